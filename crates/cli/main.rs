@@ -1,0 +1,435 @@
+//! `pt`: the command-line front end of the path tracer.
+//!
+//! Exit codes: 0 success, 1 a comparison that does not agree (later subcommands), 2 bad input
+//! (unreadable or malformed scene, bad argument, unwritable output). Errors name the file, line
+//! and element; no partial output file is ever left behind (outputs are written atomically).
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use pt_image::{ExrMeta, Image};
+use pt_render::{BvhKind, LightSelection, RenderSettings, Scene, Strategy};
+use pt_scene::{Geometry, SceneDesc};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+/// The Cornell box rendered when no scene is given (scenes/cornell-box.xml, embedded).
+const BUILTIN_CORNELL: &str = include_str!("../../scenes/cornell-box.xml");
+
+#[derive(Parser)]
+#[command(name = "pt", version, about = "A physically based path tracer checked against Mitsuba 3")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to an OpenEXR image (linear float32 RGB).
+    Render(RenderArgs),
+    /// Print what a scene contains: shapes, triangles, lights, materials, camera, colour mode.
+    Info(InfoArgs),
+    /// Compare an image with a reference: error metrics and, given variances, a block z-test.
+    /// Exit code 0 when they agree, 1 when they do not, 2 for bad input.
+    Compare(CompareArgs),
+}
+
+#[derive(Args)]
+struct CompareArgs {
+    /// The image to judge (EXR from pt or Mitsuba).
+    image: PathBuf,
+    /// The reference (EXR).
+    reference: PathBuf,
+    /// Variance of the reference's pixel means [default: REFERENCE_var.exr if it exists].
+    #[arg(long, value_name = "REF_VAR.exr")]
+    variance: Option<PathBuf>,
+    /// Variance of the image's pixel means [default: IMAGE_var.exr if it exists].
+    #[arg(long, value_name = "IMG_VAR.exr")]
+    image_variance: Option<PathBuf>,
+    /// Block size of the z-test, pixels.
+    #[arg(long, default_value_t = 16)]
+    block: u32,
+    /// Family-wise significance of the z-test (Sidak-corrected over blocks).
+    #[arg(long, default_value_t = 0.01)]
+    alpha: f64,
+    /// Write a false-colour relative error image (EXR or PNG).
+    #[arg(long, value_name = "OUT")]
+    error_image: Option<PathBuf>,
+}
+
+#[derive(Args)]
+struct SceneArgs {
+    /// Set a scene `<default>` parameter, as Mitsuba's `-D name=value` (repeatable).
+    #[arg(short = 'D', value_name = "NAME=VALUE")]
+    defines: Vec<String>,
+}
+
+#[derive(Args)]
+struct RenderArgs {
+    /// Mitsuba 3 XML scene. Without it, the built-in Cornell box is rendered.
+    scene: Option<PathBuf>,
+    /// Output EXR path [default: the scene's file name with .exr, in the current folder].
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Samples per pixel [default: the scene's sampler sample_count].
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Seed of the random streams [default: the scene's sampler seed].
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Worker threads [default: all cores]. The image does not depend on it.
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Longest path in segments (1: emitters only, 2: direct light, -1: unlimited)
+    /// [default: the scene's integrator max_depth].
+    #[arg(long, allow_hyphen_values = true)]
+    max_depth: Option<i32>,
+    /// Image width in pixels [default: the scene's film].
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height in pixels [default: the scene's film].
+    #[arg(long)]
+    height: Option<u32>,
+    /// Also write the per-pixel variance of the mean to OUT_var.exr.
+    #[arg(long)]
+    variance: bool,
+    /// Also write a tone-mapped sRGB PNG preview to this path.
+    #[arg(long, value_name = "PNG")]
+    png: Option<PathBuf>,
+    /// Exposure of the PNG preview, in stops.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    exposure: f32,
+    /// Direct-light strategy: MIS of light and BSDF sampling, or one of them alone.
+    #[arg(long, value_enum, default_value_t = StrategyArg::Mis)]
+    strategy: StrategyArg,
+    /// How next-event estimation picks a light.
+    #[arg(long, value_enum, default_value_t = SelectionArg::Power)]
+    light_selection: SelectionArg,
+    /// BVH layout (both from obvhs).
+    #[arg(long, value_enum, default_value_t = BvhArg::Cwbvh)]
+    bvh: BvhArg,
+    /// No progress bar or summary on stderr.
+    #[arg(short, long)]
+    quiet: bool,
+    #[command(flatten)]
+    scene_args: SceneArgs,
+}
+
+#[derive(Args)]
+struct InfoArgs {
+    /// Mitsuba 3 XML scene [default: the built-in Cornell box].
+    scene: Option<PathBuf>,
+    #[command(flatten)]
+    scene_args: SceneArgs,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum StrategyArg {
+    Mis,
+    Bsdf,
+    Light,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum SelectionArg {
+    Power,
+    Uniform,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum BvhArg {
+    Cwbvh,
+    Bvh2,
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(args) => cmd_render(args),
+        Command::Info(args) => cmd_info(args),
+        Command::Compare(args) => cmd_compare(args),
+    };
+    match result {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn parse_defines(defs: &[String]) -> Result<Vec<(String, String)>> {
+    defs.iter()
+        .map(|d| match d.split_once('=') {
+            Some((k, v)) if !k.trim().is_empty() => Ok((k.trim().to_string(), v.to_string())),
+            _ => bail!("-D expects NAME=VALUE, got '{d}'"),
+        })
+        .collect()
+}
+
+/// Loads the scene file, or the built-in Cornell box.
+fn load_scene(path: Option<&Path>, args: &SceneArgs) -> Result<SceneDesc> {
+    let defines = parse_defines(&args.defines)?;
+    let desc = match path {
+        Some(p) => pt_scene::load_file(p, &defines)?,
+        None => {
+            let cwd = std::env::current_dir().context("cannot read the current folder")?;
+            pt_scene::load_str(BUILTIN_CORNELL, Path::new("<built-in cornell-box.xml>"), &cwd, &defines)?
+        }
+    };
+    Ok(desc)
+}
+
+fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
+    let mut desc = load_scene(args.scene.as_deref(), &args.scene_args)?;
+    if let Some(w) = args.width {
+        desc.film.width = w;
+    }
+    if let Some(h) = args.height {
+        desc.film.height = h;
+    }
+    if desc.film.width == 0 || desc.film.height == 0 {
+        bail!("image size must be at least 1x1, got {}x{}", desc.film.width, desc.film.height);
+    }
+    let mut settings = RenderSettings::from_desc(&desc);
+    if let Some(spp) = args.spp {
+        if spp == 0 {
+            bail!("--spp must be at least 1");
+        }
+        settings.spp = spp;
+    }
+    if let Some(seed) = args.seed {
+        settings.seed = seed;
+    }
+    if let Some(d) = args.max_depth {
+        if d < -1 {
+            bail!("--max-depth must be -1 (unlimited) or >= 0, got {d}");
+        }
+        settings.path.max_depth = d;
+    }
+    settings.path.strategy = match args.strategy {
+        StrategyArg::Mis => Strategy::Mis,
+        StrategyArg::Bsdf => Strategy::Bsdf,
+        StrategyArg::Light => Strategy::Light,
+    };
+    let selection = match args.light_selection {
+        SelectionArg::Power => LightSelection::Power,
+        SelectionArg::Uniform => LightSelection::Uniform,
+    };
+    let bvh = match args.bvh {
+        BvhArg::Cwbvh => BvhKind::CwBvh,
+        BvhArg::Bvh2 => BvhKind::Bvh2,
+    };
+    let output = args.output.clone().unwrap_or_else(|| default_output(args.scene.as_deref()));
+    check_output_path(&output)?;
+
+    let pool = {
+        let mut b = rayon::ThreadPoolBuilder::new();
+        if let Some(t) = args.threads {
+            if t == 0 {
+                bail!("--threads must be at least 1");
+            }
+            b = b.num_threads(t);
+        }
+        b.build().context("cannot start worker threads")?
+    };
+
+    let build_start = std::time::Instant::now();
+    let scene = pool.install(|| Scene::build(&desc, bvh, selection))?;
+    let build_time = build_start.elapsed();
+
+    let total = settings.width as u64 * settings.height as u64 * settings.spp as u64;
+    let show = !args.quiet && std::io::stderr().is_terminal();
+    let bar = if show { ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr()) } else { ProgressBar::hidden() };
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% {per_sec} samples, ETA {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let out = pool.install(|| pt_render::render(&scene, &settings, &|n| bar.inc(n)));
+    bar.finish_and_clear();
+
+    let image = Image { width: out.width, height: out.height, data: out.mean.clone() };
+    let meta = ExrMeta {
+        spp: Some(out.spp),
+        mode: Some(scene.mode.name().to_string()),
+        render_time_s: Some(out.time.as_secs_f64()),
+        extra: vec![
+            ("pt_version".into(), env!("CARGO_PKG_VERSION").into()),
+            ("scene".into(), desc.source.display().to_string()),
+            ("seed".into(), settings.seed.to_string()),
+            ("max_depth".into(), settings.path.max_depth.to_string()),
+            ("strategy".into(), format!("{:?}", settings.path.strategy).to_lowercase()),
+        ],
+    };
+    pt_image::write_exr(&output, &image, &meta)?;
+    if args.variance {
+        let var = Image { width: out.width, height: out.height, data: out.variance.clone() };
+        pt_image::write_exr(&variance_path(&output), &var, &meta)?;
+    }
+    if let Some(png) = &args.png {
+        pt_image::write_png_preview(png, &image, args.exposure)?;
+    }
+    if !args.quiet {
+        let secs = out.time.as_secs_f64();
+        eprintln!(
+            "rendered {}x{} at {} spp in {:.2} s ({:.2} M samples/s, scene build {:.2} s) -> {}",
+            out.width,
+            out.height,
+            out.spp,
+            secs,
+            total as f64 / secs.max(1e-9) / 1e6,
+            build_time.as_secs_f64(),
+            output.display()
+        );
+        if out.nonfinite_samples > 0 {
+            eprintln!("warning: {} samples were NaN or infinite and were left out of their pixels", out.nonfinite_samples);
+        }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `scene.xml` -> `scene.exr` in the current folder; the built-in box -> `cornell-box.exr`.
+fn default_output(scene: Option<&Path>) -> PathBuf {
+    let stem = scene.and_then(|p| p.file_stem()).map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "cornell-box".into());
+    PathBuf::from(format!("{stem}.exr"))
+}
+
+/// `out.exr` -> `out_var.exr`.
+fn variance_path(output: &Path) -> PathBuf {
+    let stem = output.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    output.with_file_name(format!("{stem}_var.exr"))
+}
+
+/// Fails early (before rendering) when the output cannot be written.
+fn check_output_path(output: &Path) -> Result<()> {
+    if output.extension().and_then(|e| e.to_str()).map(|e| e.eq_ignore_ascii_case("exr")) != Some(true) {
+        bail!("output '{}' must end in .exr", output.display());
+    }
+    let dir = output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    if !dir.is_dir() {
+        bail!("cannot write '{}': folder '{}' does not exist", output.display(), dir.display());
+    }
+    Ok(())
+}
+
+fn cmd_info(args: InfoArgs) -> Result<ExitCode> {
+    let desc = load_scene(args.scene.as_deref(), &args.scene_args)?;
+    let scene = Scene::build(&desc, BvhKind::CwBvh, LightSelection::Power)?;
+    println!("scene       {}", desc.source.display());
+    println!("film        {}x{}, filter {:?}", desc.film.width, desc.film.height, desc.film.filter);
+    println!("sampler     {} spp, seed {}", desc.sampler.sample_count, desc.sampler.seed);
+    let i = &desc.integrator;
+    println!(
+        "integrator  {:?}, max_depth {}, rr_depth {}, hide_emitters {}{}",
+        i.kind,
+        i.max_depth,
+        i.rr_depth,
+        i.hide_emitters,
+        if i.moment { " (moment: variance requested)" } else { "" }
+    );
+    let c = &desc.camera;
+    let pos = c.to_world.transform_point3(pt_math::Vec3::ZERO);
+    let dir = c.to_world.transform_vector3(pt_math::Vec3::Z).normalize();
+    println!("camera      {:?}, at ({:.3}, {:.3}, {:.3}) looking ({:.3}, {:.3}, {:.3})", c.projection, pos.x, pos.y, pos.z, dir.x, dir.y, dir.z);
+    println!(
+        "geometry    {} shapes, {} triangles, {} spheres{}",
+        desc.shapes.len(),
+        scene.stats.triangles,
+        scene.stats.spheres,
+        if scene.stats.degenerate_triangles > 0 { format!(" ({} zero-area triangles skipped)", scene.stats.degenerate_triangles) } else { String::new() }
+    );
+    for (k, s) in desc.shapes.iter().enumerate() {
+        let geo = match &s.geometry {
+            Geometry::Mesh(m) => format!("{} triangles", m.indices.len()),
+            Geometry::Sphere { radius, .. } => format!("sphere r={radius}"),
+        };
+        let bsdf = &desc.bsdfs[s.bsdf];
+        println!(
+            "  shape {k:<3} {:<10} {:<16} bsdf {:<12} {}{}",
+            s.plugin,
+            geo,
+            bsdf.id.as_deref().unwrap_or("-"),
+            s.emitter.as_ref().map(|e| format!("emits {:?}", e.radiance)).unwrap_or_default(),
+            s.id.as_deref().map(|id| format!(" id={id}")).unwrap_or_default(),
+        );
+    }
+    println!("materials   {}", desc.bsdfs.len());
+    for b in &desc.bsdfs {
+        println!("  {:<12} {:?}", b.id.as_deref().unwrap_or("-"), b.kind);
+    }
+    println!("lights      {} area light(s)", scene.lights.len());
+    println!("mode        {} (every input is RGB and no material depends on wavelength)", scene.mode.name());
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `a.exr` -> `a_var.exr` if that file exists.
+fn sibling_variance(path: &Path) -> Option<PathBuf> {
+    let v = variance_path(path);
+    v.is_file().then_some(v)
+}
+
+fn cmd_compare(args: CompareArgs) -> Result<ExitCode> {
+    let (img, _) = pt_image::read_exr(&args.image)?;
+    let (reference, _) = pt_image::read_exr(&args.reference)?;
+    if (img.width, img.height) != (reference.width, reference.height) {
+        bail!(
+            "'{}' is {}x{} but '{}' is {}x{}",
+            args.image.display(),
+            img.width,
+            img.height,
+            args.reference.display(),
+            reference.width,
+            reference.height
+        );
+    }
+    let m = pt_image::metrics::compare(&img, &reference)?;
+    let ch = |v: [f64; 3]| format!("{:>12.6e} {:>12.6e} {:>12.6e}", v[0], v[1], v[2]);
+    println!("{:<22} {:>12} {:>12} {:>12}", "metric", "R", "G", "B");
+    println!("{:<22} {}   (all: {:.6e})", "relMSE", ch(m.relmse), m.relmse_all);
+    println!("{:<22} {}", "RMSE", ch(m.rmse));
+    println!("{:<22} {}", "MAE", ch(m.mae));
+    println!("{:<22} {}", "mean ratio", ch(m.mean_ratio));
+    println!("{:<22} {} / {}", "non-finite pixels", img.nonfinite_pixels(), reference.nonfinite_pixels());
+    let img_var = args.image_variance.clone().or_else(|| sibling_variance(&args.image));
+    let ref_var = args.variance.clone().or_else(|| sibling_variance(&args.reference));
+    let mut agree = img.nonfinite_pixels() == 0;
+    match (img_var, ref_var) {
+        (Some(iv), Some(rv)) => {
+            let (iv, _) = pt_image::read_exr(&iv)?;
+            let (rv, _) = pt_image::read_exr(&rv)?;
+            let z = pt_image::stats::block_ztest(&img, &iv, &reference, &rv, args.block, args.alpha)?;
+            println!(
+                "block z-test ({}x{} px, alpha {}): max |z| {:.2}, {} of {} block-channels fail (per-test p < {:.2e}), chi2 {:.1} on {} dof (p {:.3}): {}",
+                args.block,
+                args.block,
+                args.alpha,
+                z.max_abs_z,
+                z.failed,
+                z.tests,
+                z.p_threshold,
+                z.chi2,
+                z.tests,
+                z.chi2_p,
+                if z.pass { "PASS" } else { "FAIL" }
+            );
+            let pz = pt_image::stats::pixel_ztest(&img, &iv, &reference, &rv, args.alpha)?;
+            println!("pixel z-test: {:.3}% of pixel-channels fail at p < {}", 100.0 * pz.fraction_failed, args.alpha);
+            agree &= z.pass;
+        }
+        _ => {
+            println!("no variance images: z-test skipped (give --variance and --image-variance, or put NAME_var.exr beside each)");
+        }
+    }
+    if let Some(out) = &args.error_image {
+        let err = pt_image::colormap::relative_error_image(&img, &reference)?;
+        let e = pt_image::colormap::false_colour(&err, img.width, img.height, 0.0, 0.2, false);
+        match out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+            Some("png") => pt_image::write_png_preview(out, &e, 0.0)?,
+            Some("exr") => pt_image::write_exr(out, &e, &ExrMeta::default())?,
+            _ => bail!("--error-image '{}' must end in .png or .exr", out.display()),
+        }
+        println!("relative error image (0 to 20%, viridis) -> {}", out.display());
+    }
+    Ok(if agree { ExitCode::SUCCESS } else { ExitCode::from(1) })
+}

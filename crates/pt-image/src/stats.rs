@@ -1,0 +1,892 @@
+//! Statistical tests that decide whether a render matches its reference.
+//!
+//! The special functions are written here (no dependency) and checked against values computed
+//! with mpmath at 50 digits:
+//! - [`erfc`]: Maclaurin series of erf for `|x| < 0.75` (Abramowitz & Stegun 7.1.5), else the
+//!   Laplace continued fraction `erfc x = exp(-x^2)/sqrt(pi) * 1/(x + (1/2)/(x + 1/(x + (3/2)/(x + ...))))`
+//!   (A&S 7.1.14) evaluated with the modified Lentz method (Numerical Recipes 3rd ed., 5.2),
+//!   with `exp(-x^2)` split as in W. J. Cody's CALERF so that it keeps full relative accuracy
+//!   for large `x`. Relative error about 1e-15 over the whole range.
+//! - [`ln_gamma`]: Lanczos approximation, g = 7, n = 9 (Godfrey's coefficients).
+//! - [`gamma_q`]: regularized upper incomplete gamma, series for P when `x < a + 1`, else the
+//!   Legendre continued fraction for Q (Numerical Recipes 3rd ed., 6.2.5 and 6.2.7).
+
+use crate::{check_same_size, Image, ImageError};
+
+const FRAC_1_SQRT_PI: f64 = 0.564_189_583_547_756_3; // 1/sqrt(pi)
+const TINY: f64 = 1e-300; // Lentz's guard against division by zero
+
+/// `exp(-x^2)` with full relative accuracy for large `x`: `x^2` itself rounds with an absolute
+/// error of `x^2 * 2^-53`, which `exp` turns into a relative error. Split `x = xs + dx` with `xs`
+/// a multiple of 1/16 (so `xs^2` is exact) as in Cody's CALERF.
+fn exp_minus_sq(x: f64) -> f64 {
+    let xs = (x * 16.0).trunc() / 16.0;
+    (-xs * xs).exp() * (-(x - xs) * (x + xs)).exp()
+}
+
+/// erf by its Maclaurin series, `2/sqrt(pi) * sum (-1)^n x^(2n+1) / (n! (2n+1))` (A&S 7.1.5).
+/// Used for `|x| < 0.75`, where the terms fall fast and the alternation loses nothing.
+fn erf_series(x: f64) -> f64 {
+    let x2 = x * x;
+    let mut term = x; // (-1)^n x^(2n+1) / n!
+    let mut sum = x;
+    for n in 1..60 {
+        term *= -x2 / f64::from(n);
+        let t = term / f64::from(2 * n + 1);
+        sum += t;
+        if t.abs() <= 1e-17 * sum.abs() {
+            break;
+        }
+    }
+    2.0 * FRAC_1_SQRT_PI * sum
+}
+
+/// erfc for `x >= 0.75` by the continued fraction (A&S 7.1.14), modified Lentz. It needs about
+/// 350 terms at 0.75, 56 at 2, 14 at 6.
+fn erfc_cf(x: f64) -> f64 {
+    let mut f = x; // b0 = x
+    let mut c = f;
+    let mut d = 0.0;
+    for j in 1..2000 {
+        let a = f64::from(j) * 0.5; // a_j = j/2, b_j = x
+        d = x + a * d;
+        if d == 0.0 {
+            d = TINY;
+        }
+        c = x + a / c;
+        if c == 0.0 {
+            c = TINY;
+        }
+        d = 1.0 / d;
+        let delta = c * d;
+        f *= delta;
+        if (delta - 1.0).abs() < 2e-16 {
+            break;
+        }
+    }
+    exp_minus_sq(x) * FRAC_1_SQRT_PI / f
+}
+
+/// The complementary error function `erfc(x) = 1 - erf(x)`, with about 1e-15 relative accuracy
+/// everywhere, including the far tail (`erfc(26) = 5.66e-296`). Underflows to 0 beyond x = 27.3.
+pub fn erfc(x: f64) -> f64 {
+    if x.is_nan() {
+        f64::NAN
+    } else if x < 0.0 {
+        2.0 - erfc(-x)
+    } else if x < 0.75 {
+        1.0 - erf_series(x)
+    } else if x > 27.3 {
+        0.0
+    } else {
+        erfc_cf(x)
+    }
+}
+
+/// The error function, `1 - erfc(x)` (accurate to about 1e-16 absolute).
+pub fn erf(x: f64) -> f64 {
+    if x.abs() < 0.75 {
+        erf_series(x)
+    } else {
+        1.0 - erfc(x)
+    }
+}
+
+/// Upper tail of the standard normal distribution, `1 - Phi(z) = erfc(z / sqrt 2) / 2`, with
+/// about 1e-14 relative accuracy in the tails (`normal_sf(37) = 5.7e-300`).
+pub fn normal_sf(z: f64) -> f64 {
+    0.5 * erfc(z * std::f64::consts::FRAC_1_SQRT_2)
+}
+
+/// Lanczos coefficients for g = 7, n = 9 (P. Godfrey); relative error below 1e-15 for x > 0.
+const LANCZOS: [f64; 9] = [
+    0.999_999_999_999_809_9,
+    676.520_368_121_885_1,
+    -1_259.139_216_722_402_8,
+    771.323_428_777_653_1,
+    -176.615_029_162_140_6,
+    12.507_343_278_686_905,
+    -0.138_571_095_265_720_12,
+    9.984_369_578_019_572e-6,
+    1.505_632_735_149_311_6e-7,
+];
+
+/// ln Gamma(x) for x > 0 (Lanczos approximation, reflection formula below 0.5).
+pub fn ln_gamma(x: f64) -> f64 {
+    if x < 0.5 {
+        // Gamma(x) Gamma(1 - x) = pi / sin(pi x)
+        let pi = std::f64::consts::PI;
+        return (pi / (pi * x).sin().abs()).ln() - ln_gamma(1.0 - x);
+    }
+    let x = x - 1.0;
+    let t = x + 7.5;
+    let mut a = LANCZOS[0];
+    for (i, &c) in LANCZOS.iter().enumerate().skip(1) {
+        a += c / (x + i as f64);
+    }
+    0.5 * (2.0 * std::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + a.ln()
+}
+
+/// Regularized upper incomplete gamma function `Q(a, x) = Gamma(a, x) / Gamma(a)`, a > 0.
+///
+/// Series for `P = 1 - Q` where `x < a + 1` (there `P` is not close to 1, so `1 - P` loses
+/// little), Legendre continued fraction for `Q` otherwise (Numerical Recipes 6.2.5, 6.2.7).
+/// Relative accuracy about 1e-14 for moderate `a`, 1e-12 for `a` in the thousands (the
+/// prefactor `exp(a ln x - x - ln Gamma(a))` cancels large terms). NaN for `a <= 0`.
+pub fn gamma_q(a: f64, x: f64) -> f64 {
+    if a.is_nan() || x.is_nan() || a <= 0.0 || a.is_infinite() {
+        return f64::NAN;
+    }
+    if x <= 0.0 {
+        return 1.0;
+    }
+    if x.is_infinite() {
+        return 0.0;
+    }
+    let ln_prefactor = a * x.ln() - x - ln_gamma(a);
+    if x < a + 1.0 {
+        // P(a, x) = x^a e^-x / Gamma(a) * sum_n x^n / (a (a+1) ... (a+n))
+        let mut ap = a;
+        let mut term = 1.0 / a;
+        let mut sum = term;
+        for _ in 0..100_000 {
+            ap += 1.0;
+            term *= x / ap;
+            sum += term;
+            if term.abs() < sum.abs() * 1e-17 {
+                break;
+            }
+        }
+        1.0 - sum * ln_prefactor.exp()
+    } else {
+        // Q(a, x) = x^a e^-x / Gamma(a) * 1/(x+1-a- 1(1-a)/(x+3-a- 2(2-a)/(x+5-a- ...)))
+        let mut b = x + 1.0 - a;
+        let mut c = 1.0 / TINY;
+        let mut d = 1.0 / b;
+        let mut h = d;
+        for i in 1..100_000 {
+            let i = f64::from(i);
+            let an = -i * (i - a);
+            b += 2.0;
+            d = an * d + b;
+            if d.abs() < TINY {
+                d = TINY;
+            }
+            c = b + an / c;
+            if c.abs() < TINY {
+                c = TINY;
+            }
+            d = 1.0 / d;
+            let delta = d * c;
+            h *= delta;
+            if (delta - 1.0).abs() < 1e-16 {
+                break;
+            }
+        }
+        ln_prefactor.exp() * h
+    }
+}
+
+/// Upper tail of the chi-square distribution with `k` degrees of freedom,
+/// `P(X > x) = Q(k/2, x/2)` (see [`gamma_q`]). NaN for `k <= 0`.
+pub fn chi2_sf(x: f64, k: f64) -> f64 {
+    gamma_q(0.5 * k, 0.5 * x)
+}
+
+/// Per-test significance level for `n` independent tests with family-wise error rate `alpha`
+/// (Šidák correction): `1 - (1 - alpha)^(1/n)`, computed as `-expm1(ln1p(-alpha) / n)` so that
+/// it stays accurate when the result is tiny. `n = 0` is treated as one test.
+pub fn sidak_threshold(alpha: f64, n: usize) -> f64 {
+    let n = n.max(1) as f64;
+    -((-alpha).ln_1p() / n).exp_m1()
+}
+
+/// Two-sided p-value of a z-score, `2 (1 - Phi(|z|))`, at most 1.
+fn two_sided_p(z: f64) -> f64 {
+    (2.0 * normal_sf(z.abs())).min(1.0)
+}
+
+fn check_alpha(alpha: f64) -> Result<(), ImageError> {
+    if alpha > 0.0 && alpha < 1.0 {
+        Ok(())
+    } else {
+        Err(ImageError::InvalidArgument(format!(
+            "significance level alpha = {alpha} is not in (0, 1)"
+        )))
+    }
+}
+
+fn check_four(
+    img: &Image,
+    img_var: &Image,
+    reference: &Image,
+    ref_var: &Image,
+) -> Result<(), ImageError> {
+    check_same_size("image", img, reference, "reference")?;
+    check_same_size("image", img, img_var, "image variance")?;
+    check_same_size("reference", reference, ref_var, "reference variance")
+}
+
+/// A pixel is valid when all four inputs are finite there and both variances are >= 0.
+fn pixel_valid(i: usize, img: &Image, img_var: &Image, reference: &Image, ref_var: &Image) -> bool {
+    (0..3).all(|c| {
+        let (x, vx, r, vr) = (
+            img.data[i][c],
+            img_var.data[i][c],
+            reference.data[i][c],
+            ref_var.data[i][c],
+        );
+        x.is_finite() && r.is_finite() && vx.is_finite() && vr.is_finite() && vx >= 0.0 && vr >= 0.0
+    })
+}
+
+/// The outcome of one z-test of a difference `d` with variance `var`.
+enum Outcome {
+    /// Nothing to test: `d == 0` and `var == 0` (e.g. black on black).
+    Skipped,
+    /// A z-score (infinite when `var == 0` and `d != 0`) and its two-sided p-value.
+    Tested { z: f64, p: f64 },
+    /// Some input pixel was not finite (or had a negative variance).
+    Invalid,
+}
+
+fn z_outcome(valid: bool, d: f64, var: f64) -> Outcome {
+    if !valid {
+        Outcome::Invalid
+    } else if var == 0.0 && d == 0.0 {
+        Outcome::Skipped
+    } else {
+        // var == 0, d != 0 gives z = +-inf and p = 0: a deterministic difference.
+        let z = d / var.sqrt();
+        Outcome::Tested {
+            z,
+            p: two_sided_p(z),
+        }
+    }
+}
+
+/// Result of [`block_ztest`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct ZTestReport {
+    /// Number of block columns, `ceil(width / block)`.
+    pub blocks_x: u32,
+    /// Number of block rows, `ceil(height / block)`.
+    pub blocks_y: u32,
+    /// Number of block-channel tests performed (skipped ones excluded).
+    pub tests: usize,
+    /// Largest `|z|` over the tests (NaN z of invalid blocks ignored).
+    pub max_abs_z: f64,
+    /// The test with the smallest p-value (ties broken by the larger `|z|`; invalid blocks rank
+    /// first): (block x, block y, channel).
+    pub worst: (u32, u32, usize),
+    /// Smallest two-sided p-value (0 for invalid blocks; 1 when nothing was tested).
+    pub min_p: f64,
+    /// Šidák-corrected per-test significance level, `sidak_threshold(alpha, tests)`.
+    pub p_threshold: f64,
+    /// Number of tests with `p < p_threshold` (invalid blocks included).
+    pub failed: usize,
+    /// Sum of `z^2` over the tested blocks with a z-score (infinite if any z is).
+    pub chi2: f64,
+    /// `chi2_sf(chi2, tests)`: probability of a chi-square at least this large if the image and
+    /// the reference have the same expectation and the variances are right (1 if no tests).
+    pub chi2_p: f64,
+    /// No test failed, `chi2_p >= alpha`, and every input pixel was finite.
+    pub pass: bool,
+    /// Per block, row-major, the z-score of each channel (0 for skipped, NaN for invalid).
+    pub z: Vec<[f64; 3]>,
+    /// Pixels where an input (image, reference or a variance) is not finite or a variance is
+    /// negative. Any such pixel makes its blocks fail.
+    pub nonfinite_pixels: usize,
+}
+
+/// Block z-test of `img` against `reference`, given the variances of both pixel means.
+///
+/// This is the method of Mitsuba 3's render regression tests, applied per block so that a small
+/// uniform bias accumulates over the block's pixels while the noise of the block mean shrinks as
+/// 1/sqrt(npix). Mitsuba's `src/render/tests/test_renders.py` computes per pixel and channel
+/// `z = |mean - ref| sqrt(spp / ref_var)` (the reference's *per-sample* variance, floored at
+/// 1e-4), two-sided `p = 2 (1 - Phi(z))`, the Šidák level `1 - (1 - 0.01)^(1/pixel_count)`, and
+/// accepts when at least 99.75% of the pixel-channels pass. Here both images' variances enter,
+/// every test must pass, and a chi-square test of all z is added. Note the variance convention:
+/// Mitsuba's `*_var.exr` references hold per-sample variance and must be divided by the
+/// reference's spp before they are passed here.
+///
+/// For each tile (partial tiles at the right and bottom edges included) and channel:
+/// `d = mean(img) - mean(reference)`, `Var(d) = (sum img_var + sum ref_var) / npix^2` (the
+/// `_var` images hold the variance of each pixel's *mean*, i.e. already divided by the sample
+/// count, and pixels are taken as independent), `z = d / sqrt(Var(d))`, two-sided
+/// `p = 2 normal_sf(|z|)`. A tile fails when `p < sidak_threshold(alpha, tests)`. Tiles with
+/// `Var(d) = 0` and `d = 0` are skipped (they pass and are not counted in `tests` or `chi2`);
+/// `Var(d) = 0` with `d != 0` fails (`z = inf`). Under the null hypothesis the z are standard
+/// normal, so `chi2 = sum z^2` is chi-square with `tests` degrees of freedom, which catches
+/// many small deviations that no single tile shows: `pass` requires no failing tile and
+/// `chi2_sf(chi2, tests) >= alpha`. Non-finite pixels (or negative variances) in any input make
+/// their tiles fail; they are counted in [`ZTestReport::nonfinite_pixels`].
+///
+/// Errors on size mismatches, `block == 0` and `alpha` outside (0, 1).
+pub fn block_ztest(
+    img: &Image,
+    img_var: &Image,
+    reference: &Image,
+    ref_var: &Image,
+    block: u32,
+    alpha: f64,
+) -> Result<ZTestReport, ImageError> {
+    check_four(img, img_var, reference, ref_var)?;
+    check_alpha(alpha)?;
+    if block == 0 {
+        return Err(ImageError::InvalidArgument(
+            "block size must be at least 1".into(),
+        ));
+    }
+    let (w, h) = (img.width, img.height);
+    let blocks_x = w.div_ceil(block);
+    let blocks_y = h.div_ceil(block);
+
+    // First pass: one outcome per block and channel.
+    let mut outcomes = Vec::with_capacity(blocks_x as usize * blocks_y as usize);
+    let mut nonfinite_pixels = 0usize;
+    for by in 0..blocks_y {
+        for bx in 0..blocks_x {
+            let (x0, y0) = (bx * block, by * block);
+            let (x1, y1) = ((x0 + block).min(w), (y0 + block).min(h));
+            let mut sum_d = [0.0f64; 3];
+            let mut sum_var = [0.0f64; 3];
+            let mut valid = true;
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    let i = y as usize * w as usize + x as usize;
+                    if !pixel_valid(i, img, img_var, reference, ref_var) {
+                        nonfinite_pixels += 1;
+                        valid = false;
+                        continue;
+                    }
+                    for c in 0..3 {
+                        sum_d[c] += f64::from(img.data[i][c]) - f64::from(reference.data[i][c]);
+                        sum_var[c] += f64::from(img_var.data[i][c]) + f64::from(ref_var.data[i][c]);
+                    }
+                }
+            }
+            let npix = f64::from((x1 - x0) * (y1 - y0));
+            outcomes.push(
+                [0, 1, 2].map(|c| z_outcome(valid, sum_d[c] / npix, sum_var[c] / (npix * npix))),
+            );
+        }
+    }
+
+    // Second pass: the threshold depends on the number of tests.
+    let tests = outcomes
+        .iter()
+        .flatten()
+        .filter(|o| !matches!(o, Outcome::Skipped))
+        .count();
+    let p_threshold = sidak_threshold(alpha, tests);
+    let mut report = ZTestReport {
+        blocks_x,
+        blocks_y,
+        tests,
+        max_abs_z: 0.0,
+        worst: (0, 0, 0),
+        min_p: 1.0,
+        p_threshold,
+        failed: 0,
+        chi2: 0.0,
+        chi2_p: 1.0,
+        pass: false,
+        z: Vec::with_capacity(outcomes.len()),
+        nonfinite_pixels,
+    };
+    let mut worst_key = (1.0f64, 0.0f64); // (p, |z|): smaller p, then larger |z|, is worse
+    for (b, block_outcomes) in outcomes.iter().enumerate() {
+        let mut zs = [0.0f64; 3];
+        for (c, o) in block_outcomes.iter().enumerate() {
+            let (z, p, abs_z) = match *o {
+                Outcome::Skipped => continue,
+                Outcome::Invalid => (f64::NAN, 0.0, f64::INFINITY),
+                Outcome::Tested { z, p } => {
+                    report.chi2 += z * z;
+                    report.max_abs_z = report.max_abs_z.max(z.abs());
+                    (z, p, z.abs())
+                }
+            };
+            zs[c] = z;
+            if p < p_threshold {
+                report.failed += 1;
+            }
+            if p < worst_key.0 || (p == worst_key.0 && abs_z > worst_key.1) {
+                worst_key = (p, abs_z);
+                report.worst = ((b as u32) % blocks_x, (b as u32) / blocks_x, c);
+            }
+        }
+        report.z.push(zs);
+    }
+    report.min_p = worst_key.0;
+    if tests > 0 {
+        report.chi2_p = chi2_sf(report.chi2, tests as f64);
+    }
+    report.pass = report.failed == 0 && report.chi2_p >= alpha && nonfinite_pixels == 0;
+    Ok(report)
+}
+
+/// Result of [`pixel_ztest`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct PixelZTest {
+    /// Number of pixel-channel tests performed (skipped ones, black on black with zero variance,
+    /// excluded).
+    pub tests: usize,
+    /// Tests with two-sided `p < alpha`.
+    pub failed: usize,
+    /// `failed / tests` (0 if no tests). About `alpha` when the image matches the reference and
+    /// the variances are right; clearly more indicates bias or underestimated variance. The
+    /// tests of the three channels of a pixel are correlated, so this is a diagnostic, not an
+    /// exact binomial count.
+    pub fraction_failed: f64,
+    /// The per-test significance level used.
+    pub alpha: f64,
+    /// Largest `|z|` over the tests.
+    pub max_abs_z: f64,
+    /// The pixel-channel with the smallest p-value: (x, y, channel).
+    pub worst: (u32, u32, usize),
+    /// Pixels with a non-finite input or negative variance (counted as failed in every channel).
+    pub nonfinite_pixels: usize,
+    /// Per pixel, the smallest p-value over its channels, stored in all three channels (1 for
+    /// skipped, 0 for invalid pixels), for false-colour diagnostics.
+    pub p: Image,
+}
+
+/// Per-pixel z-test: for every pixel and channel `z = (x - r) / sqrt(img_var + ref_var)` with
+/// two-sided p-value `2 normal_sf(|z|)`, failing when `p < alpha` (no multiple-test correction:
+/// the point is the fraction of failures, expected to be about `alpha`, and the p-value image).
+/// Same conventions as [`block_ztest`] for variances, skipped and invalid pixels.
+pub fn pixel_ztest(
+    img: &Image,
+    img_var: &Image,
+    reference: &Image,
+    ref_var: &Image,
+    alpha: f64,
+) -> Result<PixelZTest, ImageError> {
+    check_four(img, img_var, reference, ref_var)?;
+    check_alpha(alpha)?;
+    let w = img.width;
+    let mut out = PixelZTest {
+        tests: 0,
+        failed: 0,
+        fraction_failed: 0.0,
+        alpha,
+        max_abs_z: 0.0,
+        worst: (0, 0, 0),
+        nonfinite_pixels: 0,
+        p: Image::filled(img.width, img.height, [1.0; 3]),
+    };
+    let mut worst_key = (1.0f64, 0.0f64);
+    for i in 0..img.data.len() {
+        let valid = pixel_valid(i, img, img_var, reference, ref_var);
+        if !valid {
+            out.nonfinite_pixels += 1;
+        }
+        let mut min_p = 1.0f64;
+        for c in 0..3 {
+            let d = f64::from(img.data[i][c]) - f64::from(reference.data[i][c]);
+            let var = f64::from(img_var.data[i][c]) + f64::from(ref_var.data[i][c]);
+            let (p, abs_z) = match z_outcome(valid, d, var) {
+                Outcome::Skipped => continue,
+                Outcome::Invalid => (0.0, f64::INFINITY),
+                Outcome::Tested { z, p } => {
+                    out.max_abs_z = out.max_abs_z.max(z.abs());
+                    (p, z.abs())
+                }
+            };
+            out.tests += 1;
+            if p < alpha {
+                out.failed += 1;
+            }
+            min_p = min_p.min(p);
+            if p < worst_key.0 || (p == worst_key.0 && abs_z > worst_key.1) {
+                worst_key = (p, abs_z);
+                out.worst = ((i as u32) % w, (i as u32) / w, c);
+            }
+        }
+        out.p.data[i] = [min_p as f32; 3];
+    }
+    if out.tests > 0 {
+        out.fraction_failed = out.failed as f64 / out.tests as f64;
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+// Reference values are quoted with all the digits mpmath gave, beyond f64 precision.
+#[allow(clippy::excessive_precision)]
+mod tests {
+    use super::*;
+
+    fn rel_err(a: f64, b: f64) -> f64 {
+        if a == b {
+            0.0
+        } else {
+            ((a - b) / b).abs()
+        }
+    }
+
+    /// Reference values computed with mpmath at 50 digits (`mpmath.erfc`).
+    const ERFC_TABLE: &[(f64, f64)] = &[
+        (0.0, 1.0),
+        (0.1, 0.887_537_083_981_715_101_6),
+        (0.5, 0.479_500_122_186_953_462_3),
+        (0.74, 0.295_321_922_145_254_228_1),
+        (0.76, 0.282_463_247_194_409_147_7),
+        (1.0, 0.157_299_207_050_285_130_7),
+        (1.5, 0.033_894_853_524_689_272_93),
+        (2.0, 0.004_677_734_981_047_265_838),
+        (2.5, 4.069_520_174_449_589_396e-4),
+        (3.0, 2.209_049_699_858_544_137e-5),
+        (4.0, 1.541_725_790_028_001_885e-8),
+        (5.0, 1.537_459_794_428_034_850e-12),
+        (6.0, 2.151_973_671_249_891_312e-17),
+        (8.0, 1.122_429_717_298_292_708e-29),
+        (10.0, 2.088_487_583_762_544_757e-45),
+        (15.0, 7.212_994_172_451_206_667e-100),
+        (20.0, 5.395_865_611_607_900_929e-176),
+        (26.0, 5.663_192_408_856_142_847e-296),
+        (-0.5, 1.520_499_877_813_046_538),
+        (-1.0, 1.842_700_792_949_714_869),
+        (-3.0, 1.999_977_909_503_001_415),
+    ];
+
+    #[test]
+    fn erfc_known_values() {
+        // The brief's three values (15 digits), to 1e-14 relative.
+        assert!(rel_err(erfc(1.0), 0.157_299_207_050_285) < 1e-14);
+        assert!(rel_err(erfc(3.0), 2.209_049_699_858_54e-5) < 1e-14);
+        assert!(rel_err(erfc(6.0), 2.151_973_671_249_89e-17) < 1e-14);
+        // The whole table to 1e-13 relative: two orders of margin over the ~1e-15 achieved, far
+        // below the 1e-12 needed for p-values.
+        for &(x, e) in ERFC_TABLE {
+            assert!(
+                rel_err(erfc(x), e) < 1e-13,
+                "erfc({x}) = {:e}, expected {e:e}",
+                erfc(x)
+            );
+        }
+        assert!(erfc(f64::NAN).is_nan());
+        assert_eq!(erfc(f64::INFINITY), 0.0);
+        assert_eq!(erfc(f64::NEG_INFINITY), 2.0);
+        assert!(rel_err(erf(0.5), 1.0 - 0.479_500_122_186_953_462_3) < 1e-15);
+    }
+
+    #[test]
+    fn erfc_is_continuous_and_monotone_across_method_switch() {
+        // Series/CF switch at 0.75: no jump larger than a few ulps.
+        let below = erfc(0.75 - 1e-12);
+        let above = erfc(0.75);
+        assert!(below > above && rel_err(below, above) < 1e-11);
+        // Strictly decreasing up to 26 (beyond ~26.5 the values are subnormal and step).
+        let mut prev = erfc(0.0);
+        for i in 1..=2600 {
+            let v = erfc(f64::from(i) * 0.01);
+            assert!(v < prev, "not decreasing at {}", f64::from(i) * 0.01);
+            prev = v;
+        }
+    }
+
+    #[test]
+    fn normal_sf_known_values() {
+        // mpmath: erfc(z/sqrt(2))/2.
+        let table = [
+            (0.0, 0.5),
+            (1.0, 0.158_655_253_931_457_051_4),
+            (3.0, 0.001_349_898_031_630_094_527),
+            (5.0, 2.866_515_718_791_939_117e-7),
+            (8.0, 6.220_960_574_271_784_124e-16),
+            (10.0, 7.619_853_024_160_526_066e-24),
+            (20.0, 2.753_624_118_606_233_695e-89),
+            (37.0, 5.725_571_222_524_576_823e-300),
+            (-1.0, 0.841_344_746_068_542_948_6),
+            (-3.0, 0.998_650_101_968_369_905_5),
+        ];
+        // 1e-12 relative: the accuracy the brief asks for in the tails. The z / sqrt(2) rounding
+        // costs up to 2 z^2 ulp (~1e-12 at z = 37); the rest is erfc's ~1e-15.
+        for (z, e) in table {
+            assert!(
+                rel_err(normal_sf(z), e) < 1e-12,
+                "normal_sf({z}) = {:e}, expected {e:e}",
+                normal_sf(z)
+            );
+        }
+        // The two-sided 5% point.
+        assert!((2.0 * normal_sf(1.959_963_984_540_054) - 0.05).abs() < 1e-15);
+    }
+
+    #[test]
+    fn ln_gamma_known_values() {
+        let pi = std::f64::consts::PI;
+        assert!(ln_gamma(1.0).abs() < 1e-15);
+        assert!(ln_gamma(2.0).abs() < 1e-15);
+        assert!(rel_err(ln_gamma(0.5), 0.5 * pi.ln()) < 1e-14);
+        assert!(rel_err(ln_gamma(10.0), (362_880.0f64).ln()) < 1e-14);
+        // mpmath loggamma(1500) = 9467.0929645306664056
+        assert!(rel_err(ln_gamma(1500.0), 9_467.092_964_530_666) < 1e-14);
+    }
+
+    #[test]
+    fn chi2_sf_known_values() {
+        // Textbook critical values (to the 1e-4 the tables give).
+        assert!((chi2_sf(3.841_458_82, 1.0) - 0.05).abs() < 1e-4);
+        assert!((chi2_sf(18.307, 10.0) - 0.05).abs() < 1e-4);
+        assert!((chi2_sf(6.634_896_6, 1.0) - 0.01).abs() < 1e-6);
+        // mpmath gammainc(k/2, x/2, inf, regularized=True), to 1e-10 relative (achieved: 1e-14
+        // for small k, 1e-12 at k = 3000, where the prefactor cancels terms of size 1e4).
+        let table = [
+            (3.841_458_82, 1.0, 0.050_000_000_020_698_457_17),
+            (18.307, 10.0, 0.050_000_589_091_398_120_29),
+            (0.5, 1.0, 0.479_500_122_186_953_462_3), // = erfc(0.5)
+            (1.0, 2.0, 0.606_530_659_712_633_423_6), // = exp(-1/2)
+            (10.0, 3.0, 0.018_566_135_463_043_233_30),
+            (100.0, 100.0, 0.481_191_684_527_956_718_1),
+            (150.0, 100.0, 9.039_320_423_540_090_858e-4),
+            (60.0, 100.0, 0.999_481_108_537_451_965_7),
+            (3000.0, 3000.0, 0.496_566_438_839_651_349_6),
+            (3200.0, 3000.0, 0.005_617_486_027_927_148_450),
+            (1e-3, 5.0, 0.999_999_998_318_512_281_0),
+            (50.0, 4.0, 3.610_865_404_890_645_355e-10),
+            (200.0, 3.0, 4.218_541_107_192_042_338e-43),
+        ];
+        for (x, k, e) in table {
+            let v = chi2_sf(x, k);
+            assert!(
+                rel_err(v, e) < 1e-10,
+                "chi2_sf({x}, {k}) = {v:e}, expected {e:e}"
+            );
+        }
+        assert_eq!(chi2_sf(0.0, 3.0), 1.0);
+        assert_eq!(chi2_sf(f64::INFINITY, 3.0), 0.0);
+        assert!(chi2_sf(1.0, 0.0).is_nan());
+    }
+
+    #[test]
+    fn sidak_threshold_values() {
+        assert!(rel_err(sidak_threshold(0.05, 1), 0.05) < 1e-15);
+        // 1 - 0.95^(1/2) = 0.025320565519103...
+        assert!(rel_err(sidak_threshold(0.05, 2), 0.025_320_565_519_103_6) < 1e-12);
+        // For tiny alpha/n the result is ~alpha/n; the naive formula would lose all digits here.
+        let t = sidak_threshold(1e-12, 1_000_000);
+        assert!(rel_err(t, 1e-18) < 1e-9, "{t:e}");
+        assert_eq!(sidak_threshold(0.01, 0), sidak_threshold(0.01, 1));
+    }
+
+    /// xorshift64* uniform generator and Box-Muller normals, so tests need no rand dependency.
+    struct Rng(u64);
+    impl Rng {
+        fn uniform(&mut self) -> f64 {
+            self.0 ^= self.0 >> 12;
+            self.0 ^= self.0 << 25;
+            self.0 ^= self.0 >> 27;
+            let r = self.0.wrapping_mul(0x2545_f491_4f6c_dd1d);
+            ((r >> 11) as f64 + 0.5) / (1u64 << 53) as f64 // in (0, 1)
+        }
+        fn normal(&mut self) -> f64 {
+            let (u1, u2) = (self.uniform(), self.uniform());
+            (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+        }
+    }
+
+    /// A noisy estimate of a constant image `value`: each pixel mean has standard deviation
+    /// `sigma`, and the variance image holds `sigma^2` (the variance of the pixel mean).
+    fn noisy(rng: &mut Rng, w: u32, h: u32, value: f32, sigma: f32) -> (Image, Image) {
+        let mut img = Image::new(w, h);
+        for p in &mut img.data {
+            for v in p.iter_mut() {
+                *v = value + sigma * rng.normal() as f32;
+            }
+        }
+        (img, Image::filled(w, h, [sigma * sigma; 3]))
+    }
+
+    #[test]
+    fn block_ztest_passes_two_unbiased_noisy_images() {
+        // 96x80 with 16x16 blocks: 6x5 blocks, 90 tests. Under H0 the test has false-alarm
+        // probability ~2 alpha (Sidak part plus chi2 part), so with alpha = 0.01 a fixed seed
+        // passing is the expected outcome; the several seeds make a lucky pass unlikely to hide
+        // a broken test (each must pass; P(any of 5 fails | H0) ~ 10%, so the seeds were checked
+        // once and are fixed, making the test deterministic).
+        for seed in [1u64, 2, 3, 4, 5] {
+            let mut rng = Rng(0x9e37_79b9_7f4a_7c15 ^ seed);
+            let (a, va) = noisy(&mut rng, 96, 80, 0.5, 0.05);
+            let (b, vb) = noisy(&mut rng, 96, 80, 0.5, 0.02);
+            let r = block_ztest(&a, &va, &b, &vb, 16, 0.01).unwrap();
+            assert_eq!((r.blocks_x, r.blocks_y, r.tests), (6, 5, 90));
+            assert!(r.pass, "seed {seed}: {r:?}");
+            assert_eq!(r.failed, 0);
+            assert_eq!(r.nonfinite_pixels, 0);
+        }
+    }
+
+    #[test]
+    fn block_ztest_fails_a_two_percent_bias() {
+        // One image scaled by 1.02: bias 0.01 on a value of 0.5. A 16x16 block mean has standard
+        // deviation sqrt(0.05^2 + 0.02^2)/16 = 3.4e-3, so every block has E[z] ~ 3 and the chi2
+        // sum ~ 90 * (1 + 8.6) ~ 860 against a 5% point of 113: certain failure. (Per pixel the
+        // same bias is z ~ 0.19, invisible: that is why the test works per block.)
+        let mut rng = Rng(42);
+        let (a, va) = noisy(&mut rng, 96, 80, 0.5, 0.05);
+        let (b, vb) = noisy(&mut rng, 96, 80, 0.5, 0.02);
+        let mut scaled = a.clone();
+        for p in &mut scaled.data {
+            *p = p.map(|v| v * 1.02);
+        }
+        let r = block_ztest(&scaled, &va, &b, &vb, 16, 0.01).unwrap();
+        assert!(!r.pass, "{r:?}");
+        assert!(r.chi2_p < 1e-50, "chi2_p = {}", r.chi2_p);
+        // A single pixel sees none of it: the same bias per pixel (z ~ 0.19) passes the Sidak
+        // test of 3 * 7680 tests, and is only caught by the chi2 sum.
+        let per_pixel = block_ztest(&scaled, &va, &b, &vb, 1, 0.01).unwrap();
+        assert_eq!(per_pixel.failed, 0, "{}", per_pixel.max_abs_z);
+
+        // Lower noise (sigma 0.01 each): block sd sqrt(2) * 0.01 / 16 = 8.8e-4, E[z] = 11.3
+        // against the Sidak critical |z| of 3.9 for 90 tests: every single block fails (the
+        // chance that one of them does not is ~90 * P(N < -7.4) ~ 1e-11).
+        let (a, va) = noisy(&mut rng, 96, 80, 0.5, 0.01);
+        let (b, vb) = noisy(&mut rng, 96, 80, 0.5, 0.01);
+        let scaled = Image {
+            data: a.data.iter().map(|p| p.map(|v| v * 1.02)).collect(),
+            ..a.clone()
+        };
+        let r = block_ztest(&scaled, &va, &b, &vb, 16, 0.01).unwrap();
+        assert!(!r.pass);
+        assert_eq!(r.failed, r.tests);
+        assert!(
+            r.z.iter().flatten().all(|&z| z > 0.0),
+            "the scaled image is brighter"
+        );
+        // Also with a 40x40 crop: partial tiles at the edges are included (3x3 blocks).
+        let crop = |im: &Image| {
+            let mut c = Image::new(40, 40);
+            for y in 0..40 {
+                for x in 0..40 {
+                    c.set(x, y, im.get(x, y));
+                }
+            }
+            c
+        };
+        let r = block_ztest(&crop(&scaled), &crop(&va), &crop(&b), &crop(&vb), 16, 0.01).unwrap();
+        assert_eq!((r.blocks_x, r.blocks_y, r.tests, r.z.len()), (3, 3, 27, 9));
+        // The 8-pixel-wide edge tiles have half the pixels, so their E[z] is 11.3 / sqrt 2 = 8:
+        // they fail too.
+        assert_eq!(r.failed, r.tests);
+    }
+
+    #[test]
+    fn block_ztest_chi2_of_pure_noise_is_near_the_number_of_tests() {
+        // 1x1 blocks on 64x64 pixels: 12288 independent standard-normal z, so chi2 has mean
+        // 12288 and standard deviation sqrt(2 * 12288) = 157. Accept within 5 sigma (a wrong
+        // variance convention, e.g. forgetting one of the two variances or npix^2, moves it by
+        // thousands). The mean of z is 0 within 5/sqrt(12288) = 0.045, and of z^2 ~ 1.
+        let mut rng = Rng(7);
+        let (a, va) = noisy(&mut rng, 64, 64, 1.0, 0.1);
+        let (b, vb) = noisy(&mut rng, 64, 64, 1.0, 0.1);
+        let r = block_ztest(&a, &va, &b, &vb, 1, 0.01).unwrap();
+        let k = r.tests as f64;
+        assert_eq!(r.tests, 64 * 64 * 3);
+        assert!(
+            (r.chi2 - k).abs() < 5.0 * (2.0 * k).sqrt(),
+            "chi2 = {} for {k} tests",
+            r.chi2
+        );
+        let mean_z = r.z.iter().flatten().sum::<f64>() / k;
+        assert!(mean_z.abs() < 5.0 / k.sqrt(), "mean z = {mean_z}");
+        // Same with 8x8 blocks (192 tests, sd 19.6): block averaging keeps z standard normal.
+        let r = block_ztest(&a, &va, &b, &vb, 8, 0.01).unwrap();
+        let k = r.tests as f64;
+        assert!(
+            (r.chi2 - k).abs() < 5.0 * (2.0 * k).sqrt(),
+            "chi2 = {} for {k} tests",
+            r.chi2
+        );
+    }
+
+    #[test]
+    fn block_ztest_special_cases() {
+        let zero = Image::new(4, 4);
+        // Black on black with zero variance: everything skipped, pass.
+        let r = block_ztest(&zero, &zero, &zero, &zero, 2, 0.01).unwrap();
+        assert!(r.pass && r.tests == 0 && r.chi2_p == 1.0 && r.min_p == 1.0);
+        // Zero variance with a difference: infinite z, fails.
+        let mut one = zero.clone();
+        one.set(3, 2, [0.0, 1.0, 0.0]);
+        let r = block_ztest(&one, &zero, &zero, &zero, 2, 0.01).unwrap();
+        assert!(!r.pass && r.failed == 1 && r.tests == 1);
+        assert_eq!(r.worst, (1, 1, 1));
+        assert!(r.max_abs_z.is_infinite() && r.min_p == 0.0);
+        // A NaN pixel fails and is reported.
+        let mut nan = Image::filled(4, 4, [1.0; 3]);
+        nan.set(0, 3, [1.0, f32::NAN, 1.0]);
+        let var = Image::filled(4, 4, [0.01; 3]);
+        let ones = Image::filled(4, 4, [1.0; 3]);
+        let r = block_ztest(&nan, &var, &ones, &var, 2, 0.01).unwrap();
+        assert!(!r.pass && r.nonfinite_pixels == 1 && r.failed == 3);
+        assert_eq!((r.worst.0, r.worst.1), (0, 1));
+        assert!(r.z[2][0].is_nan());
+        // Argument and size errors.
+        assert!(block_ztest(&ones, &var, &ones, &var, 0, 0.01).is_err());
+        assert!(block_ztest(&ones, &var, &ones, &var, 2, 1.5).is_err());
+        let small = Image::new(4, 3);
+        assert!(matches!(
+            block_ztest(&ones, &var, &small, &var, 2, 0.01),
+            Err(ImageError::SizeMismatch { .. })
+        ));
+    }
+
+    #[test]
+    fn block_ztest_hand_computed_z() {
+        // One 2x1 block: d = mean(3, 5) - mean(2, 2) = 2; Var(d) = (1 + 1 + 0.5 + 0.5) / 4 = 0.75.
+        let img = Image {
+            width: 2,
+            height: 1,
+            data: vec![[3.0; 3], [5.0; 3]],
+        };
+        let reference = Image::filled(2, 1, [2.0; 3]);
+        let r = block_ztest(
+            &img,
+            &Image::filled(2, 1, [1.0; 3]),
+            &reference,
+            &Image::filled(2, 1, [0.5; 3]),
+            4,
+            0.05,
+        )
+        .unwrap();
+        let z = 2.0 / 0.75f64.sqrt();
+        assert!(rel_err(r.z[0][0], z) < 1e-15);
+        assert!(rel_err(r.chi2, 3.0 * z * z) < 1e-14);
+        assert!(rel_err(r.min_p, 2.0 * normal_sf(z)) < 1e-14);
+        assert!(rel_err(r.p_threshold, sidak_threshold(0.05, 3)) < 1e-15);
+    }
+
+    #[test]
+    fn pixel_ztest_fraction_is_near_alpha_under_h0_and_flags_bias() {
+        // 64x64x3 = 12288 pixel-channel tests at alpha = 0.05: under H0 the failure count is
+        // binomial(12288, 0.05), mean 614, sd 24 (channels are independent here). Accept within
+        // 5 sd, i.e. a fraction within 0.05 +- 0.0098.
+        let mut rng = Rng(99);
+        let (a, va) = noisy(&mut rng, 64, 64, 1.0, 0.1);
+        let (b, vb) = noisy(&mut rng, 64, 64, 1.0, 0.1);
+        let r = pixel_ztest(&a, &va, &b, &vb, 0.05).unwrap();
+        assert_eq!(r.tests, 12288);
+        assert!(
+            (r.fraction_failed - 0.05).abs() < 0.0098,
+            "{}",
+            r.fraction_failed
+        );
+        assert_eq!((r.p.width, r.p.height), (64, 64));
+        // A bias of 3 combined sigmas (0.3 * sqrt 2 ~ 0.42) fails ~85% of the tests at 5%.
+        let shifted = Image {
+            data: a.data.iter().map(|p| p.map(|v| v + 0.424)).collect(),
+            ..a.clone()
+        };
+        let r = pixel_ztest(&shifted, &va, &b, &vb, 0.05).unwrap();
+        assert!(r.fraction_failed > 0.7, "{}", r.fraction_failed);
+        // The p image holds the minimum over channels and the worst pixel is reported.
+        let (wx, wy, _) = r.worst;
+        let min_p = r.p.get(wx, wy)[0];
+        assert!(r.p.data.iter().all(|p| p[0] >= min_p));
+    }
+}

@@ -1,0 +1,108 @@
+//! Discrete distributions.
+
+/// A discrete distribution over `n` items proportional to non-negative weights, sampled by
+/// inverting its CDF (binary search). Used for light selection by power.
+#[derive(Clone, Debug)]
+pub struct Distribution1D {
+    /// Normalised CDF: cdf[i] = sum of pmf[0..i], cdf[n] = 1.
+    cdf: Vec<f32>,
+    pmf: Vec<f32>,
+}
+
+impl Distribution1D {
+    /// Builds the distribution. Negative or non-finite weights count as 0. If every weight is 0
+    /// the distribution is uniform, so that sampling still works (callers that need to know can
+    /// check the weights themselves). Returns `None` for an empty list.
+    pub fn new(weights: &[f32]) -> Option<Self> {
+        if weights.is_empty() {
+            return None;
+        }
+        let clean: Vec<f64> = weights.iter().map(|&w| if w.is_finite() && w > 0.0 { w as f64 } else { 0.0 }).collect();
+        let total: f64 = clean.iter().sum();
+        let n = weights.len();
+        let pmf: Vec<f32> = if total > 0.0 {
+            clean.iter().map(|w| (w / total) as f32).collect()
+        } else {
+            vec![1.0 / n as f32; n]
+        };
+        let mut cdf = Vec::with_capacity(n + 1);
+        let mut acc = 0.0f64;
+        cdf.push(0.0);
+        for &p in &pmf {
+            acc += p as f64;
+            cdf.push(acc as f32);
+        }
+        // Make the last entry exactly 1 so that every u in [0, 1) maps to an item.
+        if let Some(last) = cdf.last_mut() {
+            *last = 1.0;
+        }
+        Some(Distribution1D { cdf, pmf })
+    }
+
+    /// Number of items.
+    pub fn len(&self) -> usize {
+        self.pmf.len()
+    }
+
+    /// Whether there are no items (never true for a constructed distribution).
+    pub fn is_empty(&self) -> bool {
+        self.pmf.is_empty()
+    }
+
+    /// Probability of item `i` (discrete measure).
+    #[inline]
+    pub fn pmf(&self, i: usize) -> f32 {
+        self.pmf.get(i).copied().unwrap_or(0.0)
+    }
+
+    /// Samples an item from `u` in [0, 1). Returns the index, its probability, and `u` rescaled
+    /// to [0, 1) within the chosen item's interval (so the same number can be reused).
+    /// Items with probability 0 are never returned.
+    #[inline]
+    pub fn sample(&self, u: f32) -> (usize, f32, f32) {
+        // First index i with cdf[i+1] > u.
+        let n = self.pmf.len();
+        let mut i = self.cdf[1..].partition_point(|&c| c <= u).min(n - 1);
+        while self.pmf[i] == 0.0 && i > 0 {
+            i -= 1; // u at the very top can land past zero-weight tail items.
+        }
+        let p = self.pmf[i];
+        let u_rescaled = if p > 0.0 { ((u - self.cdf[i]) / p).clamp(0.0, 1.0 - f32::EPSILON) } else { 0.0 };
+        (i, p, u_rescaled)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frequencies_match_pmf() {
+        let d = Distribution1D::new(&[1.0, 0.0, 3.0, 4.0]).unwrap();
+        assert_eq!(d.pmf(1), 0.0);
+        let n = 80_000;
+        let mut counts = [0usize; 4];
+        for k in 0..n {
+            let (i, p, ur) = d.sample((k as f32 + 0.5) / n as f32);
+            assert_eq!(p, d.pmf(i));
+            assert!((0.0..1.0).contains(&ur));
+            counts[i] += 1;
+        }
+        // Stratified u: counts are exact to +-1 per item.
+        assert_eq!(counts[1], 0);
+        for (i, &c) in counts.iter().enumerate() {
+            assert!((c as f32 - d.pmf(i) * n as f32).abs() <= 1.5, "{i}: {c}");
+        }
+    }
+
+    #[test]
+    fn degenerate_weights() {
+        assert!(Distribution1D::new(&[]).is_none());
+        let d = Distribution1D::new(&[0.0, f32::NAN, -1.0]).unwrap();
+        assert!((d.pmf(0) - 1.0 / 3.0).abs() < 1e-6);
+        let d = Distribution1D::new(&[0.0, 0.0, 5.0, 0.0]).unwrap();
+        for u in [0.0, 0.5, 0.999_999] {
+            assert_eq!(d.sample(u).0, 2);
+        }
+    }
+}

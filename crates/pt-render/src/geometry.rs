@@ -1,0 +1,132 @@
+//! Primitives (triangles and analytic spheres), their ray intersection, and the surface
+//! interaction recorded at a hit. Everything in world space.
+
+use obvhs::aabb::Aabb;
+use pt_math::{Vec2, Vec3, Vec3A};
+
+/// A primitive in the BVH. Triangles store `v0` and two edges, the form Möller-Trumbore wants.
+#[derive(Clone, Copy, Debug)]
+pub enum Primitive {
+    /// A triangle `v0 + b1 e1 + b2 e2`; its front side is the side `e1 x e2` points to.
+    Triangle {
+        /// First vertex.
+        v0: Vec3A,
+        /// `v1 - v0`.
+        e1: Vec3A,
+        /// `v2 - v0`.
+        e2: Vec3A,
+    },
+    /// A sphere; `flip` makes the front side (normal) face inwards.
+    Sphere {
+        /// Centre.
+        center: Vec3A,
+        /// Radius (> 0).
+        radius: f32,
+        /// Whether the normal points inwards.
+        flip: bool,
+    },
+}
+
+impl Primitive {
+    /// Axis-aligned bounds, for the BVH builder.
+    pub fn aabb(&self) -> Aabb {
+        match *self {
+            Primitive::Triangle { v0, e1, e2 } => {
+                let (v1, v2) = (v0 + e1, v0 + e2);
+                Aabb::new(v0.min(v1).min(v2), v0.max(v1).max(v2))
+            }
+            Primitive::Sphere { center, radius, .. } => {
+                Aabb::new(center - Vec3A::splat(radius), center + Vec3A::splat(radius))
+            }
+        }
+    }
+
+    /// Distance along the ray to the nearest hit in `(tmin, tmax)`, or +inf. `dir` need not be
+    /// unit length for triangles; spheres assume it is.
+    #[inline(always)]
+    pub fn intersect(&self, origin: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> f32 {
+        match *self {
+            Primitive::Triangle { v0, e1, e2 } => intersect_triangle(origin, dir, v0, e1, e2, tmin, tmax).map_or(f32::INFINITY, |h| h.0),
+            Primitive::Sphere { center, radius, .. } => intersect_sphere(origin, dir, center, radius, tmin, tmax),
+        }
+    }
+}
+
+/// Möller & Trumbore 1997, "Fast, Minimum Storage Ray/Triangle Intersection": returns
+/// `(t, b1, b2)`. Written so that NaN from degenerate input fails every comparison and misses.
+#[inline(always)]
+pub fn intersect_triangle(o: Vec3A, d: Vec3A, v0: Vec3A, e1: Vec3A, e2: Vec3A, tmin: f32, tmax: f32) -> Option<(f32, f32, f32)> {
+    let pvec = d.cross(e2);
+    let det = e1.dot(pvec);
+    if det == 0.0 {
+        return None;
+    }
+    let inv_det = 1.0 / det;
+    let tvec = o - v0;
+    let b1 = tvec.dot(pvec) * inv_det;
+    if !(0.0..=1.0).contains(&b1) {
+        return None;
+    }
+    let qvec = tvec.cross(e1);
+    let b2 = d.dot(qvec) * inv_det;
+    if !(b2 >= 0.0 && b1 + b2 <= 1.0) {
+        return None;
+    }
+    let t = e2.dot(qvec) * inv_det;
+    if t > tmin && t < tmax {
+        Some((t, b1, b2))
+    } else {
+        None
+    }
+}
+
+/// Ray-sphere intersection for a unit-length `d`, using the numerically stable form of
+/// Haines et al. 2019 ("Precision Improvements for Ray/Sphere Intersection", Ray Tracing Gems
+/// ch. 7, eq. 10): the discriminant is computed from the perpendicular distance, which avoids the
+/// cancellation of b^2 - c for far-away origins.
+#[inline(always)]
+pub fn intersect_sphere(o: Vec3A, d: Vec3A, center: Vec3A, radius: f32, tmin: f32, tmax: f32) -> f32 {
+    let f = o - center;
+    let b = -f.dot(d); // distance along d to the point closest to the centre
+    let perp = f + d * b; // offset of that point from the centre
+    let disc = radius * radius - perp.length_squared();
+    if !(disc >= 0.0) {
+        return f32::INFINITY;
+    }
+    let sq = disc.sqrt();
+    // Stable pair of roots: q has the larger magnitude, the other root is c / q.
+    let c = f.length_squared() - radius * radius;
+    let q = if b >= 0.0 { b + sq } else { b - sq };
+    let (mut t0, mut t1) = (c / q, q);
+    if t0 > t1 {
+        std::mem::swap(&mut t0, &mut t1);
+    }
+    if q == 0.0 {
+        t0 = 0.0;
+        t1 = 0.0;
+    }
+    if t0 > tmin && t0 < tmax {
+        t0
+    } else if t1 > tmin && t1 < tmax {
+        t1
+    } else {
+        f32::INFINITY
+    }
+}
+
+/// What the integrator needs to know about a hit, world space.
+#[derive(Clone, Copy, Debug)]
+pub struct Interaction {
+    /// Hit point.
+    pub p: Vec3,
+    /// Unit geometric normal, on the primitive's front side.
+    pub ng: Vec3,
+    /// Unit shading normal (interpolated vertex normal, or `ng`), on the same side as `ng`.
+    pub ns: Vec3,
+    /// Surface parameterisation (texture coordinates).
+    pub uv: Vec2,
+    /// Distance along the ray.
+    pub t: f32,
+    /// Index of the shape this primitive belongs to.
+    pub shape: u32,
+}

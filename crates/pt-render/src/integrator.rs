@@ -1,0 +1,150 @@
+//! Unidirectional path tracing with next-event estimation and multiple importance sampling.
+//!
+//! Estimator: Veach 1997, ch. 9 and 10 (one light sample and one BSDF sample per vertex, each
+//! weighted by the power heuristic, beta = 2). Path depth follows Mitsuba 3's `path` integrator:
+//! `max_depth` counts path segments (1: emitters seen directly, 2: direct illumination, -1:
+//! unlimited); Russian roulette starts once `rr_depth` segments have been traced, continuing with
+//! probability min(max throughput, 0.95). Emitters are one-sided.
+
+use crate::sampler::Sampler;
+use crate::scene::Scene;
+use pt_math::{offset_ray_origin, power_heuristic, Frame, Ray};
+use pt_spectrum::SampledSpectrum;
+
+/// Which strategies estimate direct light (for method comparisons; MIS is the default).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Strategy {
+    /// Light sampling and BSDF sampling combined with the power heuristic.
+    #[default]
+    Mis,
+    /// Only BSDF sampling (emitters found by hitting them).
+    Bsdf,
+    /// Only light sampling (emitters hit by BSDF-sampled rays contribute nothing, except when seen
+    /// directly from the camera or after a delta bounce).
+    Light,
+}
+
+/// Integrator settings (Mitsuba semantics).
+#[derive(Clone, Copy, Debug)]
+pub struct PathSettings {
+    /// Longest path in segments; -1 = unlimited.
+    pub max_depth: i32,
+    /// Segments after which Russian roulette starts.
+    pub rr_depth: u32,
+    /// Hide directly visible emitters.
+    pub hide_emitters: bool,
+    /// Direct-light strategy.
+    pub strategy: Strategy,
+}
+
+impl Default for PathSettings {
+    fn default() -> Self {
+        PathSettings { max_depth: -1, rr_depth: 5, hide_emitters: false, strategy: Strategy::Mis }
+    }
+}
+
+/// Shadow rays stop this fraction short of the light point, whose origin is already offset: a
+/// relative guard against rounding at the far end, not an absolute epsilon.
+const SHADOW_RAY_SHORTEN: f32 = 1.0 - 1e-5;
+
+/// Radiance arriving along `ray` (the camera ray), estimated with one path.
+pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler) -> SampledSpectrum {
+    let max_depth = if s.max_depth < 0 { u32::MAX } else { s.max_depth as u32 };
+    let mut radiance = SampledSpectrum::ZERO;
+    let mut throughput = SampledSpectrum::from_rgb([1.0; 3]);
+    // The previous scattering event, for MIS on emitters hit by BSDF sampling.
+    let mut prev_p = ray.origin;
+    let mut prev_pdf = 0.0f32;
+    let mut prev_delta = true; // the camera acts like a delta event: no MIS on directly seen lights
+    let use_light = s.strategy != Strategy::Bsdf;
+    let use_bsdf_hits = s.strategy != Strategy::Light;
+    let mut depth: u32 = 0;
+
+    loop {
+        let Some(hit) = scene.intersect(&ray) else { break };
+        let wo_world = -ray.dir;
+
+        // Emission found by the ray we just traced.
+        if let Some((li_idx, light)) = scene.shape_light(hit.shape) {
+            let le = light.emitted(hit.ns, wo_world);
+            if !le.is_black() {
+                if depth == 0 {
+                    if !s.hide_emitters {
+                        radiance += throughput * le;
+                    }
+                } else if prev_delta {
+                    radiance += throughput * le;
+                } else if use_bsdf_hits {
+                    let w = if use_light {
+                        let light_pdf = scene.light_pmf(li_idx) * light.pdf(prev_p, hit.p, hit.ns);
+                        power_heuristic(prev_pdf, light_pdf)
+                    } else {
+                        1.0
+                    };
+                    radiance += throughput * le * w;
+                }
+            }
+        }
+
+        // Mitsuba: continue only if another segment fits within max_depth.
+        if depth.saturating_add(1) >= max_depth {
+            break;
+        }
+
+        let bsdf = scene.material(hit.shape);
+        let frame = Frame::from_normal(hit.ns);
+        let wo = frame.to_local(wo_world);
+
+        // Next-event estimation.
+        if use_light && bsdf.has_smooth_lobe() {
+            if let Some((li_idx, pmf, u_sel)) = scene.sample_light(sampler.next_1d()) {
+                let u = sampler.next_2d();
+                let light = &scene.lights[li_idx];
+                if let Some(ls) = light.sample(hit.p, u_sel, u) {
+                    let wi = frame.to_local(ls.wi);
+                    let f = bsdf.eval(wo, wi);
+                    if !ls.radiance.is_black() && !f.is_black() {
+                        let origin = offset_ray_origin(hit.p, hit.ng * hit.ng.dot(ls.wi).signum());
+                        let target = offset_ray_origin(ls.p, ls.n * ls.n.dot(-ls.wi).signum());
+                        let seg = target - origin;
+                        let dist = seg.length();
+                        let shadow = Ray { origin, dir: seg / dist, tmin: 0.0, tmax: dist * SHADOW_RAY_SHORTEN };
+                        if dist > 0.0 && !scene.occluded(&shadow) {
+                            let light_pdf = pmf * ls.pdf;
+                            let w = if use_bsdf_hits { power_heuristic(light_pdf, bsdf.pdf(wo, wi)) } else { 1.0 };
+                            radiance += throughput * f * ls.radiance * (wi.z.abs() * w / light_pdf);
+                        }
+                    }
+                }
+            } else {
+                // Keep the random number sequence aligned whether or not there are lights.
+                let _ = sampler.next_2d();
+            }
+        }
+
+        // BSDF sampling.
+        let u_lobe = sampler.next_1d();
+        let Some(bs) = bsdf.sample(wo, u_lobe, sampler.next_2d()) else { break };
+        if bs.weight.is_black() {
+            break;
+        }
+        throughput *= bs.weight;
+        let wi_world = frame.to_world(bs.wi);
+        prev_p = hit.p;
+        prev_pdf = bs.pdf;
+        prev_delta = bs.delta;
+        ray = Ray::new(offset_ray_origin(hit.p, hit.ng * hit.ng.dot(wi_world).signum()), wi_world);
+        depth += 1;
+
+        // Russian roulette (Mitsuba: after rr_depth segments, keep with prob min(max T, 0.95)).
+        if depth >= s.rr_depth {
+            let q = throughput.max_value().min(0.95);
+            if !(sampler.next_1d() < q) {
+                break;
+            }
+            throughput *= 1.0 / q;
+        }
+    }
+    radiance
+}
+

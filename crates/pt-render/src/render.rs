@@ -1,0 +1,106 @@
+//! The render loop: rayon over tiles, one independent random stream per sample.
+
+use crate::film::{sample_filter, PixelStats};
+use crate::integrator::{li, PathSettings};
+use crate::sampler::Sampler;
+use crate::scene::Scene;
+use pt_math::Vec2;
+use pt_scene::FilterDesc;
+use rayon::prelude::*;
+use std::time::{Duration, Instant};
+
+/// What to render.
+#[derive(Clone, Debug)]
+pub struct RenderSettings {
+    /// Image width, pixels.
+    pub width: u32,
+    /// Image height, pixels.
+    pub height: u32,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Seed of the random streams.
+    pub seed: u64,
+    /// Pixel reconstruction filter.
+    pub filter: FilterDesc,
+    /// Integrator settings.
+    pub path: PathSettings,
+}
+
+/// The rendered image with its per-pixel variance.
+#[derive(Clone, Debug)]
+pub struct RenderOutput {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Pixel means, linear RGB radiance, row-major from the top.
+    pub mean: Vec<[f32; 3]>,
+    /// Variance of each pixel mean (sample variance / spp).
+    pub variance: Vec<[f32; 3]>,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Wall-clock time of the sampling loop.
+    pub time: Duration,
+    /// Samples whose radiance was NaN or infinite (excluded from the means).
+    pub nonfinite_samples: u64,
+}
+
+/// Tile edge in pixels: small enough to balance 2-64 threads on 256^2 images, large enough
+/// that scheduling overhead is negligible.
+const TILE: u32 = 16;
+
+/// Renders the image. `progress` is called after each tile with the number of samples it took
+/// (called from worker threads). The result depends only on the scene, settings and seed, not
+/// on the number of threads.
+pub fn render(scene: &Scene, settings: &RenderSettings, progress: &(dyn Fn(u64) + Sync)) -> RenderOutput {
+    let (w, h) = (settings.width, settings.height);
+    let tiles_x = w.div_ceil(TILE);
+    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE)).flat_map(|ty| (0..tiles_x).map(move |tx| (tx, ty))).collect();
+    let start = Instant::now();
+    let results: Vec<Vec<PixelStats>> = tiles
+        .par_iter()
+        .map(|&(tx, ty)| {
+            let (x0, y0) = (tx * TILE, ty * TILE);
+            let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+            let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    out.push(render_pixel(scene, settings, x, y));
+                }
+            }
+            progress(out.len() as u64 * settings.spp as u64);
+            out
+        })
+        .collect();
+    let time = start.elapsed();
+
+    let n = (w * h) as usize;
+    let mut mean = vec![[0.0; 3]; n];
+    let mut variance = vec![[0.0; 3]; n];
+    let mut nonfinite = 0u64;
+    for (&(tx, ty), tile) in tiles.iter().zip(&results) {
+        let (x0, y0) = (tx * TILE, ty * TILE);
+        let x1 = (x0 + TILE).min(w);
+        for (k, px) in tile.iter().enumerate() {
+            let (x, y) = (x0 + k as u32 % (x1 - x0), y0 + k as u32 / (x1 - x0));
+            let i = (y * w + x) as usize;
+            mean[i] = px.mean();
+            variance[i] = px.variance_of_mean();
+            nonfinite += px.nonfinite as u64;
+        }
+    }
+    RenderOutput { width: w, height: h, mean, variance, spp: settings.spp, time, nonfinite_samples: nonfinite }
+}
+
+fn render_pixel(scene: &Scene, settings: &RenderSettings, x: u32, y: u32) -> PixelStats {
+    let mut stats = PixelStats::default();
+    let pixel = y as u64 * settings.width as u64 + x as u64;
+    let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+    for s in 0..settings.spp {
+        let mut sampler = Sampler::new(settings.seed, pixel, s as u64);
+        let offset = sample_filter(&settings.filter, &mut sampler);
+        let ray = scene.camera.generate_ray(centre + offset);
+        stats.add(li(scene, ray, &settings.path, &mut sampler).rgb());
+    }
+    stats
+}

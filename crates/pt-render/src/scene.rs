@@ -1,0 +1,284 @@
+//! A renderable scene built from the loader's description: BVH, materials, lights, camera.
+
+use crate::accel::{Accel, BvhKind};
+use crate::camera::Camera;
+use crate::geometry::{intersect_triangle, Interaction, Primitive};
+use crate::light::{AreaLight, LightShape, LightTriangle};
+use pt_bsdf::{Bsdf, Lambert, SurfaceBsdf};
+use pt_math::{Distribution1D, Ray, Vec2, Vec3, Vec3A};
+use pt_scene::{BsdfDesc, BsdfKind, Geometry, SceneDesc, SourceLoc, SpectrumDesc, TriangleMesh};
+use pt_spectrum::{ColorMode, SampledSpectrum};
+
+/// Errors found while building a scene (after parsing): each names the element at fault.
+#[derive(Debug, thiserror::Error)]
+#[error("{loc}: {message}")]
+pub struct BuildError {
+    /// The offending element.
+    pub loc: SourceLoc,
+    /// What is wrong.
+    pub message: String,
+}
+
+/// How lights are chosen for next-event estimation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum LightSelection {
+    /// Proportional to emitted power (default).
+    #[default]
+    Power,
+    /// Uniform over lights (Mitsuba 3's choice), for comparison.
+    Uniform,
+}
+
+/// Per-shape data needed after a hit.
+struct ShapeData {
+    material: u32,
+    light: Option<u32>,
+    /// Vertex normals and uvs of meshes, indexed through `indices`.
+    normals: Option<Vec<Vec3>>,
+    uvs: Option<Vec<Vec2>>,
+    indices: Vec<[u32; 3]>,
+}
+
+/// Where each BVH primitive came from.
+#[derive(Clone, Copy)]
+struct PrimRef {
+    shape: u32,
+    /// Triangle index within the shape's mesh (0 for spheres).
+    local: u32,
+}
+
+/// Counts for `pt info` and logs.
+#[derive(Clone, Debug, Default)]
+pub struct SceneStats {
+    /// Triangles in the BVH.
+    pub triangles: usize,
+    /// Analytic spheres in the BVH.
+    pub spheres: usize,
+    /// Zero-area triangles left out of the BVH (they can neither be hit nor emit).
+    pub degenerate_triangles: usize,
+}
+
+/// A scene ready for rendering. Immutable and shared by all render threads.
+pub struct Scene {
+    accel: Accel,
+    prim_refs: Vec<PrimRef>,
+    shapes: Vec<ShapeData>,
+    /// One BSDF per material of the description (RGB mode: evaluated once).
+    pub materials: Vec<SurfaceBsdf>,
+    /// Area lights.
+    pub lights: Vec<AreaLight>,
+    light_distr: Option<Distribution1D>,
+    /// The camera.
+    pub camera: Camera,
+    /// Colour mode the scene is rendered in.
+    pub mode: ColorMode,
+    /// Counts.
+    pub stats: SceneStats,
+}
+
+fn spectrum(s: &SpectrumDesc) -> SampledSpectrum {
+    match *s {
+        SpectrumDesc::Constant(v) => SampledSpectrum::from_rgb([v; 3]),
+        SpectrumDesc::Rgb(c) => SampledSpectrum::from_rgb(c),
+    }
+}
+
+fn material(desc: &BsdfDesc) -> SurfaceBsdf {
+    match &desc.kind {
+        BsdfKind::Diffuse { reflectance } => {
+            SurfaceBsdf { bsdf: Bsdf::Lambert(Lambert::new(spectrum(reflectance))), two_sided: false }
+        }
+        BsdfKind::TwoSided { inner } => SurfaceBsdf { two_sided: true, ..material(inner) },
+    }
+}
+
+impl Scene {
+    /// Builds the BVH and lights. `selection` chooses how NEE picks lights.
+    pub fn build(desc: &SceneDesc, bvh: BvhKind, selection: LightSelection) -> Result<Scene, BuildError> {
+        let materials: Vec<SurfaceBsdf> = desc.bsdfs.iter().map(material).collect();
+        let mut prims = Vec::new();
+        let mut refs = Vec::new();
+        let mut shapes = Vec::new();
+        let mut lights = Vec::new();
+        let mut stats = SceneStats::default();
+
+        for (si, shape) in desc.shapes.iter().enumerate() {
+            if shape.bsdf >= materials.len() {
+                return Err(BuildError { loc: shape.loc.clone(), message: format!("BSDF index {} out of range", shape.bsdf) });
+            }
+            let mut data = ShapeData { material: shape.bsdf as u32, light: None, normals: None, uvs: None, indices: Vec::new() };
+            let light_shape = match &shape.geometry {
+                Geometry::Mesh(mesh) => {
+                    let tris = add_mesh(mesh, si as u32, shape.emitter.is_some(), &mut prims, &mut refs, &mut stats, &shape.loc)?;
+                    data.normals = mesh.normals.clone();
+                    data.uvs = mesh.uvs.clone();
+                    data.indices = mesh.indices.clone();
+                    tris.map(|(tris, areas)| (LightShape::Mesh { distr: Distribution1D::new(&areas).expect("non-empty"), tris }, areas.iter().sum::<f32>()))
+                }
+                &Geometry::Sphere { center, radius, flip_normals } => {
+                    if !(radius > 0.0 && radius.is_finite() && center.is_finite()) {
+                        return Err(BuildError { loc: shape.loc.clone(), message: format!("sphere radius must be positive and finite, got {radius}") });
+                    }
+                    prims.push(Primitive::Sphere { center: center.into(), radius, flip: flip_normals });
+                    refs.push(PrimRef { shape: si as u32, local: 0 });
+                    stats.spheres += 1;
+                    Some((LightShape::Sphere { center, radius, flip: flip_normals }, 4.0 * std::f32::consts::PI * radius * radius))
+                }
+            };
+            if let Some(em) = &shape.emitter {
+                let radiance = spectrum(&em.radiance);
+                if !radiance.is_finite() || radiance.0.min_element() < 0.0 {
+                    return Err(BuildError { loc: em.loc.clone(), message: "radiance must be finite and non-negative".into() });
+                }
+                match light_shape {
+                    Some((shape, area)) if area > 0.0 => {
+                        data.light = Some(lights.len() as u32);
+                        lights.push(AreaLight { radiance, shape, area });
+                    }
+                    _ => {
+                        return Err(BuildError { loc: em.loc.clone(), message: "area emitter on a shape with zero area".into() });
+                    }
+                }
+            }
+            shapes.push(data);
+        }
+
+        let accel = Accel::build(prims, bvh);
+        let prim_refs = accel.original_index.iter().map(|&i| refs[i as usize]).collect();
+        let weights: Vec<f32> = match selection {
+            LightSelection::Power => lights.iter().map(AreaLight::power).collect(),
+            LightSelection::Uniform => vec![1.0; lights.len()],
+        };
+        let light_distr = Distribution1D::new(&weights);
+        let camera = Camera::new(&desc.camera, desc.film.width, desc.film.height);
+        Ok(Scene { accel, prim_refs, shapes, materials, lights, light_distr, camera, mode: ColorMode::Rgb, stats })
+    }
+
+    /// Closest hit along `ray`, with its surface data.
+    #[inline]
+    pub fn intersect(&self, ray: &Ray) -> Option<Interaction> {
+        let (id, t) = self.accel.intersect(ray)?;
+        let r = self.prim_refs[id];
+        let shape = &self.shapes[r.shape as usize];
+        match self.accel.prims[id] {
+            Primitive::Triangle { v0, e1, e2 } => {
+                // Barycentrics of the accepted hit (recomputed once instead of in every test).
+                let (b1, b2) = intersect_triangle(ray.origin.into(), ray.dir.into(), v0, e1, e2, f32::NEG_INFINITY, f32::INFINITY)
+                    .map_or((0.0, 0.0), |h| (h.1, h.2));
+                let b0 = 1.0 - b1 - b2;
+                let p = Vec3::from(v0 + e1 * b1 + e2 * b2);
+                let ng = Vec3::from(e1.cross(e2)).normalize();
+                let idx = shape.indices.get(r.local as usize).copied().unwrap_or([0, 0, 0]);
+                let ns = match &shape.normals {
+                    Some(n) => {
+                        let v = n[idx[0] as usize] * b0 + n[idx[1] as usize] * b1 + n[idx[2] as usize] * b2;
+                        v.try_normalize().unwrap_or(ng)
+                    }
+                    None => ng,
+                };
+                let uv = match &shape.uvs {
+                    Some(uv) => uv[idx[0] as usize] * b0 + uv[idx[1] as usize] * b1 + uv[idx[2] as usize] * b2,
+                    None => Vec2::new(b1, b2),
+                };
+                Some(Interaction { p, ng, ns, uv, t, shape: r.shape })
+            }
+            Primitive::Sphere { center, radius, flip } => {
+                let c = Vec3::from(center);
+                let local = (ray.at(t) - c).normalize();
+                // Re-project onto the surface: removes the error of o + t d (pbrt-v4 6.8.5).
+                let p = c + local * radius;
+                let n = if flip { -local } else { local };
+                let uv = Vec2::new(local.y.atan2(local.x), local.z.clamp(-1.0, 1.0).acos());
+                Some(Interaction { p, ng: n, ns: n, uv, t, shape: r.shape })
+            }
+        }
+    }
+
+    /// Whether the segment `ray` (tmin..tmax) is blocked.
+    #[inline]
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        self.accel.occluded(ray)
+    }
+
+    /// The material of a hit shape.
+    #[inline]
+    pub fn material(&self, shape: u32) -> &SurfaceBsdf {
+        &self.materials[self.shapes[shape as usize].material as usize]
+    }
+
+    /// The light attached to a shape, if it emits: `(light index, light)`.
+    #[inline]
+    pub fn shape_light(&self, shape: u32) -> Option<(usize, &AreaLight)> {
+        let i = self.shapes[shape as usize].light? as usize;
+        Some((i, &self.lights[i]))
+    }
+
+    /// Chooses a light for NEE: `(index, probability, u rescaled)`.
+    #[inline]
+    pub fn sample_light(&self, u: f32) -> Option<(usize, f32, f32)> {
+        self.light_distr.as_ref().map(|d| d.sample(u))
+    }
+
+    /// Probability that NEE chooses light `i`.
+    #[inline]
+    pub fn light_pmf(&self, i: usize) -> f32 {
+        self.light_distr.as_ref().map_or(0.0, |d| d.pmf(i))
+    }
+}
+
+/// Adds a mesh's non-degenerate triangles to the BVH list; for an emissive mesh also returns its
+/// light triangles and their areas.
+#[allow(clippy::type_complexity)]
+fn add_mesh(
+    mesh: &TriangleMesh,
+    shape: u32,
+    emissive: bool,
+    prims: &mut Vec<Primitive>,
+    refs: &mut Vec<PrimRef>,
+    stats: &mut SceneStats,
+    loc: &SourceLoc,
+) -> Result<Option<(Vec<LightTriangle>, Vec<f32>)>, BuildError> {
+    let n = mesh.positions.len();
+    let bad_len = |what: &str, len: usize| BuildError { loc: loc.clone(), message: format!("mesh has {len} {what} for {n} vertices") };
+    if let Some(ns) = &mesh.normals {
+        if ns.len() != n {
+            return Err(bad_len("normals", ns.len()));
+        }
+    }
+    if let Some(uvs) = &mesh.uvs {
+        if uvs.len() != n {
+            return Err(bad_len("texture coordinates", uvs.len()));
+        }
+    }
+    let mut tris = Vec::new();
+    let mut areas = Vec::new();
+    for (k, idx) in mesh.indices.iter().enumerate() {
+        if idx.iter().any(|&i| i as usize >= n) {
+            return Err(BuildError { loc: loc.clone(), message: format!("triangle {k} has a vertex index out of range ({n} vertices)") });
+        }
+        let p = idx.map(|i| mesh.positions[i as usize]);
+        if !p.iter().all(|v| v.is_finite()) {
+            return Err(BuildError { loc: loc.clone(), message: format!("triangle {k} has a non-finite vertex") });
+        }
+        let cross = (p[1] - p[0]).cross(p[2] - p[0]);
+        let area = 0.5 * cross.length();
+        if !(area > 0.0) {
+            stats.degenerate_triangles += 1;
+            continue;
+        }
+        prims.push(Primitive::Triangle { v0: Vec3A::from(p[0]), e1: Vec3A::from(p[1] - p[0]), e2: Vec3A::from(p[2] - p[0]) });
+        refs.push(PrimRef { shape, local: k as u32 });
+        stats.triangles += 1;
+        if !emissive {
+            continue;
+        }
+        let ng = cross.normalize();
+        let nrm = match &mesh.normals {
+            Some(ns) => idx.map(|i| ns.get(i as usize).copied().and_then(Vec3::try_normalize).unwrap_or(ng)),
+            None => [ng; 3],
+        };
+        tris.push(LightTriangle { p, n: nrm });
+        areas.push(area);
+    }
+    Ok((!tris.is_empty()).then_some((tris, areas)))
+}

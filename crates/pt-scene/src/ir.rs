@@ -1,0 +1,251 @@
+//! The scene description IR: what a loader produces and the renderer consumes.
+//!
+//! Everything here is in **world space** unless said otherwise, lengths in the scene's units
+//! (metres by convention), angles in degrees where the Mitsuba format uses degrees (camera fov).
+//! Colours are linear Rec.709 RGB. Every element remembers where it came from ([`SourceLoc`]) so
+//! that errors found later (in the renderer) can still name the file, line and element.
+
+use glam::{Mat4, Vec2, Vec3};
+use std::fmt;
+use std::path::PathBuf;
+
+/// A position in a scene file: file path, 1-based line and column, and the element's name
+/// (for example `shape type="obj"`).
+#[derive(Clone, Debug, PartialEq, Eq, Default)]
+pub struct SourceLoc {
+    /// The file the element was read from (or `<built-in>` for embedded scenes).
+    pub file: PathBuf,
+    /// 1-based line number.
+    pub line: u32,
+    /// 1-based column number.
+    pub col: u32,
+    /// The element as written, e.g. `shape type="rectangle"` or `float name="fov"`.
+    pub element: String,
+}
+
+impl fmt::Display for SourceLoc {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}:{}:{}: <{}>", self.file.display(), self.line, self.col, self.element)
+    }
+}
+
+/// A complete scene: camera, film, sampler, integrator settings, shapes and their materials.
+#[derive(Clone, Debug)]
+pub struct SceneDesc {
+    /// The scene file (or `<built-in>`).
+    pub source: PathBuf,
+    /// The (only) camera.
+    pub camera: CameraDesc,
+    /// Image size and reconstruction filter.
+    pub film: FilmDesc,
+    /// Sample count and seed.
+    pub sampler: SamplerDesc,
+    /// Light transport settings.
+    pub integrator: IntegratorDesc,
+    /// All shapes, in file order.
+    pub shapes: Vec<ShapeDesc>,
+    /// All BSDFs referenced by shapes (shared ones appear once). `ShapeDesc::bsdf` indexes this.
+    pub bsdfs: Vec<BsdfDesc>,
+}
+
+/// Which image axis the field of view spans (Mitsuba's `fov_axis`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FovAxis {
+    /// Horizontal (the default).
+    X,
+    /// Vertical.
+    Y,
+    /// The image diagonal.
+    Diagonal,
+    /// The smaller of the two image axes.
+    Smaller,
+    /// The larger of the two image axes.
+    Larger,
+}
+
+/// Camera projection.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// Pinhole perspective camera with the full field of view in degrees along `fov_axis`.
+    Perspective {
+        /// Full field of view in degrees.
+        fov_deg: f32,
+        /// Which image axis `fov_deg` spans.
+        fov_axis: FovAxis,
+    },
+}
+
+/// A camera. Camera space follows Mitsuba: it looks along +z, +y is up, +x is *left* in the image
+/// (so image x grows towards camera -x). `to_world` maps camera space to world space.
+#[derive(Clone, Debug)]
+pub struct CameraDesc {
+    /// Where it was defined (for errors).
+    pub loc: SourceLoc,
+    /// Projection and its parameters.
+    pub projection: Projection,
+    /// Camera-to-world transform (may contain scale, e.g. a mirroring `scale x=-1`).
+    pub to_world: Mat4,
+    /// Near clip distance along the ray, scene units.
+    pub near_clip: f32,
+    /// Far clip distance along the ray, scene units.
+    pub far_clip: f32,
+}
+
+/// Pixel reconstruction filter (Mitsuba's `rfilter`). Radii in pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FilterDesc {
+    /// Box of the given radius (Mitsuba default radius 0.5: one pixel).
+    Box {
+        /// Half-width in pixels.
+        radius: f32,
+    },
+    /// Tent (triangle) of the given radius (Mitsuba default 1.0).
+    Tent {
+        /// Half-width in pixels.
+        radius: f32,
+    },
+    /// Gaussian with standard deviation `stddev` (Mitsuba default 0.5), truncated at 4 stddev.
+    Gaussian {
+        /// Standard deviation in pixels.
+        stddev: f32,
+    },
+}
+
+/// Film: image size and reconstruction filter.
+#[derive(Clone, Debug)]
+pub struct FilmDesc {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Reconstruction filter (Mitsuba's default is a Gaussian with stddev 0.5).
+    pub filter: FilterDesc,
+}
+
+/// Sampler settings.
+#[derive(Clone, Debug)]
+pub struct SamplerDesc {
+    /// Samples per pixel.
+    pub sample_count: u32,
+    /// Seed of the random streams (Mitsuba default 0).
+    pub seed: u64,
+}
+
+/// Which integrator the scene asks for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IntegratorKind {
+    /// Unidirectional path tracing with NEE and MIS (Mitsuba `path`).
+    Path,
+    /// Direct illumination only (Mitsuba `direct`): equivalent to `path` with max_depth 2.
+    Direct,
+}
+
+/// Integrator settings with Mitsuba semantics.
+#[derive(Clone, Debug)]
+pub struct IntegratorDesc {
+    /// Which integrator.
+    pub kind: IntegratorKind,
+    /// Longest path in segments: 1 = emitters seen directly, 2 = direct light, -1 = unlimited.
+    pub max_depth: i32,
+    /// Depth at which Russian roulette starts (Mitsuba default 5).
+    pub rr_depth: u32,
+    /// Whether directly visible emitters are hidden (black).
+    pub hide_emitters: bool,
+    /// Whether the scene wrapped the integrator in `moment` (asks for a variance output).
+    pub moment: bool,
+}
+
+/// A triangle mesh in world space.
+#[derive(Clone, Debug, Default)]
+pub struct TriangleMesh {
+    /// Vertex positions, world space.
+    pub positions: Vec<Vec3>,
+    /// Per-vertex shading normals (unit length, world space), if the mesh has them and
+    /// `face_normals` is off. Flipped already when `flip_normals` is set.
+    pub normals: Option<Vec<Vec3>>,
+    /// Per-vertex texture coordinates.
+    pub uvs: Option<Vec<Vec2>>,
+    /// Triangles as vertex index triples, counter-clockwise seen from the front side
+    /// (the side the geometric normal `(p1-p0) x (p2-p0)` points to). `flip_normals` has already
+    /// reversed the winding where asked.
+    pub indices: Vec<[u32; 3]>,
+}
+
+/// Geometry of a shape, in world space.
+#[derive(Clone, Debug)]
+pub enum Geometry {
+    /// Triangles (obj, rectangle, cube, disk are all turned into this).
+    Mesh(TriangleMesh),
+    /// An analytic sphere. `flip_normals` makes its normal point inwards.
+    Sphere {
+        /// Centre, world space.
+        center: Vec3,
+        /// Radius, scene units.
+        radius: f32,
+        /// Whether the normal points inwards.
+        flip_normals: bool,
+    },
+}
+
+/// An area emitter attached to a shape: emits `radiance` from the shape's front side only
+/// (the side its normal points to), as Mitsuba's `area` emitter does.
+#[derive(Clone, Debug)]
+pub struct AreaEmitterDesc {
+    /// Where it was defined.
+    pub loc: SourceLoc,
+    /// Emitted radiance, W sr^-1 m^-2 (linear RGB).
+    pub radiance: SpectrumDesc,
+}
+
+/// A shape with its material and optional emitter.
+#[derive(Clone, Debug)]
+pub struct ShapeDesc {
+    /// Where it was defined.
+    pub loc: SourceLoc,
+    /// The plugin name (`obj`, `rectangle`, `cube`, `sphere`, `disk`), for `pt info`.
+    pub plugin: String,
+    /// The `id` attribute, if any.
+    pub id: Option<String>,
+    /// World-space geometry.
+    pub geometry: Geometry,
+    /// Index into `SceneDesc::bsdfs`. A shape without a BSDF gets Mitsuba's default
+    /// (diffuse, reflectance 0.5), which the loader inserts explicitly.
+    pub bsdf: usize,
+    /// The area emitter, if the shape emits.
+    pub emitter: Option<AreaEmitterDesc>,
+}
+
+/// A spectrum-valued parameter. In this IR: linear Rec.709 RGB, or one number for all channels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum SpectrumDesc {
+    /// The same value in every channel.
+    Constant(f32),
+    /// Linear Rec.709 RGB.
+    Rgb([f32; 3]),
+}
+
+/// A BSDF as described in the scene.
+#[derive(Clone, Debug)]
+pub struct BsdfDesc {
+    /// Where it was defined.
+    pub loc: SourceLoc,
+    /// The `id` attribute, if any.
+    pub id: Option<String>,
+    /// The model and its parameters.
+    pub kind: BsdfKind,
+}
+
+/// The BSDF models the loader knows.
+#[derive(Clone, Debug)]
+pub enum BsdfKind {
+    /// Lambertian reflection with the given albedo (one-sided: black from the back).
+    Diffuse {
+        /// Albedo in [0, 1] per channel.
+        reflectance: SpectrumDesc,
+    },
+    /// Makes the inner BSDF act the same on both sides (Mitsuba `twosided`).
+    TwoSided {
+        /// The wrapped BSDF.
+        inner: Box<BsdfDesc>,
+    },
+}

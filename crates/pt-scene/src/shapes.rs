@@ -1,0 +1,470 @@
+//! Shape geometry: the built-in shapes (`rectangle`, `cube`, `disk`, `sphere`) and OBJ meshes,
+//! turned into world-space [`Geometry`].
+//!
+//! | shape       | object space                                   | parameters                       |
+//! |-------------|------------------------------------------------|----------------------------------|
+//! | `rectangle` | [-1, 1]^2 in z = 0, normal +z, uv (0,0)..(1,1) | `to_world`, `flip_normals`       |
+//! | `cube`      | [-1, 1]^3, outward normals, uv per face        | `to_world`, `flip_normals`       |
+//! | `disk`      | unit disk in z = 0, normal +z                  | `to_world`, `flip_normals`       |
+//! | `sphere`    | `center` (point, 0), `radius` (float, 1)       | `to_world` (similarity only)     |
+//! | `obj`       | the file's coordinates                         | `filename`, `face_normals` (false), `flip_tex_coords` (true) |
+//!
+//! Meshes carry no vertex normals unless the shape is smooth (OBJ), so the renderer shades
+//! them flat with the geometric normal `(p1 - p0) x (p2 - p0)`.
+
+use crate::error::io_message;
+use crate::ir::{Geometry, TriangleMesh};
+use crate::transform::is_affine;
+use glam::{Mat3, Mat4, Vec2, Vec3};
+use std::path::Path;
+
+/// Segments of the disk's triangle fan.
+pub(crate) const DISK_SEGMENTS: u32 = 256;
+
+/// A mesh in object space, before `to_world` and `flip_normals`.
+#[derive(Default)]
+pub(crate) struct LocalMesh {
+    pub positions: Vec<Vec3>,
+    pub normals: Option<Vec<Vec3>>,
+    pub uvs: Option<Vec<Vec2>>,
+    pub indices: Vec<[u32; 3]>,
+}
+
+/// Mitsuba's `rectangle`: [-1, 1]^2 in the z = 0 plane, facing +z.
+pub(crate) fn rectangle() -> LocalMesh {
+    LocalMesh {
+        positions: vec![
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+        ],
+        normals: None,
+        uvs: Some(vec![
+            Vec2::new(0.0, 0.0),
+            Vec2::new(1.0, 0.0),
+            Vec2::new(1.0, 1.0),
+            Vec2::new(0.0, 1.0),
+        ]),
+        indices: vec![[0, 1, 2], [0, 2, 3]],
+    }
+}
+
+/// Mitsuba's `cube`: [-1, 1]^3 with outward faces. Each face has its own four vertices so that
+/// every face gets the full (0,0)..(1,1) uv square.
+pub(crate) fn cube() -> LocalMesh {
+    let mut mesh = LocalMesh {
+        uvs: Some(Vec::new()),
+        ..Default::default()
+    };
+    for axis in 0..3 {
+        for sign in [-1.0f32, 1.0] {
+            let n = Vec3::from_array(std::array::from_fn(|i| if i == axis { sign } else { 0.0 }));
+            // (u, v, n) right-handed, so corners listed by increasing (u, v) wind around +n.
+            let u = Vec3::from_array(std::array::from_fn(|i| {
+                if i == (axis + 1) % 3 {
+                    1.0
+                } else {
+                    0.0
+                }
+            }));
+            let v = n.cross(u);
+            add_quad(&mut mesh, n, u, v);
+        }
+    }
+    mesh
+}
+
+fn add_quad(mesh: &mut LocalMesh, n: Vec3, u: Vec3, v: Vec3) {
+    let base = mesh.positions.len() as u32;
+    let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
+    for (a, b) in corners {
+        mesh.positions.push(n + u * a + v * b);
+        if let Some(uvs) = mesh.uvs.as_mut() {
+            uvs.push(Vec2::new((a + 1.0) * 0.5, (b + 1.0) * 0.5));
+        }
+    }
+    mesh.indices.push([base, base + 1, base + 2]);
+    mesh.indices.push([base, base + 2, base + 3]);
+}
+
+/// Mitsuba's `disk` (unit radius, z = 0, facing +z) as a fan of [`DISK_SEGMENTS`] triangles.
+///
+/// The rim vertices sit on a circle slightly larger than the unit circle, chosen so that the
+/// polygon's area is exactly pi: an inscribed polygon would lose area (0.01% at 256 segments),
+/// and area is what sets an emitter's power and the form factors between surfaces.
+/// The fan has no uvs (Mitsuba's polar uvs cannot be interpolated across a fan).
+pub(crate) fn disk() -> LocalMesh {
+    let n = DISK_SEGMENTS;
+    let step = std::f32::consts::TAU / n as f32;
+    // Area of a regular n-gon with circumradius R: n/2 R^2 sin(2 pi / n) = pi.
+    let rim = (std::f32::consts::TAU / (n as f32 * step.sin())).sqrt();
+    let mut positions = vec![Vec3::ZERO];
+    positions.extend((0..n).map(|i| {
+        let phi = step * i as f32;
+        Vec3::new(rim * phi.cos(), rim * phi.sin(), 0.0)
+    }));
+    let indices = (0..n).map(|i| [0, 1 + i, 1 + (i + 1) % n]).collect();
+    LocalMesh {
+        positions,
+        normals: None,
+        uvs: None,
+        indices,
+    }
+}
+
+/// Applies `to_world` and `flip_normals` and checks the result is finite.
+///
+/// Normals are transformed by the inverse transpose (so they stay perpendicular under
+/// non-uniform scale) and renormalised. Flipping reverses each triangle's winding and negates
+/// the vertex normals, which turns the geometric and the shading normal together.
+pub(crate) fn to_world(
+    local: LocalMesh,
+    m: &Mat4,
+    flip: bool,
+) -> std::result::Result<TriangleMesh, String> {
+    check_affine(m)?;
+    let positions: Vec<Vec3> = local
+        .positions
+        .iter()
+        .map(|&p| m.transform_point3(p))
+        .collect();
+    if positions.iter().any(|p| !p.is_finite()) {
+        return Err("mesh has NaN or infinite vertex positions".into());
+    }
+    let normals = match local.normals {
+        Some(ns) => Some(transform_normals(&ns, m, flip)?),
+        None => None,
+    };
+    let mut indices = local.indices;
+    if flip {
+        for t in &mut indices {
+            t.swap(1, 2);
+        }
+    }
+    Ok(TriangleMesh {
+        positions,
+        normals,
+        uvs: local.uvs,
+        indices,
+    })
+}
+
+fn transform_normals(ns: &[Vec3], m: &Mat4, flip: bool) -> std::result::Result<Vec<Vec3>, String> {
+    let linear = Mat3::from_mat4(*m);
+    if linear.determinant() == 0.0 {
+        return Err("to_world is singular, so vertex normals cannot be transformed".into());
+    }
+    let normal_matrix = linear.inverse().transpose();
+    let sign = if flip { -1.0 } else { 1.0 };
+    ns.iter()
+        .map(|&n| {
+            (normal_matrix * n)
+                .try_normalize()
+                .map(|n| n * sign)
+                .ok_or_else(|| "mesh has a zero-length, NaN or infinite vertex normal".to_string())
+        })
+        .collect()
+}
+
+fn check_affine(m: &Mat4) -> std::result::Result<(), String> {
+    if is_affine(m) {
+        Ok(())
+    } else {
+        Err("to_world must be affine (last matrix row 0, 0, 0, 1)".into())
+    }
+}
+
+/// A world-space sphere: the centre goes through `to_world`; the radius is multiplied by its
+/// scale, which must be uniform (rotation, mirroring and translation are fine).
+pub(crate) fn sphere(
+    center: Vec3,
+    radius: f32,
+    m: &Mat4,
+    flip: bool,
+) -> std::result::Result<Geometry, String> {
+    check_affine(m)?;
+    let scale = uniform_scale(m).ok_or(
+        "a sphere's to_world may only rotate, translate and scale uniformly \
+         (non-uniform scale or shear would make an ellipsoid)",
+    )?;
+    let center = m.transform_point3(center);
+    let radius = radius * scale;
+    if !center.is_finite() || !(radius.is_finite() && radius > 0.0) {
+        return Err(format!(
+            "sphere has an invalid centre {center} or radius {radius}"
+        ));
+    }
+    Ok(Geometry::Sphere {
+        center,
+        radius,
+        flip_normals: flip,
+    })
+}
+
+/// The scale factor s if the linear part of `m` is s times an orthogonal matrix.
+fn uniform_scale(m: &Mat4) -> Option<f32> {
+    let l = Mat3::from_mat4(*m);
+    let cols = [l.x_axis, l.y_axis, l.z_axis];
+    let s = cols[0].length();
+    let tol = 1e-4 * s;
+    let lengths_ok = cols.iter().all(|c| (c.length() - s).abs() <= tol);
+    let orthogonal = cols[0].dot(cols[1]).abs() <= tol * s
+        && cols[1].dot(cols[2]).abs() <= tol * s
+        && cols[0].dot(cols[2]).abs() <= tol * s;
+    (s > 0.0 && lengths_ok && orthogonal).then_some(s)
+}
+
+/// Options of the `obj` shape.
+pub(crate) struct ObjOptions {
+    /// Drop vertex normals and shade flat.
+    pub face_normals: bool,
+    /// Use v' = 1 - v (Mitsuba's default: most OBJ files put v = 0 at the bottom).
+    pub flip_tex_coords: bool,
+}
+
+/// Loads an OBJ file into an object-space mesh: every object and group merged, polygons
+/// triangulated as fans, one index per vertex (position, uv and normal together).
+///
+/// Without normals in the file (and without `face_normals`), vertex normals are computed after
+/// `to_world`, as Mitsuba does, so that meshes render smooth in both renderers.
+pub(crate) fn load_obj(
+    path: &Path,
+    shown_name: &str,
+    opts: &ObjOptions,
+) -> std::result::Result<LocalMesh, String> {
+    let bytes = std::fs::read(path)
+        .map_err(|e| format!("cannot open mesh '{shown_name}': {}", io_message(&e)))?;
+    let models = parse_obj(&bytes).map_err(|e| format!("cannot read mesh '{shown_name}': {e}"))?;
+    merge_models(&models, opts).map_err(|e| format!("mesh '{shown_name}': {e}"))
+}
+
+fn parse_obj(bytes: &[u8]) -> std::result::Result<Vec<tobj::Model>, String> {
+    let options = tobj::LoadOptions {
+        single_index: true,
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    let mut reader = std::io::BufReader::new(bytes);
+    // Materials are not used: answer every `mtllib` with an empty library. tobj is third-party
+    // code reading untrusted files; a panic inside it (index arithmetic on absurd input) is
+    // turned into an error rather than taking the program down.
+    let parsed = std::panic::catch_unwind(move || {
+        tobj::load_obj_buf(&mut reader, &options, |_| {
+            Ok((Vec::new(), Default::default()))
+        })
+    });
+    match parsed {
+        Ok(Ok((models, _materials))) => Ok(models),
+        Ok(Err(e)) => Err(e.to_string()),
+        Err(_) => Err("malformed OBJ data".into()),
+    }
+}
+
+fn merge_models(
+    models: &[tobj::Model],
+    opts: &ObjOptions,
+) -> std::result::Result<LocalMesh, String> {
+    // Normals and uvs are kept only if every vertex of every object has them; otherwise
+    // normals are recomputed and uvs dropped.
+    let all = |stride: usize, data: fn(&tobj::Mesh) -> &[f32]| {
+        models.iter().any(|m| !data(&m.mesh).is_empty())
+            && models
+                .iter()
+                .all(|m| data(&m.mesh).len() == m.mesh.positions.len() / 3 * stride)
+    };
+    let keep_normals = !opts.face_normals && all(3, |m| &m.normals);
+    let keep_uvs = all(2, |m| &m.texcoords);
+    let mut out = LocalMesh {
+        normals: keep_normals.then(Vec::new),
+        uvs: keep_uvs.then(Vec::new),
+        ..Default::default()
+    };
+    for model in models {
+        append_model(&mut out, &model.mesh, opts)?;
+    }
+    Ok(out)
+}
+
+fn append_model(
+    out: &mut LocalMesh,
+    mesh: &tobj::Mesh,
+    opts: &ObjOptions,
+) -> std::result::Result<(), String> {
+    let base = u32::try_from(out.positions.len()).map_err(|_| "too many vertices")?;
+    let count = mesh.positions.len() / 3;
+    out.positions.extend(
+        mesh.positions
+            .chunks_exact(3)
+            .map(|p| Vec3::new(p[0], p[1], p[2])),
+    );
+    if let Some(normals) = out.normals.as_mut() {
+        normals.extend(
+            mesh.normals
+                .chunks_exact(3)
+                .map(|n| Vec3::new(n[0], n[1], n[2])),
+        );
+    }
+    if let Some(uvs) = out.uvs.as_mut() {
+        uvs.extend(mesh.texcoords.chunks_exact(2).map(|t| {
+            let v = if opts.flip_tex_coords {
+                1.0 - t[1]
+            } else {
+                t[1]
+            };
+            Vec2::new(t[0], v)
+        }));
+    }
+    if mesh.indices.len() % 3 != 0 {
+        return Err("face list is not made of triangles".into());
+    }
+    for tri in mesh.indices.chunks_exact(3) {
+        if tri.iter().any(|&i| i as usize >= count) {
+            return Err(format!("face index out of range ({} vertices)", count));
+        }
+        let shifted = [tri[0], tri[1], tri[2]].map(|i| i.checked_add(base));
+        match shifted {
+            [Some(a), Some(b), Some(c)] => out.indices.push([a, b, c]),
+            _ => return Err("too many vertices".into()),
+        }
+    }
+    Ok(())
+}
+
+/// Smooth vertex normals: each triangle adds its unit normal weighted by its angle at the
+/// vertex, which does not depend on how the surface around a vertex is triangulated.
+/// A vertex touched only by degenerate triangles gets an arbitrary unit normal (+z); it is
+/// never shaded through a triangle with non-zero area.
+pub(crate) fn vertex_normals(positions: &[Vec3], indices: &[[u32; 3]]) -> Vec<Vec3> {
+    let mut sums = vec![Vec3::ZERO; positions.len()];
+    for tri in indices {
+        let [Some(&p0), Some(&p1), Some(&p2)] = tri.map(|i| positions.get(i as usize)) else {
+            continue;
+        };
+        let Some(n) = (p1 - p0).cross(p2 - p0).try_normalize() else {
+            continue;
+        };
+        let corners = [(p0, p1, p2), (p1, p2, p0), (p2, p0, p1)];
+        for (&index, (p, a, b)) in tri.iter().zip(corners) {
+            let angle = (a - p).angle_between(b - p);
+            if let (Some(sum), true) = (sums.get_mut(index as usize), angle.is_finite()) {
+                *sum += n * angle;
+            }
+        }
+    }
+    sums.into_iter()
+        .map(|s| s.try_normalize().unwrap_or(Vec3::Z))
+        .collect()
+}
+
+/// Sum of triangle areas (used by tests and to sanity-check tessellation).
+#[cfg(test)]
+pub(crate) fn area(mesh: &TriangleMesh) -> f32 {
+    mesh.indices
+        .iter()
+        .map(|t| {
+            let p = t.map(|i| mesh.positions[i as usize]);
+            0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length()
+        })
+        .sum()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn face_normal(mesh: &TriangleMesh, t: usize) -> Vec3 {
+        let p = mesh.indices[t].map(|i| mesh.positions[i as usize]);
+        (p[1] - p[0]).cross(p[2] - p[0]).normalize()
+    }
+
+    #[test]
+    fn rectangle_faces_plus_z() {
+        let m = to_world(rectangle(), &Mat4::IDENTITY, false).unwrap();
+        assert_eq!(m.indices.len(), 2);
+        for t in 0..2 {
+            assert!((face_normal(&m, t) - Vec3::Z).length() < 1e-6);
+        }
+        assert!((area(&m) - 4.0).abs() < 1e-6);
+        let flipped = to_world(rectangle(), &Mat4::IDENTITY, true).unwrap();
+        assert!((face_normal(&flipped, 0) + Vec3::Z).length() < 1e-6);
+    }
+
+    #[test]
+    fn cube_normals_point_outwards() {
+        let m = to_world(cube(), &Mat4::IDENTITY, false).unwrap();
+        assert_eq!(m.indices.len(), 12);
+        assert!(m.normals.is_none());
+        for (t, tri) in m.indices.iter().enumerate() {
+            let centroid = tri.iter().map(|&i| m.positions[i as usize]).sum::<Vec3>() / 3.0;
+            let n = face_normal(&m, t);
+            // The centroid lies on the face, so it points the same way as the outward normal.
+            assert!(
+                n.dot(centroid) > 0.9,
+                "triangle {t}: n {n} centroid {centroid}"
+            );
+        }
+        assert!((area(&m) - 24.0).abs() < 1e-4);
+    }
+
+    #[test]
+    fn disk_area_is_exactly_pi() {
+        let m = to_world(disk(), &Mat4::from_scale(Vec3::splat(2.0)), false).unwrap();
+        assert_eq!(m.indices.len(), DISK_SEGMENTS as usize);
+        let expected = std::f32::consts::PI * 4.0;
+        assert!(
+            (area(&m) - expected).abs() < 1e-5 * expected,
+            "{}",
+            area(&m)
+        );
+        assert!((face_normal(&m, 0) - Vec3::Z).length() < 1e-5);
+    }
+
+    #[test]
+    fn sphere_scale_must_be_uniform() {
+        let m = Mat4::from_scale_rotation_translation(
+            Vec3::splat(2.0),
+            glam::Quat::from_rotation_y(0.3),
+            Vec3::new(1.0, 2.0, 3.0),
+        );
+        match sphere(Vec3::X, 0.5, &m, false).unwrap() {
+            Geometry::Sphere { center, radius, .. } => {
+                assert!((radius - 1.0).abs() < 1e-6);
+                assert!((center - m.transform_point3(Vec3::X)).length() < 1e-6);
+            }
+            _ => panic!("not a sphere"),
+        }
+        assert!(sphere(
+            Vec3::ZERO,
+            1.0,
+            &Mat4::from_scale(Vec3::new(1.0, 2.0, 1.0)),
+            false
+        )
+        .is_err());
+        assert!(sphere(
+            Vec3::ZERO,
+            1.0,
+            &Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0)),
+            false
+        )
+        .is_ok());
+    }
+
+    #[test]
+    fn normals_use_inverse_transpose() {
+        let mut local = rectangle();
+        local.normals = Some(vec![Vec3::new(1.0, 1.0, 0.0).normalize(); 4]);
+        let m = to_world(local, &Mat4::from_scale(Vec3::new(2.0, 1.0, 1.0)), false).unwrap();
+        let n = m.normals.unwrap()[0];
+        assert!((n - Vec3::new(0.5, 1.0, 0.0).normalize()).length() < 1e-6);
+    }
+
+    #[test]
+    fn angle_weighted_normals_of_a_flat_fan_are_the_plane_normal() {
+        let d = disk();
+        let n = vertex_normals(&d.positions, &d.indices);
+        assert!(n.iter().all(|n| (*n - Vec3::Z).length() < 1e-5));
+    }
+}
