@@ -243,8 +243,11 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
     let show = !args.quiet && std::io::stderr().is_terminal();
     let bar = if show { ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr()) } else { ProgressBar::hidden() };
     bar.set_style(
-        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% {per_sec} samples, ETA {eta}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% {msps} M samples/s, ETA {eta}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .with_key("msps", |state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+                let _ = write!(w, "{:.2}", state.per_sec() / 1e6);
+            }),
     );
     let out = pool.install(|| pt_render::render(&scene, &settings, &|n| bar.inc(n)));
     bar.finish_and_clear();

@@ -14,7 +14,7 @@ mod frame;
 mod offset;
 pub mod warp;
 
-pub use distribution::Distribution1D;
+pub use distribution::{Distribution1D, Distribution2D};
 pub use frame::Frame;
 pub use offset::offset_ray_origin;
 

@@ -6,6 +6,8 @@
 //! unlimited); Russian roulette starts once `rr_depth` segments have been traced, continuing with
 //! probability min(max throughput, 0.95). Emitters are one-sided.
 
+use crate::geometry::Interaction;
+use crate::light::LightSample;
 use crate::sampler::Sampler;
 use crate::scene::Scene;
 use pt_math::{offset_ray_origin, power_heuristic, Frame, Ray};
@@ -61,7 +63,27 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler) 
     let mut depth: u32 = 0;
 
     loop {
-        let Some(hit) = scene.intersect(&ray) else { break };
+        let Some(hit) = scene.intersect(&ray) else {
+            // The ray left the scene: environment and sun.
+            for &i in &scene.infinite_lights {
+                let light = &scene.lights[i];
+                let le = light.escaped_radiance(ray.dir);
+                if le.is_black() {
+                    continue;
+                }
+                if depth == 0 {
+                    if !s.hide_emitters {
+                        radiance += throughput * le;
+                    }
+                } else if prev_delta {
+                    radiance += throughput * le;
+                } else if use_bsdf_hits {
+                    let w = if use_light { power_heuristic(prev_pdf, scene.light_pmf(i) * light.escaped_pdf(ray.dir)) } else { 1.0 };
+                    radiance += throughput * le * w;
+                }
+            }
+            break;
+        };
         let wo_world = -ray.dir;
 
         // Emission found by the ray we just traced.
@@ -103,17 +125,12 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler) 
                 if let Some(ls) = light.sample(hit.p, u_sel, u) {
                     let wi = frame.to_local(ls.wi);
                     let f = bsdf.eval(wo, wi);
-                    if !ls.radiance.is_black() && !f.is_black() {
-                        let origin = offset_ray_origin(hit.p, hit.ng * hit.ng.dot(ls.wi).signum());
-                        let target = offset_ray_origin(ls.p, ls.n * ls.n.dot(-ls.wi).signum());
-                        let seg = target - origin;
-                        let dist = seg.length();
-                        let shadow = Ray { origin, dir: seg / dist, tmin: 0.0, tmax: dist * SHADOW_RAY_SHORTEN };
-                        if dist > 0.0 && !scene.occluded(&shadow) {
-                            let light_pdf = pmf * ls.pdf;
-                            let w = if use_bsdf_hits { power_heuristic(light_pdf, bsdf.pdf(wo, wi)) } else { 1.0 };
-                            radiance += throughput * f * ls.radiance * (wi.z.abs() * w / light_pdf);
-                        }
+                    if !ls.radiance.is_black() && !f.is_black() && visible(scene, &hit, &ls) {
+                        let light_pdf = pmf * ls.pdf;
+                        // Delta lights cannot be hit by BSDF sampling: light sampling is the only
+                        // strategy, weight 1.
+                        let w = if use_bsdf_hits && !ls.delta { power_heuristic(light_pdf, bsdf.pdf(wo, wi)) } else { 1.0 };
+                        radiance += throughput * f * ls.radiance * (wi.z.abs() * w / light_pdf);
                     }
                 }
             } else {
@@ -148,3 +165,20 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler) 
     radiance
 }
 
+
+/// Whether nothing blocks the segment from the hit to the light sample. Both ends are offset off
+/// their surfaces (a light without a surface normal, or a distant one, needs no offset there).
+#[inline]
+fn visible(scene: &Scene, hit: &Interaction, ls: &LightSample) -> bool {
+    let origin = offset_ray_origin(hit.p, hit.ng * hit.ng.dot(ls.wi).signum());
+    if ls.dist.is_infinite() {
+        return !scene.occluded(&Ray::new(origin, ls.wi));
+    }
+    let target = if ls.n == pt_math::Vec3::ZERO { ls.p } else { offset_ray_origin(ls.p, ls.n * ls.n.dot(-ls.wi).signum()) };
+    let seg = target - origin;
+    let dist = seg.length();
+    if !(dist > 0.0) {
+        return false;
+    }
+    !scene.occluded(&Ray { origin, dir: seg / dist, tmin: 0.0, tmax: dist * SHADOW_RAY_SHORTEN })
+}

@@ -1,13 +1,20 @@
-//! Area lights: emissive shapes, sampled by area and converted to solid angle.
+//! Lights: area lights on shapes, point and spot lights, distant lights (directional, sun),
+//! and environment lights (constant, environment map).
 //!
+//! Every light offers `sample` (a direction towards it from a reference point, with the
+//! radiance arriving along it and the solid-angle pdf, or a `delta` flag for lights that cannot be
+//! hit by a ray) and, for lights a BSDF-sampled ray can find, `pdf` for MIS.
+//!
+//! Area lights:
 //! An area emitter radiates `radiance` from its front side only (the side its shading normal
 //! faces), as Mitsuba's `area` emitter. Points are sampled uniformly by area over the whole
 //! shape (triangles chosen by area, then uniform barycentrics; spheres uniformly over their
 //! surface), so `pdf_area = 1 / total area`, and the solid-angle pdf seen from a point `x` is
 //! `pdf_area * |x - y|^2 / |cos theta_y|` (pbrt-v4 eq. 4.15; Veach 1997 eq. 8.10).
 
-use pt_math::warp::{square_to_uniform_sphere, square_to_uniform_triangle};
-use pt_math::{Distribution1D, Vec2, Vec3};
+use pt_math::warp::{square_to_uniform_cone, square_to_uniform_sphere, square_to_uniform_triangle, uniform_cone_pdf};
+use pt_math::{Distribution1D, Distribution2D, Frame, Mat3, Vec2, Vec3};
+use std::f32::consts::PI;
 use pt_spectrum::SampledSpectrum;
 
 /// Shape data a mesh light samples from (world space).
@@ -54,18 +61,23 @@ pub struct AreaLight {
 /// A point sampled on a light, as seen from a reference point.
 #[derive(Clone, Copy, Debug)]
 pub struct LightSample {
-    /// The point on the light, world space.
+    /// The point on the light, world space (for distant lights: unused).
     pub p: Vec3,
-    /// The light's shading normal there (front side).
+    /// The light's surface normal there (zero for point-like and distant lights: the shadow ray
+    /// then needs no offset at the light's end).
     pub n: Vec3,
-    /// Unit direction from the reference point towards `p`.
+    /// Unit direction from the reference point towards the light.
     pub wi: Vec3,
-    /// Distance from the reference point to `p`.
+    /// Distance to `p` (infinite for distant lights).
     pub dist: f32,
-    /// Radiance arriving along `-wi` (zero if `p` shows its back).
+    /// Radiance arriving along `-wi` (for delta lights: the irradiance-like quantity
+    /// `I / d^2` or `E`, to be divided by `pdf` = 1).
     pub radiance: SampledSpectrum,
-    /// Solid-angle pdf of `wi` for this light alone (not including light selection).
+    /// Solid-angle pdf of `wi` for this light alone (not including light selection); 1 for
+    /// delta lights.
     pub pdf: f32,
+    /// Whether the light is a delta light (point, spot, directional): no MIS, never hit.
+    pub delta: bool,
 }
 
 impl AreaLight {
@@ -106,7 +118,7 @@ impl AreaLight {
             return None;
         }
         let radiance = if cos_l > 0.0 { self.radiance } else { SampledSpectrum::ZERO };
-        Some(LightSample { p, n, wi, dist, radiance, pdf })
+        Some(LightSample { p, n, wi, dist, radiance, pdf, delta: false })
     }
 
     /// Solid-angle pdf, from `x`, of having sampled the point `p` with normal `n` on this light
@@ -125,6 +137,296 @@ impl AreaLight {
     #[inline]
     pub fn emitted(&self, n: Vec3, w: Vec3) -> SampledSpectrum {
         if n.dot(w) > 0.0 { self.radiance } else { SampledSpectrum::ZERO }
+    }
+}
+
+/// Spot light falloff: 1 inside `beam_width`, 0 beyond `cutoff`, linear in angle between
+/// (Mitsuba 3 `spot`).
+#[derive(Clone, Copy, Debug)]
+pub struct SpotCone {
+    /// cos of the cutoff angle.
+    pub cos_cutoff: f32,
+    /// Cutoff angle, radians.
+    pub cutoff: f32,
+    /// Full-intensity half-angle, radians.
+    pub beam_width: f32,
+}
+
+impl SpotCone {
+    /// Falloff factor for a direction making cos(theta) = `cos_t` with the axis.
+    #[inline]
+    pub fn falloff(&self, cos_t: f32) -> f32 {
+        if cos_t <= self.cos_cutoff {
+            return 0.0;
+        }
+        let angle = cos_t.clamp(-1.0, 1.0).acos();
+        if angle <= self.beam_width {
+            1.0
+        } else {
+            ((self.cutoff - angle) / (self.cutoff - self.beam_width)).clamp(0.0, 1.0)
+        }
+    }
+}
+
+/// A latitude-longitude environment map (Mitsuba 3 `envmap` conventions): the direction `d` in
+/// map space (y up) has `u = atan2(d.x, -d.z) / (2 pi)` (wrapped to [0,1)) and
+/// `v = acos(d.y) / pi`; radiance is bilinearly interpolated between pixel centres, wrapping
+/// in u and clamping in v. Sampled by a piecewise-constant distribution over pixels proportional
+/// to the largest luminance in each pixel's bilinear footprint times sin(theta), so that every
+/// direction with non-zero radiance has a non-zero pdf.
+#[derive(Clone, Debug)]
+pub struct EnvMap {
+    width: usize,
+    height: usize,
+    /// Linear RGB radiance times scale, row-major from v = 0 (the +y pole).
+    texels: Vec<[f32; 3]>,
+    distr: Distribution2D,
+    to_world: Mat3,
+    to_local: Mat3,
+}
+
+impl EnvMap {
+    /// Builds from an image (row-major, top row = +y pole) and a map-to-world rotation.
+    pub fn new(width: usize, height: usize, texels: Vec<[f32; 3]>, to_world: Mat3) -> Option<Self> {
+        if width == 0 || height == 0 || texels.len() != width * height {
+            return None;
+        }
+        let lum = |t: [f32; 3]| (0.212_671 * t[0] + 0.715_160 * t[1] + 0.072_169 * t[2]).max(0.0);
+        let mut w = vec![0.0f32; width * height];
+        for y in 0..height {
+            let sin_t = (PI * (y as f32 + 0.5) / height as f32).sin();
+            for x in 0..width {
+                // Max over the 3x3 neighbourhood covers the bilinear footprint of this cell.
+                let mut m = 0.0f32;
+                for dy in [-1i64, 0, 1] {
+                    let yy = (y as i64 + dy).clamp(0, height as i64 - 1) as usize;
+                    for dx in [-1i64, 0, 1] {
+                        let xx = (x as i64 + dx).rem_euclid(width as i64) as usize;
+                        m = m.max(lum(texels[yy * width + xx]));
+                    }
+                }
+                w[y * width + x] = m * sin_t;
+            }
+        }
+        let distr = Distribution2D::new(&w, width, height)?;
+        Some(EnvMap { width, height, texels, distr, to_world, to_local: to_world.transpose() })
+    }
+
+    fn dir_to_uv(&self, world: Vec3) -> Vec2 {
+        let d = self.to_local * world;
+        let mut u = d.x.atan2(-d.z) * (0.5 / PI);
+        if u < 0.0 {
+            u += 1.0;
+        }
+        Vec2::new(u, d.y.clamp(-1.0, 1.0).acos() / PI)
+    }
+
+    fn uv_to_dir(&self, uv: Vec2) -> (Vec3, f32) {
+        let (phi, theta) = (2.0 * PI * uv.x, PI * uv.y);
+        let (st, ct) = theta.sin_cos();
+        let local = Vec3::new(st * phi.sin(), ct, -st * phi.cos());
+        (self.to_world * local, st)
+    }
+
+    /// Bilinearly interpolated radiance at `uv`.
+    fn lookup(&self, uv: Vec2) -> [f32; 3] {
+        let x = uv.x * self.width as f32 - 0.5;
+        let y = (uv.y * self.height as f32 - 0.5).clamp(0.0, (self.height - 1) as f32);
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let xi = |k: f32| (k as i64).rem_euclid(self.width as i64) as usize;
+        let yi = |k: f32| (k as usize).min(self.height - 1);
+        let t = |xx: f32, yy: f32| self.texels[yi(yy) * self.width + xi(xx)];
+        let (a, b, c, d) = (t(x0, y0), t(x0 + 1.0, y0), t(x0, y0 + 1.0), t(x0 + 1.0, y0 + 1.0));
+        std::array::from_fn(|k| (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + d[k] * fx) * fy)
+    }
+
+    /// Radiance arriving from world direction `dir` (unit, pointing away from the scene).
+    pub fn radiance(&self, dir: Vec3) -> SampledSpectrum {
+        SampledSpectrum::from_rgb(self.lookup(self.dir_to_uv(dir)))
+    }
+
+    /// Solid-angle pdf of sampling `dir`.
+    pub fn pdf(&self, dir: Vec3) -> f32 {
+        let uv = self.dir_to_uv(dir);
+        let sin_t = (PI * uv.y).sin();
+        if sin_t <= 0.0 {
+            return 0.0;
+        }
+        self.distr.pdf(uv) / (2.0 * PI * PI * sin_t)
+    }
+
+    /// Samples a direction: (dir, radiance, solid-angle pdf).
+    pub fn sample(&self, u: Vec2) -> Option<(Vec3, SampledSpectrum, f32)> {
+        let (uv, pdf_uv) = self.distr.sample(u);
+        let (dir, sin_t) = self.uv_to_dir(uv);
+        if sin_t <= 0.0 || pdf_uv <= 0.0 {
+            return None;
+        }
+        Some((dir, SampledSpectrum::from_rgb(self.lookup(uv)), pdf_uv / (2.0 * PI * PI * sin_t)))
+    }
+
+    /// Mean radiance luminance over the sphere (for light selection).
+    pub fn mean_luminance(&self) -> f32 {
+        let mut acc = 0.0f64;
+        let mut wsum = 0.0f64;
+        for y in 0..self.height {
+            let s = (PI * (y as f32 + 0.5) / self.height as f32).sin() as f64;
+            for x in 0..self.width {
+                let t = self.texels[y * self.width + x];
+                acc += s * (0.212_671 * t[0] + 0.715_160 * t[1] + 0.072_169 * t[2]) as f64;
+                wsum += s;
+            }
+        }
+        (acc / wsum.max(1e-30)) as f32
+    }
+}
+
+/// Any light of the scene.
+#[derive(Clone, Debug)]
+pub enum Light {
+    /// An emitting shape.
+    Area(AreaLight),
+    /// Isotropic point light with intensity `intensity` (W/sr).
+    Point {
+        /// Position, world.
+        position: Vec3,
+        /// Radiant intensity, W/sr.
+        intensity: SampledSpectrum,
+    },
+    /// Spot light at `position` pointing along `frame.n`.
+    Spot {
+        /// Position, world.
+        position: Vec3,
+        /// Frame whose normal is the spot axis.
+        frame: Frame,
+        /// Intensity on the axis, W/sr.
+        intensity: SampledSpectrum,
+        /// Angular falloff.
+        cone: SpotCone,
+    },
+    /// Directional light: irradiance `irradiance` arriving from direction `to_light`.
+    Directional {
+        /// Unit direction from the scene towards the light, world.
+        to_light: Vec3,
+        /// Irradiance on a surface facing the light, W/m^2.
+        irradiance: SampledSpectrum,
+    },
+    /// A disk of uniform radiance at infinity (the sun), sampled uniformly over its cone.
+    Sun {
+        /// Frame whose normal points from the scene towards the sun's centre.
+        frame: Frame,
+        /// Radiance of the disk: irradiance / (pi sin^2(alpha)), alpha the angular radius.
+        radiance: SampledSpectrum,
+        /// 1 - cos(alpha), computed without cancellation.
+        one_minus_cos: f32,
+    },
+    /// Uniform radiance from every direction.
+    Constant {
+        /// Radiance, W sr^-1 m^-2.
+        radiance: SampledSpectrum,
+    },
+    /// Environment map.
+    EnvMap(EnvMap),
+}
+
+impl Light {
+    /// Whether rays escaping the scene can see this light (environment and sun).
+    pub fn is_infinite(&self) -> bool {
+        matches!(self, Light::Sun { .. } | Light::Constant { .. } | Light::EnvMap(_))
+    }
+
+    /// Power estimate for light selection, W (luminance). Distant lights use the scene's
+    /// bounding sphere radius `r`: the power they deliver into it (pbrt-v4 `Phi`).
+    pub fn power(&self, scene_radius: f32) -> f32 {
+        let disk = PI * scene_radius * scene_radius;
+        let p = match self {
+            Light::Area(a) => a.power(),
+            Light::Point { intensity, .. } => 4.0 * PI * intensity.luminance_rgb(),
+            Light::Spot { intensity, cone, .. } => {
+                // Full cone up to the mid-falloff angle: exact for a hard cutoff.
+                let mid = 0.5 * (cone.cutoff + cone.beam_width);
+                2.0 * PI * (1.0 - mid.cos()) * intensity.luminance_rgb()
+            }
+            Light::Directional { irradiance, .. } => disk * irradiance.luminance_rgb(),
+            Light::Sun { radiance, one_minus_cos, .. } => {
+                // E = L pi sin^2(alpha) = L pi (1 - cos)(1 + cos).
+                disk * radiance.luminance_rgb() * PI * one_minus_cos * (2.0 - one_minus_cos)
+            }
+            Light::Constant { radiance } => 4.0 * PI * disk * radiance.luminance_rgb(),
+            Light::EnvMap(e) => 4.0 * PI * disk * e.mean_luminance(),
+        };
+        p.max(0.0)
+    }
+
+    /// Samples a direction towards the light from `x`.
+    pub fn sample(&self, x: Vec3, u_sel: f32, u: Vec2) -> Option<LightSample> {
+        match self {
+            Light::Area(a) => a.sample(x, u_sel, u),
+            Light::Point { position, intensity } => {
+                let to = *position - x;
+                let d2 = to.length_squared();
+                let dist = d2.sqrt();
+                if !(dist > 0.0) {
+                    return None;
+                }
+                let radiance = *intensity / d2;
+                radiance.is_finite().then_some(LightSample { p: *position, n: Vec3::ZERO, wi: to / dist, dist, radiance, pdf: 1.0, delta: true })
+            }
+            Light::Spot { position, frame, intensity, cone } => {
+                let to = *position - x;
+                let d2 = to.length_squared();
+                let dist = d2.sqrt();
+                if !(dist > 0.0) {
+                    return None;
+                }
+                let wi = to / dist;
+                let fall = cone.falloff(frame.n.dot(-wi));
+                let radiance = *intensity * (fall / d2);
+                radiance.is_finite().then_some(LightSample { p: *position, n: Vec3::ZERO, wi, dist, radiance, pdf: 1.0, delta: true })
+            }
+            Light::Directional { to_light, irradiance } => {
+                Some(LightSample { p: x, n: Vec3::ZERO, wi: *to_light, dist: f32::INFINITY, radiance: *irradiance, pdf: 1.0, delta: true })
+            }
+            Light::Sun { frame, radiance, one_minus_cos } => {
+                let wi = frame.to_world(square_to_uniform_cone(u, *one_minus_cos)).normalize();
+                Some(LightSample { p: x, n: Vec3::ZERO, wi, dist: f32::INFINITY, radiance: *radiance, pdf: uniform_cone_pdf(*one_minus_cos), delta: false })
+            }
+            Light::Constant { radiance } => {
+                let wi = square_to_uniform_sphere(u);
+                Some(LightSample { p: x, n: Vec3::ZERO, wi, dist: f32::INFINITY, radiance: *radiance, pdf: pt_math::warp::UNIFORM_SPHERE_PDF, delta: false })
+            }
+            Light::EnvMap(e) => {
+                let (wi, radiance, pdf) = e.sample(u)?;
+                Some(LightSample { p: x, n: Vec3::ZERO, wi, dist: f32::INFINITY, radiance, pdf, delta: false })
+            }
+        }
+    }
+
+    /// Radiance seen along a ray that left the scene in direction `dir` (infinite lights only).
+    pub fn escaped_radiance(&self, dir: Vec3) -> SampledSpectrum {
+        match self {
+            Light::Sun { frame, radiance, one_minus_cos } => {
+                // Inside the cone: 1 - cos(theta) < 1 - cos(alpha), compared without cancellation
+                // as |dir - n|^2 / 2 = 1 - cos(theta).
+                if 0.5 * (dir - frame.n).length_squared() < *one_minus_cos { *radiance } else { SampledSpectrum::ZERO }
+            }
+            Light::Constant { radiance } => *radiance,
+            Light::EnvMap(e) => e.radiance(dir),
+            _ => SampledSpectrum::ZERO,
+        }
+    }
+
+    /// Solid-angle pdf that `sample` produces direction `dir` (infinite lights only).
+    pub fn escaped_pdf(&self, dir: Vec3) -> f32 {
+        match self {
+            Light::Sun { frame, one_minus_cos, .. } => {
+                if 0.5 * (dir - frame.n).length_squared() < *one_minus_cos { uniform_cone_pdf(*one_minus_cos) } else { 0.0 }
+            }
+            Light::Constant { .. } => pt_math::warp::UNIFORM_SPHERE_PDF,
+            Light::EnvMap(e) => e.pdf(dir),
+            _ => 0.0,
+        }
     }
 }
 

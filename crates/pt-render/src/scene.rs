@@ -3,10 +3,10 @@
 use crate::accel::{Accel, BvhKind};
 use crate::camera::Camera;
 use crate::geometry::{intersect_triangle, Interaction, Primitive};
-use crate::light::{AreaLight, LightShape, LightTriangle};
+use crate::light::{AreaLight, EnvMap, Light, LightShape, LightTriangle, SpotCone};
 use pt_bsdf::{Bsdf, Lambert, SurfaceBsdf};
-use pt_math::{Distribution1D, Ray, Vec2, Vec3, Vec3A};
-use pt_scene::{BsdfDesc, BsdfKind, Geometry, SceneDesc, SourceLoc, SpectrumDesc, TriangleMesh};
+use pt_math::{Distribution1D, Frame, Mat3, Ray, Vec2, Vec3, Vec3A};
+use pt_scene::{BsdfDesc, BsdfKind, Geometry, LightDesc, LightKind, SceneDesc, SourceLoc, SpectrumDesc, TriangleMesh};
 use pt_spectrum::{ColorMode, SampledSpectrum};
 
 /// Errors found while building a scene (after parsing): each names the element at fault.
@@ -65,9 +65,13 @@ pub struct Scene {
     shapes: Vec<ShapeData>,
     /// One BSDF per material of the description (RGB mode: evaluated once).
     pub materials: Vec<SurfaceBsdf>,
-    /// Area lights.
-    pub lights: Vec<AreaLight>,
+    /// All lights: area lights first (in shape order), then the others in file order.
+    pub lights: Vec<Light>,
+    /// Indices into `lights` of lights that rays leaving the scene can see.
+    pub infinite_lights: Vec<usize>,
     light_distr: Option<Distribution1D>,
+    /// Centre and radius of the scene's bounding sphere.
+    pub bounds: (Vec3, f32),
     /// The camera.
     pub camera: Camera,
     /// Colour mode the scene is rendered in.
@@ -133,7 +137,7 @@ impl Scene {
                 match light_shape {
                     Some((shape, area)) if area > 0.0 => {
                         data.light = Some(lights.len() as u32);
-                        lights.push(AreaLight { radiance, shape, area });
+                        lights.push(Light::Area(AreaLight { radiance, shape, area }));
                     }
                     _ => {
                         return Err(BuildError { loc: em.loc.clone(), message: "area emitter on a shape with zero area".into() });
@@ -143,15 +147,20 @@ impl Scene {
             shapes.push(data);
         }
 
+        let bounds = bounding_sphere(&prims);
         let accel = Accel::build(prims, bvh);
         let prim_refs = accel.original_index.iter().map(|&i| refs[i as usize]).collect();
+        for l in &desc.lights {
+            lights.push(build_light(l)?);
+        }
+        let infinite_lights = (0..lights.len()).filter(|&i| lights[i].is_infinite()).collect();
         let weights: Vec<f32> = match selection {
-            LightSelection::Power => lights.iter().map(AreaLight::power).collect(),
+            LightSelection::Power => lights.iter().map(|l| l.power(bounds.1)).collect(),
             LightSelection::Uniform => vec![1.0; lights.len()],
         };
         let light_distr = Distribution1D::new(&weights);
         let camera = Camera::new(&desc.camera, desc.film.width, desc.film.height);
-        Ok(Scene { accel, prim_refs, shapes, materials, lights, light_distr, camera, mode: ColorMode::Rgb, stats })
+        Ok(Scene { accel, prim_refs, shapes, materials, lights, infinite_lights, light_distr, bounds, camera, mode: ColorMode::Rgb, stats })
     }
 
     /// Closest hit along `ray`, with its surface data.
@@ -210,7 +219,10 @@ impl Scene {
     #[inline]
     pub fn shape_light(&self, shape: u32) -> Option<(usize, &AreaLight)> {
         let i = self.shapes[shape as usize].light? as usize;
-        Some((i, &self.lights[i]))
+        match &self.lights[i] {
+            Light::Area(a) => Some((i, a)),
+            _ => None,
+        }
     }
 
     /// Chooses a light for NEE: `(index, probability, u rescaled)`.
@@ -281,4 +293,55 @@ fn add_mesh(
         areas.push(area);
     }
     Ok((!tris.is_empty()).then_some((tris, areas)))
+}
+
+/// Bounding sphere (centre, radius) of all primitives; a unit sphere at the origin if empty.
+fn bounding_sphere(prims: &[Primitive]) -> (Vec3, f32) {
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    for p in prims {
+        let b = p.aabb();
+        lo = lo.min(b.min.into());
+        hi = hi.max(b.max.into());
+    }
+    if !(lo.is_finite() && hi.is_finite()) {
+        return (Vec3::ZERO, 1.0);
+    }
+    let c = 0.5 * (lo + hi);
+    (c, (0.5 * (hi - lo).length()).max(1e-6))
+}
+
+/// A light that is not attached to a shape.
+fn build_light(l: &LightDesc) -> Result<Light, BuildError> {
+    let err = |m: String| BuildError { loc: l.loc.clone(), message: m };
+    Ok(match &l.kind {
+        LightKind::Point { position, intensity } => Light::Point { position: *position, intensity: spectrum(intensity) },
+        LightKind::Spot { to_world, intensity, cutoff_deg, beam_width_deg } => {
+            let axis = to_world.transform_vector3(Vec3::Z).try_normalize().ok_or_else(|| err("spot to_world has no direction".into()))?;
+            let cutoff = cutoff_deg.to_radians();
+            Light::Spot {
+                position: to_world.transform_point3(Vec3::ZERO),
+                frame: Frame::from_normal(axis),
+                intensity: spectrum(intensity),
+                cone: SpotCone { cos_cutoff: cutoff.cos(), cutoff, beam_width: beam_width_deg.to_radians() },
+            }
+        }
+        LightKind::Directional { direction, irradiance } => Light::Directional { to_light: -*direction, irradiance: spectrum(irradiance) },
+        LightKind::Sun { direction, irradiance, angular_diameter_deg } => {
+            let alpha = 0.5 * angular_diameter_deg.to_radians();
+            let half = (0.5 * alpha).sin();
+            let one_minus_cos = 2.0 * half * half; // 1 - cos(alpha) without cancellation
+            let sin2 = one_minus_cos * (2.0 - one_minus_cos);
+            Light::Sun { frame: Frame::from_normal(-*direction), radiance: spectrum(irradiance) * (1.0 / (std::f32::consts::PI * sin2)), one_minus_cos }
+        }
+        LightKind::Constant { radiance } => Light::Constant { radiance: spectrum(radiance) },
+        LightKind::EnvMap { filename, to_world, scale } => {
+            let (img, _) = pt_image::read_exr(filename).map_err(|e| err(format!("environment map: {e}")))?;
+            if img.data.iter().any(|p| p.iter().any(|c| !c.is_finite() || *c < 0.0)) {
+                return Err(err(format!("environment map '{}' has negative or non-finite pixels", filename.display())));
+            }
+            let texels = img.data.iter().map(|p| p.map(|c| c * scale)).collect();
+            let rot = Mat3::from_mat4(*to_world);
+            EnvMap::new(img.width as usize, img.height as usize, texels, rot).map(Light::EnvMap).ok_or_else(|| err("empty environment map".into()))?
+        }
+    })
 }

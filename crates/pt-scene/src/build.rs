@@ -34,9 +34,8 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "polarizer", "retarder", "circular", "measured", "pplastic", "principled",
         "principledthin", "hair",
     ]),
-    ("emitter", &["area"], &[
-        "point", "spot", "directional", "constant", "envmap", "projector", "directionalarea",
-        "sunsky",
+    ("emitter", &["area", "point", "spot", "directional", "sun", "constant", "envmap"], &[
+        "projector", "directionalarea", "sunsky",
     ]),
     ("texture", &[], &["bitmap", "checkerboard", "mesh_attribute", "volume"]),
     ("medium", &[], &["homogeneous", "heterogeneous"]),
@@ -174,6 +173,7 @@ impl<'e> Builder<'e> {
         let mut sensor: Option<(CameraDesc, FilmDesc, SamplerDesc)> = None;
         let mut integrator = None;
         let mut shapes = Vec::new();
+        let mut lights = Vec::new();
         for child in &view.children {
             let Child::Object(el) = *child else {
                 return Err(SceneError::at(
@@ -196,7 +196,8 @@ impl<'e> Builder<'e> {
                 "shape" => shapes.push(self.shape(el)?),
                 // Validated now; it enters `bsdfs` when a shape uses it.
                 "bsdf" => drop(self.bsdf_desc(el)?),
-                "emitter" => return Err(self.top_level_emitter(el)),
+                "emitter" if el.attr("type") == Some("area") => return Err(self.top_level_emitter(el)),
+                "emitter" => lights.push(self.light(el)?),
                 "film" | "sampler" => {
                     return Err(SceneError::at(
                         &el.loc,
@@ -228,6 +229,7 @@ impl<'e> Builder<'e> {
             integrator: integrator.unwrap_or_else(default_integrator),
             shapes,
             bsdfs: std::mem::take(&mut self.bsdfs),
+            lights,
         })
     }
 
@@ -240,6 +242,84 @@ impl<'e> Builder<'e> {
         } else {
             plugin_error(el)
         }
+    }
+
+    /// Emitters outside shapes: `point` (`intensity` 1, `position` or `to_world`), `spot`
+    /// (`intensity` 1, `cutoff_angle` 20, `beam_width` 3/4 of the cutoff, `to_world`),
+    /// `directional` (`irradiance` 1, `direction` or `to_world` +z), `sun` (project extension:
+    /// `irradiance` 1, `direction`, `angular_diameter` 0.5338 degrees), `constant` (`radiance` 1),
+    /// `envmap` (`filename`, `scale` 1, `to_world`).
+    fn light(&mut self, el: &'e Element) -> Result<LightDesc> {
+        let v = ObjectView::parse(el)?;
+        let to_world = v.transform("to_world")?;
+        let spectrum = |name: &str| -> Result<SpectrumDesc> {
+            let s = v.spectrum(name)?.unwrap_or(SpectrumDesc::Constant(1.0));
+            let vals = match s {
+                SpectrumDesc::Constant(c) => vec![c],
+                SpectrumDesc::Rgb(c) => c.to_vec(),
+            };
+            if vals.iter().any(|&x| x < 0.0) {
+                return Err(v.prop_error(name, format!("{name} must not be negative")));
+            }
+            Ok(s)
+        };
+        // Direction of travel: `direction`, or the +z axis of `to_world`.
+        let direction = |v: &ObjectView<'e>, to_world: Option<Mat4>| -> Result<Vec3> {
+            let d = match (v.vec3("direction")?, to_world) {
+                (Some(_), Some(_)) => return Err(v.prop_error("direction", "give either direction or to_world, not both")),
+                (Some(d), None) => d,
+                (None, Some(m)) => m.transform_vector3(Vec3::Z),
+                (None, None) => Vec3::Z,
+            };
+            d.try_normalize().ok_or_else(|| v.prop_error("direction", "direction must not be zero"))
+        };
+        let kind = match v.plugin.as_str() {
+            "point" => {
+                let position = match (v.vec3("position")?, to_world) {
+                    (Some(_), Some(_)) => return Err(v.prop_error("position", "give either position or to_world, not both")),
+                    (Some(p), None) => p,
+                    (None, Some(m)) => m.transform_point3(Vec3::ZERO),
+                    (None, None) => Vec3::ZERO,
+                };
+                LightKind::Point { position, intensity: spectrum("intensity")? }
+            }
+            "spot" => {
+                let cutoff_deg = v.float("cutoff_angle")?.unwrap_or(20.0);
+                if !(cutoff_deg > 0.0 && cutoff_deg <= 180.0) {
+                    return Err(v.prop_error("cutoff_angle", "cutoff_angle must be in (0, 180] degrees"));
+                }
+                let beam_width_deg = v.float("beam_width")?.unwrap_or(cutoff_deg * 0.75);
+                if !(beam_width_deg >= 0.0 && beam_width_deg <= cutoff_deg) {
+                    return Err(v.prop_error("beam_width", "beam_width must be in [0, cutoff_angle] degrees"));
+                }
+                LightKind::Spot { to_world: to_world.unwrap_or(Mat4::IDENTITY), intensity: spectrum("intensity")?, cutoff_deg, beam_width_deg }
+            }
+            "directional" => LightKind::Directional { direction: direction(&v, to_world)?, irradiance: spectrum("irradiance")? },
+            "sun" => {
+                let angular_diameter_deg = v.float("angular_diameter")?.unwrap_or(0.5338);
+                if !(angular_diameter_deg > 0.0 && angular_diameter_deg < 180.0) {
+                    return Err(v.prop_error("angular_diameter", "angular_diameter must be in (0, 180) degrees"));
+                }
+                LightKind::Sun { direction: direction(&v, to_world)?, irradiance: spectrum("irradiance")?, angular_diameter_deg }
+            }
+            "constant" => LightKind::Constant { radiance: spectrum("radiance")? },
+            "envmap" => {
+                let name = v.string("filename")?.ok_or_else(|| SceneError::at(&el.loc, "envmap needs a filename"))?;
+                let path = resolve_file(&name, &v.el.dir, &[self.base_dir], self.search_paths);
+                if !path.is_file() {
+                    return Err(v.prop_error("filename", format!("cannot open environment map '{name}' (looked for {})", path.display())));
+                }
+                let scale = v.float("scale")?.unwrap_or(1.0);
+                if scale < 0.0 {
+                    return Err(v.prop_error("scale", "scale must not be negative"));
+                }
+                LightKind::EnvMap { filename: path, to_world: to_world.unwrap_or(Mat4::IDENTITY), scale }
+            }
+            _ => return Err(plugin_error(el)),
+        };
+        no_children(&v)?;
+        v.finish()?;
+        Ok(LightDesc { loc: el.loc.clone(), kind })
     }
 
     // -----------------------------------------------------------------------------------------

@@ -46,6 +46,73 @@ pub struct SceneDesc {
     pub shapes: Vec<ShapeDesc>,
     /// All BSDFs referenced by shapes (shared ones appear once). `ShapeDesc::bsdf` indexes this.
     pub bsdfs: Vec<BsdfDesc>,
+    /// Emitters that are not attached to a shape (point, spot, directional, sun, environment).
+    pub lights: Vec<LightDesc>,
+}
+
+/// An emitter that is not attached to a shape, with where it was defined.
+#[derive(Clone, Debug)]
+pub struct LightDesc {
+    /// Where it was defined.
+    pub loc: SourceLoc,
+    /// Its type and parameters.
+    pub kind: LightKind,
+}
+
+/// Emitters not attached to shapes. Directions are unit vectors in world space.
+#[derive(Clone, Debug)]
+pub enum LightKind {
+    /// Isotropic point light (Mitsuba `point`): `intensity` in W/sr, inverse-square falloff.
+    Point {
+        /// Position, world space.
+        position: Vec3,
+        /// Radiant intensity, W/sr.
+        intensity: SpectrumDesc,
+    },
+    /// Spot light (Mitsuba `spot`): intensity `intensity` (W/sr) on its axis (local +z of
+    /// `to_world`), full until `beam_width_deg` off axis, falling linearly in angle to 0 at
+    /// `cutoff_deg`.
+    Spot {
+        /// Light-to-world transform; the light sits at its origin and points along its +z.
+        to_world: Mat4,
+        /// Radiant intensity on the axis, W/sr.
+        intensity: SpectrumDesc,
+        /// Angle from the axis beyond which no light leaves, degrees.
+        cutoff_deg: f32,
+        /// Angle from the axis within which the intensity is full, degrees.
+        beam_width_deg: f32,
+    },
+    /// A distant light from one direction (Mitsuba `directional`).
+    Directional {
+        /// Direction the light travels in (from the light towards the scene), unit, world.
+        direction: Vec3,
+        /// Irradiance on a surface facing the light, W/m^2.
+        irradiance: SpectrumDesc,
+    },
+    /// A sun: a distant light of finite angular diameter, uniform radiance over its disk, so that
+    /// shadows get a penumbra (project extension `sun`).
+    Sun {
+        /// Direction the light travels in (from the sun towards the scene), unit, world.
+        direction: Vec3,
+        /// Irradiance on a surface facing the sun, W/m^2.
+        irradiance: SpectrumDesc,
+        /// Full angular diameter of the disk, degrees (the Sun's mean is 0.5338).
+        angular_diameter_deg: f32,
+    },
+    /// Uniform radiance from every direction (Mitsuba `constant`).
+    Constant {
+        /// Radiance, W sr^-1 m^-2.
+        radiance: SpectrumDesc,
+    },
+    /// Environment map (Mitsuba `envmap`): a latitude-longitude image of incident radiance.
+    EnvMap {
+        /// The image file (EXR), resolved.
+        filename: PathBuf,
+        /// Map-to-world transform (rotation).
+        to_world: Mat4,
+        /// Factor applied to the image's values.
+        scale: f32,
+    },
 }
 
 /// Which image axis the field of view spans (Mitsuba's `fov_axis`).
