@@ -18,23 +18,7 @@
 mod common;
 
 use common::*;
-use pt_image::stats::{block_ztest, ZTestReport};
 use pt_image::Image;
-
-const BLOCK: u32 = 16;
-const ALPHA: f64 = 0.01;
-/// Global mean ratio tolerance. The image mean's standard error is 0.04-0.05% at 256 spp
-/// (measured from the variance images), so 0.5% is over 10 standard errors: noise cannot fail
-/// it, while a 2% bias (or any systematic error above 0.5%) does. The block test above is the
-/// sharper instrument; this one says in one number how far off the image is.
-const MEAN_RATIO_TOL: f64 = 0.005;
-
-fn reference() -> (Image, Image) {
-    let r = repo().join("references");
-    let (img, _) = pt_image::read_exr(&r.join("cornell-box.exr")).expect("references/cornell-box.exr");
-    let (var, _) = pt_image::read_exr(&r.join("cornell-box_var.exr")).expect("references/cornell-box_var.exr");
-    (img, var)
-}
 
 /// Samples per pixel of the test renders (see the module comment).
 const SPP: &str = "256";
@@ -48,43 +32,8 @@ fn nominal() -> &'static (Image, Image) {
     })
 }
 
-struct Verdict {
-    z: ZTestReport,
-    ratio: [f64; 3],
-}
-
-impl Verdict {
-    fn agrees(&self) -> bool {
-        self.z.pass && self.ratio.iter().all(|r| (r - 1.0).abs() < MEAN_RATIO_TOL)
-    }
-}
-
-fn judge(img: &Image, var: &Image, name: &str) -> Verdict {
-    let (rimg, rvar) = reference();
-    let z = block_ztest(img, var, &rimg, &rvar, BLOCK, ALPHA).expect("same size as the reference");
-    let (m, mr) = (img.mean(), rimg.mean());
-    let ratio = std::array::from_fn(|c| m[c] / mr[c]);
-    eprintln!(
-        "{name}: max |z| {:.2} (threshold p {:.2e}), failed blocks {}/{}, chi2 {:.1} (p {:.3}), mean ratio {:.4} {:.4} {:.4}",
-        z.max_abs_z, z.p_threshold, z.failed, z.tests, z.chi2, z.chi2_p, ratio[0], ratio[1], ratio[2]
-    );
-    if !z.pass {
-        write_diagnostics(img, &rimg, &z, name);
-    }
-    Verdict { z, ratio }
-}
-
-/// On failure: the relative error image and the per-block |z| image under target/.
-fn write_diagnostics(img: &Image, reference: &Image, z: &ZTestReport, name: &str) {
-    let dir = scratch(&format!("cornell_diag_{name}"));
-    let Ok(err) = pt_image::colormap::relative_error_image(img, reference) else { return };
-    let err_img = pt_image::colormap::false_colour(&err, img.width, img.height, 0.0, 0.2, false);
-    let zs: Vec<f32> = z.z.iter().map(|b| b.iter().fold(0.0f64, |a, v| a.max(v.abs())) as f32).collect();
-    let z_img = pt_image::colormap::false_colour(&zs, z.blocks_x, z.blocks_y, 0.0, 6.0, false);
-    let _ = pt_image::write_exr(&dir.join("relative_error.exr"), &err_img, &Default::default());
-    let _ = pt_image::write_png_preview(&dir.join("relative_error.png"), &err_img, 0.0);
-    let _ = pt_image::write_png_preview(&dir.join("block_abs_z.png"), &z_img, 0.0);
-    eprintln!("{name}: diagnostics written to {}", dir.display());
+fn judge(img: &Image, var: &Image, label: &str) -> Verdict {
+    judge_against_reference(img, var, "cornell-box", label)
 }
 
 #[test]

@@ -52,3 +52,68 @@ pub fn mean_and_stderr(img: &Image, var: &Image) -> ([f64; 3], [f64; 3]) {
     }
     (m.map(|x| x / n), v.map(|x| x.sqrt() / n))
 }
+
+/// Block size (pixels) of the reference z-test.
+pub const BLOCK: u32 = 16;
+/// Family-wise significance of the reference z-test (Sidak-corrected over blocks).
+pub const ALPHA: f64 = 0.01;
+/// Global mean ratio tolerance. The image mean's standard error is 0.04-0.05% at 256 spp on the
+/// Cornell box (measured from the variance images), so 0.5% is over 10 standard errors: noise
+/// cannot fail it, while a 2% bias (or any systematic error above 0.5%) does. The block test is
+/// the sharper instrument; this one says in one number how far off the image is.
+pub const MEAN_RATIO_TOL: f64 = 0.005;
+
+/// The Mitsuba reference of `scene` (mean and variance of the mean).
+pub fn reference(scene: &str) -> (Image, Image) {
+    let r = repo().join("references");
+    let (img, _) = pt_image::read_exr(&r.join(format!("{scene}.exr"))).unwrap_or_else(|e| panic!("reference of {scene}: {e}"));
+    let (var, _) = pt_image::read_exr(&r.join(format!("{scene}_var.exr"))).unwrap_or_else(|e| panic!("reference variance of {scene}: {e}"));
+    (img, var)
+}
+
+/// The outcome of comparing a render with its reference.
+pub struct Verdict {
+    /// The block z-test.
+    pub z: pt_image::stats::ZTestReport,
+    /// mean(render) / mean(reference) per channel.
+    pub ratio: [f64; 3],
+}
+
+impl Verdict {
+    /// Block z-test passes and every channel's mean ratio is within [`MEAN_RATIO_TOL`] of 1
+    /// (channels whose reference mean is 0 must be 0 too).
+    pub fn agrees(&self) -> bool {
+        self.z.pass && self.ratio.iter().all(|r| (r - 1.0).abs() < MEAN_RATIO_TOL || r.is_nan())
+    }
+}
+
+/// Compares a render (mean and variance-of-mean images) with the reference of `scene`: block
+/// z-test ([`BLOCK`], [`ALPHA`]) with both variances, and the mean ratio. Prints one summary line;
+/// on a failed z-test writes the relative error and per-block |z| images under
+/// target/tmp/diag_<scene>_<label>/ and says where.
+pub fn judge_against_reference(img: &Image, var: &Image, scene: &str, label: &str) -> Verdict {
+    let (rimg, rvar) = reference(scene);
+    let z = pt_image::stats::block_ztest(img, var, &rimg, &rvar, BLOCK, ALPHA).expect("same size as the reference");
+    let (m, mr) = (img.mean(), rimg.mean());
+    let ratio = std::array::from_fn(|c| if mr[c] == 0.0 && m[c] == 0.0 { f64::NAN } else { m[c] / mr[c] });
+    eprintln!(
+        "{scene} {label}: max |z| {:.2} (per-test p threshold {:.2e}), failed blocks {}/{}, chi2 {:.1} (p {:.3}), mean ratio {:.4} {:.4} {:.4}",
+        z.max_abs_z, z.p_threshold, z.failed, z.tests, z.chi2, z.chi2_p, ratio[0], ratio[1], ratio[2]
+    );
+    if !z.pass {
+        write_diagnostics(img, &rimg, &z, &format!("{scene}_{label}"));
+    }
+    Verdict { z, ratio }
+}
+
+fn write_diagnostics(img: &Image, reference: &Image, z: &pt_image::stats::ZTestReport, name: &str) {
+    let dir = scratch(&format!("diag_{name}"));
+    let Ok(err) = pt_image::colormap::relative_error_image(img, reference) else { return };
+    let err_img = pt_image::colormap::false_colour(&err, img.width, img.height, 0.0, 0.2, false);
+    let zs: Vec<f32> = z.z.iter().map(|b| b.iter().fold(0.0f64, |a, v| a.max(v.abs())) as f32).collect();
+    let z_img = pt_image::colormap::false_colour(&zs, z.blocks_x, z.blocks_y, 0.0, 6.0, false);
+    let _ = pt_image::write_exr(&dir.join("render.exr"), img, &Default::default());
+    let _ = pt_image::write_png_preview(&dir.join("relative_error.png"), &err_img, 0.0);
+    let _ = pt_image::write_png_preview(&dir.join("block_abs_z.png"), &z_img, 0.0);
+    eprintln!("{name}: render, relative error (0-20%) and per-block |z| (0-6) written to {}", dir.display());
+}

@@ -170,8 +170,9 @@ impl SpotCone {
 
 /// A latitude-longitude environment map (Mitsuba 3 `envmap` conventions): the direction `d` in
 /// map space (y up) has `u = atan2(d.x, -d.z) / (2 pi)` (wrapped to [0,1)) and
-/// `v = acos(d.y) / pi`; radiance is bilinearly interpolated between pixel centres, wrapping
-/// in u and clamping in v. Sampled by a piecewise-constant distribution over pixels proportional
+/// `v = acos(d.y) / pi`; radiance is bilinearly interpolated, with pixel centres at
+/// `u = (x + 0.5) / W` (wrapping) and rows at `v = y / (H - 1)` (row 0 on the +y pole), as
+/// Mitsuba 3 does (checked against its reference render of scenes/envmap.xml). Sampled by a piecewise-constant distribution over pixels proportional
 /// to the largest luminance in each pixel's bilinear footprint times sin(theta), so that every
 /// direction with non-zero radiance has a non-zero pdf.
 #[derive(Clone, Debug)]
@@ -230,8 +231,10 @@ impl EnvMap {
 
     /// Bilinearly interpolated radiance at `uv`.
     fn lookup(&self, uv: Vec2) -> [f32; 3] {
+        // Mitsuba 3's envmap: columns are pixel centres (u = (x + 0.5) / W, wrapping), rows span
+        // the poles exactly (row 0 at v = 0, row H-1 at v = 1).
         let x = uv.x * self.width as f32 - 0.5;
-        let y = (uv.y * self.height as f32 - 0.5).clamp(0.0, (self.height - 1) as f32);
+        let y = (uv.y * (self.height - 1) as f32).clamp(0.0, (self.height - 1) as f32);
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         let xi = |k: f32| (k as i64).rem_euclid(self.width as i64) as usize;

@@ -304,9 +304,8 @@ fn unsupported_plugins_say_not_yet_implemented() {
         "<bsdf type=\"dielectric\"/>",
         "<bsdf type=\"roughconductor\"/>",
         "<bsdf type=\"plastic\"/>",
-        "<emitter type=\"point\"/>",
-        "<emitter type=\"constant\"/>",
-        "<emitter type=\"envmap\"/>",
+        "<emitter type=\"projector\"/>",
+        "<emitter type=\"sunsky\"/>",
         "<sensor type=\"orthographic\"/>",
         "<shape type=\"ply\"/>",
         "<integrator type=\"volpath\"/>",
@@ -967,4 +966,36 @@ fn deep_nesting_is_an_error_not_a_stack_overflow() {
         "</bsdf>".repeat(depth)
     );
     assert!(fail(&xml).message.contains("nested deeper"));
+}
+
+#[test]
+fn emitters_outside_shapes() {
+    let s = load_str(
+        &scene(
+            r#"<emitter type="point"><point name="position" value="1, 2, 3"/><rgb name="intensity" value="4"/></emitter>
+<emitter type="spot"><float name="cutoff_angle" value="30"/></emitter>
+<emitter type="directional"><vector name="direction" value="0, -2, 0"/></emitter>
+<emitter type="sun"><vector name="direction" value="0, -1, 0"/></emitter>
+<emitter type="constant"><rgb name="radiance" value="0.5"/></emitter>"#,
+        ),
+        Path::new("t.xml"),
+        Path::new("."),
+        &[],
+    )
+    .unwrap();
+    assert_eq!(s.lights.len(), 5);
+    assert!(matches!(s.lights[0].kind, LightKind::Point { position, .. } if position == Vec3::new(1.0, 2.0, 3.0)));
+    assert!(matches!(s.lights[1].kind, LightKind::Spot { cutoff_deg, beam_width_deg, .. } if cutoff_deg == 30.0 && beam_width_deg == 22.5));
+    assert!(matches!(s.lights[2].kind, LightKind::Directional { direction, .. } if direction == Vec3::new(0.0, -1.0, 0.0)));
+    assert!(matches!(s.lights[3].kind, LightKind::Sun { angular_diameter_deg, .. } if angular_diameter_deg == 0.5338));
+    // Bad values name the property.
+    for (body, what) in [
+        (r#"<emitter type="spot"><float name="beam_width" value="30"/></emitter>"#, "beam_width"),
+        (r#"<emitter type="point"><rgb name="intensity" value="-1"/></emitter>"#, "intensity"),
+        (r#"<emitter type="envmap"><string name="filename" value="nope.exr"/></emitter>"#, "nope.exr"),
+        (r#"<emitter type="directional"><vector name="direction" value="0, 0, 0"/></emitter>"#, "direction"),
+    ] {
+        let e = fail(&scene(body));
+        assert!(e.to_string().contains(what), "{body}: {e}");
+    }
 }
