@@ -109,6 +109,12 @@ struct RenderArgs {
     /// BVH layout (both from obvhs).
     #[arg(long, value_enum, default_value_t = BvhArg::Cwbvh)]
     bvh: BvhArg,
+    /// Global-illumination method [default: the scene's integrator]. `radiosity` solves for
+    /// diffuse patch radiosities and displays them (see the radiosity options below).
+    #[arg(long, value_enum)]
+    integrator: Option<IntegratorArg>,
+    #[command(flatten)]
+    radiosity: RadiosityArgs,
     /// No progress bar or summary on stderr.
     #[arg(short, long)]
     quiet: bool,
@@ -122,6 +128,39 @@ struct InfoArgs {
     scene: Option<PathBuf>,
     #[command(flatten)]
     scene_args: SceneArgs,
+}
+
+/// Options of the radiosity integrator; each overrides the scene's `<integrator type="radiosity">`
+/// property of the same name.
+#[derive(Args)]
+struct RadiosityArgs {
+    /// Radiosity: longest patch edge in scene units [default: 1/32 of the scene's diagonal].
+    #[arg(long)]
+    patch_size: Option<f32>,
+    /// Radiosity: form-factor rays per patch [default: 1024].
+    #[arg(long)]
+    rays_per_patch: Option<u32>,
+    /// Radiosity: jacobi, gauss_seidel or progressive [default: gauss_seidel].
+    #[arg(long)]
+    radiosity_solver: Option<String>,
+    /// Radiosity: constant, smoothed or final_gather [default: smoothed].
+    #[arg(long)]
+    radiosity_display: Option<String>,
+    /// Radiosity: none, average or balanced form-factor reciprocity [default: balanced].
+    #[arg(long)]
+    reciprocity: Option<String>,
+    /// Radiosity: relative residual at which the solver stops [default: 1e-4].
+    #[arg(long)]
+    tolerance: Option<f32>,
+    /// Radiosity: iteration cap [default: 1000].
+    #[arg(long)]
+    max_iterations: Option<u32>,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum IntegratorArg {
+    Path,
+    Radiosity,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -235,6 +274,14 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
         b.build().context("cannot start worker threads")?
     };
 
+    let radiosity = match args.integrator {
+        Some(i) => i == IntegratorArg::Radiosity,
+        None => desc.integrator.kind == pt_scene::IntegratorKind::Radiosity,
+    };
+    if radiosity {
+        return render_radiosity(&args, &desc, &settings, &output, &pool);
+    }
+
     let build_start = std::time::Instant::now();
     let scene = pool.install(|| Scene::build(&desc, bvh, selection))?;
     let build_time = build_start.elapsed();
@@ -252,27 +299,12 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
     let out = pool.install(|| pt_render::render(&scene, &settings, &|n| bar.inc(n)));
     bar.finish_and_clear();
 
-    let image = Image { width: out.width, height: out.height, data: out.mean.clone() };
-    let meta = ExrMeta {
-        spp: Some(out.spp),
-        mode: Some(scene.mode.name().to_string()),
-        render_time_s: Some(out.time.as_secs_f64()),
-        extra: vec![
-            ("pt_version".into(), env!("CARGO_PKG_VERSION").into()),
-            ("scene".into(), desc.source.display().to_string()),
-            ("seed".into(), settings.seed.to_string()),
-            ("max_depth".into(), settings.path.max_depth.to_string()),
-            ("strategy".into(), format!("{:?}", settings.path.strategy).to_lowercase()),
-        ],
-    };
-    pt_image::write_exr(&output, &image, &meta)?;
-    if args.variance {
-        let var = Image { width: out.width, height: out.height, data: out.variance.clone() };
-        pt_image::write_exr(&variance_path(&output), &var, &meta)?;
-    }
-    if let Some(png) = &args.png {
-        pt_image::write_png_preview(png, &image, args.exposure)?;
-    }
+    let extra = vec![
+        ("integrator".into(), "path".into()),
+        ("max_depth".into(), settings.path.max_depth.to_string()),
+        ("strategy".into(), format!("{:?}", settings.path.strategy).to_lowercase()),
+    ];
+    write_outputs(&args, &desc, &settings, &out, scene.mode.name(), extra, &output)?;
     if !args.quiet {
         let secs = out.time.as_secs_f64();
         eprintln!(
@@ -288,6 +320,99 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
         if out.nonfinite_samples > 0 {
             eprintln!("warning: {} samples were NaN or infinite and were left out of their pixels", out.nonfinite_samples);
         }
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Writes the EXR (and variance and PNG preview when asked), each atomically.
+fn write_outputs(
+    args: &RenderArgs,
+    desc: &SceneDesc,
+    settings: &RenderSettings,
+    out: &pt_render::RenderOutput,
+    mode: &str,
+    mut extra: Vec<(String, String)>,
+    output: &Path,
+) -> Result<()> {
+    let image = Image { width: out.width, height: out.height, data: out.mean.clone() };
+    extra.splice(
+        0..0,
+        [
+            ("pt_version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
+            ("scene".to_string(), desc.source.display().to_string()),
+            ("seed".to_string(), settings.seed.to_string()),
+        ],
+    );
+    let meta = ExrMeta { spp: Some(out.spp), mode: Some(mode.to_string()), render_time_s: Some(out.time.as_secs_f64()), extra };
+    pt_image::write_exr(output, &image, &meta)?;
+    if args.variance {
+        let var = Image { width: out.width, height: out.height, data: out.variance.clone() };
+        pt_image::write_exr(&variance_path(output), &var, &meta)?;
+    }
+    if let Some(png) = &args.png {
+        pt_image::write_png_preview(png, &image, args.exposure)?;
+    }
+    Ok(())
+}
+
+/// `pt render --integrator radiosity` (or a scene whose integrator is `radiosity`).
+fn render_radiosity(args: &RenderArgs, desc: &SceneDesc, settings: &RenderSettings, output: &Path, pool: &rayon::ThreadPool) -> Result<ExitCode> {
+    use pt_radiosity::{Display, RadiosityParams, Reciprocity, Solver};
+    if args.max_depth.is_some() || !matches!(args.strategy, StrategyArg::Mis) || !matches!(args.light_selection, SelectionArg::Power) {
+        bail!("--max-depth, --strategy and --light-selection apply to the path tracer, not to radiosity");
+    }
+    let o = &desc.integrator.radiosity;
+    let r = &args.radiosity;
+    let at = |what: &str, e: String| anyhow::anyhow!("{}: {what}: {e}", desc.integrator.loc);
+    let mut p = RadiosityParams { spp: settings.spp, seed: settings.seed, ..RadiosityParams::default() };
+    p.patch_size = r.patch_size.or(o.patch_size).or(p.patch_size);
+    p.rays_per_patch = r.rays_per_patch.or(o.rays_per_patch).unwrap_or(p.rays_per_patch);
+    p.tolerance = r.tolerance.or(o.tolerance).unwrap_or(p.tolerance);
+    p.max_iterations = r.max_iterations.or(o.max_iterations).unwrap_or(p.max_iterations);
+    if let Some(s) = r.radiosity_solver.as_ref().or(o.solver.as_ref()) {
+        p.solver = s.parse::<Solver>().map_err(|e| at("solver", e.to_string()))?;
+    }
+    if let Some(s) = r.radiosity_display.as_ref().or(o.display.as_ref()) {
+        p.display = s.parse::<Display>().map_err(|e| at("display", e.to_string()))?;
+    }
+    if let Some(s) = r.reciprocity.as_ref().or(o.reciprocity.as_ref()) {
+        p.reciprocity = s.parse::<Reciprocity>().map_err(|e| at("reciprocity", e.to_string()))?;
+    }
+    let show = !args.quiet && std::io::stderr().is_terminal();
+    let bar = if show { ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::stderr()) } else { ProgressBar::hidden() };
+    bar.set_style(ProgressStyle::with_template("{spinner} [{elapsed_precise}] {msg:<14} {wide_bar} {percent:>3}%").unwrap_or_else(|_| ProgressStyle::default_bar()));
+    let (out, stats) = pool.install(|| {
+        pt_radiosity::render(desc, &p, &|stage, f| {
+            bar.set_message(stage.to_string());
+            bar.set_position((f.clamp(0.0, 1.0) * 1000.0) as u64);
+        })
+    })?;
+    bar.finish_and_clear();
+    for w in &stats.warnings {
+        eprintln!("warning: {w}");
+    }
+    let extra = vec![
+        ("integrator".into(), "radiosity".into()),
+        ("patches".into(), stats.patches.to_string()),
+        ("rays_per_patch".into(), p.rays_per_patch.to_string()),
+        ("solver".into(), format!("{:?}", p.solver).to_lowercase()),
+        ("display".into(), format!("{:?}", p.display).to_lowercase()),
+        ("iterations".into(), stats.iterations.to_string()),
+    ];
+    write_outputs(args, desc, settings, &out, "rgb", extra, output)?;
+    if !args.quiet {
+        eprintln!(
+            "radiosity: {} patches (size {:.4}), {} form factors ({:.1} MB), form factors {:.2} s, solve {:.2} s in {} iterations, total {:.2} s -> {}",
+            stats.patches,
+            stats.patch_size,
+            stats.nnz,
+            stats.memory_bytes as f64 / 1e6,
+            stats.form_factor_time.as_secs_f64(),
+            stats.solve_time.as_secs_f64(),
+            stats.iterations,
+            out.time.as_secs_f64(),
+            output.display()
+        );
     }
     Ok(ExitCode::SUCCESS)
 }

@@ -33,7 +33,8 @@ impl RenderSettings {
     pub fn from_desc(desc: &pt_scene::SceneDesc) -> Self {
         let i = &desc.integrator;
         let max_depth = match i.kind {
-            pt_scene::IntegratorKind::Path => i.max_depth,
+            // Radiosity scenes rendered by the path tracer (`--integrator path`) keep their depth.
+            pt_scene::IntegratorKind::Path | pt_scene::IntegratorKind::Radiosity => i.max_depth,
             pt_scene::IntegratorKind::Direct => 2,
         };
         RenderSettings {

@@ -20,7 +20,7 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
     ("film", &["hdrfilm"], &["specfilm"]),
     ("sampler", &["independent", "stratified"], &["multijitter", "orthogonal", "ldsampler"]),
     ("rfilter", &["box", "tent", "gaussian"], &["mitchell", "catmullrom", "lanczos"]),
-    ("integrator", &["path", "direct", "moment"], &[
+    ("integrator", &["path", "direct", "moment", "radiosity"], &[
         "volpath", "volpathmis", "aov", "prb", "prb_basic", "prb_projective", "direct_projective",
         "ptracer", "depth", "stokes", "prbvolpath",
     ]),
@@ -413,8 +413,10 @@ impl<'e> Builder<'e> {
             "path" => path_integrator(&v)?,
             "direct" => direct_integrator(&v)?,
             "moment" => self.moment(&v)?,
+            "radiosity" => radiosity_integrator(&v)?,
             _ => return Err(plugin_error(el)),
         };
+        let desc = IntegratorDesc { loc: el.loc.clone(), ..desc };
         if v.plugin != "moment" {
             if let Some(child) = v.children.first() {
                 let target = self.resolve(child)?;
@@ -793,6 +795,39 @@ fn path_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
         rr_depth: int_in(v, "rr_depth", 5, 1, u32::MAX as i64)? as u32,
         hide_emitters: v.boolean("hide_emitters")?.unwrap_or(false),
         moment: false,
+        radiosity: RadiosityOptions::default(),
+        loc: SourceLoc::default(),
+    })
+}
+
+/// `radiosity` (project extension): `patch_size` (float, scene units), `rays_per_patch`,
+/// `tolerance`, `max_iterations`, `solver`, `display`, `reciprocity` (strings; checked by the
+/// radiosity crate). Renders diffuse scenes by finite elements; see crates/pt-radiosity.
+fn radiosity_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
+    let count = |name: &str| -> Result<Option<u32>> {
+        match v.integer(name)? {
+            None => Ok(None),
+            Some(n) if n >= 1 && n <= u32::MAX as i64 => Ok(Some(n as u32)),
+            Some(n) => Err(v.prop_error(name, format!("{name} must be at least 1, got {n}"))),
+        }
+    };
+    let radiosity = RadiosityOptions {
+        patch_size: v.float("patch_size")?,
+        rays_per_patch: count("rays_per_patch")?,
+        tolerance: v.float("tolerance")?,
+        max_iterations: count("max_iterations")?,
+        solver: v.string("solver")?,
+        display: v.string("display")?,
+        reciprocity: v.string("reciprocity")?,
+    };
+    Ok(IntegratorDesc {
+        kind: IntegratorKind::Radiosity,
+        max_depth: -1,
+        rr_depth: 5,
+        hide_emitters: false,
+        moment: false,
+        radiosity,
+        loc: SourceLoc::default(),
     })
 }
 
@@ -815,6 +850,8 @@ fn direct_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
         rr_depth: 5,
         hide_emitters: v.boolean("hide_emitters")?.unwrap_or(false),
         moment: false,
+        radiosity: RadiosityOptions::default(),
+        loc: SourceLoc::default(),
     })
 }
 
@@ -852,6 +889,8 @@ fn default_sampler() -> SamplerDesc {
 
 fn default_integrator() -> IntegratorDesc {
     IntegratorDesc {
+        radiosity: RadiosityOptions::default(),
+        loc: SourceLoc::default(),
         kind: IntegratorKind::Path,
         max_depth: -1,
         rr_depth: 5,

@@ -205,6 +205,28 @@ pub enum IntegratorKind {
     Path,
     /// Direct illumination only (Mitsuba `direct`): equivalent to `path` with max_depth 2.
     Direct,
+    /// Radiosity (project extension `radiosity`): finite elements for diffuse scenes.
+    Radiosity,
+}
+
+/// Options of `<integrator type="radiosity">`, as written (validated by the radiosity crate,
+/// which reports errors at the integrator's location). `None` means the solver's default.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RadiosityOptions {
+    /// Longest patch edge, scene units.
+    pub patch_size: Option<f32>,
+    /// Form-factor rays per patch.
+    pub rays_per_patch: Option<u32>,
+    /// Relative residual at which the solver stops.
+    pub tolerance: Option<f32>,
+    /// Iteration cap.
+    pub max_iterations: Option<u32>,
+    /// `jacobi`, `gauss_seidel` or `progressive`.
+    pub solver: Option<String>,
+    /// `constant`, `smoothed` or `final_gather`.
+    pub display: Option<String>,
+    /// `none`, `average` or `balanced`.
+    pub reciprocity: Option<String>,
 }
 
 /// Integrator settings with Mitsuba semantics.
@@ -220,6 +242,10 @@ pub struct IntegratorDesc {
     pub hide_emitters: bool,
     /// Whether the scene wrapped the integrator in `moment` (asks for a variance output).
     pub moment: bool,
+    /// Radiosity options (with `IntegratorKind::Radiosity`).
+    pub radiosity: RadiosityOptions,
+    /// Where the integrator was defined (default location if the scene has none).
+    pub loc: SourceLoc,
 }
 
 /// A triangle mesh in world space.
