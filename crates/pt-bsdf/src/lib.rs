@@ -6,18 +6,49 @@
 //!   both point away from the surface. (Mitsuba calls the viewer direction `si.wi`.)
 //! - [`Bsdf::eval`] returns f(wo, wi) **without** the cosine factor.
 //! - [`Bsdf::pdf`] is per unit **solid angle** of `wi`.
-//! - [`Bsdf::sample`] returns `weight = f * |cos theta_i| / pdf`.
-//! - Delta lobes (none yet) will return eval = pdf = 0 and be reached only through `sample`.
+//! - [`Bsdf::sample`] returns `weight = f * |cos theta_i| / pdf`, and `eta`, the relative index
+//!   along the sampled segment (1 for reflection).
+//! - Delta lobes ([`Conductor`], [`Dielectric`], [`ThinDielectric`]) return eval = pdf = 0 and
+//!   are reached only through `sample`, which sets `delta = true` and `pdf` = the discrete
+//!   probability of the chosen lobe (not a density: never use it in MIS).
+//! - Refraction carries radiance: transmitted values include the factor `1/eta^2` (pbrt-v4
+//!   `TransportMode::Radiance`). Energy is conserved in the sense `R + T eta^2 (weight) = 1`.
+//! - Transmissive models ([`Dielectric`], [`RoughDielectric`], [`ThinDielectric`]) handle both
+//!   sides themselves (`wo.z < 0` is inside); [`SurfaceBsdf`] never mirrors them, even if
+//!   `two_sided` is set.
 //!
 //! Models are a closed set behind one enum, held by value at a hit (no allocation per hit).
+//! Each model is in its own file, whose header gives the formula, the citation, the parameter
+//! table and the Mitsuba XML it is read from.
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod conductor;
+pub mod dielectric;
+pub mod fresnel;
 pub mod lambert;
+pub mod microfacet;
+pub mod minnaert;
+pub mod oren_nayar;
+pub mod rough_dielectric;
+pub mod thin_dielectric;
 
+pub use conductor::{Conductor, RoughConductor};
+pub use dielectric::Dielectric;
 pub use lambert::Lambert;
-use pt_math::{Vec2, Vec3};
+pub use microfacet::{Distribution, Microfacet};
+pub use minnaert::Minnaert;
+pub use oren_nayar::{OrenNayar, OrenNayarVariant};
+pub use rough_dielectric::RoughDielectric;
+pub use thin_dielectric::ThinDielectric;
+use pt_math::{Vec2, Vec3, Vec4};
 use pt_spectrum::SampledSpectrum;
+
+/// Applies `f` to each of the four lanes.
+#[inline]
+pub(crate) fn map_lanes(s: SampledSpectrum, f: impl Fn(f32) -> f32) -> SampledSpectrum {
+    SampledSpectrum(Vec4::new(f(s.0.x), f(s.0.y), f(s.0.z), f(s.0.w)))
+}
 
 /// The result of sampling a BSDF.
 #[derive(Clone, Copy, Debug)]
@@ -30,6 +61,12 @@ pub struct BsdfSample {
     pub pdf: f32,
     /// Whether `wi` came from a delta (specular) lobe: MIS must not weight it.
     pub delta: bool,
+    /// Relative index of refraction along the sampled segment, eta_t / eta_i: the index of the
+    /// side `wi` points into over the index of the side `wo` points into. 1 for reflection.
+    /// Refraction already scales `weight` by 1 / eta^2 (radiance transport); an integrator
+    /// that applies Russian roulette on throughput may multiply by `eta^2` for the decision only
+    /// (pbrt-v4 `etaScale`).
+    pub eta: f32,
 }
 
 /// A BSDF model (one-sided unless wrapped by [`SurfaceBsdf`] with `two_sided`).
@@ -37,6 +74,20 @@ pub struct BsdfSample {
 pub enum Bsdf {
     /// Lambertian diffuse reflection.
     Lambert(Lambert),
+    /// Oren-Nayar rough diffuse reflection (four variants).
+    OrenNayar(OrenNayar),
+    /// Minnaert lunar-type reflection.
+    Minnaert(Minnaert),
+    /// Smooth conductor (delta).
+    Conductor(Conductor),
+    /// Rough microfacet conductor.
+    RoughConductor(RoughConductor),
+    /// Smooth dielectric interface (two delta lobes; handles both sides itself).
+    Dielectric(Dielectric),
+    /// Thin dielectric sheet (two delta lobes, symmetric).
+    ThinDielectric(ThinDielectric),
+    /// Rough dielectric interface (handles both sides itself).
+    RoughDielectric(RoughDielectric),
 }
 
 impl Bsdf {
@@ -45,6 +96,13 @@ impl Bsdf {
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
         match self {
             Bsdf::Lambert(m) => m.eval(wo, wi),
+            Bsdf::OrenNayar(m) => m.eval(wo, wi),
+            Bsdf::Minnaert(m) => m.eval(wo, wi),
+            Bsdf::Conductor(m) => m.eval(wo, wi),
+            Bsdf::RoughConductor(m) => m.eval(wo, wi),
+            Bsdf::Dielectric(m) => m.eval(wo, wi),
+            Bsdf::ThinDielectric(m) => m.eval(wo, wi),
+            Bsdf::RoughDielectric(m) => m.eval(wo, wi),
         }
     }
 
@@ -53,23 +111,47 @@ impl Bsdf {
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         match self {
             Bsdf::Lambert(m) => m.pdf(wo, wi),
+            Bsdf::OrenNayar(m) => m.pdf(wo, wi),
+            Bsdf::Minnaert(m) => m.pdf(wo, wi),
+            Bsdf::Conductor(m) => m.pdf(wo, wi),
+            Bsdf::RoughConductor(m) => m.pdf(wo, wi),
+            Bsdf::Dielectric(m) => m.pdf(wo, wi),
+            Bsdf::ThinDielectric(m) => m.pdf(wo, wi),
+            Bsdf::RoughDielectric(m) => m.pdf(wo, wi),
         }
     }
 
     /// Samples `wi` given `wo` from `u` in [0,1)^2 (and `u_lobe` in [0,1) for lobe choice).
     #[inline]
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
-        let _ = u_lobe; // one lobe so far
         match self {
             Bsdf::Lambert(m) => m.sample(wo, u),
+            Bsdf::OrenNayar(m) => m.sample(wo, u),
+            Bsdf::Minnaert(m) => m.sample(wo, u),
+            Bsdf::Conductor(m) => m.sample(wo, u),
+            Bsdf::RoughConductor(m) => m.sample(wo, u),
+            Bsdf::Dielectric(m) => m.sample(wo, u_lobe, u),
+            Bsdf::ThinDielectric(m) => m.sample(wo, u_lobe, u),
+            Bsdf::RoughDielectric(m) => m.sample(wo, u_lobe, u),
         }
+    }
+
+    /// Whether the model transmits light (handles `wo` below the surface itself).
+    #[inline]
+    pub fn is_transmissive(&self) -> bool {
+        matches!(self, Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_))
     }
 
     /// Whether the model has a non-delta component, so that light sampling can help.
     #[inline]
     pub fn has_smooth_lobe(&self) -> bool {
         match self {
-            Bsdf::Lambert(_) => true,
+            Bsdf::Lambert(_)
+            | Bsdf::OrenNayar(_)
+            | Bsdf::Minnaert(_)
+            | Bsdf::RoughConductor(_)
+            | Bsdf::RoughDielectric(_) => true,
+            Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => false,
         }
     }
 }
@@ -80,15 +162,16 @@ impl Bsdf {
 pub struct SurfaceBsdf {
     /// The reflectance model.
     pub bsdf: Bsdf,
-    /// Mirror the model to the back side.
+    /// Mirror the model to the back side (ignored for transmissive models).
     pub two_sided: bool,
 }
 
 impl SurfaceBsdf {
-    /// Flips directions to the front side when two-sided and seen from the back.
+    /// Flips directions to the front side when two-sided and seen from the back (never for
+    /// transmissive models, whose back side is their inside).
     #[inline]
     fn side(&self, wo: Vec3) -> f32 {
-        if self.two_sided && wo.z < 0.0 {
+        if self.two_sided && wo.z < 0.0 && !self.bsdf.is_transmissive() {
             -1.0
         } else {
             1.0
@@ -147,5 +230,15 @@ mod tests {
         let bs = two.sample(wo, 0.5, Vec2::new(0.3, 0.7)).unwrap();
         assert!(bs.wi.z < 0.0, "sampled on the viewer's side");
         assert!((two.pdf(wo, bs.wi) - bs.pdf).abs() < 1e-6);
+    }
+
+    #[test]
+    fn two_sided_never_mirrors_a_dielectric() {
+        // From inside glass, straight up through the interface: refraction must go out (+z)
+        // with eta' = 1/1.5, whatever two_sided says.
+        let glass = SurfaceBsdf { bsdf: Bsdf::Dielectric(Dielectric::new(1.5)), two_sided: true };
+        let bs = glass.sample(-Vec3::Z, 0.99, Vec2::ZERO).unwrap();
+        assert!(bs.wi.z > 0.99 && (bs.eta - 1.0 / 1.5).abs() < 1e-6, "{bs:?}");
+        assert!((bs.weight.0.x - 2.25).abs() < 1e-5, "radiance gains eta^2 leaving glass");
     }
 }

@@ -27,6 +27,16 @@ impl Frame {
         Frame { s, t, n }
     }
 
+    /// A frame around the unit normal `n` whose first tangent follows `tangent` projected onto
+    /// the tangent plane (Gram-Schmidt), as Mitsuba builds its shading frame from `dp_du`. Falls
+    /// back to [`Frame::from_normal`] when `tangent` is zero or parallel to `n`.
+    pub fn from_normal_tangent(n: Vec3, tangent: Vec3) -> Self {
+        match (tangent - n * n.dot(tangent)).try_normalize() {
+            Some(s) => Frame { s, t: n.cross(s), n },
+            None => Frame::from_normal(n),
+        }
+    }
+
     /// World direction -> local frame.
     #[inline]
     pub fn to_local(&self, v: Vec3) -> Vec3 {
@@ -61,6 +71,8 @@ mod tests {
             assert!(f.s.dot(f.t).abs() < 1e-5 && f.s.dot(n).abs() < 1e-5 && f.t.dot(n).abs() < 1e-5);
             // Right-handed: s x t = n.
             assert!((f.s.cross(f.t) - n).length() < 1e-5);
+            let g = Frame::from_normal_tangent(n, Vec3::new(0.3, 0.9, -0.2));
+            assert!((g.s.cross(g.t) - n).length() < 1e-5 && g.s.dot(n).abs() < 1e-5);
             let v = Vec3::new(0.2, -0.7, 0.4);
             assert!((f.to_world(f.to_local(v)) - v).length() < 1e-5);
             assert!((f.to_local(n) - Vec3::Z).length() < 1e-5);

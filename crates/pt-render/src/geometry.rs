@@ -125,6 +125,9 @@ pub struct Interaction {
     pub ns: Vec3,
     /// Surface parameterisation (texture coordinates).
     pub uv: Vec2,
+    /// Tangent along increasing u (not normalised; zero when the surface has no
+    /// parameterisation). It orients anisotropic BSDFs, as Mitsuba's `dp_du` does.
+    pub dpdu: Vec3,
     /// Distance along the ray.
     pub t: f32,
     /// Index of the shape this primitive belongs to.

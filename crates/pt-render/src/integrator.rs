@@ -61,6 +61,9 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler) 
     let use_light = s.strategy != Strategy::Bsdf;
     let use_bsdf_hits = s.strategy != Strategy::Light;
     let mut depth: u32 = 0;
+    // Product of the relative indices of refraction crossed so far: radiance carries 1/eta^2 per
+    // refraction, which Russian roulette undoes when judging the path's worth (Mitsuba).
+    let mut eta_scale: f32 = 1.0;
 
     loop {
         let Some(hit) = scene.intersect(&ray) else {
@@ -114,7 +117,7 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler) 
         }
 
         let bsdf = scene.material(hit.shape);
-        let frame = Frame::from_normal(hit.ns);
+        let frame = Frame::from_normal_tangent(hit.ns, hit.dpdu);
         let wo = frame.to_local(wo_world);
 
         // Next-event estimation.
@@ -146,6 +149,7 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler) 
             break;
         }
         throughput *= bs.weight;
+        eta_scale *= bs.eta;
         let wi_world = frame.to_world(bs.wi);
         prev_p = hit.p;
         prev_pdf = bs.pdf;
@@ -153,9 +157,10 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler) 
         ray = Ray::new(offset_ray_origin(hit.p, hit.ng * hit.ng.dot(wi_world).signum()), wi_world);
         depth += 1;
 
-        // Russian roulette (Mitsuba: after rr_depth segments, keep with prob min(max T, 0.95)).
+        // Russian roulette (Mitsuba: after rr_depth segments, keep with probability
+        // min(max(T) eta^2, 0.95)).
         if depth >= s.rr_depth {
-            let q = throughput.max_value().min(0.95);
+            let q = (throughput.max_value() * eta_scale * eta_scale).min(0.95);
             if !(sampler.next_1d() < q) {
                 break;
             }

@@ -4,7 +4,10 @@ use crate::accel::{Accel, BvhKind};
 use crate::camera::Camera;
 use crate::geometry::{intersect_triangle, Interaction, Primitive};
 use crate::light::{AreaLight, EnvMap, Light, LightShape, LightTriangle, SpotCone};
-use pt_bsdf::{Bsdf, Lambert, SurfaceBsdf};
+use pt_bsdf::{
+    Bsdf, Conductor, Dielectric, Distribution, Lambert, Microfacet, Minnaert, OrenNayar, OrenNayarVariant, RoughConductor, RoughDielectric,
+    SurfaceBsdf, ThinDielectric,
+};
 use pt_math::{Distribution1D, Frame, Mat3, Ray, Vec2, Vec3, Vec3A};
 use pt_scene::{BsdfDesc, BsdfKind, Geometry, LightDesc, LightKind, SceneDesc, SourceLoc, SpectrumDesc, TriangleMesh};
 use pt_spectrum::{ColorMode, SampledSpectrum};
@@ -87,19 +90,39 @@ fn spectrum(s: &SpectrumDesc) -> SampledSpectrum {
     }
 }
 
-fn material(desc: &BsdfDesc) -> SurfaceBsdf {
-    match &desc.kind {
-        BsdfKind::Diffuse { reflectance } => {
-            SurfaceBsdf { bsdf: Bsdf::Lambert(Lambert::new(spectrum(reflectance))), two_sided: false }
+/// The BSDF of a material description (RGB mode: spectra are RGB triples, evaluated once).
+fn material(desc: &BsdfDesc) -> Result<SurfaceBsdf, BuildError> {
+    let one_sided = |bsdf| SurfaceBsdf { bsdf, two_sided: false };
+    let mf = |dist: &str, au: f32, av: f32| -> Result<Microfacet, BuildError> {
+        let d = Distribution::from_name(dist).ok_or_else(|| BuildError { loc: desc.loc.clone(), message: format!("unknown microfacet distribution '{dist}'") })?;
+        Ok(Microfacet::new(d, au, av))
+    };
+    Ok(match &desc.kind {
+        BsdfKind::Diffuse { reflectance } => one_sided(Bsdf::Lambert(Lambert::new(spectrum(reflectance)))),
+        BsdfKind::TwoSided { inner } => SurfaceBsdf { two_sided: true, ..material(inner)? },
+        BsdfKind::OrenNayar { reflectance, sigma, variant } => {
+            let v = OrenNayarVariant::from_name(variant).ok_or_else(|| BuildError { loc: desc.loc.clone(), message: format!("unknown Oren-Nayar variant '{variant}'") })?;
+            one_sided(Bsdf::OrenNayar(OrenNayar::new(spectrum(reflectance), *sigma, v)))
         }
-        BsdfKind::TwoSided { inner } => SurfaceBsdf { two_sided: true, ..material(inner) },
-    }
+        BsdfKind::Minnaert { reflectance, k } => one_sided(Bsdf::Minnaert(Minnaert::new(spectrum(reflectance), *k))),
+        BsdfKind::Dielectric { int_ior, ext_ior } => one_sided(Bsdf::Dielectric(Dielectric::new(int_ior / ext_ior))),
+        BsdfKind::ThinDielectric { int_ior, ext_ior } => one_sided(Bsdf::ThinDielectric(ThinDielectric::new(int_ior / ext_ior))),
+        BsdfKind::RoughDielectric { int_ior, ext_ior, distribution, alpha_u, alpha_v } => {
+            one_sided(Bsdf::RoughDielectric(RoughDielectric::new(int_ior / ext_ior, mf(distribution, *alpha_u, *alpha_v)?)))
+        }
+        BsdfKind::Conductor { eta, k, specular_reflectance } => {
+            one_sided(Bsdf::Conductor(Conductor::new(spectrum(eta), spectrum(k), spectrum(specular_reflectance))))
+        }
+        BsdfKind::RoughConductor { eta, k, specular_reflectance, distribution, alpha_u, alpha_v } => one_sided(Bsdf::RoughConductor(
+            RoughConductor::new(spectrum(eta), spectrum(k), spectrum(specular_reflectance), mf(distribution, *alpha_u, *alpha_v)?),
+        )),
+    })
 }
 
 impl Scene {
     /// Builds the BVH and lights. `selection` chooses how NEE picks lights.
     pub fn build(desc: &SceneDesc, bvh: BvhKind, selection: LightSelection) -> Result<Scene, BuildError> {
-        let materials: Vec<SurfaceBsdf> = desc.bsdfs.iter().map(material).collect();
+        let materials: Vec<SurfaceBsdf> = desc.bsdfs.iter().map(material).collect::<Result<_, _>>()?;
         let mut prims = Vec::new();
         let mut refs = Vec::new();
         let mut shapes = Vec::new();
@@ -185,11 +208,19 @@ impl Scene {
                     }
                     None => ng,
                 };
-                let uv = match &shape.uvs {
-                    Some(uv) => uv[idx[0] as usize] * b0 + uv[idx[1] as usize] * b1 + uv[idx[2] as usize] * b2,
-                    None => Vec2::new(b1, b2),
+                let (uv, dpdu) = match &shape.uvs {
+                    Some(uv) => {
+                        let (t0, t1, t2) = (uv[idx[0] as usize], uv[idx[1] as usize], uv[idx[2] as usize]);
+                        // dp/du from the uv differentials (pbrt-v4 eq. 6.7): solve
+                        // [e1 e2] = [dpdu dpdv] [du1 du2; dv1 dv2].
+                        let (d1, d2) = (t1 - t0, t2 - t0);
+                        let det = d1.x * d2.y - d1.y * d2.x;
+                        let dpdu = if det != 0.0 { (Vec3::from(e1) * d2.y - Vec3::from(e2) * d1.y) / det } else { Vec3::ZERO };
+                        (t0 * b0 + t1 * b1 + t2 * b2, if dpdu.is_finite() { dpdu } else { Vec3::ZERO })
+                    }
+                    None => (Vec2::new(b1, b2), Vec3::ZERO),
                 };
-                Some(Interaction { p, ng, ns, uv, t, shape: r.shape })
+                Some(Interaction { p, ng, ns, uv, dpdu, t, shape: r.shape })
             }
             Primitive::Sphere { center, radius, flip } => {
                 let c = Vec3::from(center);
@@ -198,7 +229,10 @@ impl Scene {
                 let p = c + local * radius;
                 let n = if flip { -local } else { local };
                 let uv = Vec2::new(local.y.atan2(local.x), local.z.clamp(-1.0, 1.0).acos());
-                Some(Interaction { p, ng: n, ns: n, uv, t, shape: r.shape })
+                // Mitsuba's sphere: u runs along the longitude about its local z axis (spheres
+                // here carry no rotation).
+                let dpdu = Vec3::new(-local.y, local.x, 0.0);
+                Some(Interaction { p, ng: n, ns: n, uv, dpdu, t, shape: r.shape })
             }
         }
     }

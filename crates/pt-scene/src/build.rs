@@ -28,8 +28,7 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "ply", "serialized", "cylinder", "shapegroup", "instance", "bsplinecurve", "linearcurve",
         "sdfgrid", "ellipsoids", "ellipsoidsmesh",
     ]),
-    ("bsdf", &["diffuse", "twosided"], &[
-        "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor",
+    ("bsdf", &["diffuse", "twosided", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor"], &[
         "plastic", "roughplastic", "bumpmap", "normalmap", "blendbsdf", "mask", "null",
         "polarizer", "retarder", "circular", "measured", "pplastic", "principled",
         "principledthin", "hair",
@@ -622,6 +621,10 @@ impl<'e> Builder<'e> {
             "twosided" => BsdfKind::TwoSided {
                 inner: Box::new(self.twosided_inner(&v)?),
             },
+            "orennayar" | "minnaert" | "dielectric" | "thindielectric" | "roughdielectric" | "conductor" | "roughconductor" => {
+                no_children(&v)?;
+                crate::materials::bsdf_kind(&v)?
+            }
             _ => return Err(plugin_error(el)),
         };
         v.finish()?;

@@ -341,4 +341,71 @@ pub enum BsdfKind {
         /// The wrapped BSDF.
         inner: Box<BsdfDesc>,
     },
+    /// Oren-Nayar rough diffuse (project extension `orennayar`).
+    OrenNayar {
+        /// Facet albedo.
+        reflectance: SpectrumDesc,
+        /// Standard deviation of the facet slope angle, radians.
+        sigma: f32,
+        /// `qualitative`, `full`, `fujii` or `eon`.
+        variant: String,
+    },
+    /// Minnaert's limb-darkening BRDF (project extension `minnaert`).
+    Minnaert {
+        /// Albedo scale.
+        reflectance: SpectrumDesc,
+        /// Minnaert exponent k (1 = Lambert).
+        k: f32,
+    },
+    /// Smooth dielectric interface (Mitsuba `dielectric`).
+    Dielectric {
+        /// Interior index of refraction.
+        int_ior: f32,
+        /// Exterior index of refraction.
+        ext_ior: f32,
+    },
+    /// Thin dielectric slab (Mitsuba `thindielectric`).
+    ThinDielectric {
+        /// Interior index of refraction.
+        int_ior: f32,
+        /// Exterior index of refraction.
+        ext_ior: f32,
+    },
+    /// Rough dielectric interface (Mitsuba `roughdielectric`).
+    RoughDielectric {
+        /// Interior index of refraction.
+        int_ior: f32,
+        /// Exterior index of refraction.
+        ext_ior: f32,
+        /// Microfacet distribution: `ggx` or `beckmann`.
+        distribution: String,
+        /// Roughness along the tangent.
+        alpha_u: f32,
+        /// Roughness along the bitangent.
+        alpha_v: f32,
+    },
+    /// Smooth conductor (Mitsuba `conductor`).
+    Conductor {
+        /// Real part of the complex index of refraction (n + i k).
+        eta: SpectrumDesc,
+        /// Imaginary part (extinction coefficient).
+        k: SpectrumDesc,
+        /// Scale factor on the reflectance (1 is physical).
+        specular_reflectance: SpectrumDesc,
+    },
+    /// Rough conductor (Mitsuba `roughconductor`).
+    RoughConductor {
+        /// Real part of the complex index of refraction.
+        eta: SpectrumDesc,
+        /// Extinction coefficient.
+        k: SpectrumDesc,
+        /// Scale factor on the reflectance.
+        specular_reflectance: SpectrumDesc,
+        /// Microfacet distribution: `ggx` or `beckmann`.
+        distribution: String,
+        /// Roughness along the tangent.
+        alpha_u: f32,
+        /// Roughness along the bitangent.
+        alpha_v: f32,
+    },
 }

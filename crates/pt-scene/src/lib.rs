@@ -40,7 +40,7 @@
 //! | `sensor` | `perspective` with `film` `hdrfilm` (`rfilter` box, tent, gaussian) and `sampler` independent, stratified |
 //! | `integrator` | `path`, `direct`, `moment` |
 //! | `shape` | `obj`, `rectangle`, `cube`, `disk`, `sphere`, with nested `bsdf` and `emitter` `area` |
-//! | `bsdf` | `diffuse`, `twosided` |
+//! | `bsdf` | `diffuse`, `twosided`, `dielectric`, `thindielectric`, `roughdielectric`, `conductor`, `roughconductor` (named materials as in Mitsuba's RGB mode), and the extensions `orennayar`, `minnaert` |
 //!
 //! Everything else is an error naming the file, line, column and element: unknown elements and
 //! plugins, Mitsuba plugins not implemented yet ("not yet implemented"), properties a plugin
@@ -53,6 +53,7 @@
 mod build;
 mod error;
 pub mod ir;
+mod materials;
 mod props;
 mod shapes;
 mod transform;

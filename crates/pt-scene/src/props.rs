@@ -251,6 +251,20 @@ impl<'e> ObjectView<'e> {
         }
     }
 
+    /// A property that may be a number or a name (Mitsuba's `int_ior="bk7"` or `1.5`).
+    pub fn float_or_string(&self, name: &str) -> Result<Option<std::result::Result<f32, String>>> {
+        let Some(prop) = self.props.iter().find(|p| p.name == name) else {
+            return Ok(None);
+        };
+        match &prop.value {
+            Value::Str(v) => {
+                prop.used.set(true);
+                Ok(Some(Err(v.clone())))
+            }
+            _ => Ok(self.float(name)?.map(Ok)),
+        }
+    }
+
     /// A string property.
     pub fn string(&self, name: &str) -> Result<Option<String>> {
         let Some(prop) = self.get(name) else {
