@@ -4,6 +4,8 @@
 //! (unreadable or malformed scene, bad argument, unwritable output). Errors name the file, line
 //! and element; no partial output file is ever left behind (outputs are written atomically).
 
+mod converge;
+
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -33,6 +35,9 @@ enum Command {
     /// Compare an image with a reference: error metrics and, given variances, a block z-test.
     /// Exit code 0 when they agree, 1 when they do not, 2 for bad input.
     Compare(CompareArgs),
+    /// Convergence: relMSE against render time per strategy (and Mitsuba 3 with --mitsuba);
+    /// writes a CSV and an SVG/PNG chart.
+    Converge(converge::ConvergeArgs),
 }
 
 #[derive(Args)]
@@ -109,6 +114,11 @@ struct RenderArgs {
     /// BVH layout (both from obvhs).
     #[arg(long, value_enum, default_value_t = BvhArg::Cwbvh)]
     bvh: BvhArg,
+    /// Colour transport [default: spectral when the scene has wavelength-dependent inputs
+    /// (`pt info` says which), RGB otherwise]. Forcing rgb on a spectral scene projects its
+    /// spectra to RGB (an approximation).
+    #[arg(long, value_enum)]
+    mode: Option<ModeArg>,
     /// Global-illumination method [default: the scene's integrator]. `radiosity` solves for
     /// diffuse patch radiosities and displays them (see the radiosity options below).
     #[arg(long, value_enum)]
@@ -158,6 +168,12 @@ struct RadiosityArgs {
 }
 
 #[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum ModeArg {
+    Rgb,
+    Spectral,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
 enum IntegratorArg {
     Path,
     Radiosity,
@@ -188,6 +204,7 @@ fn main() -> ExitCode {
         Command::Render(args) => cmd_render(args),
         Command::Info(args) => cmd_info(args),
         Command::Compare(args) => cmd_compare(args),
+        Command::Converge(args) => converge::run(args),
     };
     match result {
         Ok(code) => code,
@@ -283,7 +300,11 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
     }
 
     let build_start = std::time::Instant::now();
-    let scene = pool.install(|| Scene::build(&desc, bvh, selection))?;
+    let mode = args.mode.map(|m| match m {
+        ModeArg::Rgb => pt_spectrum::ColorMode::Rgb,
+        ModeArg::Spectral => pt_spectrum::ColorMode::Spectral,
+    });
+    let scene = pool.install(|| Scene::build_with_mode(&desc, bvh, selection, mode))?;
     let build_time = build_start.elapsed();
 
     let total = settings.width as u64 * settings.height as u64 * settings.spp as u64;
@@ -487,7 +508,10 @@ fn cmd_info(args: InfoArgs) -> Result<ExitCode> {
         println!("  {:<12} {:?}", b.id.as_deref().unwrap_or("-"), b.kind);
     }
     println!("lights      {} area light(s)", scene.lights.len());
-    println!("mode        {} (every input is RGB and no material depends on wavelength)", scene.mode.name());
+    match desc.spectral_reason() {
+        Some(why) => println!("mode        spectral, because {why}"),
+        None => println!("mode        rgb (every input is RGB and no material depends on wavelength: RGB is exact)"),
+    }
     Ok(ExitCode::SUCCESS)
 }
 

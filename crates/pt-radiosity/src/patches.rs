@@ -84,11 +84,10 @@ const ICO_EDGE: f32 = 1.051_462_2;
 /// Icosahedron inradius / circumradius.
 const ICO_INRADIUS: f32 = 0.794_654_5;
 
+/// RGB of a spectral input (tabulated spectra are projected through the CIE observer: the
+/// solver works per RGB channel).
 fn rgb(s: &SpectrumDesc) -> [f32; 3] {
-    match *s {
-        SpectrumDesc::Constant(v) => [v; 3],
-        SpectrumDesc::Rgb(c) => c,
-    }
+    pt_render::scene::rgb_of(s)
 }
 
 /// Diffuse reflectance and two-sidedness of a material. Models radiosity cannot represent are

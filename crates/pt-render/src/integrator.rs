@@ -11,7 +11,7 @@ use crate::light::LightSample;
 use crate::sampler::Sampler;
 use crate::scene::Scene;
 use pt_math::{offset_ray_origin, power_heuristic, Frame, Ray};
-use pt_spectrum::SampledSpectrum;
+use pt_spectrum::{ColorMode, SampledSpectrum, SampledWavelengths};
 
 /// Which strategies estimate direct light (for method comparisons; MIS is the default).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -49,11 +49,15 @@ impl Default for PathSettings {
 /// relative guard against rounding at the far end, not an absolute epsilon.
 const SHADOW_RAY_SHORTEN: f32 = 1.0 - 1e-5;
 
-/// Radiance arriving along `ray` (the camera ray), estimated with one path.
-pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler) -> SampledSpectrum {
+/// Radiance arriving along `ray` (the camera ray), estimated with one path, at the path's
+/// wavelengths `lambda` (spectral mode; ignored in RGB mode, whose lanes are R, G, B).
+pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, lambda: &SampledWavelengths) -> SampledSpectrum {
     let max_depth = if s.max_depth < 0 { u32::MAX } else { s.max_depth as u32 };
     let mut radiance = SampledSpectrum::ZERO;
-    let mut throughput = SampledSpectrum::from_rgb([1.0; 3]);
+    let mut throughput = match scene.mode {
+        ColorMode::Rgb => SampledSpectrum::from_rgb([1.0; 3]),
+        ColorMode::Spectral => SampledSpectrum::splat(1.0),
+    };
     // The previous scattering event, for MIS on emitters hit by BSDF sampling.
     let mut prev_p = ray.origin;
     let mut prev_pdf = 0.0f32;
@@ -70,7 +74,7 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler) 
             // The ray left the scene: environment and sun.
             for &i in &scene.infinite_lights {
                 let light = &scene.lights[i];
-                let le = light.escaped_radiance(ray.dir);
+                let le = light.escaped_radiance(ray.dir) * scene.emission(i, lambda);
                 if le.is_black() {
                     continue;
                 }
@@ -91,7 +95,7 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler) 
 
         // Emission found by the ray we just traced.
         if let Some((li_idx, light)) = scene.shape_light(hit.shape) {
-            let le = light.emitted(hit.ns, wo_world);
+            let le = light.emitted(hit.ns, wo_world) * scene.emission(li_idx, lambda);
             if !le.is_black() {
                 if depth == 0 {
                     if !s.hide_emitters {
@@ -116,7 +120,7 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler) 
             break;
         }
 
-        let bsdf = scene.material(hit.shape);
+        let bsdf = scene.material_at(hit.shape, lambda);
         let frame = Frame::from_normal_tangent(hit.ns, hit.dpdu);
         let wo = frame.to_local(wo_world);
 
@@ -133,7 +137,7 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler) 
                         // Delta lights cannot be hit by BSDF sampling: light sampling is the only
                         // strategy, weight 1.
                         let w = if use_bsdf_hits && !ls.delta { power_heuristic(light_pdf, bsdf.pdf(wo, wi)) } else { 1.0 };
-                        radiance += throughput * f * ls.radiance * (wi.z.abs() * w / light_pdf);
+                        radiance += throughput * f * ls.radiance * scene.emission(li_idx, lambda) * (wi.z.abs() * w / light_pdf);
                     }
                 }
             } else {

@@ -6,6 +6,7 @@ use crate::sampler::Sampler;
 use crate::scene::Scene;
 use pt_math::Vec2;
 use pt_scene::FilterDesc;
+use pt_spectrum::{spectrum_to_srgb, ColorMode, SampledWavelengths};
 use rayon::prelude::*;
 use std::time::{Duration, Instant};
 
@@ -96,11 +97,17 @@ fn render_pixel(scene: &Scene, settings: &RenderSettings, x: u32, y: u32) -> Pix
     let mut stats = PixelStats::default();
     let pixel = y as u64 * settings.width as u64 + x as u64;
     let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+    // RGB mode draws no wavelength sample, so its random sequence is the same as before the
+    // spectral mode existed.
+    let spectral = scene.mode == ColorMode::Spectral;
+    let rgb_lambda = SampledWavelengths::sample_visible(0.5);
     for s in 0..settings.spp {
         let mut sampler = Sampler::new(settings.seed, pixel, s as u64);
+        let lambda = if spectral { SampledWavelengths::sample_visible(sampler.next_1d()) } else { rgb_lambda };
         let offset = sample_filter(&settings.filter, &mut sampler);
         let ray = scene.camera.generate_ray(centre + offset);
-        stats.add(li(scene, ray, &settings.path, &mut sampler).rgb());
+        let l = li(scene, ray, &settings.path, &mut sampler, &lambda);
+        stats.add(if spectral { spectrum_to_srgb(l, &lambda) } else { l.rgb() });
     }
     stats
 }

@@ -10,7 +10,7 @@ use pt_bsdf::{
 };
 use pt_math::{Distribution1D, Frame, Mat3, Ray, Vec2, Vec3, Vec3A};
 use pt_scene::{BsdfDesc, BsdfKind, Geometry, LightDesc, LightKind, SceneDesc, SourceLoc, SpectrumDesc, TriangleMesh};
-use pt_spectrum::{ColorMode, SampledSpectrum};
+use pt_spectrum::{xyz_to_srgb, ColorMode, NamedIlluminant, SampledSpectrum, SampledWavelengths, Spectrum};
 
 /// Errors found while building a scene (after parsing): each names the element at fault.
 #[derive(Debug, thiserror::Error)]
@@ -66,8 +66,14 @@ pub struct Scene {
     accel: Accel,
     prim_refs: Vec<PrimRef>,
     shapes: Vec<ShapeData>,
-    /// One BSDF per material of the description (RGB mode: evaluated once).
+    /// One BSDF per material of the description (RGB mode: evaluated once; spectral mode: at
+    /// a reference white, used only as a fallback).
     pub materials: Vec<SurfaceBsdf>,
+    /// Spectral mode: each material's spectra, evaluated per path at its wavelengths.
+    spectral_materials: Vec<SpectralMaterial>,
+    /// Spectral mode: each light's emission spectrum (its `radiance` fields hold the geometric
+    /// factors only); empty in RGB mode.
+    light_spectra: Vec<Option<Spectrum>>,
     /// All lights: area lights first (in shape order), then the others in file order.
     pub lights: Vec<Light>,
     /// Indices into `lights` of lights that rays leaving the scene can see.
@@ -83,46 +89,125 @@ pub struct Scene {
     pub stats: SceneStats,
 }
 
+/// How an RGB or constant input becomes a spectrum in spectral mode (Jakob & Hanika 2019
+/// upsampling; DESIGN.md "Colour").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Role {
+    /// Bounded reflectance in [0, 1].
+    Albedo,
+    /// Unbounded positive quantity (conductor eta, k).
+    Unbounded,
+    /// Emission: upsampled colour times D65; a constant c becomes D65 scaled to luminance c
+    /// (Mitsuba's convention for emitters).
+    Emission,
+}
+
+/// RGB value of a spectral input (see [`spectrum`]), for RGB-only methods such as radiosity.
+pub fn rgb_of(s: &SpectrumDesc) -> [f32; 3] {
+    spectrum(s).rgb()
+}
+
+/// RGB-mode value of a spectral input. A tabulated spectrum (only with `--mode rgb` on a
+/// spectral scene) is projected to linear sRGB through the CIE 1931 observer, as Mitsuba's RGB
+/// variants do.
 fn spectrum(s: &SpectrumDesc) -> SampledSpectrum {
-    match *s {
-        SpectrumDesc::Constant(v) => SampledSpectrum::from_rgb([v; 3]),
-        SpectrumDesc::Rgb(c) => SampledSpectrum::from_rgb(c),
+    match s {
+        SpectrumDesc::Constant(v) => SampledSpectrum::from_rgb([*v; 3]),
+        SpectrumDesc::Rgb(c) => SampledSpectrum::from_rgb(*c),
+        SpectrumDesc::Tabulated(p) => match Spectrum::tabulated(p) {
+            Ok(sp) => SampledSpectrum::from_rgb(xyz_to_srgb(sp.emission_xyz())),
+            Err(_) => SampledSpectrum::ZERO,
+        },
     }
 }
 
-/// The BSDF of a material description (RGB mode: spectra are RGB triples, evaluated once).
-fn material(desc: &BsdfDesc) -> Result<SurfaceBsdf, BuildError> {
+/// Spectral-mode form of an input (fitted once at scene build).
+fn to_spectrum(s: &SpectrumDesc, role: Role) -> Spectrum {
+    match (s, role) {
+        (SpectrumDesc::Constant(v), Role::Emission) => Spectrum::illuminant(NamedIlluminant::D65, *v),
+        (SpectrumDesc::Constant(v), _) => Spectrum::constant(*v),
+        (SpectrumDesc::Rgb(c), Role::Albedo) => Spectrum::rgb_albedo(*c),
+        (SpectrumDesc::Rgb(c), Role::Unbounded) => Spectrum::rgb_unbounded(*c),
+        (SpectrumDesc::Rgb(c), Role::Emission) => Spectrum::rgb_illuminant(*c),
+        (SpectrumDesc::Tabulated(p), _) => Spectrum::tabulated(p).unwrap_or(Spectrum::constant(0.0)),
+    }
+}
+
+/// The BSDF of a material description. `val` turns each spectral parameter into lane values;
+/// it is called in a fixed order, so spectral mode can fit the spectra once (at build) and
+/// evaluate them per path in the same order.
+fn material_with(desc: &BsdfDesc, val: &mut dyn FnMut(&SpectrumDesc, Role) -> SampledSpectrum) -> Result<SurfaceBsdf, BuildError> {
     let one_sided = |bsdf| SurfaceBsdf { bsdf, two_sided: false };
     let mf = |dist: &str, au: f32, av: f32| -> Result<Microfacet, BuildError> {
         let d = Distribution::from_name(dist).ok_or_else(|| BuildError { loc: desc.loc.clone(), message: format!("unknown microfacet distribution '{dist}'") })?;
         Ok(Microfacet::new(d, au, av))
     };
     Ok(match &desc.kind {
-        BsdfKind::Diffuse { reflectance } => one_sided(Bsdf::Lambert(Lambert::new(spectrum(reflectance)))),
-        BsdfKind::TwoSided { inner } => SurfaceBsdf { two_sided: true, ..material(inner)? },
+        BsdfKind::Diffuse { reflectance } => one_sided(Bsdf::Lambert(Lambert::new(val(reflectance, Role::Albedo)))),
+        BsdfKind::TwoSided { inner } => SurfaceBsdf { two_sided: true, ..material_with(inner, val)? },
         BsdfKind::OrenNayar { reflectance, sigma, variant } => {
             let v = OrenNayarVariant::from_name(variant).ok_or_else(|| BuildError { loc: desc.loc.clone(), message: format!("unknown Oren-Nayar variant '{variant}'") })?;
-            one_sided(Bsdf::OrenNayar(OrenNayar::new(spectrum(reflectance), *sigma, v)))
+            one_sided(Bsdf::OrenNayar(OrenNayar::new(val(reflectance, Role::Albedo), *sigma, v)))
         }
-        BsdfKind::Minnaert { reflectance, k } => one_sided(Bsdf::Minnaert(Minnaert::new(spectrum(reflectance), *k))),
+        BsdfKind::Minnaert { reflectance, k } => one_sided(Bsdf::Minnaert(Minnaert::new(val(reflectance, Role::Albedo), *k))),
         BsdfKind::Dielectric { int_ior, ext_ior } => one_sided(Bsdf::Dielectric(Dielectric::new(int_ior / ext_ior))),
         BsdfKind::ThinDielectric { int_ior, ext_ior } => one_sided(Bsdf::ThinDielectric(ThinDielectric::new(int_ior / ext_ior))),
         BsdfKind::RoughDielectric { int_ior, ext_ior, distribution, alpha_u, alpha_v } => {
             one_sided(Bsdf::RoughDielectric(RoughDielectric::new(int_ior / ext_ior, mf(distribution, *alpha_u, *alpha_v)?)))
         }
         BsdfKind::Conductor { eta, k, specular_reflectance } => {
-            one_sided(Bsdf::Conductor(Conductor::new(spectrum(eta), spectrum(k), spectrum(specular_reflectance))))
+            let (e, kk, sr) = (val(eta, Role::Unbounded), val(k, Role::Unbounded), val(specular_reflectance, Role::Albedo));
+            one_sided(Bsdf::Conductor(Conductor::new(e, kk, sr)))
         }
-        BsdfKind::RoughConductor { eta, k, specular_reflectance, distribution, alpha_u, alpha_v } => one_sided(Bsdf::RoughConductor(
-            RoughConductor::new(spectrum(eta), spectrum(k), spectrum(specular_reflectance), mf(distribution, *alpha_u, *alpha_v)?),
-        )),
+        BsdfKind::RoughConductor { eta, k, specular_reflectance, distribution, alpha_u, alpha_v } => {
+            let (e, kk, sr) = (val(eta, Role::Unbounded), val(k, Role::Unbounded), val(specular_reflectance, Role::Albedo));
+            one_sided(Bsdf::RoughConductor(RoughConductor::new(e, kk, sr, mf(distribution, *alpha_u, *alpha_v)?)))
+        }
     })
 }
 
+/// Spectral-mode data of one material: its description and its spectra, fitted at build in the
+/// order [`material_with`] asks for them.
+struct SpectralMaterial {
+    desc: BsdfDesc,
+    spectra: Vec<Spectrum>,
+}
+
 impl Scene {
-    /// Builds the BVH and lights. `selection` chooses how NEE picks lights.
+    /// Builds the BVH and lights in the colour mode the scene needs (spectral when it has
+    /// wavelength-dependent inputs, see [`SceneDesc::spectral_reason`]). `selection` chooses how
+    /// NEE picks lights.
     pub fn build(desc: &SceneDesc, bvh: BvhKind, selection: LightSelection) -> Result<Scene, BuildError> {
-        let materials: Vec<SurfaceBsdf> = desc.bsdfs.iter().map(material).collect::<Result<_, _>>()?;
+        Scene::build_with_mode(desc, bvh, selection, None)
+    }
+
+    /// [`Scene::build`] with the colour mode forced (`--mode`); `None` chooses automatically.
+    pub fn build_with_mode(desc: &SceneDesc, bvh: BvhKind, selection: LightSelection, mode: Option<ColorMode>) -> Result<Scene, BuildError> {
+        let mode = mode.unwrap_or(if desc.spectral_reason().is_some() { ColorMode::Spectral } else { ColorMode::Rgb });
+        let spectral = mode == ColorMode::Spectral;
+        let materials: Vec<SurfaceBsdf> = desc.bsdfs.iter().map(|b| material_with(b, &mut |s, _| spectrum(s))).collect::<Result<_, _>>()?;
+        let mut spectral_materials = Vec::new();
+        if spectral {
+            for b in &desc.bsdfs {
+                let mut spectra = Vec::new();
+                material_with(b, &mut |s, role| {
+                    spectra.push(to_spectrum(s, role));
+                    SampledSpectrum::ZERO
+                })?;
+                spectral_materials.push(SpectralMaterial { desc: b.clone(), spectra });
+            }
+        }
+        // Emission: RGB mode keeps the colour in the light; spectral mode keeps a unit factor in
+        // the light and the spectrum beside it.
+        let mut light_spectra: Vec<Option<Spectrum>> = Vec::new();
+        let mut emission = |s: &SpectrumDesc| -> SampledSpectrum {
+            if spectral {
+                light_spectra.push(Some(to_spectrum(s, Role::Emission)));
+                SampledSpectrum::splat(1.0)
+            } else {
+                spectrum(s)
+            }
+        };
         let mut prims = Vec::new();
         let mut refs = Vec::new();
         let mut shapes = Vec::new();
@@ -153,7 +238,7 @@ impl Scene {
                 }
             };
             if let Some(em) = &shape.emitter {
-                let radiance = spectrum(&em.radiance);
+                let radiance = emission(&em.radiance);
                 if !radiance.is_finite() || radiance.0.min_element() < 0.0 {
                     return Err(BuildError { loc: em.loc.clone(), message: "radiance must be finite and non-negative".into() });
                 }
@@ -174,16 +259,24 @@ impl Scene {
         let accel = Accel::build(prims, bvh);
         let prim_refs = accel.original_index.iter().map(|&i| refs[i as usize]).collect();
         for l in &desc.lights {
-            lights.push(build_light(l)?);
+            if spectral && matches!(l.kind, LightKind::EnvMap { .. }) {
+                return Err(BuildError { loc: l.loc.clone(), message: "environment maps are RGB images; spectral mode would need per-texel upsampling (not yet implemented): render with --mode rgb".into() });
+            }
+            lights.push(build_light(l, &mut emission)?);
         }
         let infinite_lights = (0..lights.len()).filter(|&i| lights[i].is_infinite()).collect();
+        // Spectral mode: scale each light's geometric power by its spectrum's luminance.
+        let luminance = |i: usize| light_spectra.get(i).and_then(|s| s.as_ref()).map_or(1.0, |s| s.emission_xyz()[1]);
         let weights: Vec<f32> = match selection {
-            LightSelection::Power => lights.iter().map(|l| l.power(bounds.1)).collect(),
+            LightSelection::Power => lights.iter().enumerate().map(|(i, l)| l.power(bounds.1) * luminance(i)).collect(),
             LightSelection::Uniform => vec![1.0; lights.len()],
         };
         let light_distr = Distribution1D::new(&weights);
         let camera = Camera::new(&desc.camera, desc.film.width, desc.film.height);
-        Ok(Scene { accel, prim_refs, shapes, materials, lights, infinite_lights, light_distr, bounds, camera, mode: ColorMode::Rgb, stats })
+        if !spectral {
+            light_spectra.clear();
+        }
+        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, light_spectra, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
     }
 
     /// Closest hit along `ray`, with its surface data.
@@ -243,10 +336,32 @@ impl Scene {
         self.accel.occluded(ray)
     }
 
-    /// The material of a hit shape.
+    /// The BSDF of a hit shape at the path's wavelengths (RGB mode: the precomputed one).
     #[inline]
-    pub fn material(&self, shape: u32) -> &SurfaceBsdf {
-        &self.materials[self.shapes[shape as usize].material as usize]
+    pub fn material_at(&self, shape: u32, lambda: &SampledWavelengths) -> SurfaceBsdf {
+        let m = self.shapes[shape as usize].material as usize;
+        match self.spectral_materials.get(m) {
+            None => self.materials[m],
+            Some(sm) => {
+                let mut i = 0;
+                material_with(&sm.desc, &mut |_, _| {
+                    let v = sm.spectra.get(i).map_or(SampledSpectrum::ZERO, |s| s.sample(lambda));
+                    i += 1;
+                    v
+                })
+                .unwrap_or(self.materials[m])
+            }
+        }
+    }
+
+    /// The emission spectrum of light `i` at the path's wavelengths, which multiplies the
+    /// radiance the light reports (spectral mode); 1 in RGB mode.
+    #[inline]
+    pub fn emission(&self, i: usize, lambda: &SampledWavelengths) -> SampledSpectrum {
+        match self.light_spectra.get(i) {
+            Some(Some(s)) => s.sample(lambda),
+            _ => SampledSpectrum::splat(1.0),
+        }
     }
 
     /// The light attached to a shape, if it emits: `(light index, light)`.
@@ -345,7 +460,7 @@ fn bounding_sphere(prims: &[Primitive]) -> (Vec3, f32) {
 }
 
 /// A light that is not attached to a shape.
-fn build_light(l: &LightDesc) -> Result<Light, BuildError> {
+fn build_light(l: &LightDesc, spectrum: &mut dyn FnMut(&SpectrumDesc) -> SampledSpectrum) -> Result<Light, BuildError> {
     let err = |m: String| BuildError { loc: l.loc.clone(), message: m };
     Ok(match &l.kind {
         LightKind::Point { position, intensity } => Light::Point { position: *position, intensity: spectrum(intensity) },

@@ -253,10 +253,7 @@ impl<'e> Builder<'e> {
         let to_world = v.transform("to_world")?;
         let spectrum = |name: &str| -> Result<SpectrumDesc> {
             let s = v.spectrum(name)?.unwrap_or(SpectrumDesc::Constant(1.0));
-            let vals = match s {
-                SpectrumDesc::Constant(c) => vec![c],
-                SpectrumDesc::Rgb(c) => c.to_vec(),
-            };
+            let vals = s.values();
             if vals.iter().any(|&x| x < 0.0) {
                 return Err(v.prop_error(name, format!("{name} must not be negative")));
             }

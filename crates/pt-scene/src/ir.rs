@@ -308,13 +308,74 @@ pub struct ShapeDesc {
     pub emitter: Option<AreaEmitterDesc>,
 }
 
-/// A spectrum-valued parameter. In this IR: linear Rec.709 RGB, or one number for all channels.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A spectrum-valued parameter: linear Rec.709 RGB, one number for all channels, or a
+/// tabulated spectrum (which makes the scene spectral).
+#[derive(Clone, Debug, PartialEq)]
 pub enum SpectrumDesc {
-    /// The same value in every channel.
+    /// The same value in every channel / at every wavelength.
     Constant(f32),
     /// Linear Rec.709 RGB.
     Rgb([f32; 3]),
+    /// Piecewise-linear (wavelength nm, value) pairs, increasing wavelengths; zero outside
+    /// their range, as Mitsuba's `<spectrum value="400:0.1, 500:0.5"/>`.
+    Tabulated(std::sync::Arc<Vec<(f32, f32)>>),
+}
+
+impl SpectrumDesc {
+    /// Whether the value depends on wavelength in a way RGB cannot represent exactly.
+    pub fn is_spectral(&self) -> bool {
+        matches!(self, SpectrumDesc::Tabulated(_))
+    }
+
+    /// Every number in it (channels or tabulated values), for range checks.
+    pub fn values(&self) -> Vec<f32> {
+        match self {
+            SpectrumDesc::Constant(c) => vec![*c],
+            SpectrumDesc::Rgb(c) => c.to_vec(),
+            SpectrumDesc::Tabulated(p) => p.iter().map(|e| e.1).collect(),
+        }
+    }
+}
+
+impl SceneDesc {
+    /// Why the scene needs spectral transport (the first wavelength-dependent input found, with
+    /// its location), or `None` when RGB is exact for it.
+    pub fn spectral_reason(&self) -> Option<String> {
+        fn bsdf_spectra(k: &BsdfKind) -> Vec<&SpectrumDesc> {
+            match k {
+                BsdfKind::Diffuse { reflectance } | BsdfKind::OrenNayar { reflectance, .. } | BsdfKind::Minnaert { reflectance, .. } => vec![reflectance],
+                BsdfKind::TwoSided { inner } => bsdf_spectra(&inner.kind),
+                BsdfKind::Conductor { eta, k, specular_reflectance } | BsdfKind::RoughConductor { eta, k, specular_reflectance, .. } => {
+                    vec![eta, k, specular_reflectance]
+                }
+                BsdfKind::Dielectric { .. } | BsdfKind::ThinDielectric { .. } | BsdfKind::RoughDielectric { .. } => vec![],
+            }
+        }
+        for b in &self.bsdfs {
+            if bsdf_spectra(&b.kind).iter().any(|s| s.is_spectral()) {
+                return Some(format!("{}: tabulated spectrum in a BSDF", b.loc));
+            }
+        }
+        for s in &self.shapes {
+            if let Some(e) = &s.emitter {
+                if e.radiance.is_spectral() {
+                    return Some(format!("{}: tabulated emission spectrum", e.loc));
+                }
+            }
+        }
+        for l in &self.lights {
+            let spectral = match &l.kind {
+                LightKind::Point { intensity, .. } | LightKind::Spot { intensity, .. } => intensity.is_spectral(),
+                LightKind::Directional { irradiance, .. } | LightKind::Sun { irradiance, .. } => irradiance.is_spectral(),
+                LightKind::Constant { radiance } => radiance.is_spectral(),
+                LightKind::EnvMap { .. } => false,
+            };
+            if spectral {
+                return Some(format!("{}: tabulated emission spectrum", l.loc));
+            }
+        }
+        None
+    }
 }
 
 /// A BSDF as described in the scene.

@@ -128,10 +128,7 @@ fn conductor_ior(v: &ObjectView<'_>) -> Result<(SpectrumDesc, SpectrumDesc, Spec
 /// Albedo-like parameter: finite and in [0, 1].
 fn albedo(v: &ObjectView<'_>, name: &str) -> Result<SpectrumDesc> {
     let s = v.spectrum(name)?.unwrap_or(SpectrumDesc::Constant(0.5));
-    let vals = match s {
-        SpectrumDesc::Constant(c) => vec![c],
-        SpectrumDesc::Rgb(c) => c.to_vec(),
-    };
+    let vals = s.values();
     if vals.iter().any(|&x| !(0.0..=1.0).contains(&x)) {
         return Err(v.prop_error(name, format!("{name} must be in [0, 1], got {s:?}")));
     }

@@ -35,6 +35,8 @@ pub(crate) enum Value {
     Rgb([f32; 3]),
     /// A constant spectrum (`<spectrum value="0.5"/>`).
     Spectrum(f32),
+    /// `wavelength:value` pairs (nm, value), sorted by wavelength.
+    SpectrumPairs(Vec<(f32, f32)>),
     /// `<point>` or `<vector>`.
     Vec3(Vec3),
     Transform(Mat4),
@@ -48,7 +50,7 @@ impl Value {
             Value::Boolean(_) => "boolean",
             Value::Str(_) => "string",
             Value::Rgb(_) => "rgb",
-            Value::Spectrum(_) => "spectrum",
+            Value::Spectrum(_) | Value::SpectrumPairs(_) => "spectrum",
             Value::Vec3(_) => "point/vector",
             Value::Transform(_) => "transform",
         }
@@ -284,6 +286,7 @@ impl<'e> ObjectView<'e> {
         match prop.value {
             Value::Rgb(c) => Ok(Some(SpectrumDesc::Rgb(c))),
             Value::Spectrum(v) => Ok(Some(SpectrumDesc::Constant(v))),
+            Value::SpectrumPairs(ref pairs) => Ok(Some(SpectrumDesc::Tabulated(std::sync::Arc::new(pairs.clone())))),
             Value::Float(v) => Ok(Some(SpectrumDesc::Constant(v as f32))),
             Value::Integer(v) => Ok(Some(SpectrumDesc::Constant(v as f32))),
             _ => Err(self.type_error(prop, "an rgb, spectrum or float")),
@@ -407,19 +410,38 @@ fn parse_spectrum(el: &Element) -> Result<Value> {
         .attr("value")
         .ok_or_else(|| SceneError::at(&el.loc, "missing attribute 'value'"))?;
     if text.contains(':') {
-        return Err(SceneError::at(
-            &el.loc,
-            "wavelength:value spectra are not yet supported (not yet implemented); \
-             give one number or use <rgb>",
-        ));
+        return parse_pairs(text).map(Value::SpectrumPairs).map_err(|m| SceneError::at(&el.loc, m));
     }
     match parse_floats(text).map_err(|m| SceneError::at(&el.loc, m))?[..] {
         [v] => Ok(Value::Spectrum(v)),
         _ => Err(SceneError::at(
             &el.loc,
-            format!("expected one number in '{text}'"),
+            format!("expected one number or wavelength:value pairs in '{text}'"),
         )),
     }
+}
+
+/// Parses Mitsuba's `"400:0.1, 500:0.5"`: wavelengths in nm, strictly increasing, at least two
+/// pairs, all values finite.
+fn parse_pairs(text: &str) -> std::result::Result<Vec<(f32, f32)>, String> {
+    let mut pairs = Vec::new();
+    for item in text.split(',').map(str::trim).filter(|t| !t.is_empty()) {
+        let (l, v) = item.split_once(':').ok_or_else(|| format!("expected wavelength:value, got '{item}'"))?;
+        let (l, v) = (parse_f32(l)?, parse_f32(v)?);
+        if !(l > 0.0) {
+            return Err(format!("wavelength {l} nm must be positive"));
+        }
+        if let Some(&(prev, _)) = pairs.last() {
+            if l <= prev {
+                return Err(format!("wavelengths must increase: {l} nm after {prev} nm"));
+            }
+        }
+        pairs.push((l, v));
+    }
+    if pairs.len() < 2 {
+        return Err(format!("a tabulated spectrum needs at least two wavelength:value pairs, got '{text}'"));
+    }
+    Ok(pairs)
 }
 
 /// Parses one finite number. NaN and infinities are errors: they would poison the render.

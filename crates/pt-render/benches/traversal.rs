@@ -1,0 +1,248 @@
+//! BVH traversal throughput (criterion): rays per second for closest-hit (`Accel::intersect`)
+//! and occlusion (any-hit, `Accel::occluded`) queries, CWBVH against BVH2, single-threaded,
+//! plus the build time of a 1M-triangle BVH.
+//!
+//! ```sh
+//! cargo bench -p pt-render --bench traversal                 # full run (a few minutes)
+//! cargo bench -p pt-render --bench traversal -- --quick      # quicker, less precise
+//! cargo bench -p pt-render --bench traversal -- incoherent   # a subset, by name filter
+//! ```
+//!
+//! Criterion reports `thrpt` in elements/s: one element is one ray, so `Melem/s` = Mrays/s.
+//!
+//! Scenes: the Cornell box (`scenes/cornell-box.xml`, 36 triangles) and a displaced cube-sphere of
+//! 12 * 296^2 = 1,051,392 triangles generated here. Ray sets (2^16 rays each, generated before
+//! timing, with a fixed seed):
+//! - `coherent`: one camera ray per pixel through the pixel centre, 256 x 256, in scanline order
+//!   (the scene's camera for the Cornell box; a pinhole looking at the sphere for the mesh).
+//! - `incoherent`: origins uniform in the scene's bounding box, directions uniform on the sphere,
+//!   in random order: the pattern of secondary bounces.
+//!
+//! Both queries use the same rays with `tmax = inf` (occlusion thus measures how fast any-hit
+//! traversal finds a first blocker). The traversal runs on the calling thread; the builds use the
+//! current rayon pool (obvhs `parallel` feature), measured once with one thread and once with all.
+//! Timings include `Accel`'s conversion to the obvhs ray and the primitive intersection closure,
+//! i.e. exactly what the integrator pays per ray.
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use pt_math::{Mat4, Ray, Vec2, Vec3, Vec3A};
+use pt_render::accel::{Accel, BvhKind};
+use pt_render::camera::Camera;
+use pt_render::geometry::Primitive;
+use pt_scene::{CameraDesc, FovAxis, Geometry, Projection, SceneDesc, SourceLoc};
+use std::hint::black_box;
+use std::path::Path;
+
+/// Rays per set.
+const RAYS: usize = 1 << 16;
+/// Camera image size for coherent rays (RES * RES = RAYS).
+const RES: u32 = 256;
+/// Cube-sphere subdivision: 6 faces * N^2 quads * 2 = 1,051,392 triangles.
+const SPHERE_N: u32 = 296;
+
+const KINDS: [(BvhKind, &str); 2] = [(BvhKind::CwBvh, "cwbvh"), (BvhKind::Bvh2, "bvh2")];
+
+/// Small deterministic generator (PCG-style LCG, top 24 bits): benches need no statistics.
+struct Rng(u64);
+
+impl Rng {
+    fn next_f32(&mut self) -> f32 {
+        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        (self.0 >> 40) as f32 / (1u64 << 24) as f32
+    }
+}
+
+/// The BVH primitives of a scene description, as `Scene::build` makes them (zero-area triangles
+/// left out).
+fn primitives(desc: &SceneDesc) -> Vec<Primitive> {
+    let mut prims = Vec::new();
+    for shape in &desc.shapes {
+        match &shape.geometry {
+            Geometry::Mesh(m) => prims.extend(triangles(&m.positions, &m.indices)),
+            &Geometry::Sphere { center, radius, flip_normals } => {
+                prims.push(Primitive::Sphere { center: center.into(), radius, flip: flip_normals })
+            }
+        }
+    }
+    prims
+}
+
+fn triangles<'a>(pos: &'a [Vec3], idx: &'a [[u32; 3]]) -> impl Iterator<Item = Primitive> + 'a {
+    idx.iter().filter_map(move |t| {
+        let [a, b, c] = t.map(|i| Vec3A::from(pos[i as usize]));
+        let (e1, e2) = (b - a, c - a);
+        (e1.cross(e2).length_squared() > 0.0).then_some(Primitive::Triangle { v0: a, e1, e2 })
+    })
+}
+
+/// A cube subdivided into `n x n` quads per face, projected onto the unit sphere and displaced
+/// radially by a few octaves of sines (a bumpy asteroid), as an indexed mesh.
+fn displaced_sphere(n: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+    let mut pos = Vec::with_capacity((6 * (n + 1) * (n + 1)) as usize);
+    let mut idx = Vec::with_capacity((12 * n * n) as usize);
+    // Faces as (normal, u axis, v axis) with u x v = normal, so windings face outwards.
+    let faces = [
+        (Vec3::X, Vec3::Y, Vec3::Z),
+        (-Vec3::X, Vec3::Z, Vec3::Y),
+        (Vec3::Y, Vec3::Z, Vec3::X),
+        (-Vec3::Y, Vec3::X, Vec3::Z),
+        (Vec3::Z, Vec3::X, Vec3::Y),
+        (-Vec3::Z, Vec3::Y, Vec3::X),
+    ];
+    for (normal, u, v) in faces {
+        let base = pos.len() as u32;
+        for j in 0..=n {
+            for i in 0..=n {
+                let (s, t) = (2.0 * i as f32 / n as f32 - 1.0, 2.0 * j as f32 / n as f32 - 1.0);
+                let d = (normal + u * s + v * t).normalize();
+                let bump = 0.06 * (7.0 * d.x).sin() * (9.0 * d.y).sin() * (5.0 * d.z).sin()
+                    + 0.02 * (31.0 * d.x + 3.0).sin() * (27.0 * d.z).sin()
+                    + 0.005 * (97.0 * d.y).sin() * (89.0 * d.x + 1.0).sin();
+                pos.push(d * (1.0 + bump));
+            }
+        }
+        for j in 0..n {
+            for i in 0..n {
+                let a = base + j * (n + 1) + i;
+                let (b, c, d) = (a + 1, a + n + 1, a + n + 2);
+                idx.push([a, b, d]);
+                idx.push([a, d, c]);
+            }
+        }
+    }
+    (pos, idx)
+}
+
+/// Mitsuba's lookat: columns (left, up, dir, origin).
+fn lookat(origin: Vec3, target: Vec3, up: Vec3) -> Mat4 {
+    let dir = (target - origin).normalize();
+    let left = up.cross(dir).normalize();
+    let new_up = dir.cross(left);
+    Mat4::from_cols(left.extend(0.0), new_up.extend(0.0), dir.extend(0.0), origin.extend(1.0))
+}
+
+/// One ray through each pixel centre of a RES x RES image, scanline order.
+fn camera_rays(camera: &Camera) -> Vec<Ray> {
+    (0..RES)
+        .flat_map(|y| (0..RES).map(move |x| Vec2::new(x as f32 + 0.5, y as f32 + 0.5)))
+        .map(|p| {
+            let mut r = camera.generate_ray(p);
+            r.tmax = f32::INFINITY;
+            r
+        })
+        .collect()
+}
+
+/// Origins uniform in the bounds of `prims`, directions uniform on the sphere.
+fn random_rays(prims: &[Primitive], seed: u64) -> Vec<Ray> {
+    let (lo, hi) = prims.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+        let b = p.aabb();
+        (lo.min(Vec3::from(b.min)), hi.max(Vec3::from(b.max)))
+    });
+    let mut rng = Rng(seed);
+    (0..RAYS)
+        .map(|_| {
+            let o = lo + (hi - lo) * Vec3::new(rng.next_f32(), rng.next_f32(), rng.next_f32());
+            let z = 1.0 - 2.0 * rng.next_f32();
+            let phi = std::f32::consts::TAU * rng.next_f32();
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            Ray::new(o, Vec3::new(r * phi.cos(), r * phi.sin(), z))
+        })
+        .collect()
+}
+
+struct Case {
+    scene: &'static str,
+    prims: Vec<Primitive>,
+    coherent: Vec<Ray>,
+    incoherent: Vec<Ray>,
+}
+
+fn cornell_case() -> Case {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.xml");
+    let desc = pt_scene::load_file(&path, &[("width".into(), RES.to_string()), ("height".into(), RES.to_string())])
+        .unwrap_or_else(|e| panic!("cannot load {}: {e}", path.display()));
+    let prims = primitives(&desc);
+    let camera = Camera::new(&desc.camera, RES, RES);
+    Case { scene: "cornell", coherent: camera_rays(&camera), incoherent: random_rays(&prims, 7), prims }
+}
+
+fn mesh_case() -> Case {
+    let (pos, idx) = displaced_sphere(SPHERE_N);
+    let prims: Vec<Primitive> = triangles(&pos, &idx).collect();
+    let desc = CameraDesc {
+        loc: SourceLoc::default(),
+        projection: Projection::Perspective { fov_deg: 45.0, fov_axis: FovAxis::X },
+        to_world: lookat(Vec3::new(0.4, 0.8, 3.2), Vec3::ZERO, Vec3::Y),
+        near_clip: 0.01,
+        far_clip: 100.0,
+    };
+    let camera = Camera::new(&desc, RES, RES);
+    Case { scene: "sphere1m", coherent: camera_rays(&camera), incoherent: random_rays(&prims, 11), prims }
+}
+
+fn bench_traversal(c: &mut Criterion, case: &Case) {
+    for (kind, kname) in KINDS {
+        let accel = Accel::build(case.prims.clone(), kind);
+        for (rays, rname) in [(&case.coherent, "coherent"), (&case.incoherent, "incoherent")] {
+            let hits = rays.iter().filter(|r| accel.intersect(r).is_some()).count();
+            eprintln!(
+                "{} ({} prims) {kname} {rname}: {:.1}% of {} rays hit",
+                case.scene,
+                case.prims.len(),
+                100.0 * hits as f64 / rays.len() as f64,
+                rays.len()
+            );
+            let mut g = c.benchmark_group(format!("{}/{rname}", case.scene));
+            g.throughput(Throughput::Elements(rays.len() as u64));
+            g.bench_function(BenchmarkId::new("closest", kname), |b| {
+                b.iter(|| {
+                    let mut sum = 0.0f32;
+                    for r in rays.iter() {
+                        if let Some((_, t)) = accel.intersect(black_box(r)) {
+                            sum += t;
+                        }
+                    }
+                    sum
+                })
+            });
+            g.bench_function(BenchmarkId::new("occluded", kname), |b| {
+                b.iter(|| rays.iter().filter(|r| accel.occluded(black_box(r))).count())
+            });
+            g.finish();
+        }
+    }
+}
+
+fn traversal(c: &mut Criterion) {
+    bench_traversal(c, &cornell_case());
+    bench_traversal(c, &mesh_case());
+}
+
+fn build(c: &mut Criterion) {
+    let (pos, idx) = displaced_sphere(SPHERE_N);
+    let prims: Vec<Primitive> = triangles(&pos, &idx).collect();
+    let mut g = c.benchmark_group(format!("build/sphere1m ({} tris)", prims.len()));
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(prims.len() as u64));
+    let all = rayon::current_num_threads();
+    for threads in [1, all] {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool");
+        for (kind, kname) in KINDS {
+            g.bench_function(BenchmarkId::new(kname, format!("{threads}thr")), |b| {
+                b.iter_batched(
+                    || prims.clone(),
+                    |p| pool.install(|| Accel::build(p, kind)),
+                    criterion::BatchSize::LargeInput,
+                )
+            });
+        }
+        if all == 1 {
+            break;
+        }
+    }
+    g.finish();
+}
+
+criterion_group!(benches, traversal, build);
+criterion_main!(benches);
