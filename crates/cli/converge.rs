@@ -100,6 +100,14 @@ pub struct ConvergeArgs {
     /// Mitsuba too).
     #[arg(short = 'D', value_name = "NAME=VALUE")]
     pub defines: Vec<String>,
+    /// Also solve the scene by radiosity at these patch sizes (scene units, comma separated):
+    /// one point each, timed from meshing to the displayed image, on the same chart. Points
+    /// are labelled with their patch count.
+    #[arg(long, value_delimiter = ',', value_name = "SIZES")]
+    pub radiosity_patch_sizes: Vec<f32>,
+    /// Form-factor rays per patch for the radiosity points.
+    #[arg(long, default_value_t = 1024)]
+    pub radiosity_rays: u32,
 }
 
 /// pt's direct-light strategy of one curve.
@@ -151,7 +159,8 @@ impl MitsubaVariant {
     }
 }
 
-/// One render: its sample count, render time and error against the reference.
+/// One render: its sample count (for radiosity: its patch count), render time and error
+/// against the reference.
 #[derive(Clone, Debug)]
 struct Point {
     spp: u32,
@@ -284,6 +293,10 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
         all.push(Series { name, points });
     }
 
+    if !args.radiosity_patch_sizes.is_empty() {
+        all.push(run_radiosity(&args, &desc, &settings, &out_dir, &reference, &pool)?);
+    }
+
     let csv = out_dir.join("converge.csv");
     let mut text = String::from("series,spp,seconds,relmse,rmse\n");
     for s in &all {
@@ -304,6 +317,36 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
     write_atomic(&out_dir.join("summary.txt"), summary.as_bytes())?;
     print!("{summary}");
     Ok(ExitCode::SUCCESS)
+}
+
+/// The radiosity curve: one full solve per patch size (mesh, form factors, solve, display),
+/// each timed as a whole, measured like the path-traced images. Points carry the patch count.
+fn run_radiosity(args: &ConvergeArgs, desc: &pt_scene::SceneDesc, settings: &RenderSettings, out_dir: &Path, reference: &Image, pool: &rayon::ThreadPool) -> Result<Series> {
+    let name = "radiosity".to_string();
+    let dir = out_dir.join(&name);
+    std::fs::create_dir_all(&dir).with_context(|| format!("cannot create '{}'", dir.display()))?;
+    let mut points = Vec::new();
+    for &h in &args.radiosity_patch_sizes {
+        if !(h > 0.0 && h.is_finite()) {
+            bail!("--radiosity-patch-sizes must be positive, got {h}");
+        }
+        let params = pt_radiosity::RadiosityParams {
+            patch_size: Some(h),
+            rays_per_patch: args.radiosity_rays,
+            spp: 4,
+            seed: settings.seed,
+            ..Default::default()
+        };
+        let start = Instant::now();
+        let (out, stats) = pool.install(|| pt_radiosity::render(desc, &params, &|_, _| {}))?;
+        let seconds = start.elapsed().as_secs_f64();
+        let image = Image { width: out.width, height: out.height, data: out.mean };
+        let meta = ExrMeta { spp: Some(params.spp), mode: Some("rgb".into()), render_time_s: Some(seconds), extra: vec![("patch_size".into(), h.to_string()), ("patches".into(), stats.patches.to_string())] };
+        pt_image::write_exr(&dir.join(format!("h{h}.exr")), &image, &meta)?;
+        let patches = u32::try_from(stats.patches).unwrap_or(u32::MAX);
+        points.push(measure(&image, reference, patches, seconds, &format!("{name} h={h} ({} patches)", stats.patches))?);
+    }
+    Ok(Series { name, points })
 }
 
 fn parse_defines(defs: &[String]) -> Result<Vec<(String, String)>> {

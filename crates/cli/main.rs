@@ -4,6 +4,15 @@
 //! (unreadable or malformed scene, bad argument, unwritable output). Errors name the file, line
 //! and element; no partial output file is ever left behind (outputs are written atomically).
 
+/// `println!` that stops quietly when stdout is closed (`pt compare a.exr b.exr | head`)
+/// instead of panicking on the broken pipe.
+macro_rules! out {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($t)*);
+    }};
+}
+
 mod converge;
 
 use anyhow::{bail, Context, Result};
@@ -465,11 +474,11 @@ fn check_output_path(output: &Path) -> Result<()> {
 fn cmd_info(args: InfoArgs) -> Result<ExitCode> {
     let desc = load_scene(args.scene.as_deref(), &args.scene_args)?;
     let scene = Scene::build(&desc, BvhKind::CwBvh, LightSelection::Power)?;
-    println!("scene       {}", desc.source.display());
-    println!("film        {}x{}, filter {:?}", desc.film.width, desc.film.height, desc.film.filter);
-    println!("sampler     {} spp, seed {}", desc.sampler.sample_count, desc.sampler.seed);
+    out!("scene       {}", desc.source.display());
+    out!("film        {}x{}, filter {:?}", desc.film.width, desc.film.height, desc.film.filter);
+    out!("sampler     {} spp, seed {}", desc.sampler.sample_count, desc.sampler.seed);
     let i = &desc.integrator;
-    println!(
+    out!(
         "integrator  {:?}, max_depth {}, rr_depth {}, hide_emitters {}{}",
         i.kind,
         i.max_depth,
@@ -480,8 +489,8 @@ fn cmd_info(args: InfoArgs) -> Result<ExitCode> {
     let c = &desc.camera;
     let pos = c.to_world.transform_point3(pt_math::Vec3::ZERO);
     let dir = c.to_world.transform_vector3(pt_math::Vec3::Z).normalize();
-    println!("camera      {:?}, at ({:.3}, {:.3}, {:.3}) looking ({:.3}, {:.3}, {:.3})", c.projection, pos.x, pos.y, pos.z, dir.x, dir.y, dir.z);
-    println!(
+    out!("camera      {:?}, at ({:.3}, {:.3}, {:.3}) looking ({:.3}, {:.3}, {:.3})", c.projection, pos.x, pos.y, pos.z, dir.x, dir.y, dir.z);
+    out!(
         "geometry    {} shapes, {} triangles, {} spheres{}",
         desc.shapes.len(),
         scene.stats.triangles,
@@ -494,7 +503,7 @@ fn cmd_info(args: InfoArgs) -> Result<ExitCode> {
             Geometry::Sphere { radius, .. } => format!("sphere r={radius}"),
         };
         let bsdf = &desc.bsdfs[s.bsdf];
-        println!(
+        out!(
             "  shape {k:<3} {:<10} {:<16} bsdf {:<12} {}{}",
             s.plugin,
             geo,
@@ -503,14 +512,14 @@ fn cmd_info(args: InfoArgs) -> Result<ExitCode> {
             s.id.as_deref().map(|id| format!(" id={id}")).unwrap_or_default(),
         );
     }
-    println!("materials   {}", desc.bsdfs.len());
+    out!("materials   {}", desc.bsdfs.len());
     for b in &desc.bsdfs {
-        println!("  {:<12} {:?}", b.id.as_deref().unwrap_or("-"), b.kind);
+        out!("  {:<12} {:?}", b.id.as_deref().unwrap_or("-"), b.kind);
     }
-    println!("lights      {} area light(s)", scene.lights.len());
+    out!("lights      {} area light(s)", scene.lights.len());
     match desc.spectral_reason() {
-        Some(why) => println!("mode        spectral, because {why}"),
-        None => println!("mode        rgb (every input is RGB and no material depends on wavelength: RGB is exact)"),
+        Some(why) => out!("mode        spectral, because {why}"),
+        None => out!("mode        rgb (every input is RGB and no material depends on wavelength: RGB is exact)"),
     }
     Ok(ExitCode::SUCCESS)
 }
@@ -537,12 +546,12 @@ fn cmd_compare(args: CompareArgs) -> Result<ExitCode> {
     }
     let m = pt_image::metrics::compare(&img, &reference)?;
     let ch = |v: [f64; 3]| format!("{:>12.6e} {:>12.6e} {:>12.6e}", v[0], v[1], v[2]);
-    println!("{:<22} {:>12} {:>12} {:>12}", "metric", "R", "G", "B");
-    println!("{:<22} {}   (all: {:.6e})", "relMSE", ch(m.relmse), m.relmse_all);
-    println!("{:<22} {}", "RMSE", ch(m.rmse));
-    println!("{:<22} {}", "MAE", ch(m.mae));
-    println!("{:<22} {}", "mean ratio", ch(m.mean_ratio));
-    println!("{:<22} {} / {}", "non-finite pixels", img.nonfinite_pixels(), reference.nonfinite_pixels());
+    out!("{:<22} {:>12} {:>12} {:>12}", "metric", "R", "G", "B");
+    out!("{:<22} {}   (all: {:.6e})", "relMSE", ch(m.relmse), m.relmse_all);
+    out!("{:<22} {}", "RMSE", ch(m.rmse));
+    out!("{:<22} {}", "MAE", ch(m.mae));
+    out!("{:<22} {}", "mean ratio", ch(m.mean_ratio));
+    out!("{:<22} {} / {}", "non-finite pixels", img.nonfinite_pixels(), reference.nonfinite_pixels());
     let img_var = args.image_variance.clone().or_else(|| sibling_variance(&args.image));
     let ref_var = args.variance.clone().or_else(|| sibling_variance(&args.reference));
     let mut agree = img.nonfinite_pixels() == 0;
@@ -551,7 +560,7 @@ fn cmd_compare(args: CompareArgs) -> Result<ExitCode> {
             let (iv, _) = pt_image::read_exr(&iv)?;
             let (rv, _) = pt_image::read_exr(&rv)?;
             let z = pt_image::stats::block_ztest(&img, &iv, &reference, &rv, args.block, args.alpha)?;
-            println!(
+            out!(
                 "block z-test ({}x{} px, alpha {}): max |z| {:.2}, {} of {} block-channels fail (per-test p < {:.2e}), chi2 {:.1} on {} dof (p {:.3}): {}",
                 args.block,
                 args.block,
@@ -566,11 +575,11 @@ fn cmd_compare(args: CompareArgs) -> Result<ExitCode> {
                 if z.pass { "PASS" } else { "FAIL" }
             );
             let pz = pt_image::stats::pixel_ztest(&img, &iv, &reference, &rv, args.alpha)?;
-            println!("pixel z-test: {:.3}% of pixel-channels fail at p < {}", 100.0 * pz.fraction_failed, args.alpha);
+            out!("pixel z-test: {:.3}% of pixel-channels fail at p < {}", 100.0 * pz.fraction_failed, args.alpha);
             agree &= z.pass;
         }
         _ => {
-            println!("no variance images: z-test skipped (give --variance and --image-variance, or put NAME_var.exr beside each)");
+            out!("no variance images: z-test skipped (give --variance and --image-variance, or put NAME_var.exr beside each)");
         }
     }
     if let Some(out) = &args.error_image {
@@ -581,7 +590,7 @@ fn cmd_compare(args: CompareArgs) -> Result<ExitCode> {
             Some("exr") => pt_image::write_exr(out, &e, &ExrMeta::default())?,
             _ => bail!("--error-image '{}' must end in .png or .exr", out.display()),
         }
-        println!("relative error image (0 to 20%, viridis) -> {}", out.display());
+        out!("relative error image (0 to 20%, viridis) -> {}", out.display());
     }
     Ok(if agree { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }

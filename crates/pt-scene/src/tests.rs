@@ -178,8 +178,8 @@ fn include_path_default_and_ref_work_together() {
     assert_eq!(s.bsdfs.len(), 1, "the shared BSDF appears once");
     assert_eq!(s.shapes[0].bsdf, s.shapes[1].bsdf);
     // The main file's <default> came first, so it wins over the included one.
-    match s.bsdfs[0].kind {
-        BsdfKind::Diffuse { reflectance } => assert_eq!(reflectance, SpectrumDesc::Constant(0.25)),
+    match &s.bsdfs[0].kind {
+        BsdfKind::Diffuse { reflectance } => assert_eq!(*reflectance, SpectrumDesc::Constant(0.25)),
         ref k => panic!("unexpected {k:?}"),
     }
     assert_eq!(s.bsdfs[0].loc.file, dir.join("parts/materials.xml"));
@@ -301,15 +301,14 @@ fn unknown_plugin_is_an_error() {
 #[test]
 fn unsupported_plugins_say_not_yet_implemented() {
     let cases = [
-        "<bsdf type=\"dielectric\"/>",
-        "<bsdf type=\"roughconductor\"/>",
         "<bsdf type=\"plastic\"/>",
+        "<bsdf type=\"roughplastic\"/>",
         "<emitter type=\"projector\"/>",
         "<emitter type=\"sunsky\"/>",
         "<sensor type=\"orthographic\"/>",
         "<shape type=\"ply\"/>",
         "<integrator type=\"volpath\"/>",
-        "<shape type=\"cube\"><bsdf type=\"conductor\"/></shape>",
+        "<shape type=\"cube\"><bsdf type=\"mask\"/></shape>",
         "<shape type=\"cube\"><bsdf type=\"diffuse\"><texture type=\"bitmap\" name=\"reflectance\"/></bsdf></shape>",
         "<sensor type=\"perspective\"><film type=\"hdrfilm\"><rfilter type=\"mitchell\"/></film></sensor>",
     ];
@@ -429,11 +428,20 @@ fn transform_errors_name_the_operation() {
 }
 
 #[test]
-fn spectrum_pairs_are_not_yet_supported() {
-    let e = fail(&scene(
+fn spectrum_pairs_are_tabulated_spectra() {
+    let s = load(&scene(
         "<shape type=\"cube\"><bsdf type=\"diffuse\">\n<spectrum name=\"reflectance\" value=\"400:0.1, 700:0.5\"/>\n</bsdf></shape>",
-    ));
-    assert_error(&e, 3, "spectrum name=\"reflectance\"", "not yet supported");
+    ))
+    .unwrap();
+    assert!(matches!(&s.bsdfs[0].kind, BsdfKind::Diffuse { reflectance: SpectrumDesc::Tabulated(p) } if p.as_slice() == [(400.0, 0.1), (700.0, 0.5)]));
+    assert!(s.spectral_reason().unwrap().contains("tabulated spectrum"));
+    // Malformed pairs name the element.
+    for bad in ["400:0.1", "500:0.1, 400:0.2", "400:x, 500:1", "400:0.1; 500:0.2"] {
+        let e = fail(&scene(&format!(
+            "<shape type=\"cube\"><bsdf type=\"diffuse\">\n<spectrum name=\"reflectance\" value=\"{bad}\"/>\n</bsdf></shape>"
+        )));
+        assert_eq!(e.loc.as_ref().unwrap().line, 3, "{bad}: {e}");
+    }
     let s = load(&scene(
         "<shape type=\"cube\"><bsdf type=\"diffuse\"><spectrum name=\"reflectance\" value=\"0.3\"/></bsdf></shape>",
     ))
@@ -994,6 +1002,35 @@ fn emitters_outside_shapes() {
         (r#"<emitter type="point"><rgb name="intensity" value="-1"/></emitter>"#, "intensity"),
         (r#"<emitter type="envmap"><string name="filename" value="nope.exr"/></emitter>"#, "nope.exr"),
         (r#"<emitter type="directional"><vector name="direction" value="0, 0, 0"/></emitter>"#, "direction"),
+    ] {
+        let e = fail(&scene(body));
+        assert!(e.to_string().contains(what), "{body}: {e}");
+    }
+}
+
+#[test]
+fn physical_bsdfs_with_mitsuba_defaults_and_names() {
+    let s = load(&scene(
+        r#"<bsdf type="dielectric" id="glass"><string name="int_ior" value="water"/></bsdf>
+<bsdf type="roughconductor" id="gold"><string name="material" value="Au"/><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/></bsdf>
+<bsdf type="orennayar" id="on"><float name="sigma" value="0.3"/><string name="variant" value="EON"/></bsdf>
+<shape type="cube"><ref id="glass"/></shape>
+<shape type="cube"><ref id="gold"/></shape>
+<shape type="cube"><ref id="on"/></shape>"#,
+    ))
+    .unwrap();
+    assert!(matches!(s.bsdfs[0].kind, BsdfKind::Dielectric { int_ior, ext_ior } if int_ior == 1.333 && ext_ior == 1.000277));
+    assert!(matches!(&s.bsdfs[1].kind, BsdfKind::RoughConductor { distribution, alpha_u, alpha_v, .. }
+        if distribution == "beckmann" && *alpha_u == 0.1 && *alpha_v == 0.3));
+    assert!(matches!(&s.bsdfs[2].kind, BsdfKind::OrenNayar { variant, .. } if variant == "eon"));
+    for (body, what) in [
+        (r#"<shape type="cube"><bsdf type="conductor"><string name="material" value="Unobtainium"/></bsdf></shape>"#, "Unobtainium"),
+        (r#"<shape type="cube"><bsdf type="dielectric"><string name="int_ior" value="glas"/></bsdf></shape>"#, "glas"),
+        (r#"<shape type="cube"><bsdf type="roughconductor"><float name="alpha" value="0"/></bsdf></shape>"#, "roughness"),
+        (r#"<shape type="cube"><bsdf type="roughconductor"><string name="distribution" value="phong"/></bsdf></shape>"#, "phong"),
+        (r#"<shape type="cube"><bsdf type="orennayar"><string name="variant" value="nope"/></bsdf></shape>"#, "nope"),
+        (r#"<shape type="cube"><bsdf type="minnaert"><float name="k" value="-1"/></bsdf></shape>"#, "k must be positive"),
+        (r#"<shape type="cube"><bsdf type="orennayar"><float name="reflectance" value="1.5"/></bsdf></shape>"#, "in [0, 1]"),
     ] {
         let e = fail(&scene(body));
         assert!(e.to_string().contains(what), "{body}: {e}");
