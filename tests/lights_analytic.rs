@@ -203,3 +203,22 @@ fn envmap_light_sampling_agrees_with_bsdf_sampling() {
         }
     }
 }
+
+/// A spherical area light (radiance L, radius r, centre at height h, outside the view) over the
+/// plane: a uniform sphere fully above the horizon gives E = pi L (r/d)^2 cos(theta), so
+/// L_out = rho L r^2 h / d^3. Checks solid-angle (cone) sampling of spheres and its pdf in MIS,
+/// for each strategy.
+#[test]
+fn sphere_light_solid_angle_sampling() {
+    let (cx, h, r, l) = (2.5, 1.0, 0.3, 20.0);
+    let light = format!(
+        r#"<shape type="sphere"><point name="center" value="{cx}, {h}, 0"/><float name="radius" value="{r}"/>
+            <bsdf type="diffuse"><float name="reflectance" value="0"/></bsdf>
+            <emitter type="area"><rgb name="radiance" value="{l}"/></emitter></shape>"#
+    );
+    let want = |x: f64, z: f64| {
+        let d2 = (x - cx).powi(2) + h * h + z * z;
+        [RHO * l * r * r * h / d2.powf(1.5); 3]
+    };
+    check("sphere", &light, want, [0.0; 3]);
+}
