@@ -95,7 +95,7 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, 
 
         // Emission found by the ray we just traced.
         if let Some((li_idx, light)) = scene.shape_light(hit.shape) {
-            let le = light.emitted(hit.ns, wo_world) * scene.emission(li_idx, lambda);
+            let le = light.emitted(hit.ns, wo_world, hit.uv) * scene.emission(li_idx, lambda);
             if !le.is_black() {
                 if depth == 0 {
                     if !s.hide_emitters {

@@ -22,6 +22,7 @@ pub mod light;
 pub mod render;
 pub mod sampler;
 pub mod scene;
+pub mod texture;
 
 pub use accel::BvhKind;
 pub use integrator::{PathSettings, Strategy};

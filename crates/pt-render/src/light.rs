@@ -24,6 +24,8 @@ pub struct LightTriangle {
     pub p: [Vec3; 3],
     /// Per-vertex shading normals, or the geometric normal three times.
     pub n: [Vec3; 3],
+    /// Per-vertex texture coordinates (for textured emission).
+    pub uv: [Vec2; 3],
 }
 
 /// The geometry of an area light.
@@ -50,8 +52,10 @@ pub enum LightShape {
 /// An area light attached to one shape.
 #[derive(Clone, Debug)]
 pub struct AreaLight {
-    /// Emitted radiance (W sr^-1 m^-2), constant over the surface.
+    /// Emitted radiance (W sr^-1 m^-2), constant over the surface (times `texture` if any).
     pub radiance: SampledSpectrum,
+    /// Radiance image over the shape's texture coordinates (a monitor), RGB mode only.
+    pub texture: Option<std::sync::Arc<crate::texture::Bitmap>>,
     /// The emitting geometry.
     pub shape: LightShape,
     /// Total surface area, scene units squared.
@@ -83,7 +87,17 @@ pub struct LightSample {
 impl AreaLight {
     /// Total emitted power estimate (for light selection): pi * area * luminance.
     pub fn power(&self) -> f32 {
-        std::f32::consts::PI * self.area * self.radiance.luminance_rgb().max(0.0)
+        let scale = self.texture.as_ref().map_or(1.0, |t| t.mean_luminance());
+        std::f32::consts::PI * self.area * self.radiance.luminance_rgb().max(0.0) * scale
+    }
+
+    /// The emitted radiance at texture coordinates `uv` (front side), before the one-sided test.
+    #[inline]
+    fn radiance_at(&self, uv: Vec2) -> SampledSpectrum {
+        match &self.texture {
+            Some(t) => self.radiance * SampledSpectrum::from_rgb(t.eval(uv)),
+            None => self.radiance,
+        }
     }
 
     /// Samples a point uniformly by area and converts to solid angle as seen from `x`.
@@ -95,7 +109,7 @@ impl AreaLight {
                 return cone.sample(u, *flip, self.radiance, x);
             }
         }
-        let (p, n) = match &self.shape {
+        let (p, n, uv) = match &self.shape {
             LightShape::Mesh { tris, distr } => {
                 let (i, _, _) = distr.sample(u_sel);
                 let t = &tris[i];
@@ -103,11 +117,11 @@ impl AreaLight {
                 let b0 = 1.0 - b.x - b.y;
                 let p = t.p[0] * b0 + t.p[1] * b.x + t.p[2] * b.y;
                 let n = (t.n[0] * b0 + t.n[1] * b.x + t.n[2] * b.y).normalize_or_zero();
-                (p, n)
+                (p, n, t.uv[0] * b0 + t.uv[1] * b.x + t.uv[2] * b.y)
             }
             LightShape::Sphere { center, radius, flip } => {
                 let d = square_to_uniform_sphere(u);
-                (*center + d * *radius, if *flip { -d } else { d })
+                (*center + d * *radius, if *flip { -d } else { d }, Vec2::ZERO)
             }
         };
         let to = p - x;
@@ -122,7 +136,7 @@ impl AreaLight {
         if !pdf.is_finite() {
             return None;
         }
-        let radiance = if cos_l > 0.0 { self.radiance } else { SampledSpectrum::ZERO };
+        let radiance = if cos_l > 0.0 { self.radiance_at(uv) } else { SampledSpectrum::ZERO };
         Some(LightSample { p, n, wi, dist, radiance, pdf, delta: false })
     }
 
@@ -145,8 +159,8 @@ impl AreaLight {
     /// Radiance leaving the light at a point with normal `n` towards direction `w` (unit,
     /// pointing away from the light).
     #[inline]
-    pub fn emitted(&self, n: Vec3, w: Vec3) -> SampledSpectrum {
-        if n.dot(w) > 0.0 { self.radiance } else { SampledSpectrum::ZERO }
+    pub fn emitted(&self, n: Vec3, w: Vec3, uv: Vec2) -> SampledSpectrum {
+        if n.dot(w) > 0.0 { self.radiance_at(uv) } else { SampledSpectrum::ZERO }
     }
 }
 
@@ -505,7 +519,7 @@ mod tests {
     fn sampled_pdf_matches_pdf_query() {
         let tri = |a: Vec3, b: Vec3, c: Vec3| {
             let n = (b - a).cross(c - a).normalize();
-            LightTriangle { p: [a, b, c], n: [n; 3] }
+            LightTriangle { p: [a, b, c], n: [n; 3], uv: [Vec2::ZERO; 3] }
         };
         // A 2 x 1 rectangle at y = 1 facing down, split into two triangles of equal area.
         let tris = vec![
@@ -515,6 +529,7 @@ mod tests {
         assert!(tris[0].n.iter().all(|n| (n.y + 1.0).abs() < 1e-6), "faces down");
         let light = AreaLight {
             radiance: SampledSpectrum::from_rgb([1.0; 3]),
+            texture: None,
             shape: LightShape::Mesh { tris, distr: Distribution1D::new(&[1.0, 1.0]).unwrap() },
             area: 2.0,
         };

@@ -242,10 +242,20 @@ impl Scene {
                 if !radiance.is_finite() || radiance.0.min_element() < 0.0 {
                     return Err(BuildError { loc: em.loc.clone(), message: "radiance must be finite and non-negative".into() });
                 }
+                let texture = match &em.texture {
+                    None => None,
+                    Some(_) if spectral => {
+                        return Err(BuildError { loc: em.loc.clone(), message: "textured emitters are RGB images; spectral mode would need per-texel upsampling (not yet implemented)".into() });
+                    }
+                    Some(_) if matches!(shape.geometry, Geometry::Sphere { .. }) => {
+                        return Err(BuildError { loc: em.loc.clone(), message: "textured emitters on spheres are not yet supported (not yet implemented); use a mesh".into() });
+                    }
+                    Some(t) => Some(std::sync::Arc::new(crate::texture::Bitmap::load(t).map_err(|m| BuildError { loc: t.loc.clone(), message: m })?)),
+                };
                 match light_shape {
                     Some((shape, area)) if area > 0.0 => {
                         data.light = Some(lights.len() as u32);
-                        lights.push(Light::Area(AreaLight { radiance, shape, area }));
+                        lights.push(Light::Area(AreaLight { radiance, texture, shape, area }));
                     }
                     _ => {
                         return Err(BuildError { loc: em.loc.clone(), message: "area emitter on a shape with zero area".into() });
@@ -438,7 +448,11 @@ fn add_mesh(
             Some(ns) => idx.map(|i| ns.get(i as usize).copied().and_then(Vec3::try_normalize).unwrap_or(ng)),
             None => [ng; 3],
         };
-        tris.push(LightTriangle { p, n: nrm });
+        let uv = match &mesh.uvs {
+            Some(uvs) => idx.map(|i| uvs.get(i as usize).copied().unwrap_or(Vec2::ZERO)),
+            None => [Vec2::ZERO, Vec2::X, Vec2::Y],
+        };
+        tris.push(LightTriangle { p, n: nrm, uv });
         areas.push(area);
     }
     Ok((!tris.is_empty()).then_some((tris, areas)))

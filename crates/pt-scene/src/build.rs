@@ -36,7 +36,7 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
     ("emitter", &["area", "point", "spot", "directional", "sun", "constant", "envmap"], &[
         "projector", "directionalarea", "sunsky",
     ]),
-    ("texture", &[], &["bitmap", "checkerboard", "mesh_attribute", "volume"]),
+    ("texture", &["bitmap"], &["checkerboard", "mesh_attribute", "volume"]),
     ("medium", &[], &["homogeneous", "heterogeneous"]),
     ("phase", &[], &["isotropic", "hg", "rayleigh", "sggx", "tabphase", "blendphase"]),
     ("volume", &[], &["constvolume", "gridvolume"]),
@@ -318,6 +318,56 @@ impl<'e> Builder<'e> {
         Ok(LightDesc { loc: el.loc.clone(), kind })
     }
 
+    /// `area`: `radiance` (rgb, spectrum or float; Mitsuba's default 1), or a nested
+    /// `<texture type="bitmap" name="radiance">` (`filename`, `raw` false, `filter_type`
+    /// bilinear or nearest) for an image-emitting surface such as a monitor.
+    fn area_emitter(&self, el: &'e Element) -> Result<AreaEmitterDesc> {
+        let v = ObjectView::parse(el)?;
+        if v.plugin != "area" {
+            return Err(plugin_error(el));
+        }
+        let mut texture = None;
+        for child in &v.children {
+            let t = self.resolve(child)?;
+            if t.tag != "texture" || t.attr("name") != Some("radiance") || texture.is_some() {
+                return Err(misplaced(child, t, &v, "one <texture name=\"radiance\">"));
+            }
+            texture = Some(self.bitmap(t)?);
+        }
+        if texture.is_some() && v.has("radiance") {
+            return Err(v.prop_error("radiance", "give either a radiance value or a radiance texture"));
+        }
+        let radiance = v.spectrum("radiance")?.unwrap_or(SpectrumDesc::Constant(1.0));
+        v.finish()?;
+        Ok(AreaEmitterDesc { loc: el.loc.clone(), radiance, texture })
+    }
+
+    /// `<texture type="bitmap">`.
+    fn bitmap(&self, el: &'e Element) -> Result<BitmapDesc> {
+        let v = ObjectView::parse(el)?;
+        if v.plugin != "bitmap" {
+            return Err(plugin_error(el));
+        }
+        let name = v.string("filename")?.ok_or_else(|| SceneError::at(&el.loc, "bitmap needs a filename"))?;
+        let path = resolve_file(&name, &v.el.dir, &[self.base_dir], self.search_paths);
+        if !path.is_file() {
+            return Err(v.prop_error("filename", format!("cannot open image '{name}' (looked for {})", path.display())));
+        }
+        let raw = v.boolean("raw")?.unwrap_or(false);
+        let filter = v.string("filter_type")?.unwrap_or_else(|| "bilinear".into());
+        if filter != "bilinear" && filter != "nearest" {
+            return Err(v.prop_error("filter_type", format!("filter_type must be bilinear or nearest, got '{filter}'")));
+        }
+        if let Some(w) = v.string("wrap_mode")? {
+            if w != "repeat" {
+                return Err(v.prop_error("wrap_mode", format!("wrap_mode '{w}' is not yet supported (not yet implemented; only repeat)")));
+            }
+        }
+        no_children(&v)?;
+        v.finish()?;
+        Ok(BitmapDesc { loc: el.loc.clone(), filename: path, raw, filter })
+    }
+
     // -----------------------------------------------------------------------------------------
     // Sensor, film, sampler
 
@@ -536,7 +586,7 @@ impl<'e> Builder<'e> {
                 "bsdf" if bsdf.is_some() => return Err(once("BSDF")),
                 "bsdf" => bsdf = Some(self.bsdf_for_shape(target)?),
                 "emitter" if emitter.is_some() => return Err(once("emitter")),
-                "emitter" => emitter = Some(area_emitter(target)?),
+                "emitter" => emitter = Some(self.area_emitter(target)?),
                 _ => return Err(misplaced(child, target, v, "bsdf or emitter")),
             }
         }
@@ -856,22 +906,6 @@ fn direct_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
 }
 
 /// `area`: `radiance` (rgb, spectrum or float; Mitsuba's default 1).
-fn area_emitter(el: &Element) -> Result<AreaEmitterDesc> {
-    let v = ObjectView::parse(el)?;
-    if v.plugin != "area" {
-        return Err(plugin_error(el));
-    }
-    let radiance = v
-        .spectrum("radiance")?
-        .unwrap_or(SpectrumDesc::Constant(1.0));
-    no_children(&v)?;
-    v.finish()?;
-    Ok(AreaEmitterDesc {
-        loc: el.loc.clone(),
-        radiance,
-    })
-}
-
 fn default_film() -> FilmDesc {
     FilmDesc {
         width: 768,

@@ -286,8 +286,23 @@ pub enum Geometry {
 pub struct AreaEmitterDesc {
     /// Where it was defined.
     pub loc: SourceLoc,
-    /// Emitted radiance, W sr^-1 m^-2 (linear RGB).
+    /// Emitted radiance, W sr^-1 m^-2 (linear RGB); with `texture`, ignored.
     pub radiance: SpectrumDesc,
+    /// Radiance from an image over the shape's texture coordinates (a screen, a monitor).
+    pub texture: Option<BitmapDesc>,
+}
+
+/// A `<texture type="bitmap">`: an image looked up by texture coordinates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BitmapDesc {
+    /// Where it was defined.
+    pub loc: SourceLoc,
+    /// The image file (PNG or EXR), resolved.
+    pub filename: PathBuf,
+    /// Use the stored values as they are (`raw`): otherwise 8-bit images are sRGB-decoded.
+    pub raw: bool,
+    /// `bilinear` (default) or `nearest`.
+    pub filter: String,
 }
 
 /// A shape with its material and optional emitter.
