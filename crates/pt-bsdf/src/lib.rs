@@ -8,12 +8,13 @@
 //! - [`Bsdf::pdf`] is per unit **solid angle** of `wi`.
 //! - [`Bsdf::sample`] returns `weight = f * |cos theta_i| / pdf`, and `eta`, the relative index
 //!   along the sampled segment (1 for reflection).
-//! - Delta lobes ([`Conductor`], [`Dielectric`], [`ThinDielectric`]) return eval = pdf = 0 and
+//! - Delta lobes ([`Conductor`], [`Dielectric`], [`ThinDielectric`], [`ThinFilm`]) return eval = pdf = 0 and
 //!   are reached only through `sample`, which sets `delta = true` and `pdf` = the discrete
 //!   probability of the chosen lobe (not a density: never use it in MIS).
 //! - Refraction carries radiance: transmitted values include the factor `1/eta^2` (pbrt-v4
 //!   `TransportMode::Radiance`). Energy is conserved in the sense `R + T eta^2 (weight) = 1`.
-//! - Transmissive models ([`Dielectric`], [`RoughDielectric`], [`ThinDielectric`]) handle both
+//! - Transmissive models ([`Dielectric`], [`RoughDielectric`], [`ThinDielectric`], [`ThinFilm`]
+//!   on a dielectric base) handle both
 //!   sides themselves (`wo.z < 0` is inside); [`SurfaceBsdf`] never mirrors them, even if
 //!   `two_sided` is set.
 //!
@@ -32,6 +33,7 @@ pub mod minnaert;
 pub mod oren_nayar;
 pub mod rough_dielectric;
 pub mod thin_dielectric;
+pub mod thin_film;
 
 pub use conductor::{Conductor, RoughConductor};
 pub use dielectric::Dielectric;
@@ -41,6 +43,7 @@ pub use minnaert::Minnaert;
 pub use oren_nayar::{OrenNayar, OrenNayarVariant};
 pub use rough_dielectric::RoughDielectric;
 pub use thin_dielectric::ThinDielectric;
+pub use thin_film::{FilmBase, FilmColor, ThinFilm};
 use pt_math::{Vec2, Vec3, Vec4};
 use pt_spectrum::SampledSpectrum;
 
@@ -88,6 +91,9 @@ pub enum Bsdf {
     ThinDielectric(ThinDielectric),
     /// Rough dielectric interface (handles both sides itself).
     RoughDielectric(RoughDielectric),
+    /// Smooth thin film on a conductor (one delta lobe) or dielectric base (two delta lobes,
+    /// handles both sides itself).
+    ThinFilm(ThinFilm),
 }
 
 impl Bsdf {
@@ -103,6 +109,7 @@ impl Bsdf {
             Bsdf::Dielectric(m) => m.eval(wo, wi),
             Bsdf::ThinDielectric(m) => m.eval(wo, wi),
             Bsdf::RoughDielectric(m) => m.eval(wo, wi),
+            Bsdf::ThinFilm(m) => m.eval(wo, wi),
         }
     }
 
@@ -118,6 +125,7 @@ impl Bsdf {
             Bsdf::Dielectric(m) => m.pdf(wo, wi),
             Bsdf::ThinDielectric(m) => m.pdf(wo, wi),
             Bsdf::RoughDielectric(m) => m.pdf(wo, wi),
+            Bsdf::ThinFilm(m) => m.pdf(wo, wi),
         }
     }
 
@@ -133,13 +141,18 @@ impl Bsdf {
             Bsdf::Dielectric(m) => m.sample(wo, u_lobe, u),
             Bsdf::ThinDielectric(m) => m.sample(wo, u_lobe, u),
             Bsdf::RoughDielectric(m) => m.sample(wo, u_lobe, u),
+            Bsdf::ThinFilm(m) => m.sample(wo, u_lobe, u),
         }
     }
 
     /// Whether the model transmits light (handles `wo` below the surface itself).
     #[inline]
     pub fn is_transmissive(&self) -> bool {
-        matches!(self, Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_))
+        match self {
+            Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_) => true,
+            Bsdf::ThinFilm(m) => m.is_transmissive(),
+            _ => false,
+        }
     }
 
     /// Whether the model has a non-delta component, so that light sampling can help.
@@ -151,7 +164,7 @@ impl Bsdf {
             | Bsdf::Minnaert(_)
             | Bsdf::RoughConductor(_)
             | Bsdf::RoughDielectric(_) => true,
-            Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) => false,
+            Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::ThinFilm(_) => false,
         }
     }
 }

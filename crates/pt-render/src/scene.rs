@@ -5,7 +5,7 @@ use crate::camera::Camera;
 use crate::geometry::{intersect_triangle, Interaction, Primitive};
 use crate::light::{AreaLight, EnvMap, Light, LightShape, LightTriangle, SpotCone};
 use pt_bsdf::{
-    Bsdf, Conductor, Dielectric, Distribution, Lambert, Microfacet, Minnaert, OrenNayar, OrenNayarVariant, RoughConductor, RoughDielectric,
+    Bsdf, Conductor, Dielectric, Distribution, FilmBase, Lambert, ThinFilm, Microfacet, Minnaert, OrenNayar, OrenNayarVariant, RoughConductor, RoughDielectric,
     SurfaceBsdf, ThinDielectric,
 };
 use pt_math::{Distribution1D, Frame, Mat3, Ray, Vec2, Vec3, Vec3A};
@@ -136,7 +136,11 @@ fn to_spectrum(s: &SpectrumDesc, role: Role) -> Spectrum {
 /// The BSDF of a material description. `val` turns each spectral parameter into lane values;
 /// it is called in a fixed order, so spectral mode can fit the spectra once (at build) and
 /// evaluate them per path in the same order.
-fn material_with(desc: &BsdfDesc, val: &mut dyn FnMut(&SpectrumDesc, Role) -> SampledSpectrum) -> Result<SurfaceBsdf, BuildError> {
+fn material_with(
+    desc: &BsdfDesc,
+    lambda: Option<&SampledWavelengths>,
+    val: &mut dyn FnMut(&SpectrumDesc, Role) -> SampledSpectrum,
+) -> Result<SurfaceBsdf, BuildError> {
     let one_sided = |bsdf| SurfaceBsdf { bsdf, two_sided: false };
     let mf = |dist: &str, au: f32, av: f32| -> Result<Microfacet, BuildError> {
         let d = Distribution::from_name(dist).ok_or_else(|| BuildError { loc: desc.loc.clone(), message: format!("unknown microfacet distribution '{dist}'") })?;
@@ -144,7 +148,19 @@ fn material_with(desc: &BsdfDesc, val: &mut dyn FnMut(&SpectrumDesc, Role) -> Sa
     };
     Ok(match &desc.kind {
         BsdfKind::Diffuse { reflectance } => one_sided(Bsdf::Lambert(Lambert::new(val(reflectance, Role::Albedo)))),
-        BsdfKind::TwoSided { inner } => SurfaceBsdf { two_sided: true, ..material_with(inner, val)? },
+        BsdfKind::TwoSided { inner } => SurfaceBsdf { two_sided: true, ..material_with(inner, lambda, val)? },
+        BsdfKind::ThinFilm { thickness, film_ior, ext_ior, int_ior, eta, k } => {
+            let base = match int_ior {
+                Some(ior) => FilmBase::Dielectric { ior: *ior },
+                None => FilmBase::Conductor { eta: val(eta, Role::Unbounded), k: val(k, Role::Unbounded) },
+            };
+            // Spectral mode: exact Airy reflectance per lane; RGB mode: Belcour & Barla 2017.
+            let film = match lambda {
+                Some(l) => ThinFilm::spectral(*thickness, *film_ior, *ext_ior, base, l.lambda()),
+                None => ThinFilm::rgb(*thickness, *film_ior, *ext_ior, base),
+            };
+            one_sided(Bsdf::ThinFilm(film))
+        }
         BsdfKind::OrenNayar { reflectance, sigma, variant } => {
             let v = OrenNayarVariant::from_name(variant).ok_or_else(|| BuildError { loc: desc.loc.clone(), message: format!("unknown Oren-Nayar variant '{variant}'") })?;
             one_sided(Bsdf::OrenNayar(OrenNayar::new(val(reflectance, Role::Albedo), *sigma, v)))
@@ -185,12 +201,12 @@ impl Scene {
     pub fn build_with_mode(desc: &SceneDesc, bvh: BvhKind, selection: LightSelection, mode: Option<ColorMode>) -> Result<Scene, BuildError> {
         let mode = mode.unwrap_or(if desc.spectral_reason().is_some() { ColorMode::Spectral } else { ColorMode::Rgb });
         let spectral = mode == ColorMode::Spectral;
-        let materials: Vec<SurfaceBsdf> = desc.bsdfs.iter().map(|b| material_with(b, &mut |s, _| spectrum(s))).collect::<Result<_, _>>()?;
+        let materials: Vec<SurfaceBsdf> = desc.bsdfs.iter().map(|b| material_with(b, None, &mut |s, _| spectrum(s))).collect::<Result<_, _>>()?;
         let mut spectral_materials = Vec::new();
         if spectral {
             for b in &desc.bsdfs {
                 let mut spectra = Vec::new();
-                material_with(b, &mut |s, role| {
+                material_with(b, None, &mut |s, role| {
                     spectra.push(to_spectrum(s, role));
                     SampledSpectrum::ZERO
                 })?;
@@ -354,7 +370,7 @@ impl Scene {
             None => self.materials[m],
             Some(sm) => {
                 let mut i = 0;
-                material_with(&sm.desc, &mut |_, _| {
+                material_with(&sm.desc, Some(lambda), &mut |_, _| {
                     let v = sm.spectra.get(i).map_or(SampledSpectrum::ZERO, |s| s.sample(lambda));
                     i += 1;
                     v

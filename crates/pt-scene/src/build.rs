@@ -28,7 +28,7 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "ply", "serialized", "cylinder", "shapegroup", "instance", "bsplinecurve", "linearcurve",
         "sdfgrid", "ellipsoids", "ellipsoidsmesh",
     ]),
-    ("bsdf", &["diffuse", "twosided", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor"], &[
+    ("bsdf", &["diffuse", "twosided", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm"], &[
         "plastic", "roughplastic", "bumpmap", "normalmap", "blendbsdf", "mask", "null",
         "polarizer", "retarder", "circular", "measured", "pplastic", "principled",
         "principledthin", "hair",
@@ -668,7 +668,7 @@ impl<'e> Builder<'e> {
             "twosided" => BsdfKind::TwoSided {
                 inner: Box::new(self.twosided_inner(&v)?),
             },
-            "orennayar" | "minnaert" | "dielectric" | "thindielectric" | "roughdielectric" | "conductor" | "roughconductor" => {
+            "orennayar" | "minnaert" | "dielectric" | "thindielectric" | "roughdielectric" | "conductor" | "roughconductor" | "thinfilm" => {
                 no_children(&v)?;
                 crate::materials::bsdf_kind(&v)?
             }

@@ -364,6 +364,19 @@ impl SceneDesc {
                     vec![eta, k, specular_reflectance]
                 }
                 BsdfKind::Dielectric { .. } | BsdfKind::ThinDielectric { .. } | BsdfKind::RoughDielectric { .. } => vec![],
+                BsdfKind::ThinFilm { eta, k, .. } => vec![eta, k],
+            }
+        }
+        fn has_thin_film(k: &BsdfKind) -> bool {
+            match k {
+                BsdfKind::ThinFilm { .. } => true,
+                BsdfKind::TwoSided { inner } => has_thin_film(&inner.kind),
+                _ => false,
+            }
+        }
+        for b in &self.bsdfs {
+            if has_thin_film(&b.kind) {
+                return Some(format!("{}: thin-film interference depends on wavelength (RGB mode can only approximate it, with Belcour & Barla 2017)", b.loc));
             }
         }
         for b in &self.bsdfs {
@@ -468,6 +481,22 @@ pub enum BsdfKind {
         k: SpectrumDesc,
         /// Scale factor on the reflectance (1 is physical).
         specular_reflectance: SpectrumDesc,
+    },
+    /// Thin-film interference (project extension `thinfilm`): a non-absorbing film over a
+    /// dielectric or conductor base, smooth.
+    ThinFilm {
+        /// Film thickness, nm.
+        thickness: f32,
+        /// Film index of refraction.
+        film_ior: f32,
+        /// Exterior index of refraction.
+        ext_ior: f32,
+        /// Dielectric base index (`int_ior`), or None for a conductor base.
+        int_ior: Option<f32>,
+        /// Conductor base real index (with `int_ior` None).
+        eta: SpectrumDesc,
+        /// Conductor base extinction coefficient (with `int_ior` None).
+        k: SpectrumDesc,
     },
     /// Rough conductor (Mitsuba `roughconductor`).
     RoughConductor {

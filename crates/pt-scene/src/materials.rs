@@ -1,6 +1,7 @@
 //! BSDF plugins with physical parameters: Mitsuba's `dielectric`, `thindielectric`,
-//! `roughdielectric`, `conductor`, `roughconductor`, and the project's `orennayar` and
-//! `minnaert`. Defaults and named materials follow Mitsuba 3.9.
+//! `roughdielectric`, `conductor`, `roughconductor`, and the project's `orennayar`,
+//! `minnaert` and `thinfilm` (`thickness` nm 500, `film_ior` 1.33, `ext_ior` 1, and either
+//! `int_ior` for a dielectric base or `material` / `eta` + `k` for a conductor base). Defaults and named materials follow Mitsuba 3.9.
 //!
 //! Named conductors are given by their RGB-mode complex index (eta + i k) exactly as Mitsuba 3.9.1
 //! `scalar_rgb` computes it from its spectral tables (read with `mi.traverse` on
@@ -179,6 +180,28 @@ pub(crate) fn bsdf_kind(v: &ObjectView<'_>) -> Result<BsdfKind> {
         "conductor" => {
             let (eta, k, specular_reflectance) = conductor_ior(v)?;
             BsdfKind::Conductor { eta, k, specular_reflectance }
+        }
+        "thinfilm" => {
+            let thickness = v.float("thickness")?.unwrap_or(500.0);
+            if !(thickness >= 0.0) {
+                return Err(v.prop_error("thickness", format!("thickness (nm) must be >= 0, got {thickness}")));
+            }
+            let film_ior = ior(v, "film_ior", 1.33)?;
+            let ext_ior = ior(v, "ext_ior", 1.0)?;
+            let dielectric = v.has("int_ior");
+            if dielectric && (v.has("material") || v.has("eta") || v.has("k")) {
+                return Err(v.prop_error("int_ior", "give either int_ior (dielectric base) or material / eta and k (conductor base)"));
+            }
+            if dielectric {
+                let int_ior = ior(v, "int_ior", 1.5)?;
+                BsdfKind::ThinFilm { thickness, film_ior, ext_ior, int_ior: Some(int_ior), eta: SpectrumDesc::Constant(0.0), k: SpectrumDesc::Constant(0.0) }
+            } else {
+                let (eta, k, sr) = conductor_ior(v)?;
+                if sr != SpectrumDesc::Constant(1.0) {
+                    return Err(v.prop_error("specular_reflectance", "specular_reflectance is not supported on thinfilm"));
+                }
+                BsdfKind::ThinFilm { thickness, film_ior, ext_ior, int_ior: None, eta, k }
+            }
         }
         "roughconductor" => {
             let (eta, k, specular_reflectance) = conductor_ior(v)?;
