@@ -56,7 +56,9 @@ fn plugin_error(el: &Element) -> SceneError {
     } else {
         supported.join(", ")
     };
-    let message = if known.contains(&plugin) {
+    let message = if supported.contains(&plugin) {
+        format!("{tag} \"{plugin}\" is not yet supported in this position (not yet implemented; it is read only where the docs list it)")
+    } else if known.contains(&plugin) {
         format!("unsupported plugin {tag} \"{plugin}\" (not yet implemented; supported: {list})")
     } else {
         format!("unknown {tag} plugin \"{plugin}\" (supported: {list})")
