@@ -14,6 +14,7 @@ macro_rules! out {
 }
 
 mod converge;
+mod lobes;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -47,6 +48,7 @@ enum Command {
     /// Convergence: relMSE against render time per strategy (and Mitsuba 3 with --mitsuba);
     /// writes a CSV and an SVG/PNG chart.
     Converge(converge::ConvergeArgs),
+    Lobes(lobes::LobesArgs),
 }
 
 #[derive(Args)]
@@ -214,6 +216,7 @@ fn main() -> ExitCode {
         Command::Info(args) => cmd_info(args),
         Command::Compare(args) => cmd_compare(args),
         Command::Converge(args) => converge::run(args),
+        Command::Lobes(args) => lobes::run(args),
     };
     match result {
         Ok(code) => code,
