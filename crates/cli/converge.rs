@@ -200,7 +200,7 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
             bail!("--max-depth must be -1 (unlimited) or >= 0, got {d}");
         }
     }
-    let defines = parse_defines(&args.defines)?;
+    let defines = crate::parse_defines(&args.defines)?;
     let out_dir = args.out.clone().unwrap_or_else(|| {
         let stem = args.scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
         PathBuf::from(format!("converge-{stem}"))
@@ -349,14 +349,6 @@ fn run_radiosity(args: &ConvergeArgs, desc: &pt_scene::SceneDesc, settings: &Ren
     Ok(Series { name, points })
 }
 
-fn parse_defines(defs: &[String]) -> Result<Vec<(String, String)>> {
-    defs.iter()
-        .map(|d| match d.split_once('=') {
-            Some((k, v)) if !k.trim().is_empty() => Ok((k.trim().to_string(), v.to_string())),
-            _ => bail!("-D expects NAME=VALUE, got '{d}'"),
-        })
-        .collect()
-}
 
 /// Errors of one image; prints the progress line.
 fn measure(image: &Image, reference: &Image, spp: u32, seconds: f64, series: &str) -> Result<Point> {
@@ -540,7 +532,7 @@ fn ratios(all: &[Series]) -> String {
 }
 
 /// Writes `bytes` to a temporary file beside `path`, then renames it over `path`.
-fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let name = path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
     std::fs::write(&tmp, bytes).and_then(|_| std::fs::rename(&tmp, path)).map_err(|e| {
@@ -554,7 +546,7 @@ const FONT: &str = "sans-serif";
 
 /// Registers DejaVu Sans (embedded from the `dejavu` crate) as plotters' "sans-serif", once:
 /// with the `ab_glyph` feature plotters draws text only with registered fonts.
-fn register_font() -> Result<()> {
+pub(crate) fn register_font() -> Result<()> {
     static OK: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
     if *OK.get_or_init(|| plotters::style::register_font(FONT, FontStyle::Normal, dejavu::sans::regular()).is_ok()) {
         Ok(())

@@ -565,31 +565,10 @@ fn csv_text(d: &Data) -> String {
     s
 }
 
-/// Writes `bytes` to a temporary file beside `path`, then renames it over `path` (as
-/// `converge.rs` does).
-fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let name = path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-    std::fs::write(&tmp, bytes).and_then(|_| std::fs::rename(&tmp, path)).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        anyhow!("cannot write '{}': {e}", path.display())
-    })
-}
-
 const SIZE: (u32, u32) = (1800, 1100);
 const FONT: &str = "sans-serif";
 
-/// Registers DejaVu Sans (embedded from the `dejavu` crate) as plotters' "sans-serif", once;
-/// with the `ab_glyph` feature plotters draws text only with registered fonts. Copied from
-/// `register_font` in crates/cli/converge.rs (registering the same font twice is harmless).
-fn register_font() -> Result<()> {
-    static OK: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    if *OK.get_or_init(|| plotters::style::register_font(FONT, FontStyle::Normal, dejavu::sans::regular()).is_ok()) {
-        Ok(())
-    } else {
-        bail!("the embedded chart font is not a valid TrueType font")
-    }
-}
+use crate::converge::{register_font, write_atomic};
 
 fn render_svg(d: &Data) -> Result<String> {
     register_font()?;
