@@ -63,7 +63,6 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, 
     let mut prev_pdf = 0.0f32;
     let mut prev_delta = true; // the camera acts like a delta event: no MIS on directly seen lights
     let use_light = s.strategy != Strategy::Bsdf;
-    let use_bsdf_hits = s.strategy != Strategy::Light;
     let mut depth: u32 = 0;
     // Product of the relative indices of refraction crossed so far: radiance carries 1/eta^2 per
     // refraction, which Russian roulette undoes when judging the path's worth (Mitsuba).
@@ -75,17 +74,8 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, 
             for &i in &scene.infinite_lights {
                 let light = &scene.lights[i];
                 let le = light.escaped_radiance(ray.dir) * scene.emission(i, lambda);
-                if le.is_black() {
-                    continue;
-                }
-                if depth == 0 {
-                    if !s.hide_emitters {
-                        radiance += throughput * le;
-                    }
-                } else if prev_delta {
-                    radiance += throughput * le;
-                } else if use_bsdf_hits {
-                    let w = if use_light { power_heuristic(prev_pdf, scene.light_pmf(i) * light.escaped_pdf(ray.dir)) } else { 1.0 };
+                if !le.is_black() {
+                    let w = emission_weight(s, depth, prev_delta, prev_pdf, || scene.light_pmf(i) * light.escaped_pdf(ray.dir));
                     radiance += throughput * le * w;
                 }
             }
@@ -97,21 +87,8 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, 
         if let Some((li_idx, light)) = scene.shape_light(hit.shape) {
             let le = light.emitted(hit.ns, wo_world, hit.uv) * scene.emission(li_idx, lambda);
             if !le.is_black() {
-                if depth == 0 {
-                    if !s.hide_emitters {
-                        radiance += throughput * le;
-                    }
-                } else if prev_delta {
-                    radiance += throughput * le;
-                } else if use_bsdf_hits {
-                    let w = if use_light {
-                        let light_pdf = scene.light_pmf(li_idx) * light.pdf(prev_p, hit.p, hit.ns);
-                        power_heuristic(prev_pdf, light_pdf)
-                    } else {
-                        1.0
-                    };
-                    radiance += throughput * le * w;
-                }
+                let w = emission_weight(s, depth, prev_delta, prev_pdf, || scene.light_pmf(li_idx) * light.pdf(prev_p, hit.p, hit.ns));
+                radiance += throughput * le * w;
             }
         }
 
@@ -136,7 +113,7 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, 
                         let light_pdf = pmf * ls.pdf;
                         // Delta lights cannot be hit by BSDF sampling: light sampling is the only
                         // strategy, weight 1.
-                        let w = if use_bsdf_hits && !ls.delta { power_heuristic(light_pdf, bsdf.pdf(wo, wi)) } else { 1.0 };
+                        let w = if s.strategy != Strategy::Light && !ls.delta { power_heuristic(light_pdf, bsdf.pdf(wo, wi)) } else { 1.0 };
                         radiance += throughput * f * ls.radiance * scene.emission(li_idx, lambda) * (wi.z.abs() * w / light_pdf);
                     }
                 }
@@ -190,4 +167,25 @@ fn visible(scene: &Scene, hit: &Interaction, ls: &LightSample) -> bool {
         return false;
     }
     !scene.occluded(&Ray { origin, dir: seg / dist, tmin: 0.0, tmax: dist * SHADOW_RAY_SHORTEN })
+}
+
+/// Weight of emission that the traced ray found (an emitter hit or an escaped ray), given the
+/// solid-angle pdf with which light sampling would have chosen the same direction (computed
+/// only when needed). Seen directly from the camera: 1, or 0 with `hide_emitters`. After a
+/// delta bounce: 1 (light sampling cannot produce it). Otherwise the power heuristic against
+/// light sampling under MIS, 1 with BSDF sampling alone, and 0 with light sampling alone (NEE
+/// already counted it).
+#[inline]
+fn emission_weight(s: &PathSettings, depth: u32, prev_delta: bool, prev_pdf: f32, light_pdf: impl FnOnce() -> f32) -> f32 {
+    if depth == 0 {
+        return if s.hide_emitters { 0.0 } else { 1.0 };
+    }
+    if prev_delta {
+        return 1.0;
+    }
+    match s.strategy {
+        Strategy::Mis => power_heuristic(prev_pdf, light_pdf()),
+        Strategy::Bsdf => 1.0,
+        Strategy::Light => 0.0,
+    }
 }
