@@ -47,38 +47,54 @@ pub fn refract(w: pt_math::Vec3, n: pt_math::Vec3, eta: f32) -> Option<(pt_math:
     Some((wt.normalize(), eta))
 }
 
-#[derive(Clone, Copy, Debug)]
-struct Complex {
-    re: f64,
-    im: f64,
+/// A complex number, f64: the Fresnel equations of conductors and the thin film's phases.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct C64 {
+    /// Real part.
+    pub re: f64,
+    /// Imaginary part.
+    pub im: f64,
 }
 
-impl Complex {
-    fn add(self, o: Self) -> Self {
-        Complex { re: self.re + o.re, im: self.im + o.im }
+impl C64 {
+    /// `x + 0 i`.
+    pub const fn real(x: f64) -> Self {
+        C64 { re: x, im: 0.0 }
     }
-    fn sub(self, o: Self) -> Self {
-        Complex { re: self.re - o.re, im: self.im - o.im }
+    pub(crate) fn add(self, o: Self) -> Self {
+        C64 { re: self.re + o.re, im: self.im + o.im }
     }
-    fn mul(self, o: Self) -> Self {
-        Complex { re: self.re * o.re - self.im * o.im, im: self.re * o.im + self.im * o.re }
+    pub(crate) fn sub(self, o: Self) -> Self {
+        C64 { re: self.re - o.re, im: self.im - o.im }
     }
-    fn div(self, o: Self) -> Self {
-        let d = o.re * o.re + o.im * o.im;
-        Complex { re: (self.re * o.re + self.im * o.im) / d, im: (self.im * o.re - self.re * o.im) / d }
+    pub(crate) fn mul(self, o: Self) -> Self {
+        C64 { re: self.re * o.re - self.im * o.im, im: self.re * o.im + self.im * o.re }
     }
-    fn norm(self) -> f64 {
+    pub(crate) fn scale(self, s: f64) -> Self {
+        C64 { re: self.re * s, im: self.im * s }
+    }
+    pub(crate) fn div(self, o: Self) -> Self {
+        let d = o.norm();
+        C64 { re: (self.re * o.re + self.im * o.im) / d, im: (self.im * o.re - self.re * o.im) / d }
+    }
+    /// |z|^2.
+    pub(crate) fn norm(self) -> f64 {
         self.re * self.re + self.im * self.im
     }
-    /// Principal square root.
-    fn sqrt(self) -> Self {
+    /// Principal square root (branch cut on the negative real axis; `-x + 0i` maps to `+i sqrt x`).
+    pub(crate) fn sqrt(self) -> Self {
         let r = self.norm().sqrt();
         let re = (0.5 * (r + self.re)).max(0.0).sqrt();
         let im = (0.5 * (r - self.re)).max(0.0).sqrt().copysign(self.im);
-        Complex { re, im }
+        C64 { re, im }
     }
-    fn real(x: f64) -> Self {
-        Complex { re: x, im: 0.0 }
+    /// `e^{i theta}` times `e^{-phi}` for `z = theta + i phi`: `exp(i z)`.
+    pub(crate) fn exp_i(self) -> Self {
+        let m = (-self.im).exp();
+        C64 { re: m * self.re.cos(), im: m * self.re.sin() }
+    }
+    pub(crate) fn arg(self) -> f64 {
+        self.im.atan2(self.re)
     }
 }
 
@@ -91,16 +107,16 @@ impl Complex {
 /// `R = ((eta-1)^2 + k^2)/((eta+1)^2 + k^2)`.
 pub fn fresnel_conductor(cos_i: f32, eta: f32, k: f32) -> f32 {
     let c = f64::from(cos_i.clamp(0.0, 1.0));
-    let e = Complex { re: f64::from(eta), im: f64::from(k) };
-    let sin2_i = Complex::real(1.0 - c * c);
+    let e = C64 { re: f64::from(eta), im: f64::from(k) };
+    let sin2_i = C64::real(1.0 - c * c);
     let e2 = e.mul(e);
     if e2.norm() == 0.0 {
         return 1.0;
     }
-    let cos_t = Complex::real(1.0).sub(sin2_i.div(e2)).sqrt();
-    let ec = e.mul(Complex::real(c));
+    let cos_t = C64::real(1.0).sub(sin2_i.div(e2)).sqrt();
+    let ec = e.mul(C64::real(c));
     let r_parl = ec.sub(cos_t).div(ec.add(cos_t));
-    let r_perp = Complex::real(c).sub(e.mul(cos_t)).div(Complex::real(c).add(e.mul(cos_t)));
+    let r_perp = C64::real(c).sub(e.mul(cos_t)).div(C64::real(c).add(e.mul(cos_t)));
     let r = 0.5 * (r_parl.norm() + r_perp.norm());
     if r.is_finite() {
         r.clamp(0.0, 1.0) as f32

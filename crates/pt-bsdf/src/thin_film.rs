@@ -282,56 +282,7 @@ impl ThinFilm {
 // ---------------------------------------------------------------------------------------------
 // Exact Airy reflectance (f64).
 
-/// A complex number, f64 (kept local: only the film needs phases).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct C64 {
-    /// Real part.
-    pub re: f64,
-    /// Imaginary part.
-    pub im: f64,
-}
-
-impl C64 {
-    /// `x + 0 i`.
-    pub const fn real(x: f64) -> Self {
-        C64 { re: x, im: 0.0 }
-    }
-    fn add(self, o: Self) -> Self {
-        C64 { re: self.re + o.re, im: self.im + o.im }
-    }
-    fn sub(self, o: Self) -> Self {
-        C64 { re: self.re - o.re, im: self.im - o.im }
-    }
-    fn mul(self, o: Self) -> Self {
-        C64 { re: self.re * o.re - self.im * o.im, im: self.re * o.im + self.im * o.re }
-    }
-    fn scale(self, s: f64) -> Self {
-        C64 { re: self.re * s, im: self.im * s }
-    }
-    fn div(self, o: Self) -> Self {
-        let d = o.norm();
-        C64 { re: (self.re * o.re + self.im * o.im) / d, im: (self.im * o.re - self.re * o.im) / d }
-    }
-    /// |z|^2.
-    fn norm(self) -> f64 {
-        self.re * self.re + self.im * self.im
-    }
-    /// Principal square root (branch cut on the negative real axis; `-x + 0i` maps to `+i sqrt x`).
-    fn sqrt(self) -> Self {
-        let r = self.norm().sqrt();
-        let re = (0.5 * (r + self.re)).max(0.0).sqrt();
-        let im = (0.5 * (r - self.re)).max(0.0).sqrt().copysign(self.im);
-        C64 { re, im }
-    }
-    /// `e^{i theta}` times `e^{-phi}` for `z = theta + i phi`: `exp(i z)`.
-    fn exp_i(self) -> Self {
-        let m = (-self.im).exp();
-        C64 { re: m * self.re.cos(), im: m * self.re.sin() }
-    }
-    fn arg(self) -> f64 {
-        self.im.atan2(self.re)
-    }
-}
+pub use crate::fresnel::C64;
 
 /// `q = n cos(theta) = sqrt(n^2 - s^2)` in a medium of index `n`, for Snell's invariant `s`.
 fn q_of(n: C64, s2: f64) -> C64 {
