@@ -84,6 +84,7 @@ pub mod display;
 pub mod form_factor;
 pub mod patches;
 pub mod solve;
+pub mod spectral;
 
 pub use display::{Display, ImageSettings};
 pub use form_factor::{FormFactors, Reciprocity};
@@ -336,7 +337,12 @@ pub fn render(desc: &SceneDesc, params: &RadiosityParams, progress: &(dyn Fn(&st
         return Err(RadiosityError::Params(format!("image size must be at least 1x1, got {}x{}", desc.film.width, desc.film.height)));
     }
     let sim = simulate(desc, params, progress)?;
-    let mut out = sim.render_image(desc, params.display, params.spp, params.seed, &|f| progress("display", f));
+    let mut out = if desc.spectral_reason().is_some() {
+        // Wavelength-dependent inputs: solve per wavelength bin (see `spectral`).
+        spectral::render(desc, params, &sim, progress)?
+    } else {
+        sim.render_image(desc, params.display, params.spp, params.seed, &|f| progress("display", f))
+    };
     out.time = start.elapsed();
     Ok((out, sim.stats))
 }

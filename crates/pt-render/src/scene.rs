@@ -121,6 +121,13 @@ fn spectrum(s: &SpectrumDesc) -> SampledSpectrum {
     }
 }
 
+/// The spectrum spectral mode uses for an input: a reflectance (`emission` false, RGB upsampled
+/// as a bounded albedo) or an emission (RGB times D65). For other methods (spectral radiosity)
+/// that must treat inputs exactly as the path tracer does.
+pub fn spectrum_for(s: &SpectrumDesc, emission: bool) -> Spectrum {
+    to_spectrum(s, if emission { Role::Emission } else { Role::Albedo })
+}
+
 /// Spectral-mode form of an input (fitted once at scene build).
 fn to_spectrum(s: &SpectrumDesc, role: Role) -> Spectrum {
     match (s, role) {
