@@ -729,14 +729,7 @@ fn polar<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data, with_cos: 
         }
     }
     if with_cos {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .background_style(WHITE.mix(0.8))
-            .border_style(grey)
-            .label_font((FONT, 12))
-            .draw()
-            .map_err(e)?;
+        legend(&mut chart, SeriesLabelPosition::UpperLeft).map_err(e)?;
     }
     Ok(())
 }
@@ -775,15 +768,22 @@ fn albedo_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data) -> 
             }))
             .map_err(e)?;
     }
+    legend(&mut chart, SeriesLabelPosition::LowerLeft).map_err(e)?;
+    Ok(())
+}
+
+/// The series legend every panel uses (light background, grey border, 12 px text).
+fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+) -> Result<(), DrawingAreaErrorKind<DB::ErrorType>> {
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::LowerLeft)
+        .position(position)
         .background_style(WHITE.mix(0.8))
         .border_style(RGBColor(200, 200, 200))
         .label_font((FONT, 12))
         .draw()
-        .map_err(e)?;
-    Ok(())
 }
 
 fn hist_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data) -> DrawResult {
@@ -827,14 +827,7 @@ fn hist_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data) -> Dr
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
         chart.draw_series(h.observed.iter().enumerate().map(|(b, &v)| Circle::new((centre(b), v), 2, c.filled()))).map_err(e)?;
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.8))
-        .border_style(RGBColor(200, 200, 200))
-        .label_font((FONT, 12))
-        .draw()
-        .map_err(e)?;
+    legend(&mut chart, SeriesLabelPosition::UpperRight).map_err(e)?;
     Ok(())
 }
 

@@ -284,6 +284,17 @@ impl ThinFilm {
 
 pub use crate::fresnel::C64;
 
+/// The film's `q_f = n_f cos theta_f` and the (s, p) amplitude coefficients of its two
+/// interfaces, outside -> film and film -> base, for `cos theta = c` outside and Snell's
+/// invariant squared `s2`: shared by the exact Airy sum and Belcour & Barla's series.
+fn film_interfaces(c: f64, n0: f64, nf: f64, nb: C64, s2: f64) -> (C64, (C64, C64), (C64, C64)) {
+    let (n0c, nfc) = (C64::real(n0), C64::real(nf));
+    let q0 = C64::real(n0 * c);
+    let qf = q_of(nfc, s2);
+    let qb = q_of(nb, s2);
+    (qf, fresnel_amplitudes(n0c, q0, nfc, qf), fresnel_amplitudes(nfc, qf, nb, qb))
+}
+
 /// `q = n cos(theta) = sqrt(n^2 - s^2)` in a medium of index `n`, for Snell's invariant `s`.
 fn q_of(n: C64, s2: f64) -> C64 {
     // `+ 0.0` turns a -0 imaginary part into +0, so that the evanescent branch is +i.
@@ -309,12 +320,7 @@ fn fresnel_amplitudes(ni: C64, qi: C64, nj: C64, qj: C64) -> (C64, C64) {
 pub fn airy_reflectance_sp(cos0: f64, n0: f64, nf: f64, nb: C64, d_nm: f64, lambda_nm: f64) -> (f64, f64) {
     let c = cos0.clamp(0.0, 1.0);
     let s2 = n0 * n0 * (1.0 - c * c);
-    let (n0c, nfc) = (C64::real(n0), C64::real(nf));
-    let q0 = C64::real(n0 * c);
-    let qf = q_of(nfc, s2);
-    let qb = q_of(nb, s2);
-    let (r01s, r01p) = fresnel_amplitudes(n0c, q0, nfc, qf);
-    let (r12s, r12p) = fresnel_amplitudes(nfc, qf, nb, qb);
+    let (qf, (r01s, r01p), (r12s, r12p)) = film_interfaces(c, n0, nf, nb, s2);
     // e^{2 i delta}, delta = 2 pi d q_f / lambda (q_f = n_f cos theta_f).
     let e = qf.scale(4.0 * std::f64::consts::PI * d_nm / lambda_nm).exp_i();
     let airy = |r01: C64, r12: C64| {
@@ -408,12 +414,7 @@ pub fn belcour_barla_rgb(cos0: f64, n0: f64, nf: f64, nb: C64, d_nm: f64) -> Opt
         // The exact limit (the series would need infinitely many terms at OPD = 0).
         return Some([airy_reflectance(c, n0, nf, nb, 0.0, 550.0); 3]);
     }
-    let (n0c, nfc) = (C64::real(n0), C64::real(nf));
-    let q0 = C64::real(n0 * c);
-    let qf = q_of(nfc, s2);
-    let qb = q_of(nb, s2);
-    let (r01s, r01p) = fresnel_amplitudes(n0c, q0, nfc, qf);
-    let (r12s, r12p) = fresnel_amplitudes(nfc, qf, nb, qb);
+    let (qf, (r01s, r01p), (r12s, r12p)) = film_interfaces(c, n0, nf, nb, s2);
     let opd = 2.0 * d_nm * qf.re;
     let mut xyz = [0.0f64; 3];
     let mut dc = 0.0;
