@@ -534,6 +534,7 @@ impl<'e> Builder<'e> {
             geometry,
             bsdf,
             emitter,
+            interior: None,
         })
     }
 

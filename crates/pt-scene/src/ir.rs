@@ -321,6 +321,20 @@ pub struct ShapeDesc {
     pub bsdf: usize,
     /// The area emitter, if the shape emits.
     pub emitter: Option<AreaEmitterDesc>,
+    /// The medium inside the shape (Mitsuba `<medium name="interior">`), if any. Rays that
+    /// refract into the shape are attenuated by it until they leave.
+    pub interior: Option<MediumDesc>,
+}
+
+/// A homogeneous, purely absorbing medium (Mitsuba `homogeneous` with `albedo` 0): radiance
+/// travelling a distance d through it is multiplied by exp(-sigma_t d) (Beer-Lambert).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MediumDesc {
+    /// Where it was defined.
+    pub loc: SourceLoc,
+    /// Extinction coefficient per scene unit of length, Mitsuba's `sigma_t` already multiplied by
+    /// its `scale`. Linear RGB, a constant or a tabulated spectrum, each value >= 0.
+    pub sigma_t: SpectrumDesc,
 }
 
 /// A spectrum-valued parameter: linear Rec.709 RGB, one number for all channels, or a
