@@ -540,6 +540,14 @@ fn sibling_variance(path: &Path) -> Option<PathBuf> {
 }
 
 fn cmd_compare(args: CompareArgs) -> Result<ExitCode> {
+    // Output names are checked before any work, so a bad one fails fast with nothing written.
+    for (flag, out) in [("--error-image", &args.error_image), ("--flip-image", &args.flip_image)] {
+        if let Some(out) = out {
+            if !matches!(out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref(), Some("png" | "exr")) {
+                bail!("{flag} '{}' must end in .png or .exr", out.display());
+            }
+        }
+    }
     let (img, _) = pt_image::read_exr(&args.image)?;
     let (reference, _) = pt_image::read_exr(&args.reference)?;
     if (img.width, img.height) != (reference.width, reference.height) {
