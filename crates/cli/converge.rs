@@ -23,7 +23,8 @@
 //! before pt renders anything.
 //!
 //! Output, in DIR (default `converge-<scene name>`):
-//! - `converge.csv`: `series,spp,seconds,relmse,rmse`, one row per render; series are
+//! - `converge.csv`: `series,spp,seconds,relmse,rmse,flip` (FLIP: mean of `pt_image::flip` at
+//!   exposure 0, measured after timing), one row per render; series are
 //!   `pt-mis`, `pt-bsdf`, `pt-light` and `mitsuba-<variant>`;
 //! - `converge.svg` and `converge.png`: relMSE against time, log-log, one line per series, points
 //!   labelled with their spp (the PNG embeds its font: no system fonts needed);
@@ -167,6 +168,8 @@ struct Point {
     seconds: f64,
     relmse: f64,
     rmse: f64,
+    /// Mean FLIP (Andersson et al. 2020) on the images tone-mapped at exposure 0.
+    flip: f32,
 }
 
 /// One curve.
@@ -298,10 +301,10 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
     }
 
     let csv = out_dir.join("converge.csv");
-    let mut text = String::from("series,spp,seconds,relmse,rmse\n");
+    let mut text = String::from("series,spp,seconds,relmse,rmse,flip\n");
     for s in &all {
         for p in &s.points {
-            let _ = writeln!(text, "{},{},{:.6},{:.6e},{:.6e}", s.name, p.spp, p.seconds, p.relmse, p.rmse);
+            let _ = writeln!(text, "{},{},{:.6},{:.6e},{:.6e},{:.6}", s.name, p.spp, p.seconds, p.relmse, p.rmse, p.flip);
         }
     }
     write_atomic(&csv, text.as_bytes())?;
@@ -357,8 +360,10 @@ fn measure(image: &Image, reference: &Image, spp: u32, seconds: f64, series: &st
     let rmse = (m.rmse.iter().map(|r| r * r).sum::<f64>() / 3.0).sqrt();
     let nonfinite = if m.nonfinite_pixels > 0 { format!(" ({} non-finite pixels skipped)", m.nonfinite_pixels) } else { String::new() };
     let unit = if series.starts_with("radiosity") { "patches" } else { "spp" };
-    eprintln!("{series:<22} {spp:>6} {unit} {seconds:>10.4} s   relMSE {:.4e}   RMSE {rmse:.4e}{nonfinite}", m.relmse_all);
-    Ok(Point { spp, seconds, relmse: m.relmse_all, rmse })
+    // Measured after the timed render, so FLIP's cost does not enter the timings.
+    let flip = pt_image::flip::flip(image, reference, 0.0)?.mean;
+    eprintln!("{series:<22} {spp:>6} {unit} {seconds:>10.4} s   relMSE {:.4e}   RMSE {rmse:.4e}   FLIP {flip:.4}{nonfinite}", m.relmse_all);
+    Ok(Point { spp, seconds, relmse: m.relmse_all, rmse, flip })
 }
 
 /// `references/mitsuba_converge.py`: beside the current folder's `references/`, else in the
@@ -685,7 +690,7 @@ mod tests {
     use super::*;
 
     fn p(spp: u32, seconds: f64, relmse: f64) -> Point {
-        Point { spp, seconds, relmse, rmse: 0.0 }
+        Point { spp, seconds, relmse, rmse: 0.0, flip: 0.0 }
     }
 
     #[test]

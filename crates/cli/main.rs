@@ -72,6 +72,12 @@ struct CompareArgs {
     /// Write a false-colour relative error image (EXR or PNG).
     #[arg(long, value_name = "OUT")]
     error_image: Option<PathBuf>,
+    /// Exposure (stops) of the tone mapping both images get before FLIP (scale by 2^stops, clamp, sRGB).
+    #[arg(long, default_value_t = 0.0)]
+    flip_exposure: f32,
+    /// Write FLIP's per-pixel error (0 to 1, viridis) as a false-colour image (EXR or PNG).
+    #[arg(long, value_name = "OUT")]
+    flip_image: Option<PathBuf>,
 }
 
 #[derive(Args)]
@@ -543,6 +549,14 @@ fn sibling_variance(path: &Path) -> Option<PathBuf> {
 }
 
 fn cmd_compare(args: CompareArgs) -> Result<ExitCode> {
+    // Output names are checked before any work, so a bad one fails fast with nothing written.
+    for (flag, out) in [("--error-image", &args.error_image), ("--flip-image", &args.flip_image)] {
+        if let Some(out) = out {
+            if !matches!(out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref(), Some("png" | "exr")) {
+                bail!("{flag} '{}' must end in .png or .exr", out.display());
+            }
+        }
+    }
     let (img, _) = pt_image::read_exr(&args.image)?;
     let (reference, _) = pt_image::read_exr(&args.reference)?;
     if (img.width, img.height) != (reference.width, reference.height) {
@@ -564,6 +578,8 @@ fn cmd_compare(args: CompareArgs) -> Result<ExitCode> {
     out!("{:<22} {}", "MAE", ch(m.mae));
     out!("{:<22} {}", "mean ratio", ch(m.mean_ratio));
     out!("{:<22} {} / {}", "non-finite pixels", img.nonfinite_pixels(), reference.nonfinite_pixels());
+    let flip = pt_image::flip::flip(&img, &reference, args.flip_exposure)?;
+    out!("{:<22} {:>12.6}   (mean, tone-mapped at {:+} stops, {} px/degree)", "FLIP", flip.mean, args.flip_exposure, pt_image::flip::DEFAULT_PIXELS_PER_DEGREE);
     let img_var = args.image_variance.clone().or_else(|| sibling_variance(&args.image));
     let ref_var = args.variance.clone().or_else(|| sibling_variance(&args.reference));
     let mut agree = img.nonfinite_pixels() == 0;
@@ -603,6 +619,15 @@ fn cmd_compare(args: CompareArgs) -> Result<ExitCode> {
             _ => bail!("--error-image '{}' must end in .png or .exr", out.display()),
         }
         out!("relative error image (0 to 20%, viridis) -> {}", out.display());
+    }
+    if let Some(out) = &args.flip_image {
+        let e = pt_image::colormap::false_colour(&flip.error_map, img.width, img.height, 0.0, 1.0, false);
+        match out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+            Some("png") => pt_image::write_png_preview(out, &e, 0.0)?,
+            Some("exr") => pt_image::write_exr(out, &e, &ExrMeta::default())?,
+            _ => bail!("--flip-image '{}' must end in .png or .exr", out.display()),
+        }
+        out!("FLIP error image (0 to 1, viridis) -> {}", out.display());
     }
     Ok(if agree { ExitCode::SUCCESS } else { ExitCode::from(1) })
 }

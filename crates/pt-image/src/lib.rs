@@ -12,6 +12,7 @@
 
 mod atomic;
 pub mod colormap;
+pub mod flip;
 mod error;
 mod exr_io;
 pub mod metrics;

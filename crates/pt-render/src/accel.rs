@@ -4,7 +4,6 @@
 //! binary BVH2 built by PLOC. CWBVH is the default; `benches/traversal.rs` compares them.
 
 use crate::geometry::Primitive;
-use obvhs::aabb::Aabb;
 use obvhs::bvh2::builder::build_bvh2;
 use obvhs::bvh2::Bvh2;
 use obvhs::cwbvh::builder::build_cwbvh;
@@ -41,27 +40,29 @@ pub struct Accel {
 
 impl Accel {
     /// Builds the BVH. Primitives are reordered; `original_index` maps back.
-    pub fn build(prims: Vec<Primitive>, kind: BvhKind) -> Self {
+    ///
+    /// Memory: the builder reads the primitives' boxes directly (no array of boxes), and the
+    /// primitives are permuted in place afterwards (no second copy).
+    pub fn build(mut prims: Vec<Primitive>, kind: BvhKind) -> Self {
         if prims.is_empty() {
             return Accel { tree: Tree::Empty, prims, original_index: Vec::new() };
         }
-        let aabbs: Vec<Aabb> = prims.iter().map(Primitive::aabb).collect();
         let params = BvhBuildParams::medium_build();
         let mut t = Duration::default();
         let (tree, order) = match kind {
             BvhKind::CwBvh => {
-                let bvh = build_cwbvh(&aabbs, params, &mut t);
+                let bvh = build_cwbvh(&prims, params, &mut t);
                 let order = bvh.primitive_indices.clone();
                 (Tree::Cw(bvh), order)
             }
             BvhKind::Bvh2 => {
-                let bvh = build_bvh2(&aabbs, params, &mut t);
+                let bvh = build_bvh2(&prims, params, &mut t);
                 let order = bvh.primitive_indices.clone();
                 (Tree::Two(bvh), order)
             }
         };
-        let reordered = order.iter().map(|&i| prims[i as usize]).collect();
-        Accel { tree, prims: reordered, original_index: order }
+        permute_in_place(&mut prims, &order);
+        Accel { tree, prims, original_index: order }
     }
 
     /// Closest hit along the ray: `(index into prims, t)`.
@@ -94,6 +95,31 @@ impl Accel {
     }
 }
 
+/// Reorders `v` so that `v[k]` becomes the old `v[order[k]]` (`order` a permutation), in place
+/// by following cycles; one bit per element marks what is done.
+fn permute_in_place<T: Copy>(v: &mut [T], order: &[u32]) {
+    assert_eq!(v.len(), order.len());
+    let mut done = vec![0u64; v.len().div_ceil(64)];
+    for start in 0..v.len() {
+        if done[start / 64] >> (start % 64) & 1 != 0 {
+            continue;
+        }
+        // Walk the cycle start -> order[start] -> ..., pulling each element into place.
+        let first = v[start];
+        let mut k = start;
+        loop {
+            done[k / 64] |= 1 << (k % 64);
+            let src = order[k] as usize;
+            if src == start {
+                v[k] = first;
+                break;
+            }
+            v[k] = v[src];
+            k = src;
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -111,6 +137,14 @@ mod tests {
         }
         v.push(Primitive::Sphere { center: Vec3A::new(2.5, 2.5, 3.0), radius: 1.0, flip: false });
         v
+    }
+
+    #[test]
+    fn permutes_in_place() {
+        let order = [3u32, 0, 4, 1, 2, 6, 5, 7];
+        let mut v: Vec<u32> = (10..18).collect();
+        permute_in_place(&mut v, &order);
+        assert_eq!(v, order.map(|i| 10 + i));
     }
 
     #[test]

@@ -5,6 +5,10 @@ use obvhs::aabb::Aabb;
 use pt_math::{Vec2, Vec3, Vec3A};
 
 /// A primitive in the BVH. Triangles store `v0` and two edges, the form Möller-Trumbore wants.
+///
+/// 64 bytes. A 48-byte layout (`e2` as an unaligned `Vec3`, packed beside the enum tag) saves
+/// 16 MB per million triangles but costs 1.4% more instructions and about 2.5% more CPU time on
+/// the Cornell box (the conversion to `Vec3A` in every triangle test), so it is not used.
 #[derive(Clone, Copy, Debug)]
 pub enum Primitive {
     /// A triangle `v0 + b1 e1 + b2 e2`; its front side is the side `e1 x e2` points to.
@@ -25,6 +29,14 @@ pub enum Primitive {
         /// Whether the normal points inwards.
         flip: bool,
     },
+}
+
+/// obvhs builds directly from the primitives (no separate array of boxes).
+impl obvhs::Boundable for Primitive {
+    #[inline]
+    fn aabb(&self) -> Aabb {
+        Primitive::aabb(self)
+    }
 }
 
 impl Primitive {
@@ -132,4 +144,31 @@ pub struct Interaction {
     pub t: f32,
     /// Index of the shape this primitive belongs to.
     pub shape: u32,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn triangle_hits_and_misses() {
+        // Unit right triangle in z = 0, both windings; rays straight down at interior, edge-adjacent
+        // outside and NaN points.
+        let (v0, e1, e2) = (Vec3A::ZERO, Vec3A::X, Vec3A::Y);
+        let d = Vec3A::NEG_Z;
+        for (a, b) in [(e1, e2), (e2, e1)] {
+            let hit = intersect_triangle(Vec3A::new(0.25, 0.5, 2.0), d, v0, a, b, 0.0, f32::INFINITY).unwrap();
+            assert_eq!(hit.0, 2.0);
+            let (b1, b2) = (hit.1, hit.2);
+            let p = v0 + a * b1 + b * b2;
+            assert!((p - Vec3A::new(0.25, 0.5, 0.0)).length() < 1e-6, "{p}");
+            for o in [Vec3A::new(0.6, 0.6, 2.0), Vec3A::new(-0.01, 0.5, 2.0), Vec3A::new(0.5, -0.01, 2.0), Vec3A::splat(f32::NAN)] {
+                assert!(intersect_triangle(o, d, v0, a, b, 0.0, f32::INFINITY).is_none(), "{o}");
+            }
+            // Outside (tmin, tmax): no hit.
+            assert!(intersect_triangle(Vec3A::new(0.25, 0.25, 2.0), d, v0, a, b, 0.0, 1.5).is_none());
+            // Parallel ray: det = 0, no hit.
+            assert!(intersect_triangle(Vec3A::new(0.25, 0.25, 0.0), Vec3A::X, v0, a, b, -1.0, 1.0).is_none());
+        }
+    }
 }

@@ -292,7 +292,10 @@ impl Scene {
                     let tris = add_mesh(mesh, si as u32, shape.emitter.is_some(), &mut prims, &mut refs, &mut stats, &shape.loc)?;
                     data.normals = mesh.normals.clone();
                     data.uvs = mesh.uvs.clone();
-                    data.indices = mesh.indices.clone();
+                    // Indices serve only to interpolate normals and uvs: without them, no copy.
+                    if data.normals.is_some() || data.uvs.is_some() {
+                        data.indices = mesh.indices.clone();
+                    }
                     tris.map(|(tris, areas)| (LightShape::Mesh { distr: Distribution1D::new(&areas).expect("non-empty"), tris }, areas.iter().sum::<f32>()))
                 }
                 &Geometry::Sphere { center, radius, flip_normals } => {
