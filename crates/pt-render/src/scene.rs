@@ -118,6 +118,7 @@ fn spectrum(s: &SpectrumDesc) -> SampledSpectrum {
             Ok(sp) => SampledSpectrum::from_rgb(xyz_to_srgb(sp.emission_xyz())),
             Err(_) => SampledSpectrum::ZERO,
         },
+        SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. } => SampledSpectrum::from_rgb(xyz_to_srgb(to_spectrum(s, Role::Emission).emission_xyz())),
     }
 }
 
@@ -137,6 +138,11 @@ fn to_spectrum(s: &SpectrumDesc, role: Role) -> Spectrum {
         (SpectrumDesc::Rgb(c), Role::Unbounded) => Spectrum::rgb_unbounded(*c),
         (SpectrumDesc::Rgb(c), Role::Emission) => Spectrum::rgb_illuminant(*c),
         (SpectrumDesc::Tabulated(p), _) => Spectrum::tabulated(p).unwrap_or(Spectrum::constant(0.0)),
+        (SpectrumDesc::Blackbody { temperature }, _) => Spectrum::blackbody(*temperature).unwrap_or(Spectrum::constant(0.0)),
+        (SpectrumDesc::Illuminant { name, scale }, _) => match NamedIlluminant::from_name(name) {
+            Some(which) => Spectrum::illuminant(which, *scale),
+            None => Spectrum::constant(0.0), // the loader accepts only known names
+        },
     }
 }
 

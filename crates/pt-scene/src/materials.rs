@@ -129,6 +129,9 @@ fn conductor_ior(v: &ObjectView<'_>) -> Result<(SpectrumDesc, SpectrumDesc, Spec
 /// Albedo-like parameter: finite and in [0, 1].
 fn albedo(v: &ObjectView<'_>, name: &str) -> Result<SpectrumDesc> {
     let s = v.spectrum(name)?.unwrap_or(SpectrumDesc::Constant(0.5));
+    if s.is_emission_only() {
+        return Err(v.prop_error(name, format!("{name} must be a reflectance in [0, 1], not an emission spectrum ({})", s.form_name())));
+    }
     let vals = s.values();
     if vals.iter().any(|&x| !(0.0..=1.0).contains(&x)) {
         return Err(v.prop_error(name, format!("{name} must be in [0, 1], got {s:?}")));
