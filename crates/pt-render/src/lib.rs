@@ -16,6 +16,7 @@
 pub mod accel;
 pub mod camera;
 pub mod film;
+pub mod fluorescence;
 pub mod geometry;
 pub mod integrator;
 pub mod light;

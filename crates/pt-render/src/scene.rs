@@ -71,6 +71,8 @@ pub struct Scene {
     pub materials: Vec<SurfaceBsdf>,
     /// Spectral mode: each material's spectra, evaluated per path at its wavelengths.
     spectral_materials: Vec<SpectralMaterial>,
+    /// Spectral mode: per material, its fluorescence model if it is `fluorescent`.
+    fluorescent: Vec<Option<crate::fluorescence::Fluorescent>>,
     /// Spectral mode: each light's emission spectrum (its `radiance` fields hold the geometric
     /// factors only); empty in RGB mode.
     light_spectra: Vec<Option<Spectrum>>,
@@ -179,6 +181,9 @@ fn material_with(
             one_sided(Bsdf::OrenNayar(OrenNayar::new(val(reflectance, Role::Albedo), *sigma, v)))
         }
         BsdfKind::Minnaert { reflectance, k } => one_sided(Bsdf::Minnaert(Minnaert::new(val(reflectance, Role::Albedo), *k))),
+        // Spectral mode replaces it by a Lambertian of the total albedo (`Scene::material_at`);
+        // RGB mode cannot move light between wavelengths and keeps the elastic part only.
+        BsdfKind::Fluorescent { reflectance, .. } => one_sided(Bsdf::Lambert(Lambert::new(val(reflectance, Role::Albedo)))),
         BsdfKind::Dielectric { int_ior, ext_ior } => one_sided(Bsdf::Dielectric(Dielectric::new(int_ior / ext_ior))),
         BsdfKind::ThinDielectric { int_ior, ext_ior } => one_sided(Bsdf::ThinDielectric(ThinDielectric::new(int_ior / ext_ior))),
         BsdfKind::RoughDielectric { int_ior, ext_ior, distribution, alpha_u, alpha_v } => {
@@ -193,6 +198,22 @@ fn material_with(
             one_sided(Bsdf::RoughConductor(RoughConductor::new(e, kk, sr, mf(distribution, *alpha_u, *alpha_v)?)))
         }
     })
+}
+
+/// The fluorescence model of a `fluorescent` material (also inside `twosided`), else `None`.
+fn fluorescent_model(b: &BsdfDesc) -> Result<Option<crate::fluorescence::Fluorescent>, BuildError> {
+    match &b.kind {
+        BsdfKind::TwoSided { inner } => fluorescent_model(inner),
+        BsdfKind::Fluorescent { reflectance, absorption, emission, quantum_yield } => crate::fluorescence::Fluorescent::new(
+            to_spectrum(reflectance, Role::Albedo),
+            &to_spectrum(absorption, Role::Albedo),
+            &to_spectrum(emission, Role::Unbounded),
+            *quantum_yield,
+        )
+        .map(Some)
+        .map_err(|message| BuildError { loc: b.loc.clone(), message }),
+        _ => Ok(None),
+    }
 }
 
 /// Spectral-mode data of one material: its description and its spectra, fitted at build in the
@@ -226,6 +247,7 @@ impl Scene {
                 spectral_materials.push(SpectralMaterial { desc: b.clone(), spectra });
             }
         }
+        let fluorescent = if spectral { desc.bsdfs.iter().map(fluorescent_model).collect::<Result<Vec<_>, _>>()? } else { Vec::new() };
         // Emission: RGB mode keeps the colour in the light; spectral mode keeps a unit factor in
         // the light and the spectrum beside it.
         let mut light_spectra: Vec<Option<Spectrum>> = Vec::new();
@@ -315,7 +337,7 @@ impl Scene {
         if !spectral {
             light_spectra.clear();
         }
-        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, light_spectra, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
+        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, fluorescent, light_spectra, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
     }
 
     /// Closest hit along `ray`, with its surface data.
@@ -379,6 +401,9 @@ impl Scene {
     #[inline]
     pub fn material_at(&self, shape: u32, lambda: &SampledWavelengths) -> SurfaceBsdf {
         let m = self.shapes[shape as usize].material as usize;
+        if let Some(Some(f)) = self.fluorescent.get(m) {
+            return SurfaceBsdf { bsdf: Bsdf::Lambert(Lambert::new(f.albedo(lambda))), two_sided: self.materials[m].two_sided };
+        }
         match self.spectral_materials.get(m) {
             None => self.materials[m],
             Some(sm) => {
@@ -390,6 +415,22 @@ impl Scene {
                 })
                 .unwrap_or(self.materials[m])
             }
+        }
+    }
+
+    /// Whether the hit shape's material is fluorescent (spectral mode only).
+    #[inline]
+    pub fn is_fluorescent(&self, shape: u32) -> bool {
+        matches!(self.fluorescent.get(self.shapes[shape as usize].material as usize), Some(Some(_)))
+    }
+
+    /// At a fluorescent hit, the wavelengths at which each lane continues (some lanes move to
+    /// an excitation wavelength, see `fluorescence.rs`); unchanged elsewhere. `u` is uniform.
+    #[inline]
+    pub fn fluoresce(&self, shape: u32, lambda: &SampledWavelengths, u: f32) -> SampledWavelengths {
+        match self.fluorescent.get(self.shapes[shape as usize].material as usize) {
+            Some(Some(f)) => f.scatter(lambda, u),
+            _ => *lambda,
         }
     }
 

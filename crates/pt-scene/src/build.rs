@@ -671,7 +671,7 @@ impl<'e> Builder<'e> {
             "twosided" => BsdfKind::TwoSided {
                 inner: Box::new(self.twosided_inner(&v)?),
             },
-            "orennayar" | "minnaert" | "dielectric" | "thindielectric" | "roughdielectric" | "conductor" | "roughconductor" | "thinfilm" => {
+            "orennayar" | "minnaert" | "dielectric" | "thindielectric" | "roughdielectric" | "conductor" | "roughconductor" | "thinfilm" | "fluorescent" => {
                 no_children(&v)?;
                 crate::materials::bsdf_kind(&v)?
             }

@@ -414,6 +414,7 @@ impl SceneDesc {
                 }
                 BsdfKind::Dielectric { .. } | BsdfKind::ThinDielectric { .. } | BsdfKind::RoughDielectric { .. } => vec![],
                 BsdfKind::ThinFilm { eta, k, .. } => vec![eta, k],
+                BsdfKind::Fluorescent { reflectance, absorption, emission, .. } => vec![reflectance, absorption, emission],
             }
         }
         fn has_thin_film(k: &BsdfKind) -> bool {
@@ -421,6 +422,18 @@ impl SceneDesc {
                 BsdfKind::ThinFilm { .. } => true,
                 BsdfKind::TwoSided { inner } => has_thin_film(&inner.kind),
                 _ => false,
+            }
+        }
+        fn is_fluorescent(k: &BsdfKind) -> bool {
+            match k {
+                BsdfKind::Fluorescent { .. } => true,
+                BsdfKind::TwoSided { inner } => is_fluorescent(&inner.kind),
+                _ => false,
+            }
+        }
+        for b in &self.bsdfs {
+            if is_fluorescent(&b.kind) {
+                return Some(format!("{}: fluorescence moves light between wavelengths (RGB mode cannot express it)", b.loc));
             }
         }
         for b in &self.bsdfs {
@@ -561,5 +574,19 @@ pub enum BsdfKind {
         alpha_u: f32,
         /// Roughness along the bitangent.
         alpha_v: f32,
+    },
+    /// Fluorescent Lambertian surface (project extension `fluorescent`; model and transport in
+    /// pt-render's `fluorescence.rs`): elastic diffuse reflectance plus absorption re-emitted at
+    /// longer wavelengths with the given emission spectrum and quantum yield.
+    Fluorescent {
+        /// Elastic (wavelength-preserving) diffuse reflectance, in [0, 1].
+        reflectance: SpectrumDesc,
+        /// Fraction of incident photons absorbed by the fluorophore, in [0, 1], with
+        /// reflectance + absorption <= 1 at every wavelength.
+        absorption: SpectrumDesc,
+        /// Emission spectrum (shape only: normalised to unit area over 360-830 nm when built).
+        emission: SpectrumDesc,
+        /// Quantum yield, emitted / absorbed photons, in [0, 1].
+        quantum_yield: f32,
     },
 }

@@ -1,7 +1,9 @@
 //! BSDF plugins with physical parameters: Mitsuba's `dielectric`, `thindielectric`,
 //! `roughdielectric`, `conductor`, `roughconductor`, and the project's `orennayar`,
 //! `minnaert` and `thinfilm` (`thickness` nm 500, `film_ior` 1.33, `ext_ior` 1, and either
-//! `int_ior` for a dielectric base or `material` / `eta` + `k` for a conductor base). Defaults and named materials follow Mitsuba 3.9.
+//! `int_ior` for a dielectric base or `material` / `eta` + `k` for a conductor base), and
+//! `fluorescent` (`reflectance` 0.5, `absorption` 0.5, `emission` required, `yield` 1; see
+//! pt-render's `fluorescence.rs`). Defaults and named materials follow Mitsuba 3.9.
 //!
 //! Named conductors are given by their RGB-mode complex index (eta + i k) exactly as Mitsuba 3.9.1
 //! `scalar_rgb` computes it from its spectral tables (read with `mi.traverse` on
@@ -210,6 +212,19 @@ pub(crate) fn bsdf_kind(v: &ObjectView<'_>) -> Result<BsdfKind> {
             let (eta, k, specular_reflectance) = conductor_ior(v)?;
             let (distribution, alpha_u, alpha_v) = microfacet(v)?;
             BsdfKind::RoughConductor { eta, k, specular_reflectance, distribution, alpha_u, alpha_v }
+        }
+        "fluorescent" => {
+            let reflectance = albedo(v, "reflectance")?;
+            let absorption = albedo(v, "absorption")?;
+            let emission = v.spectrum("emission")?.ok_or_else(|| v.prop_error("emission", "fluorescent needs an emission spectrum (<spectrum name=\"emission\" value=\"...\"/>)"))?;
+            if emission.values().iter().any(|&x| x < 0.0) || emission.values().iter().all(|&x| x == 0.0) {
+                return Err(v.prop_error("emission", "emission spectrum must be non-negative and not all zero"));
+            }
+            let quantum_yield = v.float("yield")?.unwrap_or(1.0);
+            if !(0.0..=1.0).contains(&quantum_yield) {
+                return Err(v.prop_error("yield", format!("quantum yield must be in [0, 1], got {quantum_yield}")));
+            }
+            BsdfKind::Fluorescent { reflectance, absorption, emission, quantum_yield }
         }
         other => return Err(SceneError::at(&v.el.loc, format!("internal: {other} is not a physical BSDF"))),
     })
