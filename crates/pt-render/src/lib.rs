@@ -20,6 +20,7 @@ pub mod fluorescence;
 pub mod geometry;
 pub mod integrator;
 pub mod light;
+pub mod phosphorescence;
 pub mod render;
 pub mod sampler;
 pub mod scene;

@@ -191,6 +191,8 @@ fn material_with(
         // Spectral mode replaces it by a Lambertian of the total albedo (`Scene::material_at`);
         // RGB mode cannot move light between wavelengths and keeps the elastic part only.
         BsdfKind::Fluorescent { reflectance, .. } => one_sided(Bsdf::Lambert(Lambert::new(val(reflectance, Role::Albedo)))),
+        // Lights on: the elastic part (the afterglow is rendered by `phosphorescence::afterglow`).
+        BsdfKind::Phosphorescent { reflectance, .. } => one_sided(Bsdf::Lambert(Lambert::new(val(reflectance, Role::Albedo)))),
         BsdfKind::Dielectric { int_ior, ext_ior } => one_sided(Bsdf::Dielectric(Dielectric::new(int_ior / ext_ior))),
         BsdfKind::ThinDielectric { int_ior, ext_ior } => one_sided(Bsdf::ThinDielectric(ThinDielectric::new(int_ior / ext_ior))),
         BsdfKind::RoughDielectric { int_ior, ext_ior, distribution, alpha_u, alpha_v } => {

@@ -704,7 +704,7 @@ impl<'e> Builder<'e> {
                 }
                 BsdfKind::Mask { opacity, inner: Box::new(self.single_inner(&v, "mask")?) }
             }
-            "orennayar" | "minnaert" | "dielectric" | "thindielectric" | "roughdielectric" | "conductor" | "roughconductor" | "thinfilm" | "roughplastic" | "fluorescent" => {
+            "orennayar" | "minnaert" | "dielectric" | "thindielectric" | "roughdielectric" | "conductor" | "roughconductor" | "thinfilm" | "roughplastic" | "fluorescent" | "phosphorescent" => {
                 no_children(&v)?;
                 crate::materials::bsdf_kind(&v)?
             }

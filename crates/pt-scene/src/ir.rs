@@ -419,6 +419,7 @@ impl SceneDesc {
                 BsdfKind::ThinFilm { eta, k, .. } => vec![eta, k],
                 BsdfKind::RoughPlastic { diffuse_reflectance, specular_reflectance, .. } => vec![diffuse_reflectance, specular_reflectance],
                 BsdfKind::Fluorescent { reflectance, absorption, emission, .. } => vec![reflectance, absorption, emission],
+                BsdfKind::Phosphorescent { reflectance, .. } => vec![reflectance],
             }
         }
         fn has_thin_film(k: &BsdfKind) -> bool {
@@ -617,5 +618,20 @@ pub enum BsdfKind {
         emission: SpectrumDesc,
         /// Quantum yield, emitted / absorbed photons, in [0, 1].
         quantum_yield: f32,
+    },
+    /// Phosphorescent Lambertian surface (project extension `phosphorescent`; model in
+    /// pt-render's `phosphorescence.rs`): renders as its elastic reflectance with the lights
+    /// on; with `pt render --time T` it glows with exponentially decaying afterglow.
+    Phosphorescent {
+        /// Elastic diffuse reflectance, in [0, 1].
+        reflectance: SpectrumDesc,
+        /// Fraction of incident photons stored, in [0, 1].
+        absorption: SpectrumDesc,
+        /// Afterglow emission spectrum (shape only, normalised per nm when used).
+        emission: SpectrumDesc,
+        /// Quantum yield, emitted / stored photons, in [0, 1].
+        quantum_yield: f32,
+        /// Lifetime tau of the stored state, seconds (> 0).
+        lifetime: f32,
     },
 }
