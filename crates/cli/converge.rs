@@ -2,13 +2,15 @@
 //!
 //! ```text
 //! pt converge SCENE --reference REF.exr [--spp 1,2,4,...,1024] [--strategy mis,bsdf,light]
-//!            [--mitsuba] [--mitsuba-variant llvm_ad_rgb|scalar_rgb] [--out DIR]
+//!            [--modes rgb,spectral] [--mitsuba] [--mitsuba-variant llvm_ad_rgb|scalar_rgb] [--out DIR]
 //!            [--threads T] [--max-depth D] [--seed S] [--python PY] [-D name=value]...
 //! ```
 //!
 //! Renders SCENE once per sample count in `--spp` and per strategy in `--strategy` (one curve per
 //! strategy; every render uses the same seed, so the renders of one curve share their first
-//! samples, as a progressive render would), and measures each image against REF.exr: relMSE
+//! samples, as a progressive render would) and, with `--modes`, per colour mode (one curve per
+//! mode and strategy, to chart RGB against spectral transport on the same scene), and measures
+//! each image against REF.exr: relMSE
 //! (`mean((x - r)^2 / (r^2 + 0.01))` over pixels and channels) and RMSE (over pixels and
 //! channels). The time of a point is the wall time of the render alone: the scene is loaded and
 //! its BVH built once beforehand (that build time is printed separately), and one untimed 1-spp
@@ -24,8 +26,8 @@
 //!
 //! Output, in DIR (default `converge-<scene name>`):
 //! - `converge.csv`: `series,spp,seconds,relmse,rmse,flip` (FLIP: mean of `pt_image::flip` at
-//!   exposure 0, measured after timing), one row per render; series are
-//!   `pt-mis`, `pt-bsdf`, `pt-light` and `mitsuba-<variant>`;
+//!   exposure 0, measured after timing), one row per render; series are `pt-mis`, `pt-bsdf`,
+//!   `pt-light` (with `--modes`: `pt-rgb-mis`, `pt-spectral-mis`, ...) and `mitsuba-<variant>`;
 //! - `converge.svg` and `converge.png`: relMSE against time, log-log, one line per series, points
 //!   labelled with their spp (the PNG embeds its font: no system fonts needed);
 //! - `summary.txt`: what is printed at the end (build times, and the ratios below);
@@ -73,6 +75,12 @@ pub struct ConvergeArgs {
     /// Direct-light strategies of pt, comma separated: one curve each.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "mis")]
     pub strategy: Vec<ConvergeStrategy>,
+    /// Colour modes of pt, comma separated (`rgb,spectral`): one curve per mode and strategy,
+    /// named `pt-<mode>-<strategy>`, each timed with its own scene build [default: the scene's
+    /// automatic mode only, curves named `pt-<strategy>`]. On a spectral scene, RGB converges
+    /// to the spectra projected to RGB, so its error against a spectral reference levels off.
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub modes: Vec<ConvergeMode>,
     /// Also render with Mitsuba 3 (references/mitsuba_converge.py) at the same sample counts.
     #[arg(long)]
     pub mitsuba: bool,
@@ -109,6 +117,24 @@ pub struct ConvergeArgs {
     /// Form-factor rays per patch for the radiosity points.
     #[arg(long, default_value_t = 1024)]
     pub radiosity_rays: u32,
+}
+
+/// pt's colour mode of one curve (`--modes`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ConvergeMode {
+    /// RGB transport (spectra projected to linear sRGB).
+    Rgb,
+    /// Spectral transport (four wavelengths per path).
+    Spectral,
+}
+
+impl ConvergeMode {
+    fn mode(self) -> pt_spectrum::ColorMode {
+        match self {
+            ConvergeMode::Rgb => pt_spectrum::ColorMode::Rgb,
+            ConvergeMode::Spectral => pt_spectrum::ColorMode::Spectral,
+        }
+    }
 }
 
 /// pt's direct-light strategy of one curve.
@@ -242,6 +268,22 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
     let build_start = Instant::now();
     let scene = pool.install(|| Scene::build(&desc, BvhKind::CwBvh, LightSelection::Power))?;
     let build_s = build_start.elapsed().as_secs_f64();
+    // `--modes`: one scene per requested colour mode (None: the automatic one, built above).
+    let mut modes: Vec<Option<ConvergeMode>> = Vec::new();
+    for m in &args.modes {
+        if !modes.contains(&Some(*m)) {
+            modes.push(Some(*m));
+        }
+    }
+    if modes.is_empty() {
+        modes.push(None);
+    }
+    // Built before any timing; with `--modes` every entry of `modes` is Some, in this order.
+    let mode_scenes: Vec<Scene> = modes
+        .iter()
+        .flatten()
+        .map(|m| pool.install(|| Scene::build_with_mode(&desc, BvhKind::CwBvh, LightSelection::Power, Some(m.mode()))))
+        .collect::<Result<_, _>>()?;
     let mut summary = String::new();
     let _ = writeln!(
         summary,
@@ -269,31 +311,37 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
     if let Some(d) = args.max_depth {
         settings.path.max_depth = d;
     }
-    // Untimed warm-up (page faults, thread start-up), as Mitsuba gets one.
-    pool.install(|| pt_render::render(&scene, &RenderSettings { spp: 1, seed: args.seed.wrapping_add(1_000_000), ..settings.clone() }, &|_| {}));
-    for strategy in &strategies {
-        let name = format!("pt-{}", strategy.name());
-        let dir = out_dir.join(&name);
-        std::fs::create_dir_all(&dir).with_context(|| format!("cannot create '{}'", dir.display()))?;
-        let mut points = Vec::new();
-        for &n in &spp {
-            let s = RenderSettings { spp: n, path: pt_render::PathSettings { strategy: strategy.strategy(), ..settings.path }, ..settings.clone() };
-            let out = pool.install(|| pt_render::render(&scene, &s, &|_| {}));
-            let image = Image { width: out.width, height: out.height, data: out.mean };
-            let meta = ExrMeta {
-                spp: Some(n),
-                mode: Some(scene.mode.name().to_string()),
-                render_time_s: Some(out.time.as_secs_f64()),
-                extra: vec![("strategy".into(), strategy.name().into()), ("seed".into(), args.seed.to_string())],
+    for (k, mode) in modes.iter().enumerate() {
+        let scene = if mode.is_some() { &mode_scenes[k] } else { &scene };
+        // Untimed warm-up (page faults, thread start-up), as Mitsuba gets one.
+        pool.install(|| pt_render::render(scene, &RenderSettings { spp: 1, seed: args.seed.wrapping_add(1_000_000), ..settings.clone() }, &|_| {}));
+        for strategy in &strategies {
+            let name = match mode {
+                None => format!("pt-{}", strategy.name()),
+                Some(m) => format!("pt-{}-{}", m.mode().name(), strategy.name()),
             };
-            pt_image::write_exr(&dir.join(format!("spp{n}.exr")), &image, &meta)?;
-            let p = measure(&image, &reference, n, out.time.as_secs_f64(), &name)?;
-            if out.nonfinite_samples > 0 {
-                eprintln!("warning: {name} at {n} spp: {} NaN or infinite samples were left out", out.nonfinite_samples);
+            let dir = out_dir.join(&name);
+            std::fs::create_dir_all(&dir).with_context(|| format!("cannot create '{}'", dir.display()))?;
+            let mut points = Vec::new();
+            for &n in &spp {
+                let s = RenderSettings { spp: n, path: pt_render::PathSettings { strategy: strategy.strategy(), ..settings.path }, ..settings.clone() };
+                let out = pool.install(|| pt_render::render(scene, &s, &|_| {}));
+                let image = Image { width: out.width, height: out.height, data: out.mean };
+                let meta = ExrMeta {
+                    spp: Some(n),
+                    mode: Some(scene.mode.name().to_string()),
+                    render_time_s: Some(out.time.as_secs_f64()),
+                    extra: vec![("strategy".into(), strategy.name().into()), ("seed".into(), args.seed.to_string())],
+                };
+                pt_image::write_exr(&dir.join(format!("spp{n}.exr")), &image, &meta)?;
+                let p = measure(&image, &reference, n, out.time.as_secs_f64(), &name)?;
+                if out.nonfinite_samples > 0 {
+                    eprintln!("warning: {name} at {n} spp: {} NaN or infinite samples were left out", out.nonfinite_samples);
+                }
+                points.push(p);
             }
-            points.push(p);
+            all.push(Series { name, points });
         }
-        all.push(Series { name, points });
     }
 
     if !args.radiosity_patch_sizes.is_empty() {

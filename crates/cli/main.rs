@@ -100,6 +100,10 @@ struct RenderArgs {
     /// Seed of the random streams [default: the scene's sampler seed].
     #[arg(long)]
     seed: Option<u64>,
+    /// Seconds since the lights went out: render the afterglow of phosphorescent materials
+    /// (every light and emitter off; see crates/pt-render/src/phosphorescence.rs).
+    #[arg(long, value_name = "SECONDS")]
+    time: Option<f32>,
     /// Worker threads [default: all cores]. The image does not depend on it.
     #[arg(long)]
     threads: Option<usize>,
@@ -330,6 +334,10 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
         ModeArg::Rgb => pt_spectrum::ColorMode::Rgb,
         ModeArg::Spectral => pt_spectrum::ColorMode::Spectral,
     });
+    let desc = match args.time {
+        Some(t) => pool.install(|| pt_render::phosphorescence::afterglow(&desc, t, settings.seed))?,
+        None => desc,
+    };
     let scene = pool.install(|| Scene::build_with_mode(&desc, bvh, selection, mode))?;
     let build_time = build_start.elapsed();
 

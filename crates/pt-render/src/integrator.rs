@@ -56,6 +56,9 @@ const SHADOW_RAY_SHORTEN: f32 = 1.0 - 1e-5;
 /// wavelengths `lambda` (spectral mode; ignored in RGB mode, whose lanes are R, G, B).
 pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, lambda: &SampledWavelengths) -> SampledSpectrum {
     let max_depth = if s.max_depth < 0 { u32::MAX } else { s.max_depth as u32 };
+    // Lanes may change wavelength at fluorescent vertices; the caller's film keeps the originals.
+    let mut lambda = *lambda;
+    let lambda = &mut lambda;
     let mut radiance = SampledSpectrum::ZERO;
     let mut throughput = match scene.mode {
         ColorMode::Rgb => SampledSpectrum::from_rgb([1.0; 3]),
@@ -114,6 +117,11 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, 
         }
 
         let bsdf = scene.material_at(hit.shape, lambda);
+        // Fluorescence: the BSDF holds each lane's total albedo at its emitted wavelength; now
+        // some lanes move to an excitation wavelength, used by NEE and the rest of the path.
+        if scene.is_fluorescent(hit.shape) {
+            *lambda = scene.fluoresce(hit.shape, lambda, sampler.next_1d());
+        }
         let frame = Frame::from_normal_tangent(hit.ns, hit.dpdu);
         let wo = frame.to_local(wo_world);
 

@@ -16,9 +16,11 @@
 pub mod accel;
 pub mod camera;
 pub mod film;
+pub mod fluorescence;
 pub mod geometry;
 pub mod integrator;
 pub mod light;
+pub mod phosphorescence;
 pub mod render;
 pub mod sampler;
 pub mod scene;

@@ -73,6 +73,8 @@ pub struct Scene {
     pub materials: Vec<SurfaceBsdf>,
     /// Spectral mode: each material's spectra, evaluated per path at its wavelengths.
     spectral_materials: Vec<SpectralMaterial>,
+    /// Spectral mode: per material, its fluorescence model if it is `fluorescent`.
+    fluorescent: Vec<Option<crate::fluorescence::Fluorescent>>,
     /// Spectral mode: each light's emission spectrum (its `radiance` fields hold the geometric
     /// factors only); empty in RGB mode.
     light_spectra: Vec<Option<Spectrum>>,
@@ -123,6 +125,7 @@ fn spectrum(s: &SpectrumDesc) -> SampledSpectrum {
             Ok(sp) => SampledSpectrum::from_rgb(xyz_to_srgb(sp.emission_xyz())),
             Err(_) => SampledSpectrum::ZERO,
         },
+        SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. } => SampledSpectrum::from_rgb(xyz_to_srgb(to_spectrum(s, Role::Emission).emission_xyz())),
     }
 }
 
@@ -142,6 +145,11 @@ fn to_spectrum(s: &SpectrumDesc, role: Role) -> Spectrum {
         (SpectrumDesc::Rgb(c), Role::Unbounded) => Spectrum::rgb_unbounded(*c),
         (SpectrumDesc::Rgb(c), Role::Emission) => Spectrum::rgb_illuminant(*c),
         (SpectrumDesc::Tabulated(p), _) => Spectrum::tabulated(p).unwrap_or(Spectrum::constant(0.0)),
+        (SpectrumDesc::Blackbody { temperature }, _) => Spectrum::blackbody(*temperature).unwrap_or(Spectrum::constant(0.0)),
+        (SpectrumDesc::Illuminant { name, scale }, _) => match NamedIlluminant::from_name(name) {
+            Some(which) => Spectrum::illuminant(which, *scale),
+            None => Spectrum::constant(0.0), // the loader accepts only known names
+        },
     }
 }
 
@@ -191,6 +199,11 @@ fn material_with(
             one_sided(Bsdf::OrenNayar(OrenNayar::new(val(reflectance, Role::Albedo), *sigma, v)))
         }
         BsdfKind::Minnaert { reflectance, k } => one_sided(Bsdf::Minnaert(Minnaert::new(val(reflectance, Role::Albedo), *k))),
+        // Spectral mode replaces it by a Lambertian of the total albedo (`Scene::material_at`);
+        // RGB mode cannot move light between wavelengths and keeps the elastic part only.
+        BsdfKind::Fluorescent { reflectance, .. } => one_sided(Bsdf::Lambert(Lambert::new(val(reflectance, Role::Albedo)))),
+        // Lights on: the elastic part (the afterglow is rendered by `phosphorescence::afterglow`).
+        BsdfKind::Phosphorescent { reflectance, .. } => one_sided(Bsdf::Lambert(Lambert::new(val(reflectance, Role::Albedo)))),
         BsdfKind::Dielectric { int_ior, ext_ior } => one_sided(Bsdf::Dielectric(Dielectric::new(int_ior / ext_ior))),
         BsdfKind::ThinDielectric { int_ior, ext_ior } => one_sided(Bsdf::ThinDielectric(ThinDielectric::new(int_ior / ext_ior))),
         BsdfKind::RoughDielectric { int_ior, ext_ior, distribution, alpha_u, alpha_v } => {
@@ -217,6 +230,27 @@ fn material_with(
             one_sided(Bsdf::RoughConductor(RoughConductor::new(e, kk, sr, mf(distribution, *alpha_u, *alpha_v)?)))
         }
     })
+}
+
+/// The fluorescence model of a `fluorescent` material (also inside `twosided`), else `None`.
+fn fluorescent_model(b: &BsdfDesc) -> Result<Option<crate::fluorescence::Fluorescent>, BuildError> {
+    match &b.kind {
+        BsdfKind::TwoSided { inner } => fluorescent_model(inner),
+        // The integrator switches wavelengths before the BSDF chooses between pass-through and
+        // scattering, which would be wrong for the pass-through part.
+        BsdfKind::Mask { inner, .. } if fluorescent_model(inner)?.is_some() => {
+            Err(BuildError { loc: b.loc.clone(), message: "a mask around a fluorescent BSDF is not yet supported (not yet implemented)".into() })
+        }
+        BsdfKind::Fluorescent { reflectance, absorption, emission, quantum_yield } => crate::fluorescence::Fluorescent::new(
+            to_spectrum(reflectance, Role::Albedo),
+            &to_spectrum(absorption, Role::Albedo),
+            &to_spectrum(emission, Role::Unbounded),
+            *quantum_yield,
+        )
+        .map(Some)
+        .map_err(|message| BuildError { loc: b.loc.clone(), message }),
+        _ => Ok(None),
+    }
 }
 
 /// Spectral-mode data of one material: its description and its spectra, fitted at build in the
@@ -264,6 +298,7 @@ impl Scene {
                 spectral_materials.push(SpectralMaterial { desc: b.clone(), spectra, tables });
             }
         }
+        let fluorescent = if spectral { desc.bsdfs.iter().map(fluorescent_model).collect::<Result<Vec<_>, _>>()? } else { Vec::new() };
         // Emission: RGB mode keeps the colour in the light; spectral mode keeps a unit factor in
         // the light and the spectrum beside it.
         let mut light_spectra: Vec<Option<Spectrum>> = Vec::new();
@@ -365,7 +400,7 @@ impl Scene {
         if !spectral {
             light_spectra.clear();
         }
-        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, light_spectra, media, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
+        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, fluorescent, light_spectra, media, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
     }
 
     /// Closest hit along `ray`, with its surface data.
@@ -429,6 +464,9 @@ impl Scene {
     #[inline]
     pub fn material_at(&self, shape: u32, lambda: &SampledWavelengths) -> SurfaceBsdf {
         let m = self.shapes[shape as usize].material as usize;
+        if let Some(Some(f)) = self.fluorescent.get(m) {
+            return SurfaceBsdf { bsdf: Bsdf::Lambert(Lambert::new(f.albedo(lambda))), ..self.materials[m] };
+        }
         match self.spectral_materials.get(m) {
             None => self.materials[m],
             Some(sm) => {
@@ -451,6 +489,22 @@ impl Scene {
                 )
                 .unwrap_or(self.materials[m])
             }
+        }
+    }
+
+    /// Whether the hit shape's material is fluorescent (spectral mode only).
+    #[inline]
+    pub fn is_fluorescent(&self, shape: u32) -> bool {
+        matches!(self.fluorescent.get(self.shapes[shape as usize].material as usize), Some(Some(_)))
+    }
+
+    /// At a fluorescent hit, the wavelengths at which each lane continues (some lanes move to
+    /// an excitation wavelength, see `fluorescence.rs`); unchanged elsewhere. `u` is uniform.
+    #[inline]
+    pub fn fluoresce(&self, shape: u32, lambda: &SampledWavelengths, u: f32) -> SampledWavelengths {
+        match self.fluorescent.get(self.shapes[shape as usize].material as usize) {
+            Some(Some(f)) => f.scatter(lambda, u),
+            _ => *lambda,
         }
     }
 

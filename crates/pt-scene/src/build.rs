@@ -704,6 +704,11 @@ impl<'e> Builder<'e> {
                 }
                 BsdfKind::Mask { opacity, inner: Box::new(self.single_inner(&v, "mask")?) }
             }
+            // Project extensions with spectral re-emission (fluorescence.rs, phosphorescence.rs).
+            "fluorescent" | "phosphorescent" => {
+                no_children(&v)?;
+                crate::materials::bsdf_kind(&v)?
+            }
             "orennayar" | "minnaert" | "dielectric" | "thindielectric" | "roughdielectric" | "conductor" | "roughconductor" | "thinfilm" | "roughthinfilm" | "roughplastic" => {
                 no_children(&v)?;
                 crate::materials::bsdf_kind(&v)?
@@ -946,6 +951,9 @@ fn medium(el: &Element) -> Result<MediumDesc> {
         SpectrumDesc::Constant(c) => SpectrumDesc::Constant(c * scale),
         SpectrumDesc::Rgb(c) => SpectrumDesc::Rgb(c.map(|x| x * scale)),
         SpectrumDesc::Tabulated(p) => SpectrumDesc::Tabulated(std::sync::Arc::new(p.iter().map(|&(w, x)| (w, x * scale)).collect())),
+        s @ (SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. }) => {
+            return Err(v.prop_error("sigma_t", format!("sigma_t cannot be an emission spectrum ({})", s.form_name())));
+        }
     };
     Ok(MediumDesc { loc: el.loc.clone(), sigma_t })
 }

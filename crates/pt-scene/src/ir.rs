@@ -351,20 +351,55 @@ pub enum SpectrumDesc {
     /// Piecewise-linear (wavelength nm, value) pairs, increasing wavelengths; zero outside
     /// their range, as Mitsuba's `<spectrum value="400:0.1, 500:0.5"/>`.
     Tabulated(std::sync::Arc<Vec<(f32, f32)>>),
+    /// Planck's law at `temperature` K in W m^-2 sr^-1 nm^-1, unnormalised and zero outside
+    /// 360-830 nm, as Mitsuba 3.9's `<spectrum type="blackbody">` (scene units must be metres).
+    Blackbody {
+        /// Temperature, K (> 0).
+        temperature: f32,
+    },
+    /// A CIE illuminant by name, scaled to luminance Y = `scale` (a constant 1 has Y = 1):
+    /// Mitsuba's `<spectrum type="d65"/>`, and the project extension `type="a"` and
+    /// `type="f1"` .. `type="f12"` (the CIE fluorescent-lamp series).
+    Illuminant {
+        /// `d65`, `a` or `f1` .. `f12` (lower case).
+        name: String,
+        /// Luminance, >= 0.
+        scale: f32,
+    },
 }
 
 impl SpectrumDesc {
     /// Whether the value depends on wavelength in a way RGB cannot represent exactly.
     pub fn is_spectral(&self) -> bool {
-        matches!(self, SpectrumDesc::Tabulated(_))
+        matches!(self, SpectrumDesc::Tabulated(_) | SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. })
     }
 
-    /// Every number in it (channels or tabulated values), for range checks.
+    /// How `pt info` names a wavelength-dependent form: `tabulated`, `blackbody`, `CIE F11`, ...
+    pub fn form_name(&self) -> String {
+        match self {
+            SpectrumDesc::Constant(_) => "constant".into(),
+            SpectrumDesc::Rgb(_) => "RGB".into(),
+            SpectrumDesc::Tabulated(_) => "tabulated".into(),
+            SpectrumDesc::Blackbody { temperature } => format!("blackbody ({temperature} K)"),
+            SpectrumDesc::Illuminant { name, .. } => format!("CIE {}", name.to_ascii_uppercase()),
+        }
+    }
+
+    /// Whether this is an emission-only form (blackbody, named illuminant), which makes no
+    /// sense as a reflectance.
+    pub fn is_emission_only(&self) -> bool {
+        matches!(self, SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. })
+    }
+
+    /// Every number in it (channels, tabulated values, an illuminant's scale; none for a
+    /// blackbody, whose temperature is checked when parsed), for range checks.
     pub fn values(&self) -> Vec<f32> {
         match self {
             SpectrumDesc::Constant(c) => vec![*c],
             SpectrumDesc::Rgb(c) => c.to_vec(),
             SpectrumDesc::Tabulated(p) => p.iter().map(|e| e.1).collect(),
+            SpectrumDesc::Blackbody { .. } => vec![],
+            SpectrumDesc::Illuminant { scale, .. } => vec![*scale],
         }
     }
 }
@@ -383,6 +418,8 @@ impl SceneDesc {
                 BsdfKind::Dielectric { .. } | BsdfKind::ThinDielectric { .. } | BsdfKind::RoughDielectric { .. } => vec![],
                 BsdfKind::ThinFilm { eta, k, .. } | BsdfKind::RoughThinFilm { eta, k, .. } => vec![eta, k],
                 BsdfKind::RoughPlastic { diffuse_reflectance, specular_reflectance, .. } => vec![diffuse_reflectance, specular_reflectance],
+                BsdfKind::Fluorescent { reflectance, absorption, emission, .. } => vec![reflectance, absorption, emission],
+                BsdfKind::Phosphorescent { reflectance, .. } => vec![reflectance],
             }
         }
         fn has_thin_film(k: &BsdfKind) -> bool {
@@ -392,32 +429,44 @@ impl SceneDesc {
                 _ => false,
             }
         }
+        fn is_fluorescent(k: &BsdfKind) -> bool {
+            match k {
+                BsdfKind::Fluorescent { .. } => true,
+                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } => is_fluorescent(&inner.kind),
+                _ => false,
+            }
+        }
+        for b in &self.bsdfs {
+            if is_fluorescent(&b.kind) {
+                return Some(format!("{}: fluorescence moves light between wavelengths (RGB mode cannot express it)", b.loc));
+            }
+        }
         for b in &self.bsdfs {
             if has_thin_film(&b.kind) {
                 return Some(format!("{}: thin-film interference depends on wavelength (RGB mode can only approximate it, with Belcour & Barla 2017)", b.loc));
             }
         }
         for b in &self.bsdfs {
-            if bsdf_spectra(&b.kind).iter().any(|s| s.is_spectral()) {
-                return Some(format!("{}: tabulated spectrum in a BSDF", b.loc));
+            if let Some(s) = bsdf_spectra(&b.kind).into_iter().find(|s| s.is_spectral()) {
+                return Some(format!("{}: {} spectrum in a BSDF", b.loc, s.form_name()));
             }
         }
         for s in &self.shapes {
             if let Some(e) = &s.emitter {
                 if e.radiance.is_spectral() {
-                    return Some(format!("{}: tabulated emission spectrum", e.loc));
+                    return Some(format!("{}: {} emission spectrum", e.loc, e.radiance.form_name()));
                 }
             }
         }
         for l in &self.lights {
-            let spectral = match &l.kind {
-                LightKind::Point { intensity, .. } | LightKind::Spot { intensity, .. } => intensity.is_spectral(),
-                LightKind::Directional { irradiance, .. } | LightKind::Sun { irradiance, .. } => irradiance.is_spectral(),
-                LightKind::Constant { radiance } => radiance.is_spectral(),
-                LightKind::EnvMap { .. } => false,
+            let spectrum = match &l.kind {
+                LightKind::Point { intensity, .. } | LightKind::Spot { intensity, .. } => Some(intensity),
+                LightKind::Directional { irradiance, .. } | LightKind::Sun { irradiance, .. } => Some(irradiance),
+                LightKind::Constant { radiance } => Some(radiance),
+                LightKind::EnvMap { .. } => None,
             };
-            if spectral {
-                return Some(format!("{}: tabulated emission spectrum", l.loc));
+            if let Some(s) = spectrum.filter(|s| s.is_spectral()) {
+                return Some(format!("{}: {} emission spectrum", l.loc, s.form_name()));
             }
         }
         None
@@ -577,5 +626,34 @@ pub enum BsdfKind {
         alpha_u: f32,
         /// Roughness along the bitangent.
         alpha_v: f32,
+    },
+    /// Fluorescent Lambertian surface (project extension `fluorescent`; model and transport in
+    /// pt-render's `fluorescence.rs`): elastic diffuse reflectance plus absorption re-emitted at
+    /// longer wavelengths with the given emission spectrum and quantum yield.
+    Fluorescent {
+        /// Elastic (wavelength-preserving) diffuse reflectance, in [0, 1].
+        reflectance: SpectrumDesc,
+        /// Fraction of incident photons absorbed by the fluorophore, in [0, 1], with
+        /// reflectance + absorption <= 1 at every wavelength.
+        absorption: SpectrumDesc,
+        /// Emission spectrum (shape only: normalised to unit area over 360-830 nm when built).
+        emission: SpectrumDesc,
+        /// Quantum yield, emitted / absorbed photons, in [0, 1].
+        quantum_yield: f32,
+    },
+    /// Phosphorescent Lambertian surface (project extension `phosphorescent`; model in
+    /// pt-render's `phosphorescence.rs`): renders as its elastic reflectance with the lights
+    /// on; with `pt render --time T` it glows with exponentially decaying afterglow.
+    Phosphorescent {
+        /// Elastic diffuse reflectance, in [0, 1].
+        reflectance: SpectrumDesc,
+        /// Fraction of incident photons stored, in [0, 1].
+        absorption: SpectrumDesc,
+        /// Afterglow emission spectrum (shape only, normalised per nm when used).
+        emission: SpectrumDesc,
+        /// Quantum yield, emitted / stored photons, in [0, 1].
+        quantum_yield: f32,
+        /// Lifetime tau of the stored state, seconds (> 0).
+        lifetime: f32,
     },
 }

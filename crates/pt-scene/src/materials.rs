@@ -1,7 +1,10 @@
 //! BSDF plugins with physical parameters: Mitsuba's `dielectric`, `thindielectric`,
 //! `roughdielectric`, `conductor`, `roughconductor`, and the project's `orennayar`,
 //! `minnaert` and `thinfilm` (`thickness` nm 500, `film_ior` 1.33, `ext_ior` 1, and either
-//! `int_ior` for a dielectric base or `material` / `eta` + `k` for a conductor base). Defaults and named materials follow Mitsuba 3.9.
+//! `int_ior` for a dielectric base or `material` / `eta` + `k` for a conductor base), and
+//! `fluorescent` (`reflectance` 0.5, `absorption` 0.5, `emission` required, `yield` 1; see
+//! pt-render's `fluorescence.rs`), `phosphorescent` (the same plus `lifetime` in seconds,
+//! required; see pt-render's `phosphorescence.rs`). Defaults and named materials follow Mitsuba 3.9.
 //!
 //! Named conductors are given by their RGB-mode complex index (eta + i k) exactly as Mitsuba 3.9.1
 //! `scalar_rgb` computes it from its spectral tables (read with `mi.traverse` on
@@ -129,6 +132,9 @@ fn conductor_ior(v: &ObjectView<'_>) -> Result<(SpectrumDesc, SpectrumDesc, Spec
 /// Albedo-like parameter: finite and in [0, 1].
 fn albedo(v: &ObjectView<'_>, name: &str) -> Result<SpectrumDesc> {
     let s = v.spectrum(name)?.unwrap_or(SpectrumDesc::Constant(0.5));
+    if s.is_emission_only() {
+        return Err(v.prop_error(name, format!("{name} must be a reflectance in [0, 1], not an emission spectrum ({})", s.form_name())));
+    }
     let vals = s.values();
     if vals.iter().any(|&x| !(0.0..=1.0).contains(&x)) {
         return Err(v.prop_error(name, format!("{name} must be in [0, 1], got {s:?}")));
@@ -238,6 +244,36 @@ pub(crate) fn bsdf_kind(v: &ObjectView<'_>) -> Result<BsdfKind> {
             let (eta, k, specular_reflectance) = conductor_ior(v)?;
             let (distribution, alpha_u, alpha_v) = microfacet(v)?;
             BsdfKind::RoughConductor { eta, k, specular_reflectance, distribution, alpha_u, alpha_v }
+        }
+        "fluorescent" => {
+            let reflectance = albedo(v, "reflectance")?;
+            let absorption = albedo(v, "absorption")?;
+            let emission = v.spectrum("emission")?.ok_or_else(|| v.prop_error("emission", "fluorescent needs an emission spectrum (<spectrum name=\"emission\" value=\"...\"/>)"))?;
+            if emission.values().iter().any(|&x| x < 0.0) || emission.values().iter().all(|&x| x == 0.0) {
+                return Err(v.prop_error("emission", "emission spectrum must be non-negative and not all zero"));
+            }
+            let quantum_yield = v.float("yield")?.unwrap_or(1.0);
+            if !(0.0..=1.0).contains(&quantum_yield) {
+                return Err(v.prop_error("yield", format!("quantum yield must be in [0, 1], got {quantum_yield}")));
+            }
+            BsdfKind::Fluorescent { reflectance, absorption, emission, quantum_yield }
+        }
+        "phosphorescent" => {
+            let reflectance = albedo(v, "reflectance")?;
+            let absorption = albedo(v, "absorption")?;
+            let emission = v.spectrum("emission")?.ok_or_else(|| v.prop_error("emission", "phosphorescent needs an emission spectrum (<spectrum name=\"emission\" value=\"...\"/>)"))?;
+            if emission.values().iter().any(|&x| x < 0.0) || emission.values().iter().all(|&x| x == 0.0) {
+                return Err(v.prop_error("emission", "emission spectrum must be non-negative and not all zero"));
+            }
+            let quantum_yield = v.float("yield")?.unwrap_or(1.0);
+            if !(0.0..=1.0).contains(&quantum_yield) {
+                return Err(v.prop_error("yield", format!("quantum yield must be in [0, 1], got {quantum_yield}")));
+            }
+            let lifetime = v.float("lifetime")?.ok_or_else(|| v.prop_error("lifetime", "phosphorescent needs <float name=\"lifetime\"> (seconds)"))?;
+            if !(lifetime > 0.0) {
+                return Err(v.prop_error("lifetime", format!("lifetime must be positive (seconds), got {lifetime}")));
+            }
+            BsdfKind::Phosphorescent { reflectance, absorption, emission, quantum_yield, lifetime }
         }
         other => return Err(SceneError::at(&v.el.loc, format!("internal: {other} is not a physical BSDF"))),
     })

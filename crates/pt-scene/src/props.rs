@@ -35,8 +35,10 @@ pub(crate) enum Value {
     Rgb([f32; 3]),
     /// A constant spectrum (`<spectrum value="0.5"/>`).
     Spectrum(f32),
-    /// `wavelength:value` pairs (nm, value), sorted by wavelength.
+    /// `wavelength:value` pairs (nm, value), sorted by wavelength (from `value` or `filename`).
     SpectrumPairs(Vec<(f32, f32)>),
+    /// A spectrum plugin (`<spectrum type="blackbody">`, `type="d65"`, ...).
+    SpectrumPlugin(SpectrumDesc),
     /// `<point>` or `<vector>`.
     Vec3(Vec3),
     Transform(Mat4),
@@ -50,7 +52,7 @@ impl Value {
             Value::Boolean(_) => "boolean",
             Value::Str(_) => "string",
             Value::Rgb(_) => "rgb",
-            Value::Spectrum(_) | Value::SpectrumPairs(_) => "spectrum",
+            Value::Spectrum(_) | Value::SpectrumPairs(_) | Value::SpectrumPlugin(_) => "spectrum",
             Value::Vec3(_) => "point/vector",
             Value::Transform(_) => "transform",
         }
@@ -278,7 +280,8 @@ impl<'e> ObjectView<'e> {
         }
     }
 
-    /// A spectrum-valued property: `<rgb>`, `<spectrum>` with one number, or a plain number.
+    /// A spectrum-valued property: `<rgb>`, `<spectrum>` (one number, pairs, a file, a plugin
+    /// such as a blackbody or a named illuminant), or a plain number.
     pub fn spectrum(&self, name: &str) -> Result<Option<SpectrumDesc>> {
         let Some(prop) = self.get(name) else {
             return Ok(None);
@@ -287,6 +290,7 @@ impl<'e> ObjectView<'e> {
             Value::Rgb(c) => Ok(Some(SpectrumDesc::Rgb(c))),
             Value::Spectrum(v) => Ok(Some(SpectrumDesc::Constant(v))),
             Value::SpectrumPairs(ref pairs) => Ok(Some(SpectrumDesc::Tabulated(std::sync::Arc::new(pairs.clone())))),
+            Value::SpectrumPlugin(ref s) => Ok(Some(s.clone())),
             Value::Float(v) => Ok(Some(SpectrumDesc::Constant(v as f32))),
             Value::Integer(v) => Ok(Some(SpectrumDesc::Constant(v as f32))),
             _ => Err(self.type_error(prop, "an rgb, spectrum or float")),
@@ -360,7 +364,7 @@ fn misplaced(el: &Element) -> SceneError {
 /// Parses a property element's value.
 fn parse_value(el: &Element) -> Result<Value> {
     let tag = el.tag.as_str();
-    if tag != "transform" {
+    if tag != "transform" && !(tag == "spectrum" && el.attr("type").is_some()) {
         no_children(el)?;
     }
     let value = || el.attr("value").unwrap_or_default();
@@ -398,13 +402,18 @@ fn parse_value(el: &Element) -> Result<Value> {
     }
 }
 
+/// `<spectrum>`: `value` (one number or `wavelength:value` pairs), `filename` (a file of pairs),
+/// or `type` (a spectrum plugin, see [`parse_spectrum_plugin`]).
 fn parse_spectrum(el: &Element) -> Result<Value> {
+    if el.attr("type").is_some() {
+        return parse_spectrum_plugin(el).map(Value::SpectrumPlugin);
+    }
     el.check_attrs(&["name", "value", "filename"], &["name"])?;
-    if el.attr("filename").is_some() {
-        return Err(SceneError::at(
-            &el.loc,
-            "spectra from files are not yet supported (not yet implemented)",
-        ));
+    if let Some(name) = el.attr("filename") {
+        if el.attr("value").is_some() {
+            return Err(SceneError::at(&el.loc, "give either 'value' or 'filename', not both"));
+        }
+        return read_spectrum_file(el, name).map(Value::SpectrumPairs);
     }
     let text = el
         .attr("value")
@@ -419,6 +428,108 @@ fn parse_spectrum(el: &Element) -> Result<Value> {
             format!("expected one number or wavelength:value pairs in '{text}'"),
         )),
     }
+}
+
+/// Mitsuba's `<spectrum filename="..."/>`: an ASCII file with one `wavelength value` pair per
+/// line (nm; separated by whitespace or a comma), `#` starting a comment, blank lines ignored;
+/// wavelengths strictly increasing, at least two pairs. Zero outside the tabulated range, as the
+/// `value` pairs. The name is resolved relative to the XML file that contains the element
+/// (absolute names as they are); `<path>` folders are not searched for spectrum files.
+fn read_spectrum_file(el: &Element, name: &str) -> Result<Vec<(f32, f32)>> {
+    let path = crate::xml::resolve_file(name, &el.dir, &[], &[]);
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        SceneError::at(&el.loc, format!("cannot read spectrum file '{name}' ({}): {e}", path.display()))
+    })?;
+    let mut pairs: Vec<(f32, f32)> = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let data = line.split('#').next().unwrap_or_default().trim();
+        if data.is_empty() {
+            continue;
+        }
+        let at = |m: String| SceneError::at(&el.loc, format!("spectrum file '{}', line {}: {m}", path.display(), i + 1));
+        let nums = parse_floats(data).map_err(at)?;
+        let [l, v] = nums[..] else {
+            return Err(at(format!("expected 'wavelength value', got '{data}'")));
+        };
+        if !(l > 0.0) {
+            return Err(at(format!("wavelength {l} nm must be positive")));
+        }
+        if let Some(&(prev, _)) = pairs.last() {
+            if l <= prev {
+                return Err(at(format!("wavelengths must increase: {l} nm after {prev} nm")));
+            }
+        }
+        pairs.push((l, v));
+    }
+    if pairs.len() < 2 {
+        return Err(SceneError::at(
+            &el.loc,
+            format!("spectrum file '{}' has {} wavelength/value pairs; at least two are needed", path.display(), pairs.len()),
+        ));
+    }
+    Ok(pairs)
+}
+
+/// `<spectrum type="..">` plugins:
+/// - `blackbody` with `<float name="temperature">` (K, required, > 0): Planck's law,
+///   unnormalised, as Mitsuba 3.9's `blackbody` (which has no other parameter);
+/// - `d65` with `<float name="scale">` (default 1): CIE D65 of luminance Y = scale, as
+///   Mitsuba's `d65` (whose `color` parameter is not supported);
+/// - project extension, same form as `d65`: `a` (CIE illuminant A) and `f1` .. `f12` (the CIE
+///   fluorescent lamps). Mitsuba has no plugin of these names, so such scenes render only in pt.
+fn parse_spectrum_plugin(el: &Element) -> Result<SpectrumDesc> {
+    el.check_attrs(&["name", "type"], &["name", "type"])?;
+    let plugin = el.attr("type").unwrap_or_default().to_ascii_lowercase();
+    let mut temperature = None;
+    let mut scale = None;
+    for c in &el.children {
+        c.check_attrs(&["name", "value"], &["name", "value"])?;
+        no_children(c)?;
+        let pname = c.attr("name").unwrap_or_default();
+        let slot = match (plugin.as_str(), pname) {
+            ("blackbody", "temperature") => &mut temperature,
+            (p, "scale") if p != "blackbody" => &mut scale,
+            _ => {
+                return Err(SceneError::at(
+                    &c.loc,
+                    format!("unused property '{pname}': spectrum \"{plugin}\" does not have this parameter"),
+                ))
+            }
+        };
+        if c.tag != "float" && c.tag != "integer" {
+            return Err(SceneError::at(&c.loc, format!("property '{pname}' must be a float, not {}", c.tag)));
+        }
+        if slot.is_some() {
+            return Err(SceneError::at(&c.loc, format!("property '{pname}' is given twice")));
+        }
+        *slot = Some(parse_f32(c.attr("value").unwrap_or_default()).map_err(|m| SceneError::at(&c.loc, m))?);
+    }
+    match plugin.as_str() {
+        "blackbody" => {
+            let t = temperature.ok_or_else(|| SceneError::at(&el.loc, "spectrum \"blackbody\" needs <float name=\"temperature\"> (K)"))?;
+            if !(t > 0.0) {
+                return Err(SceneError::at(&el.loc, format!("blackbody temperature must be positive, got {t} K")));
+            }
+            Ok(SpectrumDesc::Blackbody { temperature: t })
+        }
+        "d65" | "a" => Ok(SpectrumDesc::Illuminant { name: plugin, scale: checked_scale(el, scale)? }),
+        p if p.strip_prefix('f').and_then(|k| k.parse::<u8>().ok()).is_some_and(|k| (1..=12).contains(&k) && p == format!("f{k}")) => {
+            Ok(SpectrumDesc::Illuminant { name: plugin, scale: checked_scale(el, scale)? })
+        }
+        _ => Err(SceneError::at(
+            &el.loc,
+            format!("unknown spectrum type '{plugin}' (known: blackbody, d65, a, f1 .. f12)"),
+        )),
+    }
+}
+
+/// An illuminant's `scale` (luminance), default 1, must be >= 0.
+fn checked_scale(el: &Element, scale: Option<f32>) -> Result<f32> {
+    let s = scale.unwrap_or(1.0);
+    if !(s >= 0.0) {
+        return Err(SceneError::at(&el.loc, format!("illuminant scale must not be negative, got {s}")));
+    }
+    Ok(s)
 }
 
 /// Parses Mitsuba's `"400:0.1, 500:0.5"`: wavelengths in nm, strictly increasing, at least two

@@ -451,6 +451,61 @@ fn spectrum_pairs_are_tabulated_spectra() {
 }
 
 #[test]
+fn spectrum_files_blackbody_and_named_illuminants() {
+    // A file of pairs, relative to the XML file, with comments, blank lines and commas.
+    let dir = temp_dir("spectrum-file");
+    std::fs::write(dir.join("refl.spd"), "# wavelength value\n400 0.25\n\n550, 0.5  # mid\n700\t0.75\n").unwrap();
+    std::fs::write(dir.join("bad.spd"), "400 0.1\n380 0.2\n").unwrap();
+    std::fs::write(dir.join("one.spd"), "400 0.1\n").unwrap();
+    std::fs::write(dir.join("text.spd"), "400 0.1\n500 x\n").unwrap();
+    let body = |f: &str| scene(&format!("<shape type=\"cube\"><bsdf type=\"diffuse\">\n<spectrum name=\"reflectance\" filename=\"{f}\"/>\n</bsdf></shape>"));
+    std::fs::write(dir.join("ok.xml"), body("refl.spd")).unwrap();
+    let s = load_file(&dir.join("ok.xml"), &[]).unwrap();
+    assert!(matches!(&s.bsdfs[0].kind, BsdfKind::Diffuse { reflectance: SpectrumDesc::Tabulated(p) } if p.as_slice() == [(400.0, 0.25), (550.0, 0.5), (700.0, 0.75)]));
+    // Bad files: the error names the XML element (line 3) and the data file's line.
+    for (f, text) in [("bad.spd", "line 2: wavelengths must increase"), ("one.spd", "at least two"), ("text.spd", "line 2: cannot parse 'x'"), ("missing.spd", "cannot read spectrum file")] {
+        std::fs::write(dir.join("bad.xml"), body(f)).unwrap();
+        let e = load_file(&dir.join("bad.xml"), &[]).expect_err(f);
+        assert_eq!(e.loc.as_ref().unwrap().line, 3, "{f}: {e}");
+        assert!(e.message.contains(text), "{f}: {e}");
+    }
+
+    // Blackbody and named illuminants as emitter radiance.
+    let emitter = |spec: &str| scene(&format!("<shape type=\"rectangle\"><emitter type=\"area\">\n{spec}\n</emitter></shape>"));
+    let radiance = |s: &SceneDesc| s.shapes[0].emitter.as_ref().unwrap().radiance.clone();
+    let s = load(&emitter("<spectrum type=\"blackbody\" name=\"radiance\"><float name=\"temperature\" value=\"2500\"/></spectrum>")).unwrap();
+    assert_eq!(radiance(&s), SpectrumDesc::Blackbody { temperature: 2500.0 });
+    assert!(s.spectral_reason().unwrap().contains("blackbody (2500 K) emission spectrum"), "{:?}", s.spectral_reason());
+    let s = load(&emitter("<spectrum type=\"d65\" name=\"radiance\"><float name=\"scale\" value=\"3\"/></spectrum>")).unwrap();
+    assert_eq!(radiance(&s), SpectrumDesc::Illuminant { name: "d65".into(), scale: 3.0 });
+    let s = load(&emitter("<spectrum type=\"d65\" name=\"radiance\"/>")).unwrap();
+    assert_eq!(radiance(&s), SpectrumDesc::Illuminant { name: "d65".into(), scale: 1.0 });
+    for (t, name) in [("A", "a"), ("f1", "f1"), ("F11", "f11"), ("f12", "f12")] {
+        let s = load(&emitter(&format!("<spectrum type=\"{t}\" name=\"radiance\"/>"))).unwrap();
+        assert_eq!(radiance(&s), SpectrumDesc::Illuminant { name: name.into(), scale: 1.0 }, "{t}");
+        assert!(s.spectral_reason().unwrap().contains(&format!("CIE {}", name.to_uppercase())));
+    }
+    // Errors at the element at fault (line 3 is the <spectrum>, line 4 its child).
+    for (spec, line, text) in [
+        ("<spectrum type=\"blackbody\" name=\"radiance\"/>", 3, "needs <float name=\"temperature\">"),
+        ("<spectrum type=\"blackbody\" name=\"radiance\">\n<float name=\"temperature\" value=\"-5\"/></spectrum>", 3, "must be positive"),
+        ("<spectrum type=\"blackbody\" name=\"radiance\">\n<float name=\"scale\" value=\"2\"/></spectrum>", 4, "unused property 'scale'"),
+        ("<spectrum type=\"d65\" name=\"radiance\">\n<float name=\"scale\" value=\"-1\"/></spectrum>", 3, "must not be negative"),
+        ("<spectrum type=\"d65\" name=\"radiance\">\n<rgb name=\"scale\" value=\"1\"/></spectrum>", 4, "must be a float"),
+        ("<spectrum type=\"f13\" name=\"radiance\"/>", 3, "unknown spectrum type 'f13'"),
+        ("<spectrum type=\"f01\" name=\"radiance\"/>", 3, "unknown spectrum type"),
+        ("<spectrum name=\"radiance\" value=\"1\" filename=\"x.spd\"/>", 3, "either 'value' or 'filename'"),
+    ] {
+        let e = fail(&emitter(spec));
+        assert_eq!(e.loc.as_ref().unwrap().line, line, "{spec}: {e}");
+        assert!(e.message.contains(text), "{spec}: {e}");
+    }
+    // An emission spectrum is no reflectance.
+    let e = fail(&scene("<shape type=\"cube\"><bsdf type=\"orennayar\">\n<spectrum type=\"d65\" name=\"reflectance\"/>\n</bsdf></shape>"));
+    assert!(e.message.contains("not an emission spectrum"), "{e}");
+}
+
+#[test]
 fn malformed_xml_has_a_location() {
     let e = fail("<scene version=\"3.0.0\">\n<shape type=\"cube\">\n</scene>");
     let loc = e.loc.as_ref().unwrap();

@@ -108,6 +108,15 @@ impl SampledWavelengths {
         self.pdf
     }
 
+    /// The same lanes moved to other wavelengths `lambda` (nm), with the pdfs unchanged: for
+    /// fluorescence, where a lane continues at the wavelength that excited what it carries.
+    /// The pdfs keep describing how the lanes were first sampled, which is what the film needs;
+    /// use the original value, not this one, for the film.
+    #[inline]
+    pub fn with_lambda(&self, lambda: Vec4) -> Self {
+        SampledWavelengths { lambda, pdf: self.pdf }
+    }
+
     /// The hero wavelength (lane 0), nm.
     #[inline]
     pub fn hero(&self) -> f32 {
