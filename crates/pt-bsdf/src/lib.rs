@@ -27,6 +27,7 @@
 pub mod conductor;
 pub mod dielectric;
 pub mod fresnel;
+pub mod gltf_pbr;
 pub mod lambert;
 pub mod microfacet;
 pub mod minnaert;
@@ -37,6 +38,7 @@ pub mod thin_film;
 
 pub use conductor::{Conductor, RoughConductor};
 pub use dielectric::Dielectric;
+pub use gltf_pbr::GltfPbr;
 pub use lambert::Lambert;
 pub use microfacet::{Distribution, Microfacet};
 pub use minnaert::Minnaert;
@@ -94,6 +96,8 @@ pub enum Bsdf {
     /// Smooth thin film on a conductor (one delta lobe) or dielectric base (two delta lobes,
     /// handles both sides itself).
     ThinFilm(ThinFilm),
+    /// glTF 2.0 metallic-roughness (GGX specular over a coupled diffuse base, and metal).
+    GltfPbr(GltfPbr),
 }
 
 impl Bsdf {
@@ -110,6 +114,7 @@ impl Bsdf {
             Bsdf::ThinDielectric(m) => m.eval(wo, wi),
             Bsdf::RoughDielectric(m) => m.eval(wo, wi),
             Bsdf::ThinFilm(m) => m.eval(wo, wi),
+            Bsdf::GltfPbr(m) => m.eval(wo, wi),
         }
     }
 
@@ -126,6 +131,7 @@ impl Bsdf {
             Bsdf::ThinDielectric(m) => m.pdf(wo, wi),
             Bsdf::RoughDielectric(m) => m.pdf(wo, wi),
             Bsdf::ThinFilm(m) => m.pdf(wo, wi),
+            Bsdf::GltfPbr(m) => m.pdf(wo, wi),
         }
     }
 
@@ -142,6 +148,7 @@ impl Bsdf {
             Bsdf::ThinDielectric(m) => m.sample(wo, u_lobe, u),
             Bsdf::RoughDielectric(m) => m.sample(wo, u_lobe, u),
             Bsdf::ThinFilm(m) => m.sample(wo, u_lobe, u),
+            Bsdf::GltfPbr(m) => m.sample(wo, u_lobe, u),
         }
     }
 
@@ -163,7 +170,8 @@ impl Bsdf {
             | Bsdf::OrenNayar(_)
             | Bsdf::Minnaert(_)
             | Bsdf::RoughConductor(_)
-            | Bsdf::RoughDielectric(_) => true,
+            | Bsdf::RoughDielectric(_)
+            | Bsdf::GltfPbr(_) => true,
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::ThinFilm(_) => false,
         }
     }
