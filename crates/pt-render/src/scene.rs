@@ -5,7 +5,7 @@ use crate::camera::Camera;
 use crate::geometry::{intersect_triangle, Interaction, Primitive};
 use crate::light::{AreaLight, EnvMap, Light, LightShape, LightTriangle, SpotCone};
 use pt_bsdf::{
-    Bsdf, Conductor, Dielectric, Distribution, FilmBase, Lambert, ThinFilm, Microfacet, Minnaert, OrenNayar, OrenNayarVariant, RoughConductor, RoughDielectric,
+    Bsdf, Conductor, Dielectric, Distribution, FilmBase, GltfPbr, Lambert, ThinFilm, Microfacet, Minnaert, OrenNayar, OrenNayarVariant, RoughConductor, RoughDielectric,
     SurfaceBsdf, ThinDielectric,
 };
 use pt_math::{Distribution1D, Frame, Mat3, Ray, Vec2, Vec3, Vec3A};
@@ -186,6 +186,7 @@ fn material_with(
             let (e, kk, sr) = (val(eta, Role::Unbounded), val(k, Role::Unbounded), val(specular_reflectance, Role::Albedo));
             one_sided(Bsdf::RoughConductor(RoughConductor::new(e, kk, sr, mf(distribution, *alpha_u, *alpha_v)?)))
         }
+        BsdfKind::GltfPbr { base_color, metallic, roughness, ior } => one_sided(Bsdf::GltfPbr(GltfPbr::new(val(base_color, Role::Albedo), *metallic, *roughness, *ior))),
     })
 }
 

@@ -379,6 +379,7 @@ impl SceneDesc {
                 }
                 BsdfKind::Dielectric { .. } | BsdfKind::ThinDielectric { .. } | BsdfKind::RoughDielectric { .. } => vec![],
                 BsdfKind::ThinFilm { eta, k, .. } => vec![eta, k],
+                BsdfKind::GltfPbr { base_color, .. } => vec![base_color],
             }
         }
         fn has_thin_film(k: &BsdfKind) -> bool {
@@ -526,5 +527,16 @@ pub enum BsdfKind {
         alpha_u: f32,
         /// Roughness along the bitangent.
         alpha_v: f32,
+    },
+    /// glTF 2.0 metallic-roughness material (read from glTF files; pt-bsdf `GltfPbr`).
+    GltfPbr {
+        /// Base colour (linear albedo): the diffuse colour of the dielectric and F0 of the metal.
+        base_color: SpectrumDesc,
+        /// Metalness in [0, 1].
+        metallic: f32,
+        /// Perceptual roughness in [0, 1]; GGX alpha = roughness^2.
+        roughness: f32,
+        /// Index of refraction of the dielectric part (1.5 unless KHR_materials_ior).
+        ior: f32,
     },
 }

@@ -1,0 +1,301 @@
+//! glTF 2.0 input: the assets of scenes/gltf/ (written by scenes/gltf/make_gltf.py) against
+//! closed forms, `pt info`'s listing, and bad input (exit code 2, no output file).
+
+mod common;
+
+use common::*;
+use pt_bsdf::GltfPbr;
+use pt_math::Vec3;
+use pt_spectrum::SampledSpectrum;
+use std::path::{Path, PathBuf};
+
+fn asset(name: &str) -> PathBuf {
+    repo().join("scenes/gltf").join(name)
+}
+
+/// scenes/gltf/lights.gltf: a 6 x 6 m plane (y = 0, normal +y, glTF metallic-roughness with
+/// base colour 0.6, metallic 0, roughness 0.5) seen from (0, 4, 0) straight down (yfov 50 deg,
+/// square image: image right is +x, image top is -z), lit by a KHR_lights_punctual point light
+/// (5 cd, colour (1, 0.5, 0.25), at (0.7, 1.5, -0.4)), a spot light (8 cd at (0, 2, 0) pointing
+/// down, inner cone 15 deg, outer 30 deg) and a directional light (3 lx travelling along
+/// (0.6, -0.8, 0)).
+///
+/// Each pixel must equal the box-filter footprint average of
+/// `L = sum over lights f(wo, wi) E_light(x)` with `E = I cos(theta_i) / d^2` (point, spot
+/// times the renderer's falloff: full inside the inner cone, linear in angle to 0 at the outer
+/// cone) and `E = E0 cos(theta_i)` (directional), `f` the BRDF evaluated by pt-bsdf (tested on
+/// its own in crates/pt-bsdf/tests/gltf_pbr.rs). Photometric units are used 1:1 (pt-gltf's
+/// documentation), so a cd is an intensity of 1. This checks the loader's node transforms
+/// (light positions and directions, the camera's axes and field of view), the unit mapping and
+/// the material mapping at once: a light pointing the wrong way, a factor 683 or 4 pi, or a
+/// swapped image axis fails by far more than the tolerance.
+///
+/// Tolerance as in tests/lights_analytic.rs: 4.5 standard errors per pixel (the larger of the
+/// render's own estimate and the one implied by the footprint's variance at 64 spp) plus 2e-4
+/// relative for quadrature and float32 rounding, and the image mean within 0.2%.
+#[test]
+fn punctual_lights_match_closed_form() {
+    const W: u32 = 24;
+    const SPP: f64 = 64.0;
+    let h_cam = 4.0f64;
+    let tan = (25.0f64).to_radians().tan();
+    let f = GltfPbr::new(SampledSpectrum::from_rgb([0.6; 3]), 0.0, 0.5, 1.5);
+    // Local shading frame of the plane: normal +y -> z; isotropic, so any tangent will do.
+    let local = |v: [f64; 3]| Vec3::new(v[0] as f32, v[2] as f32, v[1] as f32);
+    let norm = |v: [f64; 3]| {
+        let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+        [v[0] / l, v[1] / l, v[2] / l]
+    };
+    let radiance = |x: f64, z: f64| -> [f64; 3] {
+        let wo = local(norm([-x, h_cam, -z]));
+        let mut l = [0.0f64; 3];
+        // Point light.
+        let (px, ph, pz, i) = (0.7, 1.5, -0.4, 5.0);
+        let d2 = (px - x) * (px - x) + ph * ph + (pz - z) * (pz - z);
+        let fv = f64::from(f.eval(wo, local(norm([px - x, ph, pz - z]))).0.x);
+        let e = i * ph / d2.powf(1.5);
+        for (c, col) in [1.0, 0.5, 0.25].iter().enumerate() {
+            l[c] += fv * e * col;
+        }
+        // Spot light.
+        let (sh, si, outer, inner) = (2.0f64, 8.0f64, 30.0f64, 15.0f64);
+        let d2 = x * x + sh * sh + z * z;
+        let angle = (sh / d2.sqrt()).acos().to_degrees();
+        let fall = if angle <= inner { 1.0 } else if angle >= outer { 0.0 } else { (outer - angle) / (outer - inner) };
+        let fv = f64::from(f.eval(wo, local(norm([-x, sh, -z]))).0.x);
+        for lc in &mut l {
+            *lc += fv * si * fall * sh / d2.powf(1.5);
+        }
+        // Directional light, travelling along (0.6, -0.8, 0): wi = (-0.6, 0.8, 0).
+        let fv = f64::from(f.eval(wo, local([-0.6, 0.8, 0.0])).0.x);
+        for lc in &mut l {
+            *lc += fv * 3.0 * 0.8;
+        }
+        l
+    };
+    let dir = scratch("gltf_lights");
+    let (img, var) = render(&asset("lights.gltf"), &dir, "out", &["--width", "24", "--height", "24", "--spp", "64", "--max-depth", "2"]);
+    let n = 16;
+    let (mut sum_got, mut sum_want) = (0.0, 0.0);
+    for py in 0..W {
+        for px in 0..W {
+            let (mut want, mut want_sq) = ([0.0f64; 3], [0.0f64; 3]);
+            for j in 0..n {
+                for i in 0..n {
+                    let u = (px as f64 + (i as f64 + 0.5) / n as f64) / W as f64;
+                    let v = (py as f64 + (j as f64 + 0.5) / n as f64) / W as f64;
+                    let (x, z) = (h_cam * (2.0 * u - 1.0) * tan, h_cam * (2.0 * v - 1.0) * tan);
+                    let l = if x.abs() <= 3.0 && z.abs() <= 3.0 { radiance(x, z) } else { [0.0; 3] };
+                    for c in 0..3 {
+                        want[c] += l[c] / (n * n) as f64;
+                        want_sq[c] += l[c] * l[c] / (n * n) as f64;
+                    }
+                }
+            }
+            let (got, sd) = (img.get(px, py), var.get(px, py));
+            for c in 0..3 {
+                let footprint_var = (want_sq[c] - want[c] * want[c]).max(0.0) / SPP;
+                let tol = 4.5 * (sd[c] as f64).max(footprint_var).sqrt() + 2e-4 * want[c].abs() + 1e-7;
+                assert!((got[c] as f64 - want[c]).abs() <= tol, "pixel ({px}, {py}) channel {c}: got {} want {} (tol {tol:.3e})", got[c], want[c]);
+                sum_got += got[c] as f64;
+                sum_want += want[c];
+            }
+        }
+    }
+    assert!((sum_got / sum_want - 1.0).abs() < 2e-3, "mean ratio {}", sum_got / sum_want);
+}
+
+/// The loader's mapping of the glass block (KHR_materials_volume): attenuationColor c reached
+/// after attenuationDistance d means exp(-sigma_t d) = c, so sigma_t = -ln(c)/d per channel;
+/// transmission with a volume maps to a smooth dielectric of the KHR_materials_ior index.
+#[test]
+fn volume_maps_to_beer_lambert_sigma_t() {
+    let g = pt_gltf::load(&asset("glass-block.glb"), &Default::default()).expect("load glass-block.glb");
+    let s = &g.desc.shapes[0];
+    let m = s.interior.as_ref().expect("the slab has an interior medium");
+    let pt_scene::SpectrumDesc::Rgb(sigma) = m.sigma_t else { panic!("sigma_t {:?}", m.sigma_t) };
+    for (c, col) in [0.8f32, 0.5, 0.2].iter().enumerate() {
+        let want = -col.ln() / 0.5;
+        assert!((sigma[c] - want).abs() < 1e-5 * want, "channel {c}: {} vs {want}", sigma[c]);
+    }
+    assert!(matches!(g.desc.bsdfs[s.bsdf].kind, pt_scene::BsdfKind::Dielectric { int_ior, ext_ior } if int_ior == 1.5 && ext_ior == 1.0));
+    assert!(g.warnings.iter().any(|w| w.contains("default environment")), "{:?}", g.warnings);
+}
+
+/// `pt info` on each asset lists the materials with the extensions they use and what each maps
+/// to, the lights, the cameras and the colour mode (thin film makes the iridescent sphere
+/// spectral).
+#[test]
+fn info_lists_mapping_lights_cameras_and_mode() {
+    let text = |name: &str| {
+        let o = pt(&["info", asset(name).to_str().unwrap()]);
+        assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
+        (String::from_utf8_lossy(&o.stdout).into_owned(), String::from_utf8_lossy(&o.stderr).into_owned())
+    };
+    let (out, _) = text("lights.gltf");
+    for want in ["point at", "spot at", "directional towards", "gltf metallic-roughness", "camera 0: node 1, perspective", "mode        rgb"] {
+        assert!(out.contains(want), "lights.gltf info lacks '{want}':\n{out}");
+    }
+    let (out, err) = text("iridescence.gltf");
+    for want in ["KHR_materials_iridescence", "thinfilm: 450 nm film of ior 1.33", "mode        spectral"] {
+        assert!(out.contains(want), "iridescence.gltf info lacks '{want}':\n{out}");
+    }
+    assert!(err.contains("default environment"), "no default-light note on stderr: {err}");
+    let (out, _) = text("glass-block.glb");
+    for want in ["KHR_materials_transmission", "KHR_materials_volume", "sigma_t", "dielectric, ior 1.5"] {
+        assert!(out.contains(want), "glass-block.glb info lacks '{want}':\n{out}");
+    }
+}
+
+/// Writes `doc` (JSON) to `dir/name` and returns the path.
+fn write_json(dir: &Path, name: &str, doc: &serde_json::Value) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, serde_json::to_vec_pretty(doc).unwrap()).unwrap();
+    p
+}
+
+/// Bad glTF input fails cleanly: exit code 2, a message naming the file and what is wrong, and
+/// no output file. An unsupported *optional* extension only warns, naming it.
+#[test]
+fn bad_gltf_exits_2_without_output() {
+    let dir = scratch("gltf_bad");
+    let good: serde_json::Value = serde_json::from_slice(&std::fs::read(asset("lights.gltf")).unwrap()).unwrap();
+    let mut cases: Vec<(PathBuf, &str)> = Vec::new();
+
+    let p = dir.join("malformed.gltf");
+    std::fs::write(&p, b"{ \"asset\": { \"version\": \"2.0\" }, \"nodes\": [ ").unwrap();
+    cases.push((p, "malformed glTF"));
+
+    let glb = std::fs::read(asset("glass-block.glb")).unwrap();
+    let p = dir.join("truncated.glb");
+    std::fs::write(&p, &glb[..glb.len() * 2 / 3]).unwrap();
+    cases.push((p, "malformed glTF"));
+
+    // A buffer shorter than its byteLength (truncated data URI).
+    let mut d = good.clone();
+    let uri = d["buffers"][0]["uri"].as_str().unwrap().to_string();
+    d["buffers"][0]["uri"] = serde_json::Value::String(uri[..uri.len() - 40].to_string());
+    cases.push((write_json(&dir, "short-buffer.gltf", &d), "buffers[0]"));
+
+    // An index to an accessor that does not exist.
+    let mut d = good.clone();
+    d["meshes"][0]["primitives"][0]["indices"] = 99.into();
+    cases.push((write_json(&dir, "bad-accessor-index.gltf", &d), "Index out of bounds"));
+
+    // An accessor that claims more elements than its buffer view holds.
+    let mut d = good.clone();
+    d["accessors"][0]["count"] = 1000.into();
+    cases.push((write_json(&dir, "accessor-overrun.gltf", &d), "need more than"));
+
+    // Vertex indices beyond the vertex count (POSITION says 3 vertices, the triangles use 4).
+    let mut d = good.clone();
+    for a in [0, 1, 2] {
+        d["accessors"][a]["count"] = 3.into();
+    }
+    d["accessors"][0]["min"] = serde_json::json!([-3.0, 0.0, -3.0]);
+    cases.push((write_json(&dir, "vertex-index.gltf", &d), "out of range for 3 vertices"));
+
+    let mut d = good.clone();
+    d["extensionsUsed"] = serde_json::json!(["KHR_lights_punctual", "KHR_draco_mesh_compression"]);
+    d["extensionsRequired"] = serde_json::json!(["KHR_draco_mesh_compression"]);
+    cases.push((write_json(&dir, "required-ext.gltf", &d), "KHR_draco_mesh_compression"));
+
+    let mut d = good.clone();
+    d["buffers"][0]["uri"] = "missing.bin".into();
+    cases.push((write_json(&dir, "missing-buffer.gltf", &d), "missing.bin"));
+
+    for (path, want) in &cases {
+        let out = dir.join("out.exr");
+        let o = pt(&["render", path.to_str().unwrap(), "-o", out.to_str().unwrap(), "--spp", "1", "--quiet"]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{}: exit {:?}, stderr {err}", path.display(), o.status.code());
+        assert!(err.contains(want), "{}: stderr lacks '{want}': {err}", path.display());
+        assert!(err.contains(path.file_name().unwrap().to_str().unwrap()), "{}: message does not name the file: {err}", path.display());
+        assert!(!out.exists(), "{}: an output file was written", path.display());
+        let o = pt(&["info", path.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(2), "info {}: exit {:?}", path.display(), o.status.code());
+    }
+
+    // Optional unsupported extension: rendered, with a warning naming it.
+    let mut d = good.clone();
+    d["extensionsUsed"] = serde_json::json!(["KHR_lights_punctual", "KHR_materials_sheen"]);
+    let p = write_json(&dir, "optional-ext.gltf", &d);
+    let out = dir.join("optional.exr");
+    let o = pt(&["render", p.to_str().unwrap(), "-o", out.to_str().unwrap(), "--spp", "1", "--width", "8", "--height", "8"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("KHR_materials_sheen"), "no warning naming the extension");
+    assert!(out.exists());
+
+    // --camera out of range is bad input too.
+    let o = pt(&["render", asset("lights.gltf").to_str().unwrap(), "-o", dir.join("c.exr").to_str().unwrap(), "--camera", "3"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!dir.join("c.exr").exists());
+}
+
+/// scenes/gltf/iridescence.gltf: a unit sphere (a 24 x 48 UV mesh with exact vertex normals)
+/// with KHR_materials_iridescence (450 nm film of index 1.33 on a metallic base of base colour
+/// 0.9, roughness 0), seen from (0, 0, 4) (yfov 32 deg) and lit only by the default environment
+/// (constant radiance 1). The film is smooth and its base opaque, so a camera ray that hits the
+/// sphere at cos(theta) sees exactly the film's reflectance R(cos theta) times the environment
+/// (the mirror ray leaves the convex sphere). With `--mode rgb`, R is the thin-film model's
+/// Belcour-Barla RGB reflectance; the base index is the loader's documented mapping
+/// n = (1 + sqrt(F0)) / (1 - sqrt(F0)), k = 0 with F0 = 0.9.
+///
+/// Compared per pixel on pixels whose whole footprint hits the sphere at cos(theta) > 0.5, with
+/// the footprint average of R at the analytic sphere; tolerance 4.5 standard errors (render and
+/// footprint) plus 0.3% relative for the mesh: the flat triangles move the hit point by at most
+/// the sagitta 1 - cos(3.75 deg) = 2e-3 of the radius, which changes cos(theta) by about that
+/// much. A film thickness or index taken from the wrong field, the angle outside instead of inside
+/// the film, or a wrong base index changes R by far more (colour shifts of 10-50%).
+#[test]
+fn iridescent_sphere_reflects_thin_film_r() {
+    use pt_bsdf::{FilmBase, ThinFilm};
+    const W: u32 = 32;
+    let s = 0.9f32.sqrt();
+    let n_base = (1.0 + s) / (1.0 - s);
+    let film = ThinFilm::rgb(450.0, 1.33, 1.0, FilmBase::Conductor { eta: SampledSpectrum::from_rgb([n_base; 3]), k: SampledSpectrum::from_rgb([0.0; 3]) });
+    let tan = 16.0f64.to_radians().tan();
+    // cos(theta) at the analytic unit sphere for film position (u, v), or None on a miss.
+    let cos_at = |u: f64, v: f64| -> Option<f64> {
+        let d = [(2.0 * u - 1.0) * tan, (1.0 - 2.0 * v) * tan, -1.0];
+        let l = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        let d = [d[0] / l, d[1] / l, d[2] / l];
+        let b = 4.0 * d[2]; // o.d with o = (0, 0, 4)
+        let disc = b * b - 15.0;
+        if disc < 0.0 {
+            return None;
+        }
+        let t = -b - disc.sqrt();
+        let p = [t * d[0], t * d[1], 4.0 + t * d[2]];
+        Some(-(d[0] * p[0] + d[1] * p[1] + d[2] * p[2]))
+    };
+    let dir = scratch("gltf_iridescence");
+    let (img, var) = render(&asset("iridescence.gltf"), &dir, "out", &["--width", "32", "--height", "32", "--spp", "64", "--mode", "rgb"]);
+    let n = 8;
+    let mut checked = 0;
+    for py in 0..W {
+        'px: for px in 0..W {
+            let (mut want, mut want_sq) = ([0.0f64; 3], [0.0f64; 3]);
+            for j in 0..n {
+                for i in 0..n {
+                    let u = (px as f64 + (i as f64 + 0.5) / n as f64) / W as f64;
+                    let v = (py as f64 + (j as f64 + 0.5) / n as f64) / W as f64;
+                    let Some(c) = cos_at(u, v).filter(|c| *c > 0.5) else { continue 'px };
+                    let r = film.reflectance(c as f32).rgb();
+                    for k in 0..3 {
+                        want[k] += f64::from(r[k]) / (n * n) as f64;
+                        want_sq[k] += f64::from(r[k]).powi(2) / (n * n) as f64;
+                    }
+                }
+            }
+            let (got, sd) = (img.get(px, py), var.get(px, py));
+            for k in 0..3 {
+                let footprint_var = (want_sq[k] - want[k] * want[k]).max(0.0) / 64.0;
+                let tol = 4.5 * (sd[k] as f64).max(footprint_var).sqrt() + 3e-3 * want[k];
+                assert!((got[k] as f64 - want[k]).abs() <= tol, "pixel ({px}, {py}) channel {k}: got {} want {} (tol {tol:.2e})", got[k], want[k]);
+            }
+            checked += 1;
+        }
+    }
+    assert!(checked > 200, "only {checked} pixels checked");
+}
