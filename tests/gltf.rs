@@ -30,11 +30,25 @@ fn asset(name: &str) -> PathBuf {
 /// the material mapping at once: a light pointing the wrong way, a factor 683 or 4 pi, or a
 /// swapped image axis fails by far more than the tolerance.
 ///
+/// Each light is checked alone (a copy of the file whose scene lists the plane, the camera and
+/// that light's node): with several lights, next-event estimation picks one per sample, and a
+/// pixel whose 64 samples all picked the same light reports a variance of 0, which a per-pixel
+/// z-test cannot use (the sum of lights is the renderer's NEE, tested in tests/lights_analytic.rs
+/// and the reference scenes).
+///
 /// Tolerance as in tests/lights_analytic.rs: 4.5 standard errors per pixel (the larger of the
 /// render's own estimate and the one implied by the footprint's variance at 64 spp) plus 2e-4
 /// relative for quadrature and float32 rounding, and the image mean within 0.2%.
 #[test]
 fn punctual_lights_match_closed_form() {
+    for which in ["point", "spot", "directional"] {
+        check_light(which);
+    }
+}
+
+/// Renders lights.gltf with only the light node `which` (plane and camera kept) and checks
+/// every pixel against the closed form of that light.
+fn check_light(which: &str) {
     const W: u32 = 24;
     const SPP: f64 = 64.0;
     let h_cam = 4.0f64;
@@ -49,7 +63,7 @@ fn punctual_lights_match_closed_form() {
     let radiance = |x: f64, z: f64| -> [f64; 3] {
         let wo = local(norm([-x, h_cam, -z]));
         let mut l = [0.0f64; 3];
-        // Point light.
+        if which == "point" {
         let (px, ph, pz, i) = (0.7, 1.5, -0.4, 5.0);
         let d2 = (px - x) * (px - x) + ph * ph + (pz - z) * (pz - z);
         let fv = f64::from(f.eval(wo, local(norm([px - x, ph, pz - z]))).0.x);
@@ -57,7 +71,8 @@ fn punctual_lights_match_closed_form() {
         for (c, col) in [1.0, 0.5, 0.25].iter().enumerate() {
             l[c] += fv * e * col;
         }
-        // Spot light.
+        }
+        if which == "spot" {
         let (sh, si, outer, inner) = (2.0f64, 8.0f64, 30.0f64, 15.0f64);
         let d2 = x * x + sh * sh + z * z;
         let angle = (sh / d2.sqrt()).acos().to_degrees();
@@ -66,15 +81,21 @@ fn punctual_lights_match_closed_form() {
         for lc in &mut l {
             *lc += fv * si * fall * sh / d2.powf(1.5);
         }
-        // Directional light, travelling along (0.6, -0.8, 0): wi = (-0.6, 0.8, 0).
+        }
+        if which == "directional" {
+        // Travelling along (0.6, -0.8, 0): wi = (-0.6, 0.8, 0).
         let fv = f64::from(f.eval(wo, local([-0.6, 0.8, 0.0])).0.x);
         for lc in &mut l {
             *lc += fv * 3.0 * 0.8;
         }
+        }
         l
     };
-    let dir = scratch("gltf_lights");
-    let (img, var) = render(&asset("lights.gltf"), &dir, "out", &["--width", "24", "--height", "24", "--spp", "64", "--max-depth", "2"]);
+    let dir = scratch(&format!("gltf_lights_{which}"));
+    let mut doc: serde_json::Value = serde_json::from_slice(&std::fs::read(asset("lights.gltf")).unwrap()).unwrap();
+    let node = ["point", "spot", "directional"].iter().position(|w| *w == which).unwrap() + 2;
+    doc["scenes"][0]["nodes"] = serde_json::json!([0, 1, node]);
+    let (img, var) = render(&write_json(&dir, "one-light.gltf", &doc), &dir, "out", &["--width", "24", "--height", "24", "--spp", "64", "--max-depth", "2"]);
     let n = 16;
     let (mut sum_got, mut sum_want) = (0.0, 0.0);
     for py in 0..W {
@@ -96,13 +117,13 @@ fn punctual_lights_match_closed_form() {
             for c in 0..3 {
                 let footprint_var = (want_sq[c] - want[c] * want[c]).max(0.0) / SPP;
                 let tol = 4.5 * (sd[c] as f64).max(footprint_var).sqrt() + 2e-4 * want[c].abs() + 1e-7;
-                assert!((got[c] as f64 - want[c]).abs() <= tol, "pixel ({px}, {py}) channel {c}: got {} want {} (tol {tol:.3e})", got[c], want[c]);
+                assert!((got[c] as f64 - want[c]).abs() <= tol, "{which}: pixel ({px}, {py}) channel {c}: got {} want {} (tol {tol:.3e})", got[c], want[c]);
                 sum_got += got[c] as f64;
                 sum_want += want[c];
             }
         }
     }
-    assert!((sum_got / sum_want - 1.0).abs() < 2e-3, "mean ratio {}", sum_got / sum_want);
+    assert!((sum_got / sum_want - 1.0).abs() < 2e-3, "{which}: mean ratio {}", sum_got / sum_want);
 }
 
 /// The loader's mapping of the glass block (KHR_materials_volume): attenuationColor c reached
@@ -298,4 +319,49 @@ fn iridescent_sphere_reflects_thin_film_r() {
         }
     }
     assert!(checked > 200, "only {checked} pixels checked");
+}
+
+/// Textures (scenes/gltf/textures*.gltf, under the default white environment, same seed):
+/// 1. textures.gltf (a 2 x 1 base colour texture rotated 90 degrees by KHR_texture_transform)
+///    and textures-flat.gltf (the 1 x 2 texture that rotation should produce, no transform)
+///    render the same image: nearest lookups of the same texels along the same paths, so the
+///    images agree to float rounding (1e-4 relative allowed per pixel). A rotation applied
+///    the other way, or offset/scale ignored, swaps the two colours (a 5x difference).
+/// 2. The top half of the image (v < 1/2, texel sRGB (20, 60, 240)) equals a plane without
+///    textures whose factors are the glTF factors times the decoded texels: base colour
+///    factor x sRGB-decoded texel, roughness x green/255, metallic x blue/255 of the linear
+///    metallic-roughness texture. This checks the sRGB decoding (IEC 61966-2-1; no decoding
+///    would be 2-10x off), the channel assignment and that factors multiply.
+#[test]
+fn textures_follow_uv_transform_srgb_and_factors() {
+    let dir = scratch("gltf_textures");
+    let args = ["--width", "16", "--height", "16", "--spp", "16", "--seed", "3", "--max-depth", "3"];
+    let (a, _) = render(&asset("textures.gltf"), &dir, "rotated", &args);
+    let (b, _) = render(&asset("textures-flat.gltf"), &dir, "flat", &args);
+    for (i, (p, q)) in a.data.iter().zip(&b.data).enumerate() {
+        for c in 0..3 {
+            assert!((p[c] - q[c]).abs() <= 1e-4 * q[c].abs().max(1e-3), "pixel {i} channel {c}: transformed {} vs flat {}", p[c], q[c]);
+        }
+    }
+    let srgb = |c: f64| if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) };
+    let mut d: serde_json::Value = serde_json::from_slice(&std::fs::read(asset("textures-flat.gltf")).unwrap()).unwrap();
+    let pbr = &mut d["materials"][0]["pbrMetallicRoughness"];
+    let factor = [0.8, 1.0, 0.9];
+    let texel = [20.0, 60.0, 240.0];
+    pbr["baseColorFactor"] = serde_json::json!([factor[0] * srgb(texel[0] / 255.0), factor[1] * srgb(texel[1] / 255.0), factor[2] * srgb(texel[2] / 255.0), 1.0]);
+    pbr["metallicFactor"] = serde_json::json!(0.5 * 255.0 / 255.0);
+    pbr["roughnessFactor"] = serde_json::json!(0.9 * 128.0 / 255.0);
+    let obj = pbr.as_object_mut().unwrap();
+    obj.remove("baseColorTexture");
+    obj.remove("metallicRoughnessTexture");
+    let plain = write_json(&dir, "plain.gltf", &d);
+    let (c, _) = render(&plain, &dir, "plain", &args);
+    for y in 0..7 {
+        for x in 0..16 {
+            let (p, q) = (a.get(x, y), c.get(x, y));
+            for k in 0..3 {
+                assert!((p[k] - q[k]).abs() <= 1e-4 * q[k].abs().max(1e-3), "pixel ({x}, {y}) channel {k}: textured {} vs factors {}", p[k], q[k]);
+            }
+        }
+    }
 }

@@ -9,6 +9,11 @@
                     against the closed form f(wo, wi) E(x) with E the irradiance of each light.
 - iridescence.gltf  a UV sphere (radius 1) with KHR_materials_iridescence on a metallic base,
                     no light (the default constant environment of radiance 1 lights it).
+- textures.gltf     a plane whose base colour is a 2 x 1 PNG (sRGB (200, 100, 50) | (20, 60, 240),
+                    nearest) times a factor, and whose metallic-roughness texture (1 x 1, linear)
+                    scales roughness and metallic; KHR_texture_transform rotates the uvs by 90
+                    degrees. textures-flat.gltf is the same scene with a 1 x 2 texture and no
+                    transform, laid out so that both must render the same image (tests/gltf.rs).
 - glass-block.glb   binary glTF: a 1 m thick slab (KHR_materials_transmission + _ior + _volume
                     with attenuationColor / attenuationDistance) between the camera and the
                     default white environment.
@@ -22,6 +27,7 @@ import json
 import math
 import os
 import struct
+import zlib
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -93,6 +99,68 @@ def write_glb(name, doc, b):
     out = struct.pack("<4sII", b"glTF", 2, total) + struct.pack("<I4s", len(js), b"JSON") + js + struct.pack("<I4s", len(bin_), b"BIN\0") + bin_
     with open(os.path.join(HERE, name), "wb") as f:
         f.write(out)
+
+
+def png(width, height, rows):
+    """An 8-bit RGB PNG (colour type 2) from rows of (r, g, b) tuples."""
+    raw = b"".join(b"\0" + bytes(c for px in row for c in px) for row in rows)
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)) + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b"")
+
+
+def data_uri(mime, raw):
+    return "data:%s;base64,%s" % (mime, base64.b64encode(raw).decode())
+
+
+def textures():
+    """Two files that must render identically: textures.gltf rotates a 2 x 1 texture by 90
+    degrees with KHR_texture_transform, textures-flat.gltf uses the rotated 1 x 2 texture."""
+    a, b_ = (200, 100, 50), (20, 60, 240)
+    for name, img, transform in [
+        ("textures.gltf", png(2, 1, [[a, b_]]), {"rotation": math.pi / 2}),
+        # rotation pi/2: u' = -v, v' = u. For v in (0, 1/2), u' in (-1/2, 0) -> repeat -> the right
+        # texel (b_); for v in (1/2, 1) the left texel (a). So the 1 x 2 equivalent is b_ over a.
+        ("textures-flat.gltf", png(1, 2, [[b_], [a]]), None),
+    ]:
+        b = Builder()
+        s = 3.0
+        pos = b.vec([(-s, 0, -s), (s, 0, -s), (s, 0, s), (-s, 0, s)], "VEC3")
+        nrm = b.vec([(0, 1, 0)] * 4, "VEC3")
+        uv = b.vec([(0, 0), (1, 0), (1, 1), (0, 1)], "VEC2")
+        idx = b.indices([0, 2, 1, 0, 3, 2])
+        base = {"index": 0}
+        if transform:
+            base["extensions"] = {"KHR_texture_transform": transform}
+        doc = {
+            "asset": {"version": "2.0", "generator": "pt scenes/gltf/make_gltf.py"},
+            "extensionsUsed": ["KHR_texture_transform"] if transform else [],
+            "scene": 0,
+            "scenes": [{"nodes": [0, 1]}],
+            "nodes": [{"mesh": 0, "name": "plane"}, {"camera": 0, "translation": [0, 4, 0], "rotation": DOWN, "name": "camera"}],
+            "cameras": [{"type": "perspective", "perspective": {"yfov": math.radians(50.0), "aspectRatio": 1.0, "znear": 0.01}}],
+            "meshes": [{"name": "plane", "primitives": [{"attributes": {"POSITION": pos, "NORMAL": nrm, "TEXCOORD_0": uv}, "indices": idx, "material": 0}]}],
+            "materials": [
+                {
+                    "name": "textured",
+                    "pbrMetallicRoughness": {
+                        "baseColorFactor": [0.8, 1.0, 0.9, 1.0],
+                        "baseColorTexture": base,
+                        "metallicFactor": 0.5,
+                        "roughnessFactor": 0.9,
+                        "metallicRoughnessTexture": {"index": 1},
+                    },
+                }
+            ],
+            "samplers": [{"magFilter": 9728, "minFilter": 9728}],
+            "images": [{"uri": data_uri("image/png", img)}, {"uri": data_uri("image/png", png(1, 1, [[(0, 128, 255)]]))}],
+            "textures": [{"source": 0, "sampler": 0}, {"source": 1, "sampler": 0}],
+        }
+        if not doc["extensionsUsed"]:
+            del doc["extensionsUsed"]
+        write_gltf(name, doc, b)
 
 
 def lights():
@@ -215,5 +283,6 @@ def glass_block():
 
 if __name__ == "__main__":
     lights()
+    textures()
     iridescence()
     glass_block()

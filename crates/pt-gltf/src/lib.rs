@@ -15,6 +15,7 @@
 //! | `KHR_materials_transmission` (+ `KHR_materials_ior`) | with `KHR_materials_volume` thickness > 0: `dielectric` (roughness 0) or `roughdielectric` (GGX, alpha = roughness^2) of index `ior`; without volume (glTF's thin-walled case): `thindielectric` |
 //! | `KHR_materials_volume`                | `ShapeDesc::interior`, Beer-Lambert: `sigma_t = -ln(attenuationColor) / attenuationDistance` per channel (the colour white light turns into after travelling `attenuationDistance`); `thicknessFactor` only selects volume vs thin-walled: the path tracer measures the real distance inside the mesh |
 //! | `KHR_materials_iridescence`           | `thinfilm`: thickness `iridescenceThicknessMaximum` nm (glTF's value without a thickness texture), film index `iridescenceIor`, base: a conductor of index `n = (1 + sqrt(F0))/(1 - sqrt(F0))`, `k = 0` from the base colour (metallic >= 0.5) or from the dielectric's `ior` (metallic < 0.5); smooth |
+//! | `baseColorTexture`, `metallicRoughnessTexture`, `KHR_texture_transform` | factors times texels at the hit's uv (see Textures below) |
 //! | `KHR_lights_punctual` point           | `point`, intensity (cd) x colour                                |
 //! | `KHR_lights_punctual` spot            | `spot` on the node's -z axis, full intensity within `innerConeAngle`, zero beyond `outerConeAngle` (the renderer's falloff between them is linear in angle, Mitsuba's; glTF suggests a squared linear-in-cosine ramp) |
 //! | `KHR_lights_punctual` directional     | `directional` along the node's -z axis, irradiance (lux) x colour |
@@ -29,8 +30,14 @@
 //! 555 nm, would give watts only for 555 nm light and would put lights and emissive surfaces
 //! on different scales; it is not done. `range` is ignored (physical inverse-square falloff).
 //!
-//! **Not yet** (warned about, never silently): textures (base colour, metallic-roughness,
-//! normal, emissive, occlusion, transmission; and so KHR_texture_transform), alpha mask/blend,
+//! **Textures.** `baseColorTexture` (sRGB-decoded) and `metallicRoughnessTexture` (linear:
+//! green scales roughness, blue metallic) multiply their factors at the hit's `TEXCOORD_0`, after
+//! KHR_texture_transform (offset, rotation, scale, texCoord); PNG or JPEG, embedded or files;
+//! repeat wrapping; `magFilter` NEAREST or bilinear (no mipmaps). RGB mode only for base colour
+//! textures (spectral mode would need per-texel upsampling: an error says to use `--mode rgb`).
+//!
+//! **Not yet** (warned about, never silently): normal, emissive, occlusion and transmission
+//! textures, texture coordinate sets other than 0, clamped/mirrored wrapping, alpha mask/blend,
 //! transmission factors between 0 and 1 (treated as 1), orthographic cameras, non-triangle
 //! primitives, sparse accessors, skins and morph targets.
 //!
@@ -45,7 +52,7 @@ use base64::Engine as _;
 use glam::{Mat3, Mat4, Vec2, Vec3};
 use gltf::json::validation::Validate as _;
 use pt_scene::{
-    AreaEmitterDesc, BsdfDesc, BsdfKind, CameraDesc, FilmDesc, FilterDesc, FovAxis, Geometry, IntegratorDesc, IntegratorKind, LightDesc, LightKind, MediumDesc,
+    AreaEmitterDesc, BsdfDesc, BsdfKind, CameraDesc, FilmDesc, FilterDesc, FovAxis, Geometry, ImageSource, IntegratorDesc, IntegratorKind, LightDesc, LightKind, MediumDesc, UvTexture,
     Projection, RadiosityOptions, SamplerDesc, SceneDesc, ShapeDesc, SourceLoc, SpectrumDesc, TriangleMesh,
 };
 use std::path::{Path, PathBuf};
@@ -58,6 +65,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_transmission",
     "KHR_materials_volume",
     "KHR_materials_iridescence",
+    "KHR_texture_transform",
 ];
 
 /// Vertical field of view of the default camera, degrees.
@@ -169,12 +177,12 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
     let mut mats = Vec::new();
     cx.summary.push(format!("materials   {} (glTF)", doc.materials().len()));
     for m in doc.materials() {
-        let mm = map_material(&mut cx, &m)?;
+        let mm = map_material(&mut cx, &m, &buffers)?;
         desc.bsdfs.push(mm.bsdf.clone());
         mats.push(mm);
     }
     let default_mat = MappedMaterial {
-        bsdf: BsdfDesc { loc: cx.loc("default material".into()), id: Some("gltf-default".into()), kind: BsdfKind::GltfPbr { base_color: SpectrumDesc::Constant(1.0), metallic: 1.0, roughness: 1.0, ior: 1.5 } },
+        bsdf: BsdfDesc { loc: cx.loc("default material".into()), id: Some("gltf-default".into()), kind: BsdfKind::GltfPbr { base_color: SpectrumDesc::Constant(1.0), metallic: 1.0, roughness: 1.0, ior: 1.5, base_color_texture: None, metallic_roughness_texture: None } },
         emission: None,
         interior: None,
     };
@@ -520,7 +528,55 @@ fn ext_f32(v: Option<&serde_json::Value>, key: &str, default: f32) -> f32 {
     v.and_then(|o| o.get(key)).and_then(|x| x.as_f64()).map_or(default, |x| x as f32)
 }
 
-fn map_material(cx: &mut Ctx, m: &gltf::Material) -> Result<MappedMaterial, GltfError> {
+/// A material's texture: its image (embedded or a file), sampler filter and
+/// KHR_texture_transform as an affine uv map. `None` (with a warning) for what is not supported:
+/// texture coordinate sets other than 0, clamped or mirrored wrapping.
+fn texture_of(cx: &mut Ctx, info: &gltf::texture::Info, srgb: bool, buffers: &[Vec<u8>], what: &str) -> Result<Option<Box<UvTexture>>, GltfError> {
+    let tex = info.texture();
+    let elem = format!("{what} (textures[{}])", tex.index());
+    let mut tex_coord = info.tex_coord();
+    // KHR_texture_transform: uv' = T R S uv (the extension's GLSL, column-major mat3s):
+    // u' = sx u cos(r) - sy v sin(r) + ox, v' = sx u sin(r) + sy v cos(r) + oy.
+    let mut transform = [1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    if let Some(t) = info.texture_transform() {
+        let ([ox, oy], r, [sx, sy]) = (t.offset(), t.rotation(), t.scale());
+        let (sin, cos) = r.sin_cos();
+        transform = [sx * cos, -sy * sin, ox, sx * sin, sy * cos, oy];
+        if let Some(tc) = t.tex_coord() {
+            tex_coord = tc;
+        }
+    }
+    if tex_coord != 0 {
+        cx.warnings.push(format!("{elem}: texture coordinate set {tex_coord} is not read (only TEXCOORD_0): texture ignored"));
+        return Ok(None);
+    }
+    let sampler = tex.sampler();
+    if sampler.wrap_s() != gltf::texture::WrappingMode::Repeat || sampler.wrap_t() != gltf::texture::WrappingMode::Repeat {
+        cx.warnings.push(format!("{elem}: clamped or mirrored wrapping is not supported (not yet implemented): the texture repeats"));
+    }
+    let nearest = sampler.mag_filter() == Some(gltf::texture::MagFilter::Nearest);
+    let img = tex.source();
+    let name = format!("images[{}]", img.index());
+    let source = match img.source() {
+        gltf::image::Source::View { view, .. } => {
+            let buf = &buffers[view.buffer().index()];
+            let end = view.offset().checked_add(view.length()).filter(|e| *e <= buf.len()).ok_or_else(|| cx.err(format!("{name}: bufferViews[{}] runs past the end of its buffer", view.index())))?;
+            ImageSource::Embedded { name, bytes: std::sync::Arc::new(buf[view.offset()..end].to_vec()) }
+        }
+        gltf::image::Source::Uri { uri, .. } => {
+            if let Some(rest) = uri.strip_prefix("data:") {
+                let (_, b64) = rest.split_once(";base64,").ok_or_else(|| cx.err(format!("{name}: data URI is not base64")))?;
+                let bytes = base64::engine::general_purpose::STANDARD.decode(b64).map_err(|e| cx.err(format!("{name}: bad base64 data: {e}")))?;
+                ImageSource::Embedded { name, bytes: std::sync::Arc::new(bytes) }
+            } else {
+                ImageSource::File(cx.file.parent().unwrap_or(Path::new(".")).join(uri))
+            }
+        }
+    };
+    Ok(Some(Box::new(UvTexture { source, srgb, nearest, transform })))
+}
+
+fn map_material(cx: &mut Ctx, m: &gltf::Material, buffers: &[Vec<u8>]) -> Result<MappedMaterial, GltfError> {
     let idx = m.index().unwrap_or(0);
     let elem = format!("materials[{idx}]");
     let name = m.name().map(|n| format!(" '{n}'")).unwrap_or_default();
@@ -531,15 +587,27 @@ fn map_material(cx: &mut Ctx, m: &gltf::Material) -> Result<MappedMaterial, Gltf
     let ior = m.ior().unwrap_or(1.5);
     let mut used = Vec::new();
     let mut notes = Vec::new();
+    let base_color_texture = match pbr.base_color_texture() {
+        Some(i) => texture_of(cx, &i, true, buffers, &format!("{elem}{name} baseColorTexture"))?,
+        None => None,
+    };
+    let metallic_roughness_texture = match pbr.metallic_roughness_texture() {
+        Some(i) => texture_of(cx, &i, false, buffers, &format!("{elem}{name} metallicRoughnessTexture"))?,
+        None => None,
+    };
+    for (slot, texture) in [("baseColorTexture", &base_color_texture), ("metallicRoughnessTexture", &metallic_roughness_texture)] {
+        if let Some(t) = texture {
+            let ext = if t.transform != [1.0, 0.0, 0.0, 0.0, 1.0, 0.0] { format!(", KHR_texture_transform {:?}", t.transform) } else { String::new() };
+            notes.push(format!("{slot}: {} {}{ext}", if t.srgb { "sRGB-decoded" } else { "linear" }, if t.nearest { "nearest" } else { "bilinear" }));
+        }
+    }
     for (slot, present) in [
-        ("baseColorTexture", pbr.base_color_texture().is_some()),
-        ("metallicRoughnessTexture", pbr.metallic_roughness_texture().is_some()),
         ("normalTexture", m.normal_texture().is_some()),
         ("emissiveTexture", m.emissive_texture().is_some()),
         ("occlusionTexture", m.occlusion_texture().is_some()),
     ] {
         if present {
-            cx.warnings.push(format!("{elem}{name}: {slot} ignored (textures are not yet implemented); the factors are used"));
+            cx.warnings.push(format!("{elem}{name}: {slot} ignored (not yet implemented)"));
         }
     }
     if m.alpha_mode() != gltf::material::AlphaMode::Opaque {
@@ -553,13 +621,17 @@ fn map_material(cx: &mut Ctx, m: &gltf::Material) -> Result<MappedMaterial, Gltf
         used.push(format!("KHR_materials_ior (ior {ior})"));
     }
     let iridescence = m.extension_value("KHR_materials_iridescence");
-    let mut kind = BsdfKind::GltfPbr { base_color: base_color.clone(), metallic, roughness, ior };
+    let textured = base_color_texture.is_some() || metallic_roughness_texture.is_some();
+    let mut kind = BsdfKind::GltfPbr { base_color: base_color.clone(), metallic, roughness, ior, base_color_texture, metallic_roughness_texture };
     let mut interior = None;
     let mut mapping = format!("gltf metallic-roughness: base colour {:?}, metallic {metallic}, roughness {roughness} (alpha {:.4}), dielectric ior {ior}", [bc[0], bc[1], bc[2]], roughness * roughness);
     if let Some(t) = m.transmission().filter(|t| t.transmission_factor() > 0.0) {
         let f = t.transmission_factor();
         if f < 1.0 {
             notes.push(format!("transmissionFactor {f} treated as 1"));
+        }
+        if textured {
+            notes.push("base colour / metallic-roughness textures ignored (transmissive)".into());
         }
         if t.transmission_texture().is_some() {
             cx.warnings.push(format!("{elem}{name}: transmissionTexture ignored (textures are not yet implemented)"));
@@ -613,6 +685,9 @@ fn map_material(cx: &mut Ctx, m: &gltf::Material) -> Result<MappedMaterial, Gltf
             if factor < 1.0 {
                 notes.push(format!("iridescenceFactor {factor} treated as 1"));
             }
+            if textured {
+                notes.push("base colour / metallic-roughness textures ignored (thin film)".into());
+            }
             // An opaque base of the reflectance F0 at normal incidence: n from F0 with k = 0.
             let n_of = |f0: f32| {
                 let s = f0.clamp(0.0, 0.999).sqrt();
@@ -656,4 +731,90 @@ fn map_material(cx: &mut Ctx, m: &gltf::Material) -> Result<MappedMaterial, Gltf
         cx.summary.push(format!("      note: {nt}"));
     }
     Ok(MappedMaterial { bsdf: BsdfDesc { loc, id: Some(m.name().map_or(format!("material{idx}"), str::to_string)), kind }, emission, interior })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A one-triangle glTF (vertices (0,0,0), (1,0,0), (0,1,0), normals +z) under one node with
+    /// the given extra node properties, plus `extra` top-level members.
+    fn triangle(node: &str, extra: &str) -> Vec<u8> {
+        let mut bytes = Vec::new();
+        for v in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, 1.0], [0.0, 0.0, 1.0]] {
+            for c in v {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        let b64 = base64::engine::general_purpose::STANDARD.encode(&bytes);
+        format!(
+            r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}],
+            "nodes": [{{"mesh": 0 {node}}}],
+            "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "NORMAL": 1}}}}]}}],
+            "buffers": [{{"byteLength": 72, "uri": "data:application/octet-stream;base64,{b64}"}}],
+            "bufferViews": [{{"buffer": 0, "byteOffset": 0, "byteLength": 36}}, {{"buffer": 0, "byteOffset": 36, "byteLength": 36}}],
+            "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0,0,0], "max": [1,1,0]}},
+                          {{"bufferView": 1, "componentType": 5126, "count": 3, "type": "VEC3"}}]
+            {extra}}}"#
+        )
+        .into_bytes()
+    }
+
+    fn mesh(g: &GltfScene) -> &TriangleMesh {
+        match &g.desc.shapes[0].geometry {
+            Geometry::Mesh(m) => m,
+            _ => unreachable!(),
+        }
+    }
+
+    #[test]
+    fn mirrored_node_keeps_front_side_with_the_normals() {
+        // A scale of -1 in x mirrors the triangle: the winding must be reversed so that the
+        // geometric normal (p1 - p0) x (p2 - p0) still points along the (transformed) vertex
+        // normal, +z.
+        for (node, flipped) in [("", false), (r#", "scale": [-1, 1, 1]"#, true)] {
+            let g = load_slice(&triangle(node, ""), Path::new("t.gltf"), &LoadOptions::default()).unwrap();
+            let m = mesh(&g);
+            let [a, b, c] = m.indices[0].map(|i| m.positions[i as usize]);
+            let ng = (b - a).cross(c - a);
+            assert!(ng.z > 0.0, "flipped {flipped}: geometric normal {ng}");
+            assert!(m.normals.as_ref().unwrap().iter().all(|n| (n.z - 1.0).abs() < 1e-6));
+            assert_eq!(m.positions[1].x, if flipped { -1.0 } else { 1.0 });
+        }
+    }
+
+    #[test]
+    fn default_camera_frames_the_bounds_and_default_light_is_announced() {
+        let g = load_slice(&triangle("", ""), Path::new("t.gltf"), &LoadOptions::default()).unwrap();
+        // Bounds: box (0,0,0)-(1,1,0), centre (0.5, 0.5, 0), radius sqrt(2)/2.
+        let eye = g.desc.camera.to_world.transform_point3(Vec3::ZERO);
+        let look = g.desc.camera.to_world.transform_vector3(Vec3::Z).normalize();
+        let r = 0.5f32 * 2f32.sqrt();
+        let dist = 1.1 * r / (0.5 * DEFAULT_FOV_Y_DEG.to_radians()).sin();
+        assert!((eye - Vec3::new(0.5, 0.5, dist)).length() < 1e-5, "eye {eye}");
+        assert!((look - Vec3::NEG_Z).length() < 1e-6, "looks along {look}");
+        // Mitsuba camera space: +x is image left, so world +x (glTF right) must map to camera -x.
+        assert!(g.desc.camera.to_world.transform_vector3(Vec3::X).x < 0.0);
+        assert!(g.warnings.iter().any(|w| w.contains("default camera")));
+        assert!(g.warnings.iter().any(|w| w.contains("default environment")));
+        assert!(matches!(g.desc.lights[0].kind, LightKind::Constant { .. }));
+    }
+
+    #[test]
+    fn camera_node_axes_and_choice() {
+        // Camera node at (0, 0, 5) with no rotation: looks down -z, image right is +x.
+        let extra = r#", "cameras": [{"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.1}},
+                                      {"type": "orthographic", "orthographic": {"xmag": 1, "ymag": 1, "znear": 0.1, "zfar": 10}}]"#;
+        let node = r#", "children": [1, 2]}, {"camera": 0, "translation": [0, 0, 5]}, {"camera": 1"#;
+        let bytes = triangle(node, extra);
+        let g = load_slice(&bytes, Path::new("t.gltf"), &LoadOptions::default()).unwrap();
+        let c = &g.desc.camera;
+        assert!((c.to_world.transform_point3(Vec3::ZERO) - Vec3::new(0.0, 0.0, 5.0)).length() < 1e-6);
+        assert!((c.to_world.transform_vector3(Vec3::Z) - Vec3::NEG_Z).length() < 1e-6);
+        assert!(matches!(c.projection, Projection::Perspective { fov_deg, fov_axis: FovAxis::Y } if (fov_deg - 0.5f32.to_degrees()).abs() < 1e-4));
+        let e = load_slice(&bytes, Path::new("t.gltf"), &LoadOptions { camera: Some(1) }).unwrap_err();
+        assert!(e.message.contains("orthographic"), "{e}");
+        let e = load_slice(&bytes, Path::new("t.gltf"), &LoadOptions { camera: Some(2) }).unwrap_err();
+        assert!(e.message.contains("2 camera(s)"), "{e}");
+    }
 }

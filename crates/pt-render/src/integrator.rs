@@ -97,7 +97,7 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, 
             break;
         }
 
-        let bsdf = scene.material_at(hit.shape, lambda);
+        let bsdf = scene.material_at_uv(hit.shape, hit.uv, lambda);
         let frame = Frame::from_normal_tangent(hit.ns, hit.dpdu);
         let wo = frame.to_local(wo_world);
 

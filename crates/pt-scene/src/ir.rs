@@ -538,5 +538,39 @@ pub enum BsdfKind {
         roughness: f32,
         /// Index of refraction of the dielectric part (1.5 unless KHR_materials_ior).
         ior: f32,
+        /// Base colour texture (sRGB-decoded), multiplying `base_color` at the hit's uv.
+        base_color_texture: Option<Box<UvTexture>>,
+        /// Metallic-roughness texture (linear): blue multiplies `metallic`, green `roughness`.
+        metallic_roughness_texture: Option<Box<UvTexture>>,
     },
+}
+
+/// Image data of a texture: a file, or bytes embedded in the scene file (a glTF buffer view or
+/// `data:` URI).
+#[derive(Clone, Debug, PartialEq)]
+pub enum ImageSource {
+    /// An image file (PNG or JPEG), resolved.
+    File(PathBuf),
+    /// Encoded image bytes (PNG or JPEG) and a name for messages.
+    Embedded {
+        /// Where the bytes came from, e.g. `images[0]`.
+        name: String,
+        /// The encoded image.
+        bytes: std::sync::Arc<Vec<u8>>,
+    },
+}
+
+/// A texture looked up at the hit's texture coordinates (glTF `textureInfo`): the image is
+/// repeated outside [0, 1]^2, row 0 at v = 0 (the image's top row), as glTF and Mitsuba.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UvTexture {
+    /// The image.
+    pub source: ImageSource,
+    /// sRGB-decode the stored values (colour data); false: use them as they are (linear data).
+    pub srgb: bool,
+    /// Nearest-texel lookup (glTF sampler `magFilter` NEAREST); otherwise bilinear.
+    pub nearest: bool,
+    /// Affine map of the texture coordinates applied before the lookup (KHR_texture_transform),
+    /// rows `[a, b, c, d, e, f]`: `u' = a u + b v + c`, `v' = d u + e v + f`.
+    pub transform: [f32; 6],
 }
