@@ -365,3 +365,51 @@ fn textures_follow_uv_transform_srgb_and_factors() {
         }
     }
 }
+
+/// `<shape type="gltf">` in a Mitsuba XML scene: the plane of lights.gltf placed with a diffuse
+/// BSDF renders the same image (to float rounding, 1e-5 relative; same seed, so the same paths)
+/// as Mitsuba's `rectangle` covering the same square, under a point light. A glTF shape whose
+/// file is bad fails the XML scene with exit code 2, naming the glTF file.
+#[test]
+fn xml_gltf_shape_places_the_mesh() {
+    let dir = scratch("gltf_xml_shape");
+    let scene = |shape: &str| {
+        format!(
+            r#"<scene version="3.0.0">
+    <integrator type="path"><integer name="max_depth" value="2"/></integrator>
+    <sensor type="perspective">
+        <float name="fov" value="50"/>
+        <transform name="to_world"><lookat origin="0, 4, 0" target="0, 0, 0" up="0, 0, -1"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="24"/><rfilter type="box"/></film>
+    </sensor>
+    {shape}
+    <emitter type="point"><point name="position" value="0.7, 1.5, -0.4"/><rgb name="intensity" value="5"/></emitter>
+</scene>"#
+        )
+    };
+    let bsdf = r#"<bsdf type="diffuse"><float name="reflectance" value="0.6"/></bsdf>"#;
+    let rect = dir.join("rect.xml");
+    std::fs::write(&rect, scene(&format!(r#"<shape type="rectangle"><transform name="to_world"><scale value="3, 3, 1"/><rotate x="1" angle="-90"/></transform>{bsdf}</shape>"#))).unwrap();
+    let gl = dir.join("gltf.xml");
+    let file = asset("lights.gltf");
+    std::fs::write(&gl, scene(&format!(r#"<shape type="gltf"><string name="filename" value="{}"/>{bsdf}</shape>"#, file.display()))).unwrap();
+    let (a, _) = render(&rect, &dir, "rect", &[]);
+    let (b, _) = render(&gl, &dir, "gltf", &[]);
+    for (i, (p, q)) in a.data.iter().zip(&b.data).enumerate() {
+        for c in 0..3 {
+            assert!((p[c] - q[c]).abs() <= 1e-5 * p[c].abs().max(1e-3), "pixel {i}: rectangle {} vs glTF {}", p[c], q[c]);
+        }
+    }
+    assert!(a.data.iter().map(|p| p[0]).sum::<f32>() > 1.0, "lit");
+    let bad = dir.join("bad.gltf");
+    std::fs::write(&bad, b"{ not json").unwrap();
+    let badxml = dir.join("bad.xml");
+    std::fs::write(&badxml, scene(&format!(r#"<shape type="gltf"><string name="filename" value="{}"/></shape>"#, bad.display()))).unwrap();
+    let out = dir.join("bad.exr");
+    let o = pt(&["render", badxml.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("bad.gltf") && err.contains("shape type=\"gltf\""), "{err}");
+    assert!(!out.exists());
+}

@@ -216,6 +216,8 @@ enum BvhArg {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // `<shape type="gltf">` in XML scenes reads meshes through pt-gltf.
+    pt_scene::set_gltf_mesh_reader(pt_gltf::load_mesh);
     let result = match cli.command {
         Command::Render(args) => cmd_render(args),
         Command::Info(args) => cmd_info(args),

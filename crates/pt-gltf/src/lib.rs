@@ -104,6 +104,35 @@ pub struct GltfScene {
     pub summary: Vec<String>,
 }
 
+/// Every triangle primitive of a glTF file's scene as one mesh (node transforms applied; normals
+/// and texture coordinates kept when every primitive has them), for `<shape type="gltf">` in a
+/// Mitsuba XML scene ([`pt_scene::GltfMeshReader`]). Errors name the file and the element.
+pub fn load_mesh(path: &Path) -> Result<TriangleMesh, String> {
+    let g = load(path, &LoadOptions::default()).map_err(|e| e.to_string())?;
+    let meshes: Vec<&TriangleMesh> = g.desc.shapes.iter().filter_map(|s| if let Geometry::Mesh(m) = &s.geometry { Some(m) } else { None }).collect();
+    if meshes.is_empty() {
+        return Err(format!("{}: no triangles", path.display()));
+    }
+    let mut out = TriangleMesh::default();
+    let all_normals = meshes.iter().all(|m| m.normals.is_some());
+    let all_uvs = meshes.iter().all(|m| m.uvs.is_some());
+    let (mut normals, mut uvs) = (Vec::new(), Vec::new());
+    for m in meshes {
+        let base = out.positions.len() as u32;
+        out.positions.extend_from_slice(&m.positions);
+        out.indices.extend(m.indices.iter().map(|t| t.map(|i| i + base)));
+        if let (true, Some(n)) = (all_normals, &m.normals) {
+            normals.extend_from_slice(n);
+        }
+        if let (true, Some(u)) = (all_uvs, &m.uvs) {
+            uvs.extend_from_slice(u);
+        }
+    }
+    out.normals = all_normals.then_some(normals);
+    out.uvs = all_uvs.then_some(uvs);
+    Ok(out)
+}
+
 /// Whether a path names a glTF file (`.gltf` or `.glb`, any case).
 pub fn is_gltf_path(path: &Path) -> bool {
     matches!(path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref(), Some("gltf" | "glb"))
