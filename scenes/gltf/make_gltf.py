@@ -7,7 +7,7 @@
                     perspective camera, lit by one KHR_lights_punctual light of each type: point,
                     spot (pointing down) and directional. tests/gltf.rs checks every pixel
                     against the closed form f(wo, wi) E(x) with E the irradiance of each light.
-- iridescence.gltf  a UV sphere (radius 1) with KHR_materials_iridescence on a metallic base,
+- iridescence.gltf  a UV sphere (radius 1) with KHR_materials_iridescence on a dark dielectric base,
                     no light (the default constant environment of radiance 1 lights it).
 - textures.gltf     a plane whose base colour is a 2 x 1 PNG (sRGB (200, 100, 50) | (20, 60, 240),
                     nearest) times a factor, and whose metallic-roughness texture (1 x 1, linear)
@@ -230,8 +230,8 @@ def iridescence():
         "meshes": [{"name": "sphere", "primitives": [{"attributes": {"POSITION": pos, "NORMAL": nrm}, "indices": idx, "material": 0}]}],
         "materials": [
             {
-                "name": "soap-on-metal",
-                "pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.9, 0.9, 1.0], "metallicFactor": 1.0, "roughnessFactor": 0.0},
+                "name": "soap-film-on-glass",
+                "pbrMetallicRoughness": {"baseColorFactor": [0.05, 0.05, 0.05, 1.0], "metallicFactor": 0.0, "roughnessFactor": 0.0},
                 "extensions": {"KHR_materials_iridescence": {"iridescenceFactor": 1.0, "iridescenceIor": 1.33, "iridescenceThicknessMinimum": 100.0, "iridescenceThicknessMaximum": 450.0}},
             }
         ],
