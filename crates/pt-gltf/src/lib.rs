@@ -8,7 +8,7 @@
 //! | mesh primitive (triangles)            | one `TriangleMesh` shape, positions/normals by the node's world matrix (normals by its inverse transpose, winding reversed when the determinant is negative), `TEXCOORD_0` |
 //! | node camera (perspective)             | the first one in node order, or `--camera N`; glTF looks down -z with +x right, the renderer's camera space looks down +z with +x left: `to_world = node * diag(-1, 1, -1)`; `yfov` is the vertical field of view |
 //! | no camera                             | a default camera: vertical fov 45 deg, on the +z side of the bounds' centre, looking down -z, at the distance where the bounding sphere fits the vertical fov (x 1.1) |
-//! | (film)                                | 320 x 240 pixels (height from the camera's `aspectRatio`), box filter, 64 spp, path tracer with unlimited depth; `pt render --width/--height/--spp` override |
+//! | (film)                                | 320 x 240 pixels (height from the camera's `aspectRatio`), box filter, 64 spp, `volpath` (path tracing with Beer-Lambert media) with unlimited depth; `pt render --width/--height/--spp` override |
 //! | no light and no emissive material     | a default environment: `constant` radiance 1 (white)             |
 //! | `pbrMetallicRoughness`                | `BsdfKind::GltfPbr` (base colour factor, metallic, roughness; alpha = roughness^2), two-sided |
 //! | `emissiveFactor` x `KHR_materials_emissive_strength` | an area emitter of that radiance on every primitive with the material |
@@ -16,6 +16,7 @@
 //! | `KHR_materials_volume`                | `ShapeDesc::interior`, Beer-Lambert: `sigma_t = -ln(attenuationColor) / attenuationDistance` per channel (the colour white light turns into after travelling `attenuationDistance`); `thicknessFactor` only selects volume vs thin-walled: the path tracer measures the real distance inside the mesh |
 //! | `KHR_materials_iridescence`           | `thinfilm`: thickness `iridescenceThicknessMaximum` nm (glTF's value without a thickness texture), film index `iridescenceIor`, base: a conductor of index `n = (1 + sqrt(F0))/(1 - sqrt(F0))`, `k = 0` from the base colour (metallic >= 0.5) or from the dielectric's `ior` (metallic < 0.5); smooth |
 //! | `baseColorTexture`, `metallicRoughnessTexture`, `KHR_texture_transform` | factors times texels at the hit's uv (see Textures below) |
+//! | `alphaMode` BLEND / MASK              | `mask` around the material, opacity = alpha / (alpha >= alphaCutoff) |
 //! | `KHR_lights_punctual` point           | `point`, intensity (cd) x colour                                |
 //! | `KHR_lights_punctual` spot            | `spot` on the node's -z axis, full intensity within `innerConeAngle`, zero beyond `outerConeAngle` (the renderer's falloff between them is linear in angle, Mitsuba's; glTF suggests a squared linear-in-cosine ramp) |
 //! | `KHR_lights_punctual` directional     | `directional` along the node's -z axis, irradiance (lux) x colour |
@@ -36,8 +37,12 @@
 //! repeat wrapping; `magFilter` NEAREST or bilinear (no mipmaps). RGB mode only for base colour
 //! textures (spectral mode would need per-texel upsampling: an error says to use `--mode rgb`).
 //!
+//! **Alpha.** `alphaMode` BLEND becomes the renderer's `mask` with opacity = baseColorFactor's
+//! alpha; MASK an opacity of 0 or 1 against `alphaCutoff`; the base colour texture's alpha is
+//! not read.
+//!
 //! **Not yet** (warned about, never silently): normal, emissive, occlusion and transmission
-//! textures, texture coordinate sets other than 0, clamped/mirrored wrapping, alpha mask/blend,
+//! textures, texture alpha, texture coordinate sets other than 0, clamped/mirrored wrapping,
 //! transmission factors between 0 and 1 (treated as 1), orthographic cameras, non-triangle
 //! primitives, sparse accessors, skins and morph targets.
 //!
@@ -195,7 +200,7 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
         // settings; Mitsuba's default Gaussian would blur across neighbours).
         film: FilmDesc { width: DEFAULT_WIDTH, height: DEFAULT_HEIGHT, filter: FilterDesc::Box { radius: 0.5 } },
         sampler: SamplerDesc { sample_count: 64, seed: 0 },
-        integrator: IntegratorDesc { kind: IntegratorKind::Path, max_depth: -1, rr_depth: 5, hide_emitters: false, moment: false, radiosity: RadiosityOptions::default(), loc: cx.loc("integrator".into()) },
+        integrator: IntegratorDesc { kind: IntegratorKind::VolPath, max_depth: -1, rr_depth: 5, hide_emitters: false, moment: false, radiosity: RadiosityOptions::default(), loc: cx.loc("integrator".into()) },
         shapes: Vec::new(),
         bsdfs: Vec::new(),
         lights: Vec::new(),
@@ -639,11 +644,25 @@ fn map_material(cx: &mut Ctx, m: &gltf::Material, buffers: &[Vec<u8>]) -> Result
             cx.warnings.push(format!("{elem}{name}: {slot} ignored (not yet implemented)"));
         }
     }
+    // Alpha as opacity (the renderer's `mask`: light meets the surface with probability
+    // `opacity`, else passes straight through): BLEND uses the factor's alpha, MASK makes it 0
+    // or 1 against alphaCutoff (default 0.5). The base colour texture's alpha is not read.
+    let opacity = match m.alpha_mode() {
+        gltf::material::AlphaMode::Opaque => 1.0,
+        gltf::material::AlphaMode::Blend => bc[3].clamp(0.0, 1.0),
+        gltf::material::AlphaMode::Mask => {
+            if bc[3] >= m.alpha_cutoff().unwrap_or(0.5) {
+                1.0
+            } else {
+                0.0
+            }
+        }
+    };
     if m.alpha_mode() != gltf::material::AlphaMode::Opaque {
-        cx.warnings.push(format!("{elem}{name}: alphaMode {:?} ignored (opacity not yet implemented): rendered opaque", m.alpha_mode()));
-    }
-    if (bc[3] - 1.0).abs() > 1e-6 && m.alpha_mode() != gltf::material::AlphaMode::Opaque {
-        notes.push(format!("alpha {} ignored", bc[3]));
+        used.push(format!("alphaMode {:?}: opacity {opacity} (mask)", m.alpha_mode()));
+        if pbr.base_color_texture().is_some() {
+            cx.warnings.push(format!("{elem}{name}: the base colour texture's alpha channel is not read (not yet implemented): opacity from baseColorFactor only"));
+        }
     }
     let base_color = SpectrumDesc::Rgb([bc[0], bc[1], bc[2]]);
     if m.ior().is_some() {
@@ -751,6 +770,9 @@ fn map_material(cx: &mut Ctx, m: &gltf::Material, buffers: &[Vec<u8>]) -> Result
         // glTF's doubleSided only controls back-face culling in rasterisers; a path tracer sees
         // back faces anyway, so opaque materials shade both sides.
         kind = BsdfKind::TwoSided { inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
+    }
+    if opacity < 1.0 {
+        kind = BsdfKind::Mask { opacity, inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
     }
     cx.summary.push(format!("  {elem}{name}: {mapping}"));
     for u in &used {
