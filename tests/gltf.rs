@@ -492,3 +492,54 @@ fn glass_block_transmits_fresnel_times_beer_lambert() {
         assert!((got_sum[c] - want_sum[c]).abs() <= 4.5 * se + 1e-3 * want_sum[c], "channel {c}: mean {} vs {} (se {})", got_sum[c] / 256.0, want_sum[c] / 256.0, se / 256.0);
     }
 }
+
+/// lights.gltf's plane with its lights removed and made emissive: emissiveFactor (1, 0.5, 0.25)
+/// times KHR_materials_emissive_strength 4. With an emissive surface the file has a light, so
+/// no default environment is added; the camera sees the plane's front side everywhere, so every
+/// pixel is exactly the emitted radiance (4, 2, 1) (up to float rounding): a strength ignored
+/// or applied twice fails by 4x.
+#[test]
+fn emissive_strength_scales_emitted_radiance() {
+    let dir = scratch("gltf_emissive");
+    let mut d: serde_json::Value = serde_json::from_slice(&std::fs::read(asset("lights.gltf")).unwrap()).unwrap();
+    d["scenes"][0]["nodes"] = serde_json::json!([0, 1]);
+    d["materials"][0]["emissiveFactor"] = serde_json::json!([1.0, 0.5, 0.25]);
+    d["materials"][0]["extensions"] = serde_json::json!({"KHR_materials_emissive_strength": {"emissiveStrength": 4.0}});
+    d["extensionsUsed"] = serde_json::json!(["KHR_lights_punctual", "KHR_materials_emissive_strength"]);
+    let p = write_json(&dir, "emissive.gltf", &d);
+    let (img, _) = render(&p, &dir, "out", &["--width", "8", "--height", "8", "--spp", "4"]);
+    for px in &img.data {
+        for (c, want) in [4.0f32, 2.0, 1.0].iter().enumerate() {
+            assert!((px[c] - want).abs() < 1e-4 * want, "{px:?}");
+        }
+    }
+}
+
+/// alphaMode BLEND as opacity: lights.gltf's plane without its lights (so the default white
+/// environment lights it and is seen through it), once opaque and once with baseColorFactor
+/// alpha 0.25. A camera ray meets the surface with probability 0.25 and otherwise continues to
+/// the environment (radiance 1), so the blended image's mean must equal 0.25 x opaque + 0.75,
+/// within 4.5 standard errors of the two means (from the variance images) plus 1e-3 relative.
+/// Alpha ignored gives the opaque mean (checked to be below 0.9), alpha inverted
+/// 0.25 + 0.75 x opaque.
+#[test]
+fn alpha_blend_is_opacity() {
+    let dir = scratch("gltf_alpha");
+    let mut d: serde_json::Value = serde_json::from_slice(&std::fs::read(asset("lights.gltf")).unwrap()).unwrap();
+    d["scenes"][0]["nodes"] = serde_json::json!([0, 1]);
+    let opaque = write_json(&dir, "opaque.gltf", &d);
+    d["materials"][0]["alphaMode"] = "BLEND".into();
+    d["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = serde_json::json!([0.6, 0.6, 0.6, 0.25]);
+    let blend = write_json(&dir, "blend.gltf", &d);
+    let args = ["--width", "16", "--height", "16", "--spp", "256"];
+    let (a, va) = render(&opaque, &dir, "opaque", &args);
+    let (b, vb) = render(&blend, &dir, "blend", &args);
+    let (ma, sa) = mean_and_stderr(&a, &va);
+    let (mb, sb) = mean_and_stderr(&b, &vb);
+    for c in 0..3 {
+        let want = 0.25 * ma[c] + 0.75;
+        let se = ((0.25 * sa[c]).powi(2) + sb[c].powi(2)).sqrt();
+        assert!((mb[c] - want).abs() <= 4.5 * se + 1e-3 * want, "channel {c}: blend mean {} vs 0.25 x {} + 0.75 = {want} (se {se})", mb[c], ma[c]);
+        assert!(ma[c] < 0.9, "the opaque plane must differ from the environment: {}", ma[c]);
+    }
+}
