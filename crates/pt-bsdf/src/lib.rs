@@ -35,6 +35,7 @@ pub mod minnaert;
 pub mod oren_nayar;
 pub mod rough_dielectric;
 pub mod rough_plastic;
+pub mod rough_thin_film;
 pub mod thin_dielectric;
 pub mod thin_film;
 
@@ -47,6 +48,7 @@ pub use minnaert::Minnaert;
 pub use oren_nayar::{OrenNayar, OrenNayarVariant};
 pub use rough_dielectric::RoughDielectric;
 pub use rough_plastic::{CoatingTable, RoughPlastic};
+pub use rough_thin_film::RoughThinFilm;
 pub use thin_dielectric::ThinDielectric;
 pub use thin_film::{FilmBase, FilmColor, ThinFilm};
 use pt_math::{Vec2, Vec3, Vec4};
@@ -103,6 +105,8 @@ pub enum Bsdf {
     GltfPbr(GltfPbr),
     /// Rough dielectric coating over a diffuse base (Mitsuba `roughplastic`).
     RoughPlastic(RoughPlastic),
+    /// Thin film on a rough conductor or dielectric base (handles both sides for a dielectric).
+    RoughThinFilm(RoughThinFilm),
 }
 
 impl Bsdf {
@@ -121,6 +125,7 @@ impl Bsdf {
             Bsdf::ThinFilm(m) => m.eval(wo, wi),
             Bsdf::GltfPbr(m) => m.eval(wo, wi),
             Bsdf::RoughPlastic(m) => m.eval(wo, wi),
+            Bsdf::RoughThinFilm(m) => m.eval(wo, wi),
         }
     }
 
@@ -139,6 +144,7 @@ impl Bsdf {
             Bsdf::ThinFilm(m) => m.pdf(wo, wi),
             Bsdf::GltfPbr(m) => m.pdf(wo, wi),
             Bsdf::RoughPlastic(m) => m.pdf(wo, wi),
+            Bsdf::RoughThinFilm(m) => m.pdf(wo, wi),
         }
     }
 
@@ -157,6 +163,7 @@ impl Bsdf {
             Bsdf::ThinFilm(m) => m.sample(wo, u_lobe, u),
             Bsdf::GltfPbr(m) => m.sample(wo, u_lobe, u),
             Bsdf::RoughPlastic(m) => m.sample(wo, u_lobe, u),
+            Bsdf::RoughThinFilm(m) => m.sample(wo, u_lobe, u),
         }
     }
 
@@ -166,6 +173,7 @@ impl Bsdf {
         match self {
             Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_) => true,
             Bsdf::ThinFilm(m) => m.is_transmissive(),
+            Bsdf::RoughThinFilm(m) => m.film.is_transmissive(),
             _ => false,
         }
     }
@@ -179,8 +187,9 @@ impl Bsdf {
             | Bsdf::Minnaert(_)
             | Bsdf::RoughConductor(_)
             | Bsdf::RoughDielectric(_)
-            | Bsdf::GltfPbr(_) => true,
-            | Bsdf::RoughPlastic(_) => true,
+            | Bsdf::GltfPbr(_)
+            | Bsdf::RoughPlastic(_)
+            | Bsdf::RoughThinFilm(_) => true,
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::ThinFilm(_) => false,
         }
     }

@@ -14,7 +14,7 @@
 //! | `emissiveFactor` x `KHR_materials_emissive_strength` | an area emitter of that radiance on every primitive with the material |
 //! | `KHR_materials_transmission` (+ `KHR_materials_ior`) | with `KHR_materials_volume` thickness > 0: `dielectric` (roughness 0) or `roughdielectric` (GGX, alpha = roughness^2) of index `ior`; without volume (glTF's thin-walled case): `thindielectric` |
 //! | `KHR_materials_volume`                | `ShapeDesc::interior`, Beer-Lambert: `sigma_t = -ln(attenuationColor) / attenuationDistance` per channel (the colour white light turns into after travelling `attenuationDistance`); `thicknessFactor` only selects volume vs thin-walled: the path tracer measures the real distance inside the mesh |
-//! | `KHR_materials_iridescence`           | `thinfilm`: thickness `iridescenceThicknessMaximum` nm (glTF's value without a thickness texture), film index `iridescenceIor`, base: a conductor of index `n = (1 + sqrt(F0))/(1 - sqrt(F0))`, `k = 0` from the base colour (metallic >= 0.5) or from the dielectric's `ior` (metallic < 0.5); smooth |
+//! | `KHR_materials_iridescence`           | `thinfilm` (roughness 0) or `roughthinfilm` (GGX, alpha = roughness^2): thickness `iridescenceThicknessMaximum` nm (glTF's value without a thickness texture), film index `iridescenceIor`, base: an opaque base of index `n = (1 + sqrt(F0))/(1 - sqrt(F0))`, `k = 0` from the base colour (metallic >= 0.5) or `n = ior` (metallic < 0.5); the diffuse base is dropped |
 //! | `baseColorTexture`, `metallicRoughnessTexture`, `KHR_texture_transform` | factors times texels at the hit's uv (see Textures below) |
 //! | `alphaMode` BLEND / MASK              | `mask` around the material, opacity = alpha / (alpha >= alphaCutoff) |
 //! | `KHR_lights_punctual` point           | `point`, intensity (cd) x colour                                |
@@ -746,8 +746,14 @@ fn map_material(cx: &mut Ctx, m: &gltf::Material, buffers: &[Vec<u8>]) -> Result
             } else {
                 SpectrumDesc::Constant(ior)
             };
-            mapping = format!("thinfilm: {thickness} nm film of ior {film_ior} over an opaque base of index {eta:?} (k = 0); smooth, diffuse dropped");
-            kind = BsdfKind::ThinFilm { thickness, film_ior, ext_ior: 1.0, int_ior: None, eta, k: SpectrumDesc::Constant(0.0) };
+            let alpha = roughness * roughness;
+            if alpha < 1e-3 {
+                mapping = format!("thinfilm: {thickness} nm film of ior {film_ior} over an opaque base of index {eta:?} (k = 0); smooth, diffuse dropped");
+                kind = BsdfKind::ThinFilm { thickness, film_ior, ext_ior: 1.0, int_ior: None, eta, k: SpectrumDesc::Constant(0.0) };
+            } else {
+                mapping = format!("roughthinfilm: {thickness} nm film of ior {film_ior} over an opaque base of index {eta:?} (k = 0), GGX alpha {alpha:.4}; diffuse dropped");
+                kind = BsdfKind::RoughThinFilm { thickness, film_ior, ext_ior: 1.0, int_ior: None, eta, k: SpectrumDesc::Constant(0.0), distribution: "ggx".into(), alpha_u: alpha, alpha_v: alpha };
+            }
             used.push(format!("KHR_materials_iridescence (factor {factor}, ior {film_ior}, thickness max {thickness} nm)"));
         }
     }
