@@ -85,11 +85,16 @@ struct SceneArgs {
     /// Set a scene `<default>` parameter, as Mitsuba's `-D name=value` (repeatable).
     #[arg(short = 'D', value_name = "NAME=VALUE")]
     defines: Vec<String>,
+    /// glTF scenes: which camera to use (0-based, in node order as `pt info` lists them)
+    /// [default: the first perspective camera].
+    #[arg(long, value_name = "N")]
+    camera: Option<usize>,
 }
 
 #[derive(Args)]
 struct RenderArgs {
-    /// Mitsuba 3 XML scene. Without it, the built-in Cornell box is rendered.
+    /// Mitsuba 3 XML scene, or a glTF 2.0 file (.gltf / .glb). Without it, the built-in Cornell
+    /// box is rendered.
     scene: Option<PathBuf>,
     /// Output EXR path [default: the scene's file name with .exr, in the current folder].
     #[arg(short, long)]
@@ -155,7 +160,7 @@ struct RenderArgs {
 
 #[derive(Args)]
 struct InfoArgs {
-    /// Mitsuba 3 XML scene [default: the built-in Cornell box].
+    /// Mitsuba 3 XML scene or glTF 2.0 file (.gltf / .glb) [default: the built-in Cornell box].
     scene: Option<PathBuf>,
     #[command(flatten)]
     scene_args: SceneArgs,
@@ -221,6 +226,8 @@ enum BvhArg {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // `<shape type="gltf">` in XML scenes reads meshes through pt-gltf.
+    pt_scene::set_gltf_mesh_reader(pt_gltf::load_mesh);
     let result = match cli.command {
         Command::Render(args) => cmd_render(args),
         Command::Info(args) => cmd_info(args),
@@ -248,6 +255,25 @@ fn parse_defines(defs: &[String]) -> Result<Vec<(String, String)>> {
 
 /// Loads the scene file, or the built-in Cornell box.
 fn load_scene(path: Option<&Path>, args: &SceneArgs) -> Result<SceneDesc> {
+    Ok(load_scene_with_summary(path, args)?.0)
+}
+
+/// [`load_scene`], and for a glTF file (`.gltf`, `.glb`) also its `pt info` listing; the glTF
+/// reader's warnings (defaults used, features ignored) go to stderr.
+fn load_scene_with_summary(path: Option<&Path>, args: &SceneArgs) -> Result<(SceneDesc, Vec<String>)> {
+    if let Some(p) = path.filter(|p| pt_gltf::is_gltf_path(p)) {
+        if !args.defines.is_empty() {
+            bail!("-D applies to Mitsuba XML scenes, not to glTF files");
+        }
+        let g = pt_gltf::load(p, &pt_gltf::LoadOptions { camera: args.camera })?;
+        for w in &g.warnings {
+            eprintln!("warning: {w}");
+        }
+        return Ok((g.desc, g.summary));
+    }
+    if args.camera.is_some() {
+        bail!("--camera applies to glTF files (a Mitsuba XML scene has one sensor)");
+    }
     let defines = parse_defines(&args.defines)?;
     let desc = match path {
         Some(p) => pt_scene::load_file(p, &defines)?,
@@ -264,7 +290,7 @@ fn load_scene(path: Option<&Path>, args: &SceneArgs) -> Result<SceneDesc> {
             );
         }
     }
-    Ok(desc)
+    Ok((desc, Vec::new()))
 }
 
 fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
@@ -497,7 +523,7 @@ fn check_output_path(output: &Path) -> Result<()> {
 }
 
 fn cmd_info(args: InfoArgs) -> Result<ExitCode> {
-    let desc = load_scene(args.scene.as_deref(), &args.scene_args)?;
+    let (desc, gltf_summary) = load_scene_with_summary(args.scene.as_deref(), &args.scene_args)?;
     let scene = Scene::build(&desc, BvhKind::CwBvh, LightSelection::Power)?;
     out!("scene       {}", desc.source.display());
     out!("film        {}x{}, filter {:?}", desc.film.width, desc.film.height, desc.film.filter);
@@ -543,6 +569,12 @@ fn cmd_info(args: InfoArgs) -> Result<ExitCode> {
         out!("  {:<12} {:?}", b.id.as_deref().unwrap_or("-"), b.kind);
     }
     out!("lights      {} area light(s)", scene.lights.len());
+    if !gltf_summary.is_empty() {
+        out!("glTF        (how the file maps onto the renderer; see pt-gltf's documentation)");
+        for line in &gltf_summary {
+            out!("  {line}");
+        }
+    }
     match desc.spectral_reason() {
         Some(why) => out!("mode        spectral, because {why}"),
         None => out!("mode        rgb (every input is RGB and no material depends on wavelength: RGB is exact)"),

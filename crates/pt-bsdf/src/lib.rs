@@ -27,6 +27,7 @@
 pub mod conductor;
 pub mod dielectric;
 pub mod fresnel;
+pub mod gltf_pbr;
 pub mod lambert;
 pub mod mask;
 pub mod microfacet;
@@ -40,6 +41,7 @@ pub mod thin_film;
 
 pub use conductor::{Conductor, RoughConductor};
 pub use dielectric::Dielectric;
+pub use gltf_pbr::GltfPbr;
 pub use lambert::Lambert;
 pub use microfacet::{Distribution, Microfacet};
 pub use minnaert::Minnaert;
@@ -99,6 +101,8 @@ pub enum Bsdf {
     /// Smooth thin film on a conductor (one delta lobe) or dielectric base (two delta lobes,
     /// handles both sides itself).
     ThinFilm(ThinFilm),
+    /// glTF 2.0 metallic-roughness (GGX specular over a coupled diffuse base, and metal).
+    GltfPbr(GltfPbr),
     /// Rough dielectric coating over a diffuse base (Mitsuba `roughplastic`).
     RoughPlastic(RoughPlastic),
     /// Thin film on a rough conductor or dielectric base (handles both sides for a dielectric).
@@ -119,6 +123,7 @@ impl Bsdf {
             Bsdf::ThinDielectric(m) => m.eval(wo, wi),
             Bsdf::RoughDielectric(m) => m.eval(wo, wi),
             Bsdf::ThinFilm(m) => m.eval(wo, wi),
+            Bsdf::GltfPbr(m) => m.eval(wo, wi),
             Bsdf::RoughPlastic(m) => m.eval(wo, wi),
             Bsdf::RoughThinFilm(m) => m.eval(wo, wi),
         }
@@ -137,6 +142,7 @@ impl Bsdf {
             Bsdf::ThinDielectric(m) => m.pdf(wo, wi),
             Bsdf::RoughDielectric(m) => m.pdf(wo, wi),
             Bsdf::ThinFilm(m) => m.pdf(wo, wi),
+            Bsdf::GltfPbr(m) => m.pdf(wo, wi),
             Bsdf::RoughPlastic(m) => m.pdf(wo, wi),
             Bsdf::RoughThinFilm(m) => m.pdf(wo, wi),
         }
@@ -155,6 +161,7 @@ impl Bsdf {
             Bsdf::ThinDielectric(m) => m.sample(wo, u_lobe, u),
             Bsdf::RoughDielectric(m) => m.sample(wo, u_lobe, u),
             Bsdf::ThinFilm(m) => m.sample(wo, u_lobe, u),
+            Bsdf::GltfPbr(m) => m.sample(wo, u_lobe, u),
             Bsdf::RoughPlastic(m) => m.sample(wo, u_lobe, u),
             Bsdf::RoughThinFilm(m) => m.sample(wo, u_lobe, u),
         }
@@ -180,6 +187,7 @@ impl Bsdf {
             | Bsdf::Minnaert(_)
             | Bsdf::RoughConductor(_)
             | Bsdf::RoughDielectric(_)
+            | Bsdf::GltfPbr(_)
             | Bsdf::RoughPlastic(_)
             | Bsdf::RoughThinFilm(_) => true,
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::ThinFilm(_) => false,

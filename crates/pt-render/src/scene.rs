@@ -5,7 +5,7 @@ use crate::camera::Camera;
 use crate::geometry::{intersect_triangle, Interaction, Primitive};
 use crate::light::{AreaLight, EnvMap, Light, LightShape, LightTriangle, SpotCone};
 use pt_bsdf::{
-    Bsdf, CoatingTable, Conductor, Dielectric, Distribution, RoughPlastic, RoughThinFilm, FilmBase, Lambert, ThinFilm, Microfacet, Minnaert, OrenNayar, OrenNayarVariant, RoughConductor, RoughDielectric,
+    Bsdf, CoatingTable, Conductor, Dielectric, Distribution, RoughPlastic, RoughThinFilm, FilmBase, GltfPbr, Lambert, ThinFilm, Microfacet, Minnaert, OrenNayar, OrenNayarVariant, RoughConductor, RoughDielectric,
     SurfaceBsdf, ThinDielectric,
 };
 use pt_math::{Distribution1D, Frame, Mat3, Ray, Vec2, Vec3, Vec3A};
@@ -75,6 +75,8 @@ pub struct Scene {
     spectral_materials: Vec<SpectralMaterial>,
     /// Spectral mode: per material, its fluorescence model if it is `fluorescent`.
     fluorescent: Vec<Option<crate::fluorescence::Fluorescent>>,
+    /// Per material: its textures, when its parameters vary over the surface (glTF).
+    textured: Vec<Option<TexturedPbr>>,
     /// Spectral mode: each light's emission spectrum (its `radiance` fields hold the geometric
     /// factors only); empty in RGB mode.
     light_spectra: Vec<Option<Spectrum>>,
@@ -229,6 +231,7 @@ fn material_with(
             let (e, kk, sr) = (val(eta, Role::Unbounded), val(k, Role::Unbounded), val(specular_reflectance, Role::Albedo));
             one_sided(Bsdf::RoughConductor(RoughConductor::new(e, kk, sr, mf(distribution, *alpha_u, *alpha_v)?)))
         }
+        BsdfKind::GltfPbr { base_color, metallic, roughness, ior, .. } => one_sided(Bsdf::GltfPbr(GltfPbr::new(val(base_color, Role::Albedo), *metallic, *roughness, *ior))),
     })
 }
 
@@ -277,6 +280,7 @@ impl Scene {
         let spectral = mode == ColorMode::Spectral;
         let materials: Vec<SurfaceBsdf> =
             desc.bsdfs.iter().map(|b| material_with(b, None, &mut |s, _| spectrum(s), &mut CoatingTable::get)).collect::<Result<_, _>>()?;
+        let textured = desc.bsdfs.iter().map(|b| TexturedPbr::of(b, spectral)).collect::<Result<Vec<_>, _>>()?;
         let mut spectral_materials = Vec::new();
         if spectral {
             for b in &desc.bsdfs {
@@ -400,7 +404,7 @@ impl Scene {
         if !spectral {
             light_spectra.clear();
         }
-        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, fluorescent, light_spectra, media, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
+        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, fluorescent, textured, light_spectra, media, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
     }
 
     /// Closest hit along `ray`, with its surface data.
@@ -508,6 +512,17 @@ impl Scene {
         }
     }
 
+    /// The BSDF of a hit shape at texture coordinates `uv` (textured glTF materials; any other
+    /// material as [`Scene::material_at`]).
+    #[inline]
+    pub fn material_at_uv(&self, shape: u32, uv: Vec2, lambda: &SampledWavelengths) -> SurfaceBsdf {
+        let m = self.shapes[shape as usize].material as usize;
+        match self.textured.get(m) {
+            Some(Some(t)) => t.eval(uv, self.mode, lambda),
+            _ => self.material_at(shape, lambda),
+        }
+    }
+
     /// Transmittance exp(-sigma_t d) of the interior medium of `shape` over `distance` scene units,
     /// at the path's wavelengths (spectral mode) or per RGB channel; `None` if it has no medium.
     #[inline]
@@ -551,6 +566,86 @@ impl Scene {
     #[inline]
     pub fn light_pmf(&self, i: usize) -> f32 {
         self.light_distr.as_ref().map_or(0.0, |d| d.pmf(i))
+    }
+}
+
+/// A glTF metallic-roughness material with textures: factors times texels at the hit's uv.
+struct TexturedPbr {
+    base_color: [f32; 3],
+    /// Spectral mode: the base colour factor's spectrum (no base colour texture then).
+    base_spectrum: Spectrum,
+    metallic: f32,
+    roughness: f32,
+    ior: f32,
+    base_tex: Option<(std::sync::Arc<crate::texture::Bitmap>, [f32; 6])>,
+    mr_tex: Option<(std::sync::Arc<crate::texture::Bitmap>, [f32; 6])>,
+    two_sided: bool,
+    /// Opacity of an enclosing `Mask` (glTF alpha), 1 without.
+    opacity: f32,
+}
+
+impl TexturedPbr {
+    /// The textured form of a material description, if it is a glTF material with textures.
+    fn of(desc: &BsdfDesc, spectral: bool) -> Result<Option<TexturedPbr>, BuildError> {
+        // glTF materials come as [Mask (alpha)] around [TwoSided] around GltfPbr.
+        let (desc_in, opacity) = match &desc.kind {
+            BsdfKind::Mask { opacity, inner } => (inner.as_ref(), *opacity),
+            _ => (desc, 1.0),
+        };
+        let (inner, two_sided) = match &desc_in.kind {
+            BsdfKind::TwoSided { inner } => (inner.as_ref(), true),
+            _ => (desc_in, false),
+        };
+        let BsdfKind::GltfPbr { base_color, metallic, roughness, ior, base_color_texture, metallic_roughness_texture } = &inner.kind else { return Ok(None) };
+        if base_color_texture.is_none() && metallic_roughness_texture.is_none() {
+            return Ok(None);
+        }
+        if spectral && base_color_texture.is_some() {
+            return Err(BuildError { loc: desc.loc.clone(), message: "base colour textures are RGB images; spectral mode would need per-texel upsampling (not yet implemented): render with --mode rgb".into() });
+        }
+        let load = |t: &Option<Box<pt_scene::UvTexture>>| -> Result<_, BuildError> {
+            t.as_ref()
+                .map(|t| crate::texture::Bitmap::from_source(&t.source, t.srgb, t.nearest).map(|b| (std::sync::Arc::new(b), t.transform)))
+                .transpose()
+                .map_err(|m| BuildError { loc: desc.loc.clone(), message: m })
+        };
+        Ok(Some(TexturedPbr {
+            base_color: rgb_of(base_color),
+            base_spectrum: to_spectrum(base_color, Role::Albedo),
+            metallic: *metallic,
+            roughness: *roughness,
+            ior: *ior,
+            base_tex: load(base_color_texture)?,
+            mr_tex: load(metallic_roughness_texture)?,
+            two_sided,
+            opacity,
+        }))
+    }
+
+    /// The BSDF at texture coordinates `uv` (spectral mode only without a base colour texture,
+    /// whose factor's spectrum is fitted once at build).
+    #[inline]
+    fn eval(&self, uv: Vec2, mode: ColorMode, lambda: &SampledWavelengths) -> SurfaceBsdf {
+        let at = |t: &(std::sync::Arc<crate::texture::Bitmap>, [f32; 6])| {
+            let m = t.1;
+            t.0.eval(Vec2::new(m[0] * uv.x + m[1] * uv.y + m[2], m[3] * uv.x + m[4] * uv.y + m[5]))
+        };
+        let mut c = self.base_color;
+        if let Some(t) = &self.base_tex {
+            let v = at(t);
+            c = [c[0] * v[0], c[1] * v[1], c[2] * v[2]];
+        }
+        let (mut metallic, mut roughness) = (self.metallic, self.roughness);
+        if let Some(t) = &self.mr_tex {
+            let v = at(t);
+            roughness *= v[1];
+            metallic *= v[2];
+        }
+        let base = match mode {
+            ColorMode::Rgb => SampledSpectrum::from_rgb(c),
+            ColorMode::Spectral => self.base_spectrum.sample(lambda),
+        };
+        SurfaceBsdf { bsdf: Bsdf::GltfPbr(GltfPbr::new(base, metallic, roughness, self.ior)), two_sided: self.two_sided, opacity: self.opacity }
     }
 }
 

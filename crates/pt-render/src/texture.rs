@@ -48,6 +48,24 @@ impl Bitmap {
         Ok(Bitmap { width, height, texels, nearest: desc.filter == "nearest" })
     }
 
+    /// Decodes an image given by file or by embedded bytes (glTF textures): PNG or JPEG through
+    /// the `image` crate; `srgb` decodes sRGB-encoded values to linear, otherwise values are
+    /// used as stored (normalised to [0, 1]).
+    pub fn from_source(source: &pt_scene::ImageSource, srgb: bool, nearest: bool) -> Result<Bitmap, String> {
+        let (img, name) = match source {
+            pt_scene::ImageSource::File(p) => (image::open(p).map_err(|e| format!("cannot read image '{}': {e}", p.display()))?, p.display().to_string()),
+            pt_scene::ImageSource::Embedded { name, bytes } => (image::load_from_memory(bytes).map_err(|e| format!("cannot decode {name}: {e}"))?, name.clone()),
+        };
+        let img = img.to_rgb32f();
+        let (w, h) = img.dimensions();
+        if w == 0 || h == 0 {
+            return Err(format!("image {name} is empty"));
+        }
+        let decode = |c: f32| if srgb { srgb_to_linear(c) } else { c };
+        let texels = img.pixels().map(|p| [decode(p.0[0]), decode(p.0[1]), decode(p.0[2])]).collect();
+        Ok(Bitmap { width: w as usize, height: h as usize, texels, nearest })
+    }
+
     /// Linear RGB at texture coordinates `uv`.
     pub fn eval(&self, uv: Vec2) -> [f32; 3] {
         let (w, h) = (self.width as i64, self.height as i64);

@@ -24,7 +24,7 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "volpathmis", "aov", "prb", "prb_basic", "prb_projective", "direct_projective",
         "ptracer", "depth", "stokes", "prbvolpath",
     ]),
-    ("shape", &["obj", "rectangle", "cube", "sphere", "disk"], &[
+    ("shape", &["obj", "gltf", "rectangle", "cube", "sphere", "disk"], &[
         "ply", "serialized", "cylinder", "shapegroup", "instance", "bsplinecurve", "linearcurve",
         "sdfgrid", "ellipsoids", "ellipsoidsmesh",
     ]),
@@ -522,6 +522,7 @@ impl<'e> Builder<'e> {
                     .map_err(|m| SceneError::at(&el.loc, m))?
             }
             "obj" => self.obj(&v, &to_world, flip)?,
+            "gltf" => self.gltf(&v, &to_world, flip)?,
             _ => return Err(plugin_error(el)),
         };
         let (bsdf, emitter, interior) = self.shape_children(&v)?;
@@ -572,6 +573,19 @@ impl<'e> Builder<'e> {
             mesh.normals = Some(shapes::vertex_normals(&mesh.positions, &mesh.indices));
         }
         Ok(Geometry::Mesh(mesh))
+    }
+
+    /// `gltf` (project extension): every triangle primitive of a glTF 2.0 file's scene as one
+    /// mesh (node transforms applied, then `to_world`), with this shape's BSDF; the file's
+    /// materials, cameras and lights are not used. `filename` is resolved as for `obj`.
+    fn gltf(&self, v: &ObjectView<'_>, m: &Mat4, flip: bool) -> Result<Geometry> {
+        let err = |msg: String| SceneError::at(&v.el.loc, msg);
+        let name = v.string("filename")?.ok_or_else(|| err("missing <string name=\"filename\" .../>".into()))?;
+        let path = resolve_file(&name, &v.el.dir, &[self.base_dir], self.search_paths);
+        let reader = crate::gltf_mesh_reader().ok_or_else(|| err("glTF shapes need the glTF reader, which this program did not install".into()))?;
+        let mesh = reader(&path).map_err(err)?;
+        let local = shapes::LocalMesh { positions: mesh.positions, normals: mesh.normals, uvs: mesh.uvs, indices: mesh.indices };
+        shapes::to_world(local, m, flip).map(Geometry::Mesh).map_err(|e| err(format!("mesh '{name}': {e}")))
     }
 
     /// A shape's nested BSDF (or `<ref>` to one), area emitter and interior medium, at most one

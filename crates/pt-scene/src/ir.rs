@@ -417,6 +417,7 @@ impl SceneDesc {
                 }
                 BsdfKind::Dielectric { .. } | BsdfKind::ThinDielectric { .. } | BsdfKind::RoughDielectric { .. } => vec![],
                 BsdfKind::ThinFilm { eta, k, .. } | BsdfKind::RoughThinFilm { eta, k, .. } => vec![eta, k],
+                BsdfKind::GltfPbr { base_color, .. } => vec![base_color],
                 BsdfKind::RoughPlastic { diffuse_reflectance, specular_reflectance, .. } => vec![diffuse_reflectance, specular_reflectance],
                 BsdfKind::Fluorescent { reflectance, absorption, emission, .. } => vec![reflectance, absorption, emission],
                 BsdfKind::Phosphorescent { reflectance, .. } => vec![reflectance],
@@ -656,4 +657,49 @@ pub enum BsdfKind {
         /// Lifetime tau of the stored state, seconds (> 0).
         lifetime: f32,
     },
+    /// glTF 2.0 metallic-roughness material (read from glTF files; pt-bsdf `GltfPbr`).
+    GltfPbr {
+        /// Base colour (linear albedo): the diffuse colour of the dielectric and F0 of the metal.
+        base_color: SpectrumDesc,
+        /// Metalness in [0, 1].
+        metallic: f32,
+        /// Perceptual roughness in [0, 1]; GGX alpha = roughness^2.
+        roughness: f32,
+        /// Index of refraction of the dielectric part (1.5 unless KHR_materials_ior).
+        ior: f32,
+        /// Base colour texture (sRGB-decoded), multiplying `base_color` at the hit's uv.
+        base_color_texture: Option<Box<UvTexture>>,
+        /// Metallic-roughness texture (linear): blue multiplies `metallic`, green `roughness`.
+        metallic_roughness_texture: Option<Box<UvTexture>>,
+    },
+}
+
+/// Image data of a texture: a file, or bytes embedded in the scene file (a glTF buffer view or
+/// `data:` URI).
+#[derive(Clone, Debug, PartialEq)]
+pub enum ImageSource {
+    /// An image file (PNG or JPEG), resolved.
+    File(PathBuf),
+    /// Encoded image bytes (PNG or JPEG) and a name for messages.
+    Embedded {
+        /// Where the bytes came from, e.g. `images[0]`.
+        name: String,
+        /// The encoded image.
+        bytes: std::sync::Arc<Vec<u8>>,
+    },
+}
+
+/// A texture looked up at the hit's texture coordinates (glTF `textureInfo`): the image is
+/// repeated outside [0, 1]^2, row 0 at v = 0 (the image's top row), as glTF and Mitsuba.
+#[derive(Clone, Debug, PartialEq)]
+pub struct UvTexture {
+    /// The image.
+    pub source: ImageSource,
+    /// sRGB-decode the stored values (colour data); false: use them as they are (linear data).
+    pub srgb: bool,
+    /// Nearest-texel lookup (glTF sampler `magFilter` NEAREST); otherwise bilinear.
+    pub nearest: bool,
+    /// Affine map of the texture coordinates applied before the lookup (KHR_texture_transform),
+    /// rows `[a, b, c, d, e, f]`: `u' = a u + b v + c`, `v' = d u + e v + f`.
+    pub transform: [f32; 6],
 }
