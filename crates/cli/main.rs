@@ -15,6 +15,7 @@ macro_rules! out {
 
 mod converge;
 mod lobes;
+mod stability;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -49,6 +50,9 @@ enum Command {
     /// writes a CSV and an SVG/PNG chart.
     Converge(converge::ConvergeArgs),
     Lobes(lobes::LobesArgs),
+    /// Numerical stress sweep of every BSDF (NaN/Inf, energy gain, pdf mismatches, chi-square)
+    /// over angles and parameters beyond their documented ranges: CSV + Markdown report.
+    Stability(stability::StabilityArgs),
 }
 
 #[derive(Args)]
@@ -217,6 +221,7 @@ fn main() -> ExitCode {
         Command::Compare(args) => cmd_compare(args),
         Command::Converge(args) => converge::run(args),
         Command::Lobes(args) => lobes::run(args),
+        Command::Stability(args) => stability::run(args),
     };
     match result {
         Ok(code) => code,
