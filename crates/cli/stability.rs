@@ -324,7 +324,7 @@ pub(crate) fn probe(ci: usize, case: &Case, theta_deg: f64, back: bool, n: usize
     let (mut chi2_p, mut chi2_hard) = (None, None);
     // The chi-square test needs a pdf that is not identically zero: skip wo exactly on the
     // horizon (one-sided models are black there) and wo below one-sided models.
-    if smooth && chi2_samples > 0 && wo.z != 0.0 && (b.is_transmissive() || !back) {
+    if smooth && chi2_samples > 0 && wo.z != 0.0 && (b.is_transmissive() || !back) && chi2_resolvable(&b) {
         let sample = |wo: Vec3, u: Vec3| {
             b.sample(wo, u.x, Vec2::new(u.y, u.z)).map(|s| Sample { wi: s.wi, weight: s.weight.0.x, pdf: s.pdf, delta: s.delta })
         };
@@ -335,6 +335,22 @@ pub(crate) fn probe(ci: usize, case: &Case, theta_deg: f64, back: bool, n: usize
         chi2_hard = r.hard_failure;
     }
     Row { case: ci, theta_deg, back, nonfinite, albedo, albedo_se, energy_gain, pdf_mismatch, weight_mismatch, chi2_p, chi2_hard, chi2_fail: false }
+}
+
+/// Whether the chi-square test can judge the model: its quadrature of the pdf over a 16 x 32
+/// grid resolves lobes of microfacet roughness >= 0.05 (the pt-bsdf tests' smallest), but not
+/// narrower ones, nor the refraction lobe of a rough dielectric with eta within 1% of 1, which
+/// is nearly a delta (`wi` close to `-wo`) with a Jacobian singular at eta = 1. There the
+/// first sweep found "samples in a cell where the pdf integrates to 0" and "pdf integrates to
+/// 1.04" for every configuration: failures of the quadrature, not of the model. Such cases
+/// are still checked sample by sample (pdf and weight consistency, finiteness, albedo).
+pub(crate) fn chi2_resolvable(b: &Bsdf) -> bool {
+    const MIN_ALPHA: f32 = 0.05;
+    match b {
+        Bsdf::RoughConductor(m) => m.mf.alpha_u.min(m.mf.alpha_v) >= MIN_ALPHA,
+        Bsdf::RoughDielectric(m) => m.mf.alpha_u.min(m.mf.alpha_v) >= MIN_ALPHA && (m.eta - 1.0).abs() >= 0.01,
+        _ => true,
+    }
 }
 
 /// Runs the whole sweep (in parallel on the current rayon pool) and marks chi-square failures.
@@ -539,7 +555,8 @@ fn report_text(cases: &[Case], rows: &[Row], args: &StabilityArgs, secs: f64) ->
          model and, in the `in range` column, against the model's documented bound; **pdf mismatch**: sample pdf != pdf(wo, wi) \
          (1e-3 rel.), a delta probability outside (0, 1], or a delta model with non-zero eval/pdf; **weight \
          mismatch**: weight != eval cos / pdf (1e-3 rel.); **chi-square**: failures at family-wise 1% (Sidak) over all \
-         {} tests.\n",
+         {} tests (16 x 32 cells; run only where the quadrature resolves the lobe: microfacet alpha >= 0.05 and, for rough \
+         dielectrics, |eta - 1| >= 0.01; narrower lobes are checked sample by sample only).\n",
         all.chi2_tests
     );
     let _ = writeln!(

@@ -12,6 +12,7 @@
 
 mod atomic;
 pub mod colormap;
+pub mod fireflies;
 mod error;
 mod exr_io;
 pub mod metrics;
