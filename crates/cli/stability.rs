@@ -25,8 +25,11 @@
 //!   integrated pdf ([`pt_testkit::chi2_sphere`]); failures are judged at a family-wise level of
 //!   1% with Šidák's correction over all chi-square tests of the sweep.
 //!
+//! It also measures the bias of the optional per-sample clamp (`pt render --clamp`, see
+//! `fireflies.rs`) on a caustic scene.
+//!
 //! Outputs in `--out DIR` (each written atomically): `stability.csv` (one row per case),
-//! `report.md`, `albedo.svg` and `albedo.png`.
+//! `report.md`, `albedo.svg`/`.png` and `clamp.svg`/`.png`.
 
 use crate::converge::{register_font, write_atomic};
 use anyhow::{anyhow, bail, Context, Result};
@@ -410,11 +413,15 @@ pub fn run(args: StabilityArgs) -> Result<ExitCode> {
     };
     let rows = pool.install(|| sweep(&cases, args.samples, args.chi2_samples, &progress));
     let secs = start.elapsed().as_secs_f64();
+    let clamp = pool.install(crate::fireflies::clamp_bias_study)?;
     write_atomic(&args.out.join("stability.csv"), csv_text(&cases, &rows).as_bytes())?;
     let (svg, png) = albedo_charts(&cases, &rows)?;
     write_atomic(&args.out.join("albedo.svg"), svg.as_bytes())?;
     write_atomic(&args.out.join("albedo.png"), &png)?;
-    let md = report_text(&cases, &rows, &args, secs);
+    let (svg, png) = crate::fireflies::clamp_charts(&clamp)?;
+    write_atomic(&args.out.join("clamp.svg"), svg.as_bytes())?;
+    write_atomic(&args.out.join("clamp.png"), &png)?;
+    let md = report_text(&cases, &rows, &args, secs, &clamp);
     write_atomic(&args.out.join("report.md"), md.as_bytes())?;
     let s = Summary::of(&cases, &rows, |_| true);
     if !args.quiet {
@@ -532,7 +539,7 @@ fn families(cases: &[Case]) -> Vec<&'static str> {
     f
 }
 
-fn report_text(cases: &[Case], rows: &[Row], args: &StabilityArgs, secs: f64) -> String {
+fn report_text(cases: &[Case], rows: &[Row], args: &StabilityArgs, secs: f64, clamp: &crate::fireflies::ClampStudy) -> String {
     let mut md = String::new();
     let all = Summary::of(cases, rows, |_| true);
     let _ = writeln!(md, "# BSDF stability report\n");
@@ -645,6 +652,7 @@ fn report_text(cases: &[Case], rows: &[Row], args: &StabilityArgs, secs: f64) ->
         }
         let _ = writeln!(md);
     }
+    md.push_str(&crate::fireflies::clamp_report(clamp));
     md
 }
 

@@ -45,6 +45,7 @@ impl RenderSettings {
             seed: desc.sampler.seed,
             filter: desc.film.filter,
             path: PathSettings { max_depth, rr_depth: i.rr_depth, hide_emitters: i.hide_emitters, strategy: Strategy::Mis },
+            clamp: None,
         }
     }
 }
