@@ -13,6 +13,7 @@ macro_rules! out {
     }};
 }
 
+mod atlas;
 mod converge;
 mod fireflies;
 mod lobes;

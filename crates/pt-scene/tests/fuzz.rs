@@ -1,8 +1,10 @@
 //! Property tests (proptest) of the loaders on hostile input: the XML loader and the OBJ
 //! loader must return `Ok` or `Err`, never panic, whatever the bytes; and what they accept must
 //! be usable: every mesh index within its vertex list, every position, normal and sphere
-//! finite, every normal unit length. Crashers found are kept below as plain regression tests
-//! (`regression_*`); proptest also keeps its failing seeds under `tests/fuzz.proptest-regressions`.
+//! finite, every normal unit length. A crasher found would be kept here as a plain regression
+//! test (proptest also records failing seeds in `tests/fuzz.proptest-regressions`); none has
+//! been found so far: the OBJ parser (tobj) runs under `catch_unwind` and the XML loader
+//! validates every number it reads.
 //!
 //! Case counts are proptest's default (256 per property), a few seconds in the test profile.
 
