@@ -319,3 +319,46 @@ fn absurd_command_line_values() {
         assert_eq!(leftovers(&dir, &["scene.xml"]), Vec::<String>::new());
     }
 }
+
+#[test]
+fn clamp_bounds_every_pixel_and_is_off_by_default() {
+    // With --clamp X no sample exceeds X in any channel, so no pixel mean can; with a clamp
+    // above every sample the image is bit-identical to the unclamped one (same seed). Bad
+    // values are rejected with exit code 2.
+    let xml = scene(1.0, 16, "");
+    let (code, stderr, dir) = run("clamp_off", &xml, &[], &[]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let (off, _) = pt_image::read_exr(&dir.join("out.exr")).unwrap();
+    let (code, stderr, dir) = run("clamp_low", &xml, &[], &["--clamp", "0.05"]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let (low, _) = pt_image::read_exr(&dir.join("out.exr")).unwrap();
+    assert!(low.data.iter().flatten().all(|&v| v <= 0.05 * (1.0 + 1e-6)), "a pixel above the clamp");
+    assert!(mean(&low)[1] < mean(&off)[1], "the clamp removed nothing");
+    let (code, stderr, dir) = run("clamp_high", &xml, &[], &["--clamp", "1e30"]);
+    assert_eq!(code, Some(0), "{stderr}");
+    let (high, _) = pt_image::read_exr(&dir.join("out.exr")).unwrap();
+    assert_eq!(high.data, off.data);
+    for bad in ["0", "-1", "nan", "inf"] {
+        let (code, stderr, dir) = run("clamp_bad", &xml, &[], &["--clamp", bad]);
+        assert_eq!(code, Some(2), "--clamp {bad}: {stderr}");
+        assert_eq!(leftovers(&dir, &["scene.xml"]), Vec::<String>::new());
+    }
+}
+
+#[test]
+fn compare_prints_firefly_counts() {
+    // A flat image and the same image with three isolated hot pixels: pt compare reports 3
+    // fireflies for the second and 0 for the first.
+    let dir = scratch("adv_fireflies");
+    let flat = pt_image::Image::filled(32, 32, [0.5, 0.5, 0.5]);
+    let mut hot = flat.clone();
+    for (x, y) in [(3, 4), (20, 20), (31, 0)] {
+        hot.set(x, y, [50.0, 50.0, 50.0]);
+    }
+    pt_image::write_exr(&dir.join("flat.exr"), &flat, &Default::default()).unwrap();
+    pt_image::write_exr(&dir.join("hot.exr"), &hot, &Default::default()).unwrap();
+    let o = pt(&["compare", dir.join("hot.exr").to_str().unwrap(), dir.join("flat.exr").to_str().unwrap()]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    let line = out.lines().find(|l| l.starts_with("fireflies")).unwrap_or_else(|| panic!("no firefly line: {out}"));
+    assert!(line.split_whitespace().take(4).collect::<Vec<_>>() == ["fireflies", "3", "/", "0"], "{line}");
+}
