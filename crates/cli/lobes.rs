@@ -121,6 +121,8 @@ const MODELS: &[(&str, &[&str])] = &[
     ("conductor", &["material", "eta", "k", "specular_reflectance"]),
     ("dielectric", &["int_ior", "ext_ior", "eta"]),
     ("thindielectric", &["int_ior", "ext_ior", "eta"]),
+    ("roughplastic", &["diffuse_reflectance", "specular_reflectance", "int_ior", "ext_ior", "distribution", "alpha", "nonlinear"]),
+    ("thinfilm", &["thickness", "film_ior", "ext_ior", "int_ior", "material", "eta", "k"]),
 ];
 
 /// A model and its parameters as written by the user.
@@ -198,6 +200,8 @@ impl Spec {
             let numbers: Vec<Option<f64>> = value.split(',').map(|p| p.trim().parse::<f64>().ok()).collect();
             if value.parse::<f64>().is_ok() {
                 let _ = write!(props, r#"<float name="{name}" value="{esc}"/>"#);
+            } else if value == "true" || value == "false" {
+                let _ = write!(props, r#"<boolean name="{name}" value="{esc}"/>"#);
             } else if numbers.len() == 3 && numbers.iter().all(Option::is_some) {
                 let _ = write!(props, r#"<rgb name="{name}" value="{esc}"/>"#);
             } else {

@@ -258,6 +258,14 @@ fn load_scene(path: Option<&Path>, args: &SceneArgs) -> Result<SceneDesc> {
             pt_scene::load_str(BUILTIN_CORNELL, Path::new("<built-in cornell-box.xml>"), &cwd, &defines)?
         }
     };
+    if desc.integrator.kind == pt_scene::IntegratorKind::Path {
+        if let Some(s) = desc.shapes.iter().find(|s| s.interior.is_some()) {
+            eprintln!(
+                "warning: {}: the `path` integrator ignores media, as Mitsuba's does; use <integrator type=\"volpath\"> for absorption",
+                s.interior.as_ref().map_or(&s.loc, |m| &m.loc)
+            );
+        }
+    }
     Ok(desc)
 }
 
@@ -532,7 +540,8 @@ fn cmd_info(args: InfoArgs) -> Result<ExitCode> {
             s.plugin,
             geo,
             bsdf.id.as_deref().unwrap_or("-"),
-            s.emitter.as_ref().map(|e| format!("emits {:?}", e.radiance)).unwrap_or_default(),
+            s.emitter.as_ref().map(|e| format!("emits {:?}", e.radiance)).unwrap_or_default()
+                + &s.interior.as_ref().map(|m| format!(" interior medium sigma_t {:?}", m.sigma_t)).unwrap_or_default(),
             s.id.as_deref().map(|id| format!(" id={id}")).unwrap_or_default(),
         );
     }

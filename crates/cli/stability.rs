@@ -39,8 +39,9 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use pt_bsdf::{
     Bsdf, Conductor, Dielectric, Distribution, FilmBase, Lambert, Microfacet, Minnaert, OrenNayar, OrenNayarVariant, RoughConductor,
-    RoughDielectric, ThinDielectric, ThinFilm,
+    RoughDielectric, RoughPlastic, ThinDielectric, ThinFilm,
 };
+use pt_bsdf::rough_plastic::CoatingTable;
 use pt_math::{Vec2, Vec3, Vec4};
 use pt_spectrum::SampledSpectrum;
 use pt_testkit::{Chi2Config, Pcg32, Sample};
@@ -198,6 +199,20 @@ pub(crate) fn cases() -> Vec<Case> {
             }
         }
     }
+    for (fam, dist) in [("roughplastic-ggx", Distribution::Ggx), ("roughplastic-beckmann", Distribution::Beckmann)] {
+        for a in [0.0f32, 1e-3, 0.01, 0.1, 0.3, 1.0, 10.0, f32::NAN] {
+            for e in [1.49f32, 1.0001, 4.0] {
+                for nonlinear in [false, true] {
+                    let mf = Microfacet::new(dist, a, a);
+                    let table = CoatingTable::get(dist, mf.alpha_u, e);
+                    // White base and coating; sampling weight mean(ks) / (mean(ks) + mean(rho)), as
+                    // the scene builder sets it.
+                    let b = Bsdf::RoughPlastic(RoughPlastic::new(white(), white(), e, mf, nonlinear, 0.5, table));
+                    push(fam, "alpha", a, format!("eta={e} nonlinear={nonlinear}"), alpha_ok(a), 1.0, b);
+                }
+            }
+        }
+    }
     // Lane wavelengths: 12 values from 360 to 830 nm in three sets of four.
     let lam = |i: usize| 360.0 + (830.0 - 360.0) * i as f32 / 11.0;
     let lane_sets: Vec<Vec4> = (0..3).map(|s| Vec4::new(lam(s), lam(s + 3), lam(s + 6), lam(s + 9))).collect();
@@ -220,6 +235,21 @@ pub(crate) fn cases() -> Vec<Case> {
                 // form is held to 1; the RGB form is reported.
                 push("thinfilm-rgb", "thickness_nm", d, format!("film_ior={nf} base={bname}"), ok, 1.1, b);
             }
+        }
+    }
+    // Every variant of `Bsdf` must be in the sweep: this match stops compiling when one is added.
+    for c in &v {
+        match c.bsdf {
+            Bsdf::Lambert(_)
+            | Bsdf::OrenNayar(_)
+            | Bsdf::Minnaert(_)
+            | Bsdf::Conductor(_)
+            | Bsdf::RoughConductor(_)
+            | Bsdf::Dielectric(_)
+            | Bsdf::ThinDielectric(_)
+            | Bsdf::RoughDielectric(_)
+            | Bsdf::ThinFilm(_)
+            | Bsdf::RoughPlastic(_) => {}
         }
     }
     v
@@ -353,6 +383,7 @@ pub(crate) fn chi2_resolvable(b: &Bsdf) -> bool {
     match b {
         Bsdf::RoughConductor(m) => m.mf.alpha_u.min(m.mf.alpha_v) >= MIN_ALPHA,
         Bsdf::RoughDielectric(m) => m.mf.alpha_u.min(m.mf.alpha_v) >= MIN_ALPHA && (m.eta - 1.0).abs() >= 0.01,
+        Bsdf::RoughPlastic(m) => m.mf.alpha_u.min(m.mf.alpha_v) >= MIN_ALPHA,
         _ => true,
     }
 }

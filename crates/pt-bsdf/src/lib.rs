@@ -28,10 +28,12 @@ pub mod conductor;
 pub mod dielectric;
 pub mod fresnel;
 pub mod lambert;
+pub mod mask;
 pub mod microfacet;
 pub mod minnaert;
 pub mod oren_nayar;
 pub mod rough_dielectric;
+pub mod rough_plastic;
 pub mod thin_dielectric;
 pub mod thin_film;
 
@@ -42,6 +44,7 @@ pub use microfacet::{Distribution, Microfacet};
 pub use minnaert::Minnaert;
 pub use oren_nayar::{OrenNayar, OrenNayarVariant};
 pub use rough_dielectric::RoughDielectric;
+pub use rough_plastic::{CoatingTable, RoughPlastic};
 pub use thin_dielectric::ThinDielectric;
 pub use thin_film::{FilmBase, FilmColor, ThinFilm};
 use pt_math::{Vec2, Vec3, Vec4};
@@ -94,6 +97,8 @@ pub enum Bsdf {
     /// Smooth thin film on a conductor (one delta lobe) or dielectric base (two delta lobes,
     /// handles both sides itself).
     ThinFilm(ThinFilm),
+    /// Rough dielectric coating over a diffuse base (Mitsuba `roughplastic`).
+    RoughPlastic(RoughPlastic),
 }
 
 impl Bsdf {
@@ -110,6 +115,7 @@ impl Bsdf {
             Bsdf::ThinDielectric(m) => m.eval(wo, wi),
             Bsdf::RoughDielectric(m) => m.eval(wo, wi),
             Bsdf::ThinFilm(m) => m.eval(wo, wi),
+            Bsdf::RoughPlastic(m) => m.eval(wo, wi),
         }
     }
 
@@ -126,6 +132,7 @@ impl Bsdf {
             Bsdf::ThinDielectric(m) => m.pdf(wo, wi),
             Bsdf::RoughDielectric(m) => m.pdf(wo, wi),
             Bsdf::ThinFilm(m) => m.pdf(wo, wi),
+            Bsdf::RoughPlastic(m) => m.pdf(wo, wi),
         }
     }
 
@@ -142,6 +149,7 @@ impl Bsdf {
             Bsdf::ThinDielectric(m) => m.sample(wo, u_lobe, u),
             Bsdf::RoughDielectric(m) => m.sample(wo, u_lobe, u),
             Bsdf::ThinFilm(m) => m.sample(wo, u_lobe, u),
+            Bsdf::RoughPlastic(m) => m.sample(wo, u_lobe, u),
         }
     }
 
@@ -163,7 +171,8 @@ impl Bsdf {
             | Bsdf::OrenNayar(_)
             | Bsdf::Minnaert(_)
             | Bsdf::RoughConductor(_)
-            | Bsdf::RoughDielectric(_) => true,
+            | Bsdf::RoughDielectric(_)
+            | Bsdf::RoughPlastic(_) => true,
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::ThinFilm(_) => false,
         }
     }
@@ -177,9 +186,17 @@ pub struct SurfaceBsdf {
     pub bsdf: Bsdf,
     /// Mirror the model to the back side (ignored for transmissive models).
     pub two_sided: bool,
+    /// Opacity in [0, 1] (Mitsuba `mask`, see [`mask`]): the fraction of light that meets the
+    /// model; the rest passes straight through. 1 for ordinary surfaces.
+    pub opacity: f32,
 }
 
 impl SurfaceBsdf {
+    /// An opaque surface with the given model.
+    pub fn new(bsdf: Bsdf, two_sided: bool) -> Self {
+        SurfaceBsdf { bsdf, two_sided, opacity: 1.0 }
+    }
+
     /// Flips directions to the front side when two-sided and seen from the back (never for
     /// transmissive models, whose back side is their inside).
     #[inline]
@@ -195,22 +212,29 @@ impl SurfaceBsdf {
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
         let s = self.side(wo);
-        self.bsdf.eval(flip_z(wo, s), flip_z(wi, s))
+        self.bsdf.eval(flip_z(wo, s), flip_z(wi, s)) * self.opacity
     }
 
     /// Solid-angle pdf of `wi`, local frame.
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         let s = self.side(wo);
-        self.bsdf.pdf(flip_z(wo, s), flip_z(wi, s))
+        self.bsdf.pdf(flip_z(wo, s), flip_z(wi, s)) * self.opacity
     }
 
     /// Samples `wi`, local frame.
     #[inline]
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        let u_lobe = match mask::choose(self.opacity, wo, u_lobe) {
+            Ok(u_lobe) => u_lobe,
+            Err(pass_through) => return Some(pass_through),
+        };
         let s = self.side(wo);
         let mut bs = self.bsdf.sample(flip_z(wo, s), u_lobe, u)?;
         bs.wi = flip_z(bs.wi, s);
+        // The nested lobe was chosen with probability `opacity`; its weight is unchanged (the
+        // opacity in f and in the pdf cancel).
+        bs.pdf *= self.opacity;
         Some(bs)
     }
 
@@ -235,8 +259,8 @@ mod tests {
         let lam = Bsdf::Lambert(Lambert::new(SampledSpectrum::from_rgb([0.5; 3])));
         let wo = Vec3::new(0.0, 0.6, -0.8);
         let wi = Vec3::new(0.6, 0.0, -0.8);
-        let one = SurfaceBsdf { bsdf: lam, two_sided: false };
-        let two = SurfaceBsdf { bsdf: lam, two_sided: true };
+        let one = SurfaceBsdf::new(lam, false);
+        let two = SurfaceBsdf::new(lam, true);
         assert!(one.eval(wo, wi).is_black());
         assert!(one.sample(wo, 0.5, Vec2::splat(0.3)).is_none());
         assert!((two.eval(wo, wi).rgb()[0] - 0.5 / std::f32::consts::PI).abs() < 1e-6);
@@ -249,7 +273,7 @@ mod tests {
     fn two_sided_never_mirrors_a_dielectric() {
         // From inside glass, straight up through the interface: refraction must go out (+z)
         // with eta' = 1/1.5, whatever two_sided says.
-        let glass = SurfaceBsdf { bsdf: Bsdf::Dielectric(Dielectric::new(1.5)), two_sided: true };
+        let glass = SurfaceBsdf::new(Bsdf::Dielectric(Dielectric::new(1.5)), true);
         let bs = glass.sample(-Vec3::Z, 0.99, Vec2::ZERO).unwrap();
         assert!(bs.wi.z > 0.99 && (bs.eta - 1.0 / 1.5).abs() < 1e-6, "{bs:?}");
         assert!((bs.weight.0.x - 2.25).abs() < 1e-5, "radiance gains eta^2 leaving glass");

@@ -192,7 +192,7 @@ fn delta_lobes() {
     let lobes = [DeltaLobe { wi: Vec3::new(-wo.x, -wo.y, wo.z), prob: 1.0, weight: m.reflectance(wo.z).0.x }];
     check_delta("thinfilm/conductor", wo, &sampler(b), &lobes, 1000);
     assert!(b.sample(-wo, 0.5, Vec2::ZERO).is_none(), "one-sided");
-    let two = SurfaceBsdf { bsdf: b, two_sided: true };
+    let two = SurfaceBsdf::new(b, true);
     assert!(two.sample(-wo, 0.5, Vec2::ZERO).unwrap().wi.z < 0.0, "two-sided mirrors it");
 }
 

@@ -37,11 +37,14 @@ pub struct PathSettings {
     pub hide_emitters: bool,
     /// Direct-light strategy.
     pub strategy: Strategy,
+    /// Attenuate rays inside shapes with an interior medium (Mitsuba `volpath`); `path` ignores
+    /// media, as Mitsuba's does.
+    pub media: bool,
 }
 
 impl Default for PathSettings {
     fn default() -> Self {
-        PathSettings { max_depth: -1, rr_depth: 5, hide_emitters: false, strategy: Strategy::Mis }
+        PathSettings { max_depth: -1, rr_depth: 5, hide_emitters: false, strategy: Strategy::Mis, media: false }
     }
 }
 
@@ -82,6 +85,19 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, 
             break;
         };
         let wo_world = -ray.dir;
+
+        // Beer-Lambert: a ray that reaches a shape's surface from behind travelled inside it, so
+        // it crossed the shape's interior medium over the distance hit.t (the ray's direction is a
+        // unit vector). Multiplying by the transmittance exp(-sigma_t t) is the expected value of
+        // Mitsuba volpath's free-flight sampling for albedo 0, without its variance.
+        if s.media && ray.dir.dot(hit.ng) > 0.0 {
+            if let Some(tr) = scene.interior_transmittance(hit.shape, hit.t, lambda) {
+                throughput *= tr;
+                if throughput.is_black() {
+                    break;
+                }
+            }
+        }
 
         // Emission found by the ray we just traced.
         if let Some((li_idx, light)) = scene.shape_light(hit.shape) {

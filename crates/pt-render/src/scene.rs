@@ -5,7 +5,7 @@ use crate::camera::Camera;
 use crate::geometry::{intersect_triangle, Interaction, Primitive};
 use crate::light::{AreaLight, EnvMap, Light, LightShape, LightTriangle, SpotCone};
 use pt_bsdf::{
-    Bsdf, Conductor, Dielectric, Distribution, FilmBase, Lambert, ThinFilm, Microfacet, Minnaert, OrenNayar, OrenNayarVariant, RoughConductor, RoughDielectric,
+    Bsdf, CoatingTable, Conductor, Dielectric, Distribution, RoughPlastic, FilmBase, Lambert, ThinFilm, Microfacet, Minnaert, OrenNayar, OrenNayarVariant, RoughConductor, RoughDielectric,
     SurfaceBsdf, ThinDielectric,
 };
 use pt_math::{Distribution1D, Frame, Mat3, Ray, Vec2, Vec3, Vec3A};
@@ -36,6 +36,8 @@ pub enum LightSelection {
 struct ShapeData {
     material: u32,
     light: Option<u32>,
+    /// Index into `Scene::media` of the shape's interior medium.
+    interior: Option<u32>,
     /// Vertex normals and uvs of meshes, indexed through `indices`.
     normals: Option<Vec<Vec3>>,
     uvs: Option<Vec<Vec2>>,
@@ -74,6 +76,9 @@ pub struct Scene {
     /// Spectral mode: each light's emission spectrum (its `radiance` fields hold the geometric
     /// factors only); empty in RGB mode.
     light_spectra: Vec<Option<Spectrum>>,
+    /// Interior media (absorbing only): extinction per scene unit, RGB lanes in RGB mode, and the
+    /// spectrum evaluated per path in spectral mode.
+    media: Vec<(SampledSpectrum, Option<Spectrum>)>,
     /// All lights: area lights first (in shape order), then the others in file order.
     pub lights: Vec<Light>,
     /// Indices into `lights` of lights that rays leaving the scene can see.
@@ -147,15 +152,17 @@ fn material_with(
     desc: &BsdfDesc,
     lambda: Option<&SampledWavelengths>,
     val: &mut dyn FnMut(&SpectrumDesc, Role) -> SampledSpectrum,
+    tables: &mut dyn FnMut(Distribution, f32, f32) -> &'static CoatingTable,
 ) -> Result<SurfaceBsdf, BuildError> {
-    let one_sided = |bsdf| SurfaceBsdf { bsdf, two_sided: false };
+    let one_sided = |bsdf| SurfaceBsdf::new(bsdf, false);
     let mf = |dist: &str, au: f32, av: f32| -> Result<Microfacet, BuildError> {
         let d = Distribution::from_name(dist).ok_or_else(|| BuildError { loc: desc.loc.clone(), message: format!("unknown microfacet distribution '{dist}'") })?;
         Ok(Microfacet::new(d, au, av))
     };
     Ok(match &desc.kind {
         BsdfKind::Diffuse { reflectance } => one_sided(Bsdf::Lambert(Lambert::new(val(reflectance, Role::Albedo)))),
-        BsdfKind::TwoSided { inner } => SurfaceBsdf { two_sided: true, ..material_with(inner, lambda, val)? },
+        BsdfKind::TwoSided { inner } => SurfaceBsdf { two_sided: true, ..material_with(inner, lambda, val, tables)? },
+        BsdfKind::Mask { opacity, inner } => SurfaceBsdf { opacity: *opacity, ..material_with(inner, lambda, val, tables)? },
         BsdfKind::ThinFilm { thickness, film_ior, ext_ior, int_ior, eta, k } => {
             let base = match int_ior {
                 Some(ior) => FilmBase::Dielectric { ior: *ior },
@@ -182,6 +189,18 @@ fn material_with(
             let (e, kk, sr) = (val(eta, Role::Unbounded), val(k, Role::Unbounded), val(specular_reflectance, Role::Albedo));
             one_sided(Bsdf::Conductor(Conductor::new(e, kk, sr)))
         }
+        BsdfKind::RoughPlastic { diffuse_reflectance, specular_reflectance, int_ior, ext_ior, distribution, alpha, nonlinear } => {
+            let (rho, ks) = (val(diffuse_reflectance, Role::Albedo), val(specular_reflectance, Role::Unbounded));
+            let m = mf(distribution, *alpha, *alpha)?;
+            let eta = int_ior / ext_ior;
+            // Mitsuba: the share of specular samples from the spectra's means (RGB means here, so
+            // it is the same for every path; it changes the variance, not the expectation).
+            let mean = |s: &SpectrumDesc| rgb_of(s).iter().sum::<f32>() / 3.0;
+            let (d_mean, s_mean) = (mean(diffuse_reflectance), mean(specular_reflectance));
+            let weight = if d_mean + s_mean > 0.0 { s_mean / (d_mean + s_mean) } else { 0.5 };
+            let table = tables(m.dist, m.alpha_u, eta);
+            one_sided(Bsdf::RoughPlastic(RoughPlastic::new(rho, ks, eta, m, *nonlinear, weight, table)))
+        }
         BsdfKind::RoughConductor { eta, k, specular_reflectance, distribution, alpha_u, alpha_v } => {
             let (e, kk, sr) = (val(eta, Role::Unbounded), val(k, Role::Unbounded), val(specular_reflectance, Role::Albedo));
             one_sided(Bsdf::RoughConductor(RoughConductor::new(e, kk, sr, mf(distribution, *alpha_u, *alpha_v)?)))
@@ -194,6 +213,9 @@ fn material_with(
 struct SpectralMaterial {
     desc: BsdfDesc,
     spectra: Vec<Spectrum>,
+    /// Coating tables (rough plastic), in the order [`material_with`] asks for them: looked up
+    /// once at build so that per-path rebuilding takes no lock.
+    tables: Vec<&'static CoatingTable>,
 }
 
 impl Scene {
@@ -208,16 +230,27 @@ impl Scene {
     pub fn build_with_mode(desc: &SceneDesc, bvh: BvhKind, selection: LightSelection, mode: Option<ColorMode>) -> Result<Scene, BuildError> {
         let mode = mode.unwrap_or(if desc.spectral_reason().is_some() { ColorMode::Spectral } else { ColorMode::Rgb });
         let spectral = mode == ColorMode::Spectral;
-        let materials: Vec<SurfaceBsdf> = desc.bsdfs.iter().map(|b| material_with(b, None, &mut |s, _| spectrum(s))).collect::<Result<_, _>>()?;
+        let materials: Vec<SurfaceBsdf> =
+            desc.bsdfs.iter().map(|b| material_with(b, None, &mut |s, _| spectrum(s), &mut CoatingTable::get)).collect::<Result<_, _>>()?;
         let mut spectral_materials = Vec::new();
         if spectral {
             for b in &desc.bsdfs {
                 let mut spectra = Vec::new();
-                material_with(b, None, &mut |s, role| {
-                    spectra.push(to_spectrum(s, role));
-                    SampledSpectrum::ZERO
-                })?;
-                spectral_materials.push(SpectralMaterial { desc: b.clone(), spectra });
+                let mut tables = Vec::new();
+                material_with(
+                    b,
+                    None,
+                    &mut |s, role| {
+                        spectra.push(to_spectrum(s, role));
+                        SampledSpectrum::ZERO
+                    },
+                    &mut |d, a, e| {
+                        let t = CoatingTable::get(d, a, e);
+                        tables.push(t);
+                        t
+                    },
+                )?;
+                spectral_materials.push(SpectralMaterial { desc: b.clone(), spectra, tables });
             }
         }
         // Emission: RGB mode keeps the colour in the light; spectral mode keeps a unit factor in
@@ -236,12 +269,13 @@ impl Scene {
         let mut shapes = Vec::new();
         let mut lights = Vec::new();
         let mut stats = SceneStats::default();
+        let mut media = Vec::new();
 
         for (si, shape) in desc.shapes.iter().enumerate() {
             if shape.bsdf >= materials.len() {
                 return Err(BuildError { loc: shape.loc.clone(), message: format!("BSDF index {} out of range", shape.bsdf) });
             }
-            let mut data = ShapeData { material: shape.bsdf as u32, light: None, normals: None, uvs: None, indices: Vec::new() };
+            let mut data = ShapeData { material: shape.bsdf as u32, light: None, interior: None, normals: None, uvs: None, indices: Vec::new() };
             let light_shape = match &shape.geometry {
                 Geometry::Mesh(mesh) => {
                     let tris = add_mesh(mesh, si as u32, shape.emitter.is_some(), &mut prims, &mut refs, &mut stats, &shape.loc)?;
@@ -260,6 +294,14 @@ impl Scene {
                     Some((LightShape::Sphere { center, radius, flip: flip_normals }, 4.0 * std::f32::consts::PI * radius * radius))
                 }
             };
+            if let Some(m) = &shape.interior {
+                let rgb = spectrum(&m.sigma_t);
+                if !rgb.is_finite() || rgb.0.min_element() < 0.0 {
+                    return Err(BuildError { loc: m.loc.clone(), message: "sigma_t must be finite and non-negative".into() });
+                }
+                data.interior = Some(media.len() as u32);
+                media.push((rgb, spectral.then(|| to_spectrum(&m.sigma_t, Role::Unbounded))));
+            }
             if let Some(em) = &shape.emitter {
                 let radiance = emission(&em.radiance);
                 if !radiance.is_finite() || radiance.0.min_element() < 0.0 {
@@ -309,7 +351,7 @@ impl Scene {
         if !spectral {
             light_spectra.clear();
         }
-        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, light_spectra, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
+        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, light_spectra, media, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
     }
 
     /// Closest hit along `ray`, with its surface data.
@@ -376,15 +418,39 @@ impl Scene {
         match self.spectral_materials.get(m) {
             None => self.materials[m],
             Some(sm) => {
-                let mut i = 0;
-                material_with(&sm.desc, Some(lambda), &mut |_, _| {
-                    let v = sm.spectra.get(i).map_or(SampledSpectrum::ZERO, |s| s.sample(lambda));
-                    i += 1;
-                    v
-                })
+                let (mut i, mut j) = (0, 0);
+                material_with(
+                    &sm.desc,
+                    Some(lambda),
+                    &mut |_, _| {
+                        let v = sm.spectra.get(i).map_or(SampledSpectrum::ZERO, |s| s.sample(lambda));
+                        i += 1;
+                        v
+                    },
+                    &mut |d, a, e| {
+                        // Replays the build's lookups in order; a mismatch would be a bug, and
+                        // falls back to the (locking) cache rather than failing.
+                        let t = sm.tables.get(j).copied().unwrap_or_else(|| CoatingTable::get(d, a, e));
+                        j += 1;
+                        t
+                    },
+                )
                 .unwrap_or(self.materials[m])
             }
         }
+    }
+
+    /// Transmittance exp(-sigma_t d) of the interior medium of `shape` over `distance` scene units,
+    /// at the path's wavelengths (spectral mode) or per RGB channel; `None` if it has no medium.
+    #[inline]
+    pub fn interior_transmittance(&self, shape: u32, distance: f32, lambda: &SampledWavelengths) -> Option<SampledSpectrum> {
+        let (rgb, spectrum) = &self.media[self.shapes[shape as usize].interior? as usize];
+        let sigma = match spectrum {
+            Some(s) => s.sample(lambda),
+            None => *rgb,
+        };
+        let e = sigma.0 * -distance;
+        Some(SampledSpectrum(pt_math::Vec4::new(e.x.exp(), e.y.exp(), e.z.exp(), e.w.exp())))
     }
 
     /// The emission spectrum of light `i` at the path's wavelengths, which multiplies the

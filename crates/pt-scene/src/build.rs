@@ -20,16 +20,16 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
     ("film", &["hdrfilm"], &["specfilm"]),
     ("sampler", &["independent", "stratified"], &["multijitter", "orthogonal", "ldsampler"]),
     ("rfilter", &["box", "tent", "gaussian"], &["mitchell", "catmullrom", "lanczos"]),
-    ("integrator", &["path", "direct", "moment", "radiosity"], &[
-        "volpath", "volpathmis", "aov", "prb", "prb_basic", "prb_projective", "direct_projective",
+    ("integrator", &["path", "volpath", "direct", "moment", "radiosity"], &[
+        "volpathmis", "aov", "prb", "prb_basic", "prb_projective", "direct_projective",
         "ptracer", "depth", "stokes", "prbvolpath",
     ]),
     ("shape", &["obj", "rectangle", "cube", "sphere", "disk"], &[
         "ply", "serialized", "cylinder", "shapegroup", "instance", "bsplinecurve", "linearcurve",
         "sdfgrid", "ellipsoids", "ellipsoidsmesh",
     ]),
-    ("bsdf", &["diffuse", "twosided", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm"], &[
-        "plastic", "roughplastic", "bumpmap", "normalmap", "blendbsdf", "mask", "null",
+    ("bsdf", &["diffuse", "twosided", "mask", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughplastic"], &[
+        "plastic", "bumpmap", "normalmap", "blendbsdf", "null",
         "polarizer", "retarder", "circular", "measured", "pplastic", "principled",
         "principledthin", "hair",
     ]),
@@ -37,7 +37,7 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "projector", "directionalarea", "sunsky",
     ]),
     ("texture", &["bitmap"], &["checkerboard", "mesh_attribute", "volume"]),
-    ("medium", &[], &["homogeneous", "heterogeneous"]),
+    ("medium", &["homogeneous"], &["heterogeneous"]),
     ("phase", &[], &["isotropic", "hg", "rayleigh", "sggx", "tabphase", "blendphase"]),
     ("volume", &[], &["constvolume", "gridvolume"]),
 ];
@@ -197,6 +197,8 @@ impl<'e> Builder<'e> {
                 "shape" => shapes.push(self.shape(el)?),
                 // Validated now; it enters `bsdfs` when a shape uses it.
                 "bsdf" => drop(self.bsdf_desc(el)?),
+                // Validated now; shapes use it through <ref name="interior" id="..."/>.
+                "medium" => drop(medium(el)?),
                 "emitter" if el.attr("type") == Some("area") => return Err(self.top_level_emitter(el)),
                 "emitter" => lights.push(self.light(el)?),
                 "film" | "sampler" => {
@@ -459,6 +461,7 @@ impl<'e> Builder<'e> {
         let v = ObjectView::parse(el)?;
         let desc = match v.plugin.as_str() {
             "path" => path_integrator(&v)?,
+            "volpath" => IntegratorDesc { kind: IntegratorKind::VolPath, ..path_integrator(&v)? },
             "direct" => direct_integrator(&v)?,
             "moment" => self.moment(&v)?,
             "radiosity" => radiosity_integrator(&v)?,
@@ -521,7 +524,7 @@ impl<'e> Builder<'e> {
             "obj" => self.obj(&v, &to_world, flip)?,
             _ => return Err(plugin_error(el)),
         };
-        let (bsdf, emitter) = self.shape_children(&v)?;
+        let (bsdf, emitter, interior) = self.shape_children(&v)?;
         v.finish()?;
         let bsdf = match bsdf {
             Some(b) => b,
@@ -534,7 +537,7 @@ impl<'e> Builder<'e> {
             geometry,
             bsdf,
             emitter,
-            interior: None,
+            interior,
         })
     }
 
@@ -571,12 +574,13 @@ impl<'e> Builder<'e> {
         Ok(Geometry::Mesh(mesh))
     }
 
-    /// A shape's nested BSDF (or `<ref>` to one) and area emitter, at most one of each.
+    /// A shape's nested BSDF (or `<ref>` to one), area emitter and interior medium, at most one
+    /// of each.
     fn shape_children(
         &mut self,
         v: &ObjectView<'e>,
-    ) -> Result<(Option<usize>, Option<AreaEmitterDesc>)> {
-        let (mut bsdf, mut emitter) = (None, None);
+    ) -> Result<(Option<usize>, Option<AreaEmitterDesc>, Option<MediumDesc>)> {
+        let (mut bsdf, mut emitter, mut interior) = (None, None, None);
         for child in &v.children {
             let target = self.resolve(child)?;
             let once = |what: &str| {
@@ -590,10 +594,32 @@ impl<'e> Builder<'e> {
                 "bsdf" => bsdf = Some(self.bsdf_for_shape(target)?),
                 "emitter" if emitter.is_some() => return Err(once("emitter")),
                 "emitter" => emitter = Some(self.area_emitter(target)?),
-                _ => return Err(misplaced(child, target, v, "bsdf or emitter")),
+                "medium" => {
+                    let written = child.written();
+                    match written.attr("name") {
+                        Some("interior") if interior.is_some() => return Err(once("interior medium")),
+                        Some("interior") => interior = Some(medium(target)?),
+                        Some("exterior") => {
+                            return Err(SceneError::at(
+                                &written.loc,
+                                "exterior media are not yet supported (not yet implemented): the space outside all shapes is vacuum; give the medium to the shape that encloses it as name=\"interior\"",
+                            ))
+                        }
+                        other => {
+                            return Err(SceneError::at(
+                                &written.loc,
+                                format!(
+                                    "a shape's <medium> needs name=\"interior\" or name=\"exterior\", got {}",
+                                    other.map_or("none".to_string(), |n| format!("\"{n}\""))
+                                ),
+                            ))
+                        }
+                    }
+                }
+                _ => return Err(misplaced(child, target, v, "bsdf, emitter or medium")),
             }
         }
-        Ok((bsdf, emitter))
+        Ok((bsdf, emitter, interior))
     }
 
     // -----------------------------------------------------------------------------------------
@@ -671,7 +697,14 @@ impl<'e> Builder<'e> {
             "twosided" => BsdfKind::TwoSided {
                 inner: Box::new(self.twosided_inner(&v)?),
             },
-            "orennayar" | "minnaert" | "dielectric" | "thindielectric" | "roughdielectric" | "conductor" | "roughconductor" | "thinfilm" => {
+            "mask" => {
+                let opacity = v.float("opacity")?.unwrap_or(0.5);
+                if !(0.0..=1.0).contains(&opacity) {
+                    return Err(v.prop_error("opacity", format!("opacity must be in [0, 1], got {opacity}")));
+                }
+                BsdfKind::Mask { opacity, inner: Box::new(self.single_inner(&v, "mask")?) }
+            }
+            "orennayar" | "minnaert" | "dielectric" | "thindielectric" | "roughdielectric" | "conductor" | "roughconductor" | "thinfilm" | "roughplastic" => {
                 no_children(&v)?;
                 crate::materials::bsdf_kind(&v)?
             }
@@ -683,6 +716,22 @@ impl<'e> Builder<'e> {
             id: el.attr("id").map(str::to_string),
             kind,
         })
+    }
+
+    /// The one nested BSDF of a wrapper such as `mask`.
+    fn single_inner(&mut self, v: &ObjectView<'e>, what: &str) -> Result<BsdfDesc> {
+        let mut inner = None;
+        for child in &v.children {
+            let target = self.resolve(child)?;
+            if target.tag != "bsdf" {
+                return Err(misplaced(child, target, v, "bsdf"));
+            }
+            if inner.is_some() {
+                return Err(SceneError::at(&child.written().loc, format!("{what} takes one nested <bsdf>")));
+            }
+            inner = Some(self.bsdf_desc(target)?);
+        }
+        inner.ok_or_else(|| SceneError::at(&v.el.loc, format!("{what} needs one nested <bsdf> or <ref>")))
     }
 
     fn twosided_inner(&mut self, v: &ObjectView<'e>) -> Result<BsdfDesc> {
@@ -851,6 +900,54 @@ fn path_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
         radiosity: RadiosityOptions::default(),
         loc: SourceLoc::default(),
     })
+}
+
+/// `homogeneous` medium, purely absorbing: `sigma_t` (extinction per scene unit: float, rgb or
+/// spectrum; default 1), `scale` (multiplies sigma_t; default 1), `albedo` (must be 0: scattering
+/// media are not implemented, and Mitsuba's default albedo is 0.75, so it must be written),
+/// `sample_emitters` and `has_spectral_extinction` (accepted; no effect on an absorbing medium).
+fn medium(el: &Element) -> Result<MediumDesc> {
+    let v = ObjectView::parse(el)?;
+    if v.plugin != "homogeneous" {
+        return Err(plugin_error(el));
+    }
+    if let Some(child) = v.children.first() {
+        let what = child.written();
+        return Err(SceneError::at(
+            &what.loc,
+            "a phase function or nested object in a medium is not yet supported (not yet implemented): media here only absorb",
+        ));
+    }
+    let sigma_t = v.spectrum("sigma_t")?.unwrap_or(SpectrumDesc::Constant(1.0));
+    let scale = v.float("scale")?.unwrap_or(1.0);
+    if !(scale.is_finite() && scale >= 0.0) {
+        return Err(v.prop_error("scale", format!("scale must be finite and >= 0, got {scale}")));
+    }
+    if sigma_t.values().iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
+        return Err(v.prop_error("sigma_t", "sigma_t must be finite and >= 0"));
+    }
+    let albedo = v.spectrum("albedo")?;
+    let absorbing = matches!(&albedo, Some(a) if a.values().iter().all(|x| *x == 0.0));
+    if !absorbing {
+        let message = if albedo.is_none() {
+            "a medium without 'albedo' scatters (Mitsuba's default albedo is 0.75); scattering media are not yet supported (not yet implemented): write <float name=\"albedo\" value=\"0\"/> for an absorbing medium"
+        } else {
+            "scattering media (albedo > 0) are not yet supported (not yet implemented): only albedo 0 (pure absorption, Beer-Lambert)"
+        };
+        return Err(match albedo {
+            Some(_) => v.prop_error("albedo", message),
+            None => SceneError::at(&el.loc, message),
+        });
+    }
+    v.boolean("sample_emitters")?;
+    v.boolean("has_spectral_extinction")?;
+    v.finish()?;
+    let sigma_t = match sigma_t {
+        SpectrumDesc::Constant(c) => SpectrumDesc::Constant(c * scale),
+        SpectrumDesc::Rgb(c) => SpectrumDesc::Rgb(c.map(|x| x * scale)),
+        SpectrumDesc::Tabulated(p) => SpectrumDesc::Tabulated(std::sync::Arc::new(p.iter().map(|&(w, x)| (w, x * scale)).collect())),
+    };
+    Ok(MediumDesc { loc: el.loc.clone(), sigma_t })
 }
 
 /// `radiosity` (project extension): `patch_size` (float, scene units), `rays_per_patch`,

@@ -203,6 +203,9 @@ pub struct SamplerDesc {
 pub enum IntegratorKind {
     /// Unidirectional path tracing with NEE and MIS (Mitsuba `path`).
     Path,
+    /// Path tracing through media (Mitsuba `volpath`): as `Path`, and rays inside a shape with an
+    /// interior medium are attenuated by it. (`Path` ignores media, as Mitsuba's does.)
+    VolPath,
     /// Direct illumination only (Mitsuba `direct`): equivalent to `path` with max_depth 2.
     Direct,
     /// Radiosity (project extension `radiosity`): finite elements for diffuse scenes.
@@ -373,18 +376,19 @@ impl SceneDesc {
         fn bsdf_spectra(k: &BsdfKind) -> Vec<&SpectrumDesc> {
             match k {
                 BsdfKind::Diffuse { reflectance } | BsdfKind::OrenNayar { reflectance, .. } | BsdfKind::Minnaert { reflectance, .. } => vec![reflectance],
-                BsdfKind::TwoSided { inner } => bsdf_spectra(&inner.kind),
+                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } => bsdf_spectra(&inner.kind),
                 BsdfKind::Conductor { eta, k, specular_reflectance } | BsdfKind::RoughConductor { eta, k, specular_reflectance, .. } => {
                     vec![eta, k, specular_reflectance]
                 }
                 BsdfKind::Dielectric { .. } | BsdfKind::ThinDielectric { .. } | BsdfKind::RoughDielectric { .. } => vec![],
                 BsdfKind::ThinFilm { eta, k, .. } => vec![eta, k],
+                BsdfKind::RoughPlastic { diffuse_reflectance, specular_reflectance, .. } => vec![diffuse_reflectance, specular_reflectance],
             }
         }
         fn has_thin_film(k: &BsdfKind) -> bool {
             match k {
                 BsdfKind::ThinFilm { .. } => true,
-                BsdfKind::TwoSided { inner } => has_thin_film(&inner.kind),
+                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } => has_thin_film(&inner.kind),
                 _ => false,
             }
         }
@@ -441,6 +445,14 @@ pub enum BsdfKind {
     },
     /// Makes the inner BSDF act the same on both sides (Mitsuba `twosided`).
     TwoSided {
+        /// The wrapped BSDF.
+        inner: Box<BsdfDesc>,
+    },
+    /// Opacity mask (Mitsuba `mask`): with probability `opacity` light meets the inner BSDF,
+    /// otherwise it passes straight through.
+    Mask {
+        /// Opacity in [0, 1].
+        opacity: f32,
         /// The wrapped BSDF.
         inner: Box<BsdfDesc>,
     },
@@ -511,6 +523,23 @@ pub enum BsdfKind {
         eta: SpectrumDesc,
         /// Conductor base extinction coefficient (with `int_ior` None).
         k: SpectrumDesc,
+    },
+    /// Rough plastic: rough dielectric coating over a diffuse base (Mitsuba `roughplastic`).
+    RoughPlastic {
+        /// Albedo of the diffuse base.
+        diffuse_reflectance: SpectrumDesc,
+        /// Multiplier of the coating's reflection.
+        specular_reflectance: SpectrumDesc,
+        /// Coating index of refraction.
+        int_ior: f32,
+        /// Exterior index of refraction.
+        ext_ior: f32,
+        /// Microfacet distribution: `ggx` or `beckmann`.
+        distribution: String,
+        /// Roughness (isotropic).
+        alpha: f32,
+        /// Mitsuba's `nonlinear`: account for the colour shift of inner bounces.
+        nonlinear: bool,
     },
     /// Rough conductor (Mitsuba `roughconductor`).
     RoughConductor {

@@ -177,6 +177,30 @@ pub(crate) fn bsdf_kind(v: &ObjectView<'_>) -> Result<BsdfKind> {
                 }
             }
         }
+        "roughplastic" => {
+            let int_ior = ior(v, "int_ior", 1.49)?;
+            let ext_ior = ior(v, "ext_ior", 1.000277)?;
+            if int_ior == ext_ior {
+                return Err(v.prop_error("int_ior", "int_ior and ext_ior must differ (the coating would be invisible)"));
+            }
+            let (distribution, alpha_u, alpha_v) = microfacet(v)?;
+            if alpha_u != alpha_v {
+                return Err(v.prop_error("alpha_u", "roughplastic is isotropic (as in Mitsuba): give one alpha"));
+            }
+            let specular_reflectance = v.spectrum("specular_reflectance")?.unwrap_or(SpectrumDesc::Constant(1.0));
+            if specular_reflectance.values().iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
+                return Err(v.prop_error("specular_reflectance", "specular_reflectance must be finite and >= 0"));
+            }
+            BsdfKind::RoughPlastic {
+                diffuse_reflectance: albedo(v, "diffuse_reflectance")?,
+                specular_reflectance,
+                int_ior,
+                ext_ior,
+                distribution,
+                alpha: alpha_u,
+                nonlinear: v.boolean("nonlinear")?.unwrap_or(false),
+            }
+        }
         "conductor" => {
             let (eta, k, specular_reflectance) = conductor_ior(v)?;
             BsdfKind::Conductor { eta, k, specular_reflectance }

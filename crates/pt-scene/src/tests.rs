@@ -302,13 +302,12 @@ fn unknown_plugin_is_an_error() {
 fn unsupported_plugins_say_not_yet_implemented() {
     let cases = [
         "<bsdf type=\"plastic\"/>",
-        "<bsdf type=\"roughplastic\"/>",
         "<emitter type=\"projector\"/>",
         "<emitter type=\"sunsky\"/>",
         "<sensor type=\"orthographic\"/>",
         "<shape type=\"ply\"/>",
-        "<integrator type=\"volpath\"/>",
-        "<shape type=\"cube\"><bsdf type=\"mask\"/></shape>",
+        "<integrator type=\"volpathmis\"/>",
+        "<shape type=\"cube\"><bsdf type=\"blendbsdf\"/></shape>",
         "<shape type=\"cube\"><bsdf type=\"diffuse\"><texture type=\"bitmap\" name=\"reflectance\"/></bsdf></shape>",
         "<sensor type=\"perspective\"><film type=\"hdrfilm\"><rfilter type=\"mitchell\"/></film></sensor>",
     ];
@@ -1035,4 +1034,53 @@ fn physical_bsdfs_with_mitsuba_defaults_and_names() {
         let e = fail(&scene(body));
         assert!(e.to_string().contains(what), "{body}: {e}");
     }
+}
+
+// -------------------------------------------------------------------------------------------
+// Media and masks
+
+#[test]
+fn interior_medium_inline_and_by_reference_with_scale() {
+    let s = load(&scene(r#"<integrator type="volpath"/>
+<medium type="homogeneous" id="m"><rgb name="sigma_t" value="0.5, 0.25, 1"/><float name="scale" value="2"/><float name="albedo" value="0"/></medium>
+<shape type="sphere"><bsdf type="dielectric"/><ref name="interior" id="m"/></shape>
+<shape type="sphere"><bsdf type="dielectric"/><medium type="homogeneous" name="interior"><float name="sigma_t" value="3"/><rgb name="albedo" value="0,0,0"/></medium></shape>
+<shape type="sphere"/>"#))
+    .unwrap();
+    assert_eq!(s.integrator.kind, IntegratorKind::VolPath);
+    assert_eq!(s.shapes[0].interior.as_ref().unwrap().sigma_t, SpectrumDesc::Rgb([1.0, 0.5, 2.0]));
+    assert_eq!(s.shapes[1].interior.as_ref().unwrap().sigma_t, SpectrumDesc::Constant(3.0));
+    assert!(s.shapes[2].interior.is_none());
+}
+
+#[test]
+fn scattering_exterior_and_nameless_media_are_clear_errors() {
+    let e = fail(&scene(r#"<shape type="sphere"><medium type="homogeneous" name="interior"/></shape>"#));
+    assert_error(&e, 2, "medium type=\"homogeneous\"", "without 'albedo' scatters");
+    let e = fail(&scene(r#"<shape type="sphere"><medium type="homogeneous" name="interior"><float name="albedo" value="0.5"/></medium></shape>"#));
+    assert_error(&e, 2, "float name=\"albedo\"", "scattering media");
+    let e = fail(&scene(r#"<shape type="sphere"><medium type="homogeneous" name="exterior"><float name="albedo" value="0"/></medium></shape>"#));
+    assert!(e.message.contains("exterior media"), "{e}");
+    let e = fail(&scene(r#"<shape type="sphere"><medium type="homogeneous"><float name="albedo" value="0"/></medium></shape>"#));
+    assert!(e.message.contains("name=\"interior\""), "{e}");
+    let e = fail(&scene(r#"<shape type="sphere"><medium type="homogeneous" name="interior"><float name="albedo" value="0"/><float name="sigma_t" value="-1"/></medium></shape>"#));
+    assert!(e.message.contains("sigma_t"), "{e}");
+    let e = fail(&scene(r#"<shape type="sphere"><medium type="heterogeneous" name="interior"/></shape>"#));
+    assert!(e.message.contains("unsupported plugin medium \"heterogeneous\""), "{e}");
+}
+
+#[test]
+fn mask_wraps_one_bsdf_with_opacity_in_unit_range() {
+    let s = load(&scene(r#"<shape type="sphere"><bsdf type="mask"><float name="opacity" value="0.25"/><bsdf type="twosided"><bsdf type="diffuse"/></bsdf></bsdf></shape>"#)).unwrap();
+    match &s.bsdfs[s.shapes[0].bsdf].kind {
+        BsdfKind::Mask { opacity, inner } => {
+            assert_eq!(*opacity, 0.25);
+            assert!(matches!(inner.kind, BsdfKind::TwoSided { .. }));
+        }
+        k => panic!("expected a mask, got {k:?}"),
+    }
+    let e = fail(&scene(r#"<shape type="sphere"><bsdf type="mask"><float name="opacity" value="1.5"/><bsdf type="diffuse"/></bsdf></shape>"#));
+    assert!(e.message.contains("opacity must be in [0, 1]"), "{e}");
+    let e = fail(&scene(r#"<shape type="sphere"><bsdf type="mask"/></shape>"#));
+    assert!(e.message.contains("mask needs one nested <bsdf>"), "{e}");
 }
