@@ -123,6 +123,7 @@ const MODELS: &[(&str, &[&str])] = &[
     ("thindielectric", &["int_ior", "ext_ior", "eta"]),
     ("roughplastic", &["diffuse_reflectance", "specular_reflectance", "int_ior", "ext_ior", "distribution", "alpha", "nonlinear"]),
     ("thinfilm", &["thickness", "film_ior", "ext_ior", "int_ior", "material", "eta", "k"]),
+    ("roughthinfilm", &["thickness", "film_ior", "ext_ior", "int_ior", "material", "eta", "k", "distribution", "alpha", "alpha_u", "alpha_v"]),
 ];
 
 /// A model and its parameters as written by the user.

@@ -1,4 +1,4 @@
-"""Mitsuba 3 Python BSDF plugin `thinfilm`: the project's smooth thin-film interference model.
+"""Mitsuba 3 Python BSDF plugins `thinfilm` and `roughthinfilm`: the project's thin-film models.
 
 A port of the spectral path of crates/pt-bsdf/src/thin_film.rs (`ThinFilm::spectral` and
 `ThinFilm::sample`); that file's module documentation gives the physics (Born & Wolf 1999,
@@ -194,3 +194,73 @@ def register():
                     f"ext_ior={self.m_ext_ior}, {base}]")
 
     mi.register_bsdf("thinfilm", lambda props: ThinFilm(props))
+
+    class RoughThinFilm(mi.BSDF):
+        """`roughthinfilm` on a conductor base: a rough conductor (Walter et al. 2007) whose
+        Fresnel term is the film's Airy reflectance at the facet angle (Belcour & Barla 2017,
+        Sec. 3), as crates/pt-bsdf/src/rough_thin_film.rs. GGX or Beckmann, isotropic or not,
+        Mitsuba's visible-normal sampling and separable Smith G (as pt)."""
+
+        def __init__(self, props):
+            mi.BSDF.__init__(self, props)
+            get = lambda name, default: float(props.get(name)) if props.has_property(name) else default
+            self.m_thickness = get("thickness", 500.0)
+            self.m_film_ior = get("film_ior", 1.33)
+            self.m_ext_ior = get("ext_ior", 1.0)
+            if props.has_property("int_ior") or props.has_property("material"):
+                raise ValueError("roughthinfilm plugin: only a conductor base given by constant eta and k floats "
+                                 "is ported (the dielectric base is tested in pt's unit tests)")
+            self.m_eta = get("eta", 0.0)
+            self.m_k = get("k", 1.0)
+            dist = str(props.get("distribution")) if props.has_property("distribution") else "beckmann"
+            kind = {"ggx": mi.MicrofacetType.GGX, "beckmann": mi.MicrofacetType.Beckmann}[dist]
+            if props.has_property("alpha"):
+                au = av = get("alpha", 0.1)
+            else:
+                au, av = get("alpha_u", 0.1), get("alpha_v", 0.1)
+            self.m_distr = mi.MicrofacetDistribution(kind, au, av, True)
+            flags = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.FrontSide
+            self.m_components = [flags]
+            self.m_flags = flags
+
+        def _r(self, si, cos_h):
+            if not spectral:
+                raise RuntimeError("roughthinfilm plugin: spectral variants only")
+            nb = (mi.Spectrum(self.m_eta), mi.Spectrum(self.m_k))
+            return airy(dr.clip(cos_h, 0.0, 1.0), self.m_ext_ior, self.m_film_ior, nb, self.m_thickness, si.wavelengths)
+
+        def eval(self, ctx, si, wo, active=True):
+            valid = active & (si.wi.z > 0.0) & (wo.z > 0.0)
+            h = dr.normalize(si.wi + wo)
+            d = self.m_distr.eval(h)
+            g = self.m_distr.G(si.wi, wo, h)
+            f = self._r(si, dr.dot(si.wi, h)) * (d * g / (4.0 * si.wi.z))
+            return dr.select(valid & (d > 0.0), f, 0.0)
+
+        def pdf(self, ctx, si, wo, active=True):
+            valid = active & (si.wi.z > 0.0) & (wo.z > 0.0)
+            h = dr.normalize(si.wi + wo)
+            p = self.m_distr.pdf(si.wi, h) / (4.0 * dr.dot(wo, h))
+            return dr.select(valid & (dr.dot(wo, h) > 0.0), p, 0.0)
+
+        def eval_pdf(self, ctx, si, wo, active=True):
+            return self.eval(ctx, si, wo, active), self.pdf(ctx, si, wo, active)
+
+        def sample(self, ctx, si, sample1, sample2, active=True):
+            bs = mi.BSDFSample3f()
+            active = active & (si.wi.z > 0.0)
+            m, _ = self.m_distr.sample(si.wi, sample2)
+            wo = mi.reflect(si.wi, m)
+            bs.wo = wo
+            bs.eta = mi.Float(1.0)
+            bs.sampled_component = mi.UInt32(0)
+            bs.sampled_type = mi.UInt32(+mi.BSDFFlags.GlossyReflection)
+            bs.pdf = self.pdf(ctx, si, wo, active)
+            ok = active & (wo.z > 0.0) & (bs.pdf > 0.0)
+            weight = self.eval(ctx, si, wo, ok) / dr.select(ok, bs.pdf, 1.0)
+            return bs, dr.select(ok, weight, 0.0)
+
+        def to_string(self):
+            return f"RoughThinFilm[python plugin, thickness={self.m_thickness} nm, eta={self.m_eta}, k={self.m_k}]"
+
+    mi.register_bsdf("roughthinfilm", lambda props: RoughThinFilm(props))

@@ -34,6 +34,7 @@ pub mod minnaert;
 pub mod oren_nayar;
 pub mod rough_dielectric;
 pub mod rough_plastic;
+pub mod rough_thin_film;
 pub mod thin_dielectric;
 pub mod thin_film;
 
@@ -45,6 +46,7 @@ pub use minnaert::Minnaert;
 pub use oren_nayar::{OrenNayar, OrenNayarVariant};
 pub use rough_dielectric::RoughDielectric;
 pub use rough_plastic::{CoatingTable, RoughPlastic};
+pub use rough_thin_film::RoughThinFilm;
 pub use thin_dielectric::ThinDielectric;
 pub use thin_film::{FilmBase, FilmColor, ThinFilm};
 use pt_math::{Vec2, Vec3, Vec4};
@@ -99,6 +101,8 @@ pub enum Bsdf {
     ThinFilm(ThinFilm),
     /// Rough dielectric coating over a diffuse base (Mitsuba `roughplastic`).
     RoughPlastic(RoughPlastic),
+    /// Thin film on a rough conductor or dielectric base (handles both sides for a dielectric).
+    RoughThinFilm(RoughThinFilm),
 }
 
 impl Bsdf {
@@ -116,6 +120,7 @@ impl Bsdf {
             Bsdf::RoughDielectric(m) => m.eval(wo, wi),
             Bsdf::ThinFilm(m) => m.eval(wo, wi),
             Bsdf::RoughPlastic(m) => m.eval(wo, wi),
+            Bsdf::RoughThinFilm(m) => m.eval(wo, wi),
         }
     }
 
@@ -133,6 +138,7 @@ impl Bsdf {
             Bsdf::RoughDielectric(m) => m.pdf(wo, wi),
             Bsdf::ThinFilm(m) => m.pdf(wo, wi),
             Bsdf::RoughPlastic(m) => m.pdf(wo, wi),
+            Bsdf::RoughThinFilm(m) => m.pdf(wo, wi),
         }
     }
 
@@ -150,6 +156,7 @@ impl Bsdf {
             Bsdf::RoughDielectric(m) => m.sample(wo, u_lobe, u),
             Bsdf::ThinFilm(m) => m.sample(wo, u_lobe, u),
             Bsdf::RoughPlastic(m) => m.sample(wo, u_lobe, u),
+            Bsdf::RoughThinFilm(m) => m.sample(wo, u_lobe, u),
         }
     }
 
@@ -159,6 +166,7 @@ impl Bsdf {
         match self {
             Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_) => true,
             Bsdf::ThinFilm(m) => m.is_transmissive(),
+            Bsdf::RoughThinFilm(m) => m.film.is_transmissive(),
             _ => false,
         }
     }
@@ -172,7 +180,8 @@ impl Bsdf {
             | Bsdf::Minnaert(_)
             | Bsdf::RoughConductor(_)
             | Bsdf::RoughDielectric(_)
-            | Bsdf::RoughPlastic(_) => true,
+            | Bsdf::RoughPlastic(_)
+            | Bsdf::RoughThinFilm(_) => true,
             Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::ThinFilm(_) => false,
         }
     }

@@ -174,7 +174,7 @@ impl ThinFilm {
     }
 
     /// Number of meaningful lanes.
-    fn lanes(&self) -> usize {
+    pub(crate) fn lanes(&self) -> usize {
         match self.color {
             FilmColor::Lanes => 4,
             FilmColor::RgbIntegrated => 3,

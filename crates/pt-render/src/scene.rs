@@ -5,7 +5,7 @@ use crate::camera::Camera;
 use crate::geometry::{intersect_triangle, Interaction, Primitive};
 use crate::light::{AreaLight, EnvMap, Light, LightShape, LightTriangle, SpotCone};
 use pt_bsdf::{
-    Bsdf, CoatingTable, Conductor, Dielectric, Distribution, RoughPlastic, FilmBase, Lambert, ThinFilm, Microfacet, Minnaert, OrenNayar, OrenNayarVariant, RoughConductor, RoughDielectric,
+    Bsdf, CoatingTable, Conductor, Dielectric, Distribution, RoughPlastic, RoughThinFilm, FilmBase, Lambert, ThinFilm, Microfacet, Minnaert, OrenNayar, OrenNayarVariant, RoughConductor, RoughDielectric,
     SurfaceBsdf, ThinDielectric,
 };
 use pt_math::{Distribution1D, Frame, Mat3, Ray, Vec2, Vec3, Vec3A};
@@ -174,6 +174,17 @@ fn material_with(
                 None => ThinFilm::rgb(*thickness, *film_ior, *ext_ior, base),
             };
             one_sided(Bsdf::ThinFilm(film))
+        }
+        BsdfKind::RoughThinFilm { thickness, film_ior, ext_ior, int_ior, eta, k, distribution, alpha_u, alpha_v } => {
+            let base = match int_ior {
+                Some(ior) => FilmBase::Dielectric { ior: *ior },
+                None => FilmBase::Conductor { eta: val(eta, Role::Unbounded), k: val(k, Role::Unbounded) },
+            };
+            let film = match lambda {
+                Some(l) => ThinFilm::spectral(*thickness, *film_ior, *ext_ior, base, l.lambda()),
+                None => ThinFilm::rgb(*thickness, *film_ior, *ext_ior, base),
+            };
+            one_sided(Bsdf::RoughThinFilm(RoughThinFilm::new(film, mf(distribution, *alpha_u, *alpha_v)?)))
         }
         BsdfKind::OrenNayar { reflectance, sigma, variant } => {
             let v = OrenNayarVariant::from_name(variant).ok_or_else(|| BuildError { loc: desc.loc.clone(), message: format!("unknown Oren-Nayar variant '{variant}'") })?;

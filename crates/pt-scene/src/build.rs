@@ -28,7 +28,7 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "ply", "serialized", "cylinder", "shapegroup", "instance", "bsplinecurve", "linearcurve",
         "sdfgrid", "ellipsoids", "ellipsoidsmesh",
     ]),
-    ("bsdf", &["diffuse", "twosided", "mask", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughplastic"], &[
+    ("bsdf", &["diffuse", "twosided", "mask", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "roughplastic"], &[
         "plastic", "bumpmap", "normalmap", "blendbsdf", "null",
         "polarizer", "retarder", "circular", "measured", "pplastic", "principled",
         "principledthin", "hair",
@@ -704,7 +704,7 @@ impl<'e> Builder<'e> {
                 }
                 BsdfKind::Mask { opacity, inner: Box::new(self.single_inner(&v, "mask")?) }
             }
-            "orennayar" | "minnaert" | "dielectric" | "thindielectric" | "roughdielectric" | "conductor" | "roughconductor" | "thinfilm" | "roughplastic" => {
+            "orennayar" | "minnaert" | "dielectric" | "thindielectric" | "roughdielectric" | "conductor" | "roughconductor" | "thinfilm" | "roughthinfilm" | "roughplastic" => {
                 no_children(&v)?;
                 crate::materials::bsdf_kind(&v)?
             }

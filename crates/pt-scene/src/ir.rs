@@ -381,13 +381,13 @@ impl SceneDesc {
                     vec![eta, k, specular_reflectance]
                 }
                 BsdfKind::Dielectric { .. } | BsdfKind::ThinDielectric { .. } | BsdfKind::RoughDielectric { .. } => vec![],
-                BsdfKind::ThinFilm { eta, k, .. } => vec![eta, k],
+                BsdfKind::ThinFilm { eta, k, .. } | BsdfKind::RoughThinFilm { eta, k, .. } => vec![eta, k],
                 BsdfKind::RoughPlastic { diffuse_reflectance, specular_reflectance, .. } => vec![diffuse_reflectance, specular_reflectance],
             }
         }
         fn has_thin_film(k: &BsdfKind) -> bool {
             match k {
-                BsdfKind::ThinFilm { .. } => true,
+                BsdfKind::ThinFilm { .. } | BsdfKind::RoughThinFilm { .. } => true,
                 BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } => has_thin_film(&inner.kind),
                 _ => false,
             }
@@ -523,6 +523,28 @@ pub enum BsdfKind {
         eta: SpectrumDesc,
         /// Conductor base extinction coefficient (with `int_ior` None).
         k: SpectrumDesc,
+    },
+    /// Thin film on a rough base (project extension `roughthinfilm`): the smooth film's
+    /// parameters plus a microfacet distribution.
+    RoughThinFilm {
+        /// Film thickness, nm.
+        thickness: f32,
+        /// Film index of refraction.
+        film_ior: f32,
+        /// Exterior index of refraction.
+        ext_ior: f32,
+        /// Dielectric base index (`int_ior`), or None for a conductor base.
+        int_ior: Option<f32>,
+        /// Conductor base real index (with `int_ior` None).
+        eta: SpectrumDesc,
+        /// Conductor base extinction coefficient (with `int_ior` None).
+        k: SpectrumDesc,
+        /// Microfacet distribution: `ggx` or `beckmann`.
+        distribution: String,
+        /// Roughness along the tangent.
+        alpha_u: f32,
+        /// Roughness along the bitangent.
+        alpha_v: f32,
     },
     /// Rough plastic: rough dielectric coating over a diffuse base (Mitsuba `roughplastic`).
     RoughPlastic {

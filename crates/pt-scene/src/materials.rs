@@ -205,7 +205,7 @@ pub(crate) fn bsdf_kind(v: &ObjectView<'_>) -> Result<BsdfKind> {
             let (eta, k, specular_reflectance) = conductor_ior(v)?;
             BsdfKind::Conductor { eta, k, specular_reflectance }
         }
-        "thinfilm" => {
+        "thinfilm" | "roughthinfilm" => {
             let thickness = v.float("thickness")?.unwrap_or(500.0);
             if !(thickness >= 0.0) {
                 return Err(v.prop_error("thickness", format!("thickness (nm) must be >= 0, got {thickness}")));
@@ -216,7 +216,7 @@ pub(crate) fn bsdf_kind(v: &ObjectView<'_>) -> Result<BsdfKind> {
             if dielectric && (v.has("material") || v.has("eta") || v.has("k")) {
                 return Err(v.prop_error("int_ior", "give either int_ior (dielectric base) or material / eta and k (conductor base)"));
             }
-            if dielectric {
+            let smooth = if dielectric {
                 let int_ior = ior(v, "int_ior", 1.5)?;
                 BsdfKind::ThinFilm { thickness, film_ior, ext_ior, int_ior: Some(int_ior), eta: SpectrumDesc::Constant(0.0), k: SpectrumDesc::Constant(0.0) }
             } else {
@@ -225,6 +225,13 @@ pub(crate) fn bsdf_kind(v: &ObjectView<'_>) -> Result<BsdfKind> {
                     return Err(v.prop_error("specular_reflectance", "specular_reflectance is not supported on thinfilm"));
                 }
                 BsdfKind::ThinFilm { thickness, film_ior, ext_ior, int_ior: None, eta, k }
+            };
+            match smooth {
+                BsdfKind::ThinFilm { thickness, film_ior, ext_ior, int_ior, eta, k } if v.plugin == "roughthinfilm" => {
+                    let (distribution, alpha_u, alpha_v) = microfacet(v)?;
+                    BsdfKind::RoughThinFilm { thickness, film_ior, ext_ior, int_ior, eta, k, distribution, alpha_u, alpha_v }
+                }
+                smooth => smooth,
             }
         }
         "roughconductor" => {
