@@ -39,7 +39,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use pt_bsdf::{
     Bsdf, Conductor, Dielectric, Distribution, FilmBase, Lambert, Microfacet, Minnaert, OrenNayar, OrenNayarVariant, RoughConductor,
-    RoughDielectric, RoughPlastic, ThinDielectric, ThinFilm,
+    RoughDielectric, RoughPlastic, RoughThinFilm, ThinDielectric, ThinFilm,
 };
 use pt_bsdf::rough_plastic::CoatingTable;
 use pt_math::{Vec2, Vec3, Vec4};
@@ -237,6 +237,25 @@ pub(crate) fn cases() -> Vec<Case> {
             }
         }
     }
+    // Rough thin film: the film of every facet (thickness 0, 500 nm and 1e5 nm beyond the
+    // range) over both bases, spectral lanes 360-830 nm and the RGB form.
+    for (fam, dist) in [("roughthinfilm-ggx", Distribution::Ggx), ("roughthinfilm-beckmann", Distribution::Beckmann)] {
+        for a in [1e-3f32, 0.05, 0.3, 1.0, f32::NAN] {
+            for d in [0.0f32, 500.0, 1e5] {
+                for (bname, base) in bases {
+                    let mf = Microfacet::new(dist, a, a);
+                    let ok = alpha_ok(a) && d <= 2000.0;
+                    let film = ThinFilm::spectral(d, 1.33, 1.0, base, lane_sets[0]);
+                    let detail = format!("thickness={d} base={bname} spectral");
+                    push(fam, "alpha", a, detail, ok, 1.0, Bsdf::RoughThinFilm(RoughThinFilm::new(film, mf)));
+                    let film = ThinFilm::rgb(d, 1.33, 1.0, base);
+                    let detail = format!("thickness={d} base={bname} rgb");
+                    // RGB form: bound 1.1, as the smooth RGB film.
+                    push(fam, "alpha", a, detail, ok, 1.1, Bsdf::RoughThinFilm(RoughThinFilm::new(film, mf)));
+                }
+            }
+        }
+    }
     // Every variant of `Bsdf` must be in the sweep: this match stops compiling when one is added.
     for c in &v {
         match c.bsdf {
@@ -249,7 +268,8 @@ pub(crate) fn cases() -> Vec<Case> {
             | Bsdf::ThinDielectric(_)
             | Bsdf::RoughDielectric(_)
             | Bsdf::ThinFilm(_)
-            | Bsdf::RoughPlastic(_) => {}
+            | Bsdf::RoughPlastic(_)
+            | Bsdf::RoughThinFilm(_) => {}
         }
     }
     v
@@ -384,6 +404,7 @@ pub(crate) fn chi2_resolvable(b: &Bsdf) -> bool {
         Bsdf::RoughConductor(m) => m.mf.alpha_u.min(m.mf.alpha_v) >= MIN_ALPHA,
         Bsdf::RoughDielectric(m) => m.mf.alpha_u.min(m.mf.alpha_v) >= MIN_ALPHA && (m.eta - 1.0).abs() >= 0.01,
         Bsdf::RoughPlastic(m) => m.mf.alpha_u.min(m.mf.alpha_v) >= MIN_ALPHA,
+        Bsdf::RoughThinFilm(m) => m.mf.alpha_u.min(m.mf.alpha_v) >= MIN_ALPHA,
         _ => true,
     }
 }
