@@ -240,7 +240,9 @@ pub(crate) fn cases() -> Vec<Case> {
     // Rough thin film: the film of every facet (thickness 0, 500 nm and 1e5 nm beyond the
     // range) over both bases, spectral lanes 360-830 nm and the RGB form.
     for (fam, dist) in [("roughthinfilm-ggx", Distribution::Ggx), ("roughthinfilm-beckmann", Distribution::Beckmann)] {
-        for a in [1e-3f32, 0.05, 0.3, 1.0, f32::NAN] {
+        // A small grid: each evaluation runs the Airy sum (and in RGB form the Belcour-Barla
+        // series) per facet, about 20x the cost of a rough conductor.
+        for a in [1e-3f32, 0.3] {
             for d in [0.0f32, 500.0, 1e5] {
                 for (bname, base) in bases {
                     let mf = Microfacet::new(dist, a, a);
