@@ -13,8 +13,11 @@ macro_rules! out {
     }};
 }
 
+mod atlas;
 mod converge;
+mod fireflies;
 mod lobes;
+mod stability;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand, ValueEnum};
@@ -49,6 +52,9 @@ enum Command {
     /// writes a CSV and an SVG/PNG chart.
     Converge(converge::ConvergeArgs),
     Lobes(lobes::LobesArgs),
+    /// Numerical stress sweep of every BSDF (NaN/Inf, energy gain, pdf mismatches, chi-square)
+    /// over angles and parameters beyond their documented ranges: CSV + Markdown report.
+    Stability(stability::StabilityArgs),
 }
 
 #[derive(Args)]
@@ -134,6 +140,11 @@ struct RenderArgs {
     /// Direct-light strategy: MIS of light and BSDF sampling, or one of them alone.
     #[arg(long, value_enum, default_value_t = StrategyArg::Mis)]
     strategy: StrategyArg,
+    /// Clamp each sample's radiance to at most this value (largest RGB channel; hue kept).
+    /// Off by default: it removes fireflies but adds bias (darkens caustics and highlights of
+    /// small lights); `pt stability` measures how much on a test scene.
+    #[arg(long, value_name = "X")]
+    clamp: Option<f32>,
     /// How next-event estimation picks a light.
     #[arg(long, value_enum, default_value_t = SelectionArg::Power)]
     light_selection: SelectionArg,
@@ -234,6 +245,7 @@ fn main() -> ExitCode {
         Command::Compare(args) => cmd_compare(args),
         Command::Converge(args) => converge::run(args),
         Command::Lobes(args) => lobes::run(args),
+        Command::Stability(args) => stability::run(args),
     };
     match result {
         Ok(code) => code,
@@ -320,6 +332,12 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
         }
         settings.path.max_depth = d;
     }
+    if let Some(c) = args.clamp {
+        if !(c > 0.0 && c.is_finite()) {
+            bail!("--clamp must be a positive finite radiance, got {c}");
+        }
+        settings.clamp = Some(c);
+    }
     settings.path.strategy = match args.strategy {
         StrategyArg::Mis => Strategy::Mis,
         StrategyArg::Bsdf => Strategy::Bsdf,
@@ -380,11 +398,14 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
     let out = pool.install(|| pt_render::render(&scene, &settings, &|n| bar.inc(n)));
     bar.finish_and_clear();
 
-    let extra = vec![
+    let extra: Vec<(String, String)> = vec![
         ("integrator".into(), "path".into()),
         ("max_depth".into(), settings.path.max_depth.to_string()),
         ("strategy".into(), format!("{:?}", settings.path.strategy).to_lowercase()),
-    ];
+    ]
+    .into_iter()
+    .chain(settings.clamp.map(|c| ("clamp".to_string(), c.to_string())))
+    .collect();
     write_outputs(&args, &desc, &settings, &out, scene.mode.name(), extra, &output)?;
     if !args.quiet {
         let secs = out.time.as_secs_f64();
@@ -439,8 +460,8 @@ fn write_outputs(
 /// `pt render --integrator radiosity` (or a scene whose integrator is `radiosity`).
 fn render_radiosity(args: &RenderArgs, desc: &SceneDesc, settings: &RenderSettings, output: &Path, pool: &rayon::ThreadPool) -> Result<ExitCode> {
     use pt_radiosity::{Display, RadiosityParams, Reciprocity, Solver};
-    if args.max_depth.is_some() || !matches!(args.strategy, StrategyArg::Mis) || !matches!(args.light_selection, SelectionArg::Power) {
-        bail!("--max-depth, --strategy and --light-selection apply to the path tracer, not to radiosity");
+    if args.max_depth.is_some() || args.clamp.is_some() || !matches!(args.strategy, StrategyArg::Mis) || !matches!(args.light_selection, SelectionArg::Power) {
+        bail!("--max-depth, --clamp, --strategy and --light-selection apply to the path tracer, not to radiosity");
     }
     let o = &desc.integrator.radiosity;
     let r = &args.radiosity;
@@ -620,6 +641,16 @@ fn cmd_compare(args: CompareArgs) -> Result<ExitCode> {
     out!("{:<22} {} / {}", "non-finite pixels", img.nonfinite_pixels(), reference.nonfinite_pixels());
     let flip = pt_image::flip::flip(&img, &reference, args.flip_exposure)?;
     out!("{:<22} {:>12.6}   (mean, tone-mapped at {:+} stops, {} px/degree)", "FLIP", flip.mean, args.flip_exposure, pt_image::flip::DEFAULT_PIXELS_PER_DEGREE);
+    let ff = pt_image::fireflies::FireflyParams::default();
+    out!(
+        "{:<22} {} / {}   (image / reference: luminance > median + {} MAD-sigma of the {}x{} neighbourhood)",
+        "fireflies",
+        pt_image::fireflies::count_fireflies(&img, ff),
+        pt_image::fireflies::count_fireflies(&reference, ff),
+        ff.k,
+        2 * ff.radius + 1,
+        2 * ff.radius + 1
+    );
     let img_var = args.image_variance.clone().or_else(|| sibling_variance(&args.image));
     let ref_var = args.variance.clone().or_else(|| sibling_variance(&args.reference));
     let mut agree = img.nonfinite_pixels() == 0;

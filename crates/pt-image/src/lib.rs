@@ -13,6 +13,7 @@
 mod atomic;
 pub mod colormap;
 pub mod flip;
+pub mod fireflies;
 mod error;
 mod exr_io;
 pub mod metrics;

@@ -47,6 +47,7 @@ impl RenderSettings {
             seed: desc.sampler.seed,
             filter: desc.film.filter,
             path: PathSettings { max_depth, rr_depth: i.rr_depth, hide_emitters: i.hide_emitters, strategy: Strategy::Mis, media: i.kind == pt_scene::IntegratorKind::VolPath },
+            clamp: None,
         }
     }
 }

@@ -25,6 +25,12 @@ pub struct RenderSettings {
     pub filter: FilterDesc,
     /// Integrator settings.
     pub path: PathSettings,
+    /// Optional clamp of each sample's radiance (linear RGB): a sample whose largest channel
+    /// exceeds it is scaled down to it (hue kept, as pbrt-v4's `maxcomponentvalue`). Off by
+    /// default. It removes fireflies at the cost of **bias** (energy is lost wherever single
+    /// samples legitimately exceed it: caustics, small bright lights); `pt stability` reports
+    /// the bias on a test scene.
+    pub clamp: Option<f32>,
 }
 
 /// The rendered image with its per-pixel variance.
@@ -93,6 +99,19 @@ pub fn render(scene: &Scene, settings: &RenderSettings, progress: &(dyn Fn(u64) 
     RenderOutput { width: w, height: h, mean, variance, spp: settings.spp, time, nonfinite_samples: nonfinite }
 }
 
+/// Scales `rgb` so that its largest channel is at most `max` (non-finite samples pass through,
+/// so that they are still counted and left out by the film).
+#[inline]
+pub fn clamp_sample(rgb: [f32; 3], max: f32) -> [f32; 3] {
+    let m = rgb[0].max(rgb[1]).max(rgb[2]);
+    if m > max && m.is_finite() {
+        let k = max / m;
+        [rgb[0] * k, rgb[1] * k, rgb[2] * k]
+    } else {
+        rgb
+    }
+}
+
 fn render_pixel(scene: &Scene, settings: &RenderSettings, x: u32, y: u32) -> PixelStats {
     let mut stats = PixelStats::default();
     let pixel = y as u64 * settings.width as u64 + x as u64;
@@ -107,7 +126,11 @@ fn render_pixel(scene: &Scene, settings: &RenderSettings, x: u32, y: u32) -> Pix
         let offset = sample_filter(&settings.filter, &mut sampler);
         let ray = scene.camera.generate_ray(centre + offset);
         let l = li(scene, ray, &settings.path, &mut sampler, &lambda);
-        stats.add(if spectral { spectrum_to_srgb(l, &lambda) } else { l.rgb() });
+        let rgb = if spectral { spectrum_to_srgb(l, &lambda) } else { l.rgb() };
+        stats.add(match settings.clamp {
+            Some(c) => clamp_sample(rgb, c),
+            None => rgb,
+        });
     }
     stats
 }
