@@ -126,7 +126,10 @@ impl GltfPbr {
         let k = (1.0 - self.specular_albedo(wo.z)) * (1.0 - self.specular_albedo(wi.z)) * self.inv_one_minus_eavg;
         let mut f = self.base_color * ((1.0 - m) * FRAC_1_PI * k);
         let h = (wo + wi).normalize_or_zero();
-        if h.z > 0.0 {
+        // Same support as the specular pdf (wo.h > 0), as in RoughPlastic: at grazing angles the
+        // rounded wo.h can be <= 0 next to the mirror direction, where D / (4 cos cos) is huge
+        // and the pdf 0 (`pt stability` found albedo 2e10 at roughness 0, 89.99 degrees).
+        if h.z > 0.0 && wo.dot(h) > 0.0 {
             let d = self.mf.d(h);
             let v = d * self.mf.g2(wo, wi) / (4.0 * wi.z * wo.z);
             if v.is_finite() && v > 0.0 {
@@ -208,14 +211,41 @@ struct AlbedoTables {
     b_avg: Vec<f32>,
 }
 
-/// Grid nodes in mu = cos(theta_o) over [0, 1] (node 0 evaluated at mu = 1e-3).
-const N_MU: usize = 32;
-/// Grid nodes in sqrt(alpha) (the perceptual roughness) over [0, 1] (node 0 evaluated at the
-/// smallest alpha, 1e-3): E changes fastest at small alpha, where this grid is densest.
-const N_ALPHA: usize = 24;
+/// Grid nodes in x = mu^(1/4), mu = cos(theta_o), over [0, 1] (node 0 evaluated at mu = 1e-9).
+/// The fourth root puts nodes close together near grazing incidence, where masking makes E(mu)
+/// fall steeply at small roughness (it depends on alpha tan(theta)): with 32 nodes uniform in
+/// mu, linear interpolation between mu = 1e-3 and 1/31 underestimated E at 89 degrees, the
+/// coupled diffuse term took the difference, and the albedo reached 1.059 (`pt stability`).
+const N_MU: usize = 64;
+/// Grid nodes in alpha^(1/4) over [1e-3^(1/4), 1] (see [`alpha_coordinate`]): E changes
+/// fastest at small alpha, where this grid is densest.
+const N_ALPHA: usize = 32;
 /// Quadrature points per axis for each node: a midpoint rule over the visible-normal
 /// sampler's unit square (48^2 points; its error, measured against 256^2 points, is below 1e-3).
 const N_QUAD: usize = 48;
+
+/// sqrt of the smallest alpha the microfacet code uses ([`crate::microfacet::MIN_ALPHA`]): the
+/// first node of the roughness axis. (With the axis starting at 0, node 0 was evaluated at the
+/// clamped alpha 1e-3 but looked up as alpha 0, so roughness 0 read E at alpha ~0.0016: 2.3%
+/// too low at 89.9 degrees, and the coupled diffuse gained that much energy.)
+const R_MIN: f32 = 0.031_622_78;
+
+/// Fractional node index of `alpha` on the roughness axis: uniform in alpha^(1/4) (the square
+/// root of the perceptual roughness) from sqrt(R_MIN), which puts nodes densely at small
+/// roughness, where E at grazing angles changes fastest with alpha (uniform in sqrt(alpha), the
+/// interpolation left 1.3% of energy gain at roughness 0.05 and 89 degrees).
+#[inline]
+fn alpha_coordinate(alpha: f32) -> f32 {
+    let s_min = R_MIN.sqrt();
+    ((alpha.clamp(0.0, 1.0).sqrt().sqrt() - s_min) / (1.0 - s_min)).clamp(0.0, 1.0) * (N_ALPHA - 1) as f32
+}
+
+/// The alpha of node `ia` of the roughness axis (inverse of [`alpha_coordinate`]).
+fn node_alpha(ia: usize) -> f32 {
+    let s_min = R_MIN.sqrt();
+    let s = s_min + (1.0 - s_min) * ia as f32 / (N_ALPHA - 1) as f32;
+    s.powi(4)
+}
 
 fn albedo_tables() -> &'static AlbedoTables {
     static T: OnceLock<AlbedoTables> = OnceLock::new();
@@ -227,11 +257,11 @@ impl AlbedoTables {
         let mut a = vec![0.0; N_MU * N_ALPHA];
         let mut b = vec![0.0; N_MU * N_ALPHA];
         for ia in 0..N_ALPHA {
-            let r = ia as f32 / (N_ALPHA - 1) as f32;
-            let alpha = r * r;
+            let alpha = node_alpha(ia);
             let mf = Microfacet::new(Distribution::Ggx, alpha, alpha);
             for im in 0..N_MU {
-                let mu = (im as f32 / (N_MU - 1) as f32).max(1e-3);
+                let x = im as f32 / (N_MU - 1) as f32;
+                let mu = x.powi(4).max(1e-9);
                 let wo = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
                 let (mut sa, mut sb) = (0.0f64, 0.0f64);
                 for i in 0..N_QUAD {
@@ -257,26 +287,26 @@ impl AlbedoTables {
                 b[ia * N_MU + im] = (sb / n) as f32;
             }
         }
-        // E_avg = 2 int_0^1 E(mu) mu dmu, trapezoidal over the mu nodes.
+        // E_avg = 2 int_0^1 E(mu) mu dmu = 8 int_0^1 E(x^4) x^7 dx, trapezoidal over the x nodes.
         let avg = |t: &[f32], ia: usize| -> f32 {
             let h = 1.0 / (N_MU - 1) as f32;
             let mut s = 0.0;
             for im in 0..N_MU - 1 {
-                let (m0, m1) = (im as f32 * h, (im + 1) as f32 * h);
-                s += 0.5 * h * (t[ia * N_MU + im] * m0 + t[ia * N_MU + im + 1] * m1);
+                let (x0, x1) = (im as f32 * h, (im + 1) as f32 * h);
+                s += 0.5 * h * (t[ia * N_MU + im] * x0.powi(7) + t[ia * N_MU + im + 1] * x1.powi(7));
             }
-            2.0 * s
+            8.0 * s
         };
         let a_avg = (0..N_ALPHA).map(|ia| avg(&a, ia)).collect();
         let b_avg = (0..N_ALPHA).map(|ia| avg(&b, ia)).collect();
         AlbedoTables { a, b, a_avg, b_avg }
     }
 
-    /// Bilinear lookup of a table at (mu, sqrt(alpha)).
+    /// Bilinear lookup of a table at (mu^(1/4), sqrt(alpha)).
     #[inline]
     fn lookup(t: &[f32], mu: f32, alpha: f32) -> f32 {
-        let x = mu.clamp(0.0, 1.0) * (N_MU - 1) as f32;
-        let y = alpha.clamp(0.0, 1.0).sqrt() * (N_ALPHA - 1) as f32;
+        let x = mu.clamp(0.0, 1.0).sqrt().sqrt() * (N_MU - 1) as f32;
+        let y = alpha_coordinate(alpha);
         let (x0, y0) = ((x as usize).min(N_MU - 2), (y as usize).min(N_ALPHA - 2));
         let (fx, fy) = (x - x0 as f32, y - y0 as f32);
         let at = |i: usize, j: usize| t[j * N_MU + i];
@@ -291,7 +321,7 @@ impl AlbedoTables {
 
     /// E_avg = f0 A_avg + (1 - f0) B_avg, linear in sqrt(alpha) between nodes.
     fn e_avg(&self, alpha: f32, f0: f32) -> f32 {
-        let y = alpha.clamp(0.0, 1.0).sqrt() * (N_ALPHA - 1) as f32;
+        let y = alpha_coordinate(alpha);
         let y0 = (y as usize).min(N_ALPHA - 2);
         let fy = y - y0 as f32;
         let l = |t: &[f32]| t[y0] * (1.0 - fy) + t[y0 + 1] * fy;
