@@ -102,6 +102,14 @@ struct RenderArgs {
     /// Mitsuba 3 XML scene, or a glTF 2.0 file (.gltf / .glb). Without it, the built-in Cornell
     /// box is rendered.
     scene: Option<PathBuf>,
+    /// Save the accumulated per-pixel sums here when the render ends or is interrupted (Ctrl-C),
+    /// so that `--resume` can continue it.
+    #[arg(long, value_name = "STATE")]
+    save_state: Option<PathBuf>,
+    /// Continue the render saved in STATE (same scene, options and seed) up to --spp samples per
+    /// pixel; the result is bit-identical to an uninterrupted render.
+    #[arg(long, value_name = "STATE")]
+    resume: Option<PathBuf>,
     /// Output EXR path [default: the scene's file name with .exr, in the current folder].
     #[arg(short, long)]
     output: Option<PathBuf>,
@@ -395,8 +403,32 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
                 let _ = write!(w, "{:.2}", state.per_sec() / 1e6);
             }),
     );
-    let out = pool.install(|| pt_render::render(&scene, &settings, &|n| bar.inc(n)));
+    // Ctrl-C: finish the current pass, then write what was accumulated (image and, with
+    // --save-state, the sums) and exit with code 130.
+    let cancel = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    {
+        let cancel = cancel.clone();
+        // Failing to install the handler (one is already installed) only loses Ctrl-C handling.
+        let _ = ctrlc::set_handler(move || cancel.store(true, std::sync::atomic::Ordering::Relaxed));
+    }
+    let key = state_key(&args, &desc, &settings, scene.mode.name());
+    let mut state = match &args.resume {
+        Some(path) => {
+            let bytes = std::fs::read(path).with_context(|| format!("cannot read render state {}", path.display()))?;
+            pt_render::RenderState::from_bytes(&bytes, key, &settings).map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))?
+        }
+        None => pt_render::RenderState::new(&settings),
+    };
+    if state.spp_done > settings.spp {
+        bail!("the saved render already has {} spp, more than --spp {}", state.spp_done, settings.spp);
+    }
+    bar.inc(settings.width as u64 * settings.height as u64 * u64::from(state.spp_done));
+    let complete = pool.install(|| pt_render::render_passes(&scene, &settings, &mut state, &cancel, &|n| bar.inc(n)));
+    let out = state.output();
     bar.finish_and_clear();
+    if let Some(path) = &args.save_state {
+        pt_image::write_bytes_atomically(path, &state.to_bytes(key))?;
+    }
 
     let extra: Vec<(String, String)> = vec![
         ("integrator".into(), "path".into()),
@@ -423,7 +455,44 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
             eprintln!("warning: {} samples were NaN or infinite and were left out of their pixels", out.nonfinite_samples);
         }
     }
+    if !complete {
+        eprintln!(
+            "interrupted: wrote the image of the {} of {} samples per pixel taken so far{}",
+            out.spp,
+            settings.spp,
+            if args.save_state.is_some() { " and the state to continue it with --resume" } else { " (add --save-state to be able to resume)" }
+        );
+        return Ok(ExitCode::from(130));
+    }
     Ok(ExitCode::SUCCESS)
+}
+
+/// Identifies the scene and every option that changes the samples, so that `--resume` refuses a
+/// state made with anything else (FNV-1a over the scene file's bytes and the settings).
+fn state_key(args: &RenderArgs, desc: &SceneDesc, settings: &RenderSettings, mode: &str) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |bytes: &[u8]| {
+        for &b in bytes {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    match std::fs::read(&desc.source) {
+        Ok(b) => eat(&b),
+        Err(_) => eat(desc.source.to_string_lossy().as_bytes()),
+    }
+    let text = format!(
+        "{:?}|{:?}|{:?}|{:?}|{mode}|{:?}|{}|{:?}",
+        args.scene_args.defines,
+        settings.filter,
+        settings.path,
+        settings.clamp,
+        args.time,
+        args.light_selection as u8,
+        args.scene_args.camera
+    );
+    eat(text.as_bytes());
+    h
 }
 
 /// Writes the EXR (and variance and PNG preview when asked), each atomically.

@@ -187,3 +187,12 @@ mod tests {
         assert_eq!(img.mean(), [2.0, 2.0, 2.0]);
     }
 }
+
+/// Writes `bytes` to `path` atomically (temporary file in the same folder, fsync, rename): a
+/// reader sees the old file or the whole new one, never a partial file.
+pub fn write_bytes_atomically(path: &std::path::Path, bytes: &[u8]) -> Result<(), ImageError> {
+    atomic::write_atomically(path, |f| {
+        use std::io::Write;
+        f.write_all(bytes).map_err(|e| ImageError::io(path, "write file", e))
+    })
+}

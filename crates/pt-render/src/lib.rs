@@ -28,7 +28,7 @@ pub mod texture;
 
 pub use accel::BvhKind;
 pub use integrator::{PathSettings, Strategy};
-pub use render::{render, RenderOutput, RenderSettings};
+pub use render::{render, render_passes, RenderOutput, RenderSettings, RenderState};
 pub use scene::{BuildError, LightSelection, Scene};
 
 impl RenderSettings {

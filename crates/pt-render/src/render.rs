@@ -1,4 +1,5 @@
-//! The render loop: rayon over tiles, one independent random stream per sample.
+//! The render loop: passes over the image, rayon over tiles, one independent random stream per
+//! sample; a render can be cancelled between passes and resumed from its saved sums.
 
 use crate::film::{sample_filter, PixelStats};
 use crate::integrator::{li, PathSettings};
@@ -8,6 +9,7 @@ use pt_math::Vec2;
 use pt_scene::FilterDesc;
 use pt_spectrum::{spectrum_to_srgb, ColorMode, SampledWavelengths};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 /// What to render.
@@ -60,43 +62,154 @@ const TILE: u32 = 16;
 /// (called from worker threads). The result depends only on the scene, settings and seed, not
 /// on the number of threads.
 pub fn render(scene: &Scene, settings: &RenderSettings, progress: &(dyn Fn(u64) + Sync)) -> RenderOutput {
+    let mut state = RenderState::new(settings);
+    render_passes(scene, settings, &mut state, &AtomicBool::new(false), progress);
+    state.output()
+}
+
+/// The accumulated sums of a render in progress: what `--save-state` writes and `--resume`
+/// reads. Sample `s` of pixel `p` always uses the random stream `hash(seed, p, s)` and each
+/// pixel adds its samples in order, so continuing a state to N samples gives exactly the image of
+/// an uninterrupted N-sample render.
+#[derive(Clone, Debug)]
+pub struct RenderState {
+    /// Image width, pixels.
+    pub width: u32,
+    /// Image height, pixels.
+    pub height: u32,
+    /// Seed of the random streams.
+    pub seed: u64,
+    /// Samples per pixel accumulated so far.
+    pub spp_done: u32,
+    /// Wall-clock time spent sampling so far (all sessions).
+    pub time: Duration,
+    /// Per-pixel sums, row-major from the top.
+    pub pixels: Vec<PixelStats>,
+}
+
+/// First bytes of a state file (and its format version).
+const STATE_MAGIC: &[u8; 8] = b"PTSTATE1";
+
+impl RenderState {
+    /// An empty state for `settings` (no samples yet).
+    pub fn new(settings: &RenderSettings) -> Self {
+        let n = settings.width as usize * settings.height as usize;
+        RenderState { width: settings.width, height: settings.height, seed: settings.seed, spp_done: 0, time: Duration::ZERO, pixels: vec![PixelStats::default(); n] }
+    }
+
+    /// The image so far (its `spp` is `spp_done`).
+    pub fn output(&self) -> RenderOutput {
+        RenderOutput {
+            width: self.width,
+            height: self.height,
+            mean: self.pixels.iter().map(PixelStats::mean).collect(),
+            variance: self.pixels.iter().map(PixelStats::variance_of_mean).collect(),
+            spp: self.spp_done,
+            time: self.time,
+            nonfinite_samples: self.pixels.iter().map(|p| p.nonfinite as u64).sum(),
+        }
+    }
+
+    /// Serialises the state (little-endian; the sums as f64 bit patterns, so a resumed render
+    /// continues from exactly these values). `scene_key` identifies the scene and settings the
+    /// state belongs to (checked by [`RenderState::from_bytes`]).
+    pub fn to_bytes(&self, scene_key: u64) -> Vec<u8> {
+        let mut b = Vec::with_capacity(48 + self.pixels.len() * 56);
+        b.extend_from_slice(STATE_MAGIC);
+        for v in [scene_key, self.seed, u64::from(self.width), u64::from(self.height), u64::from(self.spp_done), self.time.as_nanos() as u64] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        for p in &self.pixels {
+            b.extend_from_slice(&p.n.to_le_bytes());
+            b.extend_from_slice(&p.nonfinite.to_le_bytes());
+            for v in p.sum.iter().chain(&p.sum_sq) {
+                b.extend_from_slice(&v.to_bits().to_le_bytes());
+            }
+        }
+        b
+    }
+
+    /// Reads a state written by [`RenderState::to_bytes`] for the same `scene_key`, seed and
+    /// image size; a message saying what does not match otherwise.
+    pub fn from_bytes(bytes: &[u8], scene_key: u64, settings: &RenderSettings) -> Result<RenderState, String> {
+        let header = 8 + 6 * 8;
+        if bytes.len() < header || &bytes[..8] != STATE_MAGIC {
+            return Err("not a pt render state (wrong magic number or truncated header)".into());
+        }
+        let u = |i: usize| u64::from_le_bytes(bytes[8 + 8 * i..16 + 8 * i].try_into().expect("8 bytes"));
+        let (key, seed, w, h, spp_done, nanos) = (u(0), u(1), u(2), u(3), u(4), u(5));
+        if key != scene_key {
+            return Err("the state belongs to a different scene or different render settings".into());
+        }
+        if seed != settings.seed || w != u64::from(settings.width) || h != u64::from(settings.height) {
+            return Err(format!("the state is for seed {seed} at {w}x{h}, this render is seed {} at {}x{}", settings.seed, settings.width, settings.height));
+        }
+        let n = (w * h) as usize;
+        if bytes.len() != header + n * 56 {
+            return Err(format!("truncated state: {} bytes, expected {}", bytes.len(), header + n * 56));
+        }
+        let mut pixels = Vec::with_capacity(n);
+        for k in 0..n {
+            let o = header + k * 56;
+            let u32_at = |i: usize| u32::from_le_bytes(bytes[o + i..o + i + 4].try_into().expect("4 bytes"));
+            let f = |i: usize| f64::from_bits(u64::from_le_bytes(bytes[o + 8 + 8 * i..o + 16 + 8 * i].try_into().expect("8 bytes")));
+            pixels.push(PixelStats { n: u32_at(0), nonfinite: u32_at(4), sum: [f(0), f(1), f(2)], sum_sq: [f(3), f(4), f(5)] });
+        }
+        Ok(RenderState { width: w as u32, height: h as u32, seed, spp_done: spp_done as u32, time: Duration::from_nanos(nanos), pixels })
+    }
+}
+
+/// Continues `state` up to `settings.spp` samples per pixel in passes over the whole image,
+/// checking `cancel` between passes: when it is set, returns after the current pass, with every
+/// pixel holding the same number of samples (`state.spp_done`). Passes start at one sample per
+/// pixel and grow fourfold while a pass takes under a quarter of a second, so that a cancel is
+/// honoured within about a second. (Each pass ends at a barrier where one core may idle for a
+/// tile: doubling from 1 spp, with more passes, cost 3% of the Cornell box's speed at 64 spp.)
+/// Returns whether all samples were taken.
+pub fn render_passes(scene: &Scene, settings: &RenderSettings, state: &mut RenderState, cancel: &AtomicBool, progress: &(dyn Fn(u64) + Sync)) -> bool {
     let (w, h) = (settings.width, settings.height);
     let tiles_x = w.div_ceil(TILE);
     let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE)).flat_map(|ty| (0..tiles_x).map(move |tx| (tx, ty))).collect();
-    let start = Instant::now();
-    let results: Vec<Vec<PixelStats>> = tiles
-        .par_iter()
-        .map(|&(tx, ty)| {
-            let (x0, y0) = (tx * TILE, ty * TILE);
-            let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
-            let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
-            for y in y0..y1 {
-                for x in x0..x1 {
-                    out.push(render_pixel(scene, settings, x, y));
+    let mut pass = 1u32;
+    while state.spp_done < settings.spp {
+        if cancel.load(Ordering::Relaxed) {
+            return false;
+        }
+        let (s0, s1) = (state.spp_done, state.spp_done.saturating_add(pass).min(settings.spp));
+        let start = Instant::now();
+        let results: Vec<Vec<PixelStats>> = tiles
+            .par_iter()
+            .map(|&(tx, ty)| {
+                let (x0, y0) = (tx * TILE, ty * TILE);
+                let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
+                let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
+                for y in y0..y1 {
+                    for x in x0..x1 {
+                        let mut stats = state.pixels[(y * w + x) as usize];
+                        render_pixel_samples(scene, settings, x, y, s0..s1, &mut stats);
+                        out.push(stats);
+                    }
                 }
+                progress(out.len() as u64 * u64::from(s1 - s0));
+                out
+            })
+            .collect();
+        for (&(tx, ty), tile) in tiles.iter().zip(results) {
+            let (x0, y0) = (tx * TILE, ty * TILE);
+            let x1 = (x0 + TILE).min(w);
+            for (k, px) in tile.into_iter().enumerate() {
+                let (x, y) = (x0 + k as u32 % (x1 - x0), y0 + k as u32 / (x1 - x0));
+                state.pixels[(y * w + x) as usize] = px;
             }
-            progress(out.len() as u64 * settings.spp as u64);
-            out
-        })
-        .collect();
-    let time = start.elapsed();
-
-    let n = (w * h) as usize;
-    let mut mean = vec![[0.0; 3]; n];
-    let mut variance = vec![[0.0; 3]; n];
-    let mut nonfinite = 0u64;
-    for (&(tx, ty), tile) in tiles.iter().zip(&results) {
-        let (x0, y0) = (tx * TILE, ty * TILE);
-        let x1 = (x0 + TILE).min(w);
-        for (k, px) in tile.iter().enumerate() {
-            let (x, y) = (x0 + k as u32 % (x1 - x0), y0 + k as u32 / (x1 - x0));
-            let i = (y * w + x) as usize;
-            mean[i] = px.mean();
-            variance[i] = px.variance_of_mean();
-            nonfinite += px.nonfinite as u64;
+        }
+        let took = start.elapsed();
+        state.time += took;
+        state.spp_done = s1;
+        if took < Duration::from_millis(250) {
+            pass = pass.saturating_mul(4);
         }
     }
-    RenderOutput { width: w, height: h, mean, variance, spp: settings.spp, time, nonfinite_samples: nonfinite }
+    true
 }
 
 /// Scales `rgb` so that its largest channel is at most `max` (non-finite samples pass through,
@@ -112,15 +225,15 @@ pub fn clamp_sample(rgb: [f32; 3], max: f32) -> [f32; 3] {
     }
 }
 
-fn render_pixel(scene: &Scene, settings: &RenderSettings, x: u32, y: u32) -> PixelStats {
-    let mut stats = PixelStats::default();
+/// Adds samples `samples` of pixel (x, y) to `stats`, in order.
+fn render_pixel_samples(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, samples: std::ops::Range<u32>, stats: &mut PixelStats) {
     let pixel = y as u64 * settings.width as u64 + x as u64;
     let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
     // RGB mode draws no wavelength sample, so its random sequence is the same as before the
     // spectral mode existed.
     let spectral = scene.mode == ColorMode::Spectral;
     let rgb_lambda = SampledWavelengths::sample_visible(0.5);
-    for s in 0..settings.spp {
+    for s in samples {
         let mut sampler = Sampler::new(settings.seed, pixel, s as u64);
         let lambda = if spectral { SampledWavelengths::sample_visible(sampler.next_1d()) } else { rgb_lambda };
         let offset = sample_filter(&settings.filter, &mut sampler);
@@ -132,5 +245,4 @@ fn render_pixel(scene: &Scene, settings: &RenderSettings, x: u32, y: u32) -> Pix
             None => rgb,
         });
     }
-    stats
 }
