@@ -138,22 +138,9 @@ impl RoughConductor {
         }
     }
 
-    /// Solid-angle pdf: `pdf_m(h) / (4 wo.h)`.
+    /// Solid-angle pdf: `pdf_m(h) / (4 wo.h)` ([`Microfacet::reflection_pdf`]).
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if wo.z <= 0.0 || wi.z <= 0.0 {
-            return 0.0;
-        }
-        let h = (wo + wi).normalize_or_zero();
-        let woh = wo.dot(h);
-        if h.z <= 0.0 || woh <= 0.0 {
-            return 0.0;
-        }
-        let p = self.mf.pdf_m(wo, h) / (4.0 * woh);
-        if p.is_finite() {
-            p
-        } else {
-            0.0
-        }
+        self.mf.reflection_pdf(wo, wi)
     }
 
     /// Samples a microfacet normal and reflects `wo` about it.
@@ -161,15 +148,7 @@ impl RoughConductor {
         if wo.z <= 0.0 {
             return None;
         }
-        let m = self.mf.sample_m(wo, u);
-        let wom = wo.dot(m);
-        if wom <= 0.0 {
-            return None;
-        }
-        let wi = (2.0 * wom * m - wo).normalize();
-        if wi.z <= 0.0 {
-            return None;
-        }
+        let wi = self.mf.sample_reflection(wo, u)?;
         let pdf = self.pdf(wo, wi);
         if !(pdf > 0.0) {
             return None;

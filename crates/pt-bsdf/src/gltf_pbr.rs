@@ -148,17 +148,7 @@ impl GltfPbr {
     /// Specular-lobe solid-angle pdf of `wi`: VNDF pdf of h over 4 wo.h.
     #[inline]
     fn spec_pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        let h = (wo + wi).normalize_or_zero();
-        let woh = wo.dot(h);
-        if h.z <= 0.0 || woh <= 0.0 {
-            return 0.0;
-        }
-        let p = self.mf.pdf_m(wo, h) / (4.0 * woh);
-        if p.is_finite() {
-            p
-        } else {
-            0.0
-        }
+        self.mf.reflection_pdf(wo, wi)
     }
 
     /// Solid-angle pdf of `wi`: `p_s pdf_spec + (1 - p_s) cos(theta_i)/pi`.
@@ -178,12 +168,7 @@ impl GltfPbr {
         }
         let ps = self.spec_prob(self.specular_albedo(wo.z));
         let wi = if u_lobe < ps {
-            let m = self.mf.sample_m(wo, u);
-            let wom = wo.dot(m);
-            if wom <= 0.0 {
-                return None;
-            }
-            (2.0 * wom * m - wo).normalize()
+            self.mf.sample_reflection(wo, u)?
         } else {
             square_to_cosine_hemisphere(u)
         };

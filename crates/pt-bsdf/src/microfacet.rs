@@ -228,6 +228,39 @@ impl Microfacet {
         self.g1(wo) * wo.dot(m).max(0.0) * self.d(m) / wo.z
     }
 
+    /// Solid-angle pdf of reflecting `wo` into `wi` about a normal drawn by
+    /// [`Microfacet::sample_m`]: `pdf_m(wo, h) / (4 wo.h)` with `h = normalize(wo + wi)` (Walter
+    /// et al. 2007 eq. 14); 0 below the surface, for back-facing `h` and where it is not finite.
+    /// Shared by every model with a microfacet reflection lobe.
+    pub fn reflection_pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return 0.0;
+        }
+        let h = (wo + wi).normalize_or_zero();
+        let woh = wo.dot(h);
+        if h.z <= 0.0 || woh <= 0.0 {
+            return 0.0;
+        }
+        let p = self.pdf_m(wo, h) / (4.0 * woh);
+        if p.is_finite() {
+            p
+        } else {
+            0.0
+        }
+    }
+
+    /// Draws a normal for `wo` (`wo.z > 0`) and reflects `wo` about it: the direction whose
+    /// density is [`Microfacet::reflection_pdf`], or `None` when it falls below the surface.
+    pub fn sample_reflection(&self, wo: Vec3, u: Vec2) -> Option<Vec3> {
+        let m = self.sample_m(wo, u);
+        let wom = wo.dot(m);
+        if wom <= 0.0 {
+            return None;
+        }
+        let wi = (2.0 * wom * m - wo).normalize();
+        (wi.z > 0.0).then_some(wi)
+    }
+
     /// Samples a microfacet normal (upper hemisphere) for the viewer direction `wo` (`wo.z > 0`).
     pub fn sample_m(&self, wo: Vec3, u: Vec2) -> Vec3 {
         let (ax, ay) = (self.alpha_u, self.alpha_v);

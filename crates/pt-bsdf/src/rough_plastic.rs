@@ -266,10 +266,7 @@ impl RoughPlastic {
             return 0.0;
         }
         let ps = self.prob_specular(wo);
-        let h = (wo + wi).normalize_or_zero();
-        let woh = wo.dot(h);
-        let spec = if h.z > 0.0 && woh > 0.0 { self.mf.pdf_m(wo, h) / (4.0 * woh) } else { 0.0 };
-        let p = ps * spec + (1.0 - ps) * cosine_hemisphere_pdf(wi);
+        let p = ps * self.mf.reflection_pdf(wo, wi) + (1.0 - ps) * cosine_hemisphere_pdf(wi);
         if p.is_finite() {
             p
         } else {
@@ -283,12 +280,7 @@ impl RoughPlastic {
             return None;
         }
         let wi = if u_lobe < self.prob_specular(wo) {
-            let m = self.mf.sample_m(wo, u);
-            let wom = wo.dot(m);
-            if wom <= 0.0 {
-                return None;
-            }
-            (2.0 * wom * m - wo).normalize()
+            self.mf.sample_reflection(wo, u)?
         } else {
             square_to_cosine_hemisphere(u)
         };
