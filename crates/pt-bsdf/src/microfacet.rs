@@ -300,6 +300,38 @@ impl Microfacet {
     }
 }
 
+/// The generalised half vector of a pair at an interface of relative index `eta` (inside /
+/// outside): `h = normalize(eta' wi + wo)` turned to face +z, with `eta' = 1` for a reflection
+/// (both directions on one side) and the index on `wi`'s side over `wo`'s side for a refraction
+/// (Walter et al. 2007 eqs. 13 and 16). Returns `(h, eta', reflect)`, or `None` for grazing
+/// directions, a degenerate pair, or a micro-normal facing away from either direction.
+pub fn generalized_half(wo: Vec3, wi: Vec3, eta: f32) -> Option<(Vec3, f32, bool)> {
+    let (co, ci) = (wo.z, wi.z);
+    if co == 0.0 || ci == 0.0 {
+        return None;
+    }
+    let reflect = co * ci > 0.0;
+    let etap = if reflect {
+        1.0
+    } else if co > 0.0 {
+        eta
+    } else {
+        1.0 / eta
+    };
+    let hv = wi * etap + wo;
+    if hv.length_squared() == 0.0 {
+        return None;
+    }
+    let mut h = hv.normalize();
+    if h.z < 0.0 {
+        h = -h;
+    }
+    if h.z == 0.0 || h.dot(wi) * ci <= 0.0 || h.dot(wo) * co <= 0.0 {
+        return None;
+    }
+    Some((h, etap, reflect))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -95,29 +95,7 @@ impl RoughDielectric {
     }
 
     fn half(&self, wo: Vec3, wi: Vec3) -> Option<Half> {
-        let (co, ci) = (wo.z, wi.z);
-        if co == 0.0 || ci == 0.0 {
-            return None;
-        }
-        let reflect = co * ci > 0.0;
-        let etap = if reflect {
-            1.0
-        } else if co > 0.0 {
-            self.eta
-        } else {
-            1.0 / self.eta
-        };
-        let hv = wi * etap + wo;
-        if hv.length_squared() == 0.0 {
-            return None;
-        }
-        let mut h = hv.normalize();
-        if h.z < 0.0 {
-            h = -h;
-        }
-        if h.z == 0.0 || h.dot(wi) * ci <= 0.0 || h.dot(wo) * co <= 0.0 {
-            return None;
-        }
+        let (h, etap, reflect) = crate::microfacet::generalized_half(wo, wi, self.eta)?;
         Some(Half { h, etap, reflect })
     }
 

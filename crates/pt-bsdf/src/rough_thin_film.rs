@@ -68,39 +68,14 @@ impl RoughThinFilm {
         (r.0.to_array()[..n].iter().sum::<f32>() / n as f32).clamp(0.0, 1.0)
     }
 
-    /// Half vector, `eta'` and whether the pair is a reflection; `None` when degenerate.
+    /// Half vector, `eta'` and whether the pair is a reflection; `None` when degenerate (and
+    /// for anything but a reflection above a conductor base, which is one-sided).
     fn half(&self, wo: Vec3, wi: Vec3) -> Option<(Vec3, f32, bool)> {
-        let (co, ci) = (wo.z, wi.z);
-        if co == 0.0 || ci == 0.0 {
-            return None;
+        match self.eta() {
+            Some(eta) => crate::microfacet::generalized_half(wo, wi, eta),
+            None if wo.z > 0.0 && wi.z > 0.0 => crate::microfacet::generalized_half(wo, wi, 1.0),
+            None => None,
         }
-        let reflect = co * ci > 0.0;
-        let etap = match (reflect, self.eta()) {
-            (true, _) => 1.0,
-            (false, None) => return None,
-            (false, Some(eta)) => {
-                if co > 0.0 {
-                    eta
-                } else {
-                    1.0 / eta
-                }
-            }
-        };
-        if self.eta().is_none() && co < 0.0 {
-            return None; // conductor base: one-sided
-        }
-        let hv = wi * etap + wo;
-        if hv.length_squared() == 0.0 {
-            return None;
-        }
-        let mut h = hv.normalize();
-        if h.z < 0.0 {
-            h = -h;
-        }
-        if h.z == 0.0 || h.dot(wi) * ci <= 0.0 || h.dot(wo) * co <= 0.0 {
-            return None;
-        }
-        Some((h, etap, reflect))
     }
 
     /// f(wo, wi) without the cosine (radiance transport), per lane.
