@@ -332,6 +332,26 @@ pub fn generalized_half(wo: Vec3, wi: Vec3, eta: f32) -> Option<(Vec3, f32, bool
     Some((h, etap, reflect))
 }
 
+/// Solid-angle pdf of `wi` for an interface sampled by drawing a normal for `wo` (facing up)
+/// and reflecting with probability `p_reflect`, else refracting (Walter et al. 2007 eqs. 14 and
+/// 17): reflection `pdf_m(h) p / (4 |wo.h|)`, refraction
+/// `pdf_m(h) (1 - p) |wi.h| / (wi.h + wo.h/eta')^2`; `h`, `eta'`, `reflect` from
+/// [`generalized_half`]. 0 where not finite.
+pub fn interface_pdf(mf: &Microfacet, wo: Vec3, wi: Vec3, (h, etap, reflect): (Vec3, f32, bool), p_reflect: f32) -> f32 {
+    let wo_up = if wo.z < 0.0 { -wo } else { wo };
+    let pm = mf.pdf_m(wo_up, h);
+    let p = if reflect {
+        pm * p_reflect / (4.0 * wo.dot(h).abs())
+    } else {
+        pm * (1.0 - p_reflect) * wi.dot(h).abs() / (wi.dot(h) + wo.dot(h) / etap).powi(2)
+    };
+    if p.is_finite() {
+        p
+    } else {
+        0.0
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

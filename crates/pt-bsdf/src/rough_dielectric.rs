@@ -125,20 +125,8 @@ impl RoughDielectric {
     /// Solid-angle pdf of `wi`.
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         let Some(Half { h, etap, reflect }) = self.half(wo, wi) else { return 0.0 };
-        let wo_up = if wo.z < 0.0 { -wo } else { wo };
-        let pm = self.mf.pdf_m(wo_up, h);
         let r = fresnel_dielectric(wo.dot(h), self.eta);
-        let p = if reflect {
-            pm * r / (4.0 * wo.dot(h).abs())
-        } else {
-            let dwh_dwi = wi.dot(h).abs() / (wi.dot(h) + wo.dot(h) / etap).powi(2);
-            pm * (1.0 - r) * dwh_dwi
-        };
-        if p.is_finite() {
-            p
-        } else {
-            0.0
-        }
+        crate::microfacet::interface_pdf(&self.mf, wo, wi, (h, etap, reflect), r)
     }
 
     /// Samples a micro-normal, then reflection (probability F) or refraction.

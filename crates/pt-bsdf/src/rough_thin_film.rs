@@ -105,21 +105,9 @@ impl RoughThinFilm {
 
     /// Solid-angle pdf of `wi`.
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        let Some((h, etap, reflect)) = self.half(wo, wi) else { return 0.0 };
-        let wo_up = if wo.z < 0.0 { -wo } else { wo };
-        let pm = self.mf.pdf_m(wo_up, h);
-        let p_r = if self.eta().is_some() { self.mean(self.film.reflectance(wo.dot(h))) } else { 1.0 };
-        let p = if reflect {
-            pm * p_r / (4.0 * wo.dot(h).abs())
-        } else {
-            let dwh_dwi = wi.dot(h).abs() / (wi.dot(h) + wo.dot(h) / etap).powi(2);
-            pm * (1.0 - p_r) * dwh_dwi
-        };
-        if p.is_finite() {
-            p
-        } else {
-            0.0
-        }
+        let Some(half) = self.half(wo, wi) else { return 0.0 };
+        let p_r = if self.eta().is_some() { self.mean(self.film.reflectance(wo.dot(half.0))) } else { 1.0 };
+        crate::microfacet::interface_pdf(&self.mf, wo, wi, half, p_r)
     }
 
     /// Samples a micro-normal, then reflection (probability P) or refraction.
