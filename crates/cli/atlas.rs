@@ -561,7 +561,7 @@ pub(crate) fn radiosity(o: &Opts) -> Result<Study> {
         title: "Radiosity on glossy surfaces".into(),
         row_label: "error".into(),
         col_label: "back-wall strip (alpha)".into(),
-        rows: vec!["rel. RMSE".into(), "|mean bias|".into()],
+        rows: vec!["rel. RMSE".into(), "mean bias (abs.)".into()],
         cols: STRIP_ALPHA.iter().map(|a| a.map_or("diffuse".to_string(), |a| a.to_string())).chain(std::iter::once("walls".to_string())).collect(),
         panels,
         ref_noise,
@@ -668,7 +668,7 @@ where
             .caption(caption, ("sans-serif", 17))
             .margin(10)
             .x_label_area_size(40)
-            .y_label_area_size(70)
+            .y_label_area_size(95)
             .build_cartesian_2d(0.0f64..nc as f64, 0.0f64..nr as f64)?;
         c.configure_mesh()
             .disable_mesh()
