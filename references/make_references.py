@@ -15,6 +15,9 @@ For each scene `scenes/<name>.xml` it writes
     references/<name>.exr      mean radiance, float32, channels R, G, B (linear sRGB), no alpha
     references/<name>_var.exr  per-pixel variance OF THE MEAN (sample variance / spp), float32 RGB
 
+(a scene in a folder below scenes/, e.g. `scenes/atlas/veach-mis.xml`, which must be named
+explicitly, writes into the same folder below references/: `references/atlas/veach-mis.exr`,
+manifest key `atlas/veach-mis`; tests/references.rs reads only the top level)
 and updates the scene's entry in references/manifest.json (variant, spp, seed, Mitsuba version,
 wall time, date, the scene file's sha256, max_depth, the <default> values used, and how the
 variance was computed). Files are written atomically (temporary file, then os.replace).
@@ -92,6 +95,16 @@ def resolve_scene(arg):
         if c.is_file():
             return c.resolve()
     raise SystemExit(f"error: scene {arg!r} not found (looked for {', '.join(map(str, candidates))})")
+
+
+def reference_name(path):
+    """Manifest key and output stem of a scene: its path below scenes/ without .xml
+    (scenes/cornell-box.xml -> cornell-box, scenes/atlas/veach-mis.xml -> atlas/veach-mis);
+    a scene outside scenes/ uses its file stem."""
+    try:
+        return path.relative_to(SCENE_DIR).with_suffix("").as_posix()
+    except ValueError:
+        return path.stem
 
 
 def sha256_file(path):
@@ -484,7 +497,7 @@ def main():
     msb = None
     results = {}
     for path in paths:
-        name = path.stem
+        name = reference_name(path)
         text = path.read_text()
         digest = sha256_file(path)
         mode, why = colour_mode(text)
@@ -537,6 +550,7 @@ def main():
         elif method == "moment" and reason:
             raise SystemExit(f"{name}: moment variance not applicable: {reason}")
 
+        mean_path.parent.mkdir(parents=True, exist_ok=True)
         t0 = time.time()
         try:
             if method == "moment":
@@ -570,7 +584,7 @@ def main():
                        variance_method=vinfo["method"]))
         if args.preview:
             Path(args.preview).mkdir(parents=True, exist_ok=True)
-            write_preview_png(Path(args.preview) / f"{name}.png", mean)
+            write_preview_png(Path(args.preview) / f"{name.replace('/', '-')}.png", mean)
 
         import drjit as dr
         integ = integrator_params(scene.integrator())

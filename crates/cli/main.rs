@@ -55,6 +55,9 @@ enum Command {
     /// Numerical stress sweep of every BSDF (NaN/Inf, energy gain, pdf mismatches, chi-square)
     /// over angles and parameters beyond their documented ranges: CSV + Markdown report.
     Stability(stability::StabilityArgs),
+    /// Method failure atlas: BSDF/light/MIS on Veach-style plates, caustics from small lights,
+    /// radiosity on glossy surfaces; per-region error against Mitsuba references, charts.
+    Atlas(atlas::AtlasArgs),
 }
 
 #[derive(Args)]
@@ -254,6 +257,7 @@ fn main() -> ExitCode {
         Command::Converge(args) => converge::run(args),
         Command::Lobes(args) => lobes::run(args),
         Command::Stability(args) => stability::run(args),
+        Command::Atlas(args) => atlas::run(args),
     };
     match result {
         Ok(code) => code,

@@ -29,8 +29,8 @@
 //! `fireflies.rs`) on a caustic scene.
 //!
 //! Outputs in `--out DIR` (each written atomically): `stability.csv` (one row per case),
-//! `report.md`, `albedo.svg`/`.png`, `clamp.svg`/`.png` and the method failure atlas
-//! (`atlas.rs`) `atlas-veach.svg`/`.png`.
+//! `report.md`, `albedo.svg`/`.png` and `clamp.svg`/`.png`. The method failure atlas is
+//! `pt atlas` (`atlas.rs`).
 
 use crate::converge::{register_font, write_atomic};
 use anyhow::{anyhow, bail, Context, Result};
@@ -481,7 +481,6 @@ pub fn run(args: StabilityArgs) -> Result<ExitCode> {
     let rows = pool.install(|| sweep(&cases, args.samples, args.chi2_samples, &progress));
     let secs = start.elapsed().as_secs_f64();
     let clamp = pool.install(crate::fireflies::clamp_bias_study)?;
-    let atlas = pool.install(crate::atlas::veach_atlas)?;
     write_atomic(&args.out.join("stability.csv"), csv_text(&cases, &rows).as_bytes())?;
     let (svg, png) = albedo_charts(&cases, &rows)?;
     write_atomic(&args.out.join("albedo.svg"), svg.as_bytes())?;
@@ -489,11 +488,8 @@ pub fn run(args: StabilityArgs) -> Result<ExitCode> {
     let (svg, png) = crate::fireflies::clamp_charts(&clamp)?;
     write_atomic(&args.out.join("clamp.svg"), svg.as_bytes())?;
     write_atomic(&args.out.join("clamp.png"), &png)?;
-    let (svg, png) = crate::atlas::atlas_charts(&atlas)?;
-    write_atomic(&args.out.join("atlas-veach.svg"), svg.as_bytes())?;
-    write_atomic(&args.out.join("atlas-veach.png"), &png)?;
     let mut md = report_text(&cases, &rows, &args, secs, &clamp);
-    md.push_str(&crate::atlas::atlas_report(&atlas));
+    md.push_str("## Method failure atlas\n\nWhere each sampling strategy and radiosity fail (Veach-style plates, caustics from small lights, radiosity on glossy surfaces): `pt atlas`.\n");
     write_atomic(&args.out.join("report.md"), md.as_bytes())?;
     let s = Summary::of(&cases, &rows, |_| true);
     if !args.quiet {

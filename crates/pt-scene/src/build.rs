@@ -102,7 +102,7 @@ pub(crate) fn build(doc: &Document, source: &Path, base_dir: &Path) -> Result<Sc
         bsdf_index: HashMap::new(),
         bsdf_memo: HashMap::new(),
         visiting: Vec::new(),
-        default_bsdf: None,
+        default_bsdf: [None, None],
     };
     builder.scene(&doc.root, source)
 }
@@ -146,8 +146,9 @@ struct Builder<'e> {
     bsdf_memo: HashMap<String, BsdfDesc>,
     /// Ids of BSDFs being built, to report reference cycles instead of recursing forever.
     visiting: Vec<String>,
-    /// Index of the implicit diffuse BSDF shared by all shapes without one.
-    default_bsdf: Option<usize>,
+    /// Indices of the implicit diffuse BSDFs shared by all shapes without one: [0] for shapes
+    /// without an emitter (reflectance 0.5), [1] for emitting shapes (reflectance 0).
+    default_bsdf: [Option<usize>; 2],
 }
 
 impl<'e> Builder<'e> {
@@ -529,7 +530,7 @@ impl<'e> Builder<'e> {
         v.finish()?;
         let bsdf = match bsdf {
             Some(b) => b,
-            None => self.default_bsdf(el),
+            None => self.default_bsdf(el, emitter.is_some()),
         };
         Ok(ShapeDesc {
             loc: el.loc.clone(),
@@ -654,21 +655,22 @@ impl<'e> Builder<'e> {
         Ok(index)
     }
 
-    /// Mitsuba's default for shapes without a BSDF: diffuse with reflectance 0.5, one shared
-    /// instance for all such shapes.
-    fn default_bsdf(&mut self, shape: &Element) -> usize {
-        if let Some(index) = self.default_bsdf {
+    /// Mitsuba's default for shapes without a BSDF: diffuse with reflectance 0.5, or 0 (black)
+    /// when the shape is an emitter (Mitsuba 3.9.1 `Shape`: an area light without a BSDF
+    /// reflects nothing); one shared instance of each.
+    fn default_bsdf(&mut self, shape: &Element, emitter: bool) -> usize {
+        if let Some(index) = self.default_bsdf[usize::from(emitter)] {
             return index;
         }
         self.bsdfs.push(BsdfDesc {
             loc: shape.loc.clone(),
             id: None,
             kind: BsdfKind::Diffuse {
-                reflectance: SpectrumDesc::Constant(0.5),
+                reflectance: SpectrumDesc::Constant(if emitter { 0.0 } else { 0.5 }),
             },
         });
         let index = self.bsdfs.len() - 1;
-        self.default_bsdf = Some(index);
+        self.default_bsdf[usize::from(emitter)] = Some(index);
         index
     }
 
