@@ -289,7 +289,7 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
                     id: mesh.name().map(str::to_string),
                     geometry: Geometry::Mesh(tri),
                     bsdf,
-                    emitter: mm.emission.clone().map(|radiance| AreaEmitterDesc { loc: loc.clone(), radiance, texture: None }),
+                    emitter: mm.emission.clone().map(|radiance| AreaEmitterDesc { loc: loc.clone(), radiance, texture: None, primaries: None }),
                     interior: mm.interior.clone(),
                 });
             }
