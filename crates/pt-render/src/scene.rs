@@ -78,7 +78,9 @@ pub struct Scene {
     /// Per material: its textures, when its parameters vary over the surface (glTF).
     textured: Vec<Option<TexturedPbr>>,
     /// Spectral mode: each light's emission spectrum (its `radiance` fields hold the geometric
-    /// factors only); empty in RGB mode.
+    /// factors only); empty in RGB mode. Textured area lights and environment maps multiply it
+    /// by their texels' upsampled spectra themselves (D65 here); lights with display primaries
+    /// have `None` (their texture gives the whole spectrum).
     light_spectra: Vec<Option<Spectrum>>,
     /// Interior media (absorbing only): extinction per scene unit, RGB lanes in RGB mode, and the
     /// spectrum evaluated per path in spectral mode.

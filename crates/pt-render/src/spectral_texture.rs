@@ -211,9 +211,9 @@ impl DisplayPrimaries {
     #[inline]
     pub fn eval(&self, rgb: [f32; 3], lambda: &SampledWavelengths) -> SampledSpectrum {
         let mut out = SampledSpectrum::ZERO;
-        for i in 0..3 {
-            if rgb[i] != 0.0 {
-                out += self.spectra[i].sample(lambda) * (rgb[i] * self.weights[i]);
+        for ((&c, s), &k) in rgb.iter().zip(&self.spectra).zip(&self.weights) {
+            if c != 0.0 {
+                out += s.sample(lambda) * (c * k);
             }
         }
         out
