@@ -186,3 +186,22 @@ fn monitor_without_primaries_shows_the_upsampled_texels() {
         check(&s, &dir, &format!("{name}_upsampled"), "spectral", expected, 3e-3 * max);
     }
 }
+
+#[test]
+fn primaries_outside_which_d65_lies_are_a_clear_error() {
+    // Red, green and a yellow "blue": D65 would need a negative weight. Exit code 2, the
+    // message names the scene file, the emitter element and the reason; no image is written.
+    let dir = scratch("display_bad_primaries");
+    let image = png(&dir, "white.png", [255, 255, 255]);
+    let s = scene(&dir, &image, true);
+    let yellow = dir.join("yellow.spd");
+    std::fs::write(&yellow, "560 0\n580 1\n600 0\n").unwrap();
+    let xml = std::fs::read_to_string(&s).unwrap().replace(&repo().join("scenes/spectra/lcd-b.spd").display().to_string(), &yellow.display().to_string());
+    std::fs::write(&s, xml).unwrap();
+    let out = dir.join("bad.exr");
+    let o = pt(&["render", s.to_str().unwrap(), "-o", out.to_str().unwrap(), "--quiet"]);
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "stderr: {stderr}");
+    assert!(stderr.contains("primaries.xml") && stderr.contains("emitter type=\"area\"") && stderr.contains("outside the primaries' gamut"), "{stderr}");
+    assert!(!out.exists(), "no partial output");
+}

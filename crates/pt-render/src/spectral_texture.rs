@@ -185,9 +185,13 @@ impl DisplayPrimaries {
     pub fn new(spectra: [Spectrum; 3]) -> Result<Self, String> {
         const NAMES: [&str; 3] = ["primary_r", "primary_g", "primary_b"];
         for (s, name) in spectra.iter().zip(NAMES) {
-            // 1 nm steps over the visible range: tabulated data is linear between its nodes.
-            if (360..=830).any(|l| s.eval(l as f32) < 0.0) {
-                return Err(format!("{name} is negative somewhere in 360-830 nm"));
+            // Tabulated data is linear between its nodes: check the nodes; other forms on 1 nm.
+            let negative = match s {
+                Spectrum::Tabulated(t) => t.samples().1.iter().any(|&v| v < 0.0),
+                _ => (360..=830).any(|l| s.eval(l as f32) < 0.0),
+            };
+            if negative {
+                return Err(format!("{name} has negative values (a spectral radiance cannot be negative)"));
             }
         }
         let xyz = [0, 1, 2].map(|i| spectra[i].emission_xyz());
