@@ -70,14 +70,23 @@ pub const MEAN_RATIO_TOL: f64 = 0.005;
 /// divided out before comparing, instead of widening any tolerance.
 pub const MITSUBA_SPECTRAL_SCALE: f64 = 106.750_259 / 106.856_914_916_767;
 
+/// Spectral scenes whose every emitter is normalised to the D65 white (RGB or `d65` radiance,
+/// environment maps): both renderers scale D65 to luminance Y = 1 under their own film
+/// normalisation (Mitsuba: `MI_CIE_D65_NORMALIZATION` = 1 / 98.9974 gives Y = 0.99993), so their
+/// references need no [`MITSUBA_SPECTRAL_SCALE`], which would bias them by 0.1%. Measured on
+/// envmap-spectral at 4096 spp (seed 7): pt / Mitsuba = 1.0001, 1.0001, 0.9999 unscaled, block
+/// chi2 / dof 0.66; with the scale 1.0009 and more, growing in z with the sample count.
+pub const D65_NORMALISED_SCENES: &[&str] = &["monitor-spectral", "envmap-spectral"];
+
 /// The Mitsuba reference of `scene` (mean and variance of the mean), with spectral-variant
-/// references rescaled by [`MITSUBA_SPECTRAL_SCALE`].
+/// references rescaled by [`MITSUBA_SPECTRAL_SCALE`] unless their emission is D65-normalised
+/// ([`D65_NORMALISED_SCENES`]).
 pub fn reference(scene: &str) -> (Image, Image) {
     let r = repo().join("references");
     let (img, meta) = pt_image::read_exr(&r.join(format!("{scene}.exr"))).unwrap_or_else(|e| panic!("reference of {scene}: {e}"));
     let (var, _) = pt_image::read_exr(&r.join(format!("{scene}_var.exr"))).unwrap_or_else(|e| panic!("reference variance of {scene}: {e}"));
     let spectral = meta.extra.iter().any(|(k, v)| k == "variant" && v.contains("spectral"));
-    if !spectral {
+    if !spectral || D65_NORMALISED_SCENES.contains(&scene) {
         return (img, var);
     }
     let k = MITSUBA_SPECTRAL_SCALE as f32;

@@ -34,8 +34,9 @@
 //! **Textures.** `baseColorTexture` (sRGB-decoded) and `metallicRoughnessTexture` (linear:
 //! green scales roughness, blue metallic) multiply their factors at the hit's `TEXCOORD_0`, after
 //! KHR_texture_transform (offset, rotation, scale, texCoord); PNG or JPEG, embedded or files;
-//! repeat wrapping; `magFilter` NEAREST or bilinear (no mipmaps). RGB mode only for base colour
-//! textures (spectral mode would need per-texel upsampling: an error says to use `--mode rgb`).
+//! repeat wrapping; `magFilter` NEAREST or bilinear (no mipmaps). In spectral mode each base colour
+//! texel is upsampled once at load (Jakob & Hanika 2019, as a bounded reflectance) and the
+//! interpolated texel spectra multiply the factor's spectrum (pt-render's `spectral_texture`).
 //!
 //! **Alpha.** `alphaMode` BLEND becomes the renderer's `mask` with opacity = baseColorFactor's
 //! alpha; MASK an opacity of 0 or 1 against `alphaCutoff`; the base colour texture's alpha is
@@ -289,7 +290,7 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
                     id: mesh.name().map(str::to_string),
                     geometry: Geometry::Mesh(tri),
                     bsdf,
-                    emitter: mm.emission.clone().map(|radiance| AreaEmitterDesc { loc: loc.clone(), radiance, texture: None }),
+                    emitter: mm.emission.clone().map(|radiance| AreaEmitterDesc { loc: loc.clone(), radiance, texture: None, primaries: None }),
                     interior: mm.interior.clone(),
                 });
             }

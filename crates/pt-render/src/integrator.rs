@@ -79,7 +79,7 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, 
             // The ray left the scene: environment and sun.
             for &i in &scene.infinite_lights {
                 let light = &scene.lights[i];
-                let le = light.escaped_radiance(ray.dir) * scene.emission(i, lambda);
+                let le = light.escaped_radiance(ray.dir, lambda) * scene.emission(i, lambda);
                 if !le.is_black() {
                     let w = emission_weight(s, depth, prev_delta, prev_pdf, || scene.light_pmf(i) * light.escaped_pdf(ray.dir));
                     radiance += throughput * le * w;
@@ -104,7 +104,7 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, 
 
         // Emission found by the ray we just traced.
         if let Some((li_idx, light)) = scene.shape_light(hit.shape) {
-            let le = light.emitted(hit.ns, wo_world, hit.uv) * scene.emission(li_idx, lambda);
+            let le = light.emitted(hit.ns, wo_world, hit.uv, lambda) * scene.emission(li_idx, lambda);
             if !le.is_black() {
                 let w = emission_weight(s, depth, prev_delta, prev_pdf, || scene.light_pmf(li_idx) * light.pdf(prev_p, hit.p, hit.ns));
                 radiance += throughput * le * w;
@@ -130,7 +130,7 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, 
             if let Some((li_idx, pmf, u_sel)) = scene.sample_light(sampler.next_1d()) {
                 let u = sampler.next_2d();
                 let light = &scene.lights[li_idx];
-                if let Some(ls) = light.sample(hit.p, u_sel, u) {
+                if let Some(ls) = light.sample(hit.p, u_sel, u, lambda) {
                     let wi = frame.to_local(ls.wi);
                     let f = bsdf.eval(wo, wi);
                     if !ls.radiance.is_black() && !f.is_black() && visible(scene, &hit, &ls) {

@@ -24,6 +24,7 @@ pub mod phosphorescence;
 pub mod render;
 pub mod sampler;
 pub mod scene;
+pub mod spectral_texture;
 pub mod texture;
 
 pub use accel::BvhKind;

@@ -123,7 +123,7 @@ pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, 
                     (l, (scale * e.eval(l) as f64 / l as f64) as f32)
                 })
                 .collect();
-            Some(AreaEmitterDesc { loc: shape.loc.clone(), radiance: SpectrumDesc::Tabulated(Arc::new(pairs)), texture: None })
+            Some(AreaEmitterDesc { loc: shape.loc.clone(), radiance: SpectrumDesc::Tabulated(Arc::new(pairs)), texture: None, primaries: None })
         };
         let mut sampler_index = 0u64;
         let mut next = || {
@@ -182,7 +182,7 @@ fn absorbed(scene: &Scene, a: &Spectrum, sampler: &mut Sampler, settings: &PathS
         let mut e = pt_spectrum::SampledSpectrum::ZERO;
         if let Some((i, pmf, u_sel)) = scene.sample_light(sampler.next_1d()) {
             let u = sampler.next_2d();
-            if let Some(ls) = scene.lights[i].sample(p, u_sel, u) {
+            if let Some(ls) = scene.lights[i].sample(p, u_sel, u, &lambda) {
                 let cos = ls.wi.dot(n);
                 if cos > 0.0 && !ls.radiance.is_black() && unoccluded(scene, origin, &ls) {
                     e += ls.radiance * scene.emission(i, &lambda) * (cos / (pmf * ls.pdf));

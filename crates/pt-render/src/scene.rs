@@ -78,7 +78,9 @@ pub struct Scene {
     /// Per material: its textures, when its parameters vary over the surface (glTF).
     textured: Vec<Option<TexturedPbr>>,
     /// Spectral mode: each light's emission spectrum (its `radiance` fields hold the geometric
-    /// factors only); empty in RGB mode.
+    /// factors only); empty in RGB mode. Textured area lights and environment maps multiply it
+    /// by their texels' upsampled spectra themselves (D65 here); lights with display primaries
+    /// have `None` (their texture gives the whole spectrum).
     light_spectra: Vec<Option<Spectrum>>,
     /// Interior media (absorbing only): extinction per scene unit, RGB lanes in RGB mode, and the
     /// spectrum evaluated per path in spectral mode.
@@ -320,6 +322,8 @@ impl Scene {
         let mut lights = Vec::new();
         let mut stats = SceneStats::default();
         let mut media = Vec::new();
+        // Lights with display primaries: their spectrum is in the texture (light spectrum 1).
+        let mut primaries_lights: Vec<usize> = Vec::new();
 
         for (si, shape) in desc.shapes.iter().enumerate() {
             if shape.bsdf >= materials.len() {
@@ -362,18 +366,18 @@ impl Scene {
                 }
                 let texture = match &em.texture {
                     None => None,
-                    Some(_) if spectral => {
-                        return Err(BuildError { loc: em.loc.clone(), message: "textured emitters are RGB images; spectral mode would need per-texel upsampling (not yet implemented)".into() });
-                    }
                     Some(_) if matches!(shape.geometry, Geometry::Sphere { .. }) => {
                         return Err(BuildError { loc: em.loc.clone(), message: "textured emitters on spheres are not yet supported (not yet implemented); use a mesh".into() });
                     }
                     Some(t) => Some(std::sync::Arc::new(crate::texture::Bitmap::load(t).map_err(|m| BuildError { loc: t.loc.clone(), message: m })?)),
                 };
+                // Spectral mode: the image's spectral form (per-texel upsampling, times the D65 of
+                // the light's emission spectrum; or display primaries, whose light spectrum is 1).
+                let (texture, spectral_tex) = emission_texture(texture, em, spectral, lights.len(), &mut primaries_lights)?;
                 match light_shape {
                     Some((shape, area)) if area > 0.0 => {
                         data.light = Some(lights.len() as u32);
-                        lights.push(Light::Area(AreaLight { radiance, texture, shape, area }));
+                        lights.push(Light::Area(AreaLight { radiance, texture, spectral: spectral_tex, shape, area }));
                     }
                     _ => {
                         return Err(BuildError { loc: em.loc.clone(), message: "area emitter on a shape with zero area".into() });
@@ -387,10 +391,14 @@ impl Scene {
         let accel = Accel::build(prims, bvh);
         let prim_refs = accel.original_index.iter().map(|&i| refs[i as usize]).collect();
         for l in &desc.lights {
-            if spectral && matches!(l.kind, LightKind::EnvMap { .. }) {
-                return Err(BuildError { loc: l.loc.clone(), message: "environment maps are RGB images; spectral mode would need per-texel upsampling (not yet implemented): render with --mode rgb".into() });
+            let mut light = build_light(l, &mut emission)?;
+            if let (true, Light::EnvMap(e)) = (spectral, &mut light) {
+                e.upsample();
             }
-            lights.push(build_light(l, &mut emission)?);
+            lights.push(light);
+        }
+        for &i in &primaries_lights {
+            light_spectra[i] = None;
         }
         let infinite_lights = (0..lights.len()).filter(|&i| lights[i].is_infinite()).collect();
         // Spectral mode: scale each light's geometric power by its spectrum's luminance.
@@ -578,6 +586,9 @@ struct TexturedPbr {
     roughness: f32,
     ior: f32,
     base_tex: Option<(std::sync::Arc<crate::texture::Bitmap>, [f32; 6])>,
+    /// Spectral mode: the base colour texture's upsampled texels (reflectances), looked up
+    /// with `base_tex`'s transform; they multiply `base_spectrum`.
+    base_spec: Option<std::sync::Arc<crate::spectral_texture::SpectralBitmap>>,
     mr_tex: Option<(std::sync::Arc<crate::texture::Bitmap>, [f32; 6])>,
     two_sided: bool,
     /// Opacity of an enclosing `Mask` (glTF alpha), 1 without.
@@ -600,14 +611,19 @@ impl TexturedPbr {
         if base_color_texture.is_none() && metallic_roughness_texture.is_none() {
             return Ok(None);
         }
-        if spectral && base_color_texture.is_some() {
-            return Err(BuildError { loc: desc.loc.clone(), message: "base colour textures are RGB images; spectral mode would need per-texel upsampling (not yet implemented): render with --mode rgb".into() });
-        }
         let load = |t: &Option<Box<pt_scene::UvTexture>>| -> Result<_, BuildError> {
             t.as_ref()
                 .map(|t| crate::texture::Bitmap::from_source(&t.source, t.srgb, t.nearest).map(|b| (std::sync::Arc::new(b), t.transform)))
                 .transpose()
                 .map_err(|m| BuildError { loc: desc.loc.clone(), message: m })
+        };
+        let base_tex = load(base_color_texture)?;
+        // Spectral mode: each texel upsampled as a bounded reflectance (Mitsuba's bitmap); the
+        // factor's spectrum times the interpolated texel spectrum stands for factor x texel
+        // (exact when either is grey, in particular for the default factor 1).
+        let base_spec = match (&base_tex, spectral) {
+            (Some((b, _)), true) => Some(std::sync::Arc::new(crate::spectral_texture::SpectralBitmap::new(b))),
+            _ => None,
         };
         Ok(Some(TexturedPbr {
             base_color: rgb_of(base_color),
@@ -615,15 +631,16 @@ impl TexturedPbr {
             metallic: *metallic,
             roughness: *roughness,
             ior: *ior,
-            base_tex: load(base_color_texture)?,
+            base_tex,
+            base_spec,
             mr_tex: load(metallic_roughness_texture)?,
             two_sided,
             opacity,
         }))
     }
 
-    /// The BSDF at texture coordinates `uv` (spectral mode only without a base colour texture,
-    /// whose factor's spectrum is fitted once at build).
+    /// The BSDF at texture coordinates `uv`, at the path's wavelengths in spectral mode (the
+    /// factor's spectrum fitted once at build, the texels' at load).
     #[inline]
     fn eval(&self, uv: Vec2, mode: ColorMode, lambda: &SampledWavelengths) -> SurfaceBsdf {
         let at = |t: &(std::sync::Arc<crate::texture::Bitmap>, [f32; 6])| {
@@ -631,7 +648,7 @@ impl TexturedPbr {
             t.0.eval(Vec2::new(m[0] * uv.x + m[1] * uv.y + m[2], m[3] * uv.x + m[4] * uv.y + m[5]))
         };
         let mut c = self.base_color;
-        if let Some(t) = &self.base_tex {
+        if let (Some(t), ColorMode::Rgb) = (&self.base_tex, mode) {
             let v = at(t);
             c = [c[0] * v[0], c[1] * v[1], c[2] * v[2]];
         }
@@ -643,7 +660,10 @@ impl TexturedPbr {
         }
         let base = match mode {
             ColorMode::Rgb => SampledSpectrum::from_rgb(c),
-            ColorMode::Spectral => self.base_spectrum.sample(lambda),
+            ColorMode::Spectral => match (&self.base_spec, &self.base_tex) {
+                (Some(sb), Some((_, m))) => self.base_spectrum.sample(lambda) * sb.eval(Vec2::new(m[0] * uv.x + m[1] * uv.y + m[2], m[3] * uv.x + m[4] * uv.y + m[5]), lambda),
+                _ => self.base_spectrum.sample(lambda),
+            },
         };
         SurfaceBsdf { bsdf: Bsdf::GltfPbr(GltfPbr::new(base, metallic, roughness, self.ior)), two_sided: self.two_sided, opacity: self.opacity }
     }
@@ -725,6 +745,50 @@ fn bounding_sphere(prims: &[Primitive]) -> (Vec3, f32) {
     (c, (0.5 * (hi - lo).length()).max(1e-6))
 }
 
+/// The RGB image and the spectral-mode form of an area emitter's radiance texture. RGB mode: the
+/// image as loaded, or with display primaries its colours through the display's matrix
+/// ([`DisplayPrimaries::to_srgb_matrix`](crate::spectral_texture::DisplayPrimaries::to_srgb_matrix)).
+/// Spectral mode: the image (kept for the power estimate) and its upsampled texels, or the
+/// primaries driven by it; light `index` is then recorded in `primaries_lights`.
+#[allow(clippy::type_complexity)]
+fn emission_texture(
+    texture: Option<std::sync::Arc<crate::texture::Bitmap>>,
+    em: &pt_scene::AreaEmitterDesc,
+    spectral: bool,
+    index: usize,
+    primaries_lights: &mut Vec<usize>,
+) -> Result<(Option<std::sync::Arc<crate::texture::Bitmap>>, Option<std::sync::Arc<crate::spectral_texture::SpectralEmission>>), BuildError> {
+    use crate::spectral_texture::{DisplayPrimaries, SpectralBitmap, SpectralEmission};
+    use std::sync::Arc;
+    let Some(image) = texture else { return Ok((None, None)) };
+    let display = match &em.primaries {
+        Some(p) => {
+            let spectra = [0, 1, 2].map(|i| to_spectrum(&p[i], Role::Unbounded));
+            Some(DisplayPrimaries::new(spectra).map_err(|m| BuildError { loc: em.loc.clone(), message: format!("display primaries: {m}") })?)
+        }
+        None => None,
+    };
+    Ok(match (display, spectral) {
+        (None, false) => (Some(image), None),
+        (None, true) => {
+            let up = SpectralBitmap::new(&image);
+            (Some(image), Some(Arc::new(SpectralEmission::Upsampled(up))))
+        }
+        (Some(d), spectral) => {
+            // The colours the display shows, in linear sRGB: exact for the film by linearity;
+            // saturated primaries give components below 0 (outside the sRGB gamut), kept so.
+            // Their luminance (Y >= 0) is also the power estimate in spectral mode.
+            let m = d.to_srgb_matrix();
+            let shown = Arc::new(image.map_texels(|t| std::array::from_fn(|r| m[r][0] * t[0] + m[r][1] * t[1] + m[r][2] * t[2])));
+            if !spectral {
+                return Ok((Some(shown), None));
+            }
+            primaries_lights.push(index);
+            (Some(shown), Some(Arc::new(SpectralEmission::Primaries { image, display: d })))
+        }
+    })
+}
+
 /// A light that is not attached to a shape.
 fn build_light(l: &LightDesc, spectrum: &mut dyn FnMut(&SpectrumDesc) -> SampledSpectrum) -> Result<Light, BuildError> {
     let err = |m: String| BuildError { loc: l.loc.clone(), message: m };
@@ -755,6 +819,9 @@ fn build_light(l: &LightDesc, spectrum: &mut dyn FnMut(&SpectrumDesc) -> Sampled
                 return Err(err(format!("environment map '{}' has negative or non-finite pixels", filename.display())));
             }
             let texels = img.data.iter().map(|p| p.map(|c| c * scale)).collect();
+            // Spectral mode: registers the light's emission spectrum, D65 of luminance 1, which
+            // multiplies the upsampled texels (Mitsuba 3's envmap); RGB mode: white, unused.
+            let _ = spectrum(&SpectrumDesc::Constant(1.0));
             let rot = Mat3::from_mat4(*to_world);
             EnvMap::new(img.width as usize, img.height as usize, texels, rot).map(Light::EnvMap).ok_or_else(|| err("empty environment map".into()))?
         }

@@ -89,6 +89,30 @@ impl Bitmap {
     }
 }
 
+/// Raw access for the spectral forms of an image (`spectral_texture.rs`), which must look up the
+/// same texels with the same weights as [`Bitmap::eval`].
+impl Bitmap {
+    /// Width and height in texels.
+    pub fn size(&self) -> (usize, usize) {
+        (self.width, self.height)
+    }
+
+    /// Linear RGB texels, row-major from the top row (v = 0).
+    pub fn texels(&self) -> &[[f32; 3]] {
+        &self.texels
+    }
+
+    /// Whether lookups take the nearest texel instead of interpolating bilinearly.
+    pub fn is_nearest(&self) -> bool {
+        self.nearest
+    }
+
+    /// The same image with every texel replaced by `f(texel)`.
+    pub fn map_texels(&self, f: impl Fn([f32; 3]) -> [f32; 3]) -> Bitmap {
+        Bitmap { texels: self.texels.iter().map(|&t| f(t)).collect(), ..self.clone() }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

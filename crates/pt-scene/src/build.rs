@@ -36,7 +36,7 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
     ("emitter", &["area", "point", "spot", "directional", "sun", "constant", "envmap"], &[
         "projector", "directionalarea", "sunsky",
     ]),
-    ("texture", &["bitmap"], &["checkerboard", "mesh_attribute", "volume"]),
+    ("texture", &["bitmap", "d65"], &["checkerboard", "mesh_attribute", "volume"]),
     ("medium", &["homogeneous"], &["heterogeneous"]),
     ("phase", &[], &["isotropic", "hg", "rayleigh", "sggx", "tabphase", "blendphase"]),
     ("volume", &[], &["constvolume", "gridvolume"]),
@@ -326,6 +326,19 @@ impl<'e> Builder<'e> {
     /// `area`: `radiance` (rgb, spectrum or float; Mitsuba's default 1), or a nested
     /// `<texture type="bitmap" name="radiance">` (`filename`, `raw` false, `filter_type`
     /// bilinear or nearest) for an image-emitting surface such as a monitor.
+    ///
+    /// The bitmap may be wrapped in Mitsuba's `<texture type="d65" name="radiance">` (one nested
+    /// bitmap, no `color` or `scale`), which in Mitsuba's spectral variants multiplies it by the
+    /// D65 illuminant and in its RGB variants changes nothing. pt multiplies every RGB emission by
+    /// D65 in spectral mode anyway (DESIGN.md, Colour), so for pt the wrapper changes nothing; it
+    /// makes Mitsuba 3.9.1 agree, which leaves a bare bitmap radiance without D65.
+    ///
+    /// Display primaries (pt extension, with a radiance texture only): three spectra
+    /// `<spectrum name="primary_r" filename="lcd-r.spd"/>`, `primary_g`, `primary_b` (any
+    /// spectral form: pairs, a file, blackbody, a named illuminant). In spectral mode a texel of
+    /// linear RGB (r, g, b) then emits `r k_r P_r + g k_g P_g + b k_b P_b`, the weights `k`
+    /// chosen so that (1, 1, 1) emits the CIE XYZ of D65 at luminance 1 (`spectral_texture.rs`
+    /// in pt-render). Mitsuba has no such parameter and rejects these scenes.
     fn area_emitter(&self, el: &'e Element) -> Result<AreaEmitterDesc> {
         let v = ObjectView::parse(el)?;
         if v.plugin != "area" {
@@ -337,14 +350,51 @@ impl<'e> Builder<'e> {
             if t.tag != "texture" || t.attr("name") != Some("radiance") || texture.is_some() {
                 return Err(misplaced(child, t, &v, "one <texture name=\"radiance\">"));
             }
-            texture = Some(self.bitmap(t)?);
+            texture = Some(if t.attr("type") == Some("d65") { self.d65_bitmap(t)? } else { self.bitmap(t)? });
         }
         if texture.is_some() && v.has("radiance") {
             return Err(v.prop_error("radiance", "give either a radiance value or a radiance texture"));
         }
         let radiance = v.spectrum("radiance")?.unwrap_or(SpectrumDesc::Constant(1.0));
+        let names = ["primary_r", "primary_g", "primary_b"];
+        let primaries = match names.map(|n| v.spectrum(n)) {
+            [Ok(None), Ok(None), Ok(None)] => None,
+            [Ok(Some(r)), Ok(Some(g)), Ok(Some(b))] => {
+                if texture.is_none() {
+                    return Err(v.prop_error("primary_r", "display primaries need a radiance texture (an image whose texels drive them)"));
+                }
+                for (s, n) in [&r, &g, &b].into_iter().zip(names) {
+                    if !s.is_spectral() {
+                        return Err(v.prop_error(n, format!("{n} must be a spectrum (wavelength:value pairs, a file, blackbody or a named illuminant), not an RGB value or a constant")));
+                    }
+                }
+                Some(Box::new([r, g, b]))
+            }
+            [r, g, b] => {
+                r?;
+                g?;
+                b?;
+                let missing = names.iter().zip([v.has(names[0]), v.has(names[1]), v.has(names[2])]).find(|(_, h)| !h).map_or("", |(n, _)| *n);
+                return Err(SceneError::at(&el.loc, format!("display primaries need all three of primary_r, primary_g, primary_b ({missing} is missing)")));
+            }
+        };
         v.finish()?;
-        Ok(AreaEmitterDesc { loc: el.loc.clone(), radiance, texture })
+        Ok(AreaEmitterDesc { loc: el.loc.clone(), radiance, texture, primaries })
+    }
+
+    /// `<texture type="d65">` around one `<texture type="bitmap">` (see [`Builder::area_emitter`]).
+    fn d65_bitmap(&self, el: &'e Element) -> Result<BitmapDesc> {
+        let v = ObjectView::parse(el)?;
+        let mut bitmap = None;
+        for child in &v.children {
+            let t = self.resolve(child)?;
+            if t.tag != "texture" || t.attr("type") != Some("bitmap") || bitmap.is_some() {
+                return Err(misplaced(child, t, &v, "one <texture type=\"bitmap\">"));
+            }
+            bitmap = Some(self.bitmap(t)?);
+        }
+        v.finish()?;
+        bitmap.ok_or_else(|| SceneError::at(&el.loc, "a d65 radiance texture needs a nested <texture type=\"bitmap\"> (d65 with a color or scale is not yet supported here)"))
     }
 
     /// `<texture type="bitmap">`.

@@ -293,6 +293,9 @@ pub struct AreaEmitterDesc {
     pub radiance: SpectrumDesc,
     /// Radiance from an image over the shape's texture coordinates (a screen, a monitor).
     pub texture: Option<BitmapDesc>,
+    /// pt extension: spectra of the display's red, green and blue primaries, which the
+    /// texture's linear RGB drive in spectral mode (see the loader's `area_emitter`).
+    pub primaries: Option<Box<[SpectrumDesc; 3]>>,
 }
 
 /// A `<texture type="bitmap">`: an image looked up by texture coordinates.
@@ -456,6 +459,9 @@ impl SceneDesc {
             if let Some(e) = &s.emitter {
                 if e.radiance.is_spectral() {
                     return Some(format!("{}: {} emission spectrum", e.loc, e.radiance.form_name()));
+                }
+                if e.primaries.is_some() {
+                    return Some(format!("{}: display primaries (spectra driven by the radiance texture)", e.loc));
                 }
             }
         }

@@ -1158,3 +1158,46 @@ fn mask_wraps_one_bsdf_with_opacity_in_unit_range() {
     let e = fail(&scene(r#"<shape type="sphere"><bsdf type="mask"/></shape>"#));
     assert!(e.message.contains("mask needs one nested <bsdf>"), "{e}");
 }
+
+#[test]
+fn emitter_bitmap_in_d65_and_display_primaries() {
+    // The loader only needs the image to exist (pt-render decodes it).
+    let dir = temp_dir("emitter-texture");
+    std::fs::write(dir.join("img.png"), b"not decoded here").unwrap();
+    std::fs::write(dir.join("p.spd"), "400 0.1\n700 0.2\n").unwrap();
+    let area = |inner: &str| {
+        scene(&format!("<shape type=\"rectangle\">\n<emitter type=\"area\">\n{inner}\n</emitter></shape>"))
+    };
+    let bitmap = r#"<texture type="bitmap" name="nested"><string name="filename" value="img.png"/></texture>"#;
+    let load_in = |xml: String| {
+        std::fs::write(dir.join("s.xml"), xml).unwrap();
+        load_file(&dir.join("s.xml"), &[])
+    };
+    // Mitsuba's d65 texture around a bitmap: the same image, no primaries; RGB mode suffices.
+    let s = load_in(area(&format!(r#"<texture type="d65" name="radiance">{bitmap}</texture>"#))).unwrap();
+    let em = s.shapes[0].emitter.as_ref().unwrap();
+    assert!(em.texture.as_ref().unwrap().filename.ends_with("img.png") && em.primaries.is_none());
+    assert!(s.spectral_reason().is_none());
+    // Display primaries: three spectra, which make the scene spectral.
+    let tex = r#"<texture type="bitmap" name="radiance"><string name="filename" value="img.png"/></texture>"#;
+    let prim = |names: &[&str]| names.iter().map(|n| format!(r#"<spectrum name="{n}" filename="p.spd"/>"#)).collect::<String>();
+    let s = load_in(area(&format!("{tex}{}", prim(&["primary_r", "primary_g", "primary_b"])))).unwrap();
+    let p = s.shapes[0].emitter.as_ref().unwrap().primaries.as_ref().expect("primaries");
+    assert!(p.iter().all(|s| matches!(s, SpectrumDesc::Tabulated(t) if t.as_slice() == [(400.0, 0.1), (700.0, 0.2)])));
+    assert!(s.spectral_reason().unwrap().contains("display primaries"), "{:?}", s.spectral_reason());
+    // Errors: a missing primary, primaries without an image, an RGB primary, d65 without or
+    // with two images, a d65 colour.
+    let e = load_in(area(&format!("{tex}{}", prim(&["primary_r", "primary_b"])))).unwrap_err();
+    assert!(e.message.contains("primary_g is missing"), "{e}");
+    let e = load_in(area(&prim(&["primary_r", "primary_g", "primary_b"]))).unwrap_err();
+    assert!(e.message.contains("need a radiance texture"), "{e}");
+    let e = load_in(area(&format!(r#"{tex}<rgb name="primary_r" value="1, 0, 0"/>{}"#, prim(&["primary_g", "primary_b"])))).unwrap_err();
+    assert!(e.message.contains("primary_r must be a spectrum"), "{e}");
+    let e = load_in(area(r#"<texture type="d65" name="radiance"/>"#)).unwrap_err();
+    assert!(e.message.contains("needs a nested <texture type=\"bitmap\">"), "{e}");
+    let e = load_in(area(&format!(r#"<texture type="d65" name="radiance">{bitmap}{bitmap}</texture>"#))).unwrap_err();
+    assert!(e.message.contains("texture \"bitmap\" is not yet supported in this position"), "{e}");
+    let e = load_in(area(&format!(r#"<texture type="d65" name="radiance"><rgb name="color" value="1, 1, 1"/>{bitmap}</texture>"#))).unwrap_err();
+    assert!(e.message.contains("unused property 'color'"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
