@@ -645,7 +645,7 @@ impl TexturedPbr {
             ColorMode::Rgb => SampledSpectrum::from_rgb(c),
             ColorMode::Spectral => self.base_spectrum.sample(lambda),
         };
-        SurfaceBsdf { bsdf: Bsdf::GltfPbr(GltfPbr::new(base, metallic, roughness, self.ior)), two_sided: self.two_sided, opacity: self.opacity }
+        SurfaceBsdf { bsdf: Bsdf::GltfPbr(GltfPbr::new(base, metallic, roughness, self.ior)), two_sided: self.two_sided, opacity: self.opacity, normal: None }
     }
 }
 
