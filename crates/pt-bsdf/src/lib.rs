@@ -52,7 +52,7 @@ pub use rough_plastic::{CoatingTable, RoughPlastic};
 pub use rough_thin_film::RoughThinFilm;
 pub use thin_dielectric::ThinDielectric;
 pub use thin_film::{FilmBase, FilmColor, ThinFilm};
-use pt_math::{Frame, Vec2, Vec3, Vec4};
+use pt_math::{Vec2, Vec3, Vec4};
 use pt_spectrum::SampledSpectrum;
 
 /// Applies `f` to each of the four lanes.
@@ -207,10 +207,10 @@ pub struct SurfaceBsdf {
     /// Opacity in [0, 1] (Mitsuba `mask`, see [`mask`]): the fraction of light that meets the
     /// model; the rest passes straight through. 1 for ordinary surfaces.
     pub opacity: f32,
-    /// Normal mapping (Mitsuba `normalmap`, see [`normal_map`]): the perturbed shading frame,
-    /// expressed **in the local shading frame** (its `n` is the mapped normal). `None`: the
-    /// model sees the local frame unchanged.
-    pub normal: Option<Frame>,
+    /// Normal mapping (Mitsuba `normalmap`, see [`normal_map`]): the mapped normal expressed
+    /// **in the local shading frame** (not necessarily unit length). `None`: the model sees the
+    /// local frame unchanged.
+    pub normal: Option<Vec3>,
 }
 
 impl SurfaceBsdf {
@@ -231,15 +231,15 @@ impl SurfaceBsdf {
     }
 
     /// f(wo, wi) without the cosine, local frame. With a normal map: the model's value in the
-    /// perturbed frame times |cos_perturbed(wi)| / |cos(wi)| (see [`normal_map`]).
+    /// perturbed frame times |cos_perturbed(wi)| G(wi) / |cos(wi)| (see [`normal_map`]).
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
         let s = self.side(wo);
         let (wo, wi) = (flip_z(wo, s), flip_z(wi, s));
-        match &self.normal {
+        match self.normal {
             None => self.bsdf.eval(wo, wi) * self.opacity,
-            Some(f) => match normal_map::perturb(f, wo, wi) {
-                Some((pwo, pwi)) => self.bsdf.eval(pwo, pwi) * (self.opacity * pwi.z.abs() / wi.z.abs()),
+            Some(n) => match normal_map::perturb(n, wo, wi) {
+                Some((f, pwo, pwi)) => self.bsdf.eval(pwo, pwi) * (self.opacity * pwi.z.abs() * normal_map::shadowing(f.n, wi) / wi.z.abs()),
                 None => SampledSpectrum::ZERO,
             },
         }
@@ -250,9 +250,9 @@ impl SurfaceBsdf {
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         let s = self.side(wo);
         let (wo, wi) = (flip_z(wo, s), flip_z(wi, s));
-        match &self.normal {
+        match self.normal {
             None => self.bsdf.pdf(wo, wi) * self.opacity,
-            Some(f) => normal_map::perturb(f, wo, wi).map_or(0.0, |(pwo, pwi)| self.bsdf.pdf(pwo, pwi) * self.opacity),
+            Some(n) => normal_map::perturb(n, wo, wi).map_or(0.0, |(_, pwo, pwi)| self.bsdf.pdf(pwo, pwi) * self.opacity),
         }
     }
 
@@ -264,9 +264,9 @@ impl SurfaceBsdf {
             Err(pass_through) => return Some(pass_through),
         };
         let s = self.side(wo);
-        let mut bs = match &self.normal {
+        let mut bs = match self.normal {
             None => self.bsdf.sample(flip_z(wo, s), u_lobe, u)?,
-            Some(f) => normal_map::sample(f, &self.bsdf, flip_z(wo, s), u_lobe, u)?,
+            Some(n) => normal_map::sample(n, &self.bsdf, flip_z(wo, s), u_lobe, u)?,
         };
         bs.wi = flip_z(bs.wi, s);
         // The nested lobe was chosen with probability `opacity`; its weight is unchanged (the

@@ -54,7 +54,7 @@
 #![forbid(unsafe_code)]
 
 use base64::Engine as _;
-use glam::{Mat3, Mat4, Vec2, Vec3};
+use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use gltf::json::validation::Validate as _;
 use pt_scene::{
     AreaEmitterDesc, BsdfDesc, BsdfKind, CameraDesc, FilmDesc, FilterDesc, FovAxis, Geometry, ImageSource, IntegratorDesc, IntegratorKind, LightDesc, LightKind, MediumDesc, UvTexture,
@@ -265,7 +265,8 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
                     cx.warnings.push(format!("{elem}: mode {:?} skipped (only triangles are rendered)", prim.mode()));
                     continue;
                 }
-                let tri = read_primitive(&cx, &prim, &buffers, world, &elem)?;
+                let normal_mapped = prim.material().index().is_some_and(|i| matches!(mats[i].bsdf.kind, BsdfKind::NormalMap { .. }));
+                let tri = read_primitive(&mut cx, &prim, &buffers, world, &elem, normal_mapped)?;
                 let (mm, bsdf) = match prim.material().index() {
                     Some(i) => (&mats[i], i),
                     None => {
@@ -441,7 +442,9 @@ fn check_accessor(cx: &Ctx, acc: &gltf::Accessor, buffers: &[Vec<u8>], what: &st
 }
 
 /// Positions, normals, uvs and indices of a triangle primitive, in world space.
-fn read_primitive(cx: &Ctx, prim: &gltf::Primitive, buffers: &[Vec<u8>], world: Mat4, elem: &str) -> Result<TriangleMesh, GltfError> {
+/// With `want_tangents` (a normal-mapped material) also the tangents: `TANGENT` (xyz by the
+/// node's matrix, w negated when it mirrors), or generated from the uvs ([`generate_tangents`]).
+fn read_primitive(cx: &mut Ctx, prim: &gltf::Primitive, buffers: &[Vec<u8>], world: Mat4, elem: &str, want_tangents: bool) -> Result<TriangleMesh, GltfError> {
     let pos_acc = prim.get(&gltf::Semantic::Positions).ok_or_else(|| cx.err(format!("{elem}: no POSITION attribute")))?;
     check_accessor(cx, &pos_acc, buffers, "POSITION", elem)?;
     let nrm_acc = prim.get(&gltf::Semantic::Normals);
@@ -454,6 +457,10 @@ fn read_primitive(cx: &Ctx, prim: &gltf::Primitive, buffers: &[Vec<u8>], world: 
     }
     if let Some(a) = prim.indices() {
         check_accessor(cx, &a, buffers, "indices", elem)?;
+    }
+    let tan_acc = prim.get(&gltf::Semantic::Tangents).filter(|_| want_tangents);
+    if let Some(a) = &tan_acc {
+        check_accessor(cx, a, buffers, "TANGENT", elem)?;
     }
     let reader = prim.reader(|b| buffers.get(b.index()).map(|v| v.as_slice()));
     let positions: Vec<Vec3> = reader.read_positions().ok_or_else(|| cx.err(format!("{elem}: POSITION cannot be read")))?.map(Vec3::from).collect();
@@ -499,8 +506,76 @@ fn read_primitive(cx: &Ctx, prim: &gltf::Primitive, buffers: &[Vec<u8>], world: 
     if let Some((k, &i)) = flat.iter().enumerate().find(|(_, &i)| i as usize >= n) {
         return Err(cx.err(format!("{elem}: index {k} is {i}, out of range for {n} vertices")));
     }
-    let indices = flat.chunks_exact(3).map(|t| if flip { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] }).collect();
-    Ok(TriangleMesh { positions, normals, uvs, indices })
+    let indices: Vec<[u32; 3]> = flat.chunks_exact(3).map(|t| if flip { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] }).collect();
+    let mut tangents = None;
+    if want_tangents {
+        let given = match (&tan_acc, reader.read_tangents()) {
+            (Some(_), Some(it)) => {
+                let m3 = Mat3::from_mat4(world);
+                let v: Vec<Vec4> = it.map(|t| (m3 * Vec3::new(t[0], t[1], t[2])).extend(if (t[3] < 0.0) != flip { -1.0 } else { 1.0 })).collect();
+                if v.len() != n {
+                    return Err(cx.err(format!("{elem}: {} tangents for {n} positions", v.len())));
+                }
+                v.iter().all(|t| t.is_finite()).then_some(v)
+            }
+            _ => None,
+        };
+        tangents = match (given, &uvs) {
+            (Some(t), _) => Some(t),
+            (None, Some(uv)) => Some(generate_tangents(&positions, normals.as_deref(), uv, &indices)),
+            (None, None) => {
+                cx.warnings.push(format!("{elem}: normal map without TEXCOORD_0 or TANGENT: no tangent space, normal map ignored"));
+                None
+            }
+        };
+    }
+    Ok(TriangleMesh { positions, normals, uvs, tangents, indices })
+}
+
+/// Per-vertex tangents from the uvs when a mesh has no `TANGENT` (Lengyel 2001, "Computing
+/// tangent space basis vectors for an arbitrary mesh"): each triangle's dp/du and -dp/dv
+/// (glTF's bitangent points to image-up, decreasing v) are normalised, weighted by the
+/// triangle's area and summed at its vertices; the tangent is the sum made orthogonal to the
+/// vertex normal, and w = sign((n x t) . bitangent sum).
+///
+/// The glTF spec asks for MikkTSpace. The two agree wherever the uv mapping is affine over the
+/// triangles around a vertex (planes, boxes, cylinders unrolled evenly: every test asset here);
+/// elsewhere MikkTSpace weights by corner angle rather than area and splits vertices at mirrored
+/// uv seams, which this does not (a vertex on such a seam gets one averaged tangent).
+pub fn generate_tangents(positions: &[Vec3], normals: Option<&[Vec3]>, uvs: &[Vec2], indices: &[[u32; 3]]) -> Vec<Vec4> {
+    let n = positions.len();
+    let (mut tacc, mut bacc, mut nacc) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+    for tri in indices {
+        let [i0, i1, i2] = tri.map(|i| i as usize);
+        let (e1, e2) = (positions[i1] - positions[i0], positions[i2] - positions[i0]);
+        let (d1, d2) = (uvs[i1] - uvs[i0], uvs[i2] - uvs[i0]);
+        let cross = e1.cross(e2);
+        let area = 0.5 * cross.length();
+        let det = d1.x * d2.y - d1.y * d2.x;
+        for i in [i0, i1, i2] {
+            nacc[i] += cross; // area-weighted face normal, for meshes without normals
+        }
+        if det == 0.0 || !(area > 0.0) {
+            continue;
+        }
+        // [e1 e2] = [dpdu dpdv] [d1 d2] (pbrt-v4 eq. 6.7).
+        let dpdu = (e1 * d2.y - e2 * d1.y) / det;
+        let dpdv = (e2 * d1.x - e1 * d2.x) / det;
+        let (Some(t), Some(b)) = (dpdu.try_normalize(), (-dpdv).try_normalize()) else { continue };
+        for i in [i0, i1, i2] {
+            tacc[i] += t * area;
+            bacc[i] += b * area;
+        }
+    }
+    (0..n)
+        .map(|i| {
+            let nn = normals.map(|ns| ns[i]).unwrap_or(nacc[i]).normalize_or_zero();
+            match (tacc[i] - nn * nn.dot(tacc[i])).try_normalize() {
+                Some(t) => t.extend(if nn.cross(t).dot(bacc[i]) < 0.0 { -1.0 } else { 1.0 }),
+                None => Vec4::ZERO, // the renderer falls back to dp/du
+            }
+        })
+        .collect()
 }
 
 /// Centre and radius of the bounding sphere of the boxes of all meshes (a unit sphere at the
@@ -566,8 +641,6 @@ fn ext_f32(v: Option<&serde_json::Value>, key: &str, default: f32) -> f32 {
 /// KHR_texture_transform as an affine uv map. `None` (with a warning) for what is not supported:
 /// texture coordinate sets other than 0, clamped or mirrored wrapping.
 fn texture_of(cx: &mut Ctx, info: &gltf::texture::Info, srgb: bool, buffers: &[Vec<u8>], what: &str) -> Result<Option<Box<UvTexture>>, GltfError> {
-    let tex = info.texture();
-    let elem = format!("{what} (textures[{}])", tex.index());
     let mut tex_coord = info.tex_coord();
     // KHR_texture_transform: uv' = T R S uv (the extension's GLSL, column-major mat3s):
     // u' = sx u cos(r) - sy v sin(r) + ox, v' = sx u sin(r) + sy v cos(r) + oy.
@@ -580,6 +653,26 @@ fn texture_of(cx: &mut Ctx, info: &gltf::texture::Info, srgb: bool, buffers: &[V
             tex_coord = tc;
         }
     }
+    texture_source(cx, info.texture(), tex_coord, transform, srgb, buffers, what)
+}
+
+/// KHR_texture_transform read from a textureInfo's raw `extensions` JSON (for texture slots the
+/// gltf crate does not model: `normalTexture`, extension textures), as in [`texture_of`];
+/// its `texCoord` overrides `tex_coord`.
+fn transform_from_json(ext: Option<&serde_json::Value>, tex_coord: &mut u32) -> [f32; 6] {
+    let Some(t) = ext else { return [1.0, 0.0, 0.0, 0.0, 1.0, 0.0] };
+    let pair = |k: &str, d: f32| t.get(k).and_then(|v| v.as_array()).map_or([d, d], |a| [0, 1].map(|i| a.get(i).and_then(|x| x.as_f64()).map_or(d, |x| x as f32)));
+    let ([ox, oy], r, [sx, sy]) = (pair("offset", 0.0), ext_f32(Some(t), "rotation", 0.0), pair("scale", 1.0));
+    if let Some(tc) = t.get("texCoord").and_then(|v| v.as_u64()) {
+        *tex_coord = tc as u32;
+    }
+    let (sin, cos) = r.sin_cos();
+    [sx * cos, -sy * sin, ox, sx * sin, sy * cos, oy]
+}
+
+/// The image, sampler and uv map of a texture (see [`texture_of`]).
+fn texture_source(cx: &mut Ctx, tex: gltf::Texture, tex_coord: u32, transform: [f32; 6], srgb: bool, buffers: &[Vec<u8>], what: &str) -> Result<Option<Box<UvTexture>>, GltfError> {
+    let elem = format!("{what} (textures[{}])", tex.index());
     if tex_coord != 0 {
         cx.warnings.push(format!("{elem}: texture coordinate set {tex_coord} is not read (only TEXCOORD_0): texture ignored"));
         return Ok(None);
@@ -635,8 +728,23 @@ fn map_material(cx: &mut Ctx, m: &gltf::Material, buffers: &[Vec<u8>]) -> Result
             notes.push(format!("{slot}: {} {}{ext}", if t.srgb { "sRGB-decoded" } else { "linear" }, if t.nearest { "nearest" } else { "bilinear" }));
         }
     }
+    let normal_texture = match m.normal_texture() {
+        Some(nt) => {
+            let mut tc = nt.tex_coord();
+            let transform = transform_from_json(nt.extension_value("KHR_texture_transform"), &mut tc);
+            let scale = nt.scale();
+            if !scale.is_finite() {
+                return Err(cx.err(format!("{elem}: normalTexture.scale must be finite, got {scale}")));
+            }
+            texture_source(cx, nt.texture(), tc, transform, false, buffers, &format!("{elem}{name} normalTexture"))?.map(|t| (t, scale))
+        }
+        None => None,
+    };
+    if let Some((t, scale)) = &normal_texture {
+        let ext = if t.transform != [1.0, 0.0, 0.0, 0.0, 1.0, 0.0] { format!(", KHR_texture_transform {:?}", t.transform) } else { String::new() };
+        notes.push(format!("normalTexture: linear {}, scale {scale}, tangent space from TANGENT (or generated from the uvs){ext}", if t.nearest { "nearest" } else { "bilinear" }));
+    }
     for (slot, present) in [
-        ("normalTexture", m.normal_texture().is_some()),
         ("emissiveTexture", m.emissive_texture().is_some()),
         ("occlusionTexture", m.occlusion_texture().is_some()),
     ] {
@@ -779,6 +887,9 @@ fn map_material(cx: &mut Ctx, m: &gltf::Material, buffers: &[Vec<u8>]) -> Result
     }
     if opacity < 1.0 {
         kind = BsdfKind::Mask { opacity, inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
+    }
+    if let Some((texture, scale)) = normal_texture {
+        kind = BsdfKind::NormalMap { texture, scale, gltf: true, inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
     }
     cx.summary.push(format!("  {elem}{name}: {mapping}"));
     for u in &used {

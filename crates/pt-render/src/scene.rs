@@ -41,6 +41,8 @@ struct ShapeData {
     /// Vertex normals and uvs of meshes, indexed through `indices`.
     normals: Option<Vec<Vec3>>,
     uvs: Option<Vec<Vec2>>,
+    /// Vertex tangents (xyz, handedness w) of meshes that have them (normal maps).
+    tangents: Option<Vec<pt_math::Vec4>>,
     indices: Vec<[u32; 3]>,
 }
 
@@ -77,6 +79,8 @@ pub struct Scene {
     fluorescent: Vec<Option<crate::fluorescence::Fluorescent>>,
     /// Per material: its textures, when its parameters vary over the surface (glTF).
     textured: Vec<Option<TexturedPbr>>,
+    /// Per material: its normal map, if it has one.
+    normal_maps: Vec<Option<NormalMapTex>>,
     /// Spectral mode: each light's emission spectrum (its `radiance` fields hold the geometric
     /// factors only); empty in RGB mode.
     light_spectra: Vec<Option<Spectrum>>,
@@ -173,6 +177,8 @@ fn material_with(
         BsdfKind::Diffuse { reflectance } => one_sided(Bsdf::Lambert(Lambert::new(val(reflectance, Role::Albedo)))),
         BsdfKind::TwoSided { inner } => SurfaceBsdf { two_sided: true, ..material_with(inner, lambda, val, tables)? },
         BsdfKind::Mask { opacity, inner } => SurfaceBsdf { opacity: *opacity, ..material_with(inner, lambda, val, tables)? },
+        // The perturbed frame depends on the hit: set by `Scene::material_at_hit`.
+        BsdfKind::NormalMap { inner, .. } => material_with(inner, lambda, val, tables)?,
         BsdfKind::ThinFilm { thickness, film_ior, ext_ior, int_ior, eta, k } => {
             let base = match int_ior {
                 Some(ior) => FilmBase::Dielectric { ior: *ior },
@@ -238,7 +244,7 @@ fn material_with(
 /// The fluorescence model of a `fluorescent` material (also inside `twosided`), else `None`.
 fn fluorescent_model(b: &BsdfDesc) -> Result<Option<crate::fluorescence::Fluorescent>, BuildError> {
     match &b.kind {
-        BsdfKind::TwoSided { inner } => fluorescent_model(inner),
+        BsdfKind::TwoSided { inner } | BsdfKind::NormalMap { inner, .. } => fluorescent_model(inner),
         // The integrator switches wavelengths before the BSDF chooses between pass-through and
         // scattering, which would be wrong for the pass-through part.
         BsdfKind::Mask { inner, .. } if fluorescent_model(inner)?.is_some() => {
@@ -281,6 +287,7 @@ impl Scene {
         let materials: Vec<SurfaceBsdf> =
             desc.bsdfs.iter().map(|b| material_with(b, None, &mut |s, _| spectrum(s), &mut CoatingTable::get)).collect::<Result<_, _>>()?;
         let textured = desc.bsdfs.iter().map(|b| TexturedPbr::of(b, spectral)).collect::<Result<Vec<_>, _>>()?;
+        let normal_maps = desc.bsdfs.iter().map(NormalMapTex::of).collect::<Result<Vec<_>, _>>()?;
         let mut spectral_materials = Vec::new();
         if spectral {
             for b in &desc.bsdfs {
@@ -325,14 +332,20 @@ impl Scene {
             if shape.bsdf >= materials.len() {
                 return Err(BuildError { loc: shape.loc.clone(), message: format!("BSDF index {} out of range", shape.bsdf) });
             }
-            let mut data = ShapeData { material: shape.bsdf as u32, light: None, interior: None, normals: None, uvs: None, indices: Vec::new() };
+            let mut data = ShapeData { material: shape.bsdf as u32, light: None, interior: None, normals: None, uvs: None, tangents: None, indices: Vec::new() };
             let light_shape = match &shape.geometry {
                 Geometry::Mesh(mesh) => {
                     let tris = add_mesh(mesh, si as u32, shape.emitter.is_some(), &mut prims, &mut refs, &mut stats, &shape.loc)?;
                     data.normals = mesh.normals.clone();
                     data.uvs = mesh.uvs.clone();
-                    // Indices serve only to interpolate normals and uvs: without them, no copy.
-                    if data.normals.is_some() || data.uvs.is_some() {
+                    data.tangents = mesh.tangents.clone();
+                    if let Some(ts) = &mesh.tangents {
+                        if ts.len() != mesh.positions.len() {
+                            return Err(BuildError { loc: shape.loc.clone(), message: format!("mesh has {} tangents for {} vertices", ts.len(), mesh.positions.len()) });
+                        }
+                    }
+                    // Indices serve only to interpolate normals, uvs and tangents: without them, no copy.
+                    if data.normals.is_some() || data.uvs.is_some() || data.tangents.is_some() {
                         data.indices = mesh.indices.clone();
                     }
                     tris.map(|(tris, areas)| (LightShape::Mesh { distr: Distribution1D::new(&areas).expect("non-empty"), tris }, areas.iter().sum::<f32>()))
@@ -404,7 +417,7 @@ impl Scene {
         if !spectral {
             light_spectra.clear();
         }
-        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, fluorescent, textured, light_spectra, media, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
+        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, fluorescent, textured, normal_maps, light_spectra, media, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
     }
 
     /// Closest hit along `ray`, with its surface data.
@@ -441,7 +454,15 @@ impl Scene {
                     }
                     None => (Vec2::new(b1, b2), Vec3::ZERO),
                 };
-                Some(Interaction { p, ng, ns, uv, dpdu, t, shape: r.shape })
+                let tangent = match &shape.tangents {
+                    Some(ts) => {
+                        let (a, b, c) = (ts[idx[0] as usize], ts[idx[1] as usize], ts[idx[2] as usize]);
+                        // Handedness is constant over a triangle in well-formed data; take vertex 0's.
+                        (a * b0 + b * b1 + c * b2).truncate().extend(if a.w < 0.0 { -1.0 } else { 1.0 })
+                    }
+                    None => pt_math::Vec4::ZERO,
+                };
+                Some(Interaction { p, ng, ns, uv, dpdu, tangent, t, shape: r.shape })
             }
             Primitive::Sphere { center, radius, flip } => {
                 let c = Vec3::from(center);
@@ -453,7 +474,7 @@ impl Scene {
                 // Mitsuba's sphere: u runs along the longitude about its local z axis (spheres
                 // here carry no rotation).
                 let dpdu = Vec3::new(-local.y, local.x, 0.0);
-                Some(Interaction { p, ng: n, ns: n, uv, dpdu, t, shape: r.shape })
+                Some(Interaction { p, ng: n, ns: n, uv, dpdu, tangent: pt_math::Vec4::ZERO, t, shape: r.shape })
             }
         }
     }
@@ -523,6 +544,18 @@ impl Scene {
         }
     }
 
+    /// The BSDF at a hit: [`Scene::material_at_uv`] with the material's normal map, if any, turned
+    /// into the perturbed frame (pt-bsdf `normal_map`) relative to the integrator's shading frame
+    /// `Frame::from_normal_tangent(hit.ns, hit.dpdu)`.
+    #[inline]
+    pub fn material_at_hit(&self, hit: &Interaction, lambda: &SampledWavelengths) -> SurfaceBsdf {
+        let mut b = self.material_at_uv(hit.shape, hit.uv, lambda);
+        if let Some(Some(nm)) = self.normal_maps.get(self.shapes[hit.shape as usize].material as usize) {
+            b.normal = nm.normal(hit);
+        }
+        b
+    }
+
     /// Transmittance exp(-sigma_t d) of the interior medium of `shape` over `distance` scene units,
     /// at the path's wavelengths (spectral mode) or per RGB channel; `None` if it has no medium.
     #[inline]
@@ -587,7 +620,11 @@ struct TexturedPbr {
 impl TexturedPbr {
     /// The textured form of a material description, if it is a glTF material with textures.
     fn of(desc: &BsdfDesc, spectral: bool) -> Result<Option<TexturedPbr>, BuildError> {
-        // glTF materials come as [Mask (alpha)] around [TwoSided] around GltfPbr.
+        // glTF materials come as [NormalMap] around [Mask (alpha)] around [TwoSided] around GltfPbr.
+        let desc = match &desc.kind {
+            BsdfKind::NormalMap { inner, .. } => inner.as_ref(),
+            _ => desc,
+        };
         let (desc_in, opacity) = match &desc.kind {
             BsdfKind::Mask { opacity, inner } => (inner.as_ref(), *opacity),
             _ => (desc, 1.0),
@@ -646,6 +683,56 @@ impl TexturedPbr {
             ColorMode::Spectral => self.base_spectrum.sample(lambda),
         };
         SurfaceBsdf { bsdf: Bsdf::GltfPbr(GltfPbr::new(base, metallic, roughness, self.ior)), two_sided: self.two_sided, opacity: self.opacity, normal: None }
+    }
+}
+
+/// A material's normal map (pt-bsdf `normal_map`): the texture and whose tangent space it uses.
+struct NormalMapTex {
+    bitmap: std::sync::Arc<crate::texture::Bitmap>,
+    /// KHR_texture_transform as `[a, b, c, d, e, f]`: `u' = a u + b v + c`, `v' = d u + e v + f`.
+    transform: [f32; 6],
+    /// glTF `scale` on the decoded x and y.
+    scale: f32,
+    /// glTF tangent space (mesh tangents and handedness) rather than Mitsuba's (dp/du).
+    gltf: bool,
+}
+
+impl NormalMapTex {
+    /// The normal map of a material (found through `Mask`, `TwoSided` and `NormalMap` wrappers).
+    fn of(desc: &BsdfDesc) -> Result<Option<NormalMapTex>, BuildError> {
+        match &desc.kind {
+            BsdfKind::Mask { inner, .. } | BsdfKind::TwoSided { inner } => NormalMapTex::of(inner),
+            BsdfKind::NormalMap { texture, scale, gltf, inner } => {
+                if NormalMapTex::of(inner)?.is_some() {
+                    return Err(BuildError { loc: desc.loc.clone(), message: "nested normal maps are not supported (not yet implemented)".into() });
+                }
+                let bitmap = crate::texture::Bitmap::from_source(&texture.source, texture.srgb, texture.nearest).map_err(|m| BuildError { loc: desc.loc.clone(), message: m })?;
+                Ok(Some(NormalMapTex { bitmap: std::sync::Arc::new(bitmap), transform: texture.transform, scale: *scale, gltf: *gltf }))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// The mapped normal at a hit, in the integrator's local shading frame (pt-bsdf
+    /// `normal_map` builds the frame from it). The texel c decodes to n = 2 c - 1 (glTF: x and y
+    /// times `scale`), in the tangent space (s, t, n): Mitsuba: s along dp/du, t = n x s; glTF:
+    /// s along the mesh tangent, t = w (n x s).
+    #[inline]
+    fn normal(&self, hit: &Interaction) -> Option<Vec3> {
+        let m = self.transform;
+        let uv = Vec2::new(m[0] * hit.uv.x + m[1] * hit.uv.y + m[2], m[3] * hit.uv.x + m[4] * hit.uv.y + m[5]);
+        let c = self.bitmap.eval(uv);
+        let n = Vec3::new(2.0 * c[0] - 1.0, 2.0 * c[1] - 1.0, 2.0 * c[2] - 1.0);
+        if !self.gltf {
+            return Some(n);
+        }
+        let n = Vec3::new(n.x * self.scale, n.y * self.scale, n.z);
+        let local = Frame::from_normal_tangent(hit.ns, hit.dpdu);
+        // Tangent frame of the mesh; without tangents, dp/du with w = +1.
+        let (t, w) = if hit.tangent.truncate() != Vec3::ZERO { (hit.tangent.truncate(), hit.tangent.w) } else { (hit.dpdu, 1.0) };
+        let tf = Frame::from_normal_tangent(hit.ns, t);
+        let world = tf.s * n.x + tf.t * (w * n.y) + tf.n * n.z;
+        Some(local.to_local(world))
     }
 }
 

@@ -28,8 +28,8 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "ply", "serialized", "cylinder", "shapegroup", "instance", "bsplinecurve", "linearcurve",
         "sdfgrid", "ellipsoids", "ellipsoidsmesh",
     ]),
-    ("bsdf", &["diffuse", "twosided", "mask", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "roughplastic"], &[
-        "plastic", "bumpmap", "normalmap", "blendbsdf", "null",
+    ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "roughplastic"], &[
+        "plastic", "bumpmap", "blendbsdf", "null",
         "polarizer", "retarder", "circular", "measured", "pplastic", "principled",
         "principledthin", "hair",
     ]),
@@ -718,6 +718,7 @@ impl<'e> Builder<'e> {
                 }
                 BsdfKind::Mask { opacity, inner: Box::new(self.single_inner(&v, "mask")?) }
             }
+            "normalmap" => self.normal_map(&v)?,
             // Project extensions with spectral re-emission (fluorescence.rs, phosphorescence.rs).
             "fluorescent" | "phosphorescent" => {
                 no_children(&v)?;
@@ -751,6 +752,25 @@ impl<'e> Builder<'e> {
             inner = Some(self.bsdf_desc(target)?);
         }
         inner.ok_or_else(|| SceneError::at(&v.el.loc, format!("{what} needs one nested <bsdf> or <ref>")))
+    }
+
+    /// `normalmap`: one nested BSDF and `<texture type="bitmap" name="normalmap">` whose RGB
+    /// is (n + 1) / 2 in the local shading frame (x along dp/du). As Mitsuba's bitmap, 8-bit
+    /// images are sRGB-decoded unless `raw` is true (which normal maps want).
+    fn normal_map(&mut self, v: &ObjectView<'e>) -> Result<BsdfKind> {
+        let (mut inner, mut texture) = (None, None);
+        for child in &v.children {
+            let target = self.resolve(child)?;
+            match (target.tag.as_str(), target.attr("name")) {
+                ("bsdf", _) if inner.is_none() => inner = Some(self.bsdf_desc(target)?),
+                ("texture", Some("normalmap")) if texture.is_none() => texture = Some(self.bitmap(target)?),
+                _ => return Err(misplaced(child, target, v, "one nested <bsdf> and one <texture name=\"normalmap\">")),
+            }
+        }
+        let inner = inner.ok_or_else(|| SceneError::at(&v.el.loc, "normalmap needs one nested <bsdf> or <ref>"))?;
+        let b = texture.ok_or_else(|| SceneError::at(&v.el.loc, "normalmap needs <texture type=\"bitmap\" name=\"normalmap\">"))?;
+        let texture = Box::new(UvTexture { source: ImageSource::File(b.filename), srgb: !b.raw, nearest: b.filter == "nearest", transform: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0] });
+        Ok(BsdfKind::NormalMap { texture, scale: 1.0, gltf: false, inner: Box::new(inner) })
     }
 
     fn twosided_inner(&mut self, v: &ObjectView<'e>) -> Result<BsdfDesc> {

@@ -261,6 +261,10 @@ pub struct TriangleMesh {
     pub normals: Option<Vec<Vec3>>,
     /// Per-vertex texture coordinates.
     pub uvs: Option<Vec<Vec2>>,
+    /// Per-vertex tangents for normal maps (glTF `TANGENT`, or generated from the uvs): xyz the
+    /// direction of increasing u, world space; w = +1 or -1, the handedness: the bitangent is
+    /// `w (n x t)` (glTF's convention).
+    pub tangents: Option<Vec<glam::Vec4>>,
     /// Triangles as vertex index triples, counter-clockwise seen from the front side
     /// (the side the geometric normal `(p1-p0) x (p2-p0)` points to). `flip_normals` has already
     /// reversed the winding where asked.
@@ -411,7 +415,7 @@ impl SceneDesc {
         fn bsdf_spectra(k: &BsdfKind) -> Vec<&SpectrumDesc> {
             match k {
                 BsdfKind::Diffuse { reflectance } | BsdfKind::OrenNayar { reflectance, .. } | BsdfKind::Minnaert { reflectance, .. } => vec![reflectance],
-                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } => bsdf_spectra(&inner.kind),
+                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } => bsdf_spectra(&inner.kind),
                 BsdfKind::Conductor { eta, k, specular_reflectance } | BsdfKind::RoughConductor { eta, k, specular_reflectance, .. } => {
                     vec![eta, k, specular_reflectance]
                 }
@@ -426,14 +430,14 @@ impl SceneDesc {
         fn has_thin_film(k: &BsdfKind) -> bool {
             match k {
                 BsdfKind::ThinFilm { .. } | BsdfKind::RoughThinFilm { .. } => true,
-                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } => has_thin_film(&inner.kind),
+                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } => has_thin_film(&inner.kind),
                 _ => false,
             }
         }
         fn is_fluorescent(k: &BsdfKind) -> bool {
             match k {
                 BsdfKind::Fluorescent { .. } => true,
-                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } => is_fluorescent(&inner.kind),
+                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } => is_fluorescent(&inner.kind),
                 _ => false,
             }
         }
@@ -503,6 +507,21 @@ pub enum BsdfKind {
     Mask {
         /// Opacity in [0, 1].
         opacity: f32,
+        /// The wrapped BSDF.
+        inner: Box<BsdfDesc>,
+    },
+    /// Normal map (Mitsuba `normalmap`; glTF `normalTexture`): the inner BSDF is evaluated in
+    /// the shading frame perturbed by the texture's normal (pt-bsdf `normal_map`).
+    NormalMap {
+        /// The texture: RGB = (n + 1) / 2, linear data unless `srgb` (Mitsuba's bitmap without
+        /// `raw`).
+        texture: Box<UvTexture>,
+        /// glTF `normalTexture.scale`: multiplies the x and y of the decoded normal (1 for
+        /// Mitsuba).
+        scale: f32,
+        /// Whose tangent space: `true` for glTF (frame from the mesh's tangents, y along
+        /// `w (n x t)`), `false` for Mitsuba (x along dp/du, y = n x x).
+        gltf: bool,
         /// The wrapped BSDF.
         inner: Box<BsdfDesc>,
     },
