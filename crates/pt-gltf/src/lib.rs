@@ -211,7 +211,7 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
     let mut mats = Vec::new();
     cx.summary.push(format!("materials   {} (glTF)", doc.materials().len()));
     for m in doc.materials() {
-        let mm = map_material(&mut cx, &m, &buffers)?;
+        let mm = map_material(&mut cx, doc, &m, &buffers)?;
         desc.bsdfs.push(mm.bsdf.clone());
         mats.push(mm);
     }
@@ -670,6 +670,16 @@ fn transform_from_json(ext: Option<&serde_json::Value>, tex_coord: &mut u32) -> 
     [sx * cos, -sy * sin, ox, sx * sin, sy * cos, oy]
 }
 
+/// A texture given by a raw textureInfo JSON object (`index`, `texCoord`, KHR_texture_transform)
+/// of an extension the gltf crate does not model, as [`texture_of`].
+fn json_texture(cx: &mut Ctx, doc: &gltf::Document, info: &serde_json::Value, srgb: bool, buffers: &[Vec<u8>], what: &str) -> Result<Option<Box<UvTexture>>, GltfError> {
+    let index = info.get("index").and_then(|v| v.as_u64()).ok_or_else(|| cx.err(format!("{what}: textureInfo without an index")))? as usize;
+    let tex = doc.textures().nth(index).ok_or_else(|| cx.err(format!("{what}: textures[{index}] does not exist ({} textures)", doc.textures().len())))?;
+    let mut tex_coord = info.get("texCoord").and_then(|v| v.as_u64()).unwrap_or(0) as u32;
+    let transform = transform_from_json(info.get("extensions").and_then(|e| e.get("KHR_texture_transform")), &mut tex_coord);
+    texture_source(cx, tex, tex_coord, transform, srgb, buffers, what)
+}
+
 /// The image, sampler and uv map of a texture (see [`texture_of`]).
 fn texture_source(cx: &mut Ctx, tex: gltf::Texture, tex_coord: u32, transform: [f32; 6], srgb: bool, buffers: &[Vec<u8>], what: &str) -> Result<Option<Box<UvTexture>>, GltfError> {
     let elem = format!("{what} (textures[{}])", tex.index());
@@ -703,7 +713,7 @@ fn texture_source(cx: &mut Ctx, tex: gltf::Texture, tex_coord: u32, transform: [
     Ok(Some(Box::new(UvTexture { source, srgb, nearest, transform })))
 }
 
-fn map_material(cx: &mut Ctx, m: &gltf::Material, buffers: &[Vec<u8>]) -> Result<MappedMaterial, GltfError> {
+fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers: &[Vec<u8>]) -> Result<MappedMaterial, GltfError> {
     let idx = m.index().unwrap_or(0);
     let elem = format!("materials[{idx}]");
     let name = m.name().map(|n| format!(" '{n}'")).unwrap_or_default();
@@ -835,8 +845,19 @@ fn map_material(cx: &mut Ctx, m: &gltf::Material, buffers: &[Vec<u8>]) -> Result
             if !(thickness >= 0.0 && thickness.is_finite() && film_ior >= 1.0 && film_ior.is_finite()) {
                 return Err(cx.err(format!("{elem}: KHR_materials_iridescence needs thickness >= 0 and ior >= 1, got {thickness}, {film_ior}")));
             }
-            if ir.get("iridescenceTexture").is_some() || ir.get("iridescenceThicknessTexture").is_some() {
-                cx.warnings.push(format!("{elem}{name}: iridescence textures ignored (textures are not yet implemented): thickness = iridescenceThicknessMaximum"));
+            // iridescenceThicknessTexture: thickness = mix(min, max, green) per texel.
+            let thickness_texture = match ir.get("iridescenceThicknessTexture") {
+                Some(info) => {
+                    let min_nm = ext_f32(Some(ir), "iridescenceThicknessMinimum", 100.0);
+                    if !(min_nm >= 0.0 && min_nm.is_finite()) {
+                        return Err(cx.err(format!("{elem}: iridescenceThicknessMinimum must be finite and >= 0, got {min_nm}")));
+                    }
+                    json_texture(cx, doc, info, false, buffers, &format!("{elem}{name} iridescenceThicknessTexture"))?.map(|t| (t, min_nm))
+                }
+                None => None,
+            };
+            if ir.get("iridescenceTexture").is_some() {
+                cx.warnings.push(format!("{elem}{name}: iridescenceTexture ignored (not yet implemented): iridescence factor from iridescenceFactor only"));
             }
             if factor < 1.0 {
                 notes.push(format!("iridescenceFactor {factor} treated as 1"));
@@ -861,6 +882,10 @@ fn map_material(cx: &mut Ctx, m: &gltf::Material, buffers: &[Vec<u8>]) -> Result
             } else {
                 mapping = format!("roughthinfilm: {thickness} nm film of ior {film_ior} over an opaque base of index {eta:?} (k = 0), GGX alpha {alpha:.4}; diffuse dropped");
                 kind = BsdfKind::RoughThinFilm { thickness, film_ior, ext_ior: 1.0, int_ior: None, eta, k: SpectrumDesc::Constant(0.0), distribution: "ggx".into(), alpha_u: alpha, alpha_v: alpha };
+            }
+            if let Some((texture, min_nm)) = thickness_texture {
+                notes.push(format!("iridescenceThicknessTexture: thickness = {min_nm} + ({thickness} - {min_nm}) x green, nm, per texel"));
+                kind = BsdfKind::FilmThicknessTexture { texture, min_nm, max_nm: thickness, inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
             }
             used.push(format!("KHR_materials_iridescence (factor {factor}, ior {film_ior}, thickness max {thickness} nm)"));
         }

@@ -81,6 +81,8 @@ pub struct Scene {
     textured: Vec<Option<TexturedPbr>>,
     /// Per material: its normal map, if it has one.
     normal_maps: Vec<Option<NormalMapTex>>,
+    /// Per material: its film thickness texture, if it has one.
+    film_textures: Vec<Option<FilmThicknessTex>>,
     /// Spectral mode: each light's emission spectrum (its `radiance` fields hold the geometric
     /// factors only); empty in RGB mode.
     light_spectra: Vec<Option<Spectrum>>,
@@ -179,6 +181,8 @@ fn material_with(
         BsdfKind::Mask { opacity, inner } => SurfaceBsdf { opacity: *opacity, ..material_with(inner, lambda, val, tables)? },
         // The perturbed frame depends on the hit: set by `Scene::material_at_hit`.
         BsdfKind::NormalMap { inner, .. } => material_with(inner, lambda, val, tables)?,
+        // The thickness depends on the hit: set by `Scene::material_at_hit`.
+        BsdfKind::FilmThicknessTexture { inner, .. } => material_with(inner, lambda, val, tables)?,
         BsdfKind::ThinFilm { thickness, film_ior, ext_ior, int_ior, eta, k } => {
             let base = match int_ior {
                 Some(ior) => FilmBase::Dielectric { ior: *ior },
@@ -244,7 +248,7 @@ fn material_with(
 /// The fluorescence model of a `fluorescent` material (also inside `twosided`), else `None`.
 fn fluorescent_model(b: &BsdfDesc) -> Result<Option<crate::fluorescence::Fluorescent>, BuildError> {
     match &b.kind {
-        BsdfKind::TwoSided { inner } | BsdfKind::NormalMap { inner, .. } => fluorescent_model(inner),
+        BsdfKind::TwoSided { inner } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } => fluorescent_model(inner),
         // The integrator switches wavelengths before the BSDF chooses between pass-through and
         // scattering, which would be wrong for the pass-through part.
         BsdfKind::Mask { inner, .. } if fluorescent_model(inner)?.is_some() => {
@@ -288,6 +292,7 @@ impl Scene {
             desc.bsdfs.iter().map(|b| material_with(b, None, &mut |s, _| spectrum(s), &mut CoatingTable::get)).collect::<Result<_, _>>()?;
         let textured = desc.bsdfs.iter().map(|b| TexturedPbr::of(b, spectral)).collect::<Result<Vec<_>, _>>()?;
         let normal_maps = desc.bsdfs.iter().map(NormalMapTex::of).collect::<Result<Vec<_>, _>>()?;
+        let film_textures = desc.bsdfs.iter().map(FilmThicknessTex::of).collect::<Result<Vec<_>, _>>()?;
         let mut spectral_materials = Vec::new();
         if spectral {
             for b in &desc.bsdfs {
@@ -417,7 +422,7 @@ impl Scene {
         if !spectral {
             light_spectra.clear();
         }
-        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, fluorescent, textured, normal_maps, light_spectra, media, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
+        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, fluorescent, textured, normal_maps, film_textures, light_spectra, media, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
     }
 
     /// Closest hit along `ray`, with its surface data.
@@ -550,8 +555,17 @@ impl Scene {
     #[inline]
     pub fn material_at_hit(&self, hit: &Interaction, lambda: &SampledWavelengths) -> SurfaceBsdf {
         let mut b = self.material_at_uv(hit.shape, hit.uv, lambda);
-        if let Some(Some(nm)) = self.normal_maps.get(self.shapes[hit.shape as usize].material as usize) {
+        let m = self.shapes[hit.shape as usize].material as usize;
+        if let Some(Some(nm)) = self.normal_maps.get(m) {
             b.normal = nm.normal(hit);
+        }
+        if let Some(Some(ft)) = self.film_textures.get(m) {
+            let d = ft.thickness(hit.uv);
+            match &mut b.bsdf {
+                Bsdf::ThinFilm(f) => f.thickness_nm = d,
+                Bsdf::RoughThinFilm(r) => r.film.thickness_nm = d,
+                _ => {}
+            }
         }
         b
     }
@@ -733,6 +747,41 @@ impl NormalMapTex {
         let tf = Frame::from_normal_tangent(hit.ns, t);
         let world = tf.s * n.x + tf.t * (w * n.y) + tf.n * n.z;
         Some(local.to_local(world))
+    }
+}
+
+/// A film thickness texture (glTF `iridescenceThicknessTexture`).
+struct FilmThicknessTex {
+    bitmap: std::sync::Arc<crate::texture::Bitmap>,
+    /// KHR_texture_transform as `[a, b, c, d, e, f]`: `u' = a u + b v + c`, `v' = d u + e v + f`.
+    transform: [f32; 6],
+    /// Thickness at green 0 and 1, nm.
+    min_nm: f32,
+    max_nm: f32,
+}
+
+impl FilmThicknessTex {
+    /// The film thickness texture of a material (through `Mask`, `TwoSided`, `NormalMap`).
+    fn of(desc: &BsdfDesc) -> Result<Option<FilmThicknessTex>, BuildError> {
+        match &desc.kind {
+            BsdfKind::Mask { inner, .. } | BsdfKind::TwoSided { inner } | BsdfKind::NormalMap { inner, .. } => FilmThicknessTex::of(inner),
+            BsdfKind::FilmThicknessTexture { texture, min_nm, max_nm, .. } => {
+                if !(min_nm.is_finite() && max_nm.is_finite() && *min_nm >= 0.0 && *max_nm >= 0.0) {
+                    return Err(BuildError { loc: desc.loc.clone(), message: format!("film thickness range must be finite and >= 0 nm, got {min_nm}..{max_nm}") });
+                }
+                let bitmap = crate::texture::Bitmap::from_source(&texture.source, texture.srgb, texture.nearest).map_err(|m| BuildError { loc: desc.loc.clone(), message: m })?;
+                Ok(Some(FilmThicknessTex { bitmap: std::sync::Arc::new(bitmap), transform: texture.transform, min_nm: *min_nm, max_nm: *max_nm }))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// Thickness at texture coordinates `uv`, nm: `min + (max - min) g` (glTF: mix(min, max, g)).
+    #[inline]
+    fn thickness(&self, uv: Vec2) -> f32 {
+        let m = self.transform;
+        let g = self.bitmap.eval(Vec2::new(m[0] * uv.x + m[1] * uv.y + m[2], m[3] * uv.x + m[4] * uv.y + m[5]))[1];
+        (self.min_nm + (self.max_nm - self.min_nm) * g).max(0.0)
     }
 }
 

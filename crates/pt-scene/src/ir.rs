@@ -415,7 +415,7 @@ impl SceneDesc {
         fn bsdf_spectra(k: &BsdfKind) -> Vec<&SpectrumDesc> {
             match k {
                 BsdfKind::Diffuse { reflectance } | BsdfKind::OrenNayar { reflectance, .. } | BsdfKind::Minnaert { reflectance, .. } => vec![reflectance],
-                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } => bsdf_spectra(&inner.kind),
+                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } => bsdf_spectra(&inner.kind),
                 BsdfKind::Conductor { eta, k, specular_reflectance } | BsdfKind::RoughConductor { eta, k, specular_reflectance, .. } => {
                     vec![eta, k, specular_reflectance]
                 }
@@ -430,14 +430,14 @@ impl SceneDesc {
         fn has_thin_film(k: &BsdfKind) -> bool {
             match k {
                 BsdfKind::ThinFilm { .. } | BsdfKind::RoughThinFilm { .. } => true,
-                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } => has_thin_film(&inner.kind),
+                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } => has_thin_film(&inner.kind),
                 _ => false,
             }
         }
         fn is_fluorescent(k: &BsdfKind) -> bool {
             match k {
                 BsdfKind::Fluorescent { .. } => true,
-                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } => is_fluorescent(&inner.kind),
+                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } => is_fluorescent(&inner.kind),
                 _ => false,
             }
         }
@@ -523,6 +523,20 @@ pub enum BsdfKind {
         /// `w (n x t)`), `false` for Mitsuba (x along dp/du, y = n x x).
         gltf: bool,
         /// The wrapped BSDF.
+        inner: Box<BsdfDesc>,
+    },
+    /// A thin film (`inner`: `ThinFilm` or `RoughThinFilm`, possibly inside `TwoSided`) whose
+    /// thickness varies over the surface (glTF `iridescenceThicknessTexture`): thickness =
+    /// `min_nm + (max_nm - min_nm) g` with g the texture's green channel (linear data) at the
+    /// hit's uv; the inner film's own thickness is not used.
+    FilmThicknessTexture {
+        /// The texture (green channel used).
+        texture: Box<UvTexture>,
+        /// Thickness where green is 0, nm.
+        min_nm: f32,
+        /// Thickness where green is 1, nm.
+        max_nm: f32,
+        /// The film.
         inner: Box<BsdfDesc>,
     },
     /// Oren-Nayar rough diffuse (project extension `orennayar`).
