@@ -233,3 +233,96 @@ fn iridescence_thickness_texture_gives_constant_films_per_texel() {
         assert!(!close(&got, &other), "at ({x}, {y}) the two thicknesses give the same BSDF: the test cannot tell them apart");
     }
 }
+
+/// Mean of the left and right image halves per channel, with their standard errors.
+fn half_means(img: &pt_image::Image, var: &pt_image::Image) -> [([f64; 3], [f64; 3]); 2] {
+    let w = img.width as usize;
+    std::array::from_fn(|half| {
+        let (mut m, mut v, mut n) = ([0.0f64; 3], [0.0f64; 3], 0.0);
+        for (i, (p, q)) in img.data.iter().zip(&var.data).enumerate() {
+            if ((i % w) < w / 2) == (half == 0) {
+                n += 1.0;
+                for c in 0..3 {
+                    m[c] += p[c] as f64;
+                    v[c] += q[c] as f64;
+                }
+            }
+        }
+        (m.map(|x| x / n), v.map(|x| x.sqrt() / n))
+    })
+}
+
+/// XML `mask` with `<texture name="opacity">` (2 x 1 texels, nearest, raw): the left texel is
+/// pure red, opacity = its Rec. 709 luminance 0.212671 (Mitsuba's `eval_1`, checked with its
+/// Python bindings), the right one grey 128/255. A two-sided diffuse plane of albedo rho under a
+/// constant environment of radiance 1, seen straight on, has L = a rho + (1 - a) per half (the
+/// closed form of tests/media.rs per texel). Threshold as there: 4.5 standard errors plus 2e-4,
+/// standard error below 0.25% of the value, so a 2% bias (an opacity from the red channel, 1.0,
+/// or the mean of the channels, 0.333, instead of the luminance) fails.
+#[test]
+fn mask_opacity_texture_is_luminance_per_texel() {
+    let dir = scratch("mask_opacity_texture");
+    image::RgbImage::from_fn(2, 1, |x, _| if x == 0 { image::Rgb([255, 0, 0]) } else { image::Rgb([128, 128, 128]) }).save(dir.join("opacity.png")).unwrap();
+    let rho = 0.4;
+    let xml = format!(
+        r#"<scene version="3.0.0">
+    <integrator type="path"/>
+    <sensor type="perspective">
+        <float name="fov" value="20"/>
+        <transform name="to_world"><lookat origin="0, 0, 10" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/><rfilter type="box"/></film>
+    </sensor>
+    <emitter type="constant"><float name="radiance" value="1"/></emitter>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="5, 5, 1"/></transform>
+        <bsdf type="mask">
+            <texture type="bitmap" name="opacity">
+                <string name="filename" value="opacity.png"/><boolean name="raw" value="true"/><string name="filter_type" value="nearest"/>
+            </texture>
+            <bsdf type="twosided"><bsdf type="diffuse"><float name="reflectance" value="{rho}"/></bsdf></bsdf>
+        </bsdf>
+    </shape>
+</scene>"#
+    );
+    let path = dir.join("scene.xml");
+    std::fs::write(&path, xml).unwrap();
+    let (img, var) = render(&path, &dir, "out", &["--spp", "1024"]);
+    // Image left = world -x (camera +x is image left, Mitsuba's convention) = u < 1/2 = texel 0.
+    let opacity = [0.212671f64, 128.0 / 255.0];
+    for (half, (m, se)) in half_means(&img, &var).into_iter().enumerate() {
+        let want = opacity[half] * rho + (1.0 - opacity[half]);
+        for c in 0..3 {
+            eprintln!("half {half} channel {c}: got {:.5} want {want:.5} (stderr {:.2e})", m[c], se[c]);
+            assert!(se[c] < 0.0025 * want, "standard error {} too large to detect a 2% bias", se[c]);
+            assert!((m[c] - want).abs() <= 4.5 * se[c] + 2e-4, "half {half} channel {c}: {} vs closed form {want}", m[c]);
+        }
+    }
+}
+
+/// glTF base colour texture alpha (2 x 1 texels, nearest: alpha 77/255 left, 1 right) times
+/// `baseColorFactor` alpha 0.8: BLEND gives opacity 0.8 x alpha per texel, MASK (cutoff 0.5)
+/// 0 left (0.24 < 0.5) and 1 right (0.8 >= 0.5), exactly (the opacity the BSDF carries at the
+/// hit); the texture's colour still reaches the base colour (the BSDFs of the halves differ).
+#[test]
+fn gltf_base_colour_alpha_is_opacity_per_texel() {
+    let dir = scratch("gltf_alpha_texture");
+    image::RgbaImage::from_fn(2, 1, |x, _| if x == 0 { image::Rgba([200, 50, 50, 77]) } else { image::Rgba([50, 50, 200, 255]) }).save(dir.join("base.png")).unwrap();
+    let extra = r#", "samplers": [{"magFilter": 9728, "minFilter": 9728}]"#;
+    for (mode, want) in [("BLEND", [0.8 * 77.0 / 255.0, 0.8f32]), ("MASK", [0.0, 1.0])] {
+        let material = format!(r#"{{"alphaMode": "{mode}", "pbrMetallicRoughness": {{"baseColorFactor": [1, 1, 1, 0.8], "baseColorTexture": {{"index": 0}}, "metallicFactor": 0, "roughnessFactor": 0.6}}}}"#);
+        let (json, bin) = quad_gltf_with(false, &material, r#"[{"source": 0, "sampler": 0}]"#, r#"[{"uri": "base.png"}]"#, extra);
+        std::fs::write(dir.join("quad.gltf"), json).unwrap();
+        std::fs::write(dir.join("quad.bin"), bin).unwrap();
+        let g = pt_gltf::load(&dir.join("quad.gltf"), &pt_gltf::LoadOptions::default()).expect("glTF loads");
+        assert!(!g.warnings.iter().any(|w| w.contains("alpha")), "{:?}", g.warnings);
+        let scene = Scene::build(&g.desc, BvhKind::default(), LightSelection::Power).unwrap();
+        let lambda = SampledWavelengths::sample_visible(0.5);
+        let at = |x: f32| scene.material_at_hit(&scene.intersect(&Ray::new(Vec3::new(x, 0.3, 5.0), Vec3::NEG_Z)).unwrap(), &lambda);
+        let (l, r) = (at(-0.5), at(0.5));
+        assert!((l.opacity - want[0]).abs() < 1e-5 && (r.opacity - want[1]).abs() < 1e-5, "{mode}: opacity {} / {}, want {want:?}", l.opacity, r.opacity);
+        let (wo, wi) = (Vec3::new(0.1, 0.2, 0.9).normalize(), Vec3::new(-0.3, 0.1, 0.8).normalize());
+        let (fl, fr) = (l.bsdf.eval(wo, wi).0, r.bsdf.eval(wo, wi).0);
+        assert!(fl.x > 1.5 * fl.z && fr.z > 1.5 * fr.x, "{mode}: base colour texture not applied: {fl} / {fr}");
+    }
+}

@@ -776,10 +776,20 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
             }
         }
     };
+    // With a base colour texture, the texel's alpha (linear) times the factor's alpha, per hit
+    // (BLEND), or 0/1 against alphaCutoff per texel (MASK).
+    let alpha_texture = match (&base_color_texture, m.alpha_mode()) {
+        (_, gltf::material::AlphaMode::Opaque) | (None, _) => None,
+        (Some(t), mode) => {
+            let cutoff = (mode == gltf::material::AlphaMode::Mask).then(|| m.alpha_cutoff().unwrap_or(0.5));
+            Some((Box::new(UvTexture { srgb: false, ..(**t).clone() }), cutoff))
+        }
+    };
     if m.alpha_mode() != gltf::material::AlphaMode::Opaque {
-        used.push(format!("alphaMode {:?}: opacity {opacity} (mask)", m.alpha_mode()));
-        if pbr.base_color_texture().is_some() {
-            cx.warnings.push(format!("{elem}{name}: the base colour texture's alpha channel is not read (not yet implemented): opacity from baseColorFactor only"));
+        match &alpha_texture {
+            None => used.push(format!("alphaMode {:?}: opacity {opacity} (mask)", m.alpha_mode())),
+            Some((_, Some(c))) => used.push(format!("alphaMode MASK: opacity 1 where {} x texture alpha >= {c}, else 0, per texel (mask)", bc[3])),
+            Some((_, None)) => used.push(format!("alphaMode BLEND: opacity {} x texture alpha, per texel (mask)", bc[3])),
         }
     }
     let base_color = SpectrumDesc::Rgb([bc[0], bc[1], bc[2]]);
@@ -910,7 +920,10 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
         // back faces anyway, so opaque materials shade both sides.
         kind = BsdfKind::TwoSided { inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
     }
-    if opacity < 1.0 {
+    if let Some((texture, cutoff)) = alpha_texture {
+        let factor = bc[3].clamp(0.0, 1.0);
+        kind = BsdfKind::OpacityTexture { texture, channel: pt_scene::OpacityChannel::Alpha, factor, cutoff, inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
+    } else if opacity < 1.0 {
         kind = BsdfKind::Mask { opacity, inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
     }
     if let Some((texture, scale)) = normal_texture {

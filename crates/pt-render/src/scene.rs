@@ -83,6 +83,8 @@ pub struct Scene {
     normal_maps: Vec<Option<NormalMapTex>>,
     /// Per material: its film thickness texture, if it has one.
     film_textures: Vec<Option<FilmThicknessTex>>,
+    /// Per material: its opacity texture, if it has one.
+    opacity_textures: Vec<Option<OpacityTex>>,
     /// Spectral mode: each light's emission spectrum (its `radiance` fields hold the geometric
     /// factors only); empty in RGB mode.
     light_spectra: Vec<Option<Spectrum>>,
@@ -183,6 +185,8 @@ fn material_with(
         BsdfKind::NormalMap { inner, .. } => material_with(inner, lambda, val, tables)?,
         // The thickness depends on the hit: set by `Scene::material_at_hit`.
         BsdfKind::FilmThicknessTexture { inner, .. } => material_with(inner, lambda, val, tables)?,
+        // The opacity depends on the hit: set by `Scene::material_at_hit`.
+        BsdfKind::OpacityTexture { inner, .. } => material_with(inner, lambda, val, tables)?,
         BsdfKind::ThinFilm { thickness, film_ior, ext_ior, int_ior, eta, k } => {
             let base = match int_ior {
                 Some(ior) => FilmBase::Dielectric { ior: *ior },
@@ -251,7 +255,7 @@ fn fluorescent_model(b: &BsdfDesc) -> Result<Option<crate::fluorescence::Fluores
         BsdfKind::TwoSided { inner } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } => fluorescent_model(inner),
         // The integrator switches wavelengths before the BSDF chooses between pass-through and
         // scattering, which would be wrong for the pass-through part.
-        BsdfKind::Mask { inner, .. } if fluorescent_model(inner)?.is_some() => {
+        BsdfKind::Mask { inner, .. } | BsdfKind::OpacityTexture { inner, .. } if fluorescent_model(inner)?.is_some() => {
             Err(BuildError { loc: b.loc.clone(), message: "a mask around a fluorescent BSDF is not yet supported (not yet implemented)".into() })
         }
         BsdfKind::Fluorescent { reflectance, absorption, emission, quantum_yield } => crate::fluorescence::Fluorescent::new(
@@ -293,6 +297,7 @@ impl Scene {
         let textured = desc.bsdfs.iter().map(|b| TexturedPbr::of(b, spectral)).collect::<Result<Vec<_>, _>>()?;
         let normal_maps = desc.bsdfs.iter().map(NormalMapTex::of).collect::<Result<Vec<_>, _>>()?;
         let film_textures = desc.bsdfs.iter().map(FilmThicknessTex::of).collect::<Result<Vec<_>, _>>()?;
+        let opacity_textures = desc.bsdfs.iter().map(OpacityTex::of).collect::<Result<Vec<_>, _>>()?;
         let mut spectral_materials = Vec::new();
         if spectral {
             for b in &desc.bsdfs {
@@ -422,7 +427,7 @@ impl Scene {
         if !spectral {
             light_spectra.clear();
         }
-        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, fluorescent, textured, normal_maps, film_textures, light_spectra, media, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
+        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, fluorescent, textured, normal_maps, film_textures, opacity_textures, light_spectra, media, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
     }
 
     /// Closest hit along `ray`, with its surface data.
@@ -567,6 +572,9 @@ impl Scene {
                 _ => {}
             }
         }
+        if let Some(Some(ot)) = self.opacity_textures.get(m) {
+            b.opacity = ot.opacity(hit.uv);
+        }
         b
     }
 
@@ -634,13 +642,16 @@ struct TexturedPbr {
 impl TexturedPbr {
     /// The textured form of a material description, if it is a glTF material with textures.
     fn of(desc: &BsdfDesc, spectral: bool) -> Result<Option<TexturedPbr>, BuildError> {
-        // glTF materials come as [NormalMap] around [Mask (alpha)] around [TwoSided] around GltfPbr.
+        // glTF materials come as [NormalMap] around [Mask or OpacityTexture (alpha)] around
+        // [TwoSided] around GltfPbr.
         let desc = match &desc.kind {
             BsdfKind::NormalMap { inner, .. } => inner.as_ref(),
             _ => desc,
         };
         let (desc_in, opacity) = match &desc.kind {
             BsdfKind::Mask { opacity, inner } => (inner.as_ref(), *opacity),
+            // The opacity is set per hit (`Scene::material_at_hit`).
+            BsdfKind::OpacityTexture { inner, .. } => (inner.as_ref(), 1.0),
             _ => (desc, 1.0),
         };
         let (inner, two_sided) = match &desc_in.kind {
@@ -747,6 +758,62 @@ impl NormalMapTex {
         let tf = Frame::from_normal_tangent(hit.ns, t);
         let world = tf.s * n.x + tf.t * (w * n.y) + tf.n * n.z;
         Some(local.to_local(world))
+    }
+}
+
+/// An opacity texture (Mitsuba `mask` with a bitmap, glTF base colour alpha).
+struct OpacityTex {
+    bitmap: std::sync::Arc<crate::texture::Bitmap>,
+    /// KHR_texture_transform as `[a, b, c, d, e, f]`: `u' = a u + b v + c`, `v' = d u + e v + f`.
+    transform: [f32; 6],
+    /// Multiplies the texel's value.
+    factor: f32,
+    /// glTF MASK cutoff.
+    cutoff: Option<f32>,
+}
+
+impl OpacityTex {
+    /// The opacity texture of a material (through `TwoSided` and `NormalMap`; the glTF loader
+    /// puts it outside `TwoSided`).
+    fn of(desc: &BsdfDesc) -> Result<Option<OpacityTex>, BuildError> {
+        match &desc.kind {
+            BsdfKind::TwoSided { inner } | BsdfKind::NormalMap { inner, .. } => OpacityTex::of(inner),
+            BsdfKind::OpacityTexture { texture, channel, factor, cutoff, inner } => {
+                if OpacityTex::of(inner)?.is_some() {
+                    return Err(BuildError { loc: desc.loc.clone(), message: "nested opacity textures are not supported (not yet implemented)".into() });
+                }
+                let err = |m| BuildError { loc: desc.loc.clone(), message: m };
+                let bitmap = match channel {
+                    pt_scene::OpacityChannel::Luminance => crate::texture::Bitmap::from_source(&texture.source, texture.srgb, texture.nearest),
+                    pt_scene::OpacityChannel::Alpha => crate::texture::Bitmap::alpha_from_source(&texture.source, texture.nearest),
+                }
+                .map_err(err)?;
+                let bitmap = match channel {
+                    // Rec. 709 luminance of each texel, once (Mitsuba's eval_1), in all channels.
+                    pt_scene::OpacityChannel::Luminance => bitmap.map_texels(|t| [0.212_671 * t[0] + 0.715_160 * t[1] + 0.072_169 * t[2]; 3]),
+                    pt_scene::OpacityChannel::Alpha => bitmap,
+                };
+                Ok(Some(OpacityTex { bitmap: std::sync::Arc::new(bitmap), transform: texture.transform, factor: *factor, cutoff: *cutoff }))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// Opacity in [0, 1] at texture coordinates `uv`.
+    #[inline]
+    fn opacity(&self, uv: Vec2) -> f32 {
+        let m = self.transform;
+        let a = self.factor * self.bitmap.eval(Vec2::new(m[0] * uv.x + m[1] * uv.y + m[2], m[3] * uv.x + m[4] * uv.y + m[5]))[0];
+        match self.cutoff {
+            Some(c) => {
+                if a >= c {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+            None => a.clamp(0.0, 1.0),
+        }
     }
 }
 

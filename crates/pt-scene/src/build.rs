@@ -711,13 +711,7 @@ impl<'e> Builder<'e> {
             "twosided" => BsdfKind::TwoSided {
                 inner: Box::new(self.twosided_inner(&v)?),
             },
-            "mask" => {
-                let opacity = v.float("opacity")?.unwrap_or(0.5);
-                if !(0.0..=1.0).contains(&opacity) {
-                    return Err(v.prop_error("opacity", format!("opacity must be in [0, 1], got {opacity}")));
-                }
-                BsdfKind::Mask { opacity, inner: Box::new(self.single_inner(&v, "mask")?) }
-            }
+            "mask" => self.mask(&v)?,
             "normalmap" => self.normal_map(&v)?,
             // Project extensions with spectral re-emission (fluorescence.rs, phosphorescence.rs).
             "fluorescent" | "phosphorescent" => {
@@ -738,7 +732,9 @@ impl<'e> Builder<'e> {
         })
     }
 
-    /// The one nested BSDF of a wrapper such as `mask`.
+    /// The one nested BSDF of a wrapper (no user at the moment: `mask` and `normalmap` also take
+    /// textures).
+    #[allow(dead_code)]
     fn single_inner(&mut self, v: &ObjectView<'e>, what: &str) -> Result<BsdfDesc> {
         let mut inner = None;
         for child in &v.children {
@@ -752,6 +748,35 @@ impl<'e> Builder<'e> {
             inner = Some(self.bsdf_desc(target)?);
         }
         inner.ok_or_else(|| SceneError::at(&v.el.loc, format!("{what} needs one nested <bsdf> or <ref>")))
+    }
+
+    /// `mask`: `opacity` a float in [0, 1] (0.5) or `<texture type="bitmap" name="opacity">`
+    /// (opacity = the texel's value: Rec. 709 luminance of its linear RGB, as Mitsuba's `eval_1`,
+    /// clamped to [0, 1]), and one nested BSDF.
+    fn mask(&mut self, v: &ObjectView<'e>) -> Result<BsdfKind> {
+        let (mut inner, mut texture) = (None, None);
+        for child in &v.children {
+            let target = self.resolve(child)?;
+            match (target.tag.as_str(), target.attr("name")) {
+                ("bsdf", _) if inner.is_none() => inner = Some(self.bsdf_desc(target)?),
+                ("bsdf", _) => return Err(SceneError::at(&child.written().loc, "mask takes one nested <bsdf>")),
+                ("texture", Some("opacity")) if texture.is_none() => texture = Some(self.bitmap(target)?),
+                _ => return Err(misplaced(child, target, v, "one nested <bsdf> and at most one <texture name=\"opacity\">")),
+            }
+        }
+        let inner = Box::new(inner.ok_or_else(|| SceneError::at(&v.el.loc, "mask needs one nested <bsdf> or <ref>"))?);
+        if let Some(b) = texture {
+            if v.has("opacity") {
+                return Err(v.prop_error("opacity", "give either an opacity value or an opacity texture"));
+            }
+            let texture = Box::new(UvTexture { source: ImageSource::File(b.filename), srgb: !b.raw, nearest: b.filter == "nearest", transform: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0] });
+            return Ok(BsdfKind::OpacityTexture { texture, channel: OpacityChannel::Luminance, factor: 1.0, cutoff: None, inner });
+        }
+        let opacity = v.float("opacity")?.unwrap_or(0.5);
+        if !(0.0..=1.0).contains(&opacity) {
+            return Err(v.prop_error("opacity", format!("opacity must be in [0, 1], got {opacity}")));
+        }
+        Ok(BsdfKind::Mask { opacity, inner })
     }
 
     /// `normalmap`: one nested BSDF and `<texture type="bitmap" name="normalmap">` whose RGB

@@ -415,7 +415,7 @@ impl SceneDesc {
         fn bsdf_spectra(k: &BsdfKind) -> Vec<&SpectrumDesc> {
             match k {
                 BsdfKind::Diffuse { reflectance } | BsdfKind::OrenNayar { reflectance, .. } | BsdfKind::Minnaert { reflectance, .. } => vec![reflectance],
-                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } => bsdf_spectra(&inner.kind),
+                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } | BsdfKind::OpacityTexture { inner, .. } => bsdf_spectra(&inner.kind),
                 BsdfKind::Conductor { eta, k, specular_reflectance } | BsdfKind::RoughConductor { eta, k, specular_reflectance, .. } => {
                     vec![eta, k, specular_reflectance]
                 }
@@ -430,14 +430,14 @@ impl SceneDesc {
         fn has_thin_film(k: &BsdfKind) -> bool {
             match k {
                 BsdfKind::ThinFilm { .. } | BsdfKind::RoughThinFilm { .. } => true,
-                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } => has_thin_film(&inner.kind),
+                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } | BsdfKind::OpacityTexture { inner, .. } => has_thin_film(&inner.kind),
                 _ => false,
             }
         }
         fn is_fluorescent(k: &BsdfKind) -> bool {
             match k {
                 BsdfKind::Fluorescent { .. } => true,
-                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } => is_fluorescent(&inner.kind),
+                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } | BsdfKind::OpacityTexture { inner, .. } => is_fluorescent(&inner.kind),
                 _ => false,
             }
         }
@@ -522,6 +522,21 @@ pub enum BsdfKind {
         /// Whose tangent space: `true` for glTF (frame from the mesh's tangents, y along
         /// `w (n x t)`), `false` for Mitsuba (x along dp/du, y = n x x).
         gltf: bool,
+        /// The wrapped BSDF.
+        inner: Box<BsdfDesc>,
+    },
+    /// Opacity mask whose opacity varies over the surface (Mitsuba `mask` with a bitmap
+    /// `opacity`; glTF alpha from the base colour texture): as [`BsdfKind::Mask`] with the
+    /// opacity of the hit's texel.
+    OpacityTexture {
+        /// The texture.
+        texture: Box<UvTexture>,
+        /// Which value of the texel is the opacity.
+        channel: OpacityChannel,
+        /// Multiplies the texel's value (glTF `baseColorFactor` alpha; 1 for Mitsuba).
+        factor: f32,
+        /// glTF `alphaMode` MASK: opacity 1 where `factor x value >= cutoff`, else 0.
+        cutoff: Option<f32>,
         /// The wrapped BSDF.
         inner: Box<BsdfDesc>,
     },
@@ -705,6 +720,16 @@ pub enum BsdfKind {
         /// Metallic-roughness texture (linear): blue multiplies `metallic`, green `roughness`.
         metallic_roughness_texture: Option<Box<UvTexture>>,
     },
+}
+
+/// Which value of a texel an [`BsdfKind::OpacityTexture`] reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OpacityChannel {
+    /// Rec. 709 luminance of the linear RGB (Mitsuba's `eval_1` of an RGB bitmap; the value
+    /// itself for a grey image).
+    Luminance,
+    /// The alpha channel, stored linearly (glTF: 1 where the image has no alpha).
+    Alpha,
 }
 
 /// Image data of a texture: a file, or bytes embedded in the scene file (a glTF buffer view or
