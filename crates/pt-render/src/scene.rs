@@ -187,6 +187,18 @@ fn material_with(
         BsdfKind::FilmThicknessTexture { inner, .. } => material_with(inner, lambda, val, tables)?,
         // The opacity depends on the hit: set by `Scene::material_at_hit`.
         BsdfKind::OpacityTexture { inner, .. } => material_with(inner, lambda, val, tables)?,
+        BsdfKind::Blend { weight, first, second } => {
+            let (a, b) = (material_with(first, lambda, val, tables)?, material_with(second, lambda, val, tables)?);
+            let plain = |s: &SurfaceBsdf| s.opacity == 1.0 && s.normal.is_none() && s.blend.is_none();
+            if !plain(&a) || !plain(&b) {
+                return Err(BuildError { loc: desc.loc.clone(), message: "blendbsdf of masks, normal maps or blends is not yet supported (not yet implemented): put the mask or normal map around the blendbsdf".into() });
+            }
+            // `two_sided` never mirrors a transmissive model, so it may differ there.
+            if a.two_sided != b.two_sided && !a.bsdf.is_transmissive() && !b.bsdf.is_transmissive() {
+                return Err(BuildError { loc: desc.loc.clone(), message: "blendbsdf of a one-sided and a two-sided BSDF is not yet supported (not yet implemented): put twosided around the blendbsdf".into() });
+            }
+            SurfaceBsdf { blend: Some((*weight, b.bsdf)), two_sided: a.two_sided || b.two_sided, ..a }
+        }
         BsdfKind::ThinFilm { thickness, film_ior, ext_ior, int_ior, eta, k } => {
             let base = match int_ior {
                 Some(ior) => FilmBase::Dielectric { ior: *ior },
@@ -255,6 +267,9 @@ fn fluorescent_model(b: &BsdfDesc) -> Result<Option<crate::fluorescence::Fluores
         BsdfKind::TwoSided { inner } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } => fluorescent_model(inner),
         // The integrator switches wavelengths before the BSDF chooses between pass-through and
         // scattering, which would be wrong for the pass-through part.
+        BsdfKind::Blend { first, second, .. } if fluorescent_model(first)?.is_some() || fluorescent_model(second)?.is_some() => {
+            Err(BuildError { loc: b.loc.clone(), message: "a blendbsdf with a fluorescent BSDF is not yet supported (not yet implemented)".into() })
+        }
         BsdfKind::Mask { inner, .. } | BsdfKind::OpacityTexture { inner, .. } if fluorescent_model(inner)?.is_some() => {
             Err(BuildError { loc: b.loc.clone(), message: "a mask around a fluorescent BSDF is not yet supported (not yet implemented)".into() })
         }
@@ -566,10 +581,13 @@ impl Scene {
         }
         if let Some(Some(ft)) = self.film_textures.get(m) {
             let d = ft.thickness(hit.uv);
-            match &mut b.bsdf {
-                Bsdf::ThinFilm(f) => f.thickness_nm = d,
-                Bsdf::RoughThinFilm(r) => r.film.thickness_nm = d,
-                _ => {}
+            let second = b.blend.as_mut().map(|(_, s)| s);
+            for model in std::iter::once(&mut b.bsdf).chain(second) {
+                match model {
+                    Bsdf::ThinFilm(f) => f.thickness_nm = d,
+                    Bsdf::RoughThinFilm(r) => r.film.thickness_nm = d,
+                    _ => {}
+                }
             }
         }
         if let Some(Some(ot)) = self.opacity_textures.get(m) {
@@ -707,7 +725,7 @@ impl TexturedPbr {
             ColorMode::Rgb => SampledSpectrum::from_rgb(c),
             ColorMode::Spectral => self.base_spectrum.sample(lambda),
         };
-        SurfaceBsdf { bsdf: Bsdf::GltfPbr(GltfPbr::new(base, metallic, roughness, self.ior)), two_sided: self.two_sided, opacity: self.opacity, normal: None }
+        SurfaceBsdf { bsdf: Bsdf::GltfPbr(GltfPbr::new(base, metallic, roughness, self.ior)), two_sided: self.two_sided, opacity: self.opacity, normal: None, blend: None }
     }
 }
 
@@ -831,7 +849,8 @@ impl FilmThicknessTex {
     /// The film thickness texture of a material (through `Mask`, `TwoSided`, `NormalMap`).
     fn of(desc: &BsdfDesc) -> Result<Option<FilmThicknessTex>, BuildError> {
         match &desc.kind {
-            BsdfKind::Mask { inner, .. } | BsdfKind::TwoSided { inner } | BsdfKind::NormalMap { inner, .. } => FilmThicknessTex::of(inner),
+            BsdfKind::Mask { inner, .. } | BsdfKind::TwoSided { inner } | BsdfKind::NormalMap { inner, .. } | BsdfKind::OpacityTexture { inner, .. } => FilmThicknessTex::of(inner),
+            BsdfKind::Blend { first, second, .. } => Ok(FilmThicknessTex::of(first)?.or(FilmThicknessTex::of(second)?)),
             BsdfKind::FilmThicknessTexture { texture, min_nm, max_nm, .. } => {
                 if !(min_nm.is_finite() && max_nm.is_finite() && *min_nm >= 0.0 && *max_nm >= 0.0) {
                     return Err(BuildError { loc: desc.loc.clone(), message: format!("film thickness range must be finite and >= 0 nm, got {min_nm}..{max_nm}") });

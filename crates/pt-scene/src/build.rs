@@ -28,8 +28,8 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "ply", "serialized", "cylinder", "shapegroup", "instance", "bsplinecurve", "linearcurve",
         "sdfgrid", "ellipsoids", "ellipsoidsmesh",
     ]),
-    ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "roughplastic"], &[
-        "plastic", "bumpmap", "blendbsdf", "null",
+    ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "roughplastic"], &[
+        "plastic", "bumpmap", "null",
         "polarizer", "retarder", "circular", "measured", "pplastic", "principled",
         "principledthin", "hair",
     ]),
@@ -713,6 +713,7 @@ impl<'e> Builder<'e> {
             },
             "mask" => self.mask(&v)?,
             "normalmap" => self.normal_map(&v)?,
+            "blendbsdf" => self.blend(&v)?,
             // Project extensions with spectral re-emission (fluorescence.rs, phosphorescence.rs).
             "fluorescent" | "phosphorescent" => {
                 no_children(&v)?;
@@ -777,6 +778,29 @@ impl<'e> Builder<'e> {
             return Err(v.prop_error("opacity", format!("opacity must be in [0, 1], got {opacity}")));
         }
         Ok(BsdfKind::Mask { opacity, inner })
+    }
+
+    /// `blendbsdf`: `weight` (a float in [0, 1], default 0.5; textured weights are not yet
+    /// supported) and exactly two nested BSDFs: `(1 - weight) first + weight second`.
+    fn blend(&mut self, v: &ObjectView<'e>) -> Result<BsdfKind> {
+        let mut inner = Vec::new();
+        for child in &v.children {
+            let target = self.resolve(child)?;
+            if target.tag != "bsdf" || inner.len() == 2 {
+                return Err(misplaced(child, target, v, "exactly two nested <bsdf> (a textured weight is not yet supported)"));
+            }
+            inner.push(self.bsdf_desc(target)?);
+        }
+        if inner.len() != 2 {
+            return Err(SceneError::at(&v.el.loc, format!("blendbsdf needs exactly two nested BSDFs, got {}", inner.len())));
+        }
+        let weight = v.float("weight")?.unwrap_or(0.5);
+        if !(0.0..=1.0).contains(&weight) {
+            return Err(v.prop_error("weight", format!("weight must be in [0, 1], got {weight}")));
+        }
+        let second = Box::new(inner.pop().expect("two"));
+        let first = Box::new(inner.pop().expect("two"));
+        Ok(BsdfKind::Blend { weight, first, second })
     }
 
     /// `normalmap`: one nested BSDF and `<texture type="bitmap" name="normalmap">` whose RGB

@@ -424,12 +424,14 @@ impl SceneDesc {
                 BsdfKind::GltfPbr { base_color, .. } => vec![base_color],
                 BsdfKind::RoughPlastic { diffuse_reflectance, specular_reflectance, .. } => vec![diffuse_reflectance, specular_reflectance],
                 BsdfKind::Fluorescent { reflectance, absorption, emission, .. } => vec![reflectance, absorption, emission],
+                BsdfKind::Blend { first, second, .. } => bsdf_spectra(&first.kind).into_iter().chain(bsdf_spectra(&second.kind)).collect(),
                 BsdfKind::Phosphorescent { reflectance, .. } => vec![reflectance],
             }
         }
         fn has_thin_film(k: &BsdfKind) -> bool {
             match k {
                 BsdfKind::ThinFilm { .. } | BsdfKind::RoughThinFilm { .. } => true,
+                BsdfKind::Blend { first, second, .. } => has_thin_film(&first.kind) || has_thin_film(&second.kind),
                 BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } | BsdfKind::OpacityTexture { inner, .. } => has_thin_film(&inner.kind),
                 _ => false,
             }
@@ -437,6 +439,7 @@ impl SceneDesc {
         fn is_fluorescent(k: &BsdfKind) -> bool {
             match k {
                 BsdfKind::Fluorescent { .. } => true,
+                BsdfKind::Blend { first, second, .. } => is_fluorescent(&first.kind) || is_fluorescent(&second.kind),
                 BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } | BsdfKind::OpacityTexture { inner, .. } => is_fluorescent(&inner.kind),
                 _ => false,
             }
@@ -524,6 +527,16 @@ pub enum BsdfKind {
         gltf: bool,
         /// The wrapped BSDF.
         inner: Box<BsdfDesc>,
+    },
+    /// Mixture of two BSDFs (Mitsuba `blendbsdf`): `(1 - weight) first + weight second`
+    /// (pt-bsdf `blend`).
+    Blend {
+        /// Share of `second`, in [0, 1].
+        weight: f32,
+        /// The first nested BSDF.
+        first: Box<BsdfDesc>,
+        /// The second nested BSDF.
+        second: Box<BsdfDesc>,
     },
     /// Opacity mask whose opacity varies over the surface (Mitsuba `mask` with a bitmap
     /// `opacity`; glTF alpha from the base colour texture): as [`BsdfKind::Mask`] with the
