@@ -326,3 +326,39 @@ fn gltf_base_colour_alpha_is_opacity_per_texel() {
         assert!(fl.x > 1.5 * fl.z && fr.z > 1.5 * fr.x, "{mode}: base colour texture not applied: {fl} / {fr}");
     }
 }
+
+/// glTF partial factors become blends (pt-gltf's "Partial factors"): transmissionFactor 0.4 on
+/// a material of metallic 0.25 (thin-walled) gives `(1 - w) metallic-roughness + w thin
+/// dielectric` with w = 0.4 x 0.75 = 0.3; iridescenceFactor 0.6 gives `0.4 material + 0.6 film`.
+/// Checked on the BSDF the hit carries: the blend weight and the second model's type, and the
+/// blend's value equals the weighted sum of the two models' values (so the weight is used the
+/// right way round).
+#[test]
+fn gltf_partial_factors_are_blends() {
+    let dir = scratch("gltf_partial_factors");
+    image::RgbImage::from_pixel(1, 1, image::Rgb([255, 255, 255])).save(dir.join("white.png")).unwrap();
+    let cases = [
+        (r#"{"pbrMetallicRoughness": {"metallicFactor": 0.25, "roughnessFactor": 0.5}, "extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.4}}}"#, "KHR_materials_transmission", 0.3f32),
+        (r#"{"pbrMetallicRoughness": {"metallicFactor": 1, "roughnessFactor": 0.5}, "extensions": {"KHR_materials_iridescence": {"iridescenceFactor": 0.6, "iridescenceThicknessMaximum": 350}}}"#, "KHR_materials_iridescence", 0.6),
+    ];
+    for (material, ext, w) in cases {
+        let extra = format!(r#", "extensionsUsed": ["{ext}"]"#);
+        let (json, bin) = quad_gltf_with(false, material, r#"[{"source": 0}]"#, r#"[{"uri": "white.png"}]"#, &extra);
+        std::fs::write(dir.join("quad.gltf"), json).unwrap();
+        std::fs::write(dir.join("quad.bin"), bin).unwrap();
+        let g = pt_gltf::load(&dir.join("quad.gltf"), &pt_gltf::LoadOptions::default()).expect("glTF loads");
+        let scene = Scene::build_with_mode(&g.desc, BvhKind::default(), LightSelection::Power, Some(pt_spectrum::ColorMode::Rgb)).unwrap();
+        let b = scene.material_at_hit(&scene.intersect(&Ray::new(Vec3::new(0.1, 0.2, 5.0), Vec3::NEG_Z)).unwrap(), &SampledWavelengths::sample_visible(0.5));
+        let (weight, second) = b.blend.unwrap_or_else(|| panic!("{ext}: no blend: {b:?}"));
+        assert!((weight - w).abs() < 1e-6, "{ext}: weight {weight}, want {w}");
+        match ext {
+            "KHR_materials_transmission" => assert!(matches!(second, pt_bsdf::Bsdf::ThinDielectric(_)), "{second:?}"),
+            _ => assert!(matches!(second, pt_bsdf::Bsdf::RoughThinFilm(_)), "{second:?}"),
+        }
+        let (wo, wi) = (Vec3::new(0.2, 0.1, 0.9).normalize(), Vec3::new(-0.3, 0.2, 0.8).normalize());
+        let first = pt_bsdf::SurfaceBsdf { blend: None, ..b };
+        let only_second = pt_bsdf::SurfaceBsdf { bsdf: second, blend: None, ..b };
+        let want = first.eval(wo, wi).0 * (1.0 - w) + only_second.eval(wo, wi).0 * w;
+        assert!((b.eval(wo, wi).0 - want).abs().max_element() < 1e-6 * want.max_element().max(1.0), "{ext}");
+    }
+}

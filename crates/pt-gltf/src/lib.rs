@@ -12,11 +12,12 @@
 //! | no light and no emissive material     | a default environment: `constant` radiance 1 (white)             |
 //! | `pbrMetallicRoughness`                | `BsdfKind::GltfPbr` (base colour factor, metallic, roughness; alpha = roughness^2), two-sided |
 //! | `emissiveFactor` x `KHR_materials_emissive_strength` | an area emitter of that radiance on every primitive with the material |
-//! | `KHR_materials_transmission` (+ `KHR_materials_ior`) | with `KHR_materials_volume` thickness > 0: `dielectric` (roughness 0) or `roughdielectric` (GGX, alpha = roughness^2) of index `ior`; without volume (glTF's thin-walled case): `thindielectric` |
+//! | `KHR_materials_transmission` (+ `KHR_materials_ior`) | with `KHR_materials_volume` thickness > 0: `dielectric` (roughness 0) or `roughdielectric` (GGX, alpha = roughness^2) of index `ior`; without volume (glTF's thin-walled case): `thindielectric`; a factor f < 1 (or metallic > 0): `blendbsdf` of the opaque material and that, weight f (1 - metallic) (see Partial factors) |
 //! | `KHR_materials_volume`                | `ShapeDesc::interior`, Beer-Lambert: `sigma_t = -ln(attenuationColor) / attenuationDistance` per channel (the colour white light turns into after travelling `attenuationDistance`); `thicknessFactor` only selects volume vs thin-walled: the path tracer measures the real distance inside the mesh |
-//! | `KHR_materials_iridescence`           | `thinfilm` (roughness 0) or `roughthinfilm` (GGX, alpha = roughness^2): thickness `iridescenceThicknessMaximum` nm (glTF's value without a thickness texture), film index `iridescenceIor`, base: an opaque base of index `n = (1 + sqrt(F0))/(1 - sqrt(F0))`, `k = 0` from the base colour (metallic >= 0.5) or `n = ior` (metallic < 0.5); the diffuse base is dropped |
+//! | `KHR_materials_iridescence`           | `thinfilm` (roughness 0) or `roughthinfilm` (GGX, alpha = roughness^2): thickness `iridescenceThicknessMaximum` nm, or per texel `mix(iridescenceThicknessMinimum, iridescenceThicknessMaximum, green)` of `iridescenceThicknessTexture`; film index `iridescenceIor`, base: an opaque base of index `n = (1 + sqrt(F0))/(1 - sqrt(F0))`, `k = 0` from the base colour (metallic >= 0.5) or `n = ior` (metallic < 0.5); the diffuse base is dropped; `iridescenceFactor` f < 1: `blendbsdf` of the material without the film and the film, weight f |
 //! | `baseColorTexture`, `metallicRoughnessTexture`, `KHR_texture_transform` | factors times texels at the hit's uv (see Textures below) |
-//! | `alphaMode` BLEND / MASK              | `mask` around the material, opacity = alpha / (alpha >= alphaCutoff) |
+//! | `normalTexture` (`scale`)              | `normalmap` around the material: tangent space from `TANGENT` (xyz by the node's matrix, w negated under a mirroring node) or generated from the uvs (see Normal maps below) |
+//! | `alphaMode` BLEND / MASK              | `mask` around the material, opacity = alpha / (alpha >= alphaCutoff), alpha = baseColorFactor alpha x the base colour texture's alpha per texel |
 //! | `KHR_lights_punctual` point           | `point`, intensity (cd) x colour                                |
 //! | `KHR_lights_punctual` spot            | `spot` on the node's -z axis, full intensity within `innerConeAngle`, zero beyond `outerConeAngle` (the renderer's falloff between them is linear in angle, Mitsuba's; glTF suggests a squared linear-in-cosine ramp) |
 //! | `KHR_lights_punctual` directional     | `directional` along the node's -z axis, irradiance (lux) x colour |
@@ -38,13 +39,35 @@
 //! textures (spectral mode would need per-texel upsampling: an error says to use `--mode rgb`).
 //!
 //! **Alpha.** `alphaMode` BLEND becomes the renderer's `mask` with opacity = baseColorFactor's
-//! alpha; MASK an opacity of 0 or 1 against `alphaCutoff`; the base colour texture's alpha is
-//! not read.
+//! alpha times the base colour texture's alpha (stored linearly; 1 without an alpha channel) at
+//! the hit; MASK an opacity of 0 or 1 per texel against `alphaCutoff`. Shadow rays are blocked
+//! by masked surfaces whatever their opacity, as in Mitsuba's `path`: light through the holes
+//! is found by BSDF sampling (the mask's pass-through lobe), the same for every texel.
 //!
-//! **Not yet** (warned about, never silently): normal, emissive, occlusion and transmission
-//! textures, texture alpha, texture coordinate sets other than 0, clamped/mirrored wrapping,
-//! transmission factors between 0 and 1 (treated as 1), orthographic cameras, non-triangle
-//! primitives, sparse accessors, skins and morph targets.
+//! **Normal maps.** `normalTexture` is linear data, decoded as `n = (2 c - 1) (scale, scale, 1)`
+//! in the tangent frame `(t, w (n x t), n)` (glTF: +x along increasing u, +y towards image-up,
+//! i.e. decreasing v), then treated as Mitsuba 3.9's `normalmap` (pt-bsdf `normal_map`: the
+//! viewer-side flip and the Conty Estevez 2019 shadowing term). Without `TANGENT` the tangents
+//! are generated per vertex from the uvs (Lengyel 2001, area-weighted dp/du and -dp/dv,
+//! [`generate_tangents`]) instead of MikkTSpace: the same where the uv mapping is affine around
+//! each vertex, different at mirrored-uv seams, which MikkTSpace splits.
+//!
+//! **Partial factors.** A `KHR_materials_transmission` factor f < 1 (or a partly metallic
+//! transmissive material) becomes a `blendbsdf` (pt-bsdf `blend`) of the opaque
+//! metallic-roughness material and the transmissive model with weight `f (1 - metallic)`.
+//! glTF instead mixes only the dielectric's diffuse base with the transmission lobe under one
+//! specular layer; the blend keeps each model's own specular reflection (the same ior and
+//! roughness, so nearly the same lobe), which is exact at f = 0 and f = 1. An
+//! `iridescenceFactor` f < 1 becomes a blend of the material without the film (weight 1 - f)
+//! and the thin film (weight f); glTF mixes the Fresnel terms, `F = mix(F_dielectric,
+//! F_iridescence, f)`, keeping the diffuse base under both, while the film model here drops the
+//! diffuse base, so the blend has (1 - f) of it: exact at f = 0 and f = 1. With both partial,
+//! the iridescence factor is treated as 1 (nested blends are not supported).
+//!
+//! **Not yet** (warned about, never silently): emissive, occlusion and transmission textures,
+//! `iridescenceTexture` (the factor's texture), texture coordinate sets other than 0,
+//! clamped/mirrored wrapping, orthographic cameras, non-triangle primitives, sparse accessors,
+//! skins and morph targets.
 //!
 //! Errors (malformed JSON or GLB, truncated or missing buffers, accessors or indices out of
 //! range, unsupported *required* extensions) are [`GltfError`]s naming the file and the glTF
@@ -803,9 +826,7 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
     let mut mapping = format!("gltf metallic-roughness: base colour {:?}, metallic {metallic}, roughness {roughness} (alpha {:.4}), dielectric ior {ior}", [bc[0], bc[1], bc[2]], roughness * roughness);
     if let Some(t) = m.transmission().filter(|t| t.transmission_factor() > 0.0) {
         let f = t.transmission_factor();
-        if f < 1.0 {
-            notes.push(format!("transmissionFactor {f} treated as 1"));
-        }
+        let opaque = kind.clone();
         if textured {
             notes.push("base colour / metallic-roughness textures ignored (transmissive)".into());
         }
@@ -843,6 +864,18 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
         if bc[..3].iter().any(|c| (c - 1.0).abs() > 1e-6) {
             notes.push("baseColor tint of transmitted light ignored".into());
         }
+        // A partial transmission: a blend of the opaque material and the transmissive one.
+        // glTF mixes only the dielectric's diffuse base with the transmission lobe, under the
+        // same specular layer, and leaves the metal part alone: the blend weight is
+        // f (1 - metallic), and the specular layer is the opaque material's GGX reflection in
+        // one share and the dielectric's Fresnel reflection in the other (the same ior and
+        // roughness, so nearly the same lobe).
+        let w = f.min(1.0) * (1.0 - metallic.clamp(0.0, 1.0));
+        if w < 1.0 {
+            mapping = format!("blend of {:.4} x ({mapping}) and {:.4} x (the opaque metallic-roughness material)", w, 1.0 - w);
+            notes.push(format!("transmissionFactor {f} with metallic {metallic}: blend weight f (1 - metallic) = {w} (approximates glTF's layering: see the module doc)"));
+            kind = BsdfKind::Blend { weight: w, first: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind: opaque }), second: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
+        }
         used.push(format!("KHR_materials_transmission (factor {f})"));
     } else if m.volume().is_some() {
         notes.push("KHR_materials_volume without transmission has no effect".into());
@@ -869,9 +902,13 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
             if ir.get("iridescenceTexture").is_some() {
                 cx.warnings.push(format!("{elem}{name}: iridescenceTexture ignored (not yet implemented): iridescence factor from iridescenceFactor only"));
             }
-            if factor < 1.0 {
-                notes.push(format!("iridescenceFactor {factor} treated as 1"));
+            // A partial iridescence blends the material without the film and the film; with a
+            // partial transmission already blended, nested blends are not supported: factor 1.
+            let partial = factor < 1.0 && !matches!(kind, BsdfKind::Blend { .. });
+            if factor < 1.0 && !partial {
+                notes.push(format!("iridescenceFactor {factor} treated as 1 (the material already blends a partial transmission)"));
             }
+            let without_film = kind.clone();
             if textured {
                 notes.push("base colour / metallic-roughness textures ignored (thin film)".into());
             }
@@ -892,6 +929,12 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
             } else {
                 mapping = format!("roughthinfilm: {thickness} nm film of ior {film_ior} over an opaque base of index {eta:?} (k = 0), GGX alpha {alpha:.4}; diffuse dropped");
                 kind = BsdfKind::RoughThinFilm { thickness, film_ior, ext_ior: 1.0, int_ior: None, eta, k: SpectrumDesc::Constant(0.0), distribution: "ggx".into(), alpha_u: alpha, alpha_v: alpha };
+            }
+            if partial {
+                notes.push(format!("iridescenceFactor {factor}: blend of {factor} x film and {} x the material without it (approximates glTF's Fresnel mix: see the module doc)", 1.0 - factor));
+                mapping = format!("blend of {factor} x ({mapping}) and {} x (the material without the film)", 1.0 - factor);
+                let film = BsdfDesc { loc: loc.clone(), id: None, kind };
+                kind = BsdfKind::Blend { weight: factor, first: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind: without_film }), second: Box::new(film) };
             }
             if let Some((texture, min_nm)) = thickness_texture {
                 notes.push(format!("iridescenceThicknessTexture: thickness = {min_nm} + ({thickness} - {min_nm}) x green, nm, per texel"));
