@@ -362,3 +362,25 @@ fn gltf_partial_factors_are_blends() {
         assert!((b.eval(wo, wi).0 - want).abs().max_element() < 1e-6 * want.max_element().max(1.0), "{ext}");
     }
 }
+
+/// glTF `iridescenceTexture` (2 x 1 texels, nearest: red 0 left, 1 right) with factor 0.8: the
+/// blend weight of the film is 0 on the left half and 0.8 on the right, exactly.
+#[test]
+fn gltf_iridescence_texture_scales_the_blend_weight_per_texel() {
+    let dir = scratch("gltf_iridescence_factor_texture");
+    image::RgbImage::from_fn(2, 1, |x, _| image::Rgb([if x == 0 { 0 } else { 255 }, 90, 40])).save(dir.join("factor.png")).unwrap();
+    let material = r#"{"pbrMetallicRoughness": {"metallicFactor": 1, "roughnessFactor": 0.5}, "extensions": {"KHR_materials_iridescence": {"iridescenceFactor": 0.8, "iridescenceTexture": {"index": 0}}}}"#;
+    let extra = r#", "samplers": [{"magFilter": 9728, "minFilter": 9728}], "extensionsUsed": ["KHR_materials_iridescence"]"#;
+    let (json, bin) = quad_gltf_with(false, material, r#"[{"source": 0, "sampler": 0}]"#, r#"[{"uri": "factor.png"}]"#, extra);
+    std::fs::write(dir.join("quad.gltf"), json).unwrap();
+    std::fs::write(dir.join("quad.bin"), bin).unwrap();
+    let g = pt_gltf::load(&dir.join("quad.gltf"), &pt_gltf::LoadOptions::default()).expect("glTF loads");
+    assert!(!g.warnings.iter().any(|w| w.contains("iridescence")), "{:?}", g.warnings);
+    let scene = Scene::build(&g.desc, BvhKind::default(), LightSelection::Power).unwrap();
+    let lambda = SampledWavelengths::sample_visible(0.5);
+    for (x, want) in [(-0.5f32, 0.0f32), (0.5, 0.8)] {
+        let b = scene.material_at_hit(&scene.intersect(&Ray::new(Vec3::new(x, -0.2, 5.0), Vec3::NEG_Z)).unwrap(), &lambda);
+        let (w, second) = b.blend.expect("a blend");
+        assert!((w - want).abs() < 1e-6 && matches!(second, pt_bsdf::Bsdf::RoughThinFilm(_)), "x {x}: weight {w}, want {want}");
+    }
+}

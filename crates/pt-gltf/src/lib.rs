@@ -59,13 +59,14 @@
 //! specular layer; the blend keeps each model's own specular reflection (the same ior and
 //! roughness, so nearly the same lobe), which is exact at f = 0 and f = 1. An
 //! `iridescenceFactor` f < 1 becomes a blend of the material without the film (weight 1 - f)
-//! and the thin film (weight f); glTF mixes the Fresnel terms, `F = mix(F_dielectric,
+//! and the thin film (weight f, times the red channel of `iridescenceTexture` per texel when
+//! there is one); glTF mixes the Fresnel terms, `F = mix(F_dielectric,
 //! F_iridescence, f)`, keeping the diffuse base under both, while the film model here drops the
 //! diffuse base, so the blend has (1 - f) of it: exact at f = 0 and f = 1. With both partial,
 //! the iridescence factor is treated as 1 (nested blends are not supported).
 //!
 //! **Not yet** (warned about, never silently): emissive, occlusion and transmission textures,
-//! `iridescenceTexture` (the factor's texture), texture coordinate sets other than 0,
+//! texture coordinate sets other than 0,
 //! clamped/mirrored wrapping, orthographic cameras, non-triangle primitives, sparse accessors,
 //! skins and morph targets.
 //!
@@ -874,7 +875,7 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
         if w < 1.0 {
             mapping = format!("blend of {:.4} x ({mapping}) and {:.4} x (the opaque metallic-roughness material)", w, 1.0 - w);
             notes.push(format!("transmissionFactor {f} with metallic {metallic}: blend weight f (1 - metallic) = {w} (approximates glTF's layering: see the module doc)"));
-            kind = BsdfKind::Blend { weight: w, first: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind: opaque }), second: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
+            kind = BsdfKind::Blend { weight: w, weight_texture: None, first: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind: opaque }), second: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
         }
         used.push(format!("KHR_materials_transmission (factor {f})"));
     } else if m.volume().is_some() {
@@ -899,14 +900,16 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
                 }
                 None => None,
             };
-            if ir.get("iridescenceTexture").is_some() {
-                cx.warnings.push(format!("{elem}{name}: iridescenceTexture ignored (not yet implemented): iridescence factor from iridescenceFactor only"));
-            }
+            // iridescenceTexture: its red channel multiplies the factor per texel.
+            let factor_texture = match ir.get("iridescenceTexture") {
+                Some(info) => json_texture(cx, doc, info, false, buffers, &format!("{elem}{name} iridescenceTexture"))?,
+                None => None,
+            };
             // A partial iridescence blends the material without the film and the film; with a
             // partial transmission already blended, nested blends are not supported: factor 1.
-            let partial = factor < 1.0 && !matches!(kind, BsdfKind::Blend { .. });
-            if factor < 1.0 && !partial {
-                notes.push(format!("iridescenceFactor {factor} treated as 1 (the material already blends a partial transmission)"));
+            let partial = (factor < 1.0 || factor_texture.is_some()) && !matches!(kind, BsdfKind::Blend { .. });
+            if (factor < 1.0 || factor_texture.is_some()) && !partial {
+                cx.warnings.push(format!("{elem}{name}: iridescenceFactor {factor} and iridescenceTexture treated as 1: the material already blends a partial transmission (nested blends are not yet implemented)"));
             }
             let without_film = kind.clone();
             if textured {
@@ -934,7 +937,11 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
                 notes.push(format!("iridescenceFactor {factor}: blend of {factor} x film and {} x the material without it (approximates glTF's Fresnel mix: see the module doc)", 1.0 - factor));
                 mapping = format!("blend of {factor} x ({mapping}) and {} x (the material without the film)", 1.0 - factor);
                 let film = BsdfDesc { loc: loc.clone(), id: None, kind };
-                kind = BsdfKind::Blend { weight: factor, first: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind: without_film }), second: Box::new(film) };
+                if factor_texture.is_some() {
+                    notes.push("iridescenceTexture: its red channel multiplies the blend weight per texel".into());
+                }
+                let weight_texture = factor_texture.map(|t| (t, pt_scene::TextureChannel::Red));
+                kind = BsdfKind::Blend { weight: factor, weight_texture, first: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind: without_film }), second: Box::new(film) };
             }
             if let Some((texture, min_nm)) = thickness_texture {
                 notes.push(format!("iridescenceThicknessTexture: thickness = {min_nm} + ({thickness} - {min_nm}) x green, nm, per texel"));
@@ -965,7 +972,7 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
     }
     if let Some((texture, cutoff)) = alpha_texture {
         let factor = bc[3].clamp(0.0, 1.0);
-        kind = BsdfKind::OpacityTexture { texture, channel: pt_scene::OpacityChannel::Alpha, factor, cutoff, inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
+        kind = BsdfKind::OpacityTexture { texture, channel: pt_scene::TextureChannel::Alpha, factor, cutoff, inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
     } else if opacity < 1.0 {
         kind = BsdfKind::Mask { opacity, inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
     }

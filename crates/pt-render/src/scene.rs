@@ -85,6 +85,8 @@ pub struct Scene {
     film_textures: Vec<Option<FilmThicknessTex>>,
     /// Per material: its opacity texture, if it has one.
     opacity_textures: Vec<Option<OpacityTex>>,
+    /// Per material: its textured blend weight, if it has one.
+    blend_textures: Vec<Option<BlendWeightTex>>,
     /// Spectral mode: each light's emission spectrum (its `radiance` fields hold the geometric
     /// factors only); empty in RGB mode.
     light_spectra: Vec<Option<Spectrum>>,
@@ -187,7 +189,7 @@ fn material_with(
         BsdfKind::FilmThicknessTexture { inner, .. } => material_with(inner, lambda, val, tables)?,
         // The opacity depends on the hit: set by `Scene::material_at_hit`.
         BsdfKind::OpacityTexture { inner, .. } => material_with(inner, lambda, val, tables)?,
-        BsdfKind::Blend { weight, first, second } => {
+        BsdfKind::Blend { weight, first, second, .. } => {
             let (a, b) = (material_with(first, lambda, val, tables)?, material_with(second, lambda, val, tables)?);
             let plain = |s: &SurfaceBsdf| s.opacity == 1.0 && s.normal.is_none() && s.blend.is_none();
             if !plain(&a) || !plain(&b) {
@@ -313,6 +315,7 @@ impl Scene {
         let normal_maps = desc.bsdfs.iter().map(NormalMapTex::of).collect::<Result<Vec<_>, _>>()?;
         let film_textures = desc.bsdfs.iter().map(FilmThicknessTex::of).collect::<Result<Vec<_>, _>>()?;
         let opacity_textures = desc.bsdfs.iter().map(OpacityTex::of).collect::<Result<Vec<_>, _>>()?;
+        let blend_textures = desc.bsdfs.iter().map(BlendWeightTex::of).collect::<Result<Vec<_>, _>>()?;
         let mut spectral_materials = Vec::new();
         if spectral {
             for b in &desc.bsdfs {
@@ -442,7 +445,7 @@ impl Scene {
         if !spectral {
             light_spectra.clear();
         }
-        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, fluorescent, textured, normal_maps, film_textures, opacity_textures, light_spectra, media, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
+        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, fluorescent, textured, normal_maps, film_textures, opacity_textures, blend_textures, light_spectra, media, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
     }
 
     /// Closest hit along `ray`, with its surface data.
@@ -592,6 +595,9 @@ impl Scene {
         }
         if let Some(Some(ot)) = self.opacity_textures.get(m) {
             b.opacity = ot.opacity(hit.uv);
+        }
+        if let (Some(Some(bt)), Some((w, _))) = (self.blend_textures.get(m), b.blend.as_mut()) {
+            *w = bt.weight(hit.uv);
         }
         b
     }
@@ -779,6 +785,47 @@ impl NormalMapTex {
     }
 }
 
+/// A texture read as one number per texel (`channel`), stored in all three channels.
+fn scalar_bitmap(texture: &pt_scene::UvTexture, channel: pt_scene::TextureChannel) -> Result<crate::texture::Bitmap, String> {
+    use pt_scene::TextureChannel as C;
+    Ok(match channel {
+        C::Alpha => crate::texture::Bitmap::alpha_from_source(&texture.source, texture.nearest)?,
+        // Rec. 709 luminance of each texel, once (Mitsuba's eval_1 of an RGB bitmap).
+        C::Luminance => crate::texture::Bitmap::from_source(&texture.source, texture.srgb, texture.nearest)?.map_texels(|t| [0.212_671 * t[0] + 0.715_160 * t[1] + 0.072_169 * t[2]; 3]),
+        C::Red => crate::texture::Bitmap::from_source(&texture.source, texture.srgb, texture.nearest)?.map_texels(|t| [t[0]; 3]),
+    })
+}
+
+/// A blend whose weight is textured (glTF `iridescenceTexture`): weight = factor x texel.
+struct BlendWeightTex {
+    bitmap: std::sync::Arc<crate::texture::Bitmap>,
+    /// KHR_texture_transform as `[a, b, c, d, e, f]`: `u' = a u + b v + c`, `v' = d u + e v + f`.
+    transform: [f32; 6],
+    /// The blend's own weight, which the texel multiplies.
+    factor: f32,
+}
+
+impl BlendWeightTex {
+    /// The textured blend weight of a material (through the other wrappers).
+    fn of(desc: &BsdfDesc) -> Result<Option<BlendWeightTex>, BuildError> {
+        match &desc.kind {
+            BsdfKind::Mask { inner, .. } | BsdfKind::TwoSided { inner } | BsdfKind::NormalMap { inner, .. } | BsdfKind::OpacityTexture { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } => BlendWeightTex::of(inner),
+            BsdfKind::Blend { weight, weight_texture: Some((texture, channel)), .. } => {
+                let bitmap = scalar_bitmap(texture, *channel).map_err(|m| BuildError { loc: desc.loc.clone(), message: m })?;
+                Ok(Some(BlendWeightTex { bitmap: std::sync::Arc::new(bitmap), transform: texture.transform, factor: *weight }))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// The blend weight at texture coordinates `uv`, in [0, 1].
+    #[inline]
+    fn weight(&self, uv: Vec2) -> f32 {
+        let m = self.transform;
+        (self.factor * self.bitmap.eval(Vec2::new(m[0] * uv.x + m[1] * uv.y + m[2], m[3] * uv.x + m[4] * uv.y + m[5]))[0]).clamp(0.0, 1.0)
+    }
+}
+
 /// An opacity texture (Mitsuba `mask` with a bitmap, glTF base colour alpha).
 struct OpacityTex {
     bitmap: std::sync::Arc<crate::texture::Bitmap>,
@@ -800,17 +847,7 @@ impl OpacityTex {
                 if OpacityTex::of(inner)?.is_some() {
                     return Err(BuildError { loc: desc.loc.clone(), message: "nested opacity textures are not supported (not yet implemented)".into() });
                 }
-                let err = |m| BuildError { loc: desc.loc.clone(), message: m };
-                let bitmap = match channel {
-                    pt_scene::OpacityChannel::Luminance => crate::texture::Bitmap::from_source(&texture.source, texture.srgb, texture.nearest),
-                    pt_scene::OpacityChannel::Alpha => crate::texture::Bitmap::alpha_from_source(&texture.source, texture.nearest),
-                }
-                .map_err(err)?;
-                let bitmap = match channel {
-                    // Rec. 709 luminance of each texel, once (Mitsuba's eval_1), in all channels.
-                    pt_scene::OpacityChannel::Luminance => bitmap.map_texels(|t| [0.212_671 * t[0] + 0.715_160 * t[1] + 0.072_169 * t[2]; 3]),
-                    pt_scene::OpacityChannel::Alpha => bitmap,
-                };
+                let bitmap = scalar_bitmap(texture, *channel).map_err(|m| BuildError { loc: desc.loc.clone(), message: m })?;
                 Ok(Some(OpacityTex { bitmap: std::sync::Arc::new(bitmap), transform: texture.transform, factor: *factor, cutoff: *cutoff }))
             }
             _ => Ok(None),

@@ -771,7 +771,7 @@ impl<'e> Builder<'e> {
                 return Err(v.prop_error("opacity", "give either an opacity value or an opacity texture"));
             }
             let texture = Box::new(UvTexture { source: ImageSource::File(b.filename), srgb: !b.raw, nearest: b.filter == "nearest", transform: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0] });
-            return Ok(BsdfKind::OpacityTexture { texture, channel: OpacityChannel::Luminance, factor: 1.0, cutoff: None, inner });
+            return Ok(BsdfKind::OpacityTexture { texture, channel: TextureChannel::Luminance, factor: 1.0, cutoff: None, inner });
         }
         let opacity = v.float("opacity")?.unwrap_or(0.5);
         if !(0.0..=1.0).contains(&opacity) {
@@ -800,7 +800,7 @@ impl<'e> Builder<'e> {
         }
         let second = Box::new(inner.pop().expect("two"));
         let first = Box::new(inner.pop().expect("two"));
-        Ok(BsdfKind::Blend { weight, first, second })
+        Ok(BsdfKind::Blend { weight, weight_texture: None, first, second })
     }
 
     /// `normalmap`: one nested BSDF and `<texture type="bitmap" name="normalmap">` whose RGB

@@ -533,6 +533,9 @@ pub enum BsdfKind {
     Blend {
         /// Share of `second`, in [0, 1].
         weight: f32,
+        /// A texture whose value (in the given channel) multiplies `weight` at the hit (glTF
+        /// `iridescenceTexture`: red).
+        weight_texture: Option<(Box<UvTexture>, TextureChannel)>,
         /// The first nested BSDF.
         first: Box<BsdfDesc>,
         /// The second nested BSDF.
@@ -545,7 +548,7 @@ pub enum BsdfKind {
         /// The texture.
         texture: Box<UvTexture>,
         /// Which value of the texel is the opacity.
-        channel: OpacityChannel,
+        channel: TextureChannel,
         /// Multiplies the texel's value (glTF `baseColorFactor` alpha; 1 for Mitsuba).
         factor: f32,
         /// glTF `alphaMode` MASK: opacity 1 where `factor x value >= cutoff`, else 0.
@@ -735,14 +738,16 @@ pub enum BsdfKind {
     },
 }
 
-/// Which value of a texel an [`BsdfKind::OpacityTexture`] reads.
+/// Which value of a texel a scalar texture (opacity, blend weight) reads.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum OpacityChannel {
+pub enum TextureChannel {
     /// Rec. 709 luminance of the linear RGB (Mitsuba's `eval_1` of an RGB bitmap; the value
     /// itself for a grey image).
     Luminance,
     /// The alpha channel, stored linearly (glTF: 1 where the image has no alpha).
     Alpha,
+    /// The red channel (glTF `iridescenceTexture`).
+    Red,
 }
 
 /// Image data of a texture: a file, or bytes embedded in the scene file (a glTF buffer view or

@@ -1156,10 +1156,10 @@ fn normalmap_mask_texture_and_blend() {
         k => panic!("{k:?}"),
     }
     let d = load_in(&xml(&format!("<shape type=\"cube\"><bsdf type=\"mask\">{}<bsdf type=\"diffuse\"/></bsdf></shape>", tex("opacity")))).unwrap();
-    assert!(matches!(&d.bsdfs[0].kind, BsdfKind::OpacityTexture { channel: OpacityChannel::Luminance, factor, cutoff: None, .. } if *factor == 1.0));
+    assert!(matches!(&d.bsdfs[0].kind, BsdfKind::OpacityTexture { channel: TextureChannel::Luminance, factor, cutoff: None, .. } if *factor == 1.0));
     let d = load_in(&xml("<shape type=\"cube\"><bsdf type=\"blendbsdf\"><float name=\"weight\" value=\"0.3\"/><bsdf type=\"diffuse\"/><bsdf type=\"conductor\"/></bsdf></shape>")).unwrap();
     match &d.bsdfs[0].kind {
-        BsdfKind::Blend { weight, first, second } => {
+        BsdfKind::Blend { weight, first, second, .. } => {
             assert!(*weight == 0.3 && matches!(first.kind, BsdfKind::Diffuse { .. }) && matches!(second.kind, BsdfKind::Conductor { .. }));
         }
         k => panic!("{k:?}"),
