@@ -25,6 +25,7 @@
 #![forbid(unsafe_code)]
 
 pub mod conductor;
+pub mod blend;
 pub mod dielectric;
 pub mod fresnel;
 pub mod gltf_pbr;
@@ -32,6 +33,7 @@ pub mod lambert;
 pub mod mask;
 pub mod microfacet;
 pub mod minnaert;
+pub mod normal_map;
 pub mod oren_nayar;
 pub mod rough_dielectric;
 pub mod rough_plastic;
@@ -206,37 +208,86 @@ pub struct SurfaceBsdf {
     /// Opacity in [0, 1] (Mitsuba `mask`, see [`mask`]): the fraction of light that meets the
     /// model; the rest passes straight through. 1 for ordinary surfaces.
     pub opacity: f32,
+    /// Normal mapping (Mitsuba `normalmap`, see [`normal_map`]): the mapped normal expressed
+    /// **in the local shading frame** (not necessarily unit length). `None`: the model sees the
+    /// local frame unchanged.
+    pub normal: Option<Vec3>,
+    /// A second model mixed in (Mitsuba `blendbsdf`, see [`blend`]): `(w, model)` makes the
+    /// surface `(1 - w) bsdf + w model`, both sharing `two_sided`, `opacity` and `normal`.
+    pub blend: Option<(f32, Bsdf)>,
 }
 
 impl SurfaceBsdf {
     /// An opaque surface with the given model.
     pub fn new(bsdf: Bsdf, two_sided: bool) -> Self {
-        SurfaceBsdf { bsdf, two_sided, opacity: 1.0 }
+        SurfaceBsdf { bsdf, two_sided, opacity: 1.0, normal: None, blend: None }
     }
 
     /// Flips directions to the front side when two-sided and seen from the back (never for
     /// transmissive models, whose back side is their inside).
     #[inline]
-    fn side(&self, wo: Vec3) -> f32 {
-        if self.two_sided && wo.z < 0.0 && !self.bsdf.is_transmissive() {
+    fn side(&self, bsdf: &Bsdf, wo: Vec3) -> f32 {
+        if self.two_sided && wo.z < 0.0 && !bsdf.is_transmissive() {
             -1.0
         } else {
             1.0
         }
     }
 
-    /// f(wo, wi) without the cosine, local frame.
+    /// One model's f(wo, wi) with sides and normal map applied, without the opacity.
+    #[inline]
+    fn eval_of(&self, bsdf: &Bsdf, wo: Vec3, wi: Vec3) -> SampledSpectrum {
+        let s = self.side(bsdf, wo);
+        let (wo, wi) = (flip_z(wo, s), flip_z(wi, s));
+        match self.normal {
+            None => bsdf.eval(wo, wi),
+            Some(n) => match normal_map::perturb(n, wo, wi) {
+                Some((f, pwo, pwi)) => bsdf.eval(pwo, pwi) * (pwi.z.abs() * normal_map::shadowing(f.n, wi) / wi.z.abs()),
+                None => SampledSpectrum::ZERO,
+            },
+        }
+    }
+
+    /// One model's pdf with sides and normal map applied, without the opacity.
+    #[inline]
+    fn pdf_of(&self, bsdf: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
+        let s = self.side(bsdf, wo);
+        let (wo, wi) = (flip_z(wo, s), flip_z(wi, s));
+        match self.normal {
+            None => bsdf.pdf(wo, wi),
+            Some(n) => normal_map::perturb(n, wo, wi).map_or(0.0, |(_, pwo, pwi)| bsdf.pdf(pwo, pwi)),
+        }
+    }
+
+    /// One model's sample with sides and normal map applied.
+    #[inline]
+    fn sample_of(&self, bsdf: &Bsdf, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
+        let s = self.side(bsdf, wo);
+        let mut bs = match self.normal {
+            None => bsdf.sample(flip_z(wo, s), u_lobe, u)?,
+            Some(n) => normal_map::sample(n, bsdf, flip_z(wo, s), u_lobe, u)?,
+        };
+        bs.wi = flip_z(bs.wi, s);
+        Some(bs)
+    }
+
+    /// f(wo, wi) without the cosine, local frame. With a normal map: the model's value in the
+    /// perturbed frame times |cos_perturbed(wi)| G(wi) / |cos(wi)| (see [`normal_map`]).
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
-        let s = self.side(wo);
-        self.bsdf.eval(flip_z(wo, s), flip_z(wi, s)) * self.opacity
+        match &self.blend {
+            None => self.eval_of(&self.bsdf, wo, wi) * self.opacity,
+            Some((w, b)) => (self.eval_of(&self.bsdf, wo, wi) * (1.0 - w) + self.eval_of(b, wo, wi) * *w) * self.opacity,
+        }
     }
 
     /// Solid-angle pdf of `wi`, local frame.
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        let s = self.side(wo);
-        self.bsdf.pdf(flip_z(wo, s), flip_z(wi, s)) * self.opacity
+        match &self.blend {
+            None => self.pdf_of(&self.bsdf, wo, wi) * self.opacity,
+            Some((w, b)) => ((1.0 - w) * self.pdf_of(&self.bsdf, wo, wi) + w * self.pdf_of(b, wo, wi)) * self.opacity,
+        }
     }
 
     /// Samples `wi`, local frame.
@@ -246,9 +297,13 @@ impl SurfaceBsdf {
             Ok(u_lobe) => u_lobe,
             Err(pass_through) => return Some(pass_through),
         };
-        let s = self.side(wo);
-        let mut bs = self.bsdf.sample(flip_z(wo, s), u_lobe, u)?;
-        bs.wi = flip_z(bs.wi, s);
+        let mut bs = match &self.blend {
+            None => self.sample_of(&self.bsdf, wo, u_lobe, u)?,
+            Some((w, b)) => blend::sample(*w, u_lobe, |ul| self.sample_of(&self.bsdf, wo, ul, u), |ul| self.sample_of(b, wo, ul, u), |wi| {
+                let f = self.eval_of(&self.bsdf, wo, wi) * (1.0 - w) + self.eval_of(b, wo, wi) * *w;
+                (f, (1.0 - w) * self.pdf_of(&self.bsdf, wo, wi) + w * self.pdf_of(b, wo, wi))
+            })?,
+        };
         // The nested lobe was chosen with probability `opacity`; its weight is unchanged (the
         // opacity in f and in the pdf cancel).
         bs.pdf *= self.opacity;
@@ -258,7 +313,7 @@ impl SurfaceBsdf {
     /// Whether light sampling can help (a non-delta lobe exists).
     #[inline]
     pub fn has_smooth_lobe(&self) -> bool {
-        self.bsdf.has_smooth_lobe()
+        self.bsdf.has_smooth_lobe() || self.blend.is_some_and(|(_, b)| b.has_smooth_lobe())
     }
 }
 

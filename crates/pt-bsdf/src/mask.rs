@@ -22,7 +22,11 @@
 //!     <bsdf type="diffuse"/>
 //! </bsdf>
 //! ```
-//! (Textured opacity is not implemented yet.)
+//! A `<texture type="bitmap" name="opacity">` instead of the float gives a per-texel opacity,
+//! the Rec. 709 luminance of the texel's linear RGB clamped to [0, 1] (Mitsuba's `eval_1` of an
+//! RGB bitmap): the renderer sets [`crate::SurfaceBsdf::opacity`] per hit (pt-render's
+//! `Scene::material_at_hit`); shadow rays are blocked by the surface whatever the texel says,
+//! as for a constant opacity.
 
 use crate::BsdfSample;
 use pt_math::Vec3;

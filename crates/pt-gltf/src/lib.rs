@@ -12,11 +12,12 @@
 //! | no light and no emissive material     | a default environment: `constant` radiance 1 (white)             |
 //! | `pbrMetallicRoughness`                | `BsdfKind::GltfPbr` (base colour factor, metallic, roughness; alpha = roughness^2), two-sided |
 //! | `emissiveFactor` x `KHR_materials_emissive_strength` | an area emitter of that radiance on every primitive with the material |
-//! | `KHR_materials_transmission` (+ `KHR_materials_ior`) | with `KHR_materials_volume` thickness > 0: `dielectric` (roughness 0) or `roughdielectric` (GGX, alpha = roughness^2) of index `ior`; without volume (glTF's thin-walled case): `thindielectric` |
+//! | `KHR_materials_transmission` (+ `KHR_materials_ior`) | with `KHR_materials_volume` thickness > 0: `dielectric` (roughness 0) or `roughdielectric` (GGX, alpha = roughness^2) of index `ior`; without volume (glTF's thin-walled case): `thindielectric`; a factor f < 1 (or metallic > 0): `blendbsdf` of the opaque material and that, weight f (1 - metallic) (see Partial factors) |
 //! | `KHR_materials_volume`                | `ShapeDesc::interior`, Beer-Lambert: `sigma_t = -ln(attenuationColor) / attenuationDistance` per channel (the colour white light turns into after travelling `attenuationDistance`); `thicknessFactor` only selects volume vs thin-walled: the path tracer measures the real distance inside the mesh |
-//! | `KHR_materials_iridescence`           | `thinfilm` (roughness 0) or `roughthinfilm` (GGX, alpha = roughness^2): thickness `iridescenceThicknessMaximum` nm (glTF's value without a thickness texture), film index `iridescenceIor`, base: an opaque base of index `n = (1 + sqrt(F0))/(1 - sqrt(F0))`, `k = 0` from the base colour (metallic >= 0.5) or `n = ior` (metallic < 0.5); the diffuse base is dropped |
+//! | `KHR_materials_iridescence`           | `thinfilm` (roughness 0) or `roughthinfilm` (GGX, alpha = roughness^2): thickness `iridescenceThicknessMaximum` nm, or per texel `mix(iridescenceThicknessMinimum, iridescenceThicknessMaximum, green)` of `iridescenceThicknessTexture`; film index `iridescenceIor`, base: an opaque base of index `n = (1 + sqrt(F0))/(1 - sqrt(F0))`, `k = 0` from the base colour (metallic >= 0.5) or `n = ior` (metallic < 0.5); the diffuse base is dropped; `iridescenceFactor` f < 1: `blendbsdf` of the material without the film and the film, weight f |
 //! | `baseColorTexture`, `metallicRoughnessTexture`, `KHR_texture_transform` | factors times texels at the hit's uv (see Textures below) |
-//! | `alphaMode` BLEND / MASK              | `mask` around the material, opacity = alpha / (alpha >= alphaCutoff) |
+//! | `normalTexture` (`scale`)              | `normalmap` around the material: tangent space from `TANGENT` (xyz by the node's matrix, w negated under a mirroring node) or generated from the uvs (see Normal maps below) |
+//! | `alphaMode` BLEND / MASK              | `mask` around the material, opacity = alpha / (alpha >= alphaCutoff), alpha = baseColorFactor alpha x the base colour texture's alpha per texel |
 //! | `KHR_lights_punctual` point           | `point`, intensity (cd) x colour                                |
 //! | `KHR_lights_punctual` spot            | `spot` on the node's -z axis, full intensity within `innerConeAngle`, zero beyond `outerConeAngle` (the renderer's falloff between them is linear in angle, Mitsuba's; glTF suggests a squared linear-in-cosine ramp) |
 //! | `KHR_lights_punctual` directional     | `directional` along the node's -z axis, irradiance (lux) x colour |
@@ -39,13 +40,36 @@
 //! interpolated texel spectra multiply the factor's spectrum (pt-render's `spectral_texture`).
 //!
 //! **Alpha.** `alphaMode` BLEND becomes the renderer's `mask` with opacity = baseColorFactor's
-//! alpha; MASK an opacity of 0 or 1 against `alphaCutoff`; the base colour texture's alpha is
-//! not read.
+//! alpha times the base colour texture's alpha (stored linearly; 1 without an alpha channel) at
+//! the hit; MASK an opacity of 0 or 1 per texel against `alphaCutoff`. Shadow rays are blocked
+//! by masked surfaces whatever their opacity, as in Mitsuba's `path`: light through the holes
+//! is found by BSDF sampling (the mask's pass-through lobe), the same for every texel.
 //!
-//! **Not yet** (warned about, never silently): normal, emissive, occlusion and transmission
-//! textures, texture alpha, texture coordinate sets other than 0, clamped/mirrored wrapping,
-//! transmission factors between 0 and 1 (treated as 1), orthographic cameras, non-triangle
-//! primitives, sparse accessors, skins and morph targets.
+//! **Normal maps.** `normalTexture` is linear data, decoded as `n = (2 c - 1) (scale, scale, 1)`
+//! in the tangent frame `(t, w (n x t), n)` (glTF: +x along increasing u, +y towards image-up,
+//! i.e. decreasing v), then treated as Mitsuba 3.9's `normalmap` (pt-bsdf `normal_map`: the
+//! viewer-side flip and the Conty Estevez 2019 shadowing term). Without `TANGENT` the tangents
+//! are generated per vertex from the uvs (Lengyel 2001, area-weighted dp/du and -dp/dv,
+//! [`generate_tangents`]) instead of MikkTSpace: the same where the uv mapping is affine around
+//! each vertex, different at mirrored-uv seams, which MikkTSpace splits.
+//!
+//! **Partial factors.** A `KHR_materials_transmission` factor f < 1 (or a partly metallic
+//! transmissive material) becomes a `blendbsdf` (pt-bsdf `blend`) of the opaque
+//! metallic-roughness material and the transmissive model with weight `f (1 - metallic)`.
+//! glTF instead mixes only the dielectric's diffuse base with the transmission lobe under one
+//! specular layer; the blend keeps each model's own specular reflection (the same ior and
+//! roughness, so nearly the same lobe), which is exact at f = 0 and f = 1. An
+//! `iridescenceFactor` f < 1 becomes a blend of the material without the film (weight 1 - f)
+//! and the thin film (weight f, times the red channel of `iridescenceTexture` per texel when
+//! there is one); glTF mixes the Fresnel terms, `F = mix(F_dielectric,
+//! F_iridescence, f)`, keeping the diffuse base under both, while the film model here drops the
+//! diffuse base, so the blend has (1 - f) of it: exact at f = 0 and f = 1. With both partial,
+//! the iridescence factor is treated as 1 (nested blends are not supported).
+//!
+//! **Not yet** (warned about, never silently): emissive, occlusion and transmission textures,
+//! texture coordinate sets other than 0,
+//! clamped/mirrored wrapping, orthographic cameras, non-triangle primitives, sparse accessors,
+//! skins and morph targets.
 //!
 //! Errors (malformed JSON or GLB, truncated or missing buffers, accessors or indices out of
 //! range, unsupported *required* extensions) are [`GltfError`]s naming the file and the glTF
@@ -55,7 +79,7 @@
 #![forbid(unsafe_code)]
 
 use base64::Engine as _;
-use glam::{Mat3, Mat4, Vec2, Vec3};
+use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use gltf::json::validation::Validate as _;
 use pt_scene::{
     AreaEmitterDesc, BsdfDesc, BsdfKind, CameraDesc, FilmDesc, FilterDesc, FovAxis, Geometry, ImageSource, IntegratorDesc, IntegratorKind, LightDesc, LightKind, MediumDesc, UvTexture,
@@ -212,7 +236,7 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
     let mut mats = Vec::new();
     cx.summary.push(format!("materials   {} (glTF)", doc.materials().len()));
     for m in doc.materials() {
-        let mm = map_material(&mut cx, &m, &buffers)?;
+        let mm = map_material(&mut cx, doc, &m, &buffers)?;
         desc.bsdfs.push(mm.bsdf.clone());
         mats.push(mm);
     }
@@ -266,7 +290,8 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
                     cx.warnings.push(format!("{elem}: mode {:?} skipped (only triangles are rendered)", prim.mode()));
                     continue;
                 }
-                let tri = read_primitive(&cx, &prim, &buffers, world, &elem)?;
+                let normal_mapped = prim.material().index().is_some_and(|i| matches!(mats[i].bsdf.kind, BsdfKind::NormalMap { .. }));
+                let tri = read_primitive(&mut cx, &prim, &buffers, world, &elem, normal_mapped)?;
                 let (mm, bsdf) = match prim.material().index() {
                     Some(i) => (&mats[i], i),
                     None => {
@@ -442,7 +467,9 @@ fn check_accessor(cx: &Ctx, acc: &gltf::Accessor, buffers: &[Vec<u8>], what: &st
 }
 
 /// Positions, normals, uvs and indices of a triangle primitive, in world space.
-fn read_primitive(cx: &Ctx, prim: &gltf::Primitive, buffers: &[Vec<u8>], world: Mat4, elem: &str) -> Result<TriangleMesh, GltfError> {
+/// With `want_tangents` (a normal-mapped material) also the tangents: `TANGENT` (xyz by the
+/// node's matrix, w negated when it mirrors), or generated from the uvs ([`generate_tangents`]).
+fn read_primitive(cx: &mut Ctx, prim: &gltf::Primitive, buffers: &[Vec<u8>], world: Mat4, elem: &str, want_tangents: bool) -> Result<TriangleMesh, GltfError> {
     let pos_acc = prim.get(&gltf::Semantic::Positions).ok_or_else(|| cx.err(format!("{elem}: no POSITION attribute")))?;
     check_accessor(cx, &pos_acc, buffers, "POSITION", elem)?;
     let nrm_acc = prim.get(&gltf::Semantic::Normals);
@@ -455,6 +482,10 @@ fn read_primitive(cx: &Ctx, prim: &gltf::Primitive, buffers: &[Vec<u8>], world: 
     }
     if let Some(a) = prim.indices() {
         check_accessor(cx, &a, buffers, "indices", elem)?;
+    }
+    let tan_acc = prim.get(&gltf::Semantic::Tangents).filter(|_| want_tangents);
+    if let Some(a) = &tan_acc {
+        check_accessor(cx, a, buffers, "TANGENT", elem)?;
     }
     let reader = prim.reader(|b| buffers.get(b.index()).map(|v| v.as_slice()));
     let positions: Vec<Vec3> = reader.read_positions().ok_or_else(|| cx.err(format!("{elem}: POSITION cannot be read")))?.map(Vec3::from).collect();
@@ -500,8 +531,76 @@ fn read_primitive(cx: &Ctx, prim: &gltf::Primitive, buffers: &[Vec<u8>], world: 
     if let Some((k, &i)) = flat.iter().enumerate().find(|(_, &i)| i as usize >= n) {
         return Err(cx.err(format!("{elem}: index {k} is {i}, out of range for {n} vertices")));
     }
-    let indices = flat.chunks_exact(3).map(|t| if flip { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] }).collect();
-    Ok(TriangleMesh { positions, normals, uvs, indices })
+    let indices: Vec<[u32; 3]> = flat.chunks_exact(3).map(|t| if flip { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] }).collect();
+    let mut tangents = None;
+    if want_tangents {
+        let given = match (&tan_acc, reader.read_tangents()) {
+            (Some(_), Some(it)) => {
+                let m3 = Mat3::from_mat4(world);
+                let v: Vec<Vec4> = it.map(|t| (m3 * Vec3::new(t[0], t[1], t[2])).extend(if (t[3] < 0.0) != flip { -1.0 } else { 1.0 })).collect();
+                if v.len() != n {
+                    return Err(cx.err(format!("{elem}: {} tangents for {n} positions", v.len())));
+                }
+                v.iter().all(|t| t.is_finite()).then_some(v)
+            }
+            _ => None,
+        };
+        tangents = match (given, &uvs) {
+            (Some(t), _) => Some(t),
+            (None, Some(uv)) => Some(generate_tangents(&positions, normals.as_deref(), uv, &indices)),
+            (None, None) => {
+                cx.warnings.push(format!("{elem}: normal map without TEXCOORD_0 or TANGENT: no tangent space, normal map ignored"));
+                None
+            }
+        };
+    }
+    Ok(TriangleMesh { positions, normals, uvs, tangents, indices })
+}
+
+/// Per-vertex tangents from the uvs when a mesh has no `TANGENT` (Lengyel 2001, "Computing
+/// tangent space basis vectors for an arbitrary mesh"): each triangle's dp/du and -dp/dv
+/// (glTF's bitangent points to image-up, decreasing v) are normalised, weighted by the
+/// triangle's area and summed at its vertices; the tangent is the sum made orthogonal to the
+/// vertex normal, and w = sign((n x t) . bitangent sum).
+///
+/// The glTF spec asks for MikkTSpace. The two agree wherever the uv mapping is affine over the
+/// triangles around a vertex (planes, boxes, cylinders unrolled evenly: every test asset here);
+/// elsewhere MikkTSpace weights by corner angle rather than area and splits vertices at mirrored
+/// uv seams, which this does not (a vertex on such a seam gets one averaged tangent).
+pub fn generate_tangents(positions: &[Vec3], normals: Option<&[Vec3]>, uvs: &[Vec2], indices: &[[u32; 3]]) -> Vec<Vec4> {
+    let n = positions.len();
+    let (mut tacc, mut bacc, mut nacc) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+    for tri in indices {
+        let [i0, i1, i2] = tri.map(|i| i as usize);
+        let (e1, e2) = (positions[i1] - positions[i0], positions[i2] - positions[i0]);
+        let (d1, d2) = (uvs[i1] - uvs[i0], uvs[i2] - uvs[i0]);
+        let cross = e1.cross(e2);
+        let area = 0.5 * cross.length();
+        let det = d1.x * d2.y - d1.y * d2.x;
+        for i in [i0, i1, i2] {
+            nacc[i] += cross; // area-weighted face normal, for meshes without normals
+        }
+        if det == 0.0 || !(area > 0.0) {
+            continue;
+        }
+        // [e1 e2] = [dpdu dpdv] [d1 d2] (pbrt-v4 eq. 6.7).
+        let dpdu = (e1 * d2.y - e2 * d1.y) / det;
+        let dpdv = (e2 * d1.x - e1 * d2.x) / det;
+        let (Some(t), Some(b)) = (dpdu.try_normalize(), (-dpdv).try_normalize()) else { continue };
+        for i in [i0, i1, i2] {
+            tacc[i] += t * area;
+            bacc[i] += b * area;
+        }
+    }
+    (0..n)
+        .map(|i| {
+            let nn = normals.map(|ns| ns[i]).unwrap_or(nacc[i]).normalize_or_zero();
+            match (tacc[i] - nn * nn.dot(tacc[i])).try_normalize() {
+                Some(t) => t.extend(if nn.cross(t).dot(bacc[i]) < 0.0 { -1.0 } else { 1.0 }),
+                None => Vec4::ZERO, // the renderer falls back to dp/du
+            }
+        })
+        .collect()
 }
 
 /// Centre and radius of the bounding sphere of the boxes of all meshes (a unit sphere at the
@@ -567,8 +666,6 @@ fn ext_f32(v: Option<&serde_json::Value>, key: &str, default: f32) -> f32 {
 /// KHR_texture_transform as an affine uv map. `None` (with a warning) for what is not supported:
 /// texture coordinate sets other than 0, clamped or mirrored wrapping.
 fn texture_of(cx: &mut Ctx, info: &gltf::texture::Info, srgb: bool, buffers: &[Vec<u8>], what: &str) -> Result<Option<Box<UvTexture>>, GltfError> {
-    let tex = info.texture();
-    let elem = format!("{what} (textures[{}])", tex.index());
     let mut tex_coord = info.tex_coord();
     // KHR_texture_transform: uv' = T R S uv (the extension's GLSL, column-major mat3s):
     // u' = sx u cos(r) - sy v sin(r) + ox, v' = sx u sin(r) + sy v cos(r) + oy.
@@ -581,6 +678,36 @@ fn texture_of(cx: &mut Ctx, info: &gltf::texture::Info, srgb: bool, buffers: &[V
             tex_coord = tc;
         }
     }
+    texture_source(cx, info.texture(), tex_coord, transform, srgb, buffers, what)
+}
+
+/// KHR_texture_transform read from a textureInfo's raw `extensions` JSON (for texture slots the
+/// gltf crate does not model: `normalTexture`, extension textures), as in [`texture_of`];
+/// its `texCoord` overrides `tex_coord`.
+fn transform_from_json(ext: Option<&serde_json::Value>, tex_coord: &mut u32) -> [f32; 6] {
+    let Some(t) = ext else { return [1.0, 0.0, 0.0, 0.0, 1.0, 0.0] };
+    let pair = |k: &str, d: f32| t.get(k).and_then(|v| v.as_array()).map_or([d, d], |a| [0, 1].map(|i| a.get(i).and_then(|x| x.as_f64()).map_or(d, |x| x as f32)));
+    let ([ox, oy], r, [sx, sy]) = (pair("offset", 0.0), ext_f32(Some(t), "rotation", 0.0), pair("scale", 1.0));
+    if let Some(tc) = t.get("texCoord").and_then(|v| v.as_u64()) {
+        *tex_coord = tc as u32;
+    }
+    let (sin, cos) = r.sin_cos();
+    [sx * cos, -sy * sin, ox, sx * sin, sy * cos, oy]
+}
+
+/// A texture given by a raw textureInfo JSON object (`index`, `texCoord`, KHR_texture_transform)
+/// of an extension the gltf crate does not model, as [`texture_of`].
+fn json_texture(cx: &mut Ctx, doc: &gltf::Document, info: &serde_json::Value, srgb: bool, buffers: &[Vec<u8>], what: &str) -> Result<Option<Box<UvTexture>>, GltfError> {
+    let index = info.get("index").and_then(|v| v.as_u64()).ok_or_else(|| cx.err(format!("{what}: textureInfo without an index")))? as usize;
+    let tex = doc.textures().nth(index).ok_or_else(|| cx.err(format!("{what}: textures[{index}] does not exist ({} textures)", doc.textures().len())))?;
+    let mut tex_coord = info.get("texCoord").and_then(|v| v.as_u64()).unwrap_or(0) as u32;
+    let transform = transform_from_json(info.get("extensions").and_then(|e| e.get("KHR_texture_transform")), &mut tex_coord);
+    texture_source(cx, tex, tex_coord, transform, srgb, buffers, what)
+}
+
+/// The image, sampler and uv map of a texture (see [`texture_of`]).
+fn texture_source(cx: &mut Ctx, tex: gltf::Texture, tex_coord: u32, transform: [f32; 6], srgb: bool, buffers: &[Vec<u8>], what: &str) -> Result<Option<Box<UvTexture>>, GltfError> {
+    let elem = format!("{what} (textures[{}])", tex.index());
     if tex_coord != 0 {
         cx.warnings.push(format!("{elem}: texture coordinate set {tex_coord} is not read (only TEXCOORD_0): texture ignored"));
         return Ok(None);
@@ -611,7 +738,7 @@ fn texture_of(cx: &mut Ctx, info: &gltf::texture::Info, srgb: bool, buffers: &[V
     Ok(Some(Box::new(UvTexture { source, srgb, nearest, transform })))
 }
 
-fn map_material(cx: &mut Ctx, m: &gltf::Material, buffers: &[Vec<u8>]) -> Result<MappedMaterial, GltfError> {
+fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers: &[Vec<u8>]) -> Result<MappedMaterial, GltfError> {
     let idx = m.index().unwrap_or(0);
     let elem = format!("materials[{idx}]");
     let name = m.name().map(|n| format!(" '{n}'")).unwrap_or_default();
@@ -636,8 +763,23 @@ fn map_material(cx: &mut Ctx, m: &gltf::Material, buffers: &[Vec<u8>]) -> Result
             notes.push(format!("{slot}: {} {}{ext}", if t.srgb { "sRGB-decoded" } else { "linear" }, if t.nearest { "nearest" } else { "bilinear" }));
         }
     }
+    let normal_texture = match m.normal_texture() {
+        Some(nt) => {
+            let mut tc = nt.tex_coord();
+            let transform = transform_from_json(nt.extension_value("KHR_texture_transform"), &mut tc);
+            let scale = nt.scale();
+            if !scale.is_finite() {
+                return Err(cx.err(format!("{elem}: normalTexture.scale must be finite, got {scale}")));
+            }
+            texture_source(cx, nt.texture(), tc, transform, false, buffers, &format!("{elem}{name} normalTexture"))?.map(|t| (t, scale))
+        }
+        None => None,
+    };
+    if let Some((t, scale)) = &normal_texture {
+        let ext = if t.transform != [1.0, 0.0, 0.0, 0.0, 1.0, 0.0] { format!(", KHR_texture_transform {:?}", t.transform) } else { String::new() };
+        notes.push(format!("normalTexture: linear {}, scale {scale}, tangent space from TANGENT (or generated from the uvs){ext}", if t.nearest { "nearest" } else { "bilinear" }));
+    }
     for (slot, present) in [
-        ("normalTexture", m.normal_texture().is_some()),
         ("emissiveTexture", m.emissive_texture().is_some()),
         ("occlusionTexture", m.occlusion_texture().is_some()),
     ] {
@@ -659,10 +801,20 @@ fn map_material(cx: &mut Ctx, m: &gltf::Material, buffers: &[Vec<u8>]) -> Result
             }
         }
     };
+    // With a base colour texture, the texel's alpha (linear) times the factor's alpha, per hit
+    // (BLEND), or 0/1 against alphaCutoff per texel (MASK).
+    let alpha_texture = match (&base_color_texture, m.alpha_mode()) {
+        (_, gltf::material::AlphaMode::Opaque) | (None, _) => None,
+        (Some(t), mode) => {
+            let cutoff = (mode == gltf::material::AlphaMode::Mask).then(|| m.alpha_cutoff().unwrap_or(0.5));
+            Some((Box::new(UvTexture { srgb: false, ..(**t).clone() }), cutoff))
+        }
+    };
     if m.alpha_mode() != gltf::material::AlphaMode::Opaque {
-        used.push(format!("alphaMode {:?}: opacity {opacity} (mask)", m.alpha_mode()));
-        if pbr.base_color_texture().is_some() {
-            cx.warnings.push(format!("{elem}{name}: the base colour texture's alpha channel is not read (not yet implemented): opacity from baseColorFactor only"));
+        match &alpha_texture {
+            None => used.push(format!("alphaMode {:?}: opacity {opacity} (mask)", m.alpha_mode())),
+            Some((_, Some(c))) => used.push(format!("alphaMode MASK: opacity 1 where {} x texture alpha >= {c}, else 0, per texel (mask)", bc[3])),
+            Some((_, None)) => used.push(format!("alphaMode BLEND: opacity {} x texture alpha, per texel (mask)", bc[3])),
         }
     }
     let base_color = SpectrumDesc::Rgb([bc[0], bc[1], bc[2]]);
@@ -676,9 +828,7 @@ fn map_material(cx: &mut Ctx, m: &gltf::Material, buffers: &[Vec<u8>]) -> Result
     let mut mapping = format!("gltf metallic-roughness: base colour {:?}, metallic {metallic}, roughness {roughness} (alpha {:.4}), dielectric ior {ior}", [bc[0], bc[1], bc[2]], roughness * roughness);
     if let Some(t) = m.transmission().filter(|t| t.transmission_factor() > 0.0) {
         let f = t.transmission_factor();
-        if f < 1.0 {
-            notes.push(format!("transmissionFactor {f} treated as 1"));
-        }
+        let opaque = kind.clone();
         if textured {
             notes.push("base colour / metallic-roughness textures ignored (transmissive)".into());
         }
@@ -716,6 +866,18 @@ fn map_material(cx: &mut Ctx, m: &gltf::Material, buffers: &[Vec<u8>]) -> Result
         if bc[..3].iter().any(|c| (c - 1.0).abs() > 1e-6) {
             notes.push("baseColor tint of transmitted light ignored".into());
         }
+        // A partial transmission: a blend of the opaque material and the transmissive one.
+        // glTF mixes only the dielectric's diffuse base with the transmission lobe, under the
+        // same specular layer, and leaves the metal part alone: the blend weight is
+        // f (1 - metallic), and the specular layer is the opaque material's GGX reflection in
+        // one share and the dielectric's Fresnel reflection in the other (the same ior and
+        // roughness, so nearly the same lobe).
+        let w = f.min(1.0) * (1.0 - metallic.clamp(0.0, 1.0));
+        if w < 1.0 {
+            mapping = format!("blend of {:.4} x ({mapping}) and {:.4} x (the opaque metallic-roughness material)", w, 1.0 - w);
+            notes.push(format!("transmissionFactor {f} with metallic {metallic}: blend weight f (1 - metallic) = {w} (approximates glTF's layering: see the module doc)"));
+            kind = BsdfKind::Blend { weight: w, weight_texture: None, first: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind: opaque }), second: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
+        }
         used.push(format!("KHR_materials_transmission (factor {f})"));
     } else if m.volume().is_some() {
         notes.push("KHR_materials_volume without transmission has no effect".into());
@@ -728,12 +890,29 @@ fn map_material(cx: &mut Ctx, m: &gltf::Material, buffers: &[Vec<u8>]) -> Result
             if !(thickness >= 0.0 && thickness.is_finite() && film_ior >= 1.0 && film_ior.is_finite()) {
                 return Err(cx.err(format!("{elem}: KHR_materials_iridescence needs thickness >= 0 and ior >= 1, got {thickness}, {film_ior}")));
             }
-            if ir.get("iridescenceTexture").is_some() || ir.get("iridescenceThicknessTexture").is_some() {
-                cx.warnings.push(format!("{elem}{name}: iridescence textures ignored (textures are not yet implemented): thickness = iridescenceThicknessMaximum"));
+            // iridescenceThicknessTexture: thickness = mix(min, max, green) per texel.
+            let thickness_texture = match ir.get("iridescenceThicknessTexture") {
+                Some(info) => {
+                    let min_nm = ext_f32(Some(ir), "iridescenceThicknessMinimum", 100.0);
+                    if !(min_nm >= 0.0 && min_nm.is_finite()) {
+                        return Err(cx.err(format!("{elem}: iridescenceThicknessMinimum must be finite and >= 0, got {min_nm}")));
+                    }
+                    json_texture(cx, doc, info, false, buffers, &format!("{elem}{name} iridescenceThicknessTexture"))?.map(|t| (t, min_nm))
+                }
+                None => None,
+            };
+            // iridescenceTexture: its red channel multiplies the factor per texel.
+            let factor_texture = match ir.get("iridescenceTexture") {
+                Some(info) => json_texture(cx, doc, info, false, buffers, &format!("{elem}{name} iridescenceTexture"))?,
+                None => None,
+            };
+            // A partial iridescence blends the material without the film and the film; with a
+            // partial transmission already blended, nested blends are not supported: factor 1.
+            let partial = (factor < 1.0 || factor_texture.is_some()) && !matches!(kind, BsdfKind::Blend { .. });
+            if (factor < 1.0 || factor_texture.is_some()) && !partial {
+                cx.warnings.push(format!("{elem}{name}: iridescenceFactor {factor} and iridescenceTexture treated as 1: the material already blends a partial transmission (nested blends are not yet implemented)"));
             }
-            if factor < 1.0 {
-                notes.push(format!("iridescenceFactor {factor} treated as 1"));
-            }
+            let without_film = kind.clone();
             if textured {
                 notes.push("base colour / metallic-roughness textures ignored (thin film)".into());
             }
@@ -754,6 +933,20 @@ fn map_material(cx: &mut Ctx, m: &gltf::Material, buffers: &[Vec<u8>]) -> Result
             } else {
                 mapping = format!("roughthinfilm: {thickness} nm film of ior {film_ior} over an opaque base of index {eta:?} (k = 0), GGX alpha {alpha:.4}; diffuse dropped");
                 kind = BsdfKind::RoughThinFilm { thickness, film_ior, ext_ior: 1.0, int_ior: None, eta, k: SpectrumDesc::Constant(0.0), distribution: "ggx".into(), alpha_u: alpha, alpha_v: alpha };
+            }
+            if partial {
+                notes.push(format!("iridescenceFactor {factor}: blend of {factor} x film and {} x the material without it (approximates glTF's Fresnel mix: see the module doc)", 1.0 - factor));
+                mapping = format!("blend of {factor} x ({mapping}) and {} x (the material without the film)", 1.0 - factor);
+                let film = BsdfDesc { loc: loc.clone(), id: None, kind };
+                if factor_texture.is_some() {
+                    notes.push("iridescenceTexture: its red channel multiplies the blend weight per texel".into());
+                }
+                let weight_texture = factor_texture.map(|t| (t, pt_scene::TextureChannel::Red));
+                kind = BsdfKind::Blend { weight: factor, weight_texture, first: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind: without_film }), second: Box::new(film) };
+            }
+            if let Some((texture, min_nm)) = thickness_texture {
+                notes.push(format!("iridescenceThicknessTexture: thickness = {min_nm} + ({thickness} - {min_nm}) x green, nm, per texel"));
+                kind = BsdfKind::FilmThicknessTexture { texture, min_nm, max_nm: thickness, inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
             }
             used.push(format!("KHR_materials_iridescence (factor {factor}, ior {film_ior}, thickness max {thickness} nm)"));
         }
@@ -778,8 +971,14 @@ fn map_material(cx: &mut Ctx, m: &gltf::Material, buffers: &[Vec<u8>]) -> Result
         // back faces anyway, so opaque materials shade both sides.
         kind = BsdfKind::TwoSided { inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
     }
-    if opacity < 1.0 {
+    if let Some((texture, cutoff)) = alpha_texture {
+        let factor = bc[3].clamp(0.0, 1.0);
+        kind = BsdfKind::OpacityTexture { texture, channel: pt_scene::TextureChannel::Alpha, factor, cutoff, inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
+    } else if opacity < 1.0 {
         kind = BsdfKind::Mask { opacity, inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
+    }
+    if let Some((texture, scale)) = normal_texture {
+        kind = BsdfKind::NormalMap { texture, scale, gltf: true, inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
     }
     cx.summary.push(format!("  {elem}{name}: {mapping}"));
     for u in &used {

@@ -2,7 +2,7 @@
 //! interaction recorded at a hit. Everything in world space.
 
 use obvhs::aabb::Aabb;
-use pt_math::{Vec2, Vec3, Vec3A};
+use pt_math::{Vec2, Vec3, Vec3A, Vec4};
 
 /// A primitive in the BVH. Triangles store `v0` and two edges, the form Möller-Trumbore wants.
 ///
@@ -140,6 +140,9 @@ pub struct Interaction {
     /// Tangent along increasing u (not normalised; zero when the surface has no
     /// parameterisation). It orients anisotropic BSDFs, as Mitsuba's `dp_du` does.
     pub dpdu: Vec3,
+    /// Interpolated mesh tangent for normal maps (xyz world, not normalised; w = +-1 the
+    /// handedness, bitangent `w (n x t)`); zero when the mesh has no tangents.
+    pub tangent: Vec4,
     /// Distance along the ray.
     pub t: f32,
     /// Index of the shape this primitive belongs to.

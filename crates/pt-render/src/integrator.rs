@@ -116,7 +116,7 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, 
             break;
         }
 
-        let bsdf = scene.material_at_uv(hit.shape, hit.uv, lambda);
+        let bsdf = scene.material_at_hit(&hit, lambda);
         // Fluorescence: the BSDF holds each lane's total albedo at its emitted wavelength; now
         // some lanes move to an excitation wavelength, used by NEE and the rest of the path.
         if scene.is_fluorescent(hit.shape) {

@@ -147,6 +147,7 @@ pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, 
                         positions: p.to_vec(),
                         normals: m.normals.as_ref().map(|ns| idx.map(|i| ns[i as usize]).to_vec()),
                         uvs: m.uvs.as_ref().map(|uv| idx.map(|i| uv[i as usize]).to_vec()),
+                        tangents: m.tangents.as_ref().map(|ts| idx.map(|i| ts[i as usize]).to_vec()),
                         indices: vec![[0, 1, 2]],
                     });
                     tri.emitter = emitter(phi);

@@ -41,6 +41,8 @@ struct ShapeData {
     /// Vertex normals and uvs of meshes, indexed through `indices`.
     normals: Option<Vec<Vec3>>,
     uvs: Option<Vec<Vec2>>,
+    /// Vertex tangents (xyz, handedness w) of meshes that have them (normal maps).
+    tangents: Option<Vec<pt_math::Vec4>>,
     indices: Vec<[u32; 3]>,
 }
 
@@ -77,6 +79,14 @@ pub struct Scene {
     fluorescent: Vec<Option<crate::fluorescence::Fluorescent>>,
     /// Per material: its textures, when its parameters vary over the surface (glTF).
     textured: Vec<Option<TexturedPbr>>,
+    /// Per material: its normal map, if it has one.
+    normal_maps: Vec<Option<NormalMapTex>>,
+    /// Per material: its film thickness texture, if it has one.
+    film_textures: Vec<Option<FilmThicknessTex>>,
+    /// Per material: its opacity texture, if it has one.
+    opacity_textures: Vec<Option<OpacityTex>>,
+    /// Per material: its textured blend weight, if it has one.
+    blend_textures: Vec<Option<BlendWeightTex>>,
     /// Spectral mode: each light's emission spectrum (its `radiance` fields hold the geometric
     /// factors only); empty in RGB mode. Textured area lights and environment maps multiply it
     /// by their texels' upsampled spectra themselves (D65 here); lights with display primaries
@@ -175,6 +185,24 @@ fn material_with(
         BsdfKind::Diffuse { reflectance } => one_sided(Bsdf::Lambert(Lambert::new(val(reflectance, Role::Albedo)))),
         BsdfKind::TwoSided { inner } => SurfaceBsdf { two_sided: true, ..material_with(inner, lambda, val, tables)? },
         BsdfKind::Mask { opacity, inner } => SurfaceBsdf { opacity: *opacity, ..material_with(inner, lambda, val, tables)? },
+        // The perturbed frame depends on the hit: set by `Scene::material_at_hit`.
+        BsdfKind::NormalMap { inner, .. } => material_with(inner, lambda, val, tables)?,
+        // The thickness depends on the hit: set by `Scene::material_at_hit`.
+        BsdfKind::FilmThicknessTexture { inner, .. } => material_with(inner, lambda, val, tables)?,
+        // The opacity depends on the hit: set by `Scene::material_at_hit`.
+        BsdfKind::OpacityTexture { inner, .. } => material_with(inner, lambda, val, tables)?,
+        BsdfKind::Blend { weight, first, second, .. } => {
+            let (a, b) = (material_with(first, lambda, val, tables)?, material_with(second, lambda, val, tables)?);
+            let plain = |s: &SurfaceBsdf| s.opacity == 1.0 && s.normal.is_none() && s.blend.is_none();
+            if !plain(&a) || !plain(&b) {
+                return Err(BuildError { loc: desc.loc.clone(), message: "blendbsdf of masks, normal maps or blends is not yet supported (not yet implemented): put the mask or normal map around the blendbsdf".into() });
+            }
+            // `two_sided` never mirrors a transmissive model, so it may differ there.
+            if a.two_sided != b.two_sided && !a.bsdf.is_transmissive() && !b.bsdf.is_transmissive() {
+                return Err(BuildError { loc: desc.loc.clone(), message: "blendbsdf of a one-sided and a two-sided BSDF is not yet supported (not yet implemented): put twosided around the blendbsdf".into() });
+            }
+            SurfaceBsdf { blend: Some((*weight, b.bsdf)), two_sided: a.two_sided || b.two_sided, ..a }
+        }
         BsdfKind::ThinFilm { thickness, film_ior, ext_ior, int_ior, eta, k } => {
             let base = match int_ior {
                 Some(ior) => FilmBase::Dielectric { ior: *ior },
@@ -240,10 +268,13 @@ fn material_with(
 /// The fluorescence model of a `fluorescent` material (also inside `twosided`), else `None`.
 fn fluorescent_model(b: &BsdfDesc) -> Result<Option<crate::fluorescence::Fluorescent>, BuildError> {
     match &b.kind {
-        BsdfKind::TwoSided { inner } => fluorescent_model(inner),
+        BsdfKind::TwoSided { inner } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } => fluorescent_model(inner),
         // The integrator switches wavelengths before the BSDF chooses between pass-through and
         // scattering, which would be wrong for the pass-through part.
-        BsdfKind::Mask { inner, .. } if fluorescent_model(inner)?.is_some() => {
+        BsdfKind::Blend { first, second, .. } if fluorescent_model(first)?.is_some() || fluorescent_model(second)?.is_some() => {
+            Err(BuildError { loc: b.loc.clone(), message: "a blendbsdf with a fluorescent BSDF is not yet supported (not yet implemented)".into() })
+        }
+        BsdfKind::Mask { inner, .. } | BsdfKind::OpacityTexture { inner, .. } if fluorescent_model(inner)?.is_some() => {
             Err(BuildError { loc: b.loc.clone(), message: "a mask around a fluorescent BSDF is not yet supported (not yet implemented)".into() })
         }
         BsdfKind::Fluorescent { reflectance, absorption, emission, quantum_yield } => crate::fluorescence::Fluorescent::new(
@@ -283,6 +314,10 @@ impl Scene {
         let materials: Vec<SurfaceBsdf> =
             desc.bsdfs.iter().map(|b| material_with(b, None, &mut |s, _| spectrum(s), &mut CoatingTable::get)).collect::<Result<_, _>>()?;
         let textured = desc.bsdfs.iter().map(|b| TexturedPbr::of(b, spectral)).collect::<Result<Vec<_>, _>>()?;
+        let normal_maps = desc.bsdfs.iter().map(NormalMapTex::of).collect::<Result<Vec<_>, _>>()?;
+        let film_textures = desc.bsdfs.iter().map(FilmThicknessTex::of).collect::<Result<Vec<_>, _>>()?;
+        let opacity_textures = desc.bsdfs.iter().map(OpacityTex::of).collect::<Result<Vec<_>, _>>()?;
+        let blend_textures = desc.bsdfs.iter().map(BlendWeightTex::of).collect::<Result<Vec<_>, _>>()?;
         let mut spectral_materials = Vec::new();
         if spectral {
             for b in &desc.bsdfs {
@@ -329,14 +364,20 @@ impl Scene {
             if shape.bsdf >= materials.len() {
                 return Err(BuildError { loc: shape.loc.clone(), message: format!("BSDF index {} out of range", shape.bsdf) });
             }
-            let mut data = ShapeData { material: shape.bsdf as u32, light: None, interior: None, normals: None, uvs: None, indices: Vec::new() };
+            let mut data = ShapeData { material: shape.bsdf as u32, light: None, interior: None, normals: None, uvs: None, tangents: None, indices: Vec::new() };
             let light_shape = match &shape.geometry {
                 Geometry::Mesh(mesh) => {
                     let tris = add_mesh(mesh, si as u32, shape.emitter.is_some(), &mut prims, &mut refs, &mut stats, &shape.loc)?;
                     data.normals = mesh.normals.clone();
                     data.uvs = mesh.uvs.clone();
-                    // Indices serve only to interpolate normals and uvs: without them, no copy.
-                    if data.normals.is_some() || data.uvs.is_some() {
+                    data.tangents = mesh.tangents.clone();
+                    if let Some(ts) = &mesh.tangents {
+                        if ts.len() != mesh.positions.len() {
+                            return Err(BuildError { loc: shape.loc.clone(), message: format!("mesh has {} tangents for {} vertices", ts.len(), mesh.positions.len()) });
+                        }
+                    }
+                    // Indices serve only to interpolate normals, uvs and tangents: without them, no copy.
+                    if data.normals.is_some() || data.uvs.is_some() || data.tangents.is_some() {
                         data.indices = mesh.indices.clone();
                     }
                     tris.map(|(tris, areas)| (LightShape::Mesh { distr: Distribution1D::new(&areas).expect("non-empty"), tris }, areas.iter().sum::<f32>()))
@@ -412,7 +453,7 @@ impl Scene {
         if !spectral {
             light_spectra.clear();
         }
-        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, fluorescent, textured, light_spectra, media, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
+        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, fluorescent, textured, normal_maps, film_textures, opacity_textures, blend_textures, light_spectra, media, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
     }
 
     /// Closest hit along `ray`, with its surface data.
@@ -449,7 +490,15 @@ impl Scene {
                     }
                     None => (Vec2::new(b1, b2), Vec3::ZERO),
                 };
-                Some(Interaction { p, ng, ns, uv, dpdu, t, shape: r.shape })
+                let tangent = match &shape.tangents {
+                    Some(ts) => {
+                        let (a, b, c) = (ts[idx[0] as usize], ts[idx[1] as usize], ts[idx[2] as usize]);
+                        // Handedness is constant over a triangle in well-formed data; take vertex 0's.
+                        (a * b0 + b * b1 + c * b2).truncate().extend(if a.w < 0.0 { -1.0 } else { 1.0 })
+                    }
+                    None => pt_math::Vec4::ZERO,
+                };
+                Some(Interaction { p, ng, ns, uv, dpdu, tangent, t, shape: r.shape })
             }
             Primitive::Sphere { center, radius, flip } => {
                 let c = Vec3::from(center);
@@ -461,7 +510,7 @@ impl Scene {
                 // Mitsuba's sphere: u runs along the longitude about its local z axis (spheres
                 // here carry no rotation).
                 let dpdu = Vec3::new(-local.y, local.x, 0.0);
-                Some(Interaction { p, ng: n, ns: n, uv, dpdu, t, shape: r.shape })
+                Some(Interaction { p, ng: n, ns: n, uv, dpdu, tangent: pt_math::Vec4::ZERO, t, shape: r.shape })
             }
         }
     }
@@ -531,6 +580,36 @@ impl Scene {
         }
     }
 
+    /// The BSDF at a hit: [`Scene::material_at_uv`] with the material's normal map, if any, turned
+    /// into the perturbed frame (pt-bsdf `normal_map`) relative to the integrator's shading frame
+    /// `Frame::from_normal_tangent(hit.ns, hit.dpdu)`.
+    #[inline]
+    pub fn material_at_hit(&self, hit: &Interaction, lambda: &SampledWavelengths) -> SurfaceBsdf {
+        let mut b = self.material_at_uv(hit.shape, hit.uv, lambda);
+        let m = self.shapes[hit.shape as usize].material as usize;
+        if let Some(Some(nm)) = self.normal_maps.get(m) {
+            b.normal = nm.normal(hit);
+        }
+        if let Some(Some(ft)) = self.film_textures.get(m) {
+            let d = ft.thickness(hit.uv);
+            let second = b.blend.as_mut().map(|(_, s)| s);
+            for model in std::iter::once(&mut b.bsdf).chain(second) {
+                match model {
+                    Bsdf::ThinFilm(f) => f.thickness_nm = d,
+                    Bsdf::RoughThinFilm(r) => r.film.thickness_nm = d,
+                    _ => {}
+                }
+            }
+        }
+        if let Some(Some(ot)) = self.opacity_textures.get(m) {
+            b.opacity = ot.opacity(hit.uv);
+        }
+        if let (Some(Some(bt)), Some((w, _))) = (self.blend_textures.get(m), b.blend.as_mut()) {
+            *w = bt.weight(hit.uv);
+        }
+        b
+    }
+
     /// Transmittance exp(-sigma_t d) of the interior medium of `shape` over `distance` scene units,
     /// at the path's wavelengths (spectral mode) or per RGB channel; `None` if it has no medium.
     #[inline]
@@ -598,9 +677,16 @@ struct TexturedPbr {
 impl TexturedPbr {
     /// The textured form of a material description, if it is a glTF material with textures.
     fn of(desc: &BsdfDesc, spectral: bool) -> Result<Option<TexturedPbr>, BuildError> {
-        // glTF materials come as [Mask (alpha)] around [TwoSided] around GltfPbr.
+        // glTF materials come as [NormalMap] around [Mask or OpacityTexture (alpha)] around
+        // [TwoSided] around GltfPbr.
+        let desc = match &desc.kind {
+            BsdfKind::NormalMap { inner, .. } => inner.as_ref(),
+            _ => desc,
+        };
         let (desc_in, opacity) = match &desc.kind {
             BsdfKind::Mask { opacity, inner } => (inner.as_ref(), *opacity),
+            // The opacity is set per hit (`Scene::material_at_hit`).
+            BsdfKind::OpacityTexture { inner, .. } => (inner.as_ref(), 1.0),
             _ => (desc, 1.0),
         };
         let (inner, two_sided) = match &desc_in.kind {
@@ -665,7 +751,180 @@ impl TexturedPbr {
                 _ => self.base_spectrum.sample(lambda),
             },
         };
-        SurfaceBsdf { bsdf: Bsdf::GltfPbr(GltfPbr::new(base, metallic, roughness, self.ior)), two_sided: self.two_sided, opacity: self.opacity }
+        SurfaceBsdf { bsdf: Bsdf::GltfPbr(GltfPbr::new(base, metallic, roughness, self.ior)), two_sided: self.two_sided, opacity: self.opacity, normal: None, blend: None }
+    }
+}
+
+/// A material's normal map (pt-bsdf `normal_map`): the texture and whose tangent space it uses.
+struct NormalMapTex {
+    bitmap: std::sync::Arc<crate::texture::Bitmap>,
+    /// KHR_texture_transform as `[a, b, c, d, e, f]`: `u' = a u + b v + c`, `v' = d u + e v + f`.
+    transform: [f32; 6],
+    /// glTF `scale` on the decoded x and y.
+    scale: f32,
+    /// glTF tangent space (mesh tangents and handedness) rather than Mitsuba's (dp/du).
+    gltf: bool,
+}
+
+impl NormalMapTex {
+    /// The normal map of a material (found through `Mask`, `TwoSided` and `NormalMap` wrappers).
+    fn of(desc: &BsdfDesc) -> Result<Option<NormalMapTex>, BuildError> {
+        match &desc.kind {
+            BsdfKind::Mask { inner, .. } | BsdfKind::TwoSided { inner } => NormalMapTex::of(inner),
+            BsdfKind::NormalMap { texture, scale, gltf, inner } => {
+                if NormalMapTex::of(inner)?.is_some() {
+                    return Err(BuildError { loc: desc.loc.clone(), message: "nested normal maps are not supported (not yet implemented)".into() });
+                }
+                let bitmap = crate::texture::Bitmap::from_source(&texture.source, texture.srgb, texture.nearest).map_err(|m| BuildError { loc: desc.loc.clone(), message: m })?;
+                Ok(Some(NormalMapTex { bitmap: std::sync::Arc::new(bitmap), transform: texture.transform, scale: *scale, gltf: *gltf }))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// The mapped normal at a hit, in the integrator's local shading frame (pt-bsdf
+    /// `normal_map` builds the frame from it). The texel c decodes to n = 2 c - 1 (glTF: x and y
+    /// times `scale`), in the tangent space (s, t, n): Mitsuba: s along dp/du, t = n x s; glTF:
+    /// s along the mesh tangent, t = w (n x s).
+    #[inline]
+    fn normal(&self, hit: &Interaction) -> Option<Vec3> {
+        let m = self.transform;
+        let uv = Vec2::new(m[0] * hit.uv.x + m[1] * hit.uv.y + m[2], m[3] * hit.uv.x + m[4] * hit.uv.y + m[5]);
+        let c = self.bitmap.eval(uv);
+        let n = Vec3::new(2.0 * c[0] - 1.0, 2.0 * c[1] - 1.0, 2.0 * c[2] - 1.0);
+        if !self.gltf {
+            return Some(n);
+        }
+        let n = Vec3::new(n.x * self.scale, n.y * self.scale, n.z);
+        let local = Frame::from_normal_tangent(hit.ns, hit.dpdu);
+        // Tangent frame of the mesh; without tangents, dp/du with w = +1.
+        let (t, w) = if hit.tangent.truncate() != Vec3::ZERO { (hit.tangent.truncate(), hit.tangent.w) } else { (hit.dpdu, 1.0) };
+        let tf = Frame::from_normal_tangent(hit.ns, t);
+        let world = tf.s * n.x + tf.t * (w * n.y) + tf.n * n.z;
+        Some(local.to_local(world))
+    }
+}
+
+/// A texture read as one number per texel (`channel`), stored in all three channels.
+fn scalar_bitmap(texture: &pt_scene::UvTexture, channel: pt_scene::TextureChannel) -> Result<crate::texture::Bitmap, String> {
+    use pt_scene::TextureChannel as C;
+    Ok(match channel {
+        C::Alpha => crate::texture::Bitmap::alpha_from_source(&texture.source, texture.nearest)?,
+        // Rec. 709 luminance of each texel, once (Mitsuba's eval_1 of an RGB bitmap).
+        C::Luminance => crate::texture::Bitmap::from_source(&texture.source, texture.srgb, texture.nearest)?.map_texels(|t| [0.212_671 * t[0] + 0.715_160 * t[1] + 0.072_169 * t[2]; 3]),
+        C::Red => crate::texture::Bitmap::from_source(&texture.source, texture.srgb, texture.nearest)?.map_texels(|t| [t[0]; 3]),
+    })
+}
+
+/// A blend whose weight is textured (glTF `iridescenceTexture`): weight = factor x texel.
+struct BlendWeightTex {
+    bitmap: std::sync::Arc<crate::texture::Bitmap>,
+    /// KHR_texture_transform as `[a, b, c, d, e, f]`: `u' = a u + b v + c`, `v' = d u + e v + f`.
+    transform: [f32; 6],
+    /// The blend's own weight, which the texel multiplies.
+    factor: f32,
+}
+
+impl BlendWeightTex {
+    /// The textured blend weight of a material (through the other wrappers).
+    fn of(desc: &BsdfDesc) -> Result<Option<BlendWeightTex>, BuildError> {
+        match &desc.kind {
+            BsdfKind::Mask { inner, .. } | BsdfKind::TwoSided { inner } | BsdfKind::NormalMap { inner, .. } | BsdfKind::OpacityTexture { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } => BlendWeightTex::of(inner),
+            BsdfKind::Blend { weight, weight_texture: Some((texture, channel)), .. } => {
+                let bitmap = scalar_bitmap(texture, *channel).map_err(|m| BuildError { loc: desc.loc.clone(), message: m })?;
+                Ok(Some(BlendWeightTex { bitmap: std::sync::Arc::new(bitmap), transform: texture.transform, factor: *weight }))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// The blend weight at texture coordinates `uv`, in [0, 1].
+    #[inline]
+    fn weight(&self, uv: Vec2) -> f32 {
+        let m = self.transform;
+        (self.factor * self.bitmap.eval(Vec2::new(m[0] * uv.x + m[1] * uv.y + m[2], m[3] * uv.x + m[4] * uv.y + m[5]))[0]).clamp(0.0, 1.0)
+    }
+}
+
+/// An opacity texture (Mitsuba `mask` with a bitmap, glTF base colour alpha).
+struct OpacityTex {
+    bitmap: std::sync::Arc<crate::texture::Bitmap>,
+    /// KHR_texture_transform as `[a, b, c, d, e, f]`: `u' = a u + b v + c`, `v' = d u + e v + f`.
+    transform: [f32; 6],
+    /// Multiplies the texel's value.
+    factor: f32,
+    /// glTF MASK cutoff.
+    cutoff: Option<f32>,
+}
+
+impl OpacityTex {
+    /// The opacity texture of a material (through `TwoSided` and `NormalMap`; the glTF loader
+    /// puts it outside `TwoSided`).
+    fn of(desc: &BsdfDesc) -> Result<Option<OpacityTex>, BuildError> {
+        match &desc.kind {
+            BsdfKind::TwoSided { inner } | BsdfKind::NormalMap { inner, .. } => OpacityTex::of(inner),
+            BsdfKind::OpacityTexture { texture, channel, factor, cutoff, inner } => {
+                if OpacityTex::of(inner)?.is_some() {
+                    return Err(BuildError { loc: desc.loc.clone(), message: "nested opacity textures are not supported (not yet implemented)".into() });
+                }
+                let bitmap = scalar_bitmap(texture, *channel).map_err(|m| BuildError { loc: desc.loc.clone(), message: m })?;
+                Ok(Some(OpacityTex { bitmap: std::sync::Arc::new(bitmap), transform: texture.transform, factor: *factor, cutoff: *cutoff }))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// Opacity in [0, 1] at texture coordinates `uv`.
+    #[inline]
+    fn opacity(&self, uv: Vec2) -> f32 {
+        let m = self.transform;
+        let a = self.factor * self.bitmap.eval(Vec2::new(m[0] * uv.x + m[1] * uv.y + m[2], m[3] * uv.x + m[4] * uv.y + m[5]))[0];
+        match self.cutoff {
+            Some(c) => {
+                if a >= c {
+                    1.0
+                } else {
+                    0.0
+                }
+            }
+            None => a.clamp(0.0, 1.0),
+        }
+    }
+}
+
+/// A film thickness texture (glTF `iridescenceThicknessTexture`).
+struct FilmThicknessTex {
+    bitmap: std::sync::Arc<crate::texture::Bitmap>,
+    /// KHR_texture_transform as `[a, b, c, d, e, f]`: `u' = a u + b v + c`, `v' = d u + e v + f`.
+    transform: [f32; 6],
+    /// Thickness at green 0 and 1, nm.
+    min_nm: f32,
+    max_nm: f32,
+}
+
+impl FilmThicknessTex {
+    /// The film thickness texture of a material (through `Mask`, `TwoSided`, `NormalMap`).
+    fn of(desc: &BsdfDesc) -> Result<Option<FilmThicknessTex>, BuildError> {
+        match &desc.kind {
+            BsdfKind::Mask { inner, .. } | BsdfKind::TwoSided { inner } | BsdfKind::NormalMap { inner, .. } | BsdfKind::OpacityTexture { inner, .. } => FilmThicknessTex::of(inner),
+            BsdfKind::Blend { first, second, .. } => Ok(FilmThicknessTex::of(first)?.or(FilmThicknessTex::of(second)?)),
+            BsdfKind::FilmThicknessTexture { texture, min_nm, max_nm, .. } => {
+                if !(min_nm.is_finite() && max_nm.is_finite() && *min_nm >= 0.0 && *max_nm >= 0.0) {
+                    return Err(BuildError { loc: desc.loc.clone(), message: format!("film thickness range must be finite and >= 0 nm, got {min_nm}..{max_nm}") });
+                }
+                let bitmap = crate::texture::Bitmap::from_source(&texture.source, texture.srgb, texture.nearest).map_err(|m| BuildError { loc: desc.loc.clone(), message: m })?;
+                Ok(Some(FilmThicknessTex { bitmap: std::sync::Arc::new(bitmap), transform: texture.transform, min_nm: *min_nm, max_nm: *max_nm }))
+            }
+            _ => Ok(None),
+        }
+    }
+
+    /// Thickness at texture coordinates `uv`, nm: `min + (max - min) g` (glTF: mix(min, max, g)).
+    #[inline]
+    fn thickness(&self, uv: Vec2) -> f32 {
+        let m = self.transform;
+        let g = self.bitmap.eval(Vec2::new(m[0] * uv.x + m[1] * uv.y + m[2], m[3] * uv.x + m[4] * uv.y + m[5]))[1];
+        (self.min_nm + (self.max_nm - self.min_nm) * g).max(0.0)
     }
 }
 

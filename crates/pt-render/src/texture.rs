@@ -66,6 +66,22 @@ impl Bitmap {
         Ok(Bitmap { width: w as usize, height: h as usize, texels, nearest })
     }
 
+    /// The alpha channel of an image given by file or embedded bytes (glTF base colour alpha),
+    /// as stored (alpha is linear in glTF), in all three channels; 1 where the image has none.
+    pub fn alpha_from_source(source: &pt_scene::ImageSource, nearest: bool) -> Result<Bitmap, String> {
+        let (img, name) = match source {
+            pt_scene::ImageSource::File(p) => (image::open(p).map_err(|e| format!("cannot read image '{}': {e}", p.display()))?, p.display().to_string()),
+            pt_scene::ImageSource::Embedded { name, bytes } => (image::load_from_memory(bytes).map_err(|e| format!("cannot decode {name}: {e}"))?, name.clone()),
+        };
+        let img = img.to_rgba32f();
+        let (w, h) = img.dimensions();
+        if w == 0 || h == 0 {
+            return Err(format!("image {name} is empty"));
+        }
+        let texels = img.pixels().map(|p| [p.0[3]; 3]).collect();
+        Ok(Bitmap { width: w as usize, height: h as usize, texels, nearest })
+    }
+
     /// Linear RGB at texture coordinates `uv`.
     pub fn eval(&self, uv: Vec2) -> [f32; 3] {
         let (w, h) = (self.width as i64, self.height as i64);
@@ -80,6 +96,12 @@ impl Bitmap {
         let (xi, yi) = (x0 as i64, y0 as i64);
         let (a, b, c, d) = (at(xi, yi), at(xi + 1, yi), at(xi, yi + 1), at(xi + 1, yi + 1));
         std::array::from_fn(|k| (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + d[k] * fx) * fy)
+    }
+
+    /// The same image with `f` applied to every texel (linear values).
+    pub fn map_texels(mut self, f: impl Fn([f32; 3]) -> [f32; 3]) -> Bitmap {
+        self.texels.iter_mut().for_each(|t| *t = f(*t));
+        self
     }
 
     /// Mean luminance (Rec. 709 Y) of the texels, for light selection.

@@ -28,8 +28,8 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "ply", "serialized", "cylinder", "shapegroup", "instance", "bsplinecurve", "linearcurve",
         "sdfgrid", "ellipsoids", "ellipsoidsmesh",
     ]),
-    ("bsdf", &["diffuse", "twosided", "mask", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "roughplastic"], &[
-        "plastic", "bumpmap", "normalmap", "blendbsdf", "null",
+    ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "roughplastic"], &[
+        "plastic", "bumpmap", "null",
         "polarizer", "retarder", "circular", "measured", "pplastic", "principled",
         "principledthin", "hair",
     ]),
@@ -763,13 +763,9 @@ impl<'e> Builder<'e> {
             "twosided" => BsdfKind::TwoSided {
                 inner: Box::new(self.twosided_inner(&v)?),
             },
-            "mask" => {
-                let opacity = v.float("opacity")?.unwrap_or(0.5);
-                if !(0.0..=1.0).contains(&opacity) {
-                    return Err(v.prop_error("opacity", format!("opacity must be in [0, 1], got {opacity}")));
-                }
-                BsdfKind::Mask { opacity, inner: Box::new(self.single_inner(&v, "mask")?) }
-            }
+            "mask" => self.mask(&v)?,
+            "normalmap" => self.normal_map(&v)?,
+            "blendbsdf" => self.blend(&v)?,
             // Project extensions with spectral re-emission (fluorescence.rs, phosphorescence.rs).
             "fluorescent" | "phosphorescent" => {
                 no_children(&v)?;
@@ -789,7 +785,9 @@ impl<'e> Builder<'e> {
         })
     }
 
-    /// The one nested BSDF of a wrapper such as `mask`.
+    /// The one nested BSDF of a wrapper (no user at the moment: `mask` and `normalmap` also take
+    /// textures).
+    #[allow(dead_code)]
     fn single_inner(&mut self, v: &ObjectView<'e>, what: &str) -> Result<BsdfDesc> {
         let mut inner = None;
         for child in &v.children {
@@ -803,6 +801,77 @@ impl<'e> Builder<'e> {
             inner = Some(self.bsdf_desc(target)?);
         }
         inner.ok_or_else(|| SceneError::at(&v.el.loc, format!("{what} needs one nested <bsdf> or <ref>")))
+    }
+
+    /// `mask`: `opacity` a float in [0, 1] (0.5) or `<texture type="bitmap" name="opacity">`
+    /// (opacity = the texel's value: Rec. 709 luminance of its linear RGB, as Mitsuba's `eval_1`,
+    /// clamped to [0, 1]), and one nested BSDF.
+    fn mask(&mut self, v: &ObjectView<'e>) -> Result<BsdfKind> {
+        let (mut inner, mut texture) = (None, None);
+        for child in &v.children {
+            let target = self.resolve(child)?;
+            match (target.tag.as_str(), target.attr("name")) {
+                ("bsdf", _) if inner.is_none() => inner = Some(self.bsdf_desc(target)?),
+                ("bsdf", _) => return Err(SceneError::at(&child.written().loc, "mask takes one nested <bsdf>")),
+                ("texture", Some("opacity")) if texture.is_none() => texture = Some(self.bitmap(target)?),
+                _ => return Err(misplaced(child, target, v, "one nested <bsdf> and at most one <texture name=\"opacity\">")),
+            }
+        }
+        let inner = Box::new(inner.ok_or_else(|| SceneError::at(&v.el.loc, "mask needs one nested <bsdf> or <ref>"))?);
+        if let Some(b) = texture {
+            if v.has("opacity") {
+                return Err(v.prop_error("opacity", "give either an opacity value or an opacity texture"));
+            }
+            let texture = Box::new(UvTexture { source: ImageSource::File(b.filename), srgb: !b.raw, nearest: b.filter == "nearest", transform: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0] });
+            return Ok(BsdfKind::OpacityTexture { texture, channel: TextureChannel::Luminance, factor: 1.0, cutoff: None, inner });
+        }
+        let opacity = v.float("opacity")?.unwrap_or(0.5);
+        if !(0.0..=1.0).contains(&opacity) {
+            return Err(v.prop_error("opacity", format!("opacity must be in [0, 1], got {opacity}")));
+        }
+        Ok(BsdfKind::Mask { opacity, inner })
+    }
+
+    /// `blendbsdf`: `weight` (a float in [0, 1], default 0.5; textured weights are not yet
+    /// supported) and exactly two nested BSDFs: `(1 - weight) first + weight second`.
+    fn blend(&mut self, v: &ObjectView<'e>) -> Result<BsdfKind> {
+        let mut inner = Vec::new();
+        for child in &v.children {
+            let target = self.resolve(child)?;
+            if target.tag != "bsdf" || inner.len() == 2 {
+                return Err(misplaced(child, target, v, "exactly two nested <bsdf> (a textured weight is not yet supported)"));
+            }
+            inner.push(self.bsdf_desc(target)?);
+        }
+        if inner.len() != 2 {
+            return Err(SceneError::at(&v.el.loc, format!("blendbsdf needs exactly two nested BSDFs, got {}", inner.len())));
+        }
+        let weight = v.float("weight")?.unwrap_or(0.5);
+        if !(0.0..=1.0).contains(&weight) {
+            return Err(v.prop_error("weight", format!("weight must be in [0, 1], got {weight}")));
+        }
+        let second = Box::new(inner.pop().expect("two"));
+        let first = Box::new(inner.pop().expect("two"));
+        Ok(BsdfKind::Blend { weight, weight_texture: None, first, second })
+    }
+
+    /// `normalmap`: one nested BSDF and `<texture type="bitmap" name="normalmap">` whose RGB
+    /// is (n + 1) / 2 in the local shading frame (x along dp/du). As Mitsuba's bitmap, 8-bit
+    /// images are sRGB-decoded unless `raw` is true (which normal maps want).
+    fn normal_map(&mut self, v: &ObjectView<'e>) -> Result<BsdfKind> {
+        let (mut inner, mut texture) = (None, None);
+        for child in &v.children {
+            let target = self.resolve(child)?;
+            match (target.tag.as_str(), target.attr("name")) {
+                ("bsdf", _) if inner.is_none() => inner = Some(self.bsdf_desc(target)?),
+                ("texture", Some("normalmap")) if texture.is_none() => texture = Some(self.bitmap(target)?),
+                _ => return Err(misplaced(child, target, v, "one nested <bsdf> and one <texture name=\"normalmap\">")),
+            }
+        }
+        let inner = inner.ok_or_else(|| SceneError::at(&v.el.loc, "normalmap needs one nested <bsdf> or <ref>"))?;
+        let b = texture.ok_or_else(|| SceneError::at(&v.el.loc, "normalmap needs <texture type=\"bitmap\" name=\"normalmap\">"))?;
+        let texture = Box::new(UvTexture { source: ImageSource::File(b.filename), srgb: !b.raw, nearest: b.filter == "nearest", transform: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0] });
+        Ok(BsdfKind::NormalMap { texture, scale: 1.0, gltf: false, inner: Box::new(inner) })
     }
 
     fn twosided_inner(&mut self, v: &ObjectView<'e>) -> Result<BsdfDesc> {

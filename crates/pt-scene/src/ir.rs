@@ -261,6 +261,10 @@ pub struct TriangleMesh {
     pub normals: Option<Vec<Vec3>>,
     /// Per-vertex texture coordinates.
     pub uvs: Option<Vec<Vec2>>,
+    /// Per-vertex tangents for normal maps (glTF `TANGENT`, or generated from the uvs): xyz the
+    /// direction of increasing u, world space; w = +1 or -1, the handedness: the bitangent is
+    /// `w (n x t)` (glTF's convention).
+    pub tangents: Option<Vec<glam::Vec4>>,
     /// Triangles as vertex index triples, counter-clockwise seen from the front side
     /// (the side the geometric normal `(p1-p0) x (p2-p0)` points to). `flip_normals` has already
     /// reversed the winding where asked.
@@ -414,7 +418,7 @@ impl SceneDesc {
         fn bsdf_spectra(k: &BsdfKind) -> Vec<&SpectrumDesc> {
             match k {
                 BsdfKind::Diffuse { reflectance } | BsdfKind::OrenNayar { reflectance, .. } | BsdfKind::Minnaert { reflectance, .. } => vec![reflectance],
-                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } => bsdf_spectra(&inner.kind),
+                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } | BsdfKind::OpacityTexture { inner, .. } => bsdf_spectra(&inner.kind),
                 BsdfKind::Conductor { eta, k, specular_reflectance } | BsdfKind::RoughConductor { eta, k, specular_reflectance, .. } => {
                     vec![eta, k, specular_reflectance]
                 }
@@ -423,20 +427,23 @@ impl SceneDesc {
                 BsdfKind::GltfPbr { base_color, .. } => vec![base_color],
                 BsdfKind::RoughPlastic { diffuse_reflectance, specular_reflectance, .. } => vec![diffuse_reflectance, specular_reflectance],
                 BsdfKind::Fluorescent { reflectance, absorption, emission, .. } => vec![reflectance, absorption, emission],
+                BsdfKind::Blend { first, second, .. } => bsdf_spectra(&first.kind).into_iter().chain(bsdf_spectra(&second.kind)).collect(),
                 BsdfKind::Phosphorescent { reflectance, .. } => vec![reflectance],
             }
         }
         fn has_thin_film(k: &BsdfKind) -> bool {
             match k {
                 BsdfKind::ThinFilm { .. } | BsdfKind::RoughThinFilm { .. } => true,
-                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } => has_thin_film(&inner.kind),
+                BsdfKind::Blend { first, second, .. } => has_thin_film(&first.kind) || has_thin_film(&second.kind),
+                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } | BsdfKind::OpacityTexture { inner, .. } => has_thin_film(&inner.kind),
                 _ => false,
             }
         }
         fn is_fluorescent(k: &BsdfKind) -> bool {
             match k {
                 BsdfKind::Fluorescent { .. } => true,
-                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } => is_fluorescent(&inner.kind),
+                BsdfKind::Blend { first, second, .. } => is_fluorescent(&first.kind) || is_fluorescent(&second.kind),
+                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } | BsdfKind::OpacityTexture { inner, .. } => is_fluorescent(&inner.kind),
                 _ => false,
             }
         }
@@ -510,6 +517,63 @@ pub enum BsdfKind {
         /// Opacity in [0, 1].
         opacity: f32,
         /// The wrapped BSDF.
+        inner: Box<BsdfDesc>,
+    },
+    /// Normal map (Mitsuba `normalmap`; glTF `normalTexture`): the inner BSDF is evaluated in
+    /// the shading frame perturbed by the texture's normal (pt-bsdf `normal_map`).
+    NormalMap {
+        /// The texture: RGB = (n + 1) / 2, linear data unless `srgb` (Mitsuba's bitmap without
+        /// `raw`).
+        texture: Box<UvTexture>,
+        /// glTF `normalTexture.scale`: multiplies the x and y of the decoded normal (1 for
+        /// Mitsuba).
+        scale: f32,
+        /// Whose tangent space: `true` for glTF (frame from the mesh's tangents, y along
+        /// `w (n x t)`), `false` for Mitsuba (x along dp/du, y = n x x).
+        gltf: bool,
+        /// The wrapped BSDF.
+        inner: Box<BsdfDesc>,
+    },
+    /// Mixture of two BSDFs (Mitsuba `blendbsdf`): `(1 - weight) first + weight second`
+    /// (pt-bsdf `blend`).
+    Blend {
+        /// Share of `second`, in [0, 1].
+        weight: f32,
+        /// A texture whose value (in the given channel) multiplies `weight` at the hit (glTF
+        /// `iridescenceTexture`: red).
+        weight_texture: Option<(Box<UvTexture>, TextureChannel)>,
+        /// The first nested BSDF.
+        first: Box<BsdfDesc>,
+        /// The second nested BSDF.
+        second: Box<BsdfDesc>,
+    },
+    /// Opacity mask whose opacity varies over the surface (Mitsuba `mask` with a bitmap
+    /// `opacity`; glTF alpha from the base colour texture): as [`BsdfKind::Mask`] with the
+    /// opacity of the hit's texel.
+    OpacityTexture {
+        /// The texture.
+        texture: Box<UvTexture>,
+        /// Which value of the texel is the opacity.
+        channel: TextureChannel,
+        /// Multiplies the texel's value (glTF `baseColorFactor` alpha; 1 for Mitsuba).
+        factor: f32,
+        /// glTF `alphaMode` MASK: opacity 1 where `factor x value >= cutoff`, else 0.
+        cutoff: Option<f32>,
+        /// The wrapped BSDF.
+        inner: Box<BsdfDesc>,
+    },
+    /// A thin film (`inner`: `ThinFilm` or `RoughThinFilm`, possibly inside `TwoSided`) whose
+    /// thickness varies over the surface (glTF `iridescenceThicknessTexture`): thickness =
+    /// `min_nm + (max_nm - min_nm) g` with g the texture's green channel (linear data) at the
+    /// hit's uv; the inner film's own thickness is not used.
+    FilmThicknessTexture {
+        /// The texture (green channel used).
+        texture: Box<UvTexture>,
+        /// Thickness where green is 0, nm.
+        min_nm: f32,
+        /// Thickness where green is 1, nm.
+        max_nm: f32,
+        /// The film.
         inner: Box<BsdfDesc>,
     },
     /// Oren-Nayar rough diffuse (project extension `orennayar`).
@@ -678,6 +742,18 @@ pub enum BsdfKind {
         /// Metallic-roughness texture (linear): blue multiplies `metallic`, green `roughness`.
         metallic_roughness_texture: Option<Box<UvTexture>>,
     },
+}
+
+/// Which value of a texel a scalar texture (opacity, blend weight) reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TextureChannel {
+    /// Rec. 709 luminance of the linear RGB (Mitsuba's `eval_1` of an RGB bitmap; the value
+    /// itself for a grey image).
+    Luminance,
+    /// The alpha channel, stored linearly (glTF: 1 where the image has no alpha).
+    Alpha,
+    /// The red channel (glTF `iridescenceTexture`).
+    Red,
 }
 
 /// Image data of a texture: a file, or bytes embedded in the scene file (a glTF buffer view or

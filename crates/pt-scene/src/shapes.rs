@@ -146,6 +146,7 @@ pub(crate) fn to_world(
         positions,
         normals,
         uvs: local.uvs,
+        tangents: None,
         indices,
     })
 }

@@ -307,7 +307,7 @@ fn unsupported_plugins_say_not_yet_implemented() {
         "<sensor type=\"orthographic\"/>",
         "<shape type=\"ply\"/>",
         "<integrator type=\"volpathmis\"/>",
-        "<shape type=\"cube\"><bsdf type=\"blendbsdf\"/></shape>",
+        "<shape type=\"cube\"><bsdf type=\"bumpmap\"/></shape>",
         "<shape type=\"cube\"><bsdf type=\"diffuse\"><texture type=\"bitmap\" name=\"reflectance\"/></bsdf></shape>",
         "<sensor type=\"perspective\"><film type=\"hdrfilm\"><rfilter type=\"mitchell\"/></film></sensor>",
     ];
@@ -1200,4 +1200,41 @@ fn emitter_bitmap_in_d65_and_display_primaries() {
     let e = load_in(area(&format!(r#"<texture type="d65" name="radiance"><rgb name="color" value="1, 1, 1"/>{bitmap}</texture>"#))).unwrap_err();
     assert!(e.message.contains("unused property 'color'"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `normalmap`, textured `mask` and `blendbsdf` read into the IR; their mistakes are located.
+#[test]
+fn normalmap_mask_texture_and_blend() {
+    let dir = temp_dir("surftex");
+    std::fs::write(dir.join("n.png"), b"not read by the loader").unwrap();
+    let xml = |body: &str| format!("<scene version=\"3.0.0\">\n{body}\n</scene>\n");
+    let load_in = |x: &str| load_str(x, &dir.join("test.xml"), &dir, &[]);
+    let tex = |name: &str| format!("<texture type=\"bitmap\" name=\"{name}\"><string name=\"filename\" value=\"n.png\"/><boolean name=\"raw\" value=\"true\"/></texture>");
+    let d = load_in(&xml(&format!("<shape type=\"cube\"><bsdf type=\"normalmap\">{}<bsdf type=\"diffuse\"/></bsdf></shape>", tex("normalmap")))).unwrap();
+    match &d.bsdfs[0].kind {
+        BsdfKind::NormalMap { texture, scale, gltf, inner } => {
+            assert!(!texture.srgb && *scale == 1.0 && !gltf && matches!(inner.kind, BsdfKind::Diffuse { .. }));
+        }
+        k => panic!("{k:?}"),
+    }
+    let d = load_in(&xml(&format!("<shape type=\"cube\"><bsdf type=\"mask\">{}<bsdf type=\"diffuse\"/></bsdf></shape>", tex("opacity")))).unwrap();
+    assert!(matches!(&d.bsdfs[0].kind, BsdfKind::OpacityTexture { channel: TextureChannel::Luminance, factor, cutoff: None, .. } if *factor == 1.0));
+    let d = load_in(&xml("<shape type=\"cube\"><bsdf type=\"blendbsdf\"><float name=\"weight\" value=\"0.3\"/><bsdf type=\"diffuse\"/><bsdf type=\"conductor\"/></bsdf></shape>")).unwrap();
+    match &d.bsdfs[0].kind {
+        BsdfKind::Blend { weight, first, second, .. } => {
+            assert!(*weight == 0.3 && matches!(first.kind, BsdfKind::Diffuse { .. }) && matches!(second.kind, BsdfKind::Conductor { .. }));
+        }
+        k => panic!("{k:?}"),
+    }
+    for (body, text) in [
+        ("<shape type=\"cube\"><bsdf type=\"normalmap\"><bsdf type=\"diffuse\"/></bsdf></shape>".to_string(), "normalmap needs <texture"),
+        (format!("<shape type=\"cube\"><bsdf type=\"normalmap\">{}</bsdf></shape>", tex("normalmap")), "normalmap needs one nested"),
+        (format!("<shape type=\"cube\"><bsdf type=\"mask\"><float name=\"opacity\" value=\"0.5\"/>{}<bsdf type=\"diffuse\"/></bsdf></shape>", tex("opacity")), "either an opacity value or an opacity texture"),
+        ("<shape type=\"cube\"><bsdf type=\"blendbsdf\"><bsdf type=\"diffuse\"/></bsdf></shape>".to_string(), "exactly two nested BSDFs, got 1"),
+        ("<shape type=\"cube\"><bsdf type=\"blendbsdf\"><float name=\"weight\" value=\"1.5\"/><bsdf type=\"diffuse\"/><bsdf type=\"diffuse\"/></bsdf></shape>".to_string(), "weight must be in [0, 1]"),
+    ] {
+        let e = load_in(&xml(&body)).unwrap_err();
+        assert!(e.message.contains(text), "{body}: {e}");
+        assert_eq!(e.loc.as_ref().unwrap().line, 2, "{body}: {e}");
+    }
 }
