@@ -4,12 +4,19 @@
 //! binary BVH2 built by PLOC. CWBVH is the default; `benches/traversal.rs` compares them.
 
 use crate::geometry::Primitive;
+use obvhs::aabb::Aabb;
 use obvhs::bvh2::builder::build_bvh2;
+use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::bvh2::Bvh2;
+use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
 use obvhs::cwbvh::builder::build_cwbvh;
+use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray as BvhRay, RayHit};
-use obvhs::BvhBuildParams;
+use obvhs::ploc::PlocBuilder;
+use obvhs::{Boundable, BvhBuildParams};
+// The `traverse!` macro of obvhs names `UVec2` unqualified.
+use glam::UVec2;
 use pt_math::{Ray, Vec3A};
 use std::time::Duration;
 
@@ -25,9 +32,29 @@ pub enum BvhKind {
 
 enum Tree {
     Cw(CwBvh),
+    /// Large scenes: several CWBVHs over spatially separate groups of primitives (see
+    /// [`Accel::build_compact`]).
+    CwChunks(Vec<Chunk>),
     Two(Bvh2),
     Empty,
 }
+
+/// One CWBVH of a chunked tree: its primitives are `prims[base..]`, in its traversal order.
+struct Chunk {
+    bvh: CwBvh,
+    base: usize,
+    bounds: Aabb,
+}
+
+/// Largest number of primitives built as one CWBVH by [`Accel::build_compact`]: above it, the
+/// primitives are split into 2, 4 or 8 spatial groups built one after the other, because
+/// obvhs's CWBVH conversion holds 208 bytes per primitive of temporaries (binary nodes and cost
+/// table). 2^18 keeps those under 60 MB per group; traversal then tests each group's box first.
+const CHUNK_PRIMS: usize = 1 << 18;
+
+/// Most groups a chunked tree has (a fixed array orders them per ray); larger scenes make larger
+/// groups.
+const MAX_CHUNKS: usize = 8;
 
 /// A BVH over primitives stored in traversal order.
 pub struct Accel {
@@ -65,15 +92,75 @@ impl Accel {
         Accel { tree, prims, original_index: order }
     }
 
+    /// [`Accel::build`] with a lower memory peak, for large meshes: the primitives are dropped
+    /// while the tree is built and made again afterwards, in traversal order, by `remake(i)`,
+    /// which must return the primitive that was `prims[i]`. The tree and the resulting `prims`
+    /// and `original_index` are the same as [`Accel::build`]'s.
+    ///
+    /// Memory (1M triangles): the builder reads 24-byte boxes instead of the 64-byte primitives,
+    /// and frees them once the binary tree is built, before the CWBVH conversion, whose
+    /// temporaries (112 MB of cost table next to the 96 MB binary tree) are the peak. This is
+    /// obvhs's `build_cwbvh` (PLOC, reinsertion, conversion with the same parameters) written
+    /// out so that the boxes can be freed in between.
+    pub fn build_compact(prims: Vec<Primitive>, kind: BvhKind, remake: impl Fn(usize) -> Primitive) -> Self {
+        Self::build_compact_chunked(prims, kind, remake, CHUNK_PRIMS)
+    }
+
+    /// [`Accel::build_compact`] with CWBVH groups of at most `chunk_prims` primitives (as long
+    /// as that makes at most [`MAX_CHUNKS`] groups).
+    fn build_compact_chunked(prims: Vec<Primitive>, kind: BvhKind, remake: impl Fn(usize) -> Primitive, chunk_prims: usize) -> Self {
+        if prims.is_empty() {
+            return Accel { tree: Tree::Empty, prims, original_index: Vec::new() };
+        }
+        let mut boxes: Vec<BuildBox> = Vec::with_capacity(prims.len());
+        boxes.extend(prims.iter().map(|p| BuildBox::from(p.aabb())));
+        drop(prims);
+        let params = BvhBuildParams::medium_build();
+        let (tree, order) = match kind {
+            BvhKind::CwBvh if boxes.len() <= chunk_prims => {
+                let bvh = build_cw_low_memory(boxes, &params);
+                let order = bvh.primitive_indices.clone();
+                (Tree::Cw(bvh), order)
+            }
+            BvhKind::CwBvh => {
+                let parts = boxes.len().div_ceil(chunk_prims).next_power_of_two().min(MAX_CHUNKS);
+                let mut ids: Vec<u32> = (0..boxes.len() as u32).collect();
+                split_median(&mut ids, &boxes, parts);
+                let mut order = Vec::with_capacity(ids.len());
+                let mut chunks = Vec::with_capacity(parts);
+                let size = ids.len().div_ceil(parts);
+                for group in ids.chunks(size) {
+                    let group_boxes: Vec<BuildBox> = group.iter().map(|&i| boxes[i as usize]).collect();
+                    let bvh = build_cw_low_memory(group_boxes, &params);
+                    let base = order.len();
+                    order.extend(bvh.primitive_indices.iter().map(|&k| group[k as usize]));
+                    chunks.push(Chunk { bounds: bvh.total_aabb, bvh, base });
+                }
+                drop(boxes);
+                (Tree::CwChunks(chunks), order)
+            }
+            BvhKind::Bvh2 => {
+                let bvh = build_bvh2(&boxes, params, &mut Duration::default());
+                drop(boxes);
+                let order = bvh.primitive_indices.clone();
+                (Tree::Two(bvh), order)
+            }
+        };
+        let mut prims = Vec::with_capacity(order.len());
+        prims.extend(order.iter().map(|&i| remake(i as usize)));
+        Accel { tree, prims, original_index: order }
+    }
+
     /// Closest hit along the ray: `(index into prims, t)`.
-    #[inline]
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray) -> Option<(usize, f32)> {
         let r = BvhRay::new(Vec3A::from(ray.origin), Vec3A::from(ray.dir), ray.tmin, ray.tmax);
         let mut hit = RayHit::none();
         let prims = &self.prims;
         let f = |r: &BvhRay, id: usize| prims[id].intersect(r.origin, r.direction, r.tmin, r.tmax);
         let found = match &self.tree {
-            Tree::Cw(b) => b.ray_traverse(r, &mut hit, f),
+            Tree::Cw(b) => cw_closest(b, r, &mut hit, f),
+            Tree::CwChunks(chunks) => chunks_closest(chunks, prims, r, &mut hit),
             Tree::Two(b) => b.ray_traverse(r, &mut hit, f),
             Tree::Empty => false,
         };
@@ -82,17 +169,211 @@ impl Accel {
 
     /// Whether anything blocks the ray within `(tmin, tmax)` (any-hit traversal, stops at the
     /// first blocker).
-    #[inline]
+    #[inline(always)]
     pub fn occluded(&self, ray: &Ray) -> bool {
         let r = BvhRay::new(Vec3A::from(ray.origin), Vec3A::from(ray.dir), ray.tmin, ray.tmax);
         let prims = &self.prims;
         let f = |r: &BvhRay, id: usize| prims[id].intersect(r.origin, r.direction, r.tmin, r.tmax);
         match &self.tree {
-            Tree::Cw(b) => !b.ray_traverse_miss(r, f),
+            Tree::Cw(b) => cw_any(b, r, f),
+            Tree::CwChunks(chunks) => chunks.iter().any(|c| {
+                c.bounds.intersect_ray(&r) < r.tmax
+                    && cw_any(&c.bvh, r, |r: &BvhRay, id: usize| prims[c.base + id].intersect(r.origin, r.direction, r.tmin, r.tmax))
+            }),
             Tree::Two(b) => !b.ray_traverse_miss(r, f),
             Tree::Empty => false,
         }
     }
+}
+
+/// CWBVH closest-hit traversal: obvhs's `CwBvh::ray_traverse` written out with its `traverse!`
+/// macro (same visiting order, same result) with this module's node test, [`intersect_node`].
+/// `hit` receives the closest primitive in `(ray.tmin, ray.tmax)`; returns whether there is one.
+#[inline(always)]
+fn cw_closest(bvh: &CwBvh, ray: BvhRay, hit: &mut RayHit, mut f: impl FnMut(&BvhRay, usize) -> f32) -> bool {
+    let mut traverse_ray = ray;
+    let mut state = bvh.new_traversal(ray.direction);
+    let mut node;
+    obvhs::traverse!(bvh, node, state, intersect_node(node, &traverse_ray, state.oct_inv4), {
+        let t = f(&traverse_ray, state.primitive_id as usize);
+        if t < traverse_ray.tmax {
+            hit.primitive_id = state.primitive_id;
+            hit.t = t;
+            traverse_ray.tmax = t;
+        }
+    });
+    hit.t < ray.tmax
+}
+
+/// CWBVH any-hit traversal: whether some primitive is hit in `(ray.tmin, ray.tmax)`; stops at
+/// the first one found (obvhs's `CwBvh::ray_traverse_miss`, negated, with [`intersect_node`]).
+#[inline(always)]
+fn cw_any(bvh: &CwBvh, ray: BvhRay, mut f: impl FnMut(&BvhRay, usize) -> f32) -> bool {
+    let mut state = bvh.new_traversal(ray.direction);
+    let mut node;
+    let mut hit = false;
+    'outer: {
+        obvhs::traverse!(bvh, node, state, intersect_node(node, &ray, state.oct_inv4), {
+            if f(&ray, state.primitive_id as usize) < ray.tmax {
+                hit = true;
+                break 'outer;
+            }
+        });
+    }
+    hit
+}
+
+/// obvhs's `build_cwbvh` (PLOC, reinsertion, conversion, with `params`) written out so that the
+/// boxes are freed once the binary tree is built, before the conversion allocates its cost table.
+fn build_cw_low_memory(boxes: Vec<BuildBox>, params: &BvhBuildParams) -> CwBvh {
+    let n = boxes.len() as u32;
+    let mut bvh2 = PlocBuilder::with_capacity(boxes.len()).build(
+        params.ploc_search_distance,
+        &boxes,
+        (0..n).collect(),
+        params.sort_precision,
+        params.search_depth_threshold,
+    );
+    drop(boxes);
+    ReinsertionOptimizer::default().run(&mut bvh2, params.reinsertion_batch_ratio, None);
+    let mut bvh = bvh2_to_cwbvh(&bvh2, params.max_prims_per_leaf.clamp(1, 3), true, false);
+    // The converter reserves one node per primitive (80 bytes each); about a tenth are used.
+    bvh.nodes.shrink_to_fit();
+    bvh
+}
+
+/// Reorders `ids` into `parts` (a power of two) consecutive groups of equal size (the last may
+/// be smaller) that are spatially separate: recursive median splits of the box centres along
+/// the axis of their largest extent.
+fn split_median(ids: &mut [u32], boxes: &[BuildBox], parts: usize) {
+    if parts <= 1 || ids.len() < 2 {
+        return;
+    }
+    let centre = |i: u32| {
+        let b = &boxes[i as usize];
+        (b.min + b.max) * 0.5
+    };
+    let (lo, hi) = ids.iter().fold((pt_math::Vec3::INFINITY, pt_math::Vec3::NEG_INFINITY), |(lo, hi), &i| (lo.min(centre(i)), hi.max(centre(i))));
+    let ext = hi - lo;
+    let axis = if ext.x >= ext.y && ext.x >= ext.z { 0 } else if ext.y >= ext.z { 1 } else { 2 };
+    // Equal groups at every level: the left half gets ceil(len / parts) * parts / 2 items.
+    let size = ids.len().div_ceil(parts);
+    let mid = (size * parts / 2).min(ids.len());
+    if mid == 0 || mid >= ids.len() {
+        return;
+    }
+    // Ties broken by index, so the split does not depend on the input order.
+    ids.select_nth_unstable_by(mid, |&a, &b| centre(a)[axis].total_cmp(&centre(b)[axis]).then(a.cmp(&b)));
+    let (left, right) = ids.split_at_mut(mid);
+    split_median(left, boxes, parts / 2);
+    split_median(right, boxes, parts / 2);
+}
+
+/// Closest hit over the groups of a chunked tree: the groups whose box the ray enters, nearest
+/// entry first, each traversed with the closest hit so far as its `tmax`. `hit` receives the
+/// index into `prims` and the distance.
+#[inline]
+fn chunks_closest(chunks: &[Chunk], prims: &[Primitive], ray: BvhRay, hit: &mut RayHit) -> bool {
+    let mut entries = [(f32::INFINITY, 0usize); MAX_CHUNKS];
+    let mut n = 0;
+    for (k, c) in chunks.iter().enumerate() {
+        let t = c.bounds.intersect_ray(&ray);
+        if t < ray.tmax {
+            // Insertion sort by entry distance (at most MAX_CHUNKS entries).
+            let mut j = n;
+            while j > 0 && entries[j - 1].0 > t {
+                entries[j] = entries[j - 1];
+                j -= 1;
+            }
+            entries[j] = (t, k);
+            n += 1;
+        }
+    }
+    let mut best = ray.tmax;
+    for &(t, k) in &entries[..n] {
+        if t >= best {
+            break;
+        }
+        let c = &chunks[k];
+        let mut r = ray;
+        r.tmax = best;
+        let mut h = RayHit::none();
+        if cw_closest(&c.bvh, r, &mut h, |r: &BvhRay, id: usize| prims[c.base + id].intersect(r.origin, r.direction, r.tmin, r.tmax)) {
+            best = h.t;
+            hit.t = h.t;
+            hit.primitive_id = (c.base + h.primitive_id as usize) as u32;
+        }
+    }
+    best < ray.tmax
+}
+
+/// A primitive's bounds as the BVH builder reads them: 24 bytes (obvhs's `Aabb` has 32, a
+/// `Primitive` 64).
+#[derive(Clone, Copy)]
+struct BuildBox {
+    min: pt_math::Vec3,
+    max: pt_math::Vec3,
+}
+
+impl From<Aabb> for BuildBox {
+    fn from(b: Aabb) -> Self {
+        BuildBox { min: b.min.into(), max: b.max.into() }
+    }
+}
+
+impl Boundable for BuildBox {
+    #[inline]
+    fn aabb(&self) -> Aabb {
+        Aabb::new(self.min.into(), self.max.into())
+    }
+}
+
+/// Lower bound of the distances at which obvhs's node test accepts a child box (its `EPSILON`,
+/// which it uses in place of `ray.tmin`); kept so that the same children are visited.
+const NODE_TMIN: f32 = 0.0001;
+
+/// Which of a CWBVH node's eight children the ray enters within `(NODE_TMIN, ray.tmax)`, as the
+/// hit mask the `traverse!` macro expects: child node bits (in traversal order for the ray's
+/// octant) in the top byte, leaf primitive bits in the low 24.
+///
+/// The same slab test as obvhs's `CwBvhNode::intersect_ray_simd` (Ylitie et al. 2017: child
+/// planes are bytes on the node's grid, `t = q * (extent / d) + (p - o) / d`, a separate
+/// multiply and add as there), with the same results, but written over arrays of eight so that
+/// the compiler vectorises it: obvhs converts the 48 plane bytes to floats one at a time
+/// (`_mm_set_ps` of scalars); here they are widened four at a time (SSE2).
+#[inline(always)]
+fn intersect_node(node: &CwBvhNode, ray: &BvhRay, oct_inv4: u32) -> u32 {
+    let scale = node.compute_extent() * ray.inv_direction;
+    let offset = (Vec3A::from(node.p) - ray.origin) * ray.inv_direction;
+    // For a negative direction component the ray enters through the child's max plane.
+    let pick = |neg: bool, min: &[u8; 8], max: &[u8; 8]| if neg { (*max, *min) } else { (*min, *max) };
+    let (near_x, far_x) = pick(ray.direction.x < 0.0, &node.child_min_x, &node.child_max_x);
+    let (near_y, far_y) = pick(ray.direction.y < 0.0, &node.child_min_y, &node.child_max_y);
+    let (near_z, far_z) = pick(ray.direction.z < 0.0, &node.child_min_z, &node.child_max_z);
+    // `if a > b` forms compile to maxps/minps; no NaN can occur (finite planes and scales).
+    let max = |a: f32, b: f32| if a > b { a } else { b };
+    let min = |a: f32, b: f32| if a < b { a } else { b };
+    let mut hits = 0u32;
+    for i in 0..8 {
+        let t0x = near_x[i] as f32 * scale.x + offset.x;
+        let t1x = far_x[i] as f32 * scale.x + offset.x;
+        let t0y = near_y[i] as f32 * scale.y + offset.y;
+        let t1y = far_y[i] as f32 * scale.y + offset.y;
+        let t0z = near_z[i] as f32 * scale.z + offset.z;
+        let t1z = far_z[i] as f32 * scale.z + offset.z;
+        let t0 = max(max(t0x, max(t0y, t0z)), NODE_TMIN);
+        let t1 = min(min(t1x, min(t1y, t1z)), ray.tmax);
+        hits |= u32::from(t0 <= t1) << i;
+    }
+    let (child_bits8, bit_index8) = node.get_child_and_index_bits(oct_inv4);
+    let mut mask = 0u32;
+    while hits != 0 {
+        let i = hits.trailing_zeros();
+        hits &= hits - 1;
+        let byte = |x: u64| ((x >> (8 * i)) & 0xff) as u32;
+        mask |= byte(child_bits8) << byte(bit_index8);
+    }
+    mask
 }
 
 /// Reorders `v` so that `v[k]` becomes the old `v[order[k]]` (`order` a permutation), in place
@@ -148,10 +429,62 @@ mod tests {
     }
 
     #[test]
+    fn compact_build_gives_the_same_accel() {
+        // The low-memory build must make exactly the tree and order of `build` (same builder
+        // steps and parameters), so images do not change.
+        let prims = grid(12);
+        for kind in [BvhKind::CwBvh, BvhKind::Bvh2] {
+            let a = Accel::build(prims.clone(), kind);
+            let b = Accel::build_compact(prims.clone(), kind, |i| prims[i]);
+            assert_eq!(a.original_index, b.original_index, "{kind:?}");
+            match (&a.tree, &b.tree) {
+                (Tree::Cw(x), Tree::Cw(y)) => assert!(x == y),
+                (Tree::Two(x), Tree::Two(y)) => assert_eq!(format!("{:?}", x.nodes), format!("{:?}", y.nodes)),
+                _ => panic!("{kind:?}: different tree kinds"),
+            }
+            for (p, q) in a.prims.iter().zip(&b.prims) {
+                assert_eq!(format!("{p:?}"), format!("{q:?}"));
+            }
+        }
+    }
+
+    #[test]
+    fn median_split_makes_equal_separate_groups() {
+        // 1000 boxes along x in shuffled order, 4 groups: each group must hold 250 consecutive
+        // positions (so the groups do not overlap).
+        let mut xs: Vec<u32> = (0..1000).collect();
+        xs.sort_by_key(|&i| (i * 7919) % 1000);
+        let boxes: Vec<BuildBox> = xs.iter().map(|&x| BuildBox { min: Vec3::new(x as f32, 0.0, 0.0), max: Vec3::new(x as f32 + 0.5, 1.0, 1.0) }).collect();
+        let mut ids: Vec<u32> = (0..1000).collect();
+        split_median(&mut ids, &boxes, 4);
+        for (g, group) in ids.chunks(250).enumerate() {
+            let mut pos: Vec<u32> = group.iter().map(|&i| xs[i as usize]).collect();
+            pos.sort();
+            assert_eq!(pos, ((250 * g as u32)..(250 * (g as u32 + 1))).collect::<Vec<_>>(), "group {g}");
+        }
+    }
+
+    #[test]
     fn matches_brute_force() {
         let prims = grid(8);
-        for kind in [BvhKind::CwBvh, BvhKind::Bvh2] {
-            let accel = Accel::build(prims.clone(), kind);
+        // The last three: CWBVH in 2 and 4 groups (129 primitives, at most 80 and 40 per group),
+        // as large scenes are built.
+        let builds = [
+            (BvhKind::CwBvh, usize::MAX),
+            (BvhKind::Bvh2, usize::MAX),
+            (BvhKind::CwBvh, 80),
+            (BvhKind::CwBvh, 40),
+            (BvhKind::CwBvh, 16),
+        ];
+        for (kind, chunk) in builds {
+            let accel = if chunk == usize::MAX {
+                Accel::build(prims.clone(), kind)
+            } else {
+                let accel = Accel::build_compact_chunked(prims.clone(), kind, |i| prims[i], chunk);
+                let Tree::CwChunks(c) = &accel.tree else { panic!("{chunk}: not chunked") };
+                assert_eq!(c.len(), prims.len().div_ceil(chunk).next_power_of_two().min(MAX_CHUNKS));
+                accel
+            };
             assert_eq!(accel.prims.len(), prims.len());
             let mut s = 12345u64;
             let mut rnd = || {
@@ -173,9 +506,12 @@ mod tests {
                     (None, None) => {}
                     (Some((_, tb)), Some((i, t))) => {
                         assert_eq!(t, tb);
-                        let _ = accel.original_index[i];
+                        // The returned index is where the hit primitive is stored.
+                        let orig = accel.original_index[i] as usize;
+                        assert_eq!(format!("{:?}", accel.prims[i]), format!("{:?}", prims[orig]));
+                        assert_eq!(prims[orig].intersect(o.into(), d.into(), 0.0, f32::INFINITY), t);
                     }
-                    other => panic!("{kind:?}: {other:?}"),
+                    other => panic!("{kind:?} {chunk}: {other:?}"),
                 }
                 assert_eq!(accel.occluded(&ray), brute.is_some());
             }

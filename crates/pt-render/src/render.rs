@@ -182,14 +182,8 @@ pub fn render_passes(scene: &Scene, settings: &RenderSettings, state: &mut Rende
             .map(|&(tx, ty)| {
                 let (x0, y0) = (tx * TILE, ty * TILE);
                 let (x1, y1) = ((x0 + TILE).min(w), (y0 + TILE).min(h));
-                let mut out = Vec::with_capacity(((x1 - x0) * (y1 - y0)) as usize);
-                for y in y0..y1 {
-                    for x in x0..x1 {
-                        let mut stats = state.pixels[(y * w + x) as usize];
-                        render_pixel_samples(scene, settings, x, y, s0..s1, &mut stats);
-                        out.push(stats);
-                    }
-                }
+                let tile = Tile { x0, y0, x1, y1, samples: s0..s1 };
+                let out = render_tile(scene, settings, &state.pixels, &tile);
                 progress(out.len() as u64 * u64::from(s1 - s0));
                 out
             })
@@ -225,14 +219,38 @@ pub fn clamp_sample(rgb: [f32; 3], max: f32) -> [f32; 3] {
     }
 }
 
+/// Pixels `x0..x1` by `y0..y1` of the image and the samples to add to them.
+struct Tile {
+    x0: u32,
+    y0: u32,
+    x1: u32,
+    y1: u32,
+    samples: std::ops::Range<u32>,
+}
+
+/// Renders one tile: the pixels' stats continued from `pixels` (the whole image), row by row.
+fn render_tile(scene: &Scene, settings: &RenderSettings, pixels: &[PixelStats], tile: &Tile) -> Vec<PixelStats> {
+    // RGB mode draws no wavelength sample (its lanes are R, G, B), so its random sequence is the
+    // same as before the spectral mode existed; these wavelengths are only carried along.
+    let rgb_lambda = SampledWavelengths::sample_visible(0.5);
+    let mut out = Vec::with_capacity(((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize);
+    for y in tile.y0..tile.y1 {
+        for x in tile.x0..tile.x1 {
+            let mut stats = pixels[(y * settings.width + x) as usize];
+            render_pixel_samples(scene, settings, x, y, tile.samples.clone(), &rgb_lambda, &mut stats);
+            out.push(stats);
+        }
+    }
+    out
+}
+
 /// Adds samples `samples` of pixel (x, y) to `stats`, in order.
-fn render_pixel_samples(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, samples: std::ops::Range<u32>, stats: &mut PixelStats) {
+#[inline]
+fn render_pixel_samples(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, samples: std::ops::Range<u32>, rgb_lambda: &SampledWavelengths, stats: &mut PixelStats) {
     let pixel = y as u64 * settings.width as u64 + x as u64;
     let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-    // RGB mode draws no wavelength sample, so its random sequence is the same as before the
-    // spectral mode existed.
     let spectral = scene.mode == ColorMode::Spectral;
-    let rgb_lambda = SampledWavelengths::sample_visible(0.5);
+    let rgb_lambda = *rgb_lambda;
     for s in samples {
         let mut sampler = Sampler::new(settings.seed, pixel, s as u64);
         let lambda = if spectral { SampledWavelengths::sample_visible(sampler.next_1d()) } else { rgb_lambda };

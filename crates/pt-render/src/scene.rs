@@ -368,17 +368,10 @@ impl Scene {
             let light_shape = match &shape.geometry {
                 Geometry::Mesh(mesh) => {
                     let tris = add_mesh(mesh, si as u32, shape.emitter.is_some(), &mut prims, &mut refs, &mut stats, &shape.loc)?;
-                    data.normals = mesh.normals.clone();
-                    data.uvs = mesh.uvs.clone();
-                    data.tangents = mesh.tangents.clone();
                     if let Some(ts) = &mesh.tangents {
                         if ts.len() != mesh.positions.len() {
                             return Err(BuildError { loc: shape.loc.clone(), message: format!("mesh has {} tangents for {} vertices", ts.len(), mesh.positions.len()) });
                         }
-                    }
-                    // Indices serve only to interpolate normals, uvs and tangents: without them, no copy.
-                    if data.normals.is_some() || data.uvs.is_some() || data.tangents.is_some() {
-                        data.indices = mesh.indices.clone();
                     }
                     tris.map(|(tris, areas)| (LightShape::Mesh { distr: Distribution1D::new(&areas).expect("non-empty"), tris }, areas.iter().sum::<f32>()))
                 }
@@ -429,8 +422,22 @@ impl Scene {
         }
 
         let bounds = bounding_sphere(&prims);
-        let accel = Accel::build(prims, bvh);
+        // The primitives are made again from the description after the BVH build (less memory).
+        let accel = Accel::build_compact(prims, bvh, |i| primitive_of(desc, refs[i]));
         let prim_refs = accel.original_index.iter().map(|&i| refs[i as usize]).collect();
+        // Vertex data for shading, copied after the BVH build (whose temporaries are the memory
+        // peak) rather than before.
+        for (data, shape) in shapes.iter_mut().zip(&desc.shapes) {
+            if let Geometry::Mesh(mesh) = &shape.geometry {
+                data.normals = mesh.normals.clone();
+                data.uvs = mesh.uvs.clone();
+                data.tangents = mesh.tangents.clone();
+                // Indices serve only to interpolate normals, uvs and tangents: without them, no copy.
+                if data.normals.is_some() || data.uvs.is_some() || data.tangents.is_some() {
+                    data.indices = mesh.indices.clone();
+                }
+            }
+        }
         for l in &desc.lights {
             let mut light = build_light(l, &mut emission)?;
             if let (true, Light::EnvMap(e)) = (spectral, &mut light) {
@@ -968,7 +975,7 @@ fn add_mesh(
             stats.degenerate_triangles += 1;
             continue;
         }
-        prims.push(Primitive::Triangle { v0: Vec3A::from(p[0]), e1: Vec3A::from(p[1] - p[0]), e2: Vec3A::from(p[2] - p[0]) });
+        prims.push(triangle_primitive(p));
         refs.push(PrimRef { shape, local: k as u32 });
         stats.triangles += 1;
         if !emissive {
@@ -987,6 +994,19 @@ fn add_mesh(
         areas.push(area);
     }
     Ok((!tris.is_empty()).then_some((tris, areas)))
+}
+
+/// The BVH primitive of a triangle with vertices `p`.
+fn triangle_primitive(p: [Vec3; 3]) -> Primitive {
+    Primitive::Triangle { v0: Vec3A::from(p[0]), e1: Vec3A::from(p[1] - p[0]), e2: Vec3A::from(p[2] - p[0]) }
+}
+
+/// The BVH primitive `r` refers to, made from the description as the shape loop made it.
+fn primitive_of(desc: &SceneDesc, r: PrimRef) -> Primitive {
+    match &desc.shapes[r.shape as usize].geometry {
+        Geometry::Mesh(m) => triangle_primitive(m.indices[r.local as usize].map(|i| m.positions[i as usize])),
+        &Geometry::Sphere { center, radius, flip_normals } => Primitive::Sphere { center: center.into(), radius, flip: flip_normals },
+    }
 }
 
 /// Bounding sphere (centre, radius) of all primitives; a unit sphere at the origin if empty.
