@@ -98,12 +98,6 @@ impl Bitmap {
         std::array::from_fn(|k| (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + d[k] * fx) * fy)
     }
 
-    /// The same image with `f` applied to every texel (linear values).
-    pub fn map_texels(mut self, f: impl Fn([f32; 3]) -> [f32; 3]) -> Bitmap {
-        self.texels.iter_mut().for_each(|t| *t = f(*t));
-        self
-    }
-
     /// Mean luminance (Rec. 709 Y) of the texels, for light selection.
     pub fn mean_luminance(&self) -> f32 {
         let sum: f64 = self.texels.iter().map(|t| (0.212_671 * t[0] + 0.715_160 * t[1] + 0.072_169 * t[2]) as f64).sum();
@@ -129,9 +123,9 @@ impl Bitmap {
         self.nearest
     }
 
-    /// The same image with every texel replaced by `f(texel)`.
+    /// The same image with every texel (linear values) replaced by `f(texel)`.
     pub fn map_texels(&self, f: impl Fn([f32; 3]) -> [f32; 3]) -> Bitmap {
-        Bitmap { texels: self.texels.iter().map(|&t| f(t)).collect(), ..self.clone() }
+        Bitmap { width: self.width, height: self.height, texels: self.texels.iter().map(|&t| f(t)).collect(), nearest: self.nearest }
     }
 }
 
