@@ -543,3 +543,57 @@ fn alpha_blend_is_opacity() {
         assert!(ma[c] < 0.9, "the opaque plane must differ from the environment: {}", ma[c]);
     }
 }
+
+/// emissiveTexture (scenes/gltf/textures-flat.gltf's 1 x 2 image, nearest: sRGB (20, 60, 240)
+/// for v < 1/2, (200, 100, 50) below) times emissiveFactor (1, 0.5, 2) x
+/// KHR_materials_emissive_strength 3. The plane is the only light and cannot see itself, so
+/// every pixel that sees its front is exactly factor x strength x decoded texel (float rounding:
+/// 1e-4 relative). Checked on the top rows (the first texel) and the bottom rows (the second):
+/// a texture ignored is off by the texel (2-50x), sRGB not decoded by 2-10x, a factor or
+/// strength ignored by 2-3x. In spectral mode (factor x texel in RGB, as glTF defines it, then
+/// upsampled per texel) the means of the top and bottom rows must agree with RGB mode within 3%
+/// of their largest channel (the top texel, (0.021, 0.067, 5.2), is a saturated blue whose small
+/// channels are differences of large XYZ terms: both the round trip of its sigmoid fit and the
+/// hero-wavelength noise scale with the largest channel). Multiplying the factor's and the
+/// texel's spectra instead gives a red mean of 0.29 there (off by 5% of the blue); the texture
+/// ignored is off by more than 50%.
+#[test]
+fn emissive_texture_multiplies_factor() {
+    let dir = scratch("gltf_emissive_texture");
+    let mut d: serde_json::Value = serde_json::from_slice(&std::fs::read(asset("textures-flat.gltf")).unwrap()).unwrap();
+    let factor = [1.0f64, 0.5, 2.0];
+    let strength = 3.0;
+    d["materials"][0]["emissiveTexture"] = serde_json::json!({"index": 0});
+    d["materials"][0]["emissiveFactor"] = serde_json::json!(factor);
+    d["materials"][0]["extensions"] = serde_json::json!({"KHR_materials_emissive_strength": {"emissiveStrength": strength}});
+    let used = d["extensionsUsed"].as_array().cloned().unwrap_or_default();
+    let mut used: Vec<serde_json::Value> = used.into_iter().filter(|e| e != "KHR_materials_emissive_strength").collect();
+    used.push("KHR_materials_emissive_strength".into());
+    d["extensionsUsed"] = serde_json::Value::Array(used);
+    let p = write_json(&dir, "emissive-texture.gltf", &d);
+    let args = ["--width", "16", "--height", "16", "--spp", "4", "--max-depth", "3"];
+    let (img, _) = render(&p, &dir, "rgb", &args);
+    let srgb = |c: f64| if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) };
+    let want = |texel: [f64; 3]| -> [f64; 3] { std::array::from_fn(|k| factor[k] * strength * srgb(texel[k] / 255.0)) };
+    for (rows, texel) in [(0..7, [20.0, 60.0, 240.0]), (9..16, [200.0, 100.0, 50.0])] {
+        let w = want(texel);
+        for y in rows {
+            for x in 0..16 {
+                let px = img.get(x, y);
+                for k in 0..3 {
+                    assert!((px[k] as f64 - w[k]).abs() <= 1e-4 * w[k], "pixel ({x}, {y}) channel {k}: {} vs factor x strength x texel {}", px[k], w[k]);
+                }
+            }
+        }
+    }
+    let args_spectral = ["--width", "16", "--height", "16", "--spp", "16", "--max-depth", "3", "--mode", "spectral"];
+    let (spec, _) = render(&p, &dir, "spectral", &args_spectral);
+    for (rows, texel) in [(0..7, [20.0, 60.0, 240.0]), (9..16, [200.0, 100.0, 50.0])] {
+        let w = want(texel);
+        for k in 0..3 {
+            let mean: f64 = rows.clone().flat_map(|y| (0..16).map(move |x| (x, y))).map(|(x, y)| spec.get(x, y)[k] as f64).sum::<f64>() / (7.0 * 16.0);
+            let scale = w.iter().cloned().fold(0.0, f64::max);
+            assert!((mean - w[k]).abs() < 0.03 * scale, "spectral rows {rows:?} channel {k}: {mean} vs {} (largest channel {scale})", w[k]);
+        }
+    }
+}

@@ -653,7 +653,7 @@ fn cmd_info(args: InfoArgs) -> Result<ExitCode> {
             s.plugin,
             geo,
             bsdf.id.as_deref().unwrap_or("-"),
-            s.emitter.as_ref().map(|e| format!("emits {:?}", e.radiance)).unwrap_or_default()
+            s.emitter.as_ref().map(|e| format!("emits {:?}{}", e.radiance, if e.texture.is_some() || e.uv_texture.is_some() { " x texture" } else { "" })).unwrap_or_default()
                 + &s.interior.as_ref().map(|m| format!(" interior medium sigma_t {:?}", m.sigma_t)).unwrap_or_default(),
             s.id.as_deref().map(|id| format!(" id={id}")).unwrap_or_default(),
         );

@@ -66,7 +66,12 @@
 //! diffuse base, so the blend has (1 - f) of it: exact at f = 0 and f = 1. With both partial,
 //! the iridescence factor is treated as 1 (nested blends are not supported).
 //!
-//! **Not yet** (warned about, never silently): emissive, occlusion and transmission textures,
+//! `emissiveTexture` (sRGB) multiplies emissiveFactor x strength per texel on the area light
+//! (in spectral mode upsampled per texel, and the factor's spectrum times the texel's: exact
+//! when either is grey); with KHR_texture_transform it is an error (not yet implemented).
+//! `occlusionTexture` is ignored with a warning: a path tracer computes occlusion itself.
+//!
+//! **Not yet** (warned about, never silently): transmission textures,
 //! texture coordinate sets other than 0,
 //! clamped/mirrored wrapping, orthographic cameras, non-triangle primitives, sparse accessors,
 //! skins and morph targets.
@@ -243,6 +248,7 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
     let default_mat = MappedMaterial {
         bsdf: BsdfDesc { loc: cx.loc("default material".into()), id: Some("gltf-default".into()), kind: BsdfKind::GltfPbr { base_color: SpectrumDesc::Constant(1.0), metallic: 1.0, roughness: 1.0, ior: 1.5, base_color_texture: None, metallic_roughness_texture: None } },
         emission: None,
+        emissive_texture: None,
         interior: None,
     };
 
@@ -315,7 +321,7 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
                     id: mesh.name().map(str::to_string),
                     geometry: Geometry::Mesh(tri),
                     bsdf,
-                    emitter: mm.emission.clone().map(|radiance| AreaEmitterDesc { loc: loc.clone(), radiance, texture: None, primaries: None }),
+                    emitter: mm.emission.clone().map(|radiance| AreaEmitterDesc { loc: loc.clone(), radiance, texture: None, primaries: None, uv_texture: mm.emissive_texture.clone() }),
                     interior: mm.interior.clone(),
                 });
             }
@@ -654,6 +660,8 @@ fn map_light(cx: &mut Ctx, light: &gltf::khr_lights_punctual::Light, world: Mat4
 struct MappedMaterial {
     bsdf: BsdfDesc,
     emission: Option<SpectrumDesc>,
+    /// `emissiveTexture` (sRGB), multiplying `emission`.
+    emissive_texture: Option<Box<UvTexture>>,
     interior: Option<MediumDesc>,
 }
 
@@ -779,13 +787,22 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
         let ext = if t.transform != [1.0, 0.0, 0.0, 0.0, 1.0, 0.0] { format!(", KHR_texture_transform {:?}", t.transform) } else { String::new() };
         notes.push(format!("normalTexture: linear {}, scale {scale}, tangent space from TANGENT (or generated from the uvs){ext}", if t.nearest { "nearest" } else { "bilinear" }));
     }
-    for (slot, present) in [
-        ("emissiveTexture", m.emissive_texture().is_some()),
-        ("occlusionTexture", m.occlusion_texture().is_some()),
-    ] {
-        if present {
-            cx.warnings.push(format!("{elem}{name}: {slot} ignored (not yet implemented)"));
+    // Emissive texture: sRGB colour data multiplying emissiveFactor x strength. The area light
+    // looks its image up at the hit's uv without KHR_texture_transform, so a transformed one is
+    // refused rather than shown in the wrong place.
+    let emissive_texture = match m.emissive_texture() {
+        Some(i) => texture_of(cx, &i, true, buffers, &format!("{elem}{name} emissiveTexture"))?,
+        None => None,
+    };
+    if let Some(t) = &emissive_texture {
+        if t.transform != [1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+            return Err(cx.err(format!("{elem}{name}: KHR_texture_transform on emissiveTexture is not yet supported (not yet implemented)")));
         }
+        notes.push(format!("emissiveTexture: sRGB-decoded {}, times the emissive factor", if t.nearest { "nearest" } else { "bilinear" }));
+    }
+    if m.occlusion_texture().is_some() {
+        // Ambient occlusion is a rasteriser's stand-in for what the path tracer computes.
+        cx.warnings.push(format!("{elem}{name}: occlusionTexture ignored (a path tracer computes occlusion)"));
     }
     // Alpha as opacity (the renderer's `mask`: light meets the surface with probability
     // `opacity`, else passes straight through): BLEND uses the factor's alpha, MASK makes it 0
@@ -987,7 +1004,8 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
     for nt in &notes {
         cx.summary.push(format!("      note: {nt}"));
     }
-    Ok(MappedMaterial { bsdf: BsdfDesc { loc, id: Some(m.name().map_or(format!("material{idx}"), str::to_string)), kind }, emission, interior })
+    let emissive_texture = emission.as_ref().and(emissive_texture);
+    Ok(MappedMaterial { bsdf: BsdfDesc { loc, id: Some(m.name().map_or(format!("material{idx}"), str::to_string)), kind }, emission, emissive_texture, interior })
 }
 
 #[cfg(test)]

@@ -123,7 +123,7 @@ pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, 
                     (l, (scale * e.eval(l) as f64 / l as f64) as f32)
                 })
                 .collect();
-            Some(AreaEmitterDesc { loc: shape.loc.clone(), radiance: SpectrumDesc::Tabulated(Arc::new(pairs)), texture: None, primaries: None })
+            Some(AreaEmitterDesc { loc: shape.loc.clone(), radiance: SpectrumDesc::Tabulated(Arc::new(pairs)), texture: None, primaries: None, uv_texture: None })
         };
         let mut sampler_index = 0u64;
         let mut next = || {

@@ -394,16 +394,27 @@ impl Scene {
                 media.push((rgb, spectral.then(|| to_spectrum(&m.sigma_t, Role::Unbounded))));
             }
             if let Some(em) = &shape.emitter {
-                let radiance = emission(&em.radiance);
+                // glTF emissiveTexture: glTF defines emission as factor x texel in RGB, so the
+                // factor is multiplied into the texels and the light keeps a white factor; in
+                // spectral mode each product texel is then upsampled (a product of the factor's
+                // and the texel's spectra would leave the gamut for saturated colours).
+                let white = SpectrumDesc::Rgb([1.0; 3]);
+                let radiance = emission(if em.uv_texture.is_some() { &white } else { &em.radiance });
                 if !radiance.is_finite() || radiance.0.min_element() < 0.0 {
                     return Err(BuildError { loc: em.loc.clone(), message: "radiance must be finite and non-negative".into() });
                 }
-                let texture = match &em.texture {
-                    None => None,
-                    Some(_) if matches!(shape.geometry, Geometry::Sphere { .. }) => {
-                        return Err(BuildError { loc: em.loc.clone(), message: "textured emitters on spheres are not yet supported (not yet implemented); use a mesh".into() });
+                if (em.texture.is_some() || em.uv_texture.is_some()) && matches!(shape.geometry, Geometry::Sphere { .. }) {
+                    return Err(BuildError { loc: em.loc.clone(), message: "textured emitters on spheres are not yet supported (not yet implemented); use a mesh".into() });
+                }
+                let texture = match (&em.texture, &em.uv_texture) {
+                    (Some(t), _) => Some(std::sync::Arc::new(crate::texture::Bitmap::load(t).map_err(|m| BuildError { loc: t.loc.clone(), message: m })?)),
+                    // glTF emissiveTexture: the image times `radiance` (the emissive factor).
+                    (None, Some(t)) => {
+                        let f = rgb_of(&em.radiance);
+                        let image = crate::texture::Bitmap::from_source(&t.source, t.srgb, t.nearest).map_err(|m| BuildError { loc: em.loc.clone(), message: m })?;
+                        Some(std::sync::Arc::new(image.map_texels(|c| [c[0] * f[0], c[1] * f[1], c[2] * f[2]])))
                     }
-                    Some(t) => Some(std::sync::Arc::new(crate::texture::Bitmap::load(t).map_err(|m| BuildError { loc: t.loc.clone(), message: m })?)),
+                    (None, None) => None,
                 };
                 // Spectral mode: the image's spectral form (per-texel upsampling, times the D65 of
                 // the light's emission spectrum; or display primaries, whose light spectrum is 1).

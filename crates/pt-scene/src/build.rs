@@ -379,7 +379,7 @@ impl<'e> Builder<'e> {
             }
         };
         v.finish()?;
-        Ok(AreaEmitterDesc { loc: el.loc.clone(), radiance, texture, primaries })
+        Ok(AreaEmitterDesc { loc: el.loc.clone(), radiance, texture, primaries, uv_texture: None })
     }
 
     /// `<texture type="d65">` around one `<texture type="bitmap">` (see [`Builder::area_emitter`]).

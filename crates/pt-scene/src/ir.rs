@@ -293,13 +293,18 @@ pub enum Geometry {
 pub struct AreaEmitterDesc {
     /// Where it was defined.
     pub loc: SourceLoc,
-    /// Emitted radiance, W sr^-1 m^-2 (linear RGB); with `texture`, ignored.
+    /// Emitted radiance, W sr^-1 m^-2 (linear RGB); with `texture`, ignored; with
+    /// `uv_texture`, a factor multiplying the image.
     pub radiance: SpectrumDesc,
     /// Radiance from an image over the shape's texture coordinates (a screen, a monitor).
     pub texture: Option<BitmapDesc>,
     /// pt extension: spectra of the display's red, green and blue primaries, which the
     /// texture's linear RGB drive in spectral mode (see the loader's `area_emitter`).
     pub primaries: Option<Box<[SpectrumDesc; 3]>>,
+    /// Radiance image looked up at the hit's texture coordinates and multiplied by `radiance`
+    /// (glTF `emissiveTexture`, sRGB-decoded; its `transform` must be the identity). Exclusive
+    /// with `texture`.
+    pub uv_texture: Option<Box<UvTexture>>,
 }
 
 /// A `<texture type="bitmap">`: an image looked up by texture coordinates.
@@ -758,7 +763,7 @@ pub enum TextureChannel {
 
 /// Image data of a texture: a file, or bytes embedded in the scene file (a glTF buffer view or
 /// `data:` URI).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, PartialEq)]
 pub enum ImageSource {
     /// An image file (PNG or JPEG), resolved.
     File(PathBuf),
@@ -769,6 +774,16 @@ pub enum ImageSource {
         /// The encoded image.
         bytes: std::sync::Arc<Vec<u8>>,
     },
+}
+
+/// Names the image instead of listing its bytes (`pt info` prints materials with `{:?}`).
+impl std::fmt::Debug for ImageSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ImageSource::File(p) => write!(f, "File({p:?})"),
+            ImageSource::Embedded { name, bytes } => write!(f, "Embedded({name}, {} bytes)", bytes.len()),
+        }
+    }
 }
 
 /// A texture looked up at the hit's texture coordinates (glTF `textureInfo`): the image is
