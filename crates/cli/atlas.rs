@@ -698,16 +698,7 @@ pub fn run(args: AtlasArgs) -> Result<ExitCode> {
     if args.spp == Some(0) {
         bail!("--spp must be at least 1");
     }
-    let pool = {
-        let mut b = rayon::ThreadPoolBuilder::new();
-        if let Some(t) = args.threads {
-            if t == 0 {
-                bail!("--threads must be at least 1");
-            }
-            b = b.num_threads(t);
-        }
-        b.build().context("cannot start worker threads")?
-    };
+    let pool = crate::thread_pool(args.threads)?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create the folder '{}'", args.out.display()))?;
     let o = Opts { equal: args.equal, spp: 64, references: args.references.clone(), shrink: 1, fallback_spp: 4096 };
     let mut md = String::from(

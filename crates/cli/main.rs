@@ -366,16 +366,7 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
     let output = args.output.clone().unwrap_or_else(|| default_output(args.scene.as_deref()));
     check_output_path(&output)?;
 
-    let pool = {
-        let mut b = rayon::ThreadPoolBuilder::new();
-        if let Some(t) = args.threads {
-            if t == 0 {
-                bail!("--threads must be at least 1");
-            }
-            b = b.num_threads(t);
-        }
-        b.build().context("cannot start worker threads")?
-    };
+    let pool = thread_pool(args.threads)?;
 
     let radiosity = match args.integrator {
         Some(i) => i == IntegratorArg::Radiosity,
@@ -605,6 +596,19 @@ fn variance_path(output: &Path) -> PathBuf {
 }
 
 /// Fails early (before rendering) when the output cannot be written.
+/// The worker threads of a command: `--threads T` (at least 1), or rayon's default (one per
+/// core).
+pub(crate) fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+    let mut b = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = threads {
+        if t == 0 {
+            bail!("--threads must be at least 1");
+        }
+        b = b.num_threads(t);
+    }
+    b.build().context("cannot start worker threads")
+}
+
 fn check_output_path(output: &Path) -> Result<()> {
     if output.extension().and_then(|e| e.to_str()).map(|e| e.eq_ignore_ascii_case("exr")) != Some(true) {
         bail!("output '{}' must end in .exr", output.display());

@@ -456,16 +456,7 @@ pub fn run(args: StabilityArgs) -> Result<ExitCode> {
     if args.samples < 100 {
         bail!("--samples must be at least 100, got {}", args.samples);
     }
-    let pool = {
-        let mut b = rayon::ThreadPoolBuilder::new();
-        if let Some(t) = args.threads {
-            if t == 0 {
-                bail!("--threads must be at least 1");
-            }
-            b = b.num_threads(t);
-        }
-        b.build().context("cannot start worker threads")?
-    };
+    let pool = crate::thread_pool(args.threads)?;
     std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create the folder '{}'", args.out.display()))?;
     let start = std::time::Instant::now();
     let cases = cases();
