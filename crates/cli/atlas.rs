@@ -607,26 +607,17 @@ pub(crate) fn study_report(s: &Study) -> String {
 
 /// Heat maps (one panel per method) of the errors, value written in each cell; SVG and PNG.
 pub(crate) fn study_charts(s: &Study) -> Result<(String, Vec<u8>)> {
-    use image::ImageEncoder as _;
-    crate::converge::register_font()?;
     let size: (u32, u32) = (1200, 110 + 80 * s.rows.len() as u32);
-    let mut svg = String::new();
+    Ok((crate::converge::chart_svg(s, size, "the atlas")?, crate::converge::chart_png(s, size, "the atlas")?))
+}
+
+impl crate::converge::Chart for Study {
+    fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> std::result::Result<(), String>
+    where
+        DB::ErrorType: 'static,
     {
-        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
-        draw(&root, s).map_err(|e| anyhow!("cannot draw the atlas: {e}"))?;
-        root.present().map_err(|e| anyhow!("cannot draw the atlas: {e:?}"))?;
+        draw(root, self).map_err(|e| e.to_string())
     }
-    let mut rgb = vec![255u8; (size.0 * size.1 * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
-        draw(&root, s).map_err(|e| anyhow!("cannot draw the atlas: {e}"))?;
-        root.present().map_err(|e| anyhow!("cannot draw the atlas: {e:?}"))?;
-    }
-    let mut png = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut png)
-        .write_image(&rgb, size.0, size.1, image::ExtendedColorType::Rgb8)
-        .map_err(|e| anyhow!("cannot encode the PNG: {e}"))?;
-    Ok((svg, png))
 }
 
 /// The cell whose centre is at `v` (labels sit at cell centres k + 0.5, none elsewhere).

@@ -608,31 +608,66 @@ pub(crate) fn register_font() -> Result<()> {
     }
 }
 
-fn write_svg(path: &Path, title: &str, all: &[Series]) -> Result<()> {
+/// A chart that draws itself on any plotters backend (SVG text or an RGB bitmap).
+pub(crate) trait Chart {
+    /// Draws the whole chart on `root`; the error is a message.
+    fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String>
+    where
+        DB::ErrorType: 'static;
+}
+
+/// `chart` drawn at `size` pixels as SVG text; `what` names it in errors.
+pub(crate) fn chart_svg(chart: &impl Chart, size: (u32, u32), what: &str) -> Result<String> {
     register_font()?;
     let mut text = String::new();
     {
-        let root = SVGBackend::with_string(&mut text, CHART_SIZE).into_drawing_area();
-        draw_chart(&root, title, all).map_err(|e| anyhow!("cannot draw '{}': {e}", path.display()))?;
-        root.present().map_err(|e| anyhow!("cannot draw '{}': {e:?}", path.display()))?;
+        let root = SVGBackend::with_string(&mut text, size).into_drawing_area();
+        chart.draw_on(&root).map_err(|e| anyhow!("cannot draw {what}: {e}"))?;
+        root.present().map_err(|e| anyhow!("cannot draw {what}: {e:?}"))?;
     }
-    write_atomic(path, text.as_bytes())
+    Ok(text)
 }
 
-fn write_png(path: &Path, title: &str, all: &[Series]) -> Result<()> {
+/// `chart` drawn at `size` pixels as PNG bytes (8-bit RGB); `what` names it in errors.
+pub(crate) fn chart_png(chart: &impl Chart, size: (u32, u32), what: &str) -> Result<Vec<u8>> {
     use image::ImageEncoder as _;
     register_font()?;
-    let (w, h) = CHART_SIZE;
+    let (w, h) = size;
     let mut rgb = vec![255u8; (w * h * 3) as usize];
     {
-        let root = BitMapBackend::with_buffer(&mut rgb, CHART_SIZE).into_drawing_area();
-        draw_chart(&root, title, all).map_err(|e| anyhow!("cannot draw '{}': {e}", path.display()))?;
-        root.present().map_err(|e| anyhow!("cannot draw '{}': {e:?}", path.display()))?;
+        let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
+        chart.draw_on(&root).map_err(|e| anyhow!("cannot draw {what}: {e}"))?;
+        root.present().map_err(|e| anyhow!("cannot draw {what}: {e:?}"))?;
     }
     let mut bytes = Vec::new();
     image::codecs::png::PngEncoder::new(&mut bytes)
         .write_image(&rgb, w, h, image::ExtendedColorType::Rgb8)
-        .map_err(|e| anyhow!("cannot encode '{}': {e}", path.display()))?;
+        .map_err(|e| anyhow!("cannot encode {what} as PNG: {e}"))?;
+    Ok(bytes)
+}
+
+/// The error-against-time chart of `pt converge`.
+struct ConvergeChart<'a> {
+    title: &'a str,
+    all: &'a [Series],
+}
+
+impl Chart for ConvergeChart<'_> {
+    fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        draw_chart(root, self.title, self.all)
+    }
+}
+
+fn write_svg(path: &Path, title: &str, all: &[Series]) -> Result<()> {
+    let text = chart_svg(&ConvergeChart { title, all }, CHART_SIZE, &format!("'{}'", path.display()))?;
+    write_atomic(path, text.as_bytes())
+}
+
+fn write_png(path: &Path, title: &str, all: &[Series]) -> Result<()> {
+    let bytes = chart_png(&ConvergeChart { title, all }, CHART_SIZE, &format!("'{}'", path.display()))?;
     write_atomic(path, &bytes)
 }
 

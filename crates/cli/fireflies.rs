@@ -9,7 +9,7 @@
 //! which rare paths happened to be drawn). The firefly count ([`pt_image::fireflies`]) of each
 //! image shows what the clamp buys.
 
-use anyhow::{anyhow, Result};
+use anyhow::Result;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use pt_image::fireflies::{count_fireflies, luminance, FireflyParams};
@@ -141,26 +141,17 @@ pub(crate) fn clamp_report(s: &ClampStudy) -> String {
 
 /// Chart: bias (%) and firefly count against the clamp value (log scale), SVG and PNG.
 pub(crate) fn clamp_charts(s: &ClampStudy) -> Result<(String, Vec<u8>)> {
-    use image::ImageEncoder as _;
-    crate::converge::register_font()?;
     const SIZE: (u32, u32) = (1000, 420);
-    let mut svg = String::new();
+    Ok((crate::converge::chart_svg(s, SIZE, "the clamp chart")?, crate::converge::chart_png(s, SIZE, "the clamp chart")?))
+}
+
+impl crate::converge::Chart for ClampStudy {
+    fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> std::result::Result<(), String>
+    where
+        DB::ErrorType: 'static,
     {
-        let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
-        draw(&root, s).map_err(|e| anyhow!("cannot draw the clamp chart: {e}"))?;
-        root.present().map_err(|e| anyhow!("cannot draw the clamp chart: {e:?}"))?;
+        draw(root, self).map_err(|e| e.to_string())
     }
-    let mut rgb = vec![255u8; (SIZE.0 * SIZE.1 * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area();
-        draw(&root, s).map_err(|e| anyhow!("cannot draw the clamp chart: {e}"))?;
-        root.present().map_err(|e| anyhow!("cannot draw the clamp chart: {e:?}"))?;
-    }
-    let mut png = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut png)
-        .write_image(&rgb, SIZE.0, SIZE.1, image::ExtendedColorType::Rgb8)
-        .map_err(|e| anyhow!("cannot encode the PNG: {e}"))?;
-    Ok((svg, png))
 }
 
 fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &ClampStudy) -> std::result::Result<(), Box<dyn std::error::Error>>

@@ -573,34 +573,23 @@ fn csv_text(d: &Data) -> String {
 const SIZE: (u32, u32) = (1800, 1100);
 const FONT: &str = "sans-serif";
 
-use crate::converge::{register_font, write_atomic};
+use crate::converge::write_atomic;
+
+impl crate::converge::Chart for Data {
+    fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> std::result::Result<(), String>
+    where
+        DB::ErrorType: 'static,
+    {
+        draw(root, self).map_err(|e| e.to_string())
+    }
+}
 
 fn render_svg(d: &Data) -> Result<String> {
-    register_font()?;
-    let mut text = String::new();
-    {
-        let root = SVGBackend::with_string(&mut text, SIZE).into_drawing_area();
-        draw(&root, d).map_err(|e| anyhow!("cannot draw the figure: {e}"))?;
-        root.present().map_err(|e| anyhow!("cannot draw the figure: {e:?}"))?;
-    }
-    Ok(text)
+    crate::converge::chart_svg(d, SIZE, "the figure")
 }
 
 fn render_png(d: &Data) -> Result<Vec<u8>> {
-    use image::ImageEncoder as _;
-    register_font()?;
-    let (w, h) = SIZE;
-    let mut rgb = vec![255u8; (w * h * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area();
-        draw(&root, d).map_err(|e| anyhow!("cannot draw the figure: {e}"))?;
-        root.present().map_err(|e| anyhow!("cannot draw the figure: {e:?}"))?;
-    }
-    let mut bytes = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut bytes)
-        .write_image(&rgb, w, h, image::ExtendedColorType::Rgb8)
-        .map_err(|e| anyhow!("cannot encode the PNG: {e}"))?;
-    Ok(bytes)
+    crate::converge::chart_png(d, SIZE, "the figure")
 }
 
 /// Tableau 10 colours.

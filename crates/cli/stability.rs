@@ -32,8 +32,8 @@
 //! `report.md`, `albedo.svg`/`.png` and `clamp.svg`/`.png`. The method failure atlas is
 //! `pt atlas` (`atlas.rs`).
 
-use crate::converge::{register_font, write_atomic};
-use anyhow::{anyhow, bail, Context, Result};
+use crate::converge::write_atomic;
+use anyhow::{bail, Context, Result};
 use clap::Args;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -718,26 +718,24 @@ fn report_text(cases: &[Case], rows: &[Row], args: &StabilityArgs, secs: f64, cl
 /// One panel per family: worst albedo per parameter value (x: the parameter's values in grid
 /// order, as labels), one colour per incident angle.
 fn albedo_charts(cases: &[Case], rows: &[Row]) -> Result<(String, Vec<u8>)> {
-    use image::ImageEncoder as _;
-    register_font()?;
     const SIZE: (u32, u32) = (1800, 1500);
-    let mut svg = String::new();
+    let chart = AlbedoChart { cases, rows };
+    Ok((crate::converge::chart_svg(&chart, SIZE, "the albedo chart")?, crate::converge::chart_png(&chart, SIZE, "the albedo chart")?))
+}
+
+/// The albedo sweep's chart: the cases and their result rows.
+struct AlbedoChart<'a> {
+    cases: &'a [Case],
+    rows: &'a [Row],
+}
+
+impl crate::converge::Chart for AlbedoChart<'_> {
+    fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> std::result::Result<(), String>
+    where
+        DB::ErrorType: 'static,
     {
-        let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
-        draw_albedo(&root, cases, rows).map_err(|e| anyhow!("cannot draw the albedo chart: {e}"))?;
-        root.present().map_err(|e| anyhow!("cannot draw the albedo chart: {e:?}"))?;
+        draw_albedo(root, self.cases, self.rows).map_err(|e| e.to_string())
     }
-    let mut rgb = vec![255u8; (SIZE.0 * SIZE.1 * 3) as usize];
-    {
-        let root = BitMapBackend::with_buffer(&mut rgb, SIZE).into_drawing_area();
-        draw_albedo(&root, cases, rows).map_err(|e| anyhow!("cannot draw the albedo chart: {e}"))?;
-        root.present().map_err(|e| anyhow!("cannot draw the albedo chart: {e:?}"))?;
-    }
-    let mut png = Vec::new();
-    image::codecs::png::PngEncoder::new(&mut png)
-        .write_image(&rgb, SIZE.0, SIZE.1, image::ExtendedColorType::Rgb8)
-        .map_err(|e| anyhow!("cannot encode the PNG: {e}"))?;
-    Ok((svg, png))
 }
 
 /// Tableau 10 colours, one per incident angle.
