@@ -113,7 +113,7 @@ pub enum Bsdf {
 
 impl Bsdf {
     /// f(wo, wi) without the cosine, local frame.
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
         match self {
             Bsdf::Lambert(m) => m.eval(wo, wi),
@@ -132,7 +132,7 @@ impl Bsdf {
     }
 
     /// Solid-angle pdf of sampling `wi` given `wo`, local frame.
-    #[inline]
+    #[inline(always)]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         match self {
             Bsdf::Lambert(m) => m.pdf(wo, wi),
@@ -151,7 +151,7 @@ impl Bsdf {
     }
 
     /// Samples `wi` given `wo` from `u` in [0,1)^2 (and `u_lobe` in [0,1) for lobe choice).
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         match self {
             Bsdf::Lambert(m) => m.sample(wo, u),
@@ -170,7 +170,7 @@ impl Bsdf {
     }
 
     /// Whether the model transmits light (handles `wo` below the surface itself).
-    #[inline]
+    #[inline(always)]
     pub fn is_transmissive(&self) -> bool {
         match self {
             Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_) => true,
@@ -181,7 +181,7 @@ impl Bsdf {
     }
 
     /// Whether the model has a non-delta component, so that light sampling can help.
-    #[inline]
+    #[inline(always)]
     pub fn has_smooth_lobe(&self) -> bool {
         match self {
             Bsdf::Lambert(_)
@@ -225,7 +225,7 @@ impl SurfaceBsdf {
 
     /// Flips directions to the front side when two-sided and seen from the back (never for
     /// transmissive models, whose back side is their inside).
-    #[inline]
+    #[inline(always)]
     fn side(&self, bsdf: &Bsdf, wo: Vec3) -> f32 {
         if self.two_sided && wo.z < 0.0 && !bsdf.is_transmissive() {
             -1.0
@@ -235,7 +235,7 @@ impl SurfaceBsdf {
     }
 
     /// One model's f(wo, wi) with sides and normal map applied, without the opacity.
-    #[inline]
+    #[inline(always)]
     fn eval_of(&self, bsdf: &Bsdf, wo: Vec3, wi: Vec3) -> SampledSpectrum {
         let s = self.side(bsdf, wo);
         let (wo, wi) = (flip_z(wo, s), flip_z(wi, s));
@@ -249,7 +249,7 @@ impl SurfaceBsdf {
     }
 
     /// One model's pdf with sides and normal map applied, without the opacity.
-    #[inline]
+    #[inline(always)]
     fn pdf_of(&self, bsdf: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
         let s = self.side(bsdf, wo);
         let (wo, wi) = (flip_z(wo, s), flip_z(wi, s));
@@ -260,7 +260,7 @@ impl SurfaceBsdf {
     }
 
     /// One model's sample with sides and normal map applied.
-    #[inline]
+    #[inline(always)]
     fn sample_of(&self, bsdf: &Bsdf, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         let s = self.side(bsdf, wo);
         let mut bs = match self.normal {
@@ -273,7 +273,7 @@ impl SurfaceBsdf {
 
     /// f(wo, wi) without the cosine, local frame. With a normal map: the model's value in the
     /// perturbed frame times |cos_perturbed(wi)| G(wi) / |cos(wi)| (see [`normal_map`]).
-    #[inline]
+    #[inline(always)]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
         match &self.blend {
             None => self.eval_of(&self.bsdf, wo, wi) * self.opacity,
@@ -282,7 +282,7 @@ impl SurfaceBsdf {
     }
 
     /// Solid-angle pdf of `wi`, local frame.
-    #[inline]
+    #[inline(always)]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         match &self.blend {
             None => self.pdf_of(&self.bsdf, wo, wi) * self.opacity,
@@ -291,7 +291,7 @@ impl SurfaceBsdf {
     }
 
     /// Samples `wi`, local frame.
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         let u_lobe = match mask::choose(self.opacity, wo, u_lobe) {
             Ok(u_lobe) => u_lobe,
@@ -311,13 +311,13 @@ impl SurfaceBsdf {
     }
 
     /// Whether light sampling can help (a non-delta lobe exists).
-    #[inline]
+    #[inline(always)]
     pub fn has_smooth_lobe(&self) -> bool {
         self.bsdf.has_smooth_lobe() || self.blend.is_some_and(|(_, b)| b.has_smooth_lobe())
     }
 }
 
-#[inline]
+#[inline(always)]
 fn flip_z(v: Vec3, s: f32) -> Vec3 {
     Vec3::new(v.x, v.y, v.z * s)
 }

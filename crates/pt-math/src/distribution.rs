@@ -58,7 +58,7 @@ impl Distribution1D {
     /// Samples an item from `u` in [0, 1). Returns the index, its probability, and `u` rescaled
     /// to [0, 1) within the chosen item's interval (so the same number can be reused).
     /// Items with probability 0 are never returned.
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, u: f32) -> (usize, f32, f32) {
         // First index i with cdf[i+1] > u.
         let n = self.pmf.len();

@@ -10,7 +10,7 @@ use pt_scene::FilterDesc;
 use crate::sampler::Sampler;
 
 /// Samples a film offset (pixels, relative to the pixel centre) distributed as the filter.
-#[inline]
+#[inline(always)]
 pub fn sample_filter(filter: &FilterDesc, sampler: &mut Sampler) -> Vec2 {
     match *filter {
         FilterDesc::Box { radius } => (sampler.next_2d() * 2.0 - Vec2::ONE) * radius,

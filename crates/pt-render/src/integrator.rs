@@ -54,6 +54,10 @@ const SHADOW_RAY_SHORTEN: f32 = 1.0 - 1e-5;
 
 /// Radiance arriving along `ray` (the camera ray), estimated with one path, at the path's
 /// wavelengths `lambda` (spectral mode; ignored in RGB mode, whose lanes are R, G, B).
+///
+/// Always inlined, so that the render loop's x86-64-v3 variant compiles it with those
+/// instructions (see `render::render_tile`).
+#[inline(always)]
 pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, lambda: &SampledWavelengths) -> SampledSpectrum {
     let max_depth = if s.max_depth < 0 { u32::MAX } else { s.max_depth as u32 };
     // Lanes may change wavelength at fluorescent vertices; the caller's film keeps the originals.
@@ -178,7 +182,7 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, 
 
 /// Whether nothing blocks the segment from the hit to the light sample. Both ends are offset off
 /// their surfaces (a light without a surface normal, or a distant one, needs no offset there).
-#[inline]
+#[inline(always)]
 fn visible(scene: &Scene, hit: &Interaction, ls: &LightSample) -> bool {
     let origin = offset_ray_origin(hit.p, hit.ng * hit.ng.dot(ls.wi).signum());
     if ls.dist.is_infinite() {

@@ -99,7 +99,7 @@ impl AreaLight {
 
     /// The emitted radiance at texture coordinates `uv` (front side), before the one-sided test,
     /// at the path's wavelengths `lambda` (used only by spectral textures).
-    #[inline]
+    #[inline(always)]
     fn radiance_at(&self, uv: Vec2, lambda: &SampledWavelengths) -> SampledSpectrum {
         if let Some(s) = &self.spectral {
             return self.radiance * s.eval(uv, lambda);
@@ -113,6 +113,7 @@ impl AreaLight {
     /// Samples a point uniformly by area and converts to solid angle as seen from `x`.
     /// Returns `None` when the pdf is not finite (the point coincides with `x` or is seen
     /// exactly edge-on). `lambda`: the path's wavelengths (spectral textures).
+    #[inline(always)]
     pub fn sample(&self, x: Vec3, u_sel: f32, u: Vec2, lambda: &SampledWavelengths) -> Option<LightSample> {
         if let LightShape::Sphere { center, radius, flip } = &self.shape {
             if let Some(cone) = SphereCone::new(*center, *radius, x) {
@@ -490,6 +491,7 @@ impl Light {
 
     /// Samples a direction towards the light from `x`; `lambda` are the path's wavelengths
     /// (spectral textures and environment maps).
+    #[inline(always)]
     pub fn sample(&self, x: Vec3, u_sel: f32, u: Vec2, lambda: &SampledWavelengths) -> Option<LightSample> {
         match self {
             Light::Area(a) => a.sample(x, u_sel, u, lambda),

