@@ -205,3 +205,22 @@ fn primaries_outside_which_d65_lies_are_a_clear_error() {
     assert!(stderr.contains("primaries.xml") && stderr.contains("emitter type=\"area\"") && stderr.contains("outside the primaries' gamut"), "{stderr}");
     assert!(!out.exists(), "no partial output");
 }
+
+/// The rule that decides which Mitsuba spectral references keep their 0.1% film-normalisation
+/// scale: D65-normalised emission (RGB, d65, bitmaps, environment maps) does not, tabulated,
+/// blackbody and display-primary emission does. A rule that let a tabulated emitter through
+/// would bias cornell-spectral's reference by 0.1%.
+#[test]
+fn d65_normalisation_rule_classifies_the_scenes() {
+    for (scene, expected) in [
+        ("envmap-spectral", true),
+        ("monitor-spectral", true),
+        ("thin-film", true),
+        ("rough-thin-film", true),
+        ("cornell-spectral", false),
+        ("spectral-lights", false),
+        ("monitor-primaries", false),
+    ] {
+        assert_eq!(common::d65_normalised(scene), expected, "{scene}");
+    }
+}

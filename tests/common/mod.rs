@@ -70,23 +70,43 @@ pub const MEAN_RATIO_TOL: f64 = 0.005;
 /// divided out before comparing, instead of widening any tolerance.
 pub const MITSUBA_SPECTRAL_SCALE: f64 = 106.750_259 / 106.856_914_916_767;
 
-/// Spectral scenes whose every emitter is normalised to the D65 white (RGB or `d65` radiance,
-/// environment maps): both renderers scale D65 to luminance Y = 1 under their own film
-/// normalisation (Mitsuba: `MI_CIE_D65_NORMALIZATION` = 1 / 98.9974 gives Y = 0.99993), so their
-/// references need no [`MITSUBA_SPECTRAL_SCALE`], which would bias them by 0.1%. Measured on
-/// envmap-spectral at 4096 spp (seed 7): pt / Mitsuba = 1.0001, 1.0001, 0.9999 unscaled, block
-/// chi2 / dof 0.66; with the scale 1.0009 and more, growing in z with the sample count.
-pub const D65_NORMALISED_SCENES: &[&str] = &["monitor-spectral", "envmap-spectral"];
+/// Whether every emitter of `scene` (a name below scenes/, without `.xml`) is normalised to
+/// the D65 white: RGB or constant radiance (both renderers upsample it and multiply by D65),
+/// `d65` spectra, bitmap radiance and environment maps, and no display primaries. Both
+/// renderers scale D65 to luminance Y = 1 under their own film normalisation (Mitsuba:
+/// `MI_CIE_D65_NORMALIZATION` = 1 / 98.9974 gives Y = 0.99993), so such references need no
+/// [`MITSUBA_SPECTRAL_SCALE`], which would bias them by 0.1%. Measured on envmap-spectral at
+/// 4096 spp (seed 7): pt / Mitsuba = 1.0001, 1.0001, 0.9999 unscaled, block chi2 / dof 0.66;
+/// with the scale 1.0009 and more, growing in z with the sample count. Tabulated, blackbody
+/// and other named illuminants are not D65-normalised and keep the scale.
+pub fn d65_normalised(scene: &str) -> bool {
+    use pt_scene::{LightKind, SpectrumDesc};
+    let path = repo().join("scenes").join(format!("{scene}.xml"));
+    let desc = pt_scene::load_file(&path, &[]).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let white = |s: &SpectrumDesc| match s {
+        SpectrumDesc::Constant(_) | SpectrumDesc::Rgb(_) => true,
+        SpectrumDesc::Illuminant { name, .. } => name.eq_ignore_ascii_case("d65"),
+        SpectrumDesc::Tabulated(_) | SpectrumDesc::Blackbody { .. } => false,
+    };
+    let shapes = desc.shapes.iter().filter_map(|s| s.emitter.as_ref()).all(|e| e.primaries.is_none() && white(&e.radiance));
+    let lights = desc.lights.iter().all(|l| match &l.kind {
+        LightKind::Point { intensity, .. } | LightKind::Spot { intensity, .. } => white(intensity),
+        LightKind::Directional { irradiance, .. } | LightKind::Sun { irradiance, .. } => white(irradiance),
+        LightKind::Constant { radiance } => white(radiance),
+        LightKind::EnvMap { .. } => true,
+    });
+    shapes && lights
+}
 
 /// The Mitsuba reference of `scene` (mean and variance of the mean), with spectral-variant
 /// references rescaled by [`MITSUBA_SPECTRAL_SCALE`] unless their emission is D65-normalised
-/// ([`D65_NORMALISED_SCENES`]).
+/// ([`d65_normalised`]).
 pub fn reference(scene: &str) -> (Image, Image) {
     let r = repo().join("references");
     let (img, meta) = pt_image::read_exr(&r.join(format!("{scene}.exr"))).unwrap_or_else(|e| panic!("reference of {scene}: {e}"));
     let (var, _) = pt_image::read_exr(&r.join(format!("{scene}_var.exr"))).unwrap_or_else(|e| panic!("reference variance of {scene}: {e}"));
     let spectral = meta.extra.iter().any(|(k, v)| k == "variant" && v.contains("spectral"));
-    if !spectral || D65_NORMALISED_SCENES.contains(&scene) {
+    if !spectral || d65_normalised(scene) {
         return (img, var);
     }
     let k = MITSUBA_SPECTRAL_SCALE as f32;

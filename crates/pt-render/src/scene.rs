@@ -674,6 +674,33 @@ impl Scene {
     }
 }
 
+/// A bitmap looked up at a hit's texture coordinates through a KHR_texture_transform (the
+/// identity for Mitsuba's bitmaps): every textured material parameter holds one.
+struct UvBitmap {
+    bitmap: std::sync::Arc<crate::texture::Bitmap>,
+    /// `[a, b, c, d, e, f]`: `u' = a u + b v + c`, `v' = d u + e v + f`.
+    transform: [f32; 6],
+}
+
+impl UvBitmap {
+    fn new(bitmap: crate::texture::Bitmap, transform: [f32; 6]) -> Self {
+        UvBitmap { bitmap: std::sync::Arc::new(bitmap), transform }
+    }
+
+    /// The texture coordinates the bitmap is read at for the surface's `uv`.
+    #[inline]
+    fn map_uv(&self, uv: Vec2) -> Vec2 {
+        let m = self.transform;
+        Vec2::new(m[0] * uv.x + m[1] * uv.y + m[2], m[3] * uv.x + m[4] * uv.y + m[5])
+    }
+
+    /// The (filtered) texel at the surface's `uv`, linear RGB.
+    #[inline]
+    fn eval(&self, uv: Vec2) -> [f32; 3] {
+        self.bitmap.eval(self.map_uv(uv))
+    }
+}
+
 /// A glTF metallic-roughness material with textures: factors times texels at the hit's uv.
 struct TexturedPbr {
     base_color: [f32; 3],
@@ -682,11 +709,11 @@ struct TexturedPbr {
     metallic: f32,
     roughness: f32,
     ior: f32,
-    base_tex: Option<(std::sync::Arc<crate::texture::Bitmap>, [f32; 6])>,
+    base_tex: Option<UvBitmap>,
     /// Spectral mode: the base colour texture's upsampled texels (reflectances), looked up
     /// with `base_tex`'s transform; they multiply `base_spectrum`.
     base_spec: Option<std::sync::Arc<crate::spectral_texture::SpectralBitmap>>,
-    mr_tex: Option<(std::sync::Arc<crate::texture::Bitmap>, [f32; 6])>,
+    mr_tex: Option<UvBitmap>,
     two_sided: bool,
     /// Opacity of an enclosing `Mask` (glTF alpha), 1 without.
     opacity: f32,
@@ -717,7 +744,7 @@ impl TexturedPbr {
         }
         let load = |t: &Option<Box<pt_scene::UvTexture>>| -> Result<_, BuildError> {
             t.as_ref()
-                .map(|t| crate::texture::Bitmap::from_source(&t.source, t.srgb, t.nearest).map(|b| (std::sync::Arc::new(b), t.transform)))
+                .map(|t| crate::texture::Bitmap::from_source(&t.source, t.srgb, t.nearest).map(|b| UvBitmap::new(b, t.transform)))
                 .transpose()
                 .map_err(|m| BuildError { loc: desc.loc.clone(), message: m })
         };
@@ -726,7 +753,7 @@ impl TexturedPbr {
         // factor's spectrum times the interpolated texel spectrum stands for factor x texel
         // (exact when either is grey, in particular for the default factor 1).
         let base_spec = match (&base_tex, spectral) {
-            (Some((b, _)), true) => Some(std::sync::Arc::new(crate::spectral_texture::SpectralBitmap::new(b))),
+            (Some(t), true) => Some(std::sync::Arc::new(crate::spectral_texture::SpectralBitmap::new(&t.bitmap))),
             _ => None,
         };
         Ok(Some(TexturedPbr {
@@ -747,25 +774,21 @@ impl TexturedPbr {
     /// factor's spectrum fitted once at build, the texels' at load).
     #[inline]
     fn eval(&self, uv: Vec2, mode: ColorMode, lambda: &SampledWavelengths) -> SurfaceBsdf {
-        let at = |t: &(std::sync::Arc<crate::texture::Bitmap>, [f32; 6])| {
-            let m = t.1;
-            t.0.eval(Vec2::new(m[0] * uv.x + m[1] * uv.y + m[2], m[3] * uv.x + m[4] * uv.y + m[5]))
-        };
         let mut c = self.base_color;
         if let (Some(t), ColorMode::Rgb) = (&self.base_tex, mode) {
-            let v = at(t);
+            let v = t.eval(uv);
             c = [c[0] * v[0], c[1] * v[1], c[2] * v[2]];
         }
         let (mut metallic, mut roughness) = (self.metallic, self.roughness);
         if let Some(t) = &self.mr_tex {
-            let v = at(t);
+            let v = t.eval(uv);
             roughness *= v[1];
             metallic *= v[2];
         }
         let base = match mode {
             ColorMode::Rgb => SampledSpectrum::from_rgb(c),
             ColorMode::Spectral => match (&self.base_spec, &self.base_tex) {
-                (Some(sb), Some((_, m))) => self.base_spectrum.sample(lambda) * sb.eval(Vec2::new(m[0] * uv.x + m[1] * uv.y + m[2], m[3] * uv.x + m[4] * uv.y + m[5]), lambda),
+                (Some(sb), Some(t)) => self.base_spectrum.sample(lambda) * sb.eval(t.map_uv(uv), lambda),
                 _ => self.base_spectrum.sample(lambda),
             },
         };
@@ -775,9 +798,7 @@ impl TexturedPbr {
 
 /// A material's normal map (pt-bsdf `normal_map`): the texture and whose tangent space it uses.
 struct NormalMapTex {
-    bitmap: std::sync::Arc<crate::texture::Bitmap>,
-    /// KHR_texture_transform as `[a, b, c, d, e, f]`: `u' = a u + b v + c`, `v' = d u + e v + f`.
-    transform: [f32; 6],
+    tex: UvBitmap,
     /// glTF `scale` on the decoded x and y.
     scale: f32,
     /// glTF tangent space (mesh tangents and handedness) rather than Mitsuba's (dp/du).
@@ -794,7 +815,7 @@ impl NormalMapTex {
                     return Err(BuildError { loc: desc.loc.clone(), message: "nested normal maps are not supported (not yet implemented)".into() });
                 }
                 let bitmap = crate::texture::Bitmap::from_source(&texture.source, texture.srgb, texture.nearest).map_err(|m| BuildError { loc: desc.loc.clone(), message: m })?;
-                Ok(Some(NormalMapTex { bitmap: std::sync::Arc::new(bitmap), transform: texture.transform, scale: *scale, gltf: *gltf }))
+                Ok(Some(NormalMapTex { tex: UvBitmap::new(bitmap, texture.transform), scale: *scale, gltf: *gltf }))
             }
             _ => Ok(None),
         }
@@ -806,9 +827,7 @@ impl NormalMapTex {
     /// s along the mesh tangent, t = w (n x s).
     #[inline]
     fn normal(&self, hit: &Interaction) -> Option<Vec3> {
-        let m = self.transform;
-        let uv = Vec2::new(m[0] * hit.uv.x + m[1] * hit.uv.y + m[2], m[3] * hit.uv.x + m[4] * hit.uv.y + m[5]);
-        let c = self.bitmap.eval(uv);
+        let c = self.tex.eval(hit.uv);
         let n = Vec3::new(2.0 * c[0] - 1.0, 2.0 * c[1] - 1.0, 2.0 * c[2] - 1.0);
         if !self.gltf {
             return Some(n);
@@ -836,9 +855,7 @@ fn scalar_bitmap(texture: &pt_scene::UvTexture, channel: pt_scene::TextureChanne
 
 /// A blend whose weight is textured (glTF `iridescenceTexture`): weight = factor x texel.
 struct BlendWeightTex {
-    bitmap: std::sync::Arc<crate::texture::Bitmap>,
-    /// KHR_texture_transform as `[a, b, c, d, e, f]`: `u' = a u + b v + c`, `v' = d u + e v + f`.
-    transform: [f32; 6],
+    tex: UvBitmap,
     /// The blend's own weight, which the texel multiplies.
     factor: f32,
 }
@@ -850,7 +867,7 @@ impl BlendWeightTex {
             BsdfKind::Mask { inner, .. } | BsdfKind::TwoSided { inner } | BsdfKind::NormalMap { inner, .. } | BsdfKind::OpacityTexture { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } => BlendWeightTex::of(inner),
             BsdfKind::Blend { weight, weight_texture: Some((texture, channel)), .. } => {
                 let bitmap = scalar_bitmap(texture, *channel).map_err(|m| BuildError { loc: desc.loc.clone(), message: m })?;
-                Ok(Some(BlendWeightTex { bitmap: std::sync::Arc::new(bitmap), transform: texture.transform, factor: *weight }))
+                Ok(Some(BlendWeightTex { tex: UvBitmap::new(bitmap, texture.transform), factor: *weight }))
             }
             _ => Ok(None),
         }
@@ -859,16 +876,13 @@ impl BlendWeightTex {
     /// The blend weight at texture coordinates `uv`, in [0, 1].
     #[inline]
     fn weight(&self, uv: Vec2) -> f32 {
-        let m = self.transform;
-        (self.factor * self.bitmap.eval(Vec2::new(m[0] * uv.x + m[1] * uv.y + m[2], m[3] * uv.x + m[4] * uv.y + m[5]))[0]).clamp(0.0, 1.0)
+        (self.factor * self.tex.eval(uv)[0]).clamp(0.0, 1.0)
     }
 }
 
 /// An opacity texture (Mitsuba `mask` with a bitmap, glTF base colour alpha).
 struct OpacityTex {
-    bitmap: std::sync::Arc<crate::texture::Bitmap>,
-    /// KHR_texture_transform as `[a, b, c, d, e, f]`: `u' = a u + b v + c`, `v' = d u + e v + f`.
-    transform: [f32; 6],
+    tex: UvBitmap,
     /// Multiplies the texel's value.
     factor: f32,
     /// glTF MASK cutoff.
@@ -886,7 +900,7 @@ impl OpacityTex {
                     return Err(BuildError { loc: desc.loc.clone(), message: "nested opacity textures are not supported (not yet implemented)".into() });
                 }
                 let bitmap = scalar_bitmap(texture, *channel).map_err(|m| BuildError { loc: desc.loc.clone(), message: m })?;
-                Ok(Some(OpacityTex { bitmap: std::sync::Arc::new(bitmap), transform: texture.transform, factor: *factor, cutoff: *cutoff }))
+                Ok(Some(OpacityTex { tex: UvBitmap::new(bitmap, texture.transform), factor: *factor, cutoff: *cutoff }))
             }
             _ => Ok(None),
         }
@@ -895,8 +909,7 @@ impl OpacityTex {
     /// Opacity in [0, 1] at texture coordinates `uv`.
     #[inline]
     fn opacity(&self, uv: Vec2) -> f32 {
-        let m = self.transform;
-        let a = self.factor * self.bitmap.eval(Vec2::new(m[0] * uv.x + m[1] * uv.y + m[2], m[3] * uv.x + m[4] * uv.y + m[5]))[0];
+        let a = self.factor * self.tex.eval(uv)[0];
         match self.cutoff {
             Some(c) => {
                 if a >= c {
@@ -912,9 +925,7 @@ impl OpacityTex {
 
 /// A film thickness texture (glTF `iridescenceThicknessTexture`).
 struct FilmThicknessTex {
-    bitmap: std::sync::Arc<crate::texture::Bitmap>,
-    /// KHR_texture_transform as `[a, b, c, d, e, f]`: `u' = a u + b v + c`, `v' = d u + e v + f`.
-    transform: [f32; 6],
+    tex: UvBitmap,
     /// Thickness at green 0 and 1, nm.
     min_nm: f32,
     max_nm: f32,
@@ -931,7 +942,7 @@ impl FilmThicknessTex {
                     return Err(BuildError { loc: desc.loc.clone(), message: format!("film thickness range must be finite and >= 0 nm, got {min_nm}..{max_nm}") });
                 }
                 let bitmap = crate::texture::Bitmap::from_source(&texture.source, texture.srgb, texture.nearest).map_err(|m| BuildError { loc: desc.loc.clone(), message: m })?;
-                Ok(Some(FilmThicknessTex { bitmap: std::sync::Arc::new(bitmap), transform: texture.transform, min_nm: *min_nm, max_nm: *max_nm }))
+                Ok(Some(FilmThicknessTex { tex: UvBitmap::new(bitmap, texture.transform), min_nm: *min_nm, max_nm: *max_nm }))
             }
             _ => Ok(None),
         }
@@ -940,8 +951,7 @@ impl FilmThicknessTex {
     /// Thickness at texture coordinates `uv`, nm: `min + (max - min) g` (glTF: mix(min, max, g)).
     #[inline]
     fn thickness(&self, uv: Vec2) -> f32 {
-        let m = self.transform;
-        let g = self.bitmap.eval(Vec2::new(m[0] * uv.x + m[1] * uv.y + m[2], m[3] * uv.x + m[4] * uv.y + m[5]))[1];
+        let g = self.tex.eval(uv)[1];
         (self.min_nm + (self.max_nm - self.min_nm) * g).max(0.0)
     }
 }
