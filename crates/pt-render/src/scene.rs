@@ -87,6 +87,9 @@ pub struct Scene {
     opacity_textures: Vec<Option<OpacityTex>>,
     /// Per material: its textured blend weight, if it has one.
     blend_textures: Vec<Option<BlendWeightTex>>,
+    /// Per material: whether `materials[m]` is its BSDF at every hit (RGB mode, no textures,
+    /// no fluorescence), so that a hit needs one lookup instead of six.
+    plain: Vec<bool>,
     /// Spectral mode: each light's emission spectrum (its `radiance` fields hold the geometric
     /// factors only); empty in RGB mode. Textured area lights and environment maps multiply it
     /// by their texels' upsampled spectra themselves (D65 here); lights with display primaries
@@ -471,7 +474,19 @@ impl Scene {
         if !spectral {
             light_spectra.clear();
         }
-        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, fluorescent, textured, normal_maps, film_textures, opacity_textures, blend_textures, light_spectra, media, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
+        let none = |v: Option<bool>| v.unwrap_or(true);
+        let plain = (0..materials.len())
+            .map(|m| {
+                spectral_materials.get(m).is_none()
+                    && none(fluorescent.get(m).map(Option::is_none))
+                    && none(textured.get(m).map(Option::is_none))
+                    && none(normal_maps.get(m).map(Option::is_none))
+                    && none(film_textures.get(m).map(Option::is_none))
+                    && none(opacity_textures.get(m).map(Option::is_none))
+                    && none(blend_textures.get(m).map(Option::is_none))
+            })
+            .collect();
+        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, fluorescent, textured, normal_maps, film_textures, opacity_textures, blend_textures, plain, light_spectra, media, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
     }
 
     /// Closest hit along `ray`, with its surface data.
@@ -603,8 +618,11 @@ impl Scene {
     /// `Frame::from_normal_tangent(hit.ns, hit.dpdu)`.
     #[inline(always)]
     pub fn material_at_hit(&self, hit: &Interaction, lambda: &SampledWavelengths) -> SurfaceBsdf {
-        let mut b = self.material_at_uv(hit.shape, hit.uv, lambda);
         let m = self.shapes[hit.shape as usize].material as usize;
+        if self.plain.get(m).copied().unwrap_or(false) {
+            return self.materials[m];
+        }
+        let mut b = self.material_at_uv(hit.shape, hit.uv, lambda);
         if let Some(Some(nm)) = self.normal_maps.get(m) {
             b.normal = nm.normal(hit);
         }
