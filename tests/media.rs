@@ -26,15 +26,11 @@ use common::*;
 const SPP: &str = "1024";
 
 fn slab_scene(integrator: &str, sigma: [f64; 3], d: f64) -> String {
+    let sensor = sensor_xml(2.0, [0.0, 0.0, 10.0], 16, 16, 16);
     format!(
         r#"<scene version="3.0.0">
     <integrator type="{integrator}"/>
-    <sensor type="perspective">
-        <float name="fov" value="2"/>
-        <transform name="to_world"><lookat origin="0, 0, 10" target="0, 0, 0" up="0, 1, 0"/></transform>
-        <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
-        <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/><rfilter type="box"/></film>
-    </sensor>
+    {sensor}
     <emitter type="constant"><float name="radiance" value="1"/></emitter>
     <shape type="cube">
         <transform name="to_world"><scale value="5, 5, {half}"/></transform>
@@ -91,15 +87,11 @@ fn path_integrator_ignores_media_like_mitsuba() {
 #[test]
 fn mask_lets_the_background_through_its_holes() {
     let (a, rho) = (0.3, [0.8, 0.5, 0.1]);
+    let sensor = sensor_xml(20.0, [0.0, 0.0, 10.0], 16, 16, 16);
     let xml = format!(
         r#"<scene version="3.0.0">
     <integrator type="path"/>
-    <sensor type="perspective">
-        <float name="fov" value="20"/>
-        <transform name="to_world"><lookat origin="0, 0, 10" target="0, 0, 0" up="0, 1, 0"/></transform>
-        <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
-        <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/><rfilter type="box"/></film>
-    </sensor>
+    {sensor}
     <emitter type="constant"><float name="radiance" value="1"/></emitter>
     <shape type="rectangle">
         <transform name="to_world"><scale value="5, 5, 1"/></transform>

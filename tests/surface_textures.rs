@@ -53,15 +53,11 @@ fn constant_tilt_matches_closed_form() {
     for (name, n, l) in cases {
         let dir = scratch(&format!("normal_map_closed_{name}"));
         let nq = constant_map(&dir.join("n.png"), n);
+        let sensor = sensor_xml(10.0, [0.0, 0.0, 10.0], 4, 8, 8);
         let xml = format!(
             r#"<scene version="3.0.0">
     <integrator type="path"/>
-    <sensor type="perspective">
-        <float name="fov" value="10"/>
-        <transform name="to_world"><lookat origin="0, 0, 10" target="0, 0, 0" up="0, 1, 0"/></transform>
-        <sampler type="independent"><integer name="sample_count" value="4"/></sampler>
-        <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/><rfilter type="box"/></film>
-    </sensor>
+    {sensor}
     <emitter type="directional"><vector name="direction" value="{}, {}, {}"/><rgb name="irradiance" value="{e}, {e}, {e}"/></emitter>
     <shape type="rectangle">
         <transform name="to_world"><scale value="5, 5, 1"/></transform>
@@ -264,15 +260,11 @@ fn mask_opacity_texture_is_luminance_per_texel() {
     let dir = scratch("mask_opacity_texture");
     image::RgbImage::from_fn(2, 1, |x, _| if x == 0 { image::Rgb([255, 0, 0]) } else { image::Rgb([128, 128, 128]) }).save(dir.join("opacity.png")).unwrap();
     let rho = 0.4;
+    let sensor = sensor_xml(20.0, [0.0, 0.0, 10.0], 16, 16, 16);
     let xml = format!(
         r#"<scene version="3.0.0">
     <integrator type="path"/>
-    <sensor type="perspective">
-        <float name="fov" value="20"/>
-        <transform name="to_world"><lookat origin="0, 0, 10" target="0, 0, 0" up="0, 1, 0"/></transform>
-        <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
-        <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/><rfilter type="box"/></film>
-    </sensor>
+    {sensor}
     <emitter type="constant"><float name="radiance" value="1"/></emitter>
     <shape type="rectangle">
         <transform name="to_world"><scale value="5, 5, 1"/></transform>

@@ -19,6 +19,21 @@ pub fn scratch(name: &str) -> PathBuf {
     dir
 }
 
+/// A Mitsuba `<sensor>` element for test scenes: a perspective camera at `origin` looking at
+/// the world origin with +y up, `fov` degrees (along x), an independent sampler with `spp`
+/// samples and a `width` x `height` box-filtered film.
+pub fn sensor_xml(fov: f32, origin: [f32; 3], spp: u32, width: u32, height: u32) -> String {
+    let [x, y, z] = origin;
+    format!(
+        r#"<sensor type="perspective">
+        <float name="fov" value="{fov}"/>
+        <transform name="to_world"><lookat origin="{x}, {y}, {z}" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="{spp}"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="{width}"/><integer name="height" value="{height}"/><rfilter type="box"/></film>
+    </sensor>"#
+    )
+}
+
 /// Runs `pt` with the given arguments from the repository root.
 pub fn pt(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_pt")).args(args).current_dir(repo()).output().expect("run pt")
