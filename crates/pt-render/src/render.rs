@@ -54,8 +54,8 @@ pub struct RenderOutput {
     pub nonfinite_samples: u64,
 }
 
-/// Tile edge in pixels: small enough to balance 2-64 threads on 256^2 images, large enough
-/// that scheduling overhead is negligible.
+/// Tile width and largest band height in pixels (see [`render_passes`]): small enough to
+/// balance many threads, large enough that scheduling overhead is negligible.
 const TILE: u32 = 16;
 
 /// Renders the image. `progress` is called after each tile with the number of samples it took
@@ -232,8 +232,9 @@ struct Tile {
 /// routines it calls are inlined into it (`#[inline(always)]`), since a function compiled
 /// separately keeps the baseline instructions. Images are bit-identical either way: Rust never
 /// fuses a multiply and an add on its own, and glam and libm pick their code paths the same way
-/// in both. Cornell box, 256x256, 64 spp, 2 threads: 1.71 -> 2.02 M samples/s (+18%, as much as building everything
-/// with `-C target-cpu=x86-64-v3`; AVX-512 (`target-cpu=native` here) gave only +6%).
+/// in both. Cornell box, 256x256, 64 spp, 2 threads: 1.71 -> 2.02 M samples/s (+18%, as much
+/// as building everything with `-C target-cpu=x86-64-v3`; AVX-512, `target-cpu=native` on this
+/// project's machine, gave only +6%).
 fn render_tile(scene: &Scene, settings: &RenderSettings, band: &mut [PixelStats], tile: &Tile) {
     #[cfg(target_arch = "x86_64")]
     if has_x86_64_v3() {
