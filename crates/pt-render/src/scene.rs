@@ -126,7 +126,7 @@ enum Role {
     Emission,
 }
 
-/// RGB value of a spectral input (see [`spectrum`]), for RGB-only methods such as radiosity.
+/// RGB value of a spectral input (see `spectrum`), for RGB-only methods such as radiosity.
 pub fn rgb_of(s: &SpectrumDesc) -> [f32; 3] {
     spectrum(s).rgb()
 }

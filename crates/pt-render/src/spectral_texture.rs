@@ -91,7 +91,7 @@ fn target(rgb: [f32; 3], form: Upsampling) -> ([f32; 3], f32) {
 
 /// Upsamples every texel of a `width`-wide row-major image (load time). Each distinct colour is
 /// fitted once: the distinct colours are sorted (so that neighbours in the list are similar) and
-/// fitted in fixed chunks of [`FIT_CHUNK`] in parallel, each fit warm-started from the previous
+/// fitted in fixed chunks of `FIT_CHUNK` in parallel, each fit warm-started from the previous
 /// one in its chunk, so the result does not depend on the thread count. Cost: about 0.1-0.2 ms
 /// per distinct colour and core (measured: a 256x256 image of 47,693 distinct noisy colours in
 /// 4.5 s on two shared cores; `cargo test -p pt-render -- --ignored upsample_time`), so an

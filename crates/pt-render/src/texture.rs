@@ -1,5 +1,5 @@
-//! Bitmap textures (Mitsuba's `bitmap`): an image over [0,1]^2 texture coordinates, with row 0
-//! at v = 0 (the image's top row), repeated outside [0,1], bilinearly interpolated between pixel
+//! Bitmap textures (Mitsuba's `bitmap`): an image over `[0,1]^2` texture coordinates, with row 0
+//! at v = 0 (the image's top row), repeated outside `[0,1]`, bilinearly interpolated between pixel
 //! centres (or nearest). 8-bit images are sRGB-decoded to linear values unless `raw`.
 
 use pt_math::Vec2;
