@@ -77,19 +77,9 @@ pub struct Scene {
     spectral_materials: Vec<SpectralMaterial>,
     /// Spectral mode: per material, its fluorescence model if it is `fluorescent`.
     fluorescent: Vec<Option<crate::fluorescence::Fluorescent>>,
-    /// Per material: its textures, when its parameters vary over the surface (glTF).
-    textured: Vec<Option<TexturedPbr>>,
-    /// Per material: its normal map, if it has one.
-    normal_maps: Vec<Option<NormalMapTex>>,
-    /// Per material: its film thickness texture, if it has one.
-    film_textures: Vec<Option<FilmThicknessTex>>,
-    /// Per material: its opacity texture, if it has one.
-    opacity_textures: Vec<Option<OpacityTex>>,
-    /// Per material: its textured blend weight, if it has one.
-    blend_textures: Vec<Option<BlendWeightTex>>,
-    /// Per material: whether `materials[m]` is its BSDF at every hit (RGB mode, no textures,
-    /// no fluorescence), so that a hit needs one lookup instead of six.
-    plain: Vec<bool>,
+    /// Per material: its textures, `None` when nothing of it varies over the surface (then, in
+    /// RGB mode, `materials[m]` is its BSDF at every hit).
+    textures: Vec<Option<Box<MaterialTextures>>>,
     /// Spectral mode: each light's emission spectrum (its `radiance` fields hold the geometric
     /// factors only); empty in RGB mode. Textured area lights and environment maps multiply it
     /// by their texels' upsampled spectra themselves (D65 here); lights with display primaries
@@ -316,11 +306,7 @@ impl Scene {
         let spectral = mode == ColorMode::Spectral;
         let materials: Vec<SurfaceBsdf> =
             desc.bsdfs.iter().map(|b| material_with(b, None, &mut |s, _| spectrum(s), &mut CoatingTable::get)).collect::<Result<_, _>>()?;
-        let textured = desc.bsdfs.iter().map(|b| TexturedPbr::of(b, spectral)).collect::<Result<Vec<_>, _>>()?;
-        let normal_maps = desc.bsdfs.iter().map(NormalMapTex::of).collect::<Result<Vec<_>, _>>()?;
-        let film_textures = desc.bsdfs.iter().map(FilmThicknessTex::of).collect::<Result<Vec<_>, _>>()?;
-        let opacity_textures = desc.bsdfs.iter().map(OpacityTex::of).collect::<Result<Vec<_>, _>>()?;
-        let blend_textures = desc.bsdfs.iter().map(BlendWeightTex::of).collect::<Result<Vec<_>, _>>()?;
+        let textures = desc.bsdfs.iter().map(|b| MaterialTextures::of(b, spectral)).collect::<Result<Vec<_>, _>>()?;
         let mut spectral_materials = Vec::new();
         if spectral {
             for b in &desc.bsdfs {
@@ -474,19 +460,7 @@ impl Scene {
         if !spectral {
             light_spectra.clear();
         }
-        let none = |v: Option<bool>| v.unwrap_or(true);
-        let plain = (0..materials.len())
-            .map(|m| {
-                spectral_materials.get(m).is_none()
-                    && none(fluorescent.get(m).map(Option::is_none))
-                    && none(textured.get(m).map(Option::is_none))
-                    && none(normal_maps.get(m).map(Option::is_none))
-                    && none(film_textures.get(m).map(Option::is_none))
-                    && none(opacity_textures.get(m).map(Option::is_none))
-                    && none(blend_textures.get(m).map(Option::is_none))
-            })
-            .collect();
-        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, fluorescent, textured, normal_maps, film_textures, opacity_textures, blend_textures, plain, light_spectra, media, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
+        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, fluorescent, textures, light_spectra, media, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
     }
 
     /// Closest hit along `ray`, with its surface data.
@@ -607,9 +581,9 @@ impl Scene {
     #[inline(always)]
     pub fn material_at_uv(&self, shape: u32, uv: Vec2, lambda: &SampledWavelengths) -> SurfaceBsdf {
         let m = self.shapes[shape as usize].material as usize;
-        match self.textured.get(m) {
-            Some(Some(t)) => t.eval(uv, self.mode, lambda),
-            _ => self.material_at(shape, lambda),
+        match self.textures.get(m).and_then(|t| t.as_ref()?.pbr.as_ref()) {
+            Some(t) => t.eval(uv, self.mode, lambda),
+            None => self.material_at(shape, lambda),
         }
     }
 
@@ -619,14 +593,18 @@ impl Scene {
     #[inline(always)]
     pub fn material_at_hit(&self, hit: &Interaction, lambda: &SampledWavelengths) -> SurfaceBsdf {
         let m = self.shapes[hit.shape as usize].material as usize;
-        if self.plain.get(m).copied().unwrap_or(false) {
-            return self.materials[m];
-        }
-        let mut b = self.material_at_uv(hit.shape, hit.uv, lambda);
-        if let Some(Some(nm)) = self.normal_maps.get(m) {
+        let Some(Some(tex)) = self.textures.get(m) else {
+            // Nothing varies over the surface: RGB mode's precomputed BSDF (one lookup).
+            return if self.mode == ColorMode::Rgb { self.materials[m] } else { self.material_at(hit.shape, lambda) };
+        };
+        let mut b = match &tex.pbr {
+            Some(t) => t.eval(hit.uv, self.mode, lambda),
+            None => self.material_at(hit.shape, lambda),
+        };
+        if let Some(nm) = &tex.normal {
             b.normal = nm.normal(hit);
         }
-        if let Some(Some(ft)) = self.film_textures.get(m) {
+        if let Some(ft) = &tex.film {
             let d = ft.thickness(hit.uv);
             let second = b.blend.as_mut().map(|(_, s)| s);
             for model in std::iter::once(&mut b.bsdf).chain(second) {
@@ -637,10 +615,10 @@ impl Scene {
                 }
             }
         }
-        if let Some(Some(ot)) = self.opacity_textures.get(m) {
+        if let Some(ot) = &tex.opacity {
             b.opacity = ot.opacity(hit.uv);
         }
-        if let (Some(Some(bt)), Some((w, _))) = (self.blend_textures.get(m), b.blend.as_mut()) {
+        if let (Some(bt), Some((w, _))) = (&tex.blend, b.blend.as_mut()) {
             *w = bt.weight(hit.uv);
         }
         b
@@ -689,6 +667,31 @@ impl Scene {
     #[inline]
     pub fn light_pmf(&self, i: usize) -> f32 {
         self.light_distr.as_ref().map_or(0.0, |d| d.pmf(i))
+    }
+}
+
+/// What varies over a material's surface: at least one of these is present.
+struct MaterialTextures {
+    /// glTF metallic-roughness factors times texels.
+    pbr: Option<TexturedPbr>,
+    normal: Option<NormalMapTex>,
+    film: Option<FilmThicknessTex>,
+    opacity: Option<OpacityTex>,
+    blend: Option<BlendWeightTex>,
+}
+
+impl MaterialTextures {
+    /// The textures of a material description, `None` if it has none.
+    fn of(desc: &BsdfDesc, spectral: bool) -> Result<Option<Box<MaterialTextures>>, BuildError> {
+        let t = MaterialTextures {
+            pbr: TexturedPbr::of(desc, spectral)?,
+            normal: NormalMapTex::of(desc)?,
+            film: FilmThicknessTex::of(desc)?,
+            opacity: OpacityTex::of(desc)?,
+            blend: BlendWeightTex::of(desc)?,
+        };
+        let any = t.pbr.is_some() || t.normal.is_some() || t.film.is_some() || t.opacity.is_some() || t.blend.is_some();
+        Ok(any.then(|| Box::new(t)))
     }
 }
 
