@@ -376,3 +376,19 @@ fn gltf_iridescence_texture_scales_the_blend_weight_per_texel() {
         assert!((w - want).abs() < 1e-6 && matches!(second, pt_bsdf::Bsdf::RoughThinFilm(_)), "x {x}: weight {w}, want {want}");
     }
 }
+
+/// `pt info` describes wrapper materials in one readable line each (the wrapper, its texture's
+/// file name, the inner model), not as nested debug dumps with source locations.
+#[test]
+fn info_describes_wrapper_materials() {
+    let o = pt(&["info", repo().join("scenes/normal-map.xml").to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("normalmap(bumps-normal.png, Mitsuba tangent space, scale 1, Diffuse"), "{out}");
+    assert!(out.contains("normalmap(bumps-normal.png, Mitsuba tangent space, scale 1, RoughConductor"), "{out}");
+    assert!(!out.contains("SourceLoc"), "{out}");
+    let o = pt(&["info", repo().join("scenes/mask-texture.xml").to_str().unwrap()]);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("mask(opacity 1 x ") && out.contains("Luminance"), "{out}");
+    assert!(!out.contains("SourceLoc"), "{out}");
+}

@@ -620,6 +620,47 @@ fn check_output_path(output: &Path) -> Result<()> {
     Ok(())
 }
 
+/// One line describing a material for `pt info`: wrappers (twosided, mask, normalmap, blend,
+/// textured opacity and film thickness) as `name(parameters, inner)`, textures by their file or
+/// embedded name, models by their parameters.
+fn describe_bsdf(kind: &pt_scene::BsdfKind) -> String {
+    use pt_scene::BsdfKind as K;
+    let tex = |t: &pt_scene::UvTexture| match &t.source {
+        pt_scene::ImageSource::File(p) => p.file_name().map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into_owned()),
+        pt_scene::ImageSource::Embedded { name, .. } => name.clone(),
+    };
+    match kind {
+        K::TwoSided { inner } => format!("twosided({})", describe_bsdf(&inner.kind)),
+        K::Mask { opacity, inner } => format!("mask(opacity {opacity}, {})", describe_bsdf(&inner.kind)),
+        K::NormalMap { texture, scale, gltf, inner } => {
+            format!("normalmap({}, {} tangent space, scale {scale}, {})", tex(texture), if *gltf { "glTF" } else { "Mitsuba" }, describe_bsdf(&inner.kind))
+        }
+        K::Blend { weight, weight_texture, first, second } => {
+            let w = match weight_texture {
+                Some((t, channel)) => format!("weight {weight} x {} {channel:?}", tex(t)),
+                None => format!("weight {weight}"),
+            };
+            format!("blend({w}, {} | {})", describe_bsdf(&first.kind), describe_bsdf(&second.kind))
+        }
+        K::OpacityTexture { texture, channel, factor, cutoff, inner } => {
+            let cut = cutoff.map(|c| format!(", cutoff {c}")).unwrap_or_default();
+            format!("mask(opacity {factor} x {} {channel:?}{cut}, {})", tex(texture), describe_bsdf(&inner.kind))
+        }
+        K::FilmThicknessTexture { texture, min_nm, max_nm, inner } => {
+            format!("film-thickness({}, {min_nm}..{max_nm} nm, {})", tex(texture), describe_bsdf(&inner.kind))
+        }
+        K::GltfPbr { base_color, metallic, roughness, ior, base_color_texture, metallic_roughness_texture } => {
+            let t = |o: &Option<Box<pt_scene::UvTexture>>, what: &str| o.as_ref().map(|t| format!(", {what} x {}", tex(t))).unwrap_or_default();
+            format!(
+                "GltfPbr {{ base_color: {base_color:?}{}, metallic: {metallic}, roughness: {roughness}{}, ior: {ior} }}",
+                t(base_color_texture, "texture"),
+                t(metallic_roughness_texture, "metallic-roughness texture")
+            )
+        }
+        other => format!("{other:?}"),
+    }
+}
+
 fn cmd_info(args: InfoArgs) -> Result<ExitCode> {
     let (desc, gltf_summary) = load_scene_with_summary(args.scene.as_deref(), &args.scene_args)?;
     let scene = Scene::build(&desc, BvhKind::CwBvh, LightSelection::Power)?;
@@ -664,7 +705,7 @@ fn cmd_info(args: InfoArgs) -> Result<ExitCode> {
     }
     out!("materials   {}", desc.bsdfs.len());
     for b in &desc.bsdfs {
-        out!("  {:<12} {:?}", b.id.as_deref().unwrap_or("-"), b.kind);
+        out!("  {:<12} {}", b.id.as_deref().unwrap_or("-"), describe_bsdf(&b.kind));
     }
     out!("lights      {} area light(s)", scene.lights.len());
     if !gltf_summary.is_empty() {
