@@ -576,20 +576,11 @@ impl Scene {
         }
     }
 
-    /// The BSDF of a hit shape at texture coordinates `uv` (textured glTF materials; any other
-    /// material as [`Scene::material_at`]).
-    #[inline(always)]
-    pub fn material_at_uv(&self, shape: u32, uv: Vec2, lambda: &SampledWavelengths) -> SurfaceBsdf {
-        let m = self.shapes[shape as usize].material as usize;
-        match self.textures.get(m).and_then(|t| t.as_ref()?.pbr.as_ref()) {
-            Some(t) => t.eval(uv, self.mode, lambda),
-            None => self.material_at(shape, lambda),
-        }
-    }
-
-    /// The BSDF at a hit: [`Scene::material_at_uv`] with the material's normal map, if any, turned
-    /// into the perturbed frame (pt-bsdf `normal_map`) relative to the integrator's shading frame
-    /// `Frame::from_normal_tangent(hit.ns, hit.dpdu)`.
+    /// The BSDF at a hit: the material at the path's wavelengths ([`Scene::material_at`]) or,
+    /// for textured glTF materials, at the hit's texture coordinates, with the textured normal
+    /// map (turned into the perturbed frame, pt-bsdf `normal_map`, relative to the integrator's
+    /// shading frame `Frame::from_normal_tangent(hit.ns, hit.dpdu)`), film thickness, opacity and
+    /// blend weight.
     #[inline(always)]
     pub fn material_at_hit(&self, hit: &Interaction, lambda: &SampledWavelengths) -> SurfaceBsdf {
         let m = self.shapes[hit.shape as usize].material as usize;
