@@ -24,6 +24,19 @@ fn srgb_to_linear(c: f32) -> f32 {
     }
 }
 
+/// Decodes an image given by file or embedded bytes (PNG or JPEG); a message naming it when it
+/// cannot be read or has no pixels.
+fn decode_source(source: &pt_scene::ImageSource) -> Result<image::DynamicImage, String> {
+    let (img, name) = match source {
+        pt_scene::ImageSource::File(p) => (image::open(p).map_err(|e| format!("cannot read image '{}': {e}", p.display()))?, p.display().to_string()),
+        pt_scene::ImageSource::Embedded { name, bytes } => (image::load_from_memory(bytes).map_err(|e| format!("cannot decode {name}: {e}"))?, name.clone()),
+    };
+    if img.width() == 0 || img.height() == 0 {
+        return Err(format!("image {name} is empty"));
+    }
+    Ok(img)
+}
+
 impl Bitmap {
     /// Loads a PNG or JPEG (through the `image` crate) or an EXR (already linear).
     pub fn load(desc: &BitmapDesc) -> Result<Bitmap, String> {
@@ -33,7 +46,7 @@ impl Bitmap {
             let (img, _) = pt_image::read_exr(path).map_err(|e| e.to_string())?;
             (img.width as usize, img.height as usize, img.data)
         } else {
-            let img = image::open(path).map_err(|e| format!("cannot read image '{}': {e}", path.display()))?.to_rgb32f();
+            let img = decode_source(&pt_scene::ImageSource::File(path.to_path_buf()))?.to_rgb32f();
             let (w, h) = img.dimensions();
             let decode = |c: f32| if desc.raw { c } else { srgb_to_linear(c) };
             let texels = img.pixels().map(|p| [decode(p.0[0]), decode(p.0[1]), decode(p.0[2])]).collect();
@@ -52,15 +65,9 @@ impl Bitmap {
     /// the `image` crate; `srgb` decodes sRGB-encoded values to linear, otherwise values are
     /// used as stored (normalised to [0, 1]).
     pub fn from_source(source: &pt_scene::ImageSource, srgb: bool, nearest: bool) -> Result<Bitmap, String> {
-        let (img, name) = match source {
-            pt_scene::ImageSource::File(p) => (image::open(p).map_err(|e| format!("cannot read image '{}': {e}", p.display()))?, p.display().to_string()),
-            pt_scene::ImageSource::Embedded { name, bytes } => (image::load_from_memory(bytes).map_err(|e| format!("cannot decode {name}: {e}"))?, name.clone()),
-        };
+        let img = decode_source(source)?;
         let img = img.to_rgb32f();
         let (w, h) = img.dimensions();
-        if w == 0 || h == 0 {
-            return Err(format!("image {name} is empty"));
-        }
         let decode = |c: f32| if srgb { srgb_to_linear(c) } else { c };
         let texels = img.pixels().map(|p| [decode(p.0[0]), decode(p.0[1]), decode(p.0[2])]).collect();
         Ok(Bitmap { width: w as usize, height: h as usize, texels, nearest })
@@ -69,15 +76,9 @@ impl Bitmap {
     /// The alpha channel of an image given by file or embedded bytes (glTF base colour alpha),
     /// as stored (alpha is linear in glTF), in all three channels; 1 where the image has none.
     pub fn alpha_from_source(source: &pt_scene::ImageSource, nearest: bool) -> Result<Bitmap, String> {
-        let (img, name) = match source {
-            pt_scene::ImageSource::File(p) => (image::open(p).map_err(|e| format!("cannot read image '{}': {e}", p.display()))?, p.display().to_string()),
-            pt_scene::ImageSource::Embedded { name, bytes } => (image::load_from_memory(bytes).map_err(|e| format!("cannot decode {name}: {e}"))?, name.clone()),
-        };
+        let img = decode_source(source)?;
         let img = img.to_rgba32f();
         let (w, h) = img.dimensions();
-        if w == 0 || h == 0 {
-            return Err(format!("image {name} is empty"));
-        }
         let texels = img.pixels().map(|p| [p.0[3]; 3]).collect();
         Ok(Bitmap { width: w as usize, height: h as usize, texels, nearest })
     }
