@@ -123,7 +123,7 @@ pub struct ImageSettings {
 /// misses; the patch is [`NO_PATCH`] on the black back of a one-sided surface.
 #[inline]
 fn hit(mesh: &PatchMesh, accel: &Accel, ray: &Ray) -> Option<(u32, usize, f32, f32)> {
-    let (prim, _t) = accel.intersect(ray)?;
+    let prim = accel.intersect(ray)?.index;
     let tri = accel.original_index[prim] as usize;
     let patch = mesh.patch_hit(tri, ray.dir);
     let (b1, b2) = match accel.prims[prim] {

@@ -346,7 +346,7 @@ fn estimate_row(mesh: &PatchMesh, accel: &Accel, i: usize, rays: u32, seed: u64,
         let x = p[0] * (1.0 - b.x - b.y) + p[1] * b.x + p[2] * b.y;
         let dir = frame.to_world(square_to_cosine_hemisphere(u_dir)).normalize();
         let ray = Ray::new(offset_ray_origin(x, patch.normal), dir);
-        if let Some((prim, _t)) = accel.intersect(&ray) {
+        if let Some(prim) = accel.intersect(&ray).map(|h| h.index) {
             let t = accel.original_index[prim] as usize;
             let j = mesh.patch_hit(t, dir);
             if j != NO_PATCH {

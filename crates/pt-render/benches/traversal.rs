@@ -200,7 +200,7 @@ fn bench_traversal(c: &mut Criterion, case: &Case) {
                 b.iter(|| {
                     let mut sum = 0.0f32;
                     for r in rays.iter() {
-                        if let Some((_, t)) = accel.intersect(black_box(r)) {
+                        if let Some(t) = accel.intersect(black_box(r)).map(|h| h.t) {
                             sum += t;
                         }
                     }

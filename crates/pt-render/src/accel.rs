@@ -12,6 +12,7 @@ use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
 use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::cwbvh::CwBvh;
+use obvhs::faststack::StackStack;
 use obvhs::ray::{Ray as BvhRay, RayHit};
 use obvhs::ploc::PlocBuilder;
 use obvhs::{Boundable, BvhBuildParams};
@@ -59,6 +60,8 @@ const MAX_CHUNKS: usize = 8;
 /// A BVH over primitives stored in traversal order.
 pub struct Accel {
     tree: Tree,
+    /// Whether every CWBVH here is shallow enough for [`SMALL_STACK`] (chosen at build time).
+    small_stack: bool,
     /// Primitives reordered so that the BVH's primitive id indexes this directly.
     pub prims: Vec<Primitive>,
     /// For each entry of `prims`, its index in the order given to [`Accel::build`].
@@ -72,7 +75,7 @@ impl Accel {
     /// primitives are permuted in place afterwards (no second copy).
     pub fn build(mut prims: Vec<Primitive>, kind: BvhKind) -> Self {
         if prims.is_empty() {
-            return Accel { tree: Tree::Empty, prims, original_index: Vec::new() };
+            return Accel { tree: Tree::Empty, small_stack: true, prims, original_index: Vec::new() };
         }
         let params = BvhBuildParams::medium_build();
         let mut t = Duration::default();
@@ -89,7 +92,7 @@ impl Accel {
             }
         };
         permute_in_place(&mut prims, &order);
-        Accel { tree, prims, original_index: order }
+        Accel { small_stack: fits_small_stack(&tree), tree, prims, original_index: order }
     }
 
     /// [`Accel::build`] with a lower memory peak, for large meshes: the primitives are dropped
@@ -110,7 +113,7 @@ impl Accel {
     /// as that makes at most [`MAX_CHUNKS`] groups).
     fn build_compact_chunked(prims: Vec<Primitive>, kind: BvhKind, remake: impl Fn(usize) -> Primitive, chunk_prims: usize) -> Self {
         if prims.is_empty() {
-            return Accel { tree: Tree::Empty, prims, original_index: Vec::new() };
+            return Accel { tree: Tree::Empty, small_stack: true, prims, original_index: Vec::new() };
         }
         let mut boxes: Vec<BuildBox> = Vec::with_capacity(prims.len());
         boxes.extend(prims.iter().map(|p| BuildBox::from(p.aabb())));
@@ -148,37 +151,49 @@ impl Accel {
         };
         let mut prims = Vec::with_capacity(order.len());
         prims.extend(order.iter().map(|&i| remake(i as usize)));
-        Accel { tree, prims, original_index: order }
+        Accel { small_stack: fits_small_stack(&tree), tree, prims, original_index: order }
     }
 
-    /// Closest hit along the ray: `(index into prims, t)`.
+    /// Closest hit along the ray: which primitive, at what distance, with the barycentrics the
+    /// triangle test found (so the caller need not test the triangle again).
     #[inline(always)]
-    pub fn intersect(&self, ray: &Ray) -> Option<(usize, f32)> {
-        let r = BvhRay::new(Vec3A::from(ray.origin), Vec3A::from(ray.dir), ray.tmin, ray.tmax);
+    pub fn intersect(&self, ray: &Ray) -> Option<AccelHit> {
+        let r = bvh_ray(ray);
         let mut hit = RayHit::none();
         let prims = &self.prims;
-        let f = |r: &BvhRay, id: usize| prims[id].intersect(r.origin, r.direction, r.tmin, r.tmax);
+        // obvhs and `cw_closest` accept a candidate exactly when its distance is below the
+        // current `tmax`, so the barycentrics of the last candidate below it are the hit's.
+        let mut bary = (0.0, 0.0);
+        let mut f = |r: &BvhRay, id: usize| {
+            let (t, b1, b2) = prims[id].intersect_bary(r.origin, r.direction, r.tmin, r.tmax);
+            if t < r.tmax {
+                bary = (b1, b2);
+            }
+            t
+        };
         let found = match &self.tree {
-            Tree::Cw(b) => cw_closest(b, r, &mut hit, f),
-            Tree::CwChunks(chunks) => chunks_closest(chunks, prims, r, &mut hit),
-            Tree::Two(b) => b.ray_traverse(r, &mut hit, f),
+            Tree::Cw(b) if self.small_stack => cw_closest::<SMALL_STACK>(b, r, &mut hit, &mut f),
+            Tree::Cw(b) => cw_closest::<LARGE_STACK>(b, r, &mut hit, &mut f),
+            Tree::CwChunks(chunks) => chunks_closest(chunks, r, &mut hit, &mut f),
+            Tree::Two(b) => b.ray_traverse(r, &mut hit, &mut f),
             Tree::Empty => false,
         };
-        found.then_some((hit.primitive_id as usize, hit.t))
+        found.then_some(AccelHit { index: hit.primitive_id as usize, t: hit.t, b1: bary.0, b2: bary.1 })
     }
 
     /// Whether anything blocks the ray within `(tmin, tmax)` (any-hit traversal, stops at the
     /// first blocker).
     #[inline(always)]
     pub fn occluded(&self, ray: &Ray) -> bool {
-        let r = BvhRay::new(Vec3A::from(ray.origin), Vec3A::from(ray.dir), ray.tmin, ray.tmax);
+        let r = bvh_ray(ray);
         let prims = &self.prims;
         let f = |r: &BvhRay, id: usize| prims[id].intersect(r.origin, r.direction, r.tmin, r.tmax);
         match &self.tree {
-            Tree::Cw(b) => cw_any(b, r, f),
+            Tree::Cw(b) if self.small_stack => cw_any::<SMALL_STACK>(b, r, f),
+            Tree::Cw(b) => cw_any::<LARGE_STACK>(b, r, f),
             Tree::CwChunks(chunks) => chunks.iter().any(|c| {
                 c.bounds.intersect_ray(&r) < r.tmax
-                    && cw_any(&c.bvh, r, |r: &BvhRay, id: usize| prims[c.base + id].intersect(r.origin, r.direction, r.tmin, r.tmax))
+                    && cw_any::<LARGE_STACK>(&c.bvh, r, |r: &BvhRay, id: usize| prims[c.base + id].intersect(r.origin, r.direction, r.tmin, r.tmax))
             }),
             Tree::Two(b) => !b.ray_traverse_miss(r, f),
             Tree::Empty => false,
@@ -186,13 +201,100 @@ impl Accel {
     }
 }
 
-/// CWBVH closest-hit traversal: obvhs's `CwBvh::ray_traverse` written out with its `traverse!`
-/// macro (same visiting order, same result) with this module's node test, [`intersect_node`].
-/// `hit` receives the closest primitive in `(ray.tmin, ray.tmax)`; returns whether there is one.
+/// The closest hit [`Accel::intersect`] found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AccelHit {
+    /// Index into [`Accel::prims`].
+    pub index: usize,
+    /// Distance along the ray (in units of the ray's direction vector).
+    pub t: f32,
+    /// Barycentric weight of the triangle's second vertex (`v0 + e1`); 0 for spheres.
+    pub b1: f32,
+    /// Barycentric weight of the triangle's third vertex (`v0 + e2`); 0 for spheres.
+    pub b2: f32,
+}
+
+/// obvhs's ray for `ray`: the same values as its `Ray::new` (its `safe_inverse`: components of
+/// magnitude at most `f32::EPSILON` invert to `±1 / EPSILON`), computed on all three lanes at
+/// once instead of with a branch per component.
 #[inline(always)]
-fn cw_closest(bvh: &CwBvh, ray: BvhRay, hit: &mut RayHit, mut f: impl FnMut(&BvhRay, usize) -> f32) -> bool {
+fn bvh_ray(ray: &Ray) -> BvhRay {
+    let d = Vec3A::from(ray.dir);
+    let tiny = d.abs().cmple(Vec3A::splat(f32::EPSILON));
+    let inv_direction = Vec3A::select(tiny, d.signum() / f32::EPSILON, Vec3A::ONE / d);
+    BvhRay { origin: Vec3A::from(ray.origin), direction: d, inv_direction, tmin: ray.tmin, tmax: ray.tmax }
+}
+
+/// Stack entries for CWBVHs of depth below [`SMALL_STACK`]: a traversal pushes at most one
+/// node group per level it descends, and a shorter stack is cheaper to set up per ray (obvhs
+/// clears its 32 entries for every ray). Small scenes such as the Cornell box have depth 2.
+const SMALL_STACK: usize = 8;
+/// obvhs's own traversal stack size, which its `validate` requires to exceed the depth.
+const LARGE_STACK: usize = 32;
+
+/// Whether every CWBVH in `tree` is shallow enough for [`SMALL_STACK`]. obvhs's stack keeps
+/// writing into its last entry when full, so the depth must stay below the size minus one.
+fn fits_small_stack(tree: &Tree) -> bool {
+    match tree {
+        Tree::Cw(b) => cw_depth(b, 0) + 1 < SMALL_STACK as u32,
+        _ => false,
+    }
+}
+
+/// Number of internal-node levels from `node` down (1 for a node whose children are all
+/// leaves; 0 for an empty tree). A node's `imask` marks its internal children.
+fn cw_depth(bvh: &CwBvh, node: usize) -> u32 {
+    let Some(n) = bvh.nodes.get(node) else { return 0 };
+    let deepest = (0..8).filter(|&ch| n.imask >> ch & 1 != 0).map(|ch| cw_depth(bvh, n.child_node_index(ch) as usize)).max();
+    1 + deepest.unwrap_or(0)
+}
+
+/// State of one CWBVH traversal, as obvhs's `traverse!` macro reads and writes it (the fields of
+/// its `Traversal`), with a stack of `N` entries.
+struct CwTraversal<const N: usize> {
+    stack: StackStack<UVec2, N>,
+    current_group: UVec2,
+    primitive_group: UVec2,
+    oct_inv4: u32,
+    primitive_id: u32,
+    hitmask: u32,
+}
+
+/// obvhs's inverted ray octant per child slot byte, indexed by the sign mask of the direction
+/// (bit 0: x < 0, bit 1: y < 0, bit 2: z < 0): bytes of 4 for x >= 0, 2 for y >= 0, 1 for
+/// z >= 0 (Ylitie et al. 2017, the order children are stored in for each octant).
+const OCT_INV4: [u32; 8] = {
+    let mut t = [0u32; 8];
+    let mut m = 0;
+    while m < 8 {
+        let x = if m & 1 != 0 { 0 } else { 0x0404_0404 };
+        let y = if m & 2 != 0 { 0 } else { 0x0202_0202 };
+        let z = if m & 4 != 0 { 0 } else { 0x0101_0101 };
+        t[m] = x | y | z;
+        m += 1;
+    }
+    t
+};
+
+impl<const N: usize> CwTraversal<N> {
+    /// obvhs's `CwBvh::new_traversal`: the root's group, or nothing for an empty tree.
+    #[inline(always)]
+    fn new(bvh: &CwBvh, dir: Vec3A) -> Self {
+        let current_group = if bvh.nodes.is_empty() { UVec2::ZERO } else { UVec2::new(0, 0x8000_0000) };
+        // Same comparisons as obvhs (`< 0.0`, so -0.0 counts as positive), one vector compare.
+        let oct_inv4 = OCT_INV4[dir.cmplt(Vec3A::ZERO).bitmask() as usize];
+        CwTraversal { stack: StackStack::default(), current_group, primitive_group: UVec2::ZERO, oct_inv4, primitive_id: 0, hitmask: 0 }
+    }
+}
+
+/// CWBVH closest-hit traversal: obvhs's `CwBvh::ray_traverse` written out with its `traverse!`
+/// macro (same visiting order, same result) with this module's node test, [`intersect_node`],
+/// and an `N`-entry stack. `hit` receives the closest primitive in `(ray.tmin, ray.tmax)`;
+/// returns whether there is one.
+#[inline(always)]
+fn cw_closest<const N: usize>(bvh: &CwBvh, ray: BvhRay, hit: &mut RayHit, mut f: impl FnMut(&BvhRay, usize) -> f32) -> bool {
     let mut traverse_ray = ray;
-    let mut state = bvh.new_traversal(ray.direction);
+    let mut state = CwTraversal::<N>::new(bvh, ray.direction);
     let mut node;
     obvhs::traverse!(bvh, node, state, intersect_node(node, &traverse_ray, state.oct_inv4), {
         let t = f(&traverse_ray, state.primitive_id as usize);
@@ -206,10 +308,11 @@ fn cw_closest(bvh: &CwBvh, ray: BvhRay, hit: &mut RayHit, mut f: impl FnMut(&Bvh
 }
 
 /// CWBVH any-hit traversal: whether some primitive is hit in `(ray.tmin, ray.tmax)`; stops at
-/// the first one found (obvhs's `CwBvh::ray_traverse_miss`, negated, with [`intersect_node`]).
+/// the first one found (obvhs's `CwBvh::ray_traverse_miss`, negated, with [`intersect_node`]
+/// and an `N`-entry stack).
 #[inline(always)]
-fn cw_any(bvh: &CwBvh, ray: BvhRay, mut f: impl FnMut(&BvhRay, usize) -> f32) -> bool {
-    let mut state = bvh.new_traversal(ray.direction);
+fn cw_any<const N: usize>(bvh: &CwBvh, ray: BvhRay, mut f: impl FnMut(&BvhRay, usize) -> f32) -> bool {
+    let mut state = CwTraversal::<N>::new(bvh, ray.direction);
     let mut node;
     let mut hit = false;
     'outer: {
@@ -273,7 +376,7 @@ fn split_median(ids: &mut [u32], boxes: &[BuildBox], parts: usize) {
 /// entry first, each traversed with the closest hit so far as its `tmax`. `hit` receives the
 /// index into `prims` and the distance.
 #[inline]
-fn chunks_closest(chunks: &[Chunk], prims: &[Primitive], ray: BvhRay, hit: &mut RayHit) -> bool {
+fn chunks_closest(chunks: &[Chunk], ray: BvhRay, hit: &mut RayHit, f: &mut impl FnMut(&BvhRay, usize) -> f32) -> bool {
     let mut entries = [(f32::INFINITY, 0usize); MAX_CHUNKS];
     let mut n = 0;
     for (k, c) in chunks.iter().enumerate() {
@@ -298,7 +401,7 @@ fn chunks_closest(chunks: &[Chunk], prims: &[Primitive], ray: BvhRay, hit: &mut 
         let mut r = ray;
         r.tmax = best;
         let mut h = RayHit::none();
-        if cw_closest(&c.bvh, r, &mut h, |r: &BvhRay, id: usize| prims[c.base + id].intersect(r.origin, r.direction, r.tmin, r.tmax)) {
+        if cw_closest::<LARGE_STACK>(&c.bvh, r, &mut h, |r: &BvhRay, id: usize| f(r, c.base + id)) {
             best = h.t;
             hit.t = h.t;
             hit.primitive_id = (c.base + h.primitive_id as usize) as u32;
@@ -465,6 +568,29 @@ mod tests {
     }
 
     #[test]
+    fn stack_size_follows_the_tree_depth() {
+        // obvhs's validation counts depth from 0 at the root; `cw_depth` counts levels.
+        for (n, small) in [(2, true), (8, true), (300, false)] {
+            let prims = grid(n);
+            let accel = Accel::build(prims.clone(), BvhKind::CwBvh);
+            let Tree::Cw(b) = &accel.tree else { panic!("not a single CWBVH") };
+            let levels = cw_depth(b, 0);
+            assert_eq!(levels, b.validate(&accel.prims, true).max_depth + 1, "grid {n}");
+            // 180,001 primitives need more levels than the small stack holds.
+            assert_eq!(accel.small_stack, small, "grid {n}: {levels} levels");
+            // Closest hits through the large stack agree with a brute-force search.
+            if !small {
+                for k in 0..200 {
+                    let o = Vec3::new(k as f32 * 1.37 % 300.0, k as f32 * 2.71 % 300.0, 6.0);
+                    let ray = Ray::new(o, Vec3::new(0.3, -0.2, -1.0).normalize());
+                    let brute = prims.iter().map(|p| p.intersect(o.into(), ray.dir.into(), 0.0, f32::INFINITY)).fold(f32::INFINITY, f32::min);
+                    assert_eq!(accel.intersect(&ray).map_or(f32::INFINITY, |h| h.t), brute, "ray {k}");
+                }
+            }
+        }
+    }
+
+    #[test]
     fn matches_brute_force() {
         let prims = grid(8);
         // The last three: CWBVH in 2 and 4 groups (129 primitives, at most 80 and 40 per group),
@@ -504,8 +630,11 @@ mod tests {
                 let got = accel.intersect(&ray);
                 match (brute, got) {
                     (None, None) => {}
-                    (Some((_, tb)), Some((i, t))) => {
+                    (Some((_, tb)), Some(AccelHit { index: i, t, b1, b2 })) => {
                         assert_eq!(t, tb);
+                        // The barycentrics are those of the accepted primitive's own test.
+                        let (_, eb1, eb2) = accel.prims[i].intersect_bary(o.into(), d.into(), 0.0, f32::INFINITY);
+                        assert_eq!((b1, b2), (eb1, eb2));
                         // The returned index is where the hit primitive is stored.
                         let orig = accel.original_index[i] as usize;
                         assert_eq!(format!("{:?}", accel.prims[i]), format!("{:?}", prims[orig]));

@@ -62,6 +62,16 @@ impl Primitive {
             Primitive::Sphere { center, radius, .. } => intersect_sphere(origin, dir, center, radius, tmin, tmax),
         }
     }
+
+    /// [`Primitive::intersect`] with the hit's barycentrics `(t, b1, b2)` (the weights of
+    /// `v0 + e1` and `v0 + e2`; 0 for spheres); `t` is +inf on a miss.
+    #[inline(always)]
+    pub fn intersect_bary(&self, origin: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> (f32, f32, f32) {
+        match *self {
+            Primitive::Triangle { v0, e1, e2 } => intersect_triangle(origin, dir, v0, e1, e2, tmin, tmax).unwrap_or((f32::INFINITY, 0.0, 0.0)),
+            Primitive::Sphere { center, radius, .. } => (intersect_sphere(origin, dir, center, radius, tmin, tmax), 0.0, 0.0),
+        }
+    }
 }
 
 /// Möller & Trumbore 1997, "Fast, Minimum Storage Ray/Triangle Intersection": returns

@@ -10,7 +10,7 @@ use crate::geometry::Interaction;
 use crate::light::LightSample;
 use crate::sampler::Sampler;
 use crate::scene::Scene;
-use pt_math::{offset_ray_origin, power_heuristic, Frame, Ray};
+use pt_math::{offset_ray_origin, power_heuristic, Frame, Ray, Vec3};
 use pt_spectrum::{ColorMode, SampledSpectrum, SampledWavelengths};
 
 /// Which strategies estimate direct light (for method comparisons; MIS is the default).
@@ -129,6 +129,10 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, 
         let frame = Frame::from_normal_tangent(hit.ns, hit.dpdu);
         let wo = frame.to_local(wo_world);
 
+        // Rays leave the hit offset to one side of the surface; the shadow ray and the next
+        // segment of a reflection leave on the side the path came from.
+        let spawn = SpawnPoint::new(&hit, ray.dir);
+
         // Next-event estimation.
         if use_light && bsdf.has_smooth_lobe() {
             if let Some((li_idx, pmf, u_sel)) = scene.sample_light(sampler.next_1d()) {
@@ -137,7 +141,7 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, 
                 if let Some(ls) = light.sample(hit.p, u_sel, u, lambda) {
                     let wi = frame.to_local(ls.wi);
                     let f = bsdf.eval(wo, wi);
-                    if !ls.radiance.is_black() && !f.is_black() && visible(scene, &hit, &ls) {
+                    if !ls.radiance.is_black() && !f.is_black() && visible(scene, spawn.origin(ls.wi), &ls) {
                         let light_pdf = pmf * ls.pdf;
                         // Delta lights cannot be hit by BSDF sampling: light sampling is the only
                         // strategy, weight 1.
@@ -163,7 +167,7 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, 
         prev_p = hit.p;
         prev_pdf = bs.pdf;
         prev_delta = bs.delta;
-        ray = Ray::new(offset_ray_origin(hit.p, hit.ng * hit.ng.dot(wi_world).signum()), wi_world);
+        ray = Ray::new(spawn.origin(wi_world), wi_world);
         depth += 1;
 
         // Russian roulette (Mitsuba: after rr_depth segments, keep with probability
@@ -180,11 +184,43 @@ pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, 
 }
 
 
-/// Whether nothing blocks the segment from the hit to the light sample. Both ends are offset off
-/// their surfaces (a light without a surface normal, or a distant one, needs no offset there).
+/// Origins of rays leaving a hit: the hit point offset off its surface (Wächter & Binder 2019,
+/// see [`offset_ray_origin`]) to the side a ray's direction points to. The side the path
+/// arrived from is computed once, since the shadow ray and the next segment of a reflection
+/// both leave there.
+struct SpawnPoint {
+    /// Hit point, world space.
+    p: Vec3,
+    /// Unit geometric normal flipped to the side the path arrived from, world space.
+    n_out: Vec3,
+    /// `p` offset towards `n_out`.
+    out: Vec3,
+}
+
+impl SpawnPoint {
+    /// Spawn point of `hit`, reached by a ray travelling in direction `ray_dir` (world space).
+    #[inline(always)]
+    fn new(hit: &Interaction, ray_dir: Vec3) -> Self {
+        let n_out = hit.ng * -hit.ng.dot(ray_dir).signum();
+        SpawnPoint { p: hit.p, n_out, out: offset_ray_origin(hit.p, n_out) }
+    }
+
+    /// Origin for a ray leaving in direction `dir` (world space).
+    #[inline(always)]
+    fn origin(&self, dir: Vec3) -> Vec3 {
+        if self.n_out.dot(dir) >= 0.0 {
+            self.out
+        } else {
+            offset_ray_origin(self.p, -self.n_out)
+        }
+    }
+}
+
+/// Whether nothing blocks the segment from `origin` (the hit, offset off its surface towards the
+/// light) to the light sample, whose end is offset off its surface too (a light without a
+/// surface normal, or a distant one, needs no offset there).
 #[inline(always)]
-fn visible(scene: &Scene, hit: &Interaction, ls: &LightSample) -> bool {
-    let origin = offset_ray_origin(hit.p, hit.ng * hit.ng.dot(ls.wi).signum());
+fn visible(scene: &Scene, origin: Vec3, ls: &LightSample) -> bool {
     if ls.dist.is_infinite() {
         return !scene.occluded(&Ray::new(origin, ls.wi));
     }

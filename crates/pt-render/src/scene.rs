@@ -1,8 +1,8 @@
 //! A renderable scene built from the loader's description: BVH, materials, lights, camera.
 
-use crate::accel::{Accel, BvhKind};
+use crate::accel::{Accel, AccelHit, BvhKind};
 use crate::camera::Camera;
-use crate::geometry::{intersect_triangle, Interaction, Primitive};
+use crate::geometry::{Interaction, Primitive};
 use crate::light::{AreaLight, EnvMap, Light, LightShape, LightTriangle, SpotCone};
 use pt_bsdf::{
     Bsdf, CoatingTable, Conductor, Dielectric, Distribution, RoughPlastic, RoughThinFilm, FilmBase, GltfPbr, Lambert, ThinFilm, Microfacet, Minnaert, OrenNayar, OrenNayarVariant, RoughConductor, RoughDielectric,
@@ -466,14 +466,11 @@ impl Scene {
     /// Closest hit along `ray`, with its surface data.
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray) -> Option<Interaction> {
-        let (id, t) = self.accel.intersect(ray)?;
+        let AccelHit { index: id, t, b1, b2 } = self.accel.intersect(ray)?;
         let r = self.prim_refs[id];
         let shape = &self.shapes[r.shape as usize];
         match self.accel.prims[id] {
             Primitive::Triangle { v0, e1, e2 } => {
-                // Barycentrics of the accepted hit (recomputed once instead of in every test).
-                let (b1, b2) = intersect_triangle(ray.origin.into(), ray.dir.into(), v0, e1, e2, f32::NEG_INFINITY, f32::INFINITY)
-                    .map_or((0.0, 0.0), |h| (h.1, h.2));
                 let b0 = 1.0 - b1 - b2;
                 let p = Vec3::from(v0 + e1 * b1 + e2 * b2);
                 let ng = Vec3::from(e1.cross(e2)).normalize();
