@@ -681,9 +681,10 @@ fn cmd_info(args: InfoArgs) -> Result<ExitCode> {
     let dir = c.to_world.transform_vector3(pt_math::Vec3::Z).normalize();
     out!("camera      {:?}, at ({:.3}, {:.3}, {:.3}) looking ({:.3}, {:.3}, {:.3})", c.projection, pos.x, pos.y, pos.z, dir.x, dir.y, dir.z);
     out!(
-        "geometry    {} shapes, {} triangles, {} spheres{}",
+        "geometry    {} shapes, {} triangles{}, {} spheres{}",
         desc.shapes.len(),
         scene.stats.triangles,
+        if scene.stats.parallelograms > 0 { format!(" ({} pairs tested as parallelograms)", scene.stats.parallelograms) } else { String::new() },
         scene.stats.spheres,
         if scene.stats.degenerate_triangles > 0 { format!(" ({} zero-area triangles skipped)", scene.stats.degenerate_triangles) } else { String::new() }
     );

@@ -22,7 +22,6 @@ use pt_math::{offset_ray_origin, Frame, Ray, Vec2};
 use pt_render::accel::Accel;
 use pt_render::camera::Camera;
 use pt_render::film::{sample_filter, PixelStats};
-use pt_render::geometry::{intersect_triangle, Primitive};
 use pt_render::sampler::Sampler;
 use pt_render::RenderOutput;
 use pt_scene::FilterDesc;
@@ -123,15 +122,10 @@ pub struct ImageSettings {
 /// misses; the patch is [`NO_PATCH`] on the black back of a one-sided surface.
 #[inline]
 fn hit(mesh: &PatchMesh, accel: &Accel, ray: &Ray) -> Option<(u32, usize, f32, f32)> {
-    let prim = accel.intersect(ray)?.index;
-    let tri = accel.original_index[prim] as usize;
+    let h = accel.intersect(ray)?;
+    let tri = accel.original_index[h.index] as usize;
     let patch = mesh.patch_hit(tri, ray.dir);
-    let (b1, b2) = match accel.prims[prim] {
-        Primitive::Triangle { v0, e1, e2 } => intersect_triangle(ray.origin.into(), ray.dir.into(), v0, e1, e2, f32::NEG_INFINITY, f32::INFINITY)
-            .map_or((1.0 / 3.0, 1.0 / 3.0), |h| (h.1, h.2)),
-        Primitive::Sphere { .. } => (1.0 / 3.0, 1.0 / 3.0),
-    };
-    Some((patch, tri, b1, b2))
+    Some((patch, tri, h.b1, h.b2))
 }
 
 /// Renders the solution. `progress` receives the fraction of rows done.

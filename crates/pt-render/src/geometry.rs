@@ -20,6 +20,17 @@ pub enum Primitive {
         /// `v2 - v0`.
         e2: Vec3A,
     },
+    /// A parallelogram `v0 + b1 e1 + b2 e2`, `b1` and `b2` in [0, 1]: two triangles of a mesh
+    /// that share a diagonal and together form one (rectangles, cube faces, quads), tested
+    /// once instead of twice. Front side as for triangles.
+    Parallelogram {
+        /// The corner the edges start from.
+        v0: Vec3A,
+        /// First edge.
+        e1: Vec3A,
+        /// Second edge.
+        e2: Vec3A,
+    },
     /// A sphere; `flip` makes the front side (normal) face inwards.
     Sphere {
         /// Centre.
@@ -47,6 +58,10 @@ impl Primitive {
                 let (v1, v2) = (v0 + e1, v0 + e2);
                 Aabb::new(v0.min(v1).min(v2), v0.max(v1).max(v2))
             }
+            Primitive::Parallelogram { v0, e1, e2 } => {
+                let (v1, v2, v3) = (v0 + e1, v0 + e2, v0 + e1 + e2);
+                Aabb::new(v0.min(v1).min(v2).min(v3), v0.max(v1).max(v2).max(v3))
+            }
             Primitive::Sphere { center, radius, .. } => {
                 Aabb::new(center - Vec3A::splat(radius), center + Vec3A::splat(radius))
             }
@@ -59,6 +74,7 @@ impl Primitive {
     pub fn intersect(&self, origin: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> f32 {
         match *self {
             Primitive::Triangle { v0, e1, e2 } => intersect_triangle(origin, dir, v0, e1, e2, tmin, tmax).map_or(f32::INFINITY, |h| h.0),
+            Primitive::Parallelogram { v0, e1, e2 } => intersect_parallelogram(origin, dir, v0, e1, e2, tmin, tmax).map_or(f32::INFINITY, |h| h.0),
             Primitive::Sphere { center, radius, .. } => intersect_sphere(origin, dir, center, radius, tmin, tmax),
         }
     }
@@ -69,6 +85,7 @@ impl Primitive {
     pub fn intersect_bary(&self, origin: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> (f32, f32, f32) {
         match *self {
             Primitive::Triangle { v0, e1, e2 } => intersect_triangle(origin, dir, v0, e1, e2, tmin, tmax).unwrap_or((f32::INFINITY, 0.0, 0.0)),
+            Primitive::Parallelogram { v0, e1, e2 } => intersect_parallelogram(origin, dir, v0, e1, e2, tmin, tmax).unwrap_or((f32::INFINITY, 0.0, 0.0)),
             Primitive::Sphere { center, radius, .. } => (intersect_sphere(origin, dir, center, radius, tmin, tmax), 0.0, 0.0),
         }
     }
@@ -78,6 +95,21 @@ impl Primitive {
 /// `(t, b1, b2)`. Written so that NaN from degenerate input fails every comparison and misses.
 #[inline(always)]
 pub fn intersect_triangle(o: Vec3A, d: Vec3A, v0: Vec3A, e1: Vec3A, e2: Vec3A, tmin: f32, tmax: f32) -> Option<(f32, f32, f32)> {
+    moller_trumbore::<false>(o, d, v0, e1, e2, tmin, tmax)
+}
+
+/// The parallelogram `v0 + b1 e1 + b2 e2`, `b1, b2` in [0, 1]: Möller-Trumbore's
+/// barycentrics are the parallelogram's edge coordinates, so only the last bound changes
+/// (`b2 <= 1` in place of `b1 + b2 <= 1`). Returns `(t, b1, b2)`.
+#[inline(always)]
+pub fn intersect_parallelogram(o: Vec3A, d: Vec3A, v0: Vec3A, e1: Vec3A, e2: Vec3A, tmin: f32, tmax: f32) -> Option<(f32, f32, f32)> {
+    moller_trumbore::<true>(o, d, v0, e1, e2, tmin, tmax)
+}
+
+/// Möller & Trumbore's test over the triangle (`PARALLELOGRAM` false) or the parallelogram
+/// spanned by `e1` and `e2` at `v0`.
+#[inline(always)]
+fn moller_trumbore<const PARALLELOGRAM: bool>(o: Vec3A, d: Vec3A, v0: Vec3A, e1: Vec3A, e2: Vec3A, tmin: f32, tmax: f32) -> Option<(f32, f32, f32)> {
     let pvec = d.cross(e2);
     let det = e1.dot(pvec);
     if det == 0.0 {
@@ -91,7 +123,8 @@ pub fn intersect_triangle(o: Vec3A, d: Vec3A, v0: Vec3A, e1: Vec3A, e2: Vec3A, t
     }
     let qvec = tvec.cross(e1);
     let b2 = d.dot(qvec) * inv_det;
-    if !(b2 >= 0.0 && b1 + b2 <= 1.0) {
+    let inside = if PARALLELOGRAM { b2 <= 1.0 } else { b1 + b2 <= 1.0 };
+    if !(b2 >= 0.0 && inside) {
         return None;
     }
     let t = e2.dot(qvec) * inv_det;

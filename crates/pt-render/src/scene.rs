@@ -50,15 +50,48 @@ struct ShapeData {
 #[derive(Clone, Copy)]
 struct PrimRef {
     shape: u32,
-    /// Triangle index within the shape's mesh (0 for spheres).
+    /// Triangle index within the shape's mesh (0 for spheres); for a parallelogram, the first
+    /// of its two triangles (`local + 1` is the other).
     local: u32,
+    /// For a parallelogram: which vertex of triangle `local` is its corner `v0` (its edges run
+    /// to the next two vertices in winding order). `None` for a triangle or sphere.
+    corner: Option<u8>,
+}
+
+impl PrimRef {
+    /// A triangle's or sphere's reference.
+    fn single(shape: u32, local: u32) -> Self {
+        PrimRef { shape, local, corner: None }
+    }
+
+    /// The vertex indices of triangle `local` of `indices`, rotated so that a parallelogram's
+    /// corner comes first: vertex 0 has barycentric weight `1 - b1 - b2`, 1 and 2 have `b1`
+    /// and `b2` (over a parallelogram the same affine interpolation, with `1 - b1 - b2` down
+    /// to -1 in the second triangle's half).
+    #[inline(always)]
+    fn vertices(&self, indices: &[[u32; 3]]) -> [u32; 3] {
+        let t = indices.get(self.local as usize).copied().unwrap_or([0, 0, 0]);
+        match self.corner {
+            Some(c) => rotate(t, c),
+            None => t,
+        }
+    }
+}
+
+/// `t` rotated so that `t[c]` comes first (winding kept).
+#[inline(always)]
+fn rotate(t: [u32; 3], c: u8) -> [u32; 3] {
+    let c = c as usize % 3;
+    [t[c], t[(c + 1) % 3], t[(c + 2) % 3]]
 }
 
 /// Counts for `pt info` and logs.
 #[derive(Clone, Debug, Default)]
 pub struct SceneStats {
-    /// Triangles in the BVH.
+    /// Triangles in the BVH, counting those merged into parallelograms.
     pub triangles: usize,
+    /// Pairs of mesh triangles tested as one parallelogram (rectangles, cube faces, quads).
+    pub parallelograms: usize,
     /// Analytic spheres in the BVH.
     pub spheres: usize,
     /// Zero-area triangles left out of the BVH (they can neither be hit nor emit).
@@ -369,7 +402,7 @@ impl Scene {
                         return Err(BuildError { loc: shape.loc.clone(), message: format!("sphere radius must be positive and finite, got {radius}") });
                     }
                     prims.push(Primitive::Sphere { center: center.into(), radius, flip: flip_normals });
-                    refs.push(PrimRef { shape: si as u32, local: 0 });
+                    refs.push(PrimRef::single(si as u32, 0));
                     stats.spheres += 1;
                     Some((LightShape::Sphere { center, radius, flip: flip_normals }, 4.0 * std::f32::consts::PI * radius * radius))
                 }
@@ -470,11 +503,11 @@ impl Scene {
         let r = self.prim_refs[id];
         let shape = &self.shapes[r.shape as usize];
         match self.accel.prims[id] {
-            Primitive::Triangle { v0, e1, e2 } => {
+            Primitive::Triangle { v0, e1, e2 } | Primitive::Parallelogram { v0, e1, e2 } => {
                 let b0 = 1.0 - b1 - b2;
                 let p = Vec3::from(v0 + e1 * b1 + e2 * b2);
                 let ng = Vec3::from(e1.cross(e2)).normalize();
-                let idx = shape.indices.get(r.local as usize).copied().unwrap_or([0, 0, 0]);
+                let idx = r.vertices(&shape.indices);
                 let ns = match &shape.normals {
                     Some(n) => {
                         let v = n[idx[0] as usize] * b0 + n[idx[1] as usize] * b1 + n[idx[2] as usize] * b2;
@@ -991,6 +1024,8 @@ fn add_mesh(
     }
     let mut tris = Vec::new();
     let mut areas = Vec::new();
+    // The triangle that the previous one took in as the second half of its parallelogram.
+    let mut merged_with_previous = None;
     for (k, idx) in mesh.indices.iter().enumerate() {
         if idx.iter().any(|&i| i as usize >= n) {
             return Err(BuildError { loc: loc.clone(), message: format!("triangle {k} has a vertex index out of range ({n} vertices)") });
@@ -1005,9 +1040,19 @@ fn add_mesh(
             stats.degenerate_triangles += 1;
             continue;
         }
-        prims.push(triangle_primitive(p));
-        refs.push(PrimRef { shape, local: k as u32 });
         stats.triangles += 1;
+        if merged_with_previous == Some(k) {
+            // Already in the BVH as the second half of a parallelogram.
+        } else if let Some(corner) = parallelogram_corner(mesh, k) {
+            let r = PrimRef { shape, local: k as u32, corner: Some(corner) };
+            prims.push(parallelogram_primitive(mesh, r));
+            refs.push(r);
+            stats.parallelograms += 1;
+            merged_with_previous = Some(k + 1);
+        } else {
+            prims.push(triangle_primitive(p));
+            refs.push(PrimRef::single(shape, k as u32));
+        }
         if !emissive {
             continue;
         }
@@ -1031,9 +1076,76 @@ fn triangle_primitive(p: [Vec3; 3]) -> Primitive {
     Primitive::Triangle { v0: Vec3A::from(p[0]), e1: Vec3A::from(p[1] - p[0]), e2: Vec3A::from(p[2] - p[0]) }
 }
 
+/// The parallelogram whose corner and edges are the vertices of triangle `r.local` of `mesh`,
+/// rotated by `r.corner` (see [`parallelogram_corner`]).
+fn parallelogram_primitive(mesh: &TriangleMesh, r: PrimRef) -> Primitive {
+    let [v0, v1, v2] = r.vertices(&mesh.indices).map(|i| mesh.positions[i as usize]);
+    Primitive::Parallelogram { v0: Vec3A::from(v0), e1: Vec3A::from(v1 - v0), e2: Vec3A::from(v2 - v0) }
+}
+
+/// Whether mesh triangles `k` and `k + 1` together form a parallelogram that can be tested as
+/// one primitive, and if so which vertex of triangle `k` is its corner (the vertex that
+/// triangle `k + 1` lacks). They must share exactly two vertex indices (the diagonal), be
+/// wound the same way, and their four corners `x` (triangle k's own), `y` (triangle k+1's
+/// own) and the diagonal's `s1`, `s2` must satisfy `x + y = s1 + s2` (the diagonals bisect
+/// each other) to within float rounding of the vertex positions (16 ULPs of the largest
+/// coordinate: transformed rectangles and cube faces miss it by a few), and so must their
+/// texture coordinates, which are then one affine map over the whole parallelogram. Vertex
+/// normals and tangents, where present, must be the same at all four corners (flat faces).
+/// Both triangles are known to be valid (indices in range, finite); `k + 1`'s area is checked
+/// here.
+fn parallelogram_corner(mesh: &TriangleMesh, k: usize) -> Option<u8> {
+    let (a, b) = (mesh.indices[k], *mesh.indices.get(k + 1)?);
+    let n = mesh.positions.len();
+    if b.iter().any(|&i| i as usize >= n) {
+        return None;
+    }
+    let shared = |i: u32| b.contains(&i);
+    if a.iter().filter(|&&i| shared(i)).count() != 2 || a[0] == a[1] || a[1] == a[2] || a[0] == a[2] {
+        return None;
+    }
+    let c = a.iter().position(|&i| !shared(i))?;
+    let [x, s1, s2] = rotate(a, c as u8);
+    let y = *b.iter().find(|&&i| !a.contains(&i))?;
+    // Consistent winding: triangle k+1 runs along the diagonal from s2 to s1.
+    let at = |i: u32| b.iter().position(|&j| j == i).unwrap_or(0);
+    if (at(s2) + 1) % 3 != at(s1) {
+        return None;
+    }
+    let p = |i: u32| mesh.positions[i as usize];
+    let corners = [p(x), p(y), p(s1), p(s2)];
+    if !corners.iter().all(|v| v.is_finite()) || (p(s1) - p(y)).cross(p(s2) - p(y)).length_squared() <= 0.0 {
+        return None;
+    }
+    let scale = corners.iter().map(|v| v.abs().max_element()).fold(0.0f32, f32::max);
+    if (p(x) + p(y) - p(s1) - p(s2)).abs().max_element() > 16.0 * f32::EPSILON * scale {
+        return None;
+    }
+    if let Some(uv) = &mesh.uvs {
+        let t = |i: u32| uv[i as usize];
+        let uv_scale = [t(x), t(y), t(s1), t(s2)].iter().map(|v| v.abs().max_element()).fold(1.0f32, f32::max);
+        if !((t(x) + t(y) - t(s1) - t(s2)).abs().max_element() <= 16.0 * f32::EPSILON * uv_scale) {
+            return None;
+        }
+    }
+    let same = |v: [pt_math::Vec4; 4]| v.iter().all(|&u| u == v[0]);
+    if let Some(ns) = &mesh.normals {
+        if !same([x, y, s1, s2].map(|i| ns[i as usize].extend(0.0))) {
+            return None;
+        }
+    }
+    if let Some(ts) = &mesh.tangents {
+        if ts.len() != n || !same([x, y, s1, s2].map(|i| ts[i as usize])) {
+            return None;
+        }
+    }
+    Some(c as u8)
+}
+
 /// The BVH primitive `r` refers to, made from the description as the shape loop made it.
 fn primitive_of(desc: &SceneDesc, r: PrimRef) -> Primitive {
     match &desc.shapes[r.shape as usize].geometry {
+        Geometry::Mesh(m) if r.corner.is_some() => parallelogram_primitive(m, r),
         Geometry::Mesh(m) => triangle_primitive(m.indices[r.local as usize].map(|i| m.positions[i as usize])),
         &Geometry::Sphere { center, radius, flip_normals } => Primitive::Sphere { center: center.into(), radius, flip: flip_normals },
     }
