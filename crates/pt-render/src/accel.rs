@@ -189,11 +189,11 @@ impl Accel {
         let prims = &self.prims;
         let f = |r: &BvhRay, id: usize| prims[id].intersect(r.origin, r.direction, r.tmin, r.tmax);
         match &self.tree {
-            Tree::Cw(b) if self.small_stack => cw_any::<SMALL_STACK>(b, r, f),
-            Tree::Cw(b) => cw_any::<LARGE_STACK>(b, r, f),
+            Tree::Cw(b) if self.small_stack => cw_any::<SMALL_STACK>(b, r, prims),
+            Tree::Cw(b) => cw_any::<LARGE_STACK>(b, r, prims),
             Tree::CwChunks(chunks) => chunks.iter().any(|c| {
                 c.bounds.intersect_ray(&r) < r.tmax
-                    && cw_any::<LARGE_STACK>(&c.bvh, r, |r: &BvhRay, id: usize| prims[c.base + id].intersect(r.origin, r.direction, r.tmin, r.tmax))
+                    && cw_any::<LARGE_STACK>(&c.bvh, r, &prims[c.base..])
             }),
             Tree::Two(b) => !b.ray_traverse_miss(r, f),
             Tree::Empty => false,
@@ -309,15 +309,17 @@ fn cw_closest<const N: usize>(bvh: &CwBvh, ray: BvhRay, hit: &mut RayHit, mut f:
 
 /// CWBVH any-hit traversal: whether some primitive is hit in `(ray.tmin, ray.tmax)`; stops at
 /// the first one found (obvhs's `CwBvh::ray_traverse_miss`, negated, with [`intersect_node`]
-/// and an `N`-entry stack).
+/// and an `N`-entry stack). The tree's primitive ids index `prims`; they are tested directly
+/// rather than through a closure, which the compiler stopped inlining once primitives had three
+/// kinds (the test then ran outside the x86-64-v3 render loop).
 #[inline(always)]
-fn cw_any<const N: usize>(bvh: &CwBvh, ray: BvhRay, mut f: impl FnMut(&BvhRay, usize) -> f32) -> bool {
+fn cw_any<const N: usize>(bvh: &CwBvh, ray: BvhRay, prims: &[Primitive]) -> bool {
     let mut state = CwTraversal::<N>::new(bvh, ray.direction);
     let mut node;
     let mut hit = false;
     'outer: {
         obvhs::traverse!(bvh, node, state, intersect_node(node, &ray, state.oct_inv4), {
-            if f(&ray, state.primitive_id as usize) < ray.tmax {
+            if prims[state.primitive_id as usize].intersect(ray.origin, ray.direction, ray.tmin, ray.tmax) < ray.tmax {
                 hit = true;
                 break 'outer;
             }
