@@ -15,6 +15,7 @@
 //! miss together except within 1e-4 of an edge, where the two tests may round differently.
 
 use pt_math::{Ray, Vec3};
+use pt_render::light::{Light, LightShape};
 use pt_render::{BvhKind, LightSelection, Scene};
 use pt_scene::{Geometry, SceneDesc};
 use std::path::Path;
@@ -32,6 +33,8 @@ const XML: &str = r#"<scene version="3.0.0">
     <shape type="cube"><transform name="to_world"><scale value="0.3,0.6,0.3"/><rotate y="1" angle="20"/><translate value="-0.35,-0.39,-0.3"/></transform><ref id="w"/></shape>
     <shape type="cube"><transform name="to_world"><scale value="0.3,0.3,0.3"/><rotate x="1" angle="-17"/><translate value="0.33,-0.7,0.3"/></transform><ref id="w"/></shape>
     <shape type="disk"><transform name="to_world"><scale value="0.4"/><rotate x="1" angle="90"/><translate value="0,0.9,0"/></transform><ref id="w"/></shape>
+    <shape type="rectangle"><transform name="to_world"><scale value="0.25,0.2,1"/><rotate x="1" angle="90"/><translate value="0,0.98,0"/></transform>
+        <ref id="w"/><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
 </scene>"#;
 
 /// `desc` with every triangle given its own three vertices, so that no two triangles share an
@@ -58,8 +61,15 @@ fn parallelograms_hit_like_their_triangles() {
     let desc = pt_scene::load_str(XML, Path::new("parallelograms.xml"), Path::new("."), &[]).unwrap();
     let merged = Scene::build(&desc, BvhKind::default(), LightSelection::Power).unwrap();
     let split = Scene::build(&unwelded(&desc), BvhKind::default(), LightSelection::Power).unwrap();
-    // 2 + 2 rectangle triangles, 2 x 12 cube triangles; the disk's fan stays triangles.
-    assert_eq!(merged.stats.parallelograms, 2 + 12, "{:?}", merged.stats);
+    // 3 x 2 rectangle triangles, 2 x 12 cube triangles; the disk's fan stays triangles.
+    assert_eq!(merged.stats.parallelograms, 3 + 12, "{:?}", merged.stats);
+    // The rectangle light is sampled as one parallelogram (its sampling is tested in
+    // pt-render's light tests), unwelded as two triangles.
+    let shape = |s: &Scene| match &s.lights[0] {
+        Light::Area(a) => matches!(a.shape, LightShape::Parallelogram { .. }),
+        _ => panic!("not an area light"),
+    };
+    assert!(shape(&merged) && !shape(&split));
     assert_eq!(split.stats.parallelograms, 0);
     assert_eq!(merged.stats.triangles, split.stats.triangles);
 

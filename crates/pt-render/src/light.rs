@@ -40,6 +40,21 @@ pub enum LightShape {
         /// Triangle choice proportional to area.
         distr: Distribution1D,
     },
+    /// A parallelogram `v0 + a e1 + b e2`, `a, b` in [0, 1] (a `rectangle` emitter, or any
+    /// emissive mesh of one triangle pair tested as a parallelogram): sampled by area directly,
+    /// with no triangle choice and no square root.
+    Parallelogram {
+        /// Corner.
+        v0: Vec3,
+        /// First edge.
+        e1: Vec3,
+        /// Second edge.
+        e2: Vec3,
+        /// Unit normal of the emitting (front) side.
+        n: Vec3,
+        /// Texture coordinates at `v0`, and their change along `e1` and along `e2`.
+        uv: [Vec2; 3],
+    },
     /// A sphere (normal inwards when `flip`).
     Sphere {
         /// Centre.
@@ -130,6 +145,7 @@ impl AreaLight {
                 let n = (t.n[0] * b0 + t.n[1] * b.x + t.n[2] * b.y).normalize_or_zero();
                 (p, n, t.uv[0] * b0 + t.uv[1] * b.x + t.uv[2] * b.y)
             }
+            &LightShape::Parallelogram { v0, e1, e2, n, uv } => (v0 + e1 * u.x + e2 * u.y, n, uv[0] + uv[1] * u.x + uv[2] * u.y),
             LightShape::Sphere { center, radius, flip } => {
                 let d = square_to_uniform_sphere(u);
                 (*center + d * *radius, if *flip { -d } else { d }, Vec2::ZERO)
@@ -661,13 +677,19 @@ mod tests {
             tri(Vec3::new(-1.0, 1.0, -0.5), Vec3::new(1.0, 1.0, 0.5), Vec3::new(-1.0, 1.0, 0.5)),
         ];
         assert!(tris[0].n.iter().all(|n| (n.y + 1.0).abs() < 1e-6), "faces down");
-        let light = AreaLight {
-            radiance: SampledSpectrum::from_rgb([1.0; 3]),
-            texture: None,
-            spectral: None,
-            shape: LightShape::Mesh { tris, distr: Distribution1D::new(&[1.0, 1.0]).unwrap() },
-            area: 2.0,
-        };
+        // The same rectangle as a parallelogram.
+        let (v0, e1, e2) = (Vec3::new(-1.0, 1.0, -0.5), Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 1.0));
+        let parallelogram = LightShape::Parallelogram { v0, e1, e2, n: e1.cross(e2).normalize(), uv: [Vec2::ZERO, Vec2::X, Vec2::Y] };
+        assert_eq!(e1.cross(e2).normalize(), -Vec3::Y, "faces down");
+        for shape in [LightShape::Mesh { tris, distr: Distribution1D::new(&[1.0, 1.0]).unwrap() }, parallelogram] {
+            solid_angle_matches_quadrature(AreaLight { radiance: SampledSpectrum::from_rgb([1.0; 3]), texture: None, spectral: None, shape, area: 2.0 });
+        }
+    }
+
+    /// For the 2 x 1 rectangle at y = 1 facing down that `light` is: the solid angle from a
+    /// point below estimated with light samples, E[1/pdf], against quadrature; and every
+    /// sample's pdf against [`AreaLight::pdf`].
+    fn solid_angle_matches_quadrature(light: AreaLight) {
         let x = Vec3::new(0.2, 0.0, 0.1);
         // Estimate the solid angle subtended: E[1/pdf] = solid angle. Compare with the value from
         // dense midpoint quadrature of cos/d^2 over the rectangle.

@@ -389,13 +389,29 @@ impl Scene {
             let mut data = ShapeData { material: shape.bsdf as u32, light: None, interior: None, normals: None, uvs: None, tangents: None, indices: Vec::new() };
             let light_shape = match &shape.geometry {
                 Geometry::Mesh(mesh) => {
+                    let parallelograms_before = stats.parallelograms;
                     let tris = add_mesh(mesh, si as u32, shape.emitter.is_some(), &mut prims, &mut refs, &mut stats, &shape.loc)?;
                     if let Some(ts) = &mesh.tangents {
                         if ts.len() != mesh.positions.len() {
                             return Err(BuildError { loc: shape.loc.clone(), message: format!("mesh has {} tangents for {} vertices", ts.len(), mesh.positions.len()) });
                         }
                     }
-                    tris.map(|(tris, areas)| (LightShape::Mesh { distr: Distribution1D::new(&areas).expect("non-empty"), tris }, areas.iter().sum::<f32>()))
+                    // An emitter that is one parallelogram (a rectangle light) samples it as one.
+                    let single = match (prims.last(), refs.last()) {
+                        (Some(&Primitive::Parallelogram { v0, e1, e2 }), Some(r)) if r.shape == si as u32 && stats.parallelograms > parallelograms_before => {
+                            tris.as_ref().filter(|(t, _)| t.len() == 2).and(mesh.uvs.as_ref()).map(|uvs| {
+                                let [a, b, c] = r.vertices(&mesh.indices).map(|i| uvs[i as usize]);
+                                let n = match &mesh.normals {
+                                    Some(ns) => ns[r.vertices(&mesh.indices)[0] as usize].normalize(),
+                                    None => Vec3::from(e1.cross(e2)).normalize(),
+                                };
+                                let area = Vec3::from(e1.cross(e2)).length();
+                                (LightShape::Parallelogram { v0: v0.into(), e1: e1.into(), e2: e2.into(), n, uv: [a, b - a, c - a] }, area)
+                            })
+                        }
+                        _ => None,
+                    };
+                    single.or_else(|| tris.map(|(tris, areas)| (LightShape::Mesh { distr: Distribution1D::new(&areas).expect("non-empty"), tris }, areas.iter().sum::<f32>())))
                 }
                 &Geometry::Sphere { center, radius, flip_normals } => {
                     if !(radius > 0.0 && radius.is_finite() && center.is_finite()) {
