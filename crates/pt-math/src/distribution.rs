@@ -60,8 +60,12 @@ impl Distribution1D {
     /// Items with probability 0 are never returned.
     #[inline(always)]
     pub fn sample(&self, u: f32) -> (usize, f32, f32) {
-        // First index i with cdf[i+1] > u.
+        // First index i with cdf[i+1] > u (a single item, as for one light, needs no search).
         let n = self.pmf.len();
+        if n == 1 {
+            let p = self.pmf[0];
+            return (0, p, if p > 0.0 { ((u - self.cdf[0]) / p).clamp(0.0, 1.0 - f32::EPSILON) } else { 0.0 });
+        }
         let mut i = self.cdf[1..].partition_point(|&c| c <= u).min(n - 1);
         while self.pmf[i] == 0.0 && i > 0 {
             i -= 1; // u at the very top can land past zero-weight tail items.

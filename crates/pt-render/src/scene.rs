@@ -78,11 +78,11 @@ impl PrimRef {
     }
 }
 
-/// `t` rotated so that `t[c]` comes first (winding kept).
+/// `t` rotated so that `t[c]` comes first (winding kept); `c` < 3.
 #[inline(always)]
 fn rotate(t: [u32; 3], c: u8) -> [u32; 3] {
-    let c = c as usize % 3;
-    [t[c], t[(c + 1) % 3], t[(c + 2) % 3]]
+    const ORDER: [[usize; 3]; 3] = [[0, 1, 2], [1, 2, 0], [2, 0, 1]];
+    ORDER[c as usize].map(|k| t[k])
 }
 
 /// Counts for `pt info` and logs.
