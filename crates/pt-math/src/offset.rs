@@ -11,11 +11,34 @@ use glam::Vec3;
 /// Method and constants: Wächter & Binder 2019, "A Fast and Robust Method for Avoiding
 /// Self-Intersection", Ray Tracing Gems ch. 6, listing 6-1 (origin 1/32, float scale 1/65536,
 /// int scale 256). Pass `ng` facing the side the new ray leaves towards.
-#[inline]
+#[inline(always)]
 pub fn offset_ray_origin(p: Vec3, ng: Vec3) -> Vec3 {
-    const ORIGIN: f32 = 1.0 / 32.0;
-    const FLOAT_SCALE: f32 = 1.0 / 65536.0;
-    const INT_SCALE: f32 = 256.0;
+    let (p, n) = (p.to_array(), ng.to_array());
+    let mut out = [0.0f32; 3];
+    for i in 0..3 {
+        // Both candidates, then a select: no branch per coordinate.
+        let of_i = (INT_SCALE * n[i]) as i32;
+        let bits = p[i].to_bits() as i32;
+        // Outside the origin's box p is not zero, so its sign bit says p < 0: then step the
+        // integer down (two's complement: (x ^ -1) - (-1) = -x), else up.
+        let neg = bits >> 31;
+        let stepped = f32::from_bits(bits.wrapping_add((of_i ^ neg).wrapping_sub(neg)) as u32);
+        out[i] = if p[i].abs() < ORIGIN { p[i] + FLOAT_SCALE * n[i] } else { stepped };
+    }
+    Vec3::from_array(out)
+}
+
+/// Origin within which the offset is a small absolute step instead of a number of ULPs.
+const ORIGIN: f32 = 1.0 / 32.0;
+/// Absolute step per unit of normal near the origin.
+const FLOAT_SCALE: f32 = 1.0 / 65536.0;
+/// ULPs per unit of normal elsewhere.
+const INT_SCALE: f32 = 256.0;
+
+/// [`offset_ray_origin`] written with a branch per coordinate, as in the paper's listing: the
+/// reference the branch-free form is tested against.
+#[cfg(test)]
+fn offset_scalar(p: Vec3, ng: Vec3) -> Vec3 {
     let comp = |p: f32, n: f32| -> f32 {
         if p.abs() < ORIGIN {
             p + FLOAT_SCALE * n
@@ -34,6 +57,29 @@ pub fn offset_ray_origin(p: Vec3, ng: Vec3) -> Vec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn branch_free_form_matches_the_listing() {
+        // Points across scales and signs, including inside and at the edge of the origin's box
+        // and zeros; normals in every direction.
+        let mut s = 7u64;
+        let mut rnd = || {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((s >> 40) as f32) / (1u64 << 24) as f32 * 2.0 - 1.0
+        };
+        for k in 0..100_000 {
+            let scale = [0.0, 1e-3, 1.0 / 32.0, 0.5, 1.0, 1e3, 1e6][k % 7];
+            let p = Vec3::new(rnd(), rnd(), rnd()) * scale;
+            let n = Vec3::new(rnd(), rnd(), rnd()).normalize_or(Vec3::Z);
+            let (a, b) = (offset_ray_origin(p, n), offset_scalar(p, n));
+            assert_eq!(a.to_array().map(f32::to_bits), b.to_array().map(f32::to_bits), "p {p} n {n}");
+        }
+        for p in [Vec3::splat(1.0 / 32.0), Vec3::splat(-1.0 / 32.0), Vec3::new(0.0, -0.0, 1.0)] {
+            for n in [Vec3::X, -Vec3::Y, Vec3::new(0.6, 0.0, -0.8)] {
+                assert_eq!(offset_ray_origin(p, n), offset_scalar(p, n));
+            }
+        }
+    }
 
     #[test]
     fn moves_to_the_normal_side_at_every_scale() {
