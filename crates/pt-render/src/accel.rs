@@ -250,9 +250,10 @@ fn cw_depth(bvh: &CwBvh, node: usize) -> u32 {
 }
 
 /// State of one CWBVH traversal, as obvhs's `traverse!` macro reads and writes it (the fields of
-/// its `Traversal`), with a stack of `N` entries.
-struct CwTraversal<const N: usize> {
-    stack: StackStack<UVec2, N>,
+/// its `Traversal`), with a stack of `N` entries held outside: an array inside the state would
+/// make the whole state live in memory, its fields stored and reloaded on every step.
+struct CwTraversal<'s, const N: usize> {
+    stack: &'s mut StackStack<UVec2, N>,
     current_group: UVec2,
     primitive_group: UVec2,
     oct_inv4: u32,
@@ -276,14 +277,15 @@ const OCT_INV4: [u32; 8] = {
     t
 };
 
-impl<const N: usize> CwTraversal<N> {
-    /// obvhs's `CwBvh::new_traversal`: the root's group, or nothing for an empty tree.
+impl<'s, const N: usize> CwTraversal<'s, N> {
+    /// obvhs's `CwBvh::new_traversal` over `stack` (empty): the root's group, or nothing for an
+    /// empty tree.
     #[inline(always)]
-    fn new(bvh: &CwBvh, dir: Vec3A) -> Self {
+    fn new(bvh: &CwBvh, dir: Vec3A, stack: &'s mut StackStack<UVec2, N>) -> Self {
         let current_group = if bvh.nodes.is_empty() { UVec2::ZERO } else { UVec2::new(0, 0x8000_0000) };
         // Same comparisons as obvhs (`< 0.0`, so -0.0 counts as positive), one vector compare.
         let oct_inv4 = OCT_INV4[dir.cmplt(Vec3A::ZERO).bitmask() as usize];
-        CwTraversal { stack: StackStack::default(), current_group, primitive_group: UVec2::ZERO, oct_inv4, primitive_id: 0, hitmask: 0 }
+        CwTraversal { stack, current_group, primitive_group: UVec2::ZERO, oct_inv4, primitive_id: 0, hitmask: 0 }
     }
 }
 
@@ -294,7 +296,8 @@ impl<const N: usize> CwTraversal<N> {
 #[inline(always)]
 fn cw_closest<const N: usize>(bvh: &CwBvh, ray: BvhRay, hit: &mut RayHit, mut f: impl FnMut(&BvhRay, usize) -> f32) -> bool {
     let mut traverse_ray = ray;
-    let mut state = CwTraversal::<N>::new(bvh, ray.direction);
+    let mut stack = StackStack::default();
+    let mut state = CwTraversal::<N>::new(bvh, ray.direction, &mut stack);
     let mut node;
     obvhs::traverse!(bvh, node, state, intersect_node(node, &traverse_ray, state.oct_inv4), {
         let t = f(&traverse_ray, state.primitive_id as usize);
@@ -314,7 +317,8 @@ fn cw_closest<const N: usize>(bvh: &CwBvh, ray: BvhRay, hit: &mut RayHit, mut f:
 /// kinds (the test then ran outside the x86-64-v3 render loop).
 #[inline(always)]
 fn cw_any<const N: usize>(bvh: &CwBvh, ray: BvhRay, prims: &[Primitive]) -> bool {
-    let mut state = CwTraversal::<N>::new(bvh, ray.direction);
+    let mut stack = StackStack::default();
+    let mut state = CwTraversal::<N>::new(bvh, ray.direction, &mut stack);
     let mut node;
     let mut hit = false;
     'outer: {
