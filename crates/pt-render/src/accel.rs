@@ -486,7 +486,7 @@ fn intersect_node(node: &CwBvhNode, ray: &BvhRay, oct_inv4: u32) -> u32 {
 
 /// Reorders `v` so that `v[k]` becomes the old `v[order[k]]` (`order` a permutation), in place
 /// by following cycles; one bit per element marks what is done.
-fn permute_in_place<T: Copy>(v: &mut [T], order: &[u32]) {
+pub(crate) fn permute_in_place<T: Copy>(v: &mut [T], order: &[u32]) {
     assert_eq!(v.len(), order.len());
     let mut done = vec![0u64; v.len().div_ceil(64)];
     for start in 0..v.len() {
