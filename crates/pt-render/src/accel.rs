@@ -154,8 +154,8 @@ impl Accel {
         Accel { small_stack: fits_small_stack(&tree), tree, prims, original_index: order }
     }
 
-    /// Closest hit along the ray: which primitive, at what distance, with the barycentrics the
-    /// triangle test found (so the caller need not test the triangle again).
+    /// Closest hit along the ray: which primitive, at what distance, with the edge coordinates
+    /// its test found (so the caller need not test it again).
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray) -> Option<AccelHit> {
         let r = bvh_ray(ray);
@@ -208,9 +208,10 @@ pub struct AccelHit {
     pub index: usize,
     /// Distance along the ray (in units of the ray's direction vector).
     pub t: f32,
-    /// Barycentric weight of the triangle's second vertex (`v0 + e1`); 0 for spheres.
+    /// Coordinate along the primitive's first edge: a triangle's barycentric weight of
+    /// `v0 + e1`, a parallelogram's fraction of `e1`; 0 for spheres.
     pub b1: f32,
-    /// Barycentric weight of the triangle's third vertex (`v0 + e2`); 0 for spheres.
+    /// The same along the second edge (`v0 + e2`, `e2`).
     pub b2: f32,
 }
 

@@ -389,7 +389,6 @@ impl Scene {
             let mut data = ShapeData { material: shape.bsdf as u32, light: None, interior: None, normals: None, uvs: None, tangents: None, indices: Vec::new() };
             let light_shape = match &shape.geometry {
                 Geometry::Mesh(mesh) => {
-                    let parallelograms_before = stats.parallelograms;
                     let tris = add_mesh(mesh, si as u32, shape.emitter.is_some(), &mut prims, &mut refs, &mut stats, &shape.loc)?;
                     if let Some(ts) = &mesh.tangents {
                         if ts.len() != mesh.positions.len() {
@@ -397,18 +396,8 @@ impl Scene {
                         }
                     }
                     // An emitter that is one parallelogram (a rectangle light) samples it as one.
-                    let single = match (prims.last(), refs.last()) {
-                        (Some(&Primitive::Parallelogram { v0, e1, e2 }), Some(r)) if r.shape == si as u32 && stats.parallelograms > parallelograms_before => {
-                            tris.as_ref().filter(|(t, _)| t.len() == 2).and(mesh.uvs.as_ref()).map(|uvs| {
-                                let [a, b, c] = r.vertices(&mesh.indices).map(|i| uvs[i as usize]);
-                                let n = match &mesh.normals {
-                                    Some(ns) => ns[r.vertices(&mesh.indices)[0] as usize].normalize(),
-                                    None => Vec3::from(e1.cross(e2)).normalize(),
-                                };
-                                let area = Vec3::from(e1.cross(e2)).length();
-                                (LightShape::Parallelogram { v0: v0.into(), e1: e1.into(), e2: e2.into(), n, uv: [a, b - a, c - a] }, area)
-                            })
-                        }
+                    let single = match (prims.last(), refs.last(), &tris) {
+                        (Some(&prim), Some(r), Some((t, _))) if r.shape == si as u32 && t.len() == 2 => parallelogram_light(mesh, prim, *r),
                         _ => None,
                     };
                     single.or_else(|| tris.map(|(tris, areas)| (LightShape::Mesh { distr: Distribution1D::new(&areas).expect("non-empty"), tris }, areas.iter().sum::<f32>())))
@@ -1093,6 +1082,24 @@ fn add_mesh(
 /// The BVH primitive of a triangle with vertices `p`.
 fn triangle_primitive(p: [Vec3; 3]) -> Primitive {
     Primitive::Triangle { v0: Vec3A::from(p[0]), e1: Vec3A::from(p[1] - p[0]), e2: Vec3A::from(p[2] - p[0]) }
+}
+
+/// The light shape and area of an emissive mesh of two triangles that went into the BVH as the
+/// parallelogram `prim` (source `r`): sampled as one parallelogram. `None` when `prim` is not a
+/// parallelogram, or the mesh has no texture coordinates (its triangles then keep the default
+/// per-triangle uvs a textured emitter would see).
+fn parallelogram_light(mesh: &TriangleMesh, prim: Primitive, r: PrimRef) -> Option<(LightShape, f32)> {
+    let Primitive::Parallelogram { v0, e1, e2 } = prim else { return None };
+    let uvs = mesh.uvs.as_ref()?;
+    let corners = r.vertices(&mesh.indices);
+    let [a, b, c] = corners.map(|i| uvs[i as usize]);
+    let cross = Vec3::from(e1.cross(e2));
+    let n = match &mesh.normals {
+        // Equal at all four corners (a condition of the merge).
+        Some(ns) => ns[corners[0] as usize].normalize(),
+        None => cross.normalize(),
+    };
+    Some((LightShape::Parallelogram { v0: v0.into(), e1: e1.into(), e2: e2.into(), n, uv: [a, b - a, c - a] }, cross.length()))
 }
 
 /// The parallelogram whose corner and edges are the vertices of triangle `r.local` of `mesh`,
