@@ -10,7 +10,8 @@
 //!
 //! Criterion reports `thrpt` in elements/s: one element is one ray, so `Melem/s` = Mrays/s.
 //!
-//! Scenes: the Cornell box (`scenes/cornell-box.xml`, 36 triangles) and a displaced cube-sphere of
+//! Scenes: the Cornell box (`scenes/cornell-box.xml`, as the renderer builds it: its 36 triangles
+//! are 18 parallelograms) and a displaced cube-sphere of
 //! 12 * 296^2 = 1,051,392 triangles generated here. Ray sets (2^16 rays each, generated before
 //! timing, with a fixed seed):
 //! - `coherent`: one camera ray per pixel through the pixel centre, 256 x 256, in scanline order
@@ -29,7 +30,8 @@ use pt_math::{Mat4, Ray, Vec2, Vec3, Vec3A};
 use pt_render::accel::{Accel, BvhKind};
 use pt_render::camera::Camera;
 use pt_render::geometry::Primitive;
-use pt_scene::{CameraDesc, FovAxis, Geometry, Projection, SceneDesc, SourceLoc};
+use pt_render::{LightSelection, Scene};
+use pt_scene::{CameraDesc, FovAxis, Projection, SourceLoc};
 use std::hint::black_box;
 use std::path::Path;
 
@@ -50,21 +52,6 @@ impl Rng {
         self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         (self.0 >> 40) as f32 / (1u64 << 24) as f32
     }
-}
-
-/// The BVH primitives of a scene description, as `Scene::build` makes them (zero-area triangles
-/// left out).
-fn primitives(desc: &SceneDesc) -> Vec<Primitive> {
-    let mut prims = Vec::new();
-    for shape in &desc.shapes {
-        match &shape.geometry {
-            Geometry::Mesh(m) => prims.extend(triangles(&m.positions, &m.indices)),
-            &Geometry::Sphere { center, radius, flip_normals } => {
-                prims.push(Primitive::Sphere { center: center.into(), radius, flip: flip_normals })
-            }
-        }
-    }
-    prims
 }
 
 fn triangles<'a>(pos: &'a [Vec3], idx: &'a [[u32; 3]]) -> impl Iterator<Item = Primitive> + 'a {
@@ -162,7 +149,9 @@ fn cornell_case() -> Case {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.xml");
     let desc = pt_scene::load_file(&path, &[("width".into(), RES.to_string()), ("height".into(), RES.to_string())])
         .unwrap_or_else(|e| panic!("cannot load {}: {e}", path.display()));
-    let prims = primitives(&desc);
+    // The primitives as the renderer builds them: the box's 36 triangles are 18 parallelograms.
+    let scene = Scene::build(&desc, BvhKind::CwBvh, LightSelection::Power).unwrap_or_else(|e| panic!("cannot build {}: {e:?}", path.display()));
+    let prims = scene.primitives().to_vec();
     let camera = Camera::new(&desc.camera, RES, RES);
     Case { scene: "cornell", coherent: camera_rays(&camera), incoherent: random_rays(&prims, 7), prims }
 }

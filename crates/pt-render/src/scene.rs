@@ -566,6 +566,12 @@ impl Scene {
         self.accel.occluded(ray)
     }
 
+    /// The primitives the BVH holds (world space, in BVH order): triangles, parallelograms
+    /// merged from triangle pairs, spheres. For benchmarks and tools.
+    pub fn primitives(&self) -> &[Primitive] {
+        &self.accel.prims
+    }
+
     /// The BSDF of a hit shape at the path's wavelengths (RGB mode: the precomputed one).
     #[inline]
     pub fn material_at(&self, shape: u32, lambda: &SampledWavelengths) -> SurfaceBsdf {
