@@ -111,10 +111,10 @@ mod tests {
     }
 }
 
-/// A piecewise-constant 2D distribution on [0,1]^2 over a `width` x `height` grid of
+/// A piecewise-constant 2D distribution on \[0,1\]^2 over a `width` x `height` grid of
 /// non-negative weights (row-major, row 0 at v = 0): a marginal over rows and one conditional per
 /// row (pbrt-v4 `PiecewiseConstant2D`). Sampling returns a continuous point and its density per
-/// unit area of [0,1]^2.
+/// unit area of \[0,1\]^2.
 #[derive(Clone, Debug)]
 pub struct Distribution2D {
     width: usize,
@@ -152,7 +152,7 @@ impl Distribution2D {
         (glam::Vec2::new(x.min(1.0 - f32::EPSILON), y.min(1.0 - f32::EPSILON)), pdf)
     }
 
-    /// Density per unit area of [0,1]^2 at `p`.
+    /// Density per unit area of \[0,1\]^2 at `p`.
     #[inline]
     pub fn pdf(&self, p: glam::Vec2) -> f32 {
         let col = ((p.x * self.width as f32) as usize).min(self.width - 1);
