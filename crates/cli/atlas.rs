@@ -298,7 +298,7 @@ fn load(xml: &str, name: &str, shrink: u32) -> Result<(Scene, RenderSettings, pt
     let mut desc = pt_scene::load_str(xml, Path::new(&format!("scenes/atlas/{name}.xml")), Path::new("."), &[])?;
     desc.film.width /= shrink;
     desc.film.height /= shrink;
-    let scene = Scene::build(&desc, BvhKind::CwBvh, LightSelection::Power)?;
+    let scene = Scene::build(&desc, BvhKind::Auto, LightSelection::Power)?;
     let base = RenderSettings::from_desc(&desc);
     Ok((scene, base, desc))
 }

@@ -266,7 +266,7 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
     };
     let load_s = load_start.elapsed().as_secs_f64();
     let build_start = Instant::now();
-    let scene = pool.install(|| Scene::build(&desc, BvhKind::CwBvh, LightSelection::Power))?;
+    let scene = pool.install(|| Scene::build(&desc, BvhKind::Auto, LightSelection::Power))?;
     let build_s = build_start.elapsed().as_secs_f64();
     // `--modes`: one scene per requested colour mode (None: the automatic one, built above).
     let mut modes: Vec<Option<ConvergeMode>> = Vec::new();
@@ -282,7 +282,7 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
     let mode_scenes: Vec<Scene> = modes
         .iter()
         .flatten()
-        .map(|m| pool.install(|| Scene::build_with_mode(&desc, BvhKind::CwBvh, LightSelection::Power, Some(m.mode()))))
+        .map(|m| pool.install(|| Scene::build_with_mode(&desc, BvhKind::Auto, LightSelection::Power, Some(m.mode()))))
         .collect::<Result<_, _>>()?;
     let mut summary = String::new();
     let _ = writeln!(

@@ -82,7 +82,7 @@ fn block_means(img: &Image, b: u32) -> Vec<f64> {
 /// Renders the scene at each clamp value (on the current rayon pool) and measures the bias.
 pub(crate) fn clamp_bias_study() -> Result<ClampStudy> {
     let desc = pt_scene::load_str(SCENE, Path::new("<clamp study scene>"), Path::new("."), &[])?;
-    let scene = Scene::build(&desc, BvhKind::CwBvh, LightSelection::Power)?;
+    let scene = Scene::build(&desc, BvhKind::Auto, LightSelection::Power)?;
     let base = RenderSettings::from_desc(&desc);
     let mut rows = Vec::new();
     let mut reference: Option<(f64, Vec<f64>)> = None;

@@ -159,8 +159,10 @@ struct RenderArgs {
     /// How next-event estimation picks a light.
     #[arg(long, value_enum, default_value_t = SelectionArg::Power)]
     light_selection: SelectionArg,
-    /// BVH layout (both from obvhs).
-    #[arg(long, value_enum, default_value_t = BvhArg::Cwbvh)]
+    /// Acceleration structure: `auto` tests scenes of at most 32 primitives without a tree
+    /// (SIMD, faster at that size) and builds a CWBVH for larger ones; `cwbvh` and `bvh2` are
+    /// obvhs's layouts; `flat` tests every primitive for every ray (small scenes only).
+    #[arg(long, value_enum, default_value_t = BvhArg::Auto)]
     bvh: BvhArg,
     /// Colour transport [default: spectral when the scene has wavelength-dependent inputs
     /// (`pt info` says which), RGB otherwise]. Forcing rgb on a spectral scene projects its
@@ -242,8 +244,10 @@ enum SelectionArg {
 
 #[derive(Clone, Copy, ValueEnum)]
 enum BvhArg {
+    Auto,
     Cwbvh,
     Bvh2,
+    Flat,
 }
 
 fn main() -> ExitCode {
@@ -360,8 +364,10 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
         SelectionArg::Uniform => LightSelection::Uniform,
     };
     let bvh = match args.bvh {
+        BvhArg::Auto => BvhKind::Auto,
         BvhArg::Cwbvh => BvhKind::CwBvh,
         BvhArg::Bvh2 => BvhKind::Bvh2,
+        BvhArg::Flat => BvhKind::Flat,
     };
     let output = args.output.clone().unwrap_or_else(|| default_output(args.scene.as_deref()));
     check_output_path(&output)?;
@@ -663,7 +669,7 @@ fn describe_bsdf(kind: &pt_scene::BsdfKind) -> String {
 
 fn cmd_info(args: InfoArgs) -> Result<ExitCode> {
     let (desc, gltf_summary) = load_scene_with_summary(args.scene.as_deref(), &args.scene_args)?;
-    let scene = Scene::build(&desc, BvhKind::CwBvh, LightSelection::Power)?;
+    let scene = Scene::build(&desc, BvhKind::Auto, LightSelection::Power)?;
     out!("scene       {}", desc.source.display());
     out!("film        {}x{}, filter {:?}", desc.film.width, desc.film.height, desc.film.filter);
     out!("sampler     {} spp, seed {}", desc.sampler.sample_count, desc.sampler.seed);

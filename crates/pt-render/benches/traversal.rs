@@ -19,6 +19,10 @@
 //! - `incoherent`: origins uniform in the scene's bounding box, directions uniform on the sphere,
 //!   in random order: the pattern of secondary bounces.
 //!
+//! - `small/N`: N random triangles and parallelograms in a unit cube with incoherent rays, for
+//!   N = 8 .. 128, built as a CWBVH and without a tree (`BvhKind::Flat`): where the crossing
+//!   lies decides `accel::FLAT_MAX`.
+//!
 //! Both queries use the same rays with `tmax = inf` (occlusion thus measures how fast any-hit
 //! traversal finds a first blocker). The traversal runs on the calling thread; the builds use the
 //! current rayon pool (obvhs `parallel` feature), measured once with one thread and once with all.
@@ -43,6 +47,8 @@ const RES: u32 = 256;
 const SPHERE_N: u32 = 296;
 
 const KINDS: [(BvhKind, &str); 2] = [(BvhKind::CwBvh, "cwbvh"), (BvhKind::Bvh2, "bvh2")];
+/// Layouts compared on small scenes.
+const SMALL_KINDS: [(BvhKind, &str); 2] = [(BvhKind::CwBvh, "cwbvh"), (BvhKind::Flat, "flat")];
 
 /// Small deterministic generator (PCG-style LCG, top 24 bits): benches need no statistics.
 struct Rng(u64);
@@ -170,11 +176,78 @@ fn mesh_case() -> Case {
     Case { scene: "sphere1m", coherent: camera_rays(&camera), incoherent: random_rays(&prims, 11), prims }
 }
 
+/// Sum of the closest-hit distances of `rays` (hits only).
+#[inline(always)]
+fn closest_sum(accel: &Accel, rays: &[Ray]) -> f32 {
+    let mut sum = 0.0f32;
+    for r in rays {
+        if let Some(h) = accel.intersect(black_box(r)) {
+            sum += h.t;
+        }
+    }
+    sum
+}
+
+/// Number of `rays` that are occluded.
+#[inline(always)]
+fn occluded_count(accel: &Accel, rays: &[Ray]) -> usize {
+    rays.iter().filter(|r| accel.occluded(black_box(r))).count()
+}
+
+/// The queries compiled for x86-64-v3 when the processor has it, as the renderer's tile loop is
+/// (`render::render_tile`): the traversal and the SIMD primitive blocks are inlined into it.
+fn closest_sum_dispatch(accel: &Accel, rays: &[Ray]) -> f32 {
+    #[cfg(target_arch = "x86_64")]
+    if has_v3() {
+        #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe")]
+        fn v3(accel: &Accel, rays: &[Ray]) -> f32 {
+            closest_sum(accel, rays)
+        }
+        // SAFETY: `has_v3` checked every feature `v3` is compiled for.
+        return unsafe { v3(accel, rays) };
+    }
+    closest_sum(accel, rays)
+}
+
+/// [`occluded_count`], dispatched as [`closest_sum_dispatch`].
+fn occluded_count_dispatch(accel: &Accel, rays: &[Ray]) -> usize {
+    #[cfg(target_arch = "x86_64")]
+    if has_v3() {
+        #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe")]
+        fn v3(accel: &Accel, rays: &[Ray]) -> usize {
+            occluded_count(accel, rays)
+        }
+        // SAFETY: `has_v3` checked every feature `v3` is compiled for.
+        return unsafe { v3(accel, rays) };
+    }
+    occluded_count(accel, rays)
+}
+
+/// Whether the processor has the x86-64-v3 features.
+#[cfg(target_arch = "x86_64")]
+fn has_v3() -> bool {
+    std::is_x86_feature_detected!("avx2")
+        && std::is_x86_feature_detected!("fma")
+        && std::is_x86_feature_detected!("bmi1")
+        && std::is_x86_feature_detected!("bmi2")
+        && std::is_x86_feature_detected!("lzcnt")
+        && std::is_x86_feature_detected!("popcnt")
+        && std::is_x86_feature_detected!("movbe")
+}
+
 fn bench_traversal(c: &mut Criterion, case: &Case) {
-    for (kind, kname) in KINDS {
+    let kinds: &[(BvhKind, &str)] = if case.prims.len() <= 128 { &[KINDS[0], KINDS[1], SMALL_KINDS[1]] } else { &KINDS };
+    bench_kinds(c, case, kinds);
+}
+
+fn bench_kinds(c: &mut Criterion, case: &Case, kinds: &[(BvhKind, &str)]) {
+    for &(kind, kname) in kinds {
         // As `Scene::build` builds it (above 2^18 primitives: a CWBVH per spatial group).
         let accel = Accel::build_compact(case.prims.clone(), kind, |i| case.prims[i]);
         for (rays, rname) in [(&case.coherent, "coherent"), (&case.incoherent, "incoherent")] {
+            if rays.is_empty() {
+                continue;
+            }
             let hits = rays.iter().filter(|r| accel.intersect(r).is_some()).count();
             eprintln!(
                 "{} ({} prims) {kname} {rname}: {:.1}% of {} rays hit",
@@ -185,28 +258,38 @@ fn bench_traversal(c: &mut Criterion, case: &Case) {
             );
             let mut g = c.benchmark_group(format!("{}/{rname}", case.scene));
             g.throughput(Throughput::Elements(rays.len() as u64));
-            g.bench_function(BenchmarkId::new("closest", kname), |b| {
-                b.iter(|| {
-                    let mut sum = 0.0f32;
-                    for r in rays.iter() {
-                        if let Some(t) = accel.intersect(black_box(r)).map(|h| h.t) {
-                            sum += t;
-                        }
-                    }
-                    sum
-                })
-            });
-            g.bench_function(BenchmarkId::new("occluded", kname), |b| {
-                b.iter(|| rays.iter().filter(|r| accel.occluded(black_box(r))).count())
-            });
+            g.bench_function(BenchmarkId::new("closest", kname), |b| b.iter(|| closest_sum_dispatch(&accel, rays)));
+            g.bench_function(BenchmarkId::new("occluded", kname), |b| b.iter(|| occluded_count_dispatch(&accel, rays)));
             g.finish();
         }
     }
 }
 
+/// `n` random triangles and parallelograms (every third) in the unit cube, edges up to 0.5.
+fn small_case(n: usize) -> Case {
+    let mut rng = Rng(n as u64);
+    let mut v = |s: f32| Vec3A::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5) * s;
+    let prims: Vec<Primitive> = (0..n)
+        .map(|k| {
+            let (v0, e1, e2) = (v(1.0), v(0.5), v(0.5));
+            if k % 3 == 0 { Primitive::Parallelogram { v0, e1, e2 } } else { Primitive::Triangle { v0, e1, e2 } }
+        })
+        .collect();
+    let scene = ["small/8", "small/16", "small/32", "small/64", "small/128"][n.trailing_zeros() as usize - 3];
+    Case { scene, coherent: Vec::new(), incoherent: random_rays(&prims, 5), prims }
+}
+
 fn traversal(c: &mut Criterion) {
     bench_traversal(c, &cornell_case());
     bench_traversal(c, &mesh_case());
+}
+
+/// CWBVH against no tree on small scenes (incoherent rays only).
+fn small(c: &mut Criterion) {
+    for n in [8, 16, 32, 64, 128] {
+        let case = small_case(n);
+        bench_kinds(c, &case, &SMALL_KINDS);
+    }
 }
 
 fn build(c: &mut Criterion) {
@@ -234,5 +317,5 @@ fn build(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, traversal, build);
+criterion_group!(benches, traversal, small, build);
 criterion_main!(benches);

@@ -1,7 +1,10 @@
 //! The acceleration structure: one obvhs BVH over all primitives, kept unaware of materials.
 //!
 //! Both obvhs layouts are available: the compressed 8-wide CWBVH (Ylitie et al. 2017) and the
-//! binary BVH2 built by PLOC. CWBVH is the default; `benches/traversal.rs` compares them.
+//! binary BVH2 built by PLOC. CWBVH is the default; `benches/traversal.rs` compares them. Scenes
+//! of at most [`FLAT_MAX`] primitives (a Cornell box has 18) get no tree by default: every
+//! triangle and parallelogram is tested, eight at a time in SIMD lanes ([`BvhKind::Flat`]),
+//! which is faster than any traversal at that size.
 
 use crate::geometry::Primitive;
 use obvhs::aabb::Aabb;
@@ -24,12 +27,23 @@ use std::time::Duration;
 /// Which BVH layout to build.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum BvhKind {
-    /// Compressed wide BVH8 (default).
+    /// [`BvhKind::Flat`] for scenes of at most [`FLAT_MAX`] primitives, [`BvhKind::CwBvh`] for
+    /// larger ones (default).
     #[default]
+    Auto,
+    /// Compressed wide BVH8.
     CwBvh,
     /// Binary BVH.
     Bvh2,
+    /// No tree: every primitive is tested for every ray, triangles and parallelograms eight at
+    /// a time in SIMD lanes. Only sensible for small scenes (cost grows with the primitive
+    /// count).
+    Flat,
 }
+
+/// Largest scene that [`BvhKind::Auto`] tests without a tree. Measured (`benches/traversal.rs`,
+/// incoherent closest-hit rays, one thread): see the README's Performance section.
+pub const FLAT_MAX: usize = 32;
 
 enum Tree {
     Cw(CwBvh),
@@ -37,6 +51,9 @@ enum Tree {
     /// [`Accel::build_compact`]).
     CwChunks(Vec<Chunk>),
     Two(Bvh2),
+    /// No tree: `prims[..blocks.len() * LANES]` (at most) are the triangles and parallelograms,
+    /// also held in `blocks`; spheres follow them and are tested one by one.
+    Flat { blocks: Vec<Block>, spheres_from: usize },
     Empty,
 }
 
@@ -77,10 +94,13 @@ impl Accel {
         if prims.is_empty() {
             return Accel { tree: Tree::Empty, small_stack: true, prims, original_index: Vec::new() };
         }
+        if use_flat(kind, prims.len()) {
+            return Accel::build_flat(prims);
+        }
         let params = BvhBuildParams::medium_build();
         let mut t = Duration::default();
         let (tree, order) = match kind {
-            BvhKind::CwBvh => {
+            BvhKind::CwBvh | BvhKind::Auto | BvhKind::Flat => {
                 let bvh = build_cwbvh(&prims, params, &mut t);
                 let order = bvh.primitive_indices.clone();
                 (Tree::Cw(bvh), order)
@@ -115,17 +135,20 @@ impl Accel {
         if prims.is_empty() {
             return Accel { tree: Tree::Empty, small_stack: true, prims, original_index: Vec::new() };
         }
+        if use_flat(kind, prims.len()) {
+            return Accel::build_flat(prims);
+        }
         let mut boxes: Vec<BuildBox> = Vec::with_capacity(prims.len());
         boxes.extend(prims.iter().map(|p| BuildBox::from(p.aabb())));
         drop(prims);
         let params = BvhBuildParams::medium_build();
         let (tree, order) = match kind {
-            BvhKind::CwBvh if boxes.len() <= chunk_prims => {
+            BvhKind::CwBvh | BvhKind::Auto | BvhKind::Flat if boxes.len() <= chunk_prims => {
                 let bvh = build_cw_low_memory(boxes, &params);
                 let order = bvh.primitive_indices.clone();
                 (Tree::Cw(bvh), order)
             }
-            BvhKind::CwBvh => {
+            BvhKind::CwBvh | BvhKind::Auto | BvhKind::Flat => {
                 let parts = boxes.len().div_ceil(chunk_prims).next_power_of_two().min(MAX_CHUNKS);
                 let mut ids: Vec<u32> = (0..boxes.len() as u32).collect();
                 split_median(&mut ids, &boxes, parts);
@@ -154,10 +177,25 @@ impl Accel {
         Accel { small_stack: fits_small_stack(&tree), tree, prims, original_index: order }
     }
 
+    /// The flat "tree" ([`BvhKind::Flat`]): triangles and parallelograms first, in their given
+    /// order, copied into SIMD blocks; spheres after them.
+    fn build_flat(mut prims: Vec<Primitive>) -> Self {
+        let mut order: Vec<u32> = (0..prims.len() as u32).collect();
+        // Stable: the order within each kind is kept.
+        order.sort_by_key(|&i| matches!(prims[i as usize], Primitive::Sphere { .. }));
+        permute_in_place(&mut prims, &order);
+        let spheres_from = prims.iter().position(|p| matches!(p, Primitive::Sphere { .. })).unwrap_or(prims.len());
+        let blocks = prims[..spheres_from].chunks(LANES).map(Block::new).collect();
+        Accel { tree: Tree::Flat { blocks, spheres_from }, small_stack: false, prims, original_index: order }
+    }
+
     /// Closest hit along the ray: which primitive, at what distance, with the edge coordinates
     /// its test found (so the caller need not test it again).
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray) -> Option<AccelHit> {
+        if let Tree::Flat { blocks, spheres_from } = &self.tree {
+            return flat_closest(blocks, &self.prims[*spheres_from..], *spheres_from, ray);
+        }
         let r = bvh_ray(ray);
         let mut hit = RayHit::none();
         let prims = &self.prims;
@@ -176,6 +214,7 @@ impl Accel {
             Tree::Cw(b) => cw_closest::<LARGE_STACK>(b, r, &mut hit, &mut f),
             Tree::CwChunks(chunks) => chunks_closest(chunks, r, &mut hit, &mut f),
             Tree::Two(b) => b.ray_traverse(r, &mut hit, &mut f),
+            Tree::Flat { .. } => unreachable!("handled above"),
             Tree::Empty => false,
         };
         found.then_some(AccelHit { index: hit.primitive_id as usize, t: hit.t, b1: bary.0, b2: bary.1 })
@@ -185,6 +224,9 @@ impl Accel {
     /// first blocker).
     #[inline(always)]
     pub fn occluded(&self, ray: &Ray) -> bool {
+        if let Tree::Flat { blocks, spheres_from } = &self.tree {
+            return flat_any(blocks, &self.prims[*spheres_from..], ray);
+        }
         let r = bvh_ray(ray);
         let prims = &self.prims;
         let f = |r: &BvhRay, id: usize| prims[id].intersect(r.origin, r.direction, r.tmin, r.tmax);
@@ -196,9 +238,170 @@ impl Accel {
                     && cw_any::<LARGE_STACK>(&c.bvh, r, &prims[c.base..])
             }),
             Tree::Two(b) => !b.ray_traverse_miss(r, f),
+            Tree::Flat { .. } => unreachable!("handled above"),
             Tree::Empty => false,
         }
     }
+}
+
+/// Whether `kind` asks for the flat "tree" for `n` primitives.
+fn use_flat(kind: BvhKind, n: usize) -> bool {
+    kind == BvhKind::Flat || (kind == BvhKind::Auto && n <= FLAT_MAX)
+}
+
+/// Primitives per [`Block`]: eight `f32` fill one AVX2 register.
+const LANES: usize = 8;
+
+/// Up to [`LANES`] triangles and parallelograms in structure-of-arrays form (world space), for
+/// a Möller-Trumbore test of all of them at once: each lane computes exactly what
+/// [`crate::geometry::intersect_triangle`] and [`crate::geometry::intersect_parallelogram`]
+/// compute (the same operations in the same order, so the same bits), written as loops over
+/// lanes that the compiler vectorises. Unused lanes have zero edges: their determinant is 0 and
+/// they never hit.
+#[derive(Clone, Copy, Debug, Default)]
+#[repr(C, align(32))]
+struct Block {
+    /// First vertex (corner), x, y, z per lane.
+    v0: [[f32; LANES]; 3],
+    /// First edge.
+    e1: [[f32; LANES]; 3],
+    /// Second edge.
+    e2: [[f32; LANES]; 3],
+    /// Weight of `b1` in the outer bound `k1 b1 + b2 <= 1`: 1 for a triangle (`b1 + b2 <= 1`),
+    /// 0 for a parallelogram (`b2 <= 1`).
+    k1: [f32; LANES],
+}
+
+/// The nearest hit per lane so far, over the blocks a closest-hit search has tested.
+struct LaneBest {
+    /// Distance (the ray's `tmax` while nothing was hit in the lane).
+    t: [f32; LANES],
+    /// Edge coordinates of the hit (see [`AccelHit`]).
+    b1: [f32; LANES],
+    b2: [f32; LANES],
+    /// Primitive index of the hit (`u32::MAX` while nothing was hit).
+    id: [u32; LANES],
+}
+
+impl Block {
+    /// The block of `prims` (at most [`LANES`], no spheres).
+    fn new(prims: &[Primitive]) -> Block {
+        let mut b = Block::default();
+        for (i, p) in prims.iter().enumerate() {
+            let (v0, e1, e2, k1) = match *p {
+                Primitive::Triangle { v0, e1, e2 } => (v0, e1, e2, 1.0),
+                Primitive::Parallelogram { v0, e1, e2 } => (v0, e1, e2, 0.0),
+                Primitive::Sphere { .. } => unreachable!("spheres are kept out of blocks"),
+            };
+            for a in 0..3 {
+                b.v0[a][i] = v0[a];
+                b.e1[a][i] = e1[a];
+                b.e2[a][i] = e2[a];
+            }
+            b.k1[i] = k1;
+        }
+        b
+    }
+
+    /// Lane `i`'s Möller-Trumbore test (Möller & Trumbore 1997, as in
+    /// `geometry::moller_trumbore`: cross products `a.y b.z - a.z b.y`, glam's order, dot
+    /// products `(x x' + y y') + z z'`, one combined bounds test): `(hit, t, b1, b2)` for a hit
+    /// in `(ray.tmin, tmax)`.
+    #[inline(always)]
+    fn lane(&self, i: usize, ray: &Ray, tmax: f32) -> (bool, f32, f32, f32) {
+        let (o, d) = (ray.origin, ray.dir);
+        let e1 = [self.e1[0][i], self.e1[1][i], self.e1[2][i]];
+        let e2 = [self.e2[0][i], self.e2[1][i], self.e2[2][i]];
+        let cross = |a: [f32; 3], b: [f32; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+        let dot = |a: [f32; 3], b: [f32; 3]| (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2];
+        let pvec = cross([d.x, d.y, d.z], e2);
+        let det = dot(e1, pvec);
+        let inv_det = 1.0 / det;
+        let tvec = [o.x - self.v0[0][i], o.y - self.v0[1][i], o.z - self.v0[2][i]];
+        let b1 = dot(tvec, pvec) * inv_det;
+        let qvec = cross(tvec, e1);
+        let b2 = dot([d.x, d.y, d.z], qvec) * inv_det;
+        let t = dot(e2, qvec) * inv_det;
+        // k1 b1 is b1 for triangles; for parallelograms 0 b1 = 0, since b1 is finite whenever
+        // det != 0 and 0 <= b1 <= 1 hold.
+        let hit = (det != 0.0) & (b1 >= 0.0) & (b1 <= 1.0) & (b2 >= 0.0) & (self.k1[i] * b1 + b2 <= 1.0) & (t > ray.tmin) & (t < tmax);
+        (hit, t, b1, b2)
+    }
+
+    /// Keeps in `best` each lane's hit that is nearer than the lane's best so far; `first_id`
+    /// is the primitive index of lane 0. One loop over lanes, so that test and update are
+    /// vectorised together (selects, no branch per lane).
+    #[inline(always)]
+    fn closest(&self, ray: &Ray, first_id: u32, best: &mut LaneBest) {
+        for i in 0..LANES {
+            let (hit, t, b1, b2) = self.lane(i, ray, best.t[i]);
+            best.t[i] = if hit { t } else { best.t[i] };
+            best.b1[i] = if hit { b1 } else { best.b1[i] };
+            best.b2[i] = if hit { b2 } else { best.b2[i] };
+            best.id[i] = if hit { first_id + i as u32 } else { best.id[i] };
+        }
+    }
+
+    /// Whether some lane is hit in `(ray.tmin, ray.tmax)`.
+    #[inline(always)]
+    fn any_hit(&self, ray: &Ray) -> bool {
+        // Lane results into an array first, then one reduction: written as `any |= hit` per
+        // lane, the compiler tested the lanes one at a time in scalar code.
+        let mut hits = [0u32; LANES];
+        for (i, h) in hits.iter_mut().enumerate() {
+            *h = u32::from(self.lane(i, ray, ray.tmax).0);
+        }
+        hits.iter().fold(0, |a, &h| a | h) != 0
+    }
+}
+
+/// Closest hit among `blocks` (primitives `0..`, lane `i` of block `k` being `k * LANES + i`)
+/// and `spheres` (primitives `spheres_from..`). Ties go to the lowest lane, then the earliest
+/// block.
+#[inline(always)]
+fn flat_closest(blocks: &[Block], spheres: &[Primitive], spheres_from: usize, ray: &Ray) -> Option<AccelHit> {
+    let mut best = LaneBest { t: [ray.tmax; LANES], b1: [0.0; LANES], b2: [0.0; LANES], id: [u32::MAX; LANES] };
+    for (k, b) in blocks.iter().enumerate() {
+        b.closest(ray, (k * LANES) as u32, &mut best);
+    }
+    // The nearest lane without a branch per lane (which lane wins is unpredictable): a tree of
+    // minima, then the lowest lane holding it. No NaN occurs (hits and tmax only).
+    let min = |a: f32, b: f32| if a < b { a } else { b };
+    let t = &best.t;
+    let m4 = [min(t[0], t[4]), min(t[1], t[5]), min(t[2], t[6]), min(t[3], t[7])];
+    let nearest = min(min(m4[0], m4[2]), min(m4[1], m4[3]));
+    let mut at_nearest = 0u32;
+    for (i, &ti) in t.iter().enumerate() {
+        at_nearest |= u32::from(ti == nearest) << i;
+    }
+    let lane = at_nearest.trailing_zeros() as usize & (LANES - 1);
+    let mut hit = AccelHit { index: best.id[lane] as usize, t: best.t[lane], b1: best.b1[lane], b2: best.b2[lane] };
+    let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
+    for (j, s) in spheres.iter().enumerate() {
+        let t = s.intersect(o, d, ray.tmin, hit.t);
+        if t < hit.t {
+            hit = AccelHit { index: spheres_from + j, t, b1: 0.0, b2: 0.0 };
+        }
+    }
+    (hit.t < ray.tmax).then_some(hit)
+}
+
+/// Whether any of `blocks` or `spheres` is hit in `(ray.tmin, ray.tmax)`. Plain loops: the
+/// iterator adaptor `any` was not inlined, so the lane tests ran outside the x86-64-v3 loop.
+#[inline(always)]
+fn flat_any(blocks: &[Block], spheres: &[Primitive], ray: &Ray) -> bool {
+    for b in blocks {
+        if b.any_hit(ray) {
+            return true;
+        }
+    }
+    let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
+    for s in spheres {
+        if s.intersect(o, d, ray.tmin, ray.tmax) < ray.tmax {
+            return true;
+        }
+    }
+    false
 }
 
 /// The closest hit [`Accel::intersect`] found.
@@ -579,7 +782,7 @@ mod tests {
         // than obvhs's node-test bound (1e-4), which skipped boxes left that early, so whether
         // these were found depended on the tree. Every one must be found, by every tree kind.
         let prims = grid(8);
-        for (kind, chunk) in [(BvhKind::CwBvh, usize::MAX), (BvhKind::Bvh2, usize::MAX), (BvhKind::CwBvh, 40)] {
+        for (kind, chunk) in [(BvhKind::CwBvh, usize::MAX), (BvhKind::Bvh2, usize::MAX), (BvhKind::CwBvh, 40), (BvhKind::Flat, usize::MAX)] {
             let accel = if chunk == usize::MAX { Accel::build(prims.clone(), kind) } else { Accel::build_compact_chunked(prims.clone(), kind, |i| prims[i], chunk) };
             for k in 0..1000 {
                 let h = 1e-6 + 1e-4 * (k as f32 / 1000.0);
@@ -616,6 +819,64 @@ mod tests {
     }
 
     #[test]
+    fn flat_blocks_match_the_scalar_tests() {
+        // 45 random triangles and parallelograms (six blocks, the last partly empty) and two
+        // spheres, tested without a tree: each ray's hit must be the scalar tests' nearest, with
+        // the same bits (the lanes compute the same operations in the same order), and a shadow
+        // ray must be blocked exactly when something lies within its interval.
+        let mut s = 99u64;
+        let mut rnd = || {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            ((s >> 40) as f32) / (1u64 << 24) as f32
+        };
+        let mut prims = Vec::new();
+        for k in 0..45 {
+            let v0 = Vec3A::new(rnd() * 8.0 - 4.0, rnd() * 8.0 - 4.0, rnd() * 8.0 - 4.0);
+            let e1 = Vec3A::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5) * 3.0;
+            let e2 = Vec3A::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5) * 3.0;
+            prims.push(if k % 3 == 0 { Primitive::Parallelogram { v0, e1, e2 } } else { Primitive::Triangle { v0, e1, e2 } });
+            if k % 20 == 7 {
+                prims.push(Primitive::Sphere { center: v0, radius: 0.7, flip: false });
+            }
+        }
+        let accel = Accel::build(prims.clone(), BvhKind::Flat);
+        let Tree::Flat { blocks, spheres_from } = &accel.tree else { panic!("not flat") };
+        assert_eq!((blocks.len(), *spheres_from), (6, 45));
+        let mut hits = 0;
+        for _ in 0..20_000 {
+            let o = Vec3::new(rnd() * 10.0 - 5.0, rnd() * 10.0 - 5.0, rnd() * 10.0 - 5.0);
+            let d = Vec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5).normalize();
+            let mut ray = Ray::new(o, d);
+            ray.tmax = 1.0 + 6.0 * rnd();
+            let brute = accel.prims.iter().enumerate().map(|(i, p)| (i, p.intersect_bary(o.into(), d.into(), ray.tmin, ray.tmax))).filter(|h| h.1 .0 < ray.tmax).min_by(|a, b| a.1 .0.total_cmp(&b.1 .0));
+            let got = accel.intersect(&ray);
+            match (brute, got) {
+                (None, None) => {}
+                (Some((i, (t, b1, b2))), Some(h)) => {
+                    hits += 1;
+                    assert_eq!(h.t, t);
+                    // Equal distances (two primitives through one point) may pick either.
+                    if h.index != i {
+                        assert_eq!(accel.prims[h.index].intersect(o.into(), d.into(), ray.tmin, ray.tmax), t);
+                    } else {
+                        assert_eq!((h.b1, h.b2), (b1, b2));
+                    }
+                    let orig = accel.original_index[h.index] as usize;
+                    assert_eq!(format!("{:?}", accel.prims[h.index]), format!("{:?}", prims[orig]));
+                }
+                other => panic!("{other:?}"),
+            }
+            assert_eq!(accel.occluded(&ray), brute.is_some());
+        }
+        // The rays must exercise both outcomes.
+        assert!((1_000..19_000).contains(&hits), "{hits} hits");
+        // Auto: flat up to FLAT_MAX primitives, a tree above.
+        assert!(matches!(Accel::build(prims[..FLAT_MAX].to_vec(), BvhKind::Auto).tree, Tree::Flat { .. }));
+        assert!(matches!(Accel::build(prims[..FLAT_MAX + 1].to_vec(), BvhKind::Auto).tree, Tree::Cw(_)));
+        assert!(matches!(Accel::build_compact(prims[..FLAT_MAX].to_vec(), BvhKind::Auto, |i| prims[i]).tree, Tree::Flat { .. }));
+    }
+
+    #[test]
     fn matches_brute_force() {
         let prims = grid(8);
         // The last three: CWBVH in 2 and 4 groups (129 primitives, at most 80 and 40 per group),
@@ -626,6 +887,7 @@ mod tests {
             (BvhKind::CwBvh, 80),
             (BvhKind::CwBvh, 40),
             (BvhKind::CwBvh, 16),
+            (BvhKind::Flat, usize::MAX),
         ];
         for (kind, chunk) in builds {
             let accel = if chunk == usize::MAX {
