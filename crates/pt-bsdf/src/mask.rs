@@ -37,7 +37,8 @@ use pt_spectrum::SampledSpectrum;
 /// `Some(sample)` = pass straight through.
 #[inline]
 pub fn choose(opacity: f32, wo: Vec3, u_lobe: f32) -> Result<f32, BsdfSample> {
-    if opacity >= 1.0 || u_lobe < opacity {
+    // `|`: one branch, always taken for opaque surfaces.
+    if (opacity >= 1.0) | (u_lobe < opacity) {
         // Reuse the part of u_lobe below `opacity` for the nested BSDF (stays uniform).
         let u = if opacity >= 1.0 { u_lobe } else { u_lobe / opacity };
         Ok(u.min(ONE_MINUS_EPSILON))
