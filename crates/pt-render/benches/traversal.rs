@@ -8,6 +8,9 @@
 //! cargo bench -p pt-render --bench traversal -- incoherent   # a subset, by name filter
 //! ```
 //!
+//! The queries run compiled for x86-64-v3 when the processor has it, as in the renderer;
+//! `PT_BENCH_BASELINE=1` runs them compiled for baseline x86-64 instead.
+//!
 //! Criterion reports `thrpt` in elements/s: one element is one ray, so `Melem/s` = Mrays/s.
 //!
 //! Scenes: the Cornell box (`scenes/cornell-box.xml`, as the renderer builds it: its 36 triangles
@@ -223,9 +226,12 @@ fn occluded_count_dispatch(accel: &Accel, rays: &[Ray]) -> usize {
     occluded_count(accel, rays)
 }
 
-/// Whether the processor has the x86-64-v3 features.
+/// Whether the processor has the x86-64-v3 features (false when `PT_BENCH_BASELINE` is set).
 #[cfg(target_arch = "x86_64")]
 fn has_v3() -> bool {
+    if std::env::var_os("PT_BENCH_BASELINE").is_some() {
+        return false;
+    }
     std::is_x86_feature_detected!("avx2")
         && std::is_x86_feature_detected!("fma")
         && std::is_x86_feature_detected!("bmi1")
