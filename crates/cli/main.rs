@@ -242,6 +242,24 @@ enum SelectionArg {
     Uniform,
 }
 
+/// Makes glibc serve every allocation of 1 MB or more with its own mapping, returned to the
+/// system when freed. By default glibc raises that threshold (up to 32 MB) each time such a
+/// block is freed, after which large buffers come from its heap and their pages stay resident
+/// after being freed: the BVH build's temporaries then inflated the peak. Measured on the
+/// 1M-triangle scene (`references/make_memory_scene.py`): peak 182 -> 156 MB, time unchanged.
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn return_large_frees_to_the_os() {
+    // SAFETY: mallopt only changes a setting of the allocator; called before any thread starts.
+    #[allow(unsafe_code)]
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, 1 << 20);
+    }
+}
+
+/// Other allocators need no setting.
+#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+fn return_large_frees_to_the_os() {}
+
 #[derive(Clone, Copy, ValueEnum)]
 enum BvhArg {
     Auto,
@@ -251,6 +269,7 @@ enum BvhArg {
 }
 
 fn main() -> ExitCode {
+    return_large_frees_to_the_os();
     let cli = Cli::parse();
     // `<shape type="gltf">` in XML scenes reads meshes through pt-gltf.
     pt_scene::set_gltf_mesh_reader(pt_gltf::load_mesh);
