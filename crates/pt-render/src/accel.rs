@@ -329,9 +329,14 @@ impl Block {
         let b1 = dot(e2, r) * inv_det;
         let b2 = -dot(e1, r) * inv_det;
         let t = dot(tvec, n) * inv_det;
-        // k1 b1 is b1 for triangles; for parallelograms 0 b1 = 0, since b1 is finite whenever
-        // det != 0 and 0 <= b1 <= 1 hold.
-        let hit = (det != 0.0) & (b1 >= 0.0) & (b1 <= 1.0) & (b2 >= 0.0) & (self.k1[i] * b1 + b2 <= 1.0) & (t > ray.tmin) & (t < tmax);
+        // The bounds in four comparisons: b1, b2 >= 0 as min(b1, b2) >= 0; the outer bound
+        // k1 b1 + b2 <= 1 (b1 + b2 for triangles, b2 for parallelograms) together with
+        // b1 <= 1 as one max (for triangles b1 <= b1 + b2 already). A zero determinant needs no
+        // test of its own: t is then infinite or NaN and fails `t > tmin & t < tmax` (a NaN in
+        // b1 or b2, which min and max might pass on, only arises there).
+        let min = |a: f32, b: f32| if a < b { a } else { b };
+        let max = |a: f32, b: f32| if a > b { a } else { b };
+        let hit = (min(b1, b2) >= 0.0) & (max(b1, self.k1[i] * b1 + b2) <= 1.0) & (t > ray.tmin) & (t < tmax);
         (hit, t, b1, b2)
     }
 
