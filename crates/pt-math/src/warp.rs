@@ -8,6 +8,7 @@ use std::f32::consts::{FRAC_1_PI, FRAC_PI_4, PI};
 
 /// Concentric map from the square to the unit disk (Shirley & Chiu 1997, "A Low Distortion Map
 /// Between Disk and Square"), uniform in area. pdf = 1/pi per unit area.
+#[inline(always)]
 pub fn square_to_disk_concentric(u: Vec2) -> Vec2 {
     let o = 2.0 * u - Vec2::ONE;
     // Without branches (the wedge is a coin flip per sample, so a branch on it is mispredicted
@@ -47,7 +48,9 @@ pub fn sin_cos_quarter(q: f32) -> (f32, f32) {
 }
 
 /// Cosine-weighted hemisphere around +z (Malley's method: lift the uniform disk sample).
-/// pdf = cos(theta) / pi, see [`cosine_hemisphere_pdf`].
+/// pdf = cos(theta) / pi, see [`cosine_hemisphere_pdf`]. Always inlined, so that it runs in
+/// the render loop's instruction-set variant.
+#[inline(always)]
 pub fn square_to_cosine_hemisphere(u: Vec2) -> Vec3 {
     let d = square_to_disk_concentric(u);
     let z = (1.0 - d.length_squared()).max(0.0).sqrt();

@@ -55,134 +55,231 @@ const SHADOW_RAY_SHORTEN: f32 = 1.0 - 1e-5;
 /// Radiance arriving along `ray` (the camera ray), estimated with one path, at the path's
 /// wavelengths `lambda` (spectral mode; ignored in RGB mode, whose lanes are R, G, B).
 ///
-/// Always inlined, so that the render loop's x86-64-v3 variant compiles it with those
-/// instructions (see `render::render_tile`).
+/// The same computation as [`trace_paths`] for one path (which is how it is done).
 #[inline(always)]
-pub fn li(scene: &Scene, mut ray: Ray, s: &PathSettings, sampler: &mut Sampler, lambda: &SampledWavelengths) -> SampledSpectrum {
-    let max_depth = if s.max_depth < 0 { u32::MAX } else { s.max_depth as u32 };
-    // Lanes may change wavelength at fluorescent vertices; the caller's film keeps the originals.
-    let mut lambda = *lambda;
-    let lambda = &mut lambda;
-    let mut radiance = SampledSpectrum::ZERO;
-    let mut throughput = match scene.mode {
-        ColorMode::Rgb => SampledSpectrum::from_rgb([1.0; 3]),
-        ColorMode::Spectral => SampledSpectrum::splat(1.0),
-    };
-    // The previous scattering event, for MIS on emitters hit by BSDF sampling.
-    let mut prev_p = ray.origin;
-    let mut prev_pdf = 0.0f32;
-    let mut prev_delta = true; // the camera acts like a delta event: no MIS on directly seen lights
-    let use_light = s.strategy != Strategy::Bsdf;
-    let mut depth: u32 = 0;
-    // Product of the relative indices of refraction crossed so far: radiance carries 1/eta^2 per
-    // refraction, which Russian roulette undoes when judging the path's worth (Mitsuba).
-    let mut eta_scale: f32 = 1.0;
-
-    loop {
-        let Some(hit) = scene.intersect(&ray) else {
-            // The ray left the scene: environment and sun.
-            for &i in &scene.infinite_lights {
-                let light = &scene.lights[i];
-                let le = light.escaped_radiance(ray.dir, lambda) * scene.emission(i, lambda);
-                if !le.is_black() {
-                    let w = emission_weight(s, depth, prev_delta, prev_pdf, || scene.light_pmf(i) * light.escaped_pdf(ray.dir));
-                    radiance += throughput * le * w;
-                }
-            }
-            break;
-        };
-        let wo_world = -ray.dir;
-
-        // Beer-Lambert: a ray that reaches a shape's surface from behind travelled inside it, so
-        // it crossed the shape's interior medium over the distance hit.t (the ray's direction is a
-        // unit vector). Multiplying by the transmittance exp(-sigma_t t) is the expected value of
-        // Mitsuba volpath's free-flight sampling for albedo 0, without its variance.
-        if s.media && ray.dir.dot(hit.ng) > 0.0 {
-            if let Some(tr) = scene.interior_transmittance(hit.shape, hit.t, lambda) {
-                throughput *= tr;
-                if throughput.is_black() {
-                    break;
-                }
-            }
-        }
-
-        // Emission found by the ray we just traced.
-        if let Some((li_idx, light)) = scene.shape_light(hit.shape) {
-            let le = light.emitted(hit.ns, wo_world, hit.uv, lambda) * scene.emission(li_idx, lambda);
-            if !le.is_black() {
-                let w = emission_weight(s, depth, prev_delta, prev_pdf, || scene.light_pmf(li_idx) * light.pdf(prev_p, hit.p, hit.ns));
-                radiance += throughput * le * w;
-            }
-        }
-
-        // Mitsuba: continue only if another segment fits within max_depth.
-        if depth.saturating_add(1) >= max_depth {
-            break;
-        }
-
-        let bsdf = scene.material_at_hit(&hit, lambda);
-        // Fluorescence: the BSDF holds each lane's total albedo at its emitted wavelength; now
-        // some lanes move to an excitation wavelength, used by NEE and the rest of the path.
-        if scene.is_fluorescent(hit.shape) {
-            *lambda = scene.fluoresce(hit.shape, lambda, sampler.next_1d());
-        }
-        let frame = Frame::from_normal_tangent(hit.ns, hit.dpdu);
-        let wo = frame.to_local(wo_world);
-
-        // Rays leave the hit offset to one side of the surface; the shadow ray and the next
-        // segment of a reflection leave on the side the path came from.
-        let spawn = SpawnPoint::new(&hit, ray.dir);
-
-        // Next-event estimation.
-        if use_light && bsdf.has_smooth_lobe() {
-            if let Some((li_idx, pmf, u_sel)) = scene.sample_light(sampler.next_1d()) {
-                let u = sampler.next_2d();
-                let light = &scene.lights[li_idx];
-                if let Some(ls) = light.sample(hit.p, u_sel, u, lambda) {
-                    let wi = frame.to_local(ls.wi);
-                    let f = bsdf.eval(wo, wi);
-                    if !ls.radiance.is_black() && !f.is_black() && visible(scene, spawn.origin(ls.wi), &ls) {
-                        let light_pdf = pmf * ls.pdf;
-                        // Delta lights cannot be hit by BSDF sampling: light sampling is the only
-                        // strategy, weight 1.
-                        let w = if s.strategy != Strategy::Light && !ls.delta { power_heuristic(light_pdf, bsdf.pdf(wo, wi)) } else { 1.0 };
-                        radiance += throughput * f * ls.radiance * scene.emission(li_idx, lambda) * (wi.z.abs() * w / light_pdf);
-                    }
-                }
-            } else {
-                // Keep the random number sequence aligned whether or not there are lights.
-                let _ = sampler.next_2d();
-            }
-        }
-
-        // BSDF sampling.
-        let u_lobe = sampler.next_1d();
-        let Some(bs) = bsdf.sample(wo, u_lobe, sampler.next_2d()) else { break };
-        if bs.weight.is_black() {
-            break;
-        }
-        throughput *= bs.weight;
-        eta_scale *= bs.eta;
-        let wi_world = frame.to_world(bs.wi);
-        prev_p = hit.p;
-        prev_pdf = bs.pdf;
-        prev_delta = bs.delta;
-        ray = Ray::new(spawn.origin(wi_world), wi_world);
-        depth += 1;
-
-        // Russian roulette (Mitsuba: after rr_depth segments, keep with probability
-        // min(max(T) eta^2, 0.95)).
-        if depth >= s.rr_depth {
-            let q = (throughput.max_value() * eta_scale * eta_scale).min(0.95);
-            if !(sampler.next_1d() < q) {
-                break;
-            }
-            throughput *= 1.0 / q;
-        }
-    }
-    radiance
+pub fn li(scene: &Scene, ray: Ray, s: &PathSettings, sampler: &mut Sampler, lambda: &SampledWavelengths) -> SampledSpectrum {
+    let mut path = [PathState::new(scene, ray, lambda)];
+    trace_paths(scene, s, &mut path, std::slice::from_mut(sampler));
+    path[0].radiance
 }
 
+/// One path in flight: what the path loop carries from one segment to the next.
+#[derive(Clone, Copy)]
+pub struct PathState {
+    /// The next segment to trace (world space).
+    ray: Ray,
+    /// The path's wavelengths (lanes may change at fluorescent vertices).
+    lambda: SampledWavelengths,
+    /// Radiance gathered so far.
+    pub radiance: SampledSpectrum,
+    /// Product of the sample weights so far.
+    throughput: SampledSpectrum,
+    /// The previous scattering event, for MIS on emitters hit by BSDF sampling.
+    prev_p: Vec3,
+    prev_pdf: f32,
+    prev_delta: bool,
+    /// Segments traced so far.
+    depth: u32,
+    /// Product of the relative indices of refraction crossed so far: radiance carries 1/eta^2
+    /// per refraction, which Russian roulette undoes when judging the path's worth (Mitsuba).
+    eta_scale: f32,
+    /// Whether the path goes on (`ray` is its next segment).
+    alive: bool,
+    /// A light sample's shadow ray waiting for its visibility test, and what it adds to
+    /// `radiance` if nothing blocks it.
+    shadow: Option<(Ray, SampledSpectrum)>,
+}
+
+impl PathState {
+    /// A path starting with the camera ray `ray` at wavelengths `lambda`.
+    #[inline(always)]
+    pub fn new(scene: &Scene, ray: Ray, lambda: &SampledWavelengths) -> Self {
+        let throughput = match scene.mode {
+            ColorMode::Rgb => SampledSpectrum::from_rgb([1.0; 3]),
+            ColorMode::Spectral => SampledSpectrum::splat(1.0),
+        };
+        PathState {
+            ray,
+            lambda: *lambda,
+            radiance: SampledSpectrum::ZERO,
+            throughput,
+            prev_p: ray.origin,
+            prev_pdf: 0.0,
+            // The camera acts like a delta event: no MIS on directly seen lights.
+            prev_delta: true,
+            depth: 0,
+            eta_scale: 1.0,
+            alive: true,
+            shadow: None,
+        }
+    }
+}
+
+/// Most paths [`trace_paths`] keeps in flight at once.
+pub const MAX_PATHS: usize = 4;
+
+/// Traces `paths` (at most [`MAX_PATHS`]) to their ends, each with its own sampler
+/// (`samplers[i]` for `paths[i]`), adding each path's radiance to its `radiance`.
+///
+/// The paths advance together, one segment at a time, in three passes over them: the closest
+/// hits of all, then the scattering at each hit (emission, light sample, BSDF sample, Russian
+/// roulette), then the shadow rays of all. The queries of one pass do not depend on each other,
+/// so the processor overlaps them, where one path alone is a chain of dependent steps. Each
+/// path draws its random numbers and adds its terms in the same order as it would alone, so
+/// the result is bit-identical to tracing the paths one after the other.
+#[inline(always)]
+pub fn trace_paths(scene: &Scene, s: &PathSettings, paths: &mut [PathState], samplers: &mut [Sampler]) {
+    debug_assert!(paths.len() <= MAX_PATHS && paths.len() == samplers.len());
+    let mut hits: [Option<Interaction>; MAX_PATHS] = [None; MAX_PATHS];
+    loop {
+        let mut any = false;
+        for (p, hit) in paths.iter().zip(hits.iter_mut()) {
+            if p.alive {
+                *hit = scene.intersect(&p.ray);
+                any = true;
+            }
+        }
+        if !any {
+            break;
+        }
+        for ((p, hit), sampler) in paths.iter_mut().zip(&hits).zip(samplers.iter_mut()) {
+            if p.alive {
+                scatter(scene, s, p, hit, sampler);
+            }
+        }
+        for p in paths.iter_mut() {
+            if let Some((ray, contribution)) = p.shadow.take() {
+                if !scene.occluded(&ray) {
+                    p.radiance += contribution;
+                }
+            }
+        }
+    }
+}
+
+/// Everything a path does with the result `hit` of tracing its segment: emission from an
+/// escaped ray or a hit emitter, then (unless the path ends) the light sample, whose shadow ray
+/// it leaves in `path.shadow`, the BSDF sample that makes the next segment, and Russian
+/// roulette. Ends the path (`alive = false`) where Mitsuba's `path` integrator stops.
+#[inline(always)]
+fn scatter(scene: &Scene, s: &PathSettings, path: &mut PathState, hit: &Option<Interaction>, sampler: &mut Sampler) {
+    let max_depth = if s.max_depth < 0 { u32::MAX } else { s.max_depth as u32 };
+    let use_light = s.strategy != Strategy::Bsdf;
+    let PathState { ray, lambda, radiance, throughput, prev_p, prev_pdf, prev_delta, depth, eta_scale, alive, shadow } = path;
+    let (depth_now, prev_delta_now, prev_pdf_now) = (*depth, *prev_delta, *prev_pdf);
+    let Some(hit) = hit else {
+        // The ray left the scene: environment and sun.
+        for &i in &scene.infinite_lights {
+            let light = &scene.lights[i];
+            let le = light.escaped_radiance(ray.dir, lambda) * scene.emission(i, lambda);
+            if !le.is_black() {
+                let w = emission_weight(s, depth_now, prev_delta_now, prev_pdf_now, || scene.light_pmf(i) * light.escaped_pdf(ray.dir));
+                *radiance += *throughput * le * w;
+            }
+        }
+        *alive = false;
+        return;
+    };
+    let wo_world = -ray.dir;
+
+    // Beer-Lambert: a ray that reaches a shape's surface from behind travelled inside it, so
+    // it crossed the shape's interior medium over the distance hit.t (the ray's direction is a
+    // unit vector). Multiplying by the transmittance exp(-sigma_t t) is the expected value of
+    // Mitsuba volpath's free-flight sampling for albedo 0, without its variance.
+    if s.media && ray.dir.dot(hit.ng) > 0.0 {
+        if let Some(tr) = scene.interior_transmittance(hit.shape, hit.t, lambda) {
+            *throughput *= tr;
+            if throughput.is_black() {
+                *alive = false;
+                return;
+            }
+        }
+    }
+
+    // Emission found by the ray just traced.
+    if let Some((li_idx, light)) = scene.shape_light(hit.shape) {
+        let le = light.emitted(hit.ns, wo_world, hit.uv, lambda) * scene.emission(li_idx, lambda);
+        if !le.is_black() {
+            let prev = *prev_p;
+            let w = emission_weight(s, depth_now, prev_delta_now, prev_pdf_now, || scene.light_pmf(li_idx) * light.pdf(prev, hit.p, hit.ns));
+            *radiance += *throughput * le * w;
+        }
+    }
+
+    // Mitsuba: continue only if another segment fits within max_depth.
+    if depth.saturating_add(1) >= max_depth {
+        *alive = false;
+        return;
+    }
+
+    let bsdf = scene.material_at_hit(hit, lambda);
+    // Fluorescence: the BSDF holds each lane's total albedo at its emitted wavelength; now
+    // some lanes move to an excitation wavelength, used by NEE and the rest of the path.
+    if scene.is_fluorescent(hit.shape) {
+        *lambda = scene.fluoresce(hit.shape, lambda, sampler.next_1d());
+    }
+    let frame = Frame::from_normal_tangent(hit.ns, hit.dpdu);
+    let wo = frame.to_local(wo_world);
+
+    // Rays leave the hit offset to one side of the surface; the shadow ray and the next
+    // segment of a reflection leave on the side the path came from.
+    let spawn = SpawnPoint::new(hit, ray.dir);
+
+    // Next-event estimation: the light sample's contribution, added once its shadow ray is
+    // found unblocked.
+    if use_light && bsdf.has_smooth_lobe() {
+        if let Some((li_idx, pmf, u_sel)) = scene.sample_light(sampler.next_1d()) {
+            let u = sampler.next_2d();
+            let light = &scene.lights[li_idx];
+            if let Some(ls) = light.sample(hit.p, u_sel, u, lambda) {
+                let wi = frame.to_local(ls.wi);
+                let f = bsdf.eval(wo, wi);
+                if !ls.radiance.is_black() && !f.is_black() {
+                    if let Some(shadow_ray) = shadow_ray(spawn.origin(ls.wi), &ls) {
+                        let light_pdf = pmf * ls.pdf;
+                        // Delta lights cannot be hit by BSDF sampling: light sampling is the
+                        // only strategy, weight 1.
+                        let w = if s.strategy != Strategy::Light && !ls.delta { power_heuristic(light_pdf, bsdf.pdf(wo, wi)) } else { 1.0 };
+                        *shadow = Some((shadow_ray, *throughput * f * ls.radiance * scene.emission(li_idx, lambda) * (wi.z.abs() * w / light_pdf)));
+                    }
+                }
+            }
+        } else {
+            // Keep the random number sequence aligned whether or not there are lights.
+            let _ = sampler.next_2d();
+        }
+    }
+
+    // BSDF sampling.
+    let u_lobe = sampler.next_1d();
+    let Some(bs) = bsdf.sample(wo, u_lobe, sampler.next_2d()) else {
+        *alive = false;
+        return;
+    };
+    if bs.weight.is_black() {
+        *alive = false;
+        return;
+    }
+    *throughput *= bs.weight;
+    *eta_scale *= bs.eta;
+    let wi_world = frame.to_world(bs.wi);
+    *prev_p = hit.p;
+    *prev_pdf = bs.pdf;
+    *prev_delta = bs.delta;
+    *ray = Ray::new(spawn.origin(wi_world), wi_world);
+    *depth += 1;
+
+    // Russian roulette (Mitsuba: after rr_depth segments, keep with probability
+    // min(max(T) eta^2, 0.95)).
+    if *depth >= s.rr_depth {
+        let q = (throughput.max_value() * *eta_scale * *eta_scale).min(0.95);
+        if !(sampler.next_1d() < q) {
+            *alive = false;
+            return;
+        }
+        *throughput *= 1.0 / q;
+    }
+}
 
 /// Origins of rays leaving a hit: the hit point offset off its surface (Wächter & Binder 2019,
 /// see [`offset_ray_origin`]) to the side a ray's direction points to. The side the path
@@ -216,21 +313,22 @@ impl SpawnPoint {
     }
 }
 
-/// Whether nothing blocks the segment from `origin` (the hit, offset off its surface towards the
-/// light) to the light sample, whose end is offset off its surface too (a light without a
-/// surface normal, or a distant one, needs no offset there).
+/// The shadow ray from `origin` (the hit, offset off its surface towards the light) to the
+/// light sample, whose end is offset off its surface too (a light without a surface normal, or
+/// a distant one, needs no offset there); `None` when the two points coincide (nothing can be
+/// seen).
 #[inline(always)]
-fn visible(scene: &Scene, origin: Vec3, ls: &LightSample) -> bool {
+fn shadow_ray(origin: Vec3, ls: &LightSample) -> Option<Ray> {
     if ls.dist.is_infinite() {
-        return !scene.occluded(&Ray::new(origin, ls.wi));
+        return Some(Ray::new(origin, ls.wi));
     }
     let target = if ls.n == pt_math::Vec3::ZERO { ls.p } else { offset_ray_origin(ls.p, ls.n * ls.n.dot(-ls.wi).signum()) };
     let seg = target - origin;
     let dist = seg.length();
     if !(dist > 0.0) {
-        return false;
+        return None;
     }
-    !scene.occluded(&Ray { origin, dir: seg / dist, tmin: 0.0, tmax: dist * SHADOW_RAY_SHORTEN })
+    Some(Ray { origin, dir: seg / dist, tmin: 0.0, tmax: dist * SHADOW_RAY_SHORTEN })
 }
 
 /// Weight of emission that the traced ray found (an emitter hit or an escaped ray), given the

@@ -2,10 +2,10 @@
 //! sample; a render can be cancelled between passes and resumed from its saved sums.
 
 use crate::film::{sample_filter, PixelStats};
-use crate::integrator::{li, PathSettings};
+use crate::integrator::{trace_paths, PathSettings, PathState, MAX_PATHS};
 use crate::sampler::Sampler;
 use crate::scene::Scene;
-use pt_math::Vec2;
+use pt_math::{Ray, Vec2, Vec3};
 use pt_scene::FilterDesc;
 use pt_spectrum::{spectrum_to_srgb, ColorMode, SampledWavelengths};
 use rayon::prelude::*;
@@ -281,24 +281,40 @@ fn render_tile_portable(scene: &Scene, settings: &RenderSettings, band: &mut [Pi
     }
 }
 
-/// Adds samples `samples` of pixel (x, y) to `stats`, in order.
+/// Adds samples `samples` of pixel (x, y) to `stats`, in order. Up to [`MAX_PATHS`] samples
+/// are traced together (see [`trace_paths`]); each is the same as traced alone.
 #[inline(always)]
 fn render_pixel_samples(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, samples: std::ops::Range<u32>, rgb_lambda: &SampledWavelengths, stats: &mut PixelStats) {
     let pixel = y as u64 * settings.width as u64 + x as u64;
     let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
     let spectral = scene.mode == ColorMode::Spectral;
     let rgb_lambda = *rgb_lambda;
-    for s in samples {
-        let mut sampler = Sampler::new(settings.seed, pixel, s as u64);
-        let lambda = if spectral { SampledWavelengths::sample_visible(sampler.next_1d()) } else { rgb_lambda };
-        let offset = sample_filter(&settings.filter, &mut sampler);
-        let ray = scene.camera.generate_ray(centre + offset);
-        let l = li(scene, ray, &settings.path, &mut sampler, &lambda);
-        let rgb = if spectral { spectrum_to_srgb(l, &lambda) } else { l.rgb() };
-        stats.add(match settings.clamp {
-            Some(c) => clamp_sample(rgb, c),
-            None => rgb,
-        });
+    let mut first = samples.start;
+    while first < samples.end {
+        let n = (samples.end - first).min(MAX_PATHS as u32) as usize;
+        let mut samplers: [Sampler; MAX_PATHS] = std::array::from_fn(|k| Sampler::new(settings.seed, pixel, u64::from(first) + k as u64));
+        let mut lambdas = [rgb_lambda; MAX_PATHS];
+        // Plain loops rather than `array::from_fn` with this body: the compiler kept that out of
+        // line, i.e. outside the x86-64-v3 variant.
+        let mut paths = [PathState::new(scene, Ray::new(Vec3::ZERO, Vec3::Z), &rgb_lambda); MAX_PATHS];
+        for k in 0..n {
+            let sampler = &mut samplers[k];
+            if spectral {
+                lambdas[k] = SampledWavelengths::sample_visible(sampler.next_1d());
+            }
+            let offset = sample_filter(&settings.filter, sampler);
+            paths[k] = PathState::new(scene, scene.camera.generate_ray(centre + offset), &lambdas[k]);
+        }
+        trace_paths(scene, &settings.path, &mut paths[..n], &mut samplers[..n]);
+        for (path, lambda) in paths[..n].iter().zip(&lambdas) {
+            let l = path.radiance;
+            let rgb = if spectral { spectrum_to_srgb(l, lambda) } else { l.rgb() };
+            stats.add(match settings.clamp {
+                Some(c) => clamp_sample(rgb, c),
+                None => rgb,
+            });
+        }
+        first += n as u32;
     }
 }
 
