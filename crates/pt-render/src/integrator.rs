@@ -121,9 +121,10 @@ pub const MAX_PATHS: usize = 4;
 /// Traces `paths` (at most [`MAX_PATHS`]) to their ends, each with its own sampler
 /// (`samplers[i]` for `paths[i]`), adding each path's radiance to its `radiance`.
 ///
-/// The paths advance together, one segment at a time, in three passes over them: the closest
-/// hits of all, then the scattering at each hit (emission, light sample, BSDF sample, Russian
-/// roulette), then the shadow rays of all. The queries of one pass do not depend on each other,
+/// The paths advance together, one segment at a time, in two passes over them: the shadow rays
+/// left by the previous scattering and the closest hits of the new segments, then the
+/// scattering at each hit (emission, light sample, BSDF sample, Russian roulette). The queries
+/// of one pass do not depend on each other,
 /// so the processor overlaps them, where one path alone is a chain of dependent steps. Each
 /// path draws its random numbers and adds its terms in the same order as it would alone, so
 /// the result is bit-identical to tracing the paths one after the other.
@@ -132,8 +133,15 @@ pub fn trace_paths(scene: &Scene, s: &PathSettings, paths: &mut [PathState], sam
     debug_assert!(paths.len() <= MAX_PATHS && paths.len() == samplers.len());
     let mut hits: [Option<Interaction>; MAX_PATHS] = [None; MAX_PATHS];
     loop {
+        // The previous scattering's shadow rays and the new segments' closest hits, which do
+        // not depend on each other, in one pass.
         let mut any = false;
-        for (p, hit) in paths.iter().zip(hits.iter_mut()) {
+        for (p, hit) in paths.iter_mut().zip(hits.iter_mut()) {
+            if let Some((ray, contribution)) = p.shadow.take() {
+                if !scene.occluded(&ray) {
+                    p.radiance += contribution;
+                }
+            }
             if p.alive {
                 *hit = scene.intersect(&p.ray);
                 any = true;
@@ -145,13 +153,6 @@ pub fn trace_paths(scene: &Scene, s: &PathSettings, paths: &mut [PathState], sam
         for ((p, hit), sampler) in paths.iter_mut().zip(&hits).zip(samplers.iter_mut()) {
             if p.alive {
                 scatter(scene, s, p, hit, sampler);
-            }
-        }
-        for p in paths.iter_mut() {
-            if let Some((ray, contribution)) = p.shadow.take() {
-                if !scene.occluded(&ray) {
-                    p.radiance += contribution;
-                }
             }
         }
     }
