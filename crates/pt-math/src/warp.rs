@@ -86,6 +86,25 @@ pub fn square_to_uniform_triangle(u: Vec2) -> Vec2 {
     Vec2::new(1.0 - su, u.y * su)
 }
 
+
+/// Uniform direction in the cone of half-angle `theta_max` around +z, given
+/// `one_minus_cos_max = 1 - cos(theta_max)` (pass `2 sin^2(theta_max / 2)`: for the Sun's 0.27
+/// degrees, 1 - cos computed in f32 would lose 1% to cancellation).
+/// pdf = 1 / (2 pi (1 - cos_max)), see [`uniform_cone_pdf`].
+pub fn square_to_uniform_cone(u: Vec2, one_minus_cos_max: f32) -> Vec3 {
+    let omc = u.x * one_minus_cos_max; // 1 - cos(theta), exactly uniform in cos(theta)
+    let cos_t = 1.0 - omc;
+    let sin_t = (omc * (2.0 - omc)).max(0.0).sqrt();
+    let phi = 2.0 * PI * u.y;
+    Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t)
+}
+
+/// Solid-angle pdf of [`square_to_uniform_cone`] (inside the cone).
+#[inline]
+pub fn uniform_cone_pdf(one_minus_cos_max: f32) -> f32 {
+    1.0 / (2.0 * PI * one_minus_cos_max)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -168,22 +187,4 @@ mod tests {
             assert!(b.x >= 0.0 && b.y >= 0.0 && b.x + b.y <= 1.0 + 1e-6);
         }
     }
-}
-
-/// Uniform direction in the cone of half-angle `theta_max` around +z, given
-/// `one_minus_cos_max = 1 - cos(theta_max)` (pass `2 sin^2(theta_max / 2)`: for the Sun's 0.27
-/// degrees, 1 - cos computed in f32 would lose 1% to cancellation).
-/// pdf = 1 / (2 pi (1 - cos_max)), see [`uniform_cone_pdf`].
-pub fn square_to_uniform_cone(u: Vec2, one_minus_cos_max: f32) -> Vec3 {
-    let omc = u.x * one_minus_cos_max; // 1 - cos(theta), exactly uniform in cos(theta)
-    let cos_t = 1.0 - omc;
-    let sin_t = (omc * (2.0 - omc)).max(0.0).sqrt();
-    let phi = 2.0 * PI * u.y;
-    Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t)
-}
-
-/// Solid-angle pdf of [`square_to_uniform_cone`] (inside the cone).
-#[inline]
-pub fn uniform_cone_pdf(one_minus_cos_max: f32) -> f32 {
-    1.0 / (2.0 * PI * one_minus_cos_max)
 }
