@@ -229,16 +229,7 @@ fn occluded_count_dispatch(accel: &Accel, rays: &[Ray]) -> usize {
 /// Whether the processor has the x86-64-v3 features (false when `PT_BENCH_BASELINE` is set).
 #[cfg(target_arch = "x86_64")]
 fn has_v3() -> bool {
-    if std::env::var_os("PT_BENCH_BASELINE").is_some() {
-        return false;
-    }
-    std::is_x86_feature_detected!("avx2")
-        && std::is_x86_feature_detected!("fma")
-        && std::is_x86_feature_detected!("bmi1")
-        && std::is_x86_feature_detected!("bmi2")
-        && std::is_x86_feature_detected!("lzcnt")
-        && std::is_x86_feature_detected!("popcnt")
-        && std::is_x86_feature_detected!("movbe")
+    std::env::var_os("PT_BENCH_BASELINE").is_none() && pt_render::render::has_x86_64_v3()
 }
 
 fn bench_traversal(c: &mut Criterion, case: &Case) {

@@ -246,10 +246,10 @@ fn render_tile(scene: &Scene, settings: &RenderSettings, band: &mut [PixelStats]
 }
 
 /// Whether this processor has the x86-64-v3 features [`render_tile_v3`] is compiled for
-/// (detected once by std and cached).
+/// (detected once by std and cached). Public for benchmarks that compile their loops the same way.
 #[cfg(target_arch = "x86_64")]
 #[inline]
-fn has_x86_64_v3() -> bool {
+pub fn has_x86_64_v3() -> bool {
     std::is_x86_feature_detected!("avx2")
         && std::is_x86_feature_detected!("fma")
         && std::is_x86_feature_detected!("bmi1")
