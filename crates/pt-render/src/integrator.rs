@@ -124,13 +124,14 @@ pub const MAX_PATHS: usize = 4;
 /// The paths advance together, one segment at a time, in two passes over them: the shadow rays
 /// left by the previous scattering and the closest hits of the new segments, then the
 /// scattering at each hit (emission, light sample, BSDF sample, Russian roulette). The queries
-/// of one pass do not depend on each other,
-/// so the processor overlaps them, where one path alone is a chain of dependent steps. Each
-/// path draws its random numbers and adds its terms in the same order as it would alone, so
-/// the result is bit-identical to tracing the paths one after the other.
+/// of one pass do not depend on each other, so the processor overlaps them, where one path
+/// alone is a chain of dependent steps. Each path draws its random numbers and adds its terms
+/// in the same order as it would alone, so the result is bit-identical to tracing the paths
+/// one after the other.
 #[inline(always)]
 pub fn trace_paths(scene: &Scene, s: &PathSettings, paths: &mut [PathState], samplers: &mut [Sampler]) {
-    debug_assert!(paths.len() <= MAX_PATHS && paths.len() == samplers.len());
+    // More paths than hit slots would leave the extra ones untraced.
+    assert!(paths.len() <= MAX_PATHS && paths.len() == samplers.len(), "at most MAX_PATHS paths, one sampler each");
     let mut hits: [Option<Interaction>; MAX_PATHS] = [None; MAX_PATHS];
     loop {
         // The previous scattering's shadow rays and the new segments' closest hits, which do
