@@ -3,6 +3,10 @@
 //! tangent, also on the shared diagonal's far side, where the parallelogram extrapolates the
 //! first triangle's interpolation.
 //!
+//! The material is an anisotropic rough conductor, whose shading frame follows dp/du, so that
+//! hits carry texture coordinates and dp/du (with a plain diffuse material nothing reads them
+//! and hits get neither: checked at the end).
+//!
 //! The scene: the Cornell box's kinds of shapes (rectangles, rotated and scaled cubes, one
 //! lifted 1 cm off the floor so that no faces overlap, where either could win) plus a flipped
 //! rectangle (reversed winding) and a disk, whose triangle fan shares edges but forms no
@@ -23,7 +27,7 @@ use std::path::Path;
 const XML: &str = r#"<scene version="3.0.0">
     <sensor type="perspective"><transform name="to_world"><lookat origin="0,0,4" target="0,0,0" up="0,1,0"/></transform>
         <film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>
-    <bsdf type="diffuse" id="w"/>
+    BSDF
     <shape type="rectangle"><transform name="to_world"><rotate x="1" angle="-90"/><translate value="0,-1,0"/></transform><ref id="w"/></shape>
     <shape type="rectangle"><transform name="to_world"><scale value="0.7,0.3,1"/><rotate y="1" angle="33"/><translate value="0.1,0.2,-1"/></transform>
         <boolean name="flip_normals" value="true"/><ref id="w"/></shape>
@@ -33,6 +37,10 @@ const XML: &str = r#"<scene version="3.0.0">
     <shape type="rectangle"><transform name="to_world"><scale value="0.25,0.2,1"/><rotate x="1" angle="90"/><translate value="0,0.98,0"/></transform>
         <ref id="w"/><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>
 </scene>"#;
+
+/// The material (in place of `BSDF` in [`XML`]): anisotropic, so its shading frame follows dp/du
+/// and hits carry texture coordinates and dp/du.
+const ANISOTROPIC: &str = r#"<bsdf type="roughconductor" id="w"><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/></bsdf>"#;
 
 /// `desc` with every triangle given its own three vertices, so that no two triangles share an
 /// index and none are merged.
@@ -55,7 +63,7 @@ fn unwelded(desc: &SceneDesc) -> SceneDesc {
 
 #[test]
 fn parallelograms_hit_like_their_triangles() {
-    let desc = pt_scene::load_str(XML, Path::new("parallelograms.xml"), Path::new("."), &[]).unwrap();
+    let desc = pt_scene::load_str(&XML.replace("BSDF", ANISOTROPIC), Path::new("parallelograms.xml"), Path::new("."), &[]).unwrap();
     let merged = Scene::build(&desc, BvhKind::default(), LightSelection::Power).unwrap();
     let split = Scene::build(&unwelded(&desc), BvhKind::default(), LightSelection::Power).unwrap();
     // 3 x 2 rectangle triangles, 2 x 12 cube triangles; the disk's fan stays triangles.
@@ -120,4 +128,14 @@ fn parallelograms_hit_like_their_triangles() {
     // this seed); edge cases are rare.
     assert!(hits > 40_000, "{hits} hits");
     assert!(edge < hits / 1000, "{edge} edge cases in {hits} hits");
+
+    // With a diffuse material nothing reads texture coordinates: hits skip them and dp/du.
+    let diffuse = XML.replace("BSDF", r#"<bsdf type="diffuse" id="w"/>"#);
+    let desc = pt_scene::load_str(&diffuse, Path::new("parallelograms.xml"), Path::new("."), &[]).unwrap();
+    let plain = Scene::build(&desc, BvhKind::default(), LightSelection::Power).unwrap();
+    let floor = plain.intersect(&Ray::new(Vec3::new(0.9, 0.0, 0.9), Vec3::new(0.0, -1.0, 0.0))).expect("the floor");
+    assert!((floor.p.y + 1.0).abs() < 1e-5 && floor.dpdu == Vec3::ZERO, "{:?}", (floor.p, floor.dpdu));
+    // The anisotropic material keeps them.
+    let floor = merged.intersect(&Ray::new(Vec3::new(0.9, 0.0, 0.9), Vec3::new(0.0, -1.0, 0.0))).expect("the floor");
+    assert_ne!(floor.dpdu, Vec3::ZERO);
 }
