@@ -148,7 +148,7 @@ fn random_rays(prims: &[Primitive], seed: u64) -> Vec<Ray> {
 }
 
 struct Case {
-    scene: &'static str,
+    scene: String,
     prims: Vec<Primitive>,
     coherent: Vec<Ray>,
     incoherent: Vec<Ray>,
@@ -162,7 +162,7 @@ fn cornell_case() -> Case {
     let scene = Scene::build(&desc, BvhKind::CwBvh, LightSelection::Power).unwrap_or_else(|e| panic!("cannot build {}: {e:?}", path.display()));
     let prims = scene.primitives().to_vec();
     let camera = Camera::new(&desc.camera, RES, RES);
-    Case { scene: "cornell", coherent: camera_rays(&camera), incoherent: random_rays(&prims, 7), prims }
+    Case { scene: "cornell".into(), coherent: camera_rays(&camera), incoherent: random_rays(&prims, 7), prims }
 }
 
 fn mesh_case() -> Case {
@@ -176,7 +176,7 @@ fn mesh_case() -> Case {
         far_clip: 100.0,
     };
     let camera = Camera::new(&desc, RES, RES);
-    Case { scene: "sphere1m", coherent: camera_rays(&camera), incoherent: random_rays(&prims, 11), prims }
+    Case { scene: "sphere1m".into(), coherent: camera_rays(&camera), incoherent: random_rays(&prims, 11), prims }
 }
 
 /// Sum of the closest-hit distances of `rays` (hits only).
@@ -272,8 +272,7 @@ fn small_case(n: usize) -> Case {
             if k % 3 == 0 { Primitive::Parallelogram { v0, e1, e2 } } else { Primitive::Triangle { v0, e1, e2 } }
         })
         .collect();
-    let scene = ["small/8", "small/16", "small/32", "small/64", "small/128"][n.trailing_zeros() as usize - 3];
-    Case { scene, coherent: Vec::new(), incoherent: random_rays(&prims, 5), prims }
+    Case { scene: format!("small/{n}"), coherent: Vec::new(), incoherent: random_rays(&prims, 5), prims }
 }
 
 fn traversal(c: &mut Criterion) {
