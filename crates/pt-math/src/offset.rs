@@ -11,13 +11,21 @@ use glam::Vec3;
 /// Method and constants: Wächter & Binder 2019, "A Fast and Robust Method for Avoiding
 /// Self-Intersection", Ray Tracing Gems ch. 6, listing 6-1 (origin 1/32, float scale 1/65536,
 /// int scale 256). Pass `ng` facing the side the new ray leaves towards.
+///
+/// One deviation from the listing: the number of ULPs, 256 x the normal's component, is rounded
+/// to the nearest integer instead of truncated (one ULP more or less in a step of up to 256).
+/// That lets the float adder do the conversion (adding 1.5 x 2^23 leaves the integer in the low
+/// bits of the sum), so all three coordinates are computed together in one SIMD register,
+/// where Rust's saturating float-to-integer cast was three scalar conversions with range checks
+/// (3% of a Cornell box render's time).
 #[inline(always)]
 pub fn offset_ray_origin(p: Vec3, ng: Vec3) -> Vec3 {
-    let (p, n) = (p.to_array(), ng.to_array());
-    let mut out = [0.0f32; 3];
-    for i in 0..3 {
+    // Four lanes (the last one unused) so that the loop maps onto one SSE register.
+    let (p, n) = ([p.x, p.y, p.z, 0.0], [ng.x, ng.y, ng.z, 0.0]);
+    let mut out = [0.0f32; 4];
+    for i in 0..4 {
         // Both candidates, then a select: no branch per coordinate.
-        let of_i = (INT_SCALE * n[i]) as i32;
+        let of_i = ((INT_SCALE * n[i] + ROUND_MAGIC).to_bits() as i32).wrapping_sub(ROUND_MAGIC.to_bits() as i32);
         let bits = p[i].to_bits() as i32;
         // Outside the origin's box p is not zero, so its sign bit says p < 0: then step the
         // integer down (two's complement: (x ^ -1) - (-1) = -x), else up.
@@ -25,8 +33,12 @@ pub fn offset_ray_origin(p: Vec3, ng: Vec3) -> Vec3 {
         let stepped = f32::from_bits(bits.wrapping_add((of_i ^ neg).wrapping_sub(neg)) as u32);
         out[i] = if p[i].abs() < ORIGIN { p[i] + FLOAT_SCALE * n[i] } else { stepped };
     }
-    Vec3::from_array(out)
+    Vec3::new(out[0], out[1], out[2])
 }
+
+/// 1.5 x 2^23: a float of magnitude below 2^22 plus this is rounded to an integer, which sits in
+/// the low mantissa bits of the sum (the sum's bits minus this constant's bits are the integer).
+const ROUND_MAGIC: f32 = 12_582_912.0;
 
 /// Origin within which the offset is a small absolute step instead of a number of ULPs.
 const ORIGIN: f32 = 1.0 / 32.0;
@@ -35,15 +47,16 @@ const FLOAT_SCALE: f32 = 1.0 / 65536.0;
 /// ULPs per unit of normal elsewhere.
 const INT_SCALE: f32 = 256.0;
 
-/// [`offset_ray_origin`] written with a branch per coordinate, as in the paper's listing: the
-/// reference the branch-free form is tested against.
+/// [`offset_ray_origin`] written with a branch per coordinate, as in the paper's listing (but
+/// rounding the ULP count, as the fast form does): the reference the branch-free form is tested
+/// against.
 #[cfg(test)]
 fn offset_scalar(p: Vec3, ng: Vec3) -> Vec3 {
     let comp = |p: f32, n: f32| -> f32 {
         if p.abs() < ORIGIN {
             p + FLOAT_SCALE * n
         } else {
-            let of_i = (INT_SCALE * n) as i32;
+            let of_i = (INT_SCALE * n).round_ties_even() as i32;
             // Stepping the integer representation moves p by |of_i| ULPs, away from 0 when n has
             // the sign of p and towards 0 otherwise.
             let bits = p.to_bits() as i32;
