@@ -16,7 +16,7 @@ pub mod warp;
 
 pub use distribution::{Distribution1D, Distribution2D};
 pub use frame::Frame;
-pub use offset::offset_ray_origin;
+pub use offset::{offset_coordinate, offset_ray_origin};
 
 /// A ray in world space: `origin + t * dir` for `t` in `[tmin, tmax]`. `dir` is unit length.
 #[derive(Clone, Copy, Debug)]

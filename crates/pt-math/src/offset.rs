@@ -24,16 +24,23 @@ pub fn offset_ray_origin(p: Vec3, ng: Vec3) -> Vec3 {
     let (p, n) = ([p.x, p.y, p.z, 0.0], [ng.x, ng.y, ng.z, 0.0]);
     let mut out = [0.0f32; 4];
     for i in 0..4 {
-        // Both candidates, then a select: no branch per coordinate.
-        let of_i = ((INT_SCALE * n[i] + ROUND_MAGIC).to_bits() as i32).wrapping_sub(ROUND_MAGIC.to_bits() as i32);
-        let bits = p[i].to_bits() as i32;
-        // Outside the origin's box p is not zero, so its sign bit says p < 0: then step the
-        // integer down (two's complement: (x ^ -1) - (-1) = -x), else up.
-        let neg = bits >> 31;
-        let stepped = f32::from_bits(bits.wrapping_add((of_i ^ neg).wrapping_sub(neg)) as u32);
-        out[i] = if p[i].abs() < ORIGIN { p[i] + FLOAT_SCALE * n[i] } else { stepped };
+        out[i] = offset_coordinate(p[i], n[i]);
     }
     Vec3::new(out[0], out[1], out[2])
+}
+
+/// One coordinate of [`offset_ray_origin`]: `p` moved along the normal's component `n`. Also
+/// called lane by lane by code that offsets several points at once in SIMD lanes.
+#[inline(always)]
+pub fn offset_coordinate(p: f32, n: f32) -> f32 {
+    // Both candidates, then a select: no branch per coordinate.
+    let of_i = ((INT_SCALE * n + ROUND_MAGIC).to_bits() as i32).wrapping_sub(ROUND_MAGIC.to_bits() as i32);
+    let bits = p.to_bits() as i32;
+    // Outside the origin's box p is not zero, so its sign bit says p < 0: then step the
+    // integer down (two's complement: (x ^ -1) - (-1) = -x), else up.
+    let neg = bits >> 31;
+    let stepped = f32::from_bits(bits.wrapping_add((of_i ^ neg).wrapping_sub(neg)) as u32);
+    if p.abs() < ORIGIN { p + FLOAT_SCALE * n } else { stepped }
 }
 
 /// 1.5 x 2^23: a float of magnitude below 2^22 plus this is rounded to an integer, which sits in

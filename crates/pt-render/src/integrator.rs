@@ -10,8 +10,10 @@ use crate::geometry::Interaction;
 use crate::light::LightSample;
 use crate::sampler::Sampler;
 use crate::scene::Scene;
-use pt_math::{offset_ray_origin, power_heuristic, Frame, Ray, Vec3};
+use crate::scene::LaneShading;
+use pt_math::{offset_coordinate, offset_ray_origin, power_heuristic, Frame, Ray, Vec3, Vec4};
 use pt_spectrum::{ColorMode, SampledSpectrum, SampledWavelengths};
+use std::f32::consts::FRAC_1_PI;
 
 /// Which strategies estimate direct light (for method comparisons; MIS is the default).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -58,9 +60,27 @@ const SHADOW_RAY_SHORTEN: f32 = 1.0 - 1e-5;
 /// The same computation as [`trace_paths`] for one path (which is how it is done).
 #[inline(always)]
 pub fn li(scene: &Scene, ray: Ray, s: &PathSettings, sampler: &mut Sampler, lambda: &SampledWavelengths) -> SampledSpectrum {
-    let mut path = [PathState::new(scene, ray, lambda)];
-    trace_paths(scene, s, &mut path, std::slice::from_mut(sampler));
-    path[0].radiance
+    let mut first = Some(PathStart { path: PathState::new(scene, ray, lambda), sampler: sampler.clone(), lambda: *lambda, tag: 0 });
+    let mut radiance = SampledSpectrum::ZERO;
+    trace_paths(scene, s, || first.take(), |done| {
+        radiance = done.path.radiance;
+        *sampler = done.sampler.clone();
+    });
+    radiance
+}
+
+/// A path as [`trace_paths`] takes it and hands it back: the path, its random numbers, the
+/// wavelengths it started with (fluorescence may change the path's own) and a tag of the
+/// caller's choosing (which sample it is).
+pub struct PathStart {
+    /// The path (when handed back, finished: its `radiance` is the estimate).
+    pub path: PathState,
+    /// The path's random number stream.
+    pub sampler: Sampler,
+    /// The wavelengths the path started with.
+    pub lambda: SampledWavelengths,
+    /// The caller's label.
+    pub tag: u32,
 }
 
 /// One path in flight: what the path loop carries from one segment to the next.
@@ -116,58 +136,83 @@ impl PathState {
 }
 
 /// Most paths [`trace_paths`] keeps in flight at once.
-pub const MAX_PATHS: usize = 4;
+pub const MAX_PATHS: usize = 8;
 
-/// Traces `paths` (at most [`MAX_PATHS`]) to their ends, each with its own sampler
-/// (`samplers[i]` for `paths[i]`), adding each path's radiance to its `radiance`.
+/// Traces the paths that `start` gives until it gives `None`, and hands each finished path to
+/// `finish`, in the order they finish (not the order they started).
 ///
-/// The paths advance together, one segment at a time, in two passes over them: the shadow rays
-/// left by the previous scattering and the closest hits of the new segments, then the
-/// scattering at each hit (emission, light sample, BSDF sample, Russian roulette). The queries
-/// of one pass do not depend on each other, so the processor overlaps them, where one path
-/// alone is a chain of dependent steps. Each path draws its random numbers and adds its terms
-/// in the same order as it would alone, so the result is bit-identical to tracing the paths
-/// one after the other.
+/// Up to [`MAX_PATHS`] paths are in flight, and a path that ends makes room for the next at
+/// once, so that the vectorised shading's lanes stay full. The paths advance together, one
+/// segment at a time, in two passes over them: the shadow rays left by the previous scattering
+/// and the closest hits of the new segments, then the scattering at each hit (emission, light
+/// sample, BSDF sample, Russian roulette), at Lambert hits for all paths at once in SIMD lanes
+/// ([`scatter_lanes`]). The queries of one pass do not depend on each other, so the processor
+/// overlaps them, where one path alone is a chain of dependent steps. Each path draws its random
+/// numbers and adds its terms in the same order as it would alone, so each result is
+/// bit-identical to tracing the path alone.
 #[inline(always)]
-pub fn trace_paths(scene: &Scene, s: &PathSettings, paths: &mut [PathState], samplers: &mut [Sampler]) {
-    // More paths than hit slots would leave the extra ones untraced.
-    assert!(paths.len() <= MAX_PATHS && paths.len() == samplers.len(), "at most MAX_PATHS paths, one sampler each");
+pub fn trace_paths(scene: &Scene, s: &PathSettings, mut start: impl FnMut() -> Option<PathStart>, mut finish: impl FnMut(&PathStart)) {
+    let mut slots: [Option<PathStart>; MAX_PATHS] = [const { None }; MAX_PATHS];
+    for slot in slots.iter_mut() {
+        *slot = start();
+    }
     let mut hits: [Option<Interaction>; MAX_PATHS] = [None; MAX_PATHS];
     loop {
-        // The previous scattering's shadow rays and the new segments' closest hits, which do
-        // not depend on each other, in one pass.
+        // The previous scattering's shadow rays; finished paths out and new ones in; the new
+        // segments' closest hits. The queries do not depend on each other.
         let mut any = false;
-        for (p, hit) in paths.iter_mut().zip(hits.iter_mut()) {
-            if let Some((ray, contribution)) = p.shadow.take() {
-                if !scene.occluded(&ray) {
-                    p.radiance += contribution;
+        for (slot, hit) in slots.iter_mut().zip(hits.iter_mut()) {
+            if let Some(sl) = slot {
+                if let Some((ray, contribution)) = sl.path.shadow.take() {
+                    if !scene.occluded(&ray) {
+                        sl.path.radiance += contribution;
+                    }
+                }
+                if !sl.path.alive {
+                    finish(sl);
+                    *slot = start();
                 }
             }
-            if p.alive {
-                *hit = scene.intersect(&p.ray);
+            if let Some(sl) = slot {
+                *hit = scene.intersect(&sl.path.ray);
                 any = true;
             }
         }
         if !any {
             break;
         }
-        for ((p, hit), sampler) in paths.iter_mut().zip(&hits).zip(samplers.iter_mut()) {
-            if p.alive {
-                scatter(scene, s, p, hit, sampler);
+        // Hits that the vectorised shading can take wait in `lanes` for one call.
+        let lane_shading = scene.lane_shading().filter(|_| s.strategy == Strategy::Mis);
+        let mut lanes = [None; MAX_PATHS];
+        for ((slot, hit), lane) in slots.iter_mut().zip(&hits).zip(lanes.iter_mut()) {
+            let Some(PathStart { path, sampler, .. }) = slot else { continue };
+            if !arrive(scene, s, path, hit) {
+                continue;
+            }
+            let Some(hit) = hit else { continue };
+            // The vectorised shading builds the frame from the normal alone, as the general
+            // code does when there is no dp/du.
+            match lane_shading.filter(|_| hit.dpdu == Vec3::ZERO).and_then(|ls| scene.lane_lambert(ls, hit.shape)) {
+                Some(m) => *lane = Some(m),
+                None => scatter_at(scene, s, path, hit, sampler),
+            }
+        }
+        if let Some(ls) = lane_shading {
+            if lanes.iter().any(Option::is_some) {
+                scatter_lanes(scene, s, ls, &mut slots, &hits, &lanes);
             }
         }
     }
 }
 
-/// Everything a path does with the result `hit` of tracing its segment: emission from an
-/// escaped ray or a hit emitter, then (unless the path ends) the light sample, whose shadow ray
-/// it leaves in `path.shadow`, the BSDF sample that makes the next segment, and Russian
-/// roulette. Ends the path (`alive = false`) where Mitsuba's `path` integrator stops.
+/// What a path does with the result `hit` of tracing its segment before it scatters there:
+/// emission from an escaped ray or a hit emitter. Returns whether it scatters at `hit` (see
+/// [`scatter_at`]); otherwise the path has ended (`alive = false`) where Mitsuba's `path`
+/// integrator stops.
 #[inline(always)]
-fn scatter(scene: &Scene, s: &PathSettings, path: &mut PathState, hit: &Option<Interaction>, sampler: &mut Sampler) {
+fn arrive(scene: &Scene, s: &PathSettings, path: &mut PathState, hit: &Option<Interaction>) -> bool {
     let max_depth = if s.max_depth < 0 { u32::MAX } else { s.max_depth as u32 };
-    let use_light = s.strategy != Strategy::Bsdf;
-    let PathState { ray, lambda, radiance, throughput, prev_p, prev_pdf, prev_delta, depth, eta_scale, alive, shadow } = path;
+    let PathState { ray, lambda, radiance, throughput, prev_p, prev_pdf, prev_delta, depth, alive, .. } = path;
     let (depth_now, prev_delta_now, prev_pdf_now) = (*depth, *prev_delta, *prev_pdf);
     let Some(hit) = hit else {
         // The ray left the scene: environment and sun.
@@ -180,7 +225,7 @@ fn scatter(scene: &Scene, s: &PathSettings, path: &mut PathState, hit: &Option<I
             }
         }
         *alive = false;
-        return;
+        return false;
     };
     let wo_world = -ray.dir;
 
@@ -193,7 +238,7 @@ fn scatter(scene: &Scene, s: &PathSettings, path: &mut PathState, hit: &Option<I
             *throughput *= tr;
             if throughput.is_black() {
                 *alive = false;
-                return;
+                return false;
             }
         }
     }
@@ -211,9 +256,19 @@ fn scatter(scene: &Scene, s: &PathSettings, path: &mut PathState, hit: &Option<I
     // Mitsuba: continue only if another segment fits within max_depth.
     if depth.saturating_add(1) >= max_depth {
         *alive = false;
-        return;
+        return false;
     }
+    true
+}
 
+/// The scattering of a path at `hit` (after [`arrive`]): the light sample, whose shadow ray it
+/// leaves in `path.shadow`, the BSDF sample that makes the next segment, and Russian roulette.
+/// Ends the path (`alive = false`) where Mitsuba's `path` integrator stops.
+#[inline(always)]
+fn scatter_at(scene: &Scene, s: &PathSettings, path: &mut PathState, hit: &Interaction, sampler: &mut Sampler) {
+    let use_light = s.strategy != Strategy::Bsdf;
+    let PathState { ray, lambda, throughput, prev_p, prev_pdf, prev_delta, depth, eta_scale, alive, shadow, .. } = path;
+    let wo_world = -ray.dir;
     let bsdf = scene.material_at_hit(hit, lambda);
     // Fluorescence: the BSDF holds each lane's total albedo at its emitted wavelength; now
     // some lanes move to an excitation wavelength, used by NEE and the rest of the path.
@@ -280,6 +335,179 @@ fn scatter(scene: &Scene, s: &PathSettings, path: &mut PathState, hit: &Option<I
             return;
         }
         *throughput *= 1.0 / q;
+    }
+}
+
+/// The scattering at Lambert hits (see [`LaneShading`]) of the paths marked in `lanes` (with
+/// their albedo and two-sidedness), all at once: the same computation as [`scatter_at`], with
+/// the same operations in the same order, written over arrays of one lane per path so that the
+/// compiler runs it in SIMD lanes (AVX2 in the x86-64-v3 render loop). Each path draws its
+/// random numbers in the same order as in [`scatter_at`], so the results are bit-identical.
+#[inline(always)]
+fn scatter_lanes(scene: &Scene, s: &PathSettings, ls: &LaneShading, slots: &mut [Option<PathStart>; MAX_PATHS], hits: &[Option<Interaction>; MAX_PATHS], lanes: &[Option<([f32; 4], bool)>; MAX_PATHS]) {
+    const N: usize = MAX_PATHS;
+    // Inputs, gathered one lane per path. Unused lanes keep harmless values and are ignored.
+    let mut p = [[0.0f32; N]; 3];
+    let mut ng = [[0.0f32; N]; 3];
+    let mut ns = [[0.0f32, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0; N], [1.0; N]];
+    let mut dir = [[0.0f32; N], [0.0; N], [-1.0; N]];
+    let mut albedo = [[0.0f32; N]; 4];
+    let mut two_sided = [false; N];
+    let mut thr = [[0.0f32; N]; 4];
+    let mut pmf = [1.0f32; N];
+    let (mut u_light, mut u_bsdf) = ([[0.5f32; N]; 2], [[0.5f32; N]; 2]);
+    let (mut lv0, mut le1, mut le2, mut ln) = ([[0.0f32; N]; 3], [[0.0f32; N]; 3], [[0.0f32; N]; 3], [[0.0f32; N]; 3]);
+    let mut larea = [1.0f32; N];
+    let mut lrad = [[0.0f32; N]; 4];
+    for k in 0..N {
+        let (Some(h), Some((alb, two)), Some(PathStart { path, sampler, .. })) = (&hits[k], lanes[k], &mut slots[k]) else { continue };
+        // The draws of `scatter_at`: light choice, light point, lobe (unused by Lambert),
+        // direction; Russian roulette's comes after, as there.
+        let (li, pm, _) = scene.sample_light(sampler.next_1d()).expect("LaneShading requires a light to choose");
+        let ul = sampler.next_2d();
+        let _u_lobe = sampler.next_1d();
+        let ub = sampler.next_2d();
+        let light = &ls.lights[li];
+        for a in 0..3 {
+            p[a][k] = h.p[a];
+            ng[a][k] = h.ng[a];
+            ns[a][k] = h.ns[a];
+            dir[a][k] = path.ray.dir[a];
+            lv0[a][k] = light.v0[a];
+            le1[a][k] = light.e1[a];
+            le2[a][k] = light.e2[a];
+            ln[a][k] = light.n[a];
+        }
+        for c in 0..4 {
+            albedo[c][k] = alb[c];
+            thr[c][k] = path.throughput.0[c];
+            lrad[c][k] = light.radiance[c];
+        }
+        two_sided[k] = two;
+        pmf[k] = pm;
+        (u_light[0][k], u_light[1][k], u_bsdf[0][k], u_bsdf[1][k]) = (ul.x, ul.y, ub.x, ub.y);
+        larea[k] = light.area;
+    }
+
+    // Outputs: the shadow ray and its contribution, the next segment.
+    let mut shadow_ok = [false; N];
+    let (mut sh_o, mut sh_d, mut sh_tmax, mut sh_c) = ([[0.0f32; N]; 3], [[0.0f32; N]; 3], [0.0f32; N], [[0.0f32; N]; 4]);
+    let mut next_ok = [false; N];
+    let (mut nx_o, mut nx_d, mut nx_pdf) = ([[0.0f32; N]; 3], [[0.0f32; N]; 3], [0.0f32; N]);
+    let dot = |a: [f32; 3], b: [f32; 3]| (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2];
+    for k in 0..N {
+        let get = |v: &[[f32; N]; 3]| [v[0][k], v[1][k], v[2][k]];
+        let (x, n_g, n) = (get(&p), get(&ng), get(&ns));
+        // Frame::from_normal (Duff et al. 2017).
+        let sign = 1.0f32.copysign(n[2]);
+        let a = -1.0 / (sign + n[2]);
+        let b = n[0] * n[1] * a;
+        let fs = [1.0 + sign * n[0] * n[0] * a, sign * b, -sign * n[0]];
+        let ft = [b, sign + n[1] * n[1] * a, -n[1]];
+        let to_local = |v: [f32; 3]| [dot(v, fs), dot(v, ft), dot(v, n)];
+        let d = get(&dir);
+        let wo = to_local([-d[0], -d[1], -d[2]]);
+        // SpawnPoint: the side the path came from, offset there; the other side on demand.
+        let flip = -dot(n_g, d).signum();
+        let n_out = [n_g[0] * flip, n_g[1] * flip, n_g[2] * flip];
+        let out = [offset_coordinate(x[0], n_out[0]), offset_coordinate(x[1], n_out[1]), offset_coordinate(x[2], n_out[2])];
+        let origin = |w: [f32; 3]| if dot(n_out, w) >= 0.0 { out } else { [offset_coordinate(x[0], -n_out[0]), offset_coordinate(x[1], -n_out[1]), offset_coordinate(x[2], -n_out[2])] };
+        // Two-sided Lambert seen from behind is mirrored (SurfaceBsdf::side).
+        let side = if two_sided[k] && wo[2] < 0.0 { -1.0 } else { 1.0 };
+        let wo_z = wo[2] * side;
+
+        // Light sample: a point of the parallelogram by area (AreaLight::sample).
+        let (ux, uy) = (u_light[0][k], u_light[1][k]);
+        let (v0, e1, e2, l_n) = (get(&lv0), get(&le1), get(&le2), get(&ln));
+        let lp = [v0[0] + e1[0] * ux + e2[0] * uy, v0[1] + e1[1] * ux + e2[1] * uy, v0[2] + e1[2] * ux + e2[2] * uy];
+        let to = [lp[0] - x[0], lp[1] - x[1], lp[2] - x[2]];
+        let dist2 = dot(to, to);
+        let dist = dist2.sqrt();
+        let wi = [to[0] / dist, to[1] / dist, to[2] / dist];
+        let cos_l = dot(l_n, [-wi[0], -wi[1], -wi[2]]);
+        let l_pdf = dist2 / (cos_l.abs() * larea[k]);
+        let sampled = (dist > 0.0) & l_pdf.is_finite();
+        let lit = cos_l > 0.0;
+        let wi_l = to_local(wi);
+        // Lambert eval and pdf (sides mirrored as in SurfaceBsdf; opacity 1).
+        let wi_z = wi_l[2] * side;
+        let front = (wo_z > 0.0) & (wi_z > 0.0);
+        let mut f = [0.0f32; 4];
+        let mut le = [0.0f32; 4];
+        for c in 0..4 {
+            f[c] = if front { albedo[c][k] * FRAC_1_PI } else { 0.0 };
+            le[c] = if lit { lrad[c][k] } else { 0.0 };
+        }
+        let black = |v: &[f32; 4]| (v[0] == 0.0) & (v[1] == 0.0) & (v[2] == 0.0) & (v[3] == 0.0);
+        // The shadow ray (shadow_ray): to the light point offset off the light's surface.
+        let o = origin(wi);
+        let tn_sign = cos_l.signum();
+        let target = [offset_coordinate(lp[0], l_n[0] * tn_sign), offset_coordinate(lp[1], l_n[1] * tn_sign), offset_coordinate(lp[2], l_n[2] * tn_sign)];
+        let seg = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
+        let seg_len = dot(seg, seg).sqrt();
+        let light_pdf = pmf[k] * l_pdf;
+        let bsdf_pdf = if wo_z > 0.0 && wi_z > 0.0 { wi_z * FRAC_1_PI } else { 0.0 };
+        let w = power_heuristic(light_pdf, bsdf_pdf);
+        let scale = wi_l[2].abs() * w / light_pdf;
+        shadow_ok[k] = sampled & !black(&le) & !black(&f) & (seg_len > 0.0);
+        for a in 0..3 {
+            sh_o[a][k] = o[a];
+            sh_d[a][k] = seg[a] / seg_len;
+        }
+        sh_tmax[k] = seg_len * SHADOW_RAY_SHORTEN;
+        for c in 0..4 {
+            sh_c[c][k] = thr[c][k] * f[c] * le[c] * scale;
+        }
+
+        // BSDF sample: the cosine-weighted hemisphere by the concentric map (warp.rs, the same
+        // operations).
+        let (ox, oy) = (2.0 * u_bsdf[0][k] - 1.0, 2.0 * u_bsdf[1][k] - 1.0);
+        let x_wedge = ox.abs() > oy.abs();
+        let (r, num) = if x_wedge { (ox, oy) } else { (oy, ox) };
+        let ratio = (num / r).max(-1.0);
+        let (sn, cs) = pt_math::warp::sin_cos_quarter(std::f32::consts::FRAC_PI_4 * ratio);
+        let (cos_t, sin_t) = if x_wedge { (cs, sn) } else { (sn, cs) };
+        let (dx, dy) = (r * cos_t, r * sin_t);
+        let z = (1.0 - (dx * dx + dy * dy)).max(0.0).sqrt();
+        let pdf = if z > 0.0 { z * FRAC_1_PI } else { 0.0 };
+        next_ok[k] = !(wo_z <= 0.0) & !(pdf <= 0.0);
+        let wz = z * side;
+        let wi_world = [fs[0] * dx + ft[0] * dy + n[0] * wz, fs[1] * dx + ft[1] * dy + n[1] * wz, fs[2] * dx + ft[2] * dy + n[2] * wz];
+        let no = origin(wi_world);
+        for a in 0..3 {
+            nx_o[a][k] = no[a];
+            nx_d[a][k] = wi_world[a];
+        }
+        nx_pdf[k] = pdf;
+    }
+
+    // Results back to the paths, then Russian roulette as in `scatter_at`.
+    for k in 0..N {
+        let (Some(h), Some((alb, _)), Some(PathStart { path, sampler, .. })) = (&hits[k], lanes[k], &mut slots[k]) else { continue };
+        let col = |v: &[[f32; N]; 3]| Vec3::new(v[0][k], v[1][k], v[2][k]);
+        if shadow_ok[k] {
+            let ray = Ray { origin: col(&sh_o), dir: col(&sh_d), tmin: 0.0, tmax: sh_tmax[k] };
+            path.shadow = Some((ray, SampledSpectrum(Vec4::new(sh_c[0][k], sh_c[1][k], sh_c[2][k], sh_c[3][k]))));
+        }
+        let weight = SampledSpectrum(Vec4::from_array(alb));
+        if !next_ok[k] || weight.is_black() {
+            path.alive = false;
+            continue;
+        }
+        path.throughput *= weight;
+        path.prev_p = h.p;
+        path.prev_pdf = nx_pdf[k];
+        path.prev_delta = false;
+        path.ray = Ray::new(col(&nx_o), col(&nx_d));
+        path.depth += 1;
+        if path.depth >= s.rr_depth {
+            let q = (path.throughput.max_value() * path.eta_scale * path.eta_scale).min(0.95);
+            if !(sampler.next_1d() < q) {
+                path.alive = false;
+                continue;
+            }
+            path.throughput *= 1.0 / q;
+        }
     }
 }
 

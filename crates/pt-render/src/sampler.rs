@@ -19,6 +19,7 @@ fn splitmix64(mut z: u64) -> u64 {
 }
 
 /// Independent uniform random numbers for one camera sample.
+#[derive(Clone)]
 pub struct Sampler {
     rng: Pcg32,
 }

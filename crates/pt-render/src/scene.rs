@@ -90,6 +90,63 @@ fn uses_uv(material: &SurfaceBsdf, textured: bool, light: Option<&Light>) -> boo
     textured || textured_light || material.normal.is_some() || !isotropic(&material.bsdf) || material.blend.as_ref().is_some_and(|(_, b)| !isotropic(b))
 }
 
+/// The data of the integrator's vectorised shading (eight paths' scattering in SIMD lanes, see
+/// `integrator::scatter_lanes`), for scenes where it gives exactly what the general code
+/// gives: RGB mode, every light a parallelogram area light of constant radiance (so light
+/// samples need no texture or spectrum), and a light to sample. Hits on Lambert materials that
+/// are opaque, unblended and without normal map or texture go through it; all other hits
+/// through the general code.
+pub struct LaneShading {
+    /// Per material: the Lambert albedo (RGB, fourth lane 0) and two-sidedness, or `None`.
+    lambert: Vec<Option<([f32; 4], bool)>>,
+    /// Per light (same order as `Scene::lights`).
+    pub lights: Vec<LaneLight>,
+}
+
+/// A parallelogram area light as the vectorised shading samples it (world space).
+#[derive(Clone, Copy)]
+pub struct LaneLight {
+    /// Corner.
+    pub v0: Vec3,
+    /// First edge.
+    pub e1: Vec3,
+    /// Second edge.
+    pub e2: Vec3,
+    /// Unit normal of the emitting side.
+    pub n: Vec3,
+    /// Area (scene units squared).
+    pub area: f32,
+    /// Emitted radiance (RGB lanes, fourth as stored).
+    pub radiance: [f32; 4],
+}
+
+impl LaneShading {
+    fn new(mode: ColorMode, materials: &[SurfaceBsdf], textures: &[Option<Box<MaterialTextures>>], lights: &[Light], has_light_choice: bool) -> Option<Self> {
+        if mode != ColorMode::Rgb || !has_light_choice {
+            return None;
+        }
+        let lights = lights
+            .iter()
+            .map(|l| match l {
+                Light::Area(a) if a.texture.is_none() && a.spectral.is_none() => match a.shape {
+                    LightShape::Parallelogram { v0, e1, e2, n, .. } => Some(LaneLight { v0, e1, e2, n, area: a.area, radiance: a.radiance.0.to_array() }),
+                    _ => None,
+                },
+                _ => None,
+            })
+            .collect::<Option<Vec<_>>>()?;
+        let lambert = materials
+            .iter()
+            .enumerate()
+            .map(|(m, b)| match (b.bsdf, b.opacity, b.normal, b.blend, textures.get(m)) {
+                (Bsdf::Lambert(l), o, None, None, None | Some(None)) if o == 1.0 => Some((l.reflectance.0.to_array(), b.two_sided)),
+                _ => None,
+            })
+            .collect();
+        Some(LaneShading { lambert, lights })
+    }
+}
+
 /// `t` rotated so that `t[c]` comes first (winding kept); `c` < 3.
 #[inline(always)]
 fn rotate(t: [u32; 3], c: u8) -> [u32; 3] {
@@ -138,6 +195,9 @@ pub struct Scene {
     /// Indices into `lights` of lights that rays leaving the scene can see.
     pub infinite_lights: Vec<usize>,
     light_distr: Option<Distribution1D>,
+    /// What the integrator's vectorised shading needs, for scenes that allow it (see
+    /// [`LaneShading`]).
+    lane_shading: Option<LaneShading>,
     /// Centre and radius of the scene's bounding sphere.
     pub bounds: (Vec3, f32),
     /// The camera.
@@ -516,7 +576,8 @@ impl Scene {
         if !spectral {
             light_spectra.clear();
         }
-        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, fluorescent, textures, light_spectra, media, lights, infinite_lights, light_distr, bounds, camera, mode, stats })
+        let lane_shading = LaneShading::new(mode, &materials, &textures, &lights, light_distr.is_some());
+        Ok(Scene { accel, prim_refs, shapes, materials, spectral_materials, fluorescent, textures, light_spectra, media, lights, infinite_lights, light_distr, lane_shading, bounds, camera, mode, stats })
     }
 
     /// Closest hit along `ray`, with its surface data.
@@ -711,6 +772,26 @@ impl Scene {
     #[inline(always)]
     pub fn sample_light(&self, u: f32) -> Option<(usize, f32, f32)> {
         self.light_distr.as_ref().map(|d| d.sample(u))
+    }
+
+    /// The vectorised shading's data, if the scene allows it.
+    #[inline(always)]
+    pub fn lane_shading(&self) -> Option<&LaneShading> {
+        self.lane_shading.as_ref()
+    }
+
+    /// Switches the vectorised shading off (every hit then goes through the general code),
+    /// for tests that compare the two.
+    #[cfg(test)]
+    pub(crate) fn disable_lane_shading(&mut self) {
+        self.lane_shading = None;
+    }
+
+    /// Lambert albedo (RGB lanes, fourth 0) and two-sidedness of the shape's material, if the
+    /// vectorised shading may shade its hits.
+    #[inline(always)]
+    pub fn lane_lambert(&self, lanes: &LaneShading, shape: u32) -> Option<([f32; 4], bool)> {
+        lanes.lambert[self.shapes[shape as usize].material as usize]
     }
 
     /// Probability that NEE chooses light `i`.
