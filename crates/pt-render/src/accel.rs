@@ -83,6 +83,10 @@ pub struct Accel {
     pub prims: Vec<Primitive>,
     /// For each entry of `prims`, its index in the order given to [`Accel::build`].
     pub original_index: Vec<u32>,
+    /// Without a tree (at most [`FLAT_MAX`] primitives, or forced): each triangle's and
+    /// parallelogram's unit normal `normalize(e1 x e2)`, computed once instead of at every hit
+    /// (the same expression, so the same bits). Empty otherwise.
+    pub unit_normals: Vec<pt_math::Vec3>,
 }
 
 impl Accel {
@@ -92,7 +96,7 @@ impl Accel {
     /// primitives are permuted in place afterwards (no second copy).
     pub fn build(mut prims: Vec<Primitive>, kind: BvhKind) -> Self {
         if prims.is_empty() {
-            return Accel { tree: Tree::Empty, small_stack: true, prims, original_index: Vec::new() };
+            return Accel { tree: Tree::Empty, small_stack: true, prims, original_index: Vec::new(), unit_normals: Vec::new() };
         }
         if use_flat(kind, prims.len()) {
             return Accel::build_flat(prims);
@@ -112,7 +116,7 @@ impl Accel {
             }
         };
         permute_in_place(&mut prims, &order);
-        Accel { small_stack: fits_small_stack(&tree), tree, prims, original_index: order }
+        Accel { small_stack: fits_small_stack(&tree), tree, prims, original_index: order, unit_normals: Vec::new() }
     }
 
     /// [`Accel::build`] with a lower memory peak, for large meshes: the primitives are dropped
@@ -133,7 +137,7 @@ impl Accel {
     /// as that makes at most [`MAX_CHUNKS`] groups).
     fn build_compact_chunked(prims: Vec<Primitive>, kind: BvhKind, remake: impl Fn(usize) -> Primitive, chunk_prims: usize) -> Self {
         if prims.is_empty() {
-            return Accel { tree: Tree::Empty, small_stack: true, prims, original_index: Vec::new() };
+            return Accel { tree: Tree::Empty, small_stack: true, prims, original_index: Vec::new(), unit_normals: Vec::new() };
         }
         if use_flat(kind, prims.len()) {
             return Accel::build_flat(prims);
@@ -174,7 +178,7 @@ impl Accel {
         };
         let mut prims = Vec::with_capacity(order.len());
         prims.extend(order.iter().map(|&i| remake(i as usize)));
-        Accel { small_stack: fits_small_stack(&tree), tree, prims, original_index: order }
+        Accel { small_stack: fits_small_stack(&tree), tree, prims, original_index: order, unit_normals: Vec::new() }
     }
 
     /// The flat "tree" ([`BvhKind::Flat`]): triangles and parallelograms first, in their given
@@ -186,7 +190,14 @@ impl Accel {
         permute_in_place(&mut prims, &order);
         let spheres_from = prims.iter().position(|p| matches!(p, Primitive::Sphere { .. })).unwrap_or(prims.len());
         let blocks = prims[..spheres_from].chunks(LANES).map(Block::new).collect();
-        Accel { tree: Tree::Flat { blocks, spheres_from }, small_stack: false, prims, original_index: order }
+        let unit_normals = prims[..spheres_from]
+            .iter()
+            .map(|p| match *p {
+                Primitive::Triangle { e1, e2, .. } | Primitive::Parallelogram { e1, e2, .. } => pt_math::Vec3::from(e1.cross(e2)).normalize(),
+                Primitive::Sphere { .. } => pt_math::Vec3::ZERO,
+            })
+            .collect();
+        Accel { tree: Tree::Flat { blocks, spheres_from }, small_stack: false, prims, original_index: order, unit_normals }
     }
 
     /// Closest hit along the ray: which primitive, at what distance, with the edge coordinates

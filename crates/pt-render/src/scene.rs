@@ -590,7 +590,10 @@ impl Scene {
             Primitive::Triangle { v0, e1, e2 } | Primitive::Parallelogram { v0, e1, e2 } => {
                 let b0 = 1.0 - b1 - b2;
                 let p = Vec3::from(v0 + e1 * b1 + e2 * b2);
-                let ng = Vec3::from(e1.cross(e2)).normalize();
+                let ng = match self.accel.unit_normals.get(id) {
+                    Some(&n) => n,
+                    None => Vec3::from(e1.cross(e2)).normalize(),
+                };
                 let idx = r.vertices(&shape.indices);
                 let ns = match &shape.normals {
                     Some(n) => {
