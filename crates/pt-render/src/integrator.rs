@@ -146,7 +146,7 @@ pub const MAX_PATHS: usize = 8;
 /// segment at a time, in two passes over them: the shadow rays left by the previous scattering
 /// and the closest hits of the new segments, then the scattering at each hit (emission, light
 /// sample, BSDF sample, Russian roulette), at Lambert hits for all paths at once in SIMD lanes
-/// ([`scatter_lanes`]). The queries of one pass do not depend on each other, so the processor
+/// (`scatter_lanes`). The queries of one pass do not depend on each other, so the processor
 /// overlaps them, where one path alone is a chain of dependent steps. Each path draws its random
 /// numbers and adds its terms in the same order as it would alone, so each result is
 /// bit-identical to tracing the path alone.

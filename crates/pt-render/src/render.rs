@@ -245,7 +245,7 @@ fn render_tile(scene: &Scene, settings: &RenderSettings, band: &mut [PixelStats]
     render_tile_portable(scene, settings, band, tile)
 }
 
-/// Whether this processor has the x86-64-v3 features [`render_tile_v3`] is compiled for
+/// Whether this processor has the x86-64-v3 features `render_tile_v3` is compiled for
 /// (detected once by std and cached). Public for benchmarks that compile their loops the same way.
 #[cfg(target_arch = "x86_64")]
 #[inline]
