@@ -275,40 +275,49 @@ fn render_tile_portable(scene: &Scene, settings: &RenderSettings, band: &mut [Pi
     let rgb_lambda = SampledWavelengths::sample_visible(0.5);
     for y in tile.y0..tile.y1 {
         let row = &mut band[((y - tile.y0) * settings.width) as usize..][..settings.width as usize];
-        for x in tile.x0..tile.x1 {
-            render_pixel_samples(scene, settings, x, y, tile.samples.clone(), &rgb_lambda, &mut row[x as usize]);
-        }
+        render_row_samples(scene, settings, y, tile.x0..tile.x1, tile.samples.clone(), &rgb_lambda, row);
     }
 }
 
-/// Samples of one pixel traced together before their results are added to the pixel's sums:
-/// paths finish out of order, and the sums are added in sample order (so that the image does
-/// not depend on it).
+/// Samples traced together before their results are added to the pixels' sums: paths finish
+/// out of order, and each pixel's sums are added in sample order (so that the image does not
+/// depend on it).
 const SAMPLE_CHUNK: u32 = 64;
 
-/// Adds samples `samples` of pixel (x, y) to `stats`, in order. The samples are traced up to
-/// `MAX_PATHS` at a time (see [`trace_paths`]); each is the same as traced alone.
+/// Adds samples `samples` of pixels `xs` of row `y` to their sums in `row`, each pixel's in
+/// order. The samples are taken pixel after pixel (all of a pixel's, then the next pixel's)
+/// and traced up to `MAX_PATHS` at a time (see [`trace_paths`]), so that passes of few samples
+/// per pixel still keep the paths in flight; each sample is the same as traced alone.
 #[inline(always)]
-fn render_pixel_samples(scene: &Scene, settings: &RenderSettings, x: u32, y: u32, samples: std::ops::Range<u32>, rgb_lambda: &SampledWavelengths, stats: &mut PixelStats) {
-    let pixel = y as u64 * settings.width as u64 + x as u64;
-    let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
+fn render_row_samples(scene: &Scene, settings: &RenderSettings, y: u32, xs: std::ops::Range<u32>, samples: std::ops::Range<u32>, rgb_lambda: &SampledWavelengths, row: &mut [PixelStats]) {
+    if samples.is_empty() || xs.is_empty() {
+        return;
+    }
     let spectral = scene.mode == ColorMode::Spectral;
     let rgb_lambda = *rgb_lambda;
-    let mut first = samples.start;
-    while first < samples.end {
-        let end = samples.end.min(first.saturating_add(SAMPLE_CHUNK));
+    // The next sample to start, as (pixel x, sample index); `x == xs.end` when all are started.
+    let (mut x, mut k) = (xs.start, samples.start);
+    while x < xs.end {
+        let (chunk_x, chunk_k) = (x, k);
         let mut results = [[0.0f32; 3]; SAMPLE_CHUNK as usize];
-        let mut next = first;
+        let mut taken = 0u32;
         let start = || {
-            if next >= end {
+            if taken == SAMPLE_CHUNK || x >= xs.end {
                 return None;
             }
-            let mut sampler = Sampler::new(settings.seed, pixel, u64::from(next));
+            let pixel = y as u64 * settings.width as u64 + x as u64;
+            let mut sampler = Sampler::new(settings.seed, pixel, u64::from(k));
             let lambda = if spectral { SampledWavelengths::sample_visible(sampler.next_1d()) } else { rgb_lambda };
             let offset = sample_filter(&settings.filter, &mut sampler);
+            let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
             let path = PathState::new(scene, scene.camera.generate_ray(centre + offset), &lambda);
-            next += 1;
-            Some(PathStart { path, sampler, lambda, tag: next - 1 - first })
+            let tag = taken;
+            taken += 1;
+            k += 1;
+            if k == samples.end {
+                (x, k) = (x + 1, samples.start);
+            }
+            Some(PathStart { path, sampler, lambda, tag })
         };
         let finish = |done: &PathStart| {
             let l = done.path.radiance;
@@ -319,10 +328,16 @@ fn render_pixel_samples(scene: &Scene, settings: &RenderSettings, x: u32, y: u32
             };
         };
         trace_paths(scene, &settings.path, start, finish);
-        for rgb in &results[..(end - first) as usize] {
-            stats.add(*rgb);
+        // The chunk's results, in the order they were started: pixel by pixel, each in sample
+        // order.
+        let (mut px, mut pk) = (chunk_x, chunk_k);
+        for rgb in &results[..taken as usize] {
+            row[px as usize].add(*rgb);
+            pk += 1;
+            if pk == samples.end {
+                (px, pk) = (px + 1, samples.start);
+            }
         }
-        first = end;
     }
 }
 
