@@ -349,7 +349,7 @@ fn scatter_lanes(scene: &Scene, s: &PathSettings, ls: &LaneShading, slots: &mut 
     // Inputs, gathered one lane per path. Unused lanes keep harmless values and are ignored.
     let mut p = [[0.0f32; N]; 3];
     let mut ng = [[0.0f32; N]; 3];
-    let mut ns = [[0.0f32, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0; N], [1.0; N]];
+    let mut ns = [[0.0f32; N], [0.0; N], [1.0; N]];
     let mut dir = [[0.0f32; N], [0.0; N], [-1.0; N]];
     let mut albedo = [[0.0f32; N]; 4];
     let mut two_sided = [false; N];
