@@ -4,7 +4,8 @@
 use crate::error::{Result, SceneError};
 use crate::ir::*;
 use crate::props::{Child, ObjectView};
-use crate::shapes::{self, ObjOptions};
+use crate::obj::{self, ObjOptions};
+use crate::shapes;
 use crate::transform::is_affine;
 use crate::xml::{resolve_file, Document, Element};
 use glam::{Mat3, Mat4, Vec3};
@@ -617,7 +618,7 @@ impl<'e> Builder<'e> {
             flip_tex_coords: v.boolean("flip_tex_coords")?.unwrap_or(true),
         };
         let path = resolve_file(&name, &v.el.dir, &[self.base_dir], self.search_paths);
-        let local = shapes::load_obj(&path, &name, &opts).map_err(err)?;
+        let local = obj::load_obj(&path, &name, &opts).map_err(err)?;
         let mut mesh =
             shapes::to_world(local, m, flip).map_err(|e| err(format!("mesh '{name}': {e}")))?;
         if mesh.normals.is_none() && !opts.face_normals {

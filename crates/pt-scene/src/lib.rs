@@ -54,6 +54,7 @@ mod build;
 mod error;
 pub mod ir;
 mod materials;
+mod obj;
 mod props;
 mod shapes;
 mod transform;

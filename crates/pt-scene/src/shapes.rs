@@ -12,11 +12,9 @@
 //! Meshes carry no vertex normals unless the shape is smooth (OBJ), so the renderer shades
 //! them flat with the geometric normal `(p1 - p0) x (p2 - p0)`.
 
-use crate::error::io_message;
 use crate::ir::{Geometry, TriangleMesh};
 use crate::transform::is_affine;
 use glam::{Mat3, Mat4, Vec2, Vec3};
-use std::path::Path;
 
 /// Segments of the disk's triangle fan.
 pub(crate) const DISK_SEGMENTS: u32 = 256;
@@ -216,153 +214,6 @@ fn uniform_scale(m: &Mat4) -> Option<f32> {
     (s > 0.0 && lengths_ok && orthogonal).then_some(s)
 }
 
-/// Options of the `obj` shape.
-pub(crate) struct ObjOptions {
-    /// Drop vertex normals and shade flat.
-    pub face_normals: bool,
-    /// Use v' = 1 - v (Mitsuba's default: most OBJ files put v = 0 at the bottom).
-    pub flip_tex_coords: bool,
-}
-
-/// Loads an OBJ file into an object-space mesh: every object and group merged, polygons
-/// triangulated as fans, one index per vertex (position, uv and normal together).
-///
-/// Without normals in the file (and without `face_normals`), vertex normals are computed after
-/// `to_world`, as Mitsuba does, so that meshes render smooth in both renderers.
-pub(crate) fn load_obj(
-    path: &Path,
-    shown_name: &str,
-    opts: &ObjOptions,
-) -> std::result::Result<LocalMesh, String> {
-    // Read from the file as tobj parses (not into memory first: 38 MB for 1M triangles), and
-    // twice: a first pass finds whether there are texture coordinates or normals at all.
-    let open = || {
-        std::fs::File::open(path)
-            .map(std::io::BufReader::new)
-            .map_err(|e| format!("cannot open mesh '{shown_name}': {}", io_message(&e)))
-    };
-    let read_err = |e: std::io::Error| format!("cannot read mesh '{shown_name}': {}", io_message(&e));
-    let single_index = has_uvs_or_normals(open()?).map_err(read_err)?;
-    let models = parse_obj(open()?, single_index)
-        .map_err(|e| format!("cannot read mesh '{shown_name}': {e}"))?;
-    merge_models(&models, opts).map_err(|e| format!("mesh '{shown_name}': {e}"))
-}
-
-/// Whether an OBJ file has `vt` or `vn` lines. Without them, positions are the only vertex
-/// attribute and tobj's separate-index mode gives the same mesh as its single-index mode (the
-/// same vertices, in order of first use) without single-index mode's table of (v, vt, vn)
-/// triples, 52 MB for 1M triangles. A `vt`/`vn` word starting a continuation line only makes
-/// this answer true, i.e. keeps the general mode.
-fn has_uvs_or_normals(mut reader: impl std::io::BufRead) -> std::io::Result<bool> {
-    let mut line = Vec::new();
-    loop {
-        line.clear();
-        if reader.read_until(b'\n', &mut line)? == 0 {
-            return Ok(false);
-        }
-        let mut words = line.split(|b| b.is_ascii_whitespace()).filter(|w| !w.is_empty());
-        if matches!(words.next(), Some(b"vt" | b"vn")) {
-            return Ok(true);
-        }
-    }
-}
-
-fn parse_obj(
-    mut reader: impl std::io::BufRead + std::panic::UnwindSafe,
-    single_index: bool,
-) -> std::result::Result<Vec<tobj::Model>, String> {
-    let options = tobj::LoadOptions {
-        single_index,
-        triangulate: true,
-        ignore_points: true,
-        ignore_lines: true,
-        ..Default::default()
-    };
-    // Materials are not used: answer every `mtllib` with an empty library. tobj is third-party
-    // code reading untrusted files; a panic inside it (index arithmetic on absurd input) is
-    // turned into an error rather than taking the program down.
-    let parsed = std::panic::catch_unwind(move || {
-        tobj::load_obj_buf(&mut reader, &options, |_| {
-            Ok((Vec::new(), Default::default()))
-        })
-    });
-    match parsed {
-        Ok(Ok((models, _materials))) => Ok(models),
-        Ok(Err(e)) => Err(e.to_string()),
-        Err(_) => Err("malformed OBJ data".into()),
-    }
-}
-
-fn merge_models(
-    models: &[tobj::Model],
-    opts: &ObjOptions,
-) -> std::result::Result<LocalMesh, String> {
-    // Normals and uvs are kept only if every vertex of every object has them; otherwise
-    // normals are recomputed and uvs dropped.
-    let all = |stride: usize, data: fn(&tobj::Mesh) -> &[f32]| {
-        models.iter().any(|m| !data(&m.mesh).is_empty())
-            && models
-                .iter()
-                .all(|m| data(&m.mesh).len() == m.mesh.positions.len() / 3 * stride)
-    };
-    let keep_normals = !opts.face_normals && all(3, |m| &m.normals);
-    let keep_uvs = all(2, |m| &m.texcoords);
-    let mut out = LocalMesh {
-        normals: keep_normals.then(Vec::new),
-        uvs: keep_uvs.then(Vec::new),
-        ..Default::default()
-    };
-    for model in models {
-        append_model(&mut out, &model.mesh, opts)?;
-    }
-    Ok(out)
-}
-
-fn append_model(
-    out: &mut LocalMesh,
-    mesh: &tobj::Mesh,
-    opts: &ObjOptions,
-) -> std::result::Result<(), String> {
-    let base = u32::try_from(out.positions.len()).map_err(|_| "too many vertices")?;
-    let count = mesh.positions.len() / 3;
-    out.positions.extend(
-        mesh.positions
-            .chunks_exact(3)
-            .map(|p| Vec3::new(p[0], p[1], p[2])),
-    );
-    if let Some(normals) = out.normals.as_mut() {
-        normals.extend(
-            mesh.normals
-                .chunks_exact(3)
-                .map(|n| Vec3::new(n[0], n[1], n[2])),
-        );
-    }
-    if let Some(uvs) = out.uvs.as_mut() {
-        uvs.extend(mesh.texcoords.chunks_exact(2).map(|t| {
-            let v = if opts.flip_tex_coords {
-                1.0 - t[1]
-            } else {
-                t[1]
-            };
-            Vec2::new(t[0], v)
-        }));
-    }
-    if mesh.indices.len() % 3 != 0 {
-        return Err("face list is not made of triangles".into());
-    }
-    for tri in mesh.indices.chunks_exact(3) {
-        if tri.iter().any(|&i| i as usize >= count) {
-            return Err(format!("face index out of range ({} vertices)", count));
-        }
-        let shifted = [tri[0], tri[1], tri[2]].map(|i| i.checked_add(base));
-        match shifted {
-            [Some(a), Some(b), Some(c)] => out.indices.push([a, b, c]),
-            _ => return Err("too many vertices".into()),
-        }
-    }
-    Ok(())
-}
-
 /// Smooth vertex normals: each triangle adds its unit normal weighted by its angle at the
 /// vertex, which does not depend on how the surface around a vertex is triangulated.
 /// A vertex touched only by degenerate triangles gets an arbitrary unit normal (+z); it is
@@ -408,25 +259,6 @@ mod tests {
     fn face_normal(mesh: &TriangleMesh, t: usize) -> Vec3 {
         let p = mesh.indices[t].map(|i| mesh.positions[i as usize]);
         (p[1] - p[0]).cross(p[2] - p[0]).normalize()
-    }
-
-    #[test]
-    fn position_only_obj_reads_the_same_in_both_index_modes() {
-        // Positions used out of file order, an unused vertex, a quad, two objects: the cheaper
-        // separate-index mode must give exactly the single-index mesh (vertices in order of first
-        // use), and the scan must see `vt`/`vn` only where they start a line.
-        let obj = b"o a\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 5 5 5\nf 3 1 2\nf 1 3 4\no b\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nf 6 7 8 9\n";
-        let opts = ObjOptions { face_normals: false, flip_tex_coords: true };
-        let read = |single| merge_models(&parse_obj(std::io::Cursor::new(&obj[..]), single).unwrap(), &opts).unwrap();
-        let (a, b) = (read(true), read(false));
-        assert_eq!(a.positions, b.positions);
-        assert_eq!(a.indices, b.indices);
-        assert_eq!((a.normals, a.uvs, b.normals, b.uvs), (None, None, None, None));
-        assert_eq!(a.indices.len(), 4);
-        assert!(!has_uvs_or_normals(&obj[..]).unwrap());
-        assert!(has_uvs_or_normals(&b"v 0 0 0\n  vt 0 0\n"[..]).unwrap());
-        assert!(has_uvs_or_normals(&b"v 0 0 0\nvn\t0 0 1"[..]).unwrap());
-        assert!(!has_uvs_or_normals(&b"# vt 0 0\nv 0 0 0\nvtx 1\n"[..]).unwrap());
     }
 
     #[test]

@@ -558,14 +558,14 @@ fn malformed_obj_is_an_error_at_the_shape() {
         (
             "range.obj",
             "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
-            "out of bounds",
+            "line 4: face corner '9' refers to vertex 9, but 3 vertices are defined before it",
         ),
-        ("nan.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n", "NaN"),
-        ("junk.obj", "v 0 zero 0\nf 1 2 3\n", "parse"),
+        ("nan.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n", "line 2: position 'nan' is not finite"),
+        ("junk.obj", "v 0 zero 0\nf 1 2 3\n", "line 1: position 'zero' is not a number"),
         (
             "huge.obj",
             "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/9999999999999999999 2/1 3/1\n",
-            "mesh",
+            "line 5: face corner '1/9999999999999999999': '9999999999999999999' is not an index",
         ),
     ];
     for (name, text, expected) in cases {
