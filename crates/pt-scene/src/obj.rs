@@ -6,8 +6,8 @@
 //! record (three `usize` per corner, room for a quad) until the end of the file, and then builds
 //! the mesh through a hash map of vertices. On the 1M-triangle scene of the README's memory
 //! comparison that was 147 MB on top of the program (peak 156 MB, Mitsuba `scalar_rgb` 155.8
-//! MB); this reader needs 12 bytes per triangle plus about 24 per vertex (peak of the load 38
-//! MB). It also names the line of an error, which tobj cannot. tobj stays a dev-dependency: the
+//! MB); this reader needs 12 bytes per triangle and about 36 per vertex (the file's position,
+//! the mesh's copy and the lookup of corners; peak of the load 40 MB). It also names the line of an error, which tobj cannot. tobj stays a dev-dependency: the
 //! tests below check that both read the same mesh from random files.
 //!
 //! What is read (the format as published by Wavefront, "Object Files (.obj)", Appendix B1 of the
@@ -168,7 +168,6 @@ impl Builder {
     /// The file indices (v, vt, vn) of a face corner `v`, `v/vt`, `v//vn` or `v/vt/vn`, checked
     /// against the lists read so far.
     fn corner(&self, word: &[u8]) -> std::result::Result<[u32; 3], String> {
-        let shown = String::from_utf8_lossy(word);
         let mut parts = word.split(|&c| c == b'/');
         let mut key = [NONE; 3];
         let lists = [
@@ -180,12 +179,12 @@ impl Builder {
             match parts.next() {
                 // `v//vn` leaves vt empty, `v/` is read as `v`; the position is never optional.
                 Some([]) if n > 0 => {}
-                Some(text) => *slot = index(text, count, what, &shown)?,
+                Some(text) => *slot = index(text, count, what, word)?,
                 None => break,
             }
         }
         if parts.next().is_some() {
-            return Err(format!("face corner '{shown}' has more than three indices"));
+            return Err(format!("face corner '{}' has more than three indices", String::from_utf8_lossy(word)));
         }
         Ok(key)
     }
@@ -244,22 +243,23 @@ fn keep_while_present<T>(list: &mut Option<Vec<T>>, all: &mut bool, value: Optio
 
 /// A face index as a 0-based position in a list of `count` entries: 1-based from the start, or
 /// negative from the end (-1 is the last entry read so far).
-/// `what` names the list, singular and plural.
-fn index(text: &[u8], count: usize, what: [&str; 2], corner: &str) -> std::result::Result<u32, String> {
+/// `what` names the list, singular and plural; `corner` is the whole corner, for messages.
+fn index(text: &[u8], count: usize, what: [&str; 2], corner: &[u8]) -> std::result::Result<u32, String> {
+    let corner = || String::from_utf8_lossy(corner);
     let parsed = std::str::from_utf8(text).ok().and_then(|t| t.parse::<i64>().ok());
     let Some(i) = parsed else {
-        return Err(format!("face corner '{corner}': '{}' is not an index", String::from_utf8_lossy(text)));
+        return Err(format!("face corner '{}': '{}' is not an index", corner(), String::from_utf8_lossy(text)));
     };
     let count = count as i64;
     let resolved = if i > 0 { i - 1 } else { count + i };
     if i == 0 || !(0..count).contains(&resolved) {
         return Err(format!(
-            "face corner '{corner}' refers to {} {i}, but {count} {} are defined before it",
-            what[0], what[1]
+            "face corner '{}' refers to {} {i}, but {count} {} are defined before it",
+            corner(), what[0], what[1]
         ));
     }
     // `count` came from a Vec of at most as many entries as mesh vertices allow.
-    u32::try_from(resolved).map_err(|_| format!("face corner '{corner}': {} index too large", what[0]))
+    u32::try_from(resolved).map_err(|_| format!("face corner '{}': {} index too large", corner(), what[0]))
 }
 
 /// A finite number, or an error naming the statement and the quantity.
