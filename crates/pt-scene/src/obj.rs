@@ -83,10 +83,8 @@ struct Builder {
     /// Corners (v, vt, vn) whose position already has another mesh vertex (uv seams, split
     /// normals): rare, so a map is cheap.
     others: HashMap<[u32; 3], u32>,
-    /// The mesh; `uvs`/`normals` are dropped at the first vertex without them.
+    /// The mesh; its `uvs`/`normals` become `None` at the first vertex without them.
     mesh: LocalMesh,
-    every_vertex_has_uv: bool,
-    every_vertex_has_normal: bool,
 }
 
 fn read_obj(
@@ -94,8 +92,6 @@ fn read_obj(
     opts: &ObjOptions,
 ) -> std::result::Result<LocalMesh, ObjError> {
     let mut b = Builder {
-        every_vertex_has_uv: true,
-        every_vertex_has_normal: !opts.face_normals,
         mesh: LocalMesh {
             uvs: Some(Vec::new()),
             normals: (!opts.face_normals).then(Vec::new),
@@ -154,12 +150,8 @@ fn read_obj(
         }
     }
     let mut mesh = b.mesh;
-    let has_vertices = !mesh.positions.is_empty();
-    if !(b.every_vertex_has_uv && has_vertices) {
-        mesh.uvs = None;
-    }
-    if !(b.every_vertex_has_normal && has_vertices) {
-        mesh.normals = None;
+    if mesh.positions.is_empty() {
+        (mesh.uvs, mesh.normals) = (None, None);
     }
     Ok(mesh)
 }
@@ -215,29 +207,18 @@ impl Builder {
         }
         self.vt_vn.push([vt, vn]);
         self.mesh.positions.push(self.positions[v as usize]);
-        keep_while_present(
-            &mut self.mesh.uvs,
-            &mut self.every_vertex_has_uv,
-            (vt != NONE).then(|| self.uvs[vt as usize]),
-        );
-        keep_while_present(
-            &mut self.mesh.normals,
-            &mut self.every_vertex_has_normal,
-            (vn != NONE).then(|| self.normals[vn as usize]),
-        );
+        keep_while_present(&mut self.mesh.uvs, (vt != NONE).then(|| self.uvs[vt as usize]));
+        keep_while_present(&mut self.mesh.normals, (vn != NONE).then(|| self.normals[vn as usize]));
         Ok(id)
     }
 }
 
 /// Appends `value` to a vertex attribute list while every vertex so far has had one; at the
-/// first vertex without, the list is freed and stays empty.
-fn keep_while_present<T>(list: &mut Option<Vec<T>>, all: &mut bool, value: Option<T>) {
+/// first vertex without, the list is freed and stays `None`.
+fn keep_while_present<T>(list: &mut Option<Vec<T>>, value: Option<T>) {
     match (value, list.as_mut()) {
-        (Some(value), Some(list)) if *all => list.push(value),
-        _ => {
-            *all = false;
-            *list = None;
-        }
+        (Some(value), Some(list)) => list.push(value),
+        _ => *list = None,
     }
 }
 
