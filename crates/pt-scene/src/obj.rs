@@ -7,8 +7,9 @@
 //! the mesh through a hash map of vertices. On the 1M-triangle scene of the README's memory
 //! comparison that was 147 MB on top of the program (peak 156 MB, Mitsuba `scalar_rgb` 155.8
 //! MB); this reader needs 12 bytes per triangle and about 36 per vertex (the file's position,
-//! the mesh's copy and the lookup of corners; peak of the load 40 MB). It also names the line of an error, which tobj cannot. tobj stays a dev-dependency: the
-//! tests below check that both read the same mesh from random files.
+//! the mesh's copy and the lookup of corners; peak of the load 40 MB). It also names the line
+//! of an error, which tobj cannot. tobj stays a dev-dependency: the tests below check that both
+//! read the same mesh from random files.
 //!
 //! What is read (the format as published by Wavefront, "Object Files (.obj)", Appendix B1 of the
 //! Advanced Visualizer manual):
@@ -16,8 +17,9 @@
 //!   Mitsuba does (`w` weighs control points of rational curves, not polygon vertices).
 //! - `vt u [v]`: a texture coordinate (`v` = 0 when absent); `vn x y z`: a normal.
 //! - `f a b c ...` with corners `v`, `v/vt`, `v//vn` or `v/vt/vn`; indices count from 1, or
-//!   from the end of the list read so far when negative (-1 is the last one). A face of n
-//!   corners becomes the fan (1, i, i + 1), i = 2 .. n - 1.
+//!   from the end of the list read so far when negative (-1 is the last one), and must refer
+//!   to lines before the face (the file is read in one pass). A face of n >= 3 corners becomes
+//!   the fan (1, i, i + 1), i = 2 .. n - 1; fewer corners are an error.
 //! - Everything else (`o`, `g`, `s`, `usemtl`, `mtllib`, `l`, `p`, curves, comments) is
 //!   ignored: all objects and groups form one mesh, and a vertex shared by two groups stays
 //!   shared (as in Mitsuba's reader; tobj duplicated it, which left a seam in smooth normals).
