@@ -21,14 +21,25 @@ fn leftovers(dir: &Path, keep: &[&str]) -> Vec<String> {
 }
 
 /// Writes the scene (and extra files), renders it with `args`; returns (exit code, stderr, dir).
-fn run(name: &str, xml: &str, files: &[(&str, &[u8])], args: &[&str]) -> (Option<i32>, String, PathBuf) {
+fn run(
+    name: &str,
+    xml: &str,
+    files: &[(&str, &[u8])],
+    args: &[&str],
+) -> (Option<i32>, String, PathBuf) {
     let dir = scratch(&format!("adv_{name}"));
     std::fs::write(dir.join("scene.xml"), xml).unwrap();
     for (f, bytes) in files {
         std::fs::write(dir.join(f), bytes).unwrap();
     }
     let out = dir.join("out.exr");
-    let mut a: Vec<String> = vec!["render".into(), dir.join("scene.xml").to_str().unwrap().to_string(), "-o".into(), out.to_str().unwrap().to_string(), "--quiet".into()];
+    let mut a: Vec<String> = vec![
+        "render".into(),
+        dir.join("scene.xml").to_str().unwrap().to_string(),
+        "-o".into(),
+        out.to_str().unwrap().to_string(),
+        "--quiet".into(),
+    ];
     a.extend(args.iter().map(|s| s.to_string()));
     let a: Vec<&str> = a.iter().map(String::as_str).collect();
     let o = pt(&a);
@@ -43,18 +54,28 @@ fn rejected(name: &str, xml: &str, files: &[(&str, &[u8])], expect: &[&str]) {
     let (code, stderr, dir) = run(name, xml, files, &[]);
     assert_eq!(code, Some(2), "{name}: exit code; stderr: {stderr}");
     for e in expect {
-        assert!(stderr.contains(e), "{name}: stderr should mention '{e}': {stderr}");
+        assert!(
+            stderr.contains(e),
+            "{name}: stderr should mention '{e}': {stderr}"
+        );
     }
     let mut keep = vec!["scene.xml"];
     keep.extend(files.iter().map(|f| f.0));
-    assert_eq!(leftovers(&dir, &keep), Vec::<String>::new(), "{name}: partial output left behind");
+    assert_eq!(
+        leftovers(&dir, &keep),
+        Vec::<String>::new(),
+        "{name}: partial output left behind"
+    );
 }
 
 /// The input must render: exit code 0, no NaN/Inf pixel, no non-finite sample reported.
 fn rendered(name: &str, xml: &str, files: &[(&str, &[u8])], args: &[&str]) -> pt_image::Image {
     let (code, stderr, dir) = run(name, xml, files, args);
     assert_eq!(code, Some(0), "{name}: {stderr}");
-    assert!(!stderr.contains("NaN or infinite"), "{name}: non-finite samples: {stderr}");
+    assert!(
+        !stderr.contains("NaN or infinite"),
+        "{name}: non-finite samples: {stderr}"
+    );
     let (img, _) = pt_image::read_exr(&dir.join("out.exr")).unwrap();
     assert_eq!(img.nonfinite_pixels(), 0, "{name}: NaN/Inf pixels");
     img
@@ -119,7 +140,12 @@ fn scene_scale_does_not_change_the_image() {
         let (m, se) = render_at(s);
         for c in 0..3 {
             let tol = 4.0 * (se[c] * se[c] + se0[c] * se0[c]).sqrt() + 0.005 * m0[c];
-            assert!((m[c] - m0[c]).abs() < tol, "scale {s}: channel {c} mean {} vs {} (tolerance {tol})", m[c], m0[c]);
+            assert!(
+                (m[c] - m0[c]).abs() < tol,
+                "scale {s}: channel {c} mean {} vs {} (tolerance {tol})",
+                m[c],
+                m0[c]
+            );
         }
     }
 }
@@ -130,7 +156,12 @@ fn degenerate_triangles_are_skipped() {
     // `pt info` reports the two degenerate ones.
     let obj = b"v -1 0 -1\nv 1 0 -1\nv 0 0 1\nv 1 0 1.5\nv 2 0 2\nf 1 2 3\nf 1 1 2\nf 3 4 5\n";
     let body = r#"<shape type="obj"><string name="filename" value="degen.obj"/><transform name="to_world"><translate y="0.01"/></transform></shape>"#;
-    rendered("degenerate", &scene(1.0, 4, body), &[("degen.obj", obj)], &[]);
+    rendered(
+        "degenerate",
+        &scene(1.0, 4, body),
+        &[("degen.obj", obj)],
+        &[],
+    );
     let dir = scratch("adv_degenerate_info");
     std::fs::write(dir.join("scene.xml"), scene(1.0, 4, body)).unwrap();
     std::fs::write(dir.join("degen.obj"), obj).unwrap();
@@ -144,7 +175,12 @@ fn degenerate_triangles_are_skipped() {
 fn mesh_of_only_degenerate_triangles() {
     let obj = b"v 0 0 0\nv 1 1 1\nv 2 2 2\nf 1 2 3\nf 1 1 1\n";
     let body = r#"<shape type="obj"><string name="filename" value="flat.obj"/></shape>"#;
-    rendered("all_degenerate", &scene(1.0, 4, body), &[("flat.obj", obj)], &[]);
+    rendered(
+        "all_degenerate",
+        &scene(1.0, 4, body),
+        &[("flat.obj", obj)],
+        &[],
+    );
 }
 
 #[test]
@@ -160,7 +196,12 @@ fn coincident_duplicate_surfaces() {
     let one = mean(&rendered("dup_ref", &scene(1.0, 64, ""), &[], &[]));
     let two = mean(&rendered("dup", &scene(1.0, 64, body), &[], &[]));
     for c in 0..3 {
-        assert!((two[c] / one[c] - 1.0).abs() < 0.03, "channel {c}: {} with duplicates vs {}", two[c], one[c]);
+        assert!(
+            (two[c] / one[c] - 1.0).abs() < 0.03,
+            "channel {c}: {} with duplicates vs {}",
+            two[c],
+            one[c]
+        );
     }
 }
 
@@ -173,12 +214,19 @@ fn camera_inside_a_closed_one_sided_object_sees_black() {
         "<shape type=\"sphere\"><point name=\"center\" x=\"0\" y=\"1.5\" z=\"4\"/><float name=\"radius\" value=\"0.3\"/>",
     );
     let img = rendered("inside", &xml, &[], &[]);
-    assert!(img.data.iter().all(|p| p.iter().all(|&v| v == 0.0)), "light reached a camera inside a closed sphere");
+    assert!(
+        img.data.iter().all(|p| p.iter().all(|&v| v == 0.0)),
+        "light reached a camera inside a closed sphere"
+    );
 }
 
 #[test]
 fn camera_inside_a_glass_sphere_renders() {
-    let xml = scene(1.0, 16, r#"<shape type="sphere"><point name="center" x="0" y="1.5" z="4"/><float name="radius" value="0.3"/><bsdf type="dielectric"/></shape>"#);
+    let xml = scene(
+        1.0,
+        16,
+        r#"<shape type="sphere"><point name="center" x="0" y="1.5" z="4"/><float name="radius" value="0.3"/><bsdf type="dielectric"/></shape>"#,
+    );
     let img = rendered("inside_glass", &xml, &[], &["--max-depth", "12"]);
     assert!(mean(&img)[1] > 0.0, "nothing seen through the glass");
 }
@@ -187,7 +235,10 @@ fn camera_inside_a_glass_sphere_renders() {
 fn zero_power_light_lights_nothing() {
     let xml = scene(1.0, 16, "").replace("value=\"8, 8, 8\"", "value=\"0, 0, 0\"");
     let img = rendered("zero_light", &xml, &[], &[]);
-    assert!(img.data.iter().all(|p| p.iter().all(|&v| v == 0.0)), "a zero-radiance light lit the scene");
+    assert!(
+        img.data.iter().all(|p| p.iter().all(|&v| v == 0.0)),
+        "a zero-radiance light lit the scene"
+    );
     // Zero-intensity point light as the only light.
     let xml = scene(1.0, 4, r#"<emitter type="point"><point name="position" x="0" y="1" z="0"/><rgb name="intensity" value="0, 0, 0"/></emitter>"#)
         .replace("value=\"8, 8, 8\"", "value=\"0, 0, 0\"");
@@ -199,9 +250,17 @@ fn zero_power_light_lights_nothing() {
 fn negative_power_is_an_error() {
     let xml = scene(1.0, 4, "").replace("value=\"8, 8, 8\"", "value=\"-8, 8, 8\"");
     rejected("neg_area", &xml, &[], &["scene.xml:", "radiance"]);
-    let xml = scene(1.0, 4, r#"<emitter type="point"><point name="position" x="0" y="1" z="0"/><float name="intensity" value="-1"/></emitter>"#);
+    let xml = scene(
+        1.0,
+        4,
+        r#"<emitter type="point"><point name="position" x="0" y="1" z="0"/><float name="intensity" value="-1"/></emitter>"#,
+    );
     rejected("neg_point", &xml, &[], &["scene.xml:", "intensity"]);
-    let xml = scene(1.0, 4, r#"<emitter type="constant"><float name="radiance" value="-0.5"/></emitter>"#);
+    let xml = scene(
+        1.0,
+        4,
+        r#"<emitter type="constant"><float name="radiance" value="-0.5"/></emitter>"#,
+    );
     rejected("neg_constant", &xml, &[], &["scene.xml:", "radiance"]);
 }
 
@@ -210,12 +269,32 @@ fn nan_and_inf_in_the_xml_are_errors() {
     let cases: &[(&str, &str, &str)] = &[
         ("radiance_inf", "value=\"8, 8, 8\"", "value=\"inf, 8, 8\""),
         ("radiance_nan", "value=\"8, 8, 8\"", "value=\"8, nan, 8\""),
-        ("fov_nan", "name=\"fov\" value=\"45\"", "name=\"fov\" value=\"nan\""),
+        (
+            "fov_nan",
+            "name=\"fov\" value=\"45\"",
+            "name=\"fov\" value=\"nan\"",
+        ),
         ("lookat_inf", "origin=\"0, 1.5, 4\"", "origin=\"0, inf, 4\""),
-        ("scale_nan", "<scale value=\"0.5\"/>", "<scale value=\"NaN\"/>"),
-        ("reflectance_inf", "value=\"0.6, 0.5, 0.4\"", "value=\"0.6, Infinity, 0.4\""),
-        ("alpha_nan", "name=\"alpha\" value=\"0.2\"", "name=\"alpha\" value=\"nan\""),
-        ("center_inf", "x=\"0\" y=\"0.5\" z=\"0\"", "x=\"0\" y=\"-inf\" z=\"0\""),
+        (
+            "scale_nan",
+            "<scale value=\"0.5\"/>",
+            "<scale value=\"NaN\"/>",
+        ),
+        (
+            "reflectance_inf",
+            "value=\"0.6, 0.5, 0.4\"",
+            "value=\"0.6, Infinity, 0.4\"",
+        ),
+        (
+            "alpha_nan",
+            "name=\"alpha\" value=\"0.2\"",
+            "name=\"alpha\" value=\"nan\"",
+        ),
+        (
+            "center_inf",
+            "x=\"0\" y=\"0.5\" z=\"0\"",
+            "x=\"0\" y=\"-inf\" z=\"0\"",
+        ),
     ];
     for (name, from, to) in cases {
         let xml = scene(1.0, 4, "").replacen(from, to, 1);
@@ -227,13 +306,21 @@ fn nan_and_inf_in_the_xml_are_errors() {
 #[test]
 fn empty_scenes_render_black() {
     // Mitsuba renders an empty scene as a black image; so does pt.
-    let img = rendered("empty", r#"<scene version="3.0.0"/>"#, &[], &["--spp", "1", "--width", "8", "--height", "8"]);
+    let img = rendered(
+        "empty",
+        r#"<scene version="3.0.0"/>"#,
+        &[],
+        &["--spp", "1", "--width", "8", "--height", "8"],
+    );
     assert!(img.data.iter().all(|p| *p == [0.0; 3]));
     let only_camera = r#"<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor></scene>"#;
     let img = rendered("only_camera", only_camera, &[], &["--spp", "2"]);
     assert!(img.data.iter().all(|p| *p == [0.0; 3]));
     // Geometry without any light: black too.
-    let dark = scene(1.0, 4, "").replace("<emitter type=\"area\"><rgb name=\"radiance\" value=\"8, 8, 8\"/></emitter>", "");
+    let dark = scene(1.0, 4, "").replace(
+        "<emitter type=\"area\"><rgb name=\"radiance\" value=\"8, 8, 8\"/></emitter>",
+        "",
+    );
     let img = rendered("no_light", &dark, &[], &[]);
     assert!(img.data.iter().all(|p| *p == [0.0; 3]));
 }
@@ -241,34 +328,65 @@ fn empty_scenes_render_black() {
 #[test]
 fn mesh_without_normals_renders_like_flat_shading() {
     // No `vn` lines: the loader computes normals; the image is finite and lit.
-    let obj = b"v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nv 0 1 0\nf 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\n";
+    let obj =
+        b"v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nv 0 1 0\nf 1 2 5\nf 2 3 5\nf 3 4 5\nf 4 1 5\n";
     let body = r#"<shape type="obj"><string name="filename" value="pyramid.obj"/><bsdf type="diffuse"/></shape>"#;
-    let img = rendered("no_normals", &scene(1.0, 16, body), &[("pyramid.obj", obj)], &[]);
+    let img = rendered(
+        "no_normals",
+        &scene(1.0, 16, body),
+        &[("pyramid.obj", obj)],
+        &[],
+    );
     assert!(mean(&img)[1] > 0.0);
     // Normals given for some vertices only: dropped, still renders.
     let partial = b"v -1 0 -1\nv 1 0 -1\nv 0 1 0\nvn 0 1 0\nf 1//1 2//1 3//1\nf 3 2 1\n";
     let body = r#"<shape type="obj"><string name="filename" value="partial.obj"/></shape>"#;
-    rendered("partial_normals", &scene(1.0, 4, body), &[("partial.obj", partial)], &[]);
+    rendered(
+        "partial_normals",
+        &scene(1.0, 4, body),
+        &[("partial.obj", partial)],
+        &[],
+    );
     // Zero-length normals (vn 0 0 0): a clear error naming the mesh.
     let zero_n = b"v -1 0 -1\nv 1 0 -1\nv 0 1 0\nvn 0 0 0\nf 1//1 2//1 3//1\n";
     let body = r#"<shape type="obj"><string name="filename" value="zero_n.obj"/></shape>"#;
-    rejected("zero_normals", &scene(1.0, 4, body), &[("zero_n.obj", zero_n)], &["scene.xml:", "zero_n.obj", "normal"]);
+    rejected(
+        "zero_normals",
+        &scene(1.0, 4, body),
+        &[("zero_n.obj", zero_n)],
+        &["scene.xml:", "zero_n.obj", "normal"],
+    );
 }
 
 #[test]
 fn mesh_index_out_of_range_is_an_error() {
     let obj = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n";
     let body = r#"<shape type="obj"><string name="filename" value="bad.obj"/></shape>"#;
-    rejected("obj_index", &scene(1.0, 4, body), &[("bad.obj", obj)], &["scene.xml:", "bad.obj"]);
+    rejected(
+        "obj_index",
+        &scene(1.0, 4, body),
+        &[("bad.obj", obj)],
+        &["scene.xml:", "bad.obj"],
+    );
     let obj = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -7\n";
-    rejected("obj_negative_index", &scene(1.0, 4, body), &[("bad.obj", obj)], &["scene.xml:", "bad.obj"]);
+    rejected(
+        "obj_negative_index",
+        &scene(1.0, 4, body),
+        &[("bad.obj", obj)],
+        &["scene.xml:", "bad.obj"],
+    );
 }
 
 #[test]
 fn nan_in_a_mesh_file_is_an_error() {
     let obj = b"v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n";
     let body = r#"<shape type="obj"><string name="filename" value="nan.obj"/></shape>"#;
-    rejected("obj_nan", &scene(1.0, 4, body), &[("nan.obj", obj)], &["scene.xml:", "nan.obj"]);
+    rejected(
+        "obj_nan",
+        &scene(1.0, 4, body),
+        &[("nan.obj", obj)],
+        &["scene.xml:", "nan.obj"],
+    );
 }
 
 #[test]
@@ -277,10 +395,21 @@ fn truncated_files() {
     let obj = b"v -1 0 -1\nv 1 0 -1\nv 0 1 0\nv 0 2 0\nf 1 2 3\nf 2 3";
     let body = r#"<shape type="obj"><string name="filename" value="cut.obj"/></shape>"#;
     let (code, stderr, _) = run("obj_cut", &scene(1.0, 4, body), &[("cut.obj", obj)], &[]);
-    assert!(code == Some(0) || (code == Some(2) && stderr.contains("cut.obj")), "{code:?}: {stderr}");
+    assert!(
+        code == Some(0) || (code == Some(2) && stderr.contains("cut.obj")),
+        "{code:?}: {stderr}"
+    );
     // A PLY file: not a supported format; a clear error.
     let body = r#"<shape type="ply"><string name="filename" value="cut.ply"/></shape>"#;
-    rejected("ply", &scene(1.0, 4, body), &[("cut.ply", b"ply\nformat binary_little_endian 1.0\nelement vertex 3\n")], &["scene.xml:", "ply"]);
+    rejected(
+        "ply",
+        &scene(1.0, 4, body),
+        &[(
+            "cut.ply",
+            b"ply\nformat binary_little_endian 1.0\nelement vertex 3\n",
+        )],
+        &["scene.xml:", "ply"],
+    );
     // A truncated EXR environment map, and a truncated EXR given to `pt compare`.
     let good = scratch("adv_exr_src").join("env.exr");
     let img = pt_image::Image::filled(8, 4, [1.0, 0.5, 0.25]);
@@ -288,14 +417,37 @@ fn truncated_files() {
     let bytes = std::fs::read(&good).unwrap();
     let cut = &bytes[..bytes.len() / 2];
     let body = r#"<emitter type="envmap"><string name="filename" value="env.exr"/></emitter>"#;
-    rejected("exr_cut", &scene(1.0, 4, body), &[("env.exr", cut)], &["env.exr"]);
+    rejected(
+        "exr_cut",
+        &scene(1.0, 4, body),
+        &[("env.exr", cut)],
+        &["env.exr"],
+    );
     let dir = scratch("adv_compare_cut");
     std::fs::write(dir.join("cut.exr"), cut).unwrap();
-    let o = pt(&["compare", dir.join("cut.exr").to_str().unwrap(), good.to_str().unwrap()]);
-    assert_eq!(o.status.code(), Some(2), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = pt(&[
+        "compare",
+        dir.join("cut.exr").to_str().unwrap(),
+        good.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     assert!(String::from_utf8_lossy(&o.stderr).contains("cut.exr"));
     // Empty files: an empty OBJ is an empty mesh (renders without it), an empty XML an error.
-    rendered("obj_empty_file", &scene(1.0, 4, r#"<shape type="obj"><string name="filename" value="e.obj"/></shape>"#), &[("e.obj", b"")], &[]);
+    rendered(
+        "obj_empty_file",
+        &scene(
+            1.0,
+            4,
+            r#"<shape type="obj"><string name="filename" value="e.obj"/></shape>"#,
+        ),
+        &[("e.obj", b"")],
+        &[],
+    );
     rejected("xml_empty_file", "", &[], &["scene.xml"]);
 }
 
@@ -307,13 +459,23 @@ fn very_deep_paths() {
     <shape type="rectangle"><transform name="to_world"><scale value="10"/><rotate x="1" angle="180"/><translate z="5"/></transform><bsdf type="conductor"/></shape>"#;
     let xml = scene(1.0, 4, body).replace("<sensor type=\"perspective\">", "<integrator type=\"path\"><integer name=\"max_depth\" value=\"1000\"/><integer name=\"rr_depth\" value=\"2000\"/></integrator>\n<sensor type=\"perspective\">");
     rendered("deep", &xml, &[], &[]);
-    rendered("deep_unlimited", &scene(1.0, 4, ""), &[], &["--max-depth", "-1"]);
+    rendered(
+        "deep_unlimited",
+        &scene(1.0, 4, ""),
+        &[],
+        &["--max-depth", "-1"],
+    );
 }
 
 #[test]
 fn absurd_command_line_values() {
     let xml = scene(1.0, 4, "");
-    for args in [&["--width", "0"][..], &["--spp", "0"], &["--max-depth", "-5"], &["--threads", "0"]] {
+    for args in [
+        &["--width", "0"][..],
+        &["--spp", "0"],
+        &["--max-depth", "-5"],
+        &["--threads", "0"],
+    ] {
         let (code, stderr, dir) = run("args", &xml, &[], args);
         assert_eq!(code, Some(2), "{args:?}: {stderr}");
         assert_eq!(leftovers(&dir, &["scene.xml"]), Vec::<String>::new());
@@ -332,7 +494,10 @@ fn clamp_bounds_every_pixel_and_is_off_by_default() {
     let (code, stderr, dir) = run("clamp_low", &xml, &[], &["--clamp", "0.05"]);
     assert_eq!(code, Some(0), "{stderr}");
     let (low, _) = pt_image::read_exr(&dir.join("out.exr")).unwrap();
-    assert!(low.data.iter().flatten().all(|&v| v <= 0.05 * (1.0 + 1e-6)), "a pixel above the clamp");
+    assert!(
+        low.data.iter().flatten().all(|&v| v <= 0.05 * (1.0 + 1e-6)),
+        "a pixel above the clamp"
+    );
     assert!(mean(&low)[1] < mean(&off)[1], "the clamp removed nothing");
     let (code, stderr, dir) = run("clamp_high", &xml, &[], &["--clamp", "1e30"]);
     assert_eq!(code, Some(0), "{stderr}");
@@ -357,8 +522,18 @@ fn compare_prints_firefly_counts() {
     }
     pt_image::write_exr(&dir.join("flat.exr"), &flat, &Default::default()).unwrap();
     pt_image::write_exr(&dir.join("hot.exr"), &hot, &Default::default()).unwrap();
-    let o = pt(&["compare", dir.join("hot.exr").to_str().unwrap(), dir.join("flat.exr").to_str().unwrap()]);
+    let o = pt(&[
+        "compare",
+        dir.join("hot.exr").to_str().unwrap(),
+        dir.join("flat.exr").to_str().unwrap(),
+    ]);
     let out = String::from_utf8_lossy(&o.stdout);
-    let line = out.lines().find(|l| l.starts_with("fireflies")).unwrap_or_else(|| panic!("no firefly line: {out}"));
-    assert!(line.split_whitespace().take(4).collect::<Vec<_>>() == ["fireflies", "3", "/", "0"], "{line}");
+    let line = out
+        .lines()
+        .find(|l| l.starts_with("fireflies"))
+        .unwrap_or_else(|| panic!("no firefly line: {out}"));
+    assert!(
+        line.split_whitespace().take(4).collect::<Vec<_>>() == ["fireflies", "3", "/", "0"],
+        "{line}"
+    );
 }

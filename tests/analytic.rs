@@ -86,7 +86,10 @@ fn check_furnace(name: &str, extra: &[&str], want: [f64; 3]) -> [f64; 3] {
             se[c]
         );
         // The standard error must be small enough for the test to detect a 2% bias.
-        assert!(se[c] * Z_MAX < 0.02 * want[c].abs().max(1e-3), "{name}: test too noisy to catch 2% bias");
+        assert!(
+            se[c] * Z_MAX < 0.02 * want[c].abs().max(1e-3),
+            "{name}: test too noisy to catch 2% bias"
+        );
     }
     mean
 }
@@ -110,7 +113,11 @@ fn furnace_depth_limits_follow_mitsuba_semantics() {
     }
     // Depths below and above rr_depth (5), so both the plain and the roulette paths are checked.
     for d in [2, 3, 6, 12] {
-        check_furnace(&format!("furnace_d{d}"), &["--max-depth", &d.to_string()], expected(d));
+        check_furnace(
+            &format!("furnace_d{d}"),
+            &["--max-depth", &d.to_string()],
+            expected(d),
+        );
     }
 }
 
@@ -118,10 +125,18 @@ fn furnace_depth_limits_follow_mitsuba_semantics() {
 fn furnace_with_each_strategy_has_the_same_mean() {
     // Light sampling only, BSDF sampling only and MIS are three unbiased estimators of one value.
     for s in ["bsdf", "light", "mis"] {
-        check_furnace(&format!("furnace_{s}"), &["--strategy", s, "--max-depth", "4"], expected(4));
+        check_furnace(
+            &format!("furnace_{s}"),
+            &["--strategy", s, "--max-depth", "4"],
+            expected(4),
+        );
     }
     // Uniform light selection must agree with power-proportional selection.
-    check_furnace("furnace_uniform", &["--light-selection", "uniform", "--max-depth", "4"], expected(4));
+    check_furnace(
+        "furnace_uniform",
+        &["--light-selection", "uniform", "--max-depth", "4"],
+        expected(4),
+    );
 }
 
 #[test]

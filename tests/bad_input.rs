@@ -12,14 +12,32 @@ fn rejects(name: &str, xml: &str, expect: &[&str]) {
     let scene = dir.join(format!("{name}.xml"));
     std::fs::write(&scene, xml).unwrap();
     let out = dir.join("out.exr");
-    let o = pt(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--quiet"]);
+    let o = pt(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
     let stderr = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{name}: exit code; stderr: {stderr}");
+    assert_eq!(
+        o.status.code(),
+        Some(2),
+        "{name}: exit code; stderr: {stderr}"
+    );
     assert!(!stderr.contains("panicked"), "{name}: panicked: {stderr}");
     for e in expect {
-        assert!(stderr.contains(e), "{name}: stderr should mention '{e}': {stderr}");
+        assert!(
+            stderr.contains(e),
+            "{name}: stderr should mention '{e}': {stderr}"
+        );
     }
-    let left: Vec<_> = std::fs::read_dir(&dir).unwrap().flatten().map(|e| e.file_name()).filter(|f| f != Path::new(&format!("{name}.xml")).as_os_str()).collect();
+    let left: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name())
+        .filter(|f| f != Path::new(&format!("{name}.xml")).as_os_str())
+        .collect();
     assert!(left.is_empty(), "{name}: files left behind: {left:?}");
 }
 
@@ -31,12 +49,20 @@ const HEAD: &str = r#"<scene version="3.0.0">
 
 #[test]
 fn malformed_xml() {
-    rejects("malformed", &format!("{HEAD}<shape type=\"cube\">\n</scene>"), &["malformed.xml:"]);
+    rejects(
+        "malformed",
+        &format!("{HEAD}<shape type=\"cube\">\n</scene>"),
+        &["malformed.xml:"],
+    );
 }
 
 #[test]
 fn unknown_plugin() {
-    rejects("unknown", &format!("{HEAD}<shape type=\"cube\"><bsdf type=\"plasticc\"/></shape>\n</scene>"), &["unknown.xml:5:", "plasticc"]);
+    rejects(
+        "unknown",
+        &format!("{HEAD}<shape type=\"cube\"><bsdf type=\"plasticc\"/></shape>\n</scene>"),
+        &["unknown.xml:5:", "plasticc"],
+    );
 }
 
 #[test]
@@ -46,7 +72,13 @@ fn missing_mesh() {
 
 #[test]
 fn nan_parameter() {
-    rejects("nan", &format!("{HEAD}<shape type=\"sphere\"><float name=\"radius\" value=\"nan\"/></shape>\n</scene>"), &["nan.xml:5:", "radius"]);
+    rejects(
+        "nan",
+        &format!(
+            "{HEAD}<shape type=\"sphere\"><float name=\"radius\" value=\"nan\"/></shape>\n</scene>"
+        ),
+        &["nan.xml:5:", "radius"],
+    );
 }
 
 #[test]
@@ -56,12 +88,24 @@ fn malformed_number() {
 
 #[test]
 fn unused_property() {
-    rejects("unused", &format!("{HEAD}<shape type=\"cube\"><float name=\"radius\" value=\"1\"/></shape>\n</scene>"), &["unused.xml:5:", "radius"]);
+    rejects(
+        "unused",
+        &format!(
+            "{HEAD}<shape type=\"cube\"><float name=\"radius\" value=\"1\"/></shape>\n</scene>"
+        ),
+        &["unused.xml:5:", "radius"],
+    );
 }
 
 #[test]
 fn undefined_substitution() {
-    rejects("subst", &format!("{HEAD}<shape type=\"sphere\"><float name=\"radius\" value=\"$r\"/></shape>\n</scene>"), &["subst.xml:5:", "$r"]);
+    rejects(
+        "subst",
+        &format!(
+            "{HEAD}<shape type=\"sphere\"><float name=\"radius\" value=\"$r\"/></shape>\n</scene>"
+        ),
+        &["subst.xml:5:", "$r"],
+    );
 }
 
 #[test]

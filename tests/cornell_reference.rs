@@ -28,7 +28,12 @@ fn nominal() -> &'static (Image, Image) {
     static R: std::sync::OnceLock<(Image, Image)> = std::sync::OnceLock::new();
     R.get_or_init(|| {
         let dir = scratch("cornell_nominal");
-        render(&repo().join("scenes/cornell-box.xml"), &dir, "cornell", &["--spp", SPP])
+        render(
+            &repo().join("scenes/cornell-box.xml"),
+            &dir,
+            "cornell",
+            &["--spp", SPP],
+        )
     })
 }
 
@@ -41,15 +46,28 @@ fn cornell_box_matches_mitsuba_reference() {
     let (img, var) = nominal();
     let v = judge(img, var, "nominal");
     assert!(img.nonfinite_pixels() == 0);
-    assert!(v.agrees(), "the render disagrees with the Mitsuba reference (see the line above)");
+    assert!(
+        v.agrees(),
+        "the render disagrees with the Mitsuba reference (see the line above)"
+    );
 }
 
 #[test]
 fn a_two_percent_brighter_render_is_rejected() {
     let (img, var) = nominal();
     let scale = 1.02f32;
-    let brighter = Image { data: img.data.iter().map(|p| p.map(|c| c * scale)).collect(), ..img.clone() };
-    let bvar = Image { data: var.data.iter().map(|p| p.map(|c| c * scale * scale)).collect(), ..var.clone() };
+    let brighter = Image {
+        data: img.data.iter().map(|p| p.map(|c| c * scale)).collect(),
+        ..img.clone()
+    };
+    let bvar = Image {
+        data: var
+            .data
+            .iter()
+            .map(|p| p.map(|c| c * scale * scale))
+            .collect(),
+        ..var.clone()
+    };
     let v = judge(&brighter, &bvar, "brighter_2pct");
     assert!(!v.z.pass, "the block z-test must detect a 2% bias");
     assert!(!v.agrees());
@@ -58,8 +76,16 @@ fn a_two_percent_brighter_render_is_rejected() {
 #[test]
 fn a_render_without_indirect_light_is_rejected() {
     let dir = scratch("cornell_depth2");
-    let (img, var) = render(&repo().join("scenes/cornell-box.xml"), &dir, "cornell_d2", &["--max-depth", "2", "--spp", SPP]);
+    let (img, var) = render(
+        &repo().join("scenes/cornell-box.xml"),
+        &dir,
+        "cornell_d2",
+        &["--max-depth", "2", "--spp", SPP],
+    );
     let v = judge(&img, &var, "max_depth_2");
-    assert!(!v.z.pass, "the block z-test must detect missing indirect light");
+    assert!(
+        !v.z.pass,
+        "the block z-test must detect missing indirect light"
+    );
     assert!(!v.agrees());
 }

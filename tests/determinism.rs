@@ -9,12 +9,35 @@ fn bit_identical_for_one_and_two_threads() {
     let dir = scratch("determinism");
     let scene = repo().join("scenes/cornell-box.xml");
     let small = ["--spp", "4", "--width", "48", "--height", "40"];
-    let (a, va) = render(&scene, &dir, "t1", &[&small[..], &["--threads", "1"]].concat());
-    let (b, vb) = render(&scene, &dir, "t2", &[&small[..], &["--threads", "2"]].concat());
-    assert!(a.data.iter().zip(&b.data).all(|(x, y)| x.map(f32::to_bits) == y.map(f32::to_bits)));
-    assert!(va.data.iter().zip(&vb.data).all(|(x, y)| x.map(f32::to_bits) == y.map(f32::to_bits)));
+    let (a, va) = render(
+        &scene,
+        &dir,
+        "t1",
+        &[&small[..], &["--threads", "1"]].concat(),
+    );
+    let (b, vb) = render(
+        &scene,
+        &dir,
+        "t2",
+        &[&small[..], &["--threads", "2"]].concat(),
+    );
+    assert!(a
+        .data
+        .iter()
+        .zip(&b.data)
+        .all(|(x, y)| x.map(f32::to_bits) == y.map(f32::to_bits)));
+    assert!(va
+        .data
+        .iter()
+        .zip(&vb.data)
+        .all(|(x, y)| x.map(f32::to_bits) == y.map(f32::to_bits)));
     // A different seed gives a different image (the streams really depend on it).
-    let (c, _) = render(&scene, &dir, "seed", &[&small[..], &["--seed", "7"]].concat());
+    let (c, _) = render(
+        &scene,
+        &dir,
+        "seed",
+        &[&small[..], &["--seed", "7"]].concat(),
+    );
     assert!(a.data != c.data);
 }
 
@@ -22,7 +45,18 @@ fn bit_identical_for_one_and_two_threads() {
 fn builtin_cornell_box_renders_without_a_scene_argument() {
     let dir = scratch("builtin");
     let out = dir.join("builtin.exr");
-    let o = pt(&["render", "-o", out.to_str().unwrap(), "--spp", "1", "--width", "16", "--height", "16", "--quiet"]);
+    let o = pt(&[
+        "render",
+        "-o",
+        out.to_str().unwrap(),
+        "--spp",
+        "1",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--quiet",
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let (img, meta) = pt_image::read_exr(&out).unwrap();
     assert_eq!((img.width, img.height), (16, 16));
@@ -32,5 +66,8 @@ fn builtin_cornell_box_renders_without_a_scene_argument() {
     let o = pt(&["info"]);
     assert!(o.status.success());
     let text = String::from_utf8_lossy(&o.stdout);
-    assert!(text.contains("1 area light") && text.contains("mode        rgb"), "{text}");
+    assert!(
+        text.contains("1 area light") && text.contains("mode        rgb"),
+        "{text}"
+    );
 }

@@ -31,7 +31,9 @@ const SPP: &str = "256";
 /// Writes a 1x1 8-bit sRGB PNG.
 fn png(dir: &Path, name: &str, rgb8: [u8; 3]) -> PathBuf {
     let p = dir.join(name);
-    image::RgbImage::from_pixel(1, 1, image::Rgb(rgb8)).save(&p).expect("write png");
+    image::RgbImage::from_pixel(1, 1, image::Rgb(rgb8))
+        .save(&p)
+        .expect("write png");
     p
 }
 
@@ -40,7 +42,12 @@ fn scene(dir: &Path, image: &Path, primaries: bool) -> PathBuf {
     let spectra = repo().join("scenes/spectra");
     let prim = if primaries {
         ["r", "g", "b"]
-            .map(|c| format!("<spectrum name=\"primary_{c}\" filename=\"{}\"/>", spectra.join(format!("lcd-{c}.spd")).display()))
+            .map(|c| {
+                format!(
+                    "<spectrum name=\"primary_{c}\" filename=\"{}\"/>",
+                    spectra.join(format!("lcd-{c}.spd")).display()
+                )
+            })
             .join("\n                ")
     } else {
         String::new()
@@ -69,7 +76,11 @@ fn scene(dir: &Path, image: &Path, primaries: bool) -> PathBuf {
 "#,
         image.display()
     );
-    let p = dir.join(if primaries { "primaries.xml" } else { "plain.xml" });
+    let p = dir.join(if primaries {
+        "primaries.xml"
+    } else {
+        "plain.xml"
+    });
     std::fs::write(&p, xml).expect("write scene");
     p
 }
@@ -91,7 +102,9 @@ fn read_spd(path: &Path) -> Vec<(f64, f64)> {
         .lines()
         .filter(|l| !l.trim_start().starts_with('#') && !l.trim().is_empty())
         .map(|l| {
-            let mut it = l.split_whitespace().map(|t| t.parse::<f64>().expect("number"));
+            let mut it = l
+                .split_whitespace()
+                .map(|t| t.parse::<f64>().expect("number"));
             (it.next().unwrap(), it.next().unwrap())
         })
         .collect()
@@ -131,9 +144,16 @@ fn expected_with_primaries(rgb8: [u8; 3]) -> [f64; 3] {
     let d65 = xyz_of(|l| pt_spectrum::cie::d65(l as f32) as f64);
     let white = d65.map(|v| v / d65[1]);
     // k = M^-1 white, M's columns the primaries' XYZ (Cramer's rule).
-    let det = |a: [f64; 3], b: [f64; 3], c: [f64; 3]| a[0] * (b[1] * c[2] - b[2] * c[1]) - b[0] * (a[1] * c[2] - a[2] * c[1]) + c[0] * (a[1] * b[2] - a[2] * b[1]);
+    let det = |a: [f64; 3], b: [f64; 3], c: [f64; 3]| {
+        a[0] * (b[1] * c[2] - b[2] * c[1]) - b[0] * (a[1] * c[2] - a[2] * c[1])
+            + c[0] * (a[1] * b[2] - a[2] * b[1])
+    };
     let d = det(prim[0], prim[1], prim[2]);
-    let k = [det(white, prim[1], prim[2]) / d, det(prim[0], white, prim[2]) / d, det(prim[0], prim[1], white) / d];
+    let k = [
+        det(white, prim[1], prim[2]) / d,
+        det(prim[0], white, prim[2]) / d,
+        det(prim[0], prim[1], white) / d,
+    ];
     assert!(k.iter().all(|&v| v > 0.0), "{k:?}");
     let c = rgb8.map(srgb_decode);
     let xyz: [f64; 3] = std::array::from_fn(|j| (0..3).map(|i| c[i] * k[i] * prim[i][j]).sum());
@@ -148,8 +168,17 @@ fn check(scene: &Path, dir: &Path, name: &str, mode: &str, expected: [f64; 3], f
     eprintln!("{name} ({mode}): mean {m:?} +- {se:?}, expected {expected:?}");
     for c in 0..3 {
         let tol = 4.0 * se[c] + floor;
-        assert!(tol < 0.02 * expected[c].abs(), "{name}: channel {c}: threshold {tol} would not detect a 2% error of {}", expected[c]);
-        assert!((m[c] - expected[c]).abs() <= tol, "{name} ({mode}): channel {c}: {} vs closed form {} (threshold {tol})", m[c], expected[c]);
+        assert!(
+            tol < 0.02 * expected[c].abs(),
+            "{name}: channel {c}: threshold {tol} would not detect a 2% error of {}",
+            expected[c]
+        );
+        assert!(
+            (m[c] - expected[c]).abs() <= tol,
+            "{name} ({mode}): channel {c}: {} vs closed form {} (threshold {tol})",
+            m[c],
+            expected[c]
+        );
     }
 }
 
@@ -162,28 +191,59 @@ fn monitor_with_primaries_matches_the_closed_form() {
         let expected = expected_with_primaries(rgb8);
         if name == "white" {
             // The normalisation: (1, 1, 1) emits D65 at luminance 1, sRGB white to 2e-3.
-            assert!(expected.iter().all(|&v| (v - 1.0).abs() < 2e-3), "{expected:?}");
+            assert!(
+                expected.iter().all(|&v| (v - 1.0).abs() < 2e-3),
+                "{expected:?}"
+            );
         }
-        check(&s, &dir, &format!("{name}_primaries"), "spectral", expected, 1e-4 * expected[1]);
+        check(
+            &s,
+            &dir,
+            &format!("{name}_primaries"),
+            "spectral",
+            expected,
+            1e-4 * expected[1],
+        );
         // RGB mode: the display's colours through its matrix, exact and noiseless.
-        check(&s, &dir, &format!("{name}_primaries_rgb"), "rgb", expected, 1e-4 * expected[1]);
+        check(
+            &s,
+            &dir,
+            &format!("{name}_primaries_rgb"),
+            "rgb",
+            expected,
+            1e-4 * expected[1],
+        );
     }
     // The display's colours are not the texel's: the orange texel shows more saturated (the LCD
     // primaries are narrower than sRGB's), so the closed form above is not the item-1 path's.
     let orange = expected_with_primaries([230, 180, 150]);
     let texel = [230u8, 180, 150].map(srgb_decode);
-    assert!((0..3).any(|c| (orange[c] - texel[c]).abs() > 0.05 * texel[c]), "{orange:?} vs {texel:?}");
+    assert!(
+        (0..3).any(|c| (orange[c] - texel[c]).abs() > 0.05 * texel[c]),
+        "{orange:?} vs {texel:?}"
+    );
 }
 
 #[test]
 fn monitor_without_primaries_shows_the_upsampled_texels() {
     let dir = scratch("display_upsampled");
-    for (name, rgb8) in [("orange", [230u8, 180, 150]), ("white", [255, 255, 255]), ("teal", [120, 200, 190])] {
+    for (name, rgb8) in [
+        ("orange", [230u8, 180, 150]),
+        ("white", [255, 255, 255]),
+        ("teal", [120, 200, 190]),
+    ] {
         let image = png(&dir, &format!("{name}.png"), rgb8);
         let s = scene(&dir, &image, false);
         let expected = rgb8.map(srgb_decode);
         let max = expected.iter().cloned().fold(0.0, f64::max);
-        check(&s, &dir, &format!("{name}_upsampled"), "spectral", expected, 3e-3 * max);
+        check(
+            &s,
+            &dir,
+            &format!("{name}_upsampled"),
+            "spectral",
+            expected,
+            3e-3 * max,
+        );
     }
 }
 
@@ -196,13 +256,30 @@ fn primaries_outside_which_d65_lies_are_a_clear_error() {
     let s = scene(&dir, &image, true);
     let yellow = dir.join("yellow.spd");
     std::fs::write(&yellow, "560 0\n580 1\n600 0\n").unwrap();
-    let xml = std::fs::read_to_string(&s).unwrap().replace(&repo().join("scenes/spectra/lcd-b.spd").display().to_string(), &yellow.display().to_string());
+    let xml = std::fs::read_to_string(&s).unwrap().replace(
+        &repo()
+            .join("scenes/spectra/lcd-b.spd")
+            .display()
+            .to_string(),
+        &yellow.display().to_string(),
+    );
     std::fs::write(&s, xml).unwrap();
     let out = dir.join("bad.exr");
-    let o = pt(&["render", s.to_str().unwrap(), "-o", out.to_str().unwrap(), "--quiet"]);
+    let o = pt(&[
+        "render",
+        s.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "stderr: {stderr}");
-    assert!(stderr.contains("primaries.xml") && stderr.contains("emitter type=\"area\"") && stderr.contains("outside the primaries' gamut"), "{stderr}");
+    assert!(
+        stderr.contains("primaries.xml")
+            && stderr.contains("emitter type=\"area\"")
+            && stderr.contains("outside the primaries' gamut"),
+        "{stderr}"
+    );
     assert!(!out.exists(), "no partial output");
 }
 

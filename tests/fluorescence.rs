@@ -42,13 +42,20 @@ fn spec(s: &str) -> Spectrum {
 }
 
 fn build(xml: &str) -> Scene {
-    let desc = pt_scene::load_str(xml, Path::new("fluorescence-test.xml"), Path::new("."), &[]).expect("scene loads");
+    let desc = pt_scene::load_str(xml, Path::new("fluorescence-test.xml"), Path::new("."), &[])
+        .expect("scene loads");
     assert!(desc.spectral_reason().unwrap().contains("fluorescence"));
     Scene::build(&desc, BvhKind::default(), LightSelection::Power).expect("scene builds")
 }
 
 /// Per-lane mean and standard error of `n` estimates of `li` along `ray` at wavelengths `lam`.
-fn estimate(scene: &Scene, ray: Ray, settings: &PathSettings, lam: [f32; 4], n: u64) -> ([f64; 4], [f64; 4]) {
+fn estimate(
+    scene: &Scene,
+    ray: Ray,
+    settings: &PathSettings,
+    lam: [f32; 4],
+    n: u64,
+) -> ([f64; 4], [f64; 4]) {
     let w = SampledWavelengths::sample_uniform(0.0).with_lambda(lam.into());
     let (mut s1, mut s2) = ([0.0f64; 4], [0.0f64; 4]);
     for k in 0..n {
@@ -61,16 +68,30 @@ fn estimate(scene: &Scene, ray: Ray, settings: &PathSettings, lam: [f32; 4], n: 
     }
     let nf = n as f64;
     let mean = s1.map(|s| s / nf);
-    let se = std::array::from_fn(|i| ((s2[i] / nf - mean[i] * mean[i]).max(0.0) / (nf - 1.0)).sqrt());
+    let se =
+        std::array::from_fn(|i| ((s2[i] / nf - mean[i] * mean[i]).max(0.0) / (nf - 1.0)).sqrt());
     (mean, se)
 }
 
 fn check(name: &str, lam: [f32; 4], mean: [f64; 4], se: [f64; 4], expect: [f64; 4]) {
     for i in 0..4 {
         let (m, s, e) = (mean[i], se[i], expect[i]);
-        println!("{name}: {} nm: {m:.6} +- {s:.6}, expected {e:.6} (ratio {:.4})", lam[i], m / e);
-        assert!(s < 4e-3 * e, "{name} at {} nm: standard error {s} too large for a 2% test (expected {e})", lam[i]);
-        assert!((m - e).abs() < 4.5 * s, "{name} at {} nm: {m} +- {s}, expected {e} (ratio {:.4})", lam[i], m / e);
+        println!(
+            "{name}: {} nm: {m:.6} +- {s:.6}, expected {e:.6} (ratio {:.4})",
+            lam[i],
+            m / e
+        );
+        assert!(
+            s < 4e-3 * e,
+            "{name} at {} nm: standard error {s} too large for a 2% test (expected {e})",
+            lam[i]
+        );
+        assert!(
+            (m - e).abs() < 4.5 * s,
+            "{name} at {} nm: {m} +- {s}, expected {e} (ratio {:.4})",
+            lam[i],
+            m / e
+        );
     }
 }
 
@@ -104,18 +125,30 @@ fn fluorescent_plane_under_a_narrow_band_source() {
         material_xml()
     );
     let scene = build(&xml);
-    let settings = PathSettings { max_depth: 2, ..PathSettings::default() };
+    let settings = PathSettings {
+        max_depth: 2,
+        ..PathSettings::default()
+    };
     let ray = Ray::new(Vec3::new(0.1, 0.2, 1.0), Vec3::new(0.0, 0.0, -1.0));
     let lam = [455.0f32, 465.0, 520.0, 580.0];
     let (mean, se) = estimate(&scene, ray, &settings, lam, 1_200_000);
 
-    let (r, a, e, band) = (spec(REFLECTANCE), spec(ABSORPTION), spec(EMISSION), spec("430:0, 450:10, 470:0"));
+    let (r, a, e, band) = (
+        spec(REFLECTANCE),
+        spec(ABSORPTION),
+        spec(EMISSION),
+        spec("430:0, 450:10, 470:0"),
+    );
     let e_area = quad(830.0, |l| e.eval(l as f32) as f64);
     let cos = 0.8;
     let expect = lam.map(|lo| {
         let lo64 = lo as f64;
-        let excite = quad(lo64, |l| a.eval(l as f32) as f64 * band.eval(l as f32) as f64 * l);
-        cos / std::f64::consts::PI * (r.eval(lo) as f64 * band.eval(lo) as f64 + YIELD as f64 * e.eval(lo) as f64 / e_area / lo64 * excite)
+        let excite = quad(lo64, |l| {
+            a.eval(l as f32) as f64 * band.eval(l as f32) as f64 * l
+        });
+        cos / std::f64::consts::PI
+            * (r.eval(lo) as f64 * band.eval(lo) as f64
+                + YIELD as f64 * e.eval(lo) as f64 / e_area / lo64 * excite)
     });
     check("plane", lam, mean, se, expect);
 }
@@ -140,7 +173,10 @@ fn closed_fluorescent_furnace() {
     );
     let scene = build(&xml);
     let settings = PathSettings::default();
-    let ray = Ray::new(Vec3::new(0.05, -0.1, 0.02), Vec3::new(0.3, 0.4, -0.866).normalize());
+    let ray = Ray::new(
+        Vec3::new(0.05, -0.1, 0.02),
+        Vec3::new(0.3, 0.4, -0.866).normalize(),
+    );
     let lam = [430.0f32, 470.0, 520.0, 560.0];
     let (mean, se) = estimate(&scene, ray, &settings, lam, 200_000);
 
@@ -159,21 +195,31 @@ fn closed_fluorescent_furnace() {
         let lo = grid[i];
         let emit = YIELD as f64 * e.eval(lo as f32) as f64 / e_area / lo;
         // Trapezoid over [360, lo_i] with g_i (unknown yet) replaced by g_{i-1}: O(h^2).
-        let integral = if i == 0 { 0.0 } else { acc + 0.5 * h * g[i - 1] - 0.5 * h * g[0] };
+        let integral = if i == 0 {
+            0.0
+        } else {
+            acc + 0.5 * h * g[i - 1] - 0.5 * h * g[0]
+        };
         big_l[i] = (le + emit * integral) / (1.0 - r.eval(lo as f32) as f64);
         g[i] = a.eval(lo as f32) as f64 * lo * big_l[i];
         acc += h * g[i];
     }
     let expect = lam.map(|lo| big_l[((lo as f64 - 360.0) / h).round() as usize]);
     // Without fluorescence the furnace gives Le / (1 - r): the test must see the difference.
-    assert!(expect[2] > 1.5 * le / (1.0 - r.eval(520.0) as f64), "{expect:?}");
+    assert!(
+        expect[2] > 1.5 * le / (1.0 - r.eval(520.0) as f64),
+        "{expect:?}"
+    );
     check("furnace", lam, mean, se, expect);
 }
 
 /// XYZ (mean, standard error of Y) of the radiance along `ray`, with wavelengths sampled as the
 /// film samples them.
 fn xyz_along(scene: &Scene, ray: Ray, n: u64) -> ([f64; 3], f64) {
-    let settings = PathSettings { max_depth: 8, ..PathSettings::default() };
+    let settings = PathSettings {
+        max_depth: 8,
+        ..PathSettings::default()
+    };
     let (mut sum, mut sum_y2) = ([0.0f64; 3], 0.0f64);
     for k in 0..n {
         let mut sampler = Sampler::new(11, 1, k);
@@ -186,7 +232,10 @@ fn xyz_along(scene: &Scene, ray: Ray, n: u64) -> ([f64; 3], f64) {
     }
     let nf = n as f64;
     let mean = sum.map(|s| s / nf);
-    (mean, ((sum_y2 / nf - mean[1] * mean[1]).max(0.0) / (nf - 1.0)).sqrt())
+    (
+        mean,
+        ((sum_y2 / nf - mean[1] * mean[1]).max(0.0) / (nf - 1.0)).sqrt(),
+    )
 }
 
 /// scenes/fluorescence.xml makes two claims, checked here at the front-top of each sphere:
@@ -199,7 +248,10 @@ fn xyz_along(scene: &Scene, ray: Ray, n: u64) -> ([f64; 3], f64) {
 fn fluorescence_scene_twins_match_in_daylight_only() {
     let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/fluorescence.xml");
     let load = |defaults: &[(&str, &str)]| {
-        let d: Vec<(String, String)> = defaults.iter().map(|(a, b)| (a.to_string(), b.to_string())).collect();
+        let d: Vec<(String, String)> = defaults
+            .iter()
+            .map(|(a, b)| (a.to_string(), b.to_string()))
+            .collect();
         let desc = pt_scene::load_file(&path, &d).expect("scene loads");
         Scene::build(&desc, BvhKind::default(), LightSelection::Power).expect("scene builds")
     };
@@ -215,14 +267,27 @@ fn fluorescence_scene_twins_match_in_daylight_only() {
     assert!(se_rel < 5e-3, "too noisy: {se_rel}");
     for c in 0..3 {
         let r = paint[c] / twin[c];
-        assert!((r - 1.0).abs() < 0.02 + 4.0 * se_rel, "channel {c}: paint / twin = {r}");
+        assert!(
+            (r - 1.0).abs() < 0.02 + 4.0 * se_rel,
+            "channel {c}: paint / twin = {r}"
+        );
     }
 
     let blue = load(&[]);
     let (paint, _) = xyz_along(&blue, ray_to(-0.55), n);
     let (twin, _) = xyz_along(&blue, ray_to(0.55), n);
     println!("blue lamp: paint XYZ {paint:?}, twin {twin:?}");
-    assert!(paint[1] > 5.0 * twin[1], "paint Y {} vs twin Y {}", paint[1], twin[1]);
+    assert!(
+        paint[1] > 5.0 * twin[1],
+        "paint Y {} vs twin Y {}",
+        paint[1],
+        twin[1]
+    );
     let y_chroma = |v: [f64; 3]| v[1] / (v[0] + v[1] + v[2]);
-    assert!(y_chroma(paint) > y_chroma(twin) + 0.2, "paint y {} twin y {}", y_chroma(paint), y_chroma(twin));
+    assert!(
+        y_chroma(paint) > y_chroma(twin) + 0.2,
+        "paint y {} twin y {}",
+        y_chroma(paint),
+        y_chroma(twin)
+    );
 }

@@ -64,38 +64,63 @@ fn check_light(which: &str) {
         let wo = local(norm([-x, h_cam, -z]));
         let mut l = [0.0f64; 3];
         if which == "point" {
-        let (px, ph, pz, i) = (0.7, 1.5, -0.4, 5.0);
-        let d2 = (px - x) * (px - x) + ph * ph + (pz - z) * (pz - z);
-        let fv = f64::from(f.eval(wo, local(norm([px - x, ph, pz - z]))).0.x);
-        let e = i * ph / d2.powf(1.5);
-        for (c, col) in [1.0, 0.5, 0.25].iter().enumerate() {
-            l[c] += fv * e * col;
-        }
+            let (px, ph, pz, i) = (0.7, 1.5, -0.4, 5.0);
+            let d2 = (px - x) * (px - x) + ph * ph + (pz - z) * (pz - z);
+            let fv = f64::from(f.eval(wo, local(norm([px - x, ph, pz - z]))).0.x);
+            let e = i * ph / d2.powf(1.5);
+            for (c, col) in [1.0, 0.5, 0.25].iter().enumerate() {
+                l[c] += fv * e * col;
+            }
         }
         if which == "spot" {
-        let (sh, si, outer, inner) = (2.0f64, 8.0f64, 30.0f64, 15.0f64);
-        let d2 = x * x + sh * sh + z * z;
-        let angle = (sh / d2.sqrt()).acos().to_degrees();
-        let fall = if angle <= inner { 1.0 } else if angle >= outer { 0.0 } else { (outer - angle) / (outer - inner) };
-        let fv = f64::from(f.eval(wo, local(norm([-x, sh, -z]))).0.x);
-        for lc in &mut l {
-            *lc += fv * si * fall * sh / d2.powf(1.5);
-        }
+            let (sh, si, outer, inner) = (2.0f64, 8.0f64, 30.0f64, 15.0f64);
+            let d2 = x * x + sh * sh + z * z;
+            let angle = (sh / d2.sqrt()).acos().to_degrees();
+            let fall = if angle <= inner {
+                1.0
+            } else if angle >= outer {
+                0.0
+            } else {
+                (outer - angle) / (outer - inner)
+            };
+            let fv = f64::from(f.eval(wo, local(norm([-x, sh, -z]))).0.x);
+            for lc in &mut l {
+                *lc += fv * si * fall * sh / d2.powf(1.5);
+            }
         }
         if which == "directional" {
-        // Travelling along (0.6, -0.8, 0): wi = (-0.6, 0.8, 0).
-        let fv = f64::from(f.eval(wo, local([-0.6, 0.8, 0.0])).0.x);
-        for lc in &mut l {
-            *lc += fv * 3.0 * 0.8;
-        }
+            // Travelling along (0.6, -0.8, 0): wi = (-0.6, 0.8, 0).
+            let fv = f64::from(f.eval(wo, local([-0.6, 0.8, 0.0])).0.x);
+            for lc in &mut l {
+                *lc += fv * 3.0 * 0.8;
+            }
         }
         l
     };
     let dir = scratch(&format!("gltf_lights_{which}"));
-    let mut doc: serde_json::Value = serde_json::from_slice(&std::fs::read(asset("lights.gltf")).unwrap()).unwrap();
-    let node = ["point", "spot", "directional"].iter().position(|w| *w == which).unwrap() + 2;
+    let mut doc: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(asset("lights.gltf")).unwrap()).unwrap();
+    let node = ["point", "spot", "directional"]
+        .iter()
+        .position(|w| *w == which)
+        .unwrap()
+        + 2;
     doc["scenes"][0]["nodes"] = serde_json::json!([0, 1, node]);
-    let (img, var) = render(&write_json(&dir, "one-light.gltf", &doc), &dir, "out", &["--width", "24", "--height", "24", "--spp", "64", "--max-depth", "2"]);
+    let (img, var) = render(
+        &write_json(&dir, "one-light.gltf", &doc),
+        &dir,
+        "out",
+        &[
+            "--width",
+            "24",
+            "--height",
+            "24",
+            "--spp",
+            "64",
+            "--max-depth",
+            "2",
+        ],
+    );
     let n = 16;
     let (mut sum_got, mut sum_want) = (0.0, 0.0);
     for py in 0..W {
@@ -106,7 +131,11 @@ fn check_light(which: &str) {
                     let u = (px as f64 + (i as f64 + 0.5) / n as f64) / W as f64;
                     let v = (py as f64 + (j as f64 + 0.5) / n as f64) / W as f64;
                     let (x, z) = (h_cam * (2.0 * u - 1.0) * tan, h_cam * (2.0 * v - 1.0) * tan);
-                    let l = if x.abs() <= 3.0 && z.abs() <= 3.0 { radiance(x, z) } else { [0.0; 3] };
+                    let l = if x.abs() <= 3.0 && z.abs() <= 3.0 {
+                        radiance(x, z)
+                    } else {
+                        [0.0; 3]
+                    };
                     for c in 0..3 {
                         want[c] += l[c] / (n * n) as f64;
                         want_sq[c] += l[c] * l[c] / (n * n) as f64;
@@ -116,14 +145,24 @@ fn check_light(which: &str) {
             let (got, sd) = (img.get(px, py), var.get(px, py));
             for c in 0..3 {
                 let footprint_var = (want_sq[c] - want[c] * want[c]).max(0.0) / SPP;
-                let tol = 4.5 * (sd[c] as f64).max(footprint_var).sqrt() + 2e-4 * want[c].abs() + 1e-7;
-                assert!((got[c] as f64 - want[c]).abs() <= tol, "{which}: pixel ({px}, {py}) channel {c}: got {} want {} (tol {tol:.3e})", got[c], want[c]);
+                let tol =
+                    4.5 * (sd[c] as f64).max(footprint_var).sqrt() + 2e-4 * want[c].abs() + 1e-7;
+                assert!(
+                    (got[c] as f64 - want[c]).abs() <= tol,
+                    "{which}: pixel ({px}, {py}) channel {c}: got {} want {} (tol {tol:.3e})",
+                    got[c],
+                    want[c]
+                );
                 sum_got += got[c] as f64;
                 sum_want += want[c];
             }
         }
     }
-    assert!((sum_got / sum_want - 1.0).abs() < 2e-3, "{which}: mean ratio {}", sum_got / sum_want);
+    assert!(
+        (sum_got / sum_want - 1.0).abs() < 2e-3,
+        "{which}: mean ratio {}",
+        sum_got / sum_want
+    );
 }
 
 /// The loader's mapping of the glass block (KHR_materials_volume): attenuationColor c reached
@@ -131,16 +170,32 @@ fn check_light(which: &str) {
 /// transmission with a volume maps to a smooth dielectric of the KHR_materials_ior index.
 #[test]
 fn volume_maps_to_beer_lambert_sigma_t() {
-    let g = pt_gltf::load(&asset("glass-block.glb"), &Default::default()).expect("load glass-block.glb");
+    let g = pt_gltf::load(&asset("glass-block.glb"), &Default::default())
+        .expect("load glass-block.glb");
     let s = &g.desc.shapes[0];
-    let m = s.interior.as_ref().expect("the slab has an interior medium");
-    let pt_scene::SpectrumDesc::Rgb(sigma) = m.sigma_t else { panic!("sigma_t {:?}", m.sigma_t) };
+    let m = s
+        .interior
+        .as_ref()
+        .expect("the slab has an interior medium");
+    let pt_scene::SpectrumDesc::Rgb(sigma) = m.sigma_t else {
+        panic!("sigma_t {:?}", m.sigma_t)
+    };
     for (c, col) in [0.8f32, 0.5, 0.2].iter().enumerate() {
         let want = -col.ln() / 0.5;
-        assert!((sigma[c] - want).abs() < 1e-5 * want, "channel {c}: {} vs {want}", sigma[c]);
+        assert!(
+            (sigma[c] - want).abs() < 1e-5 * want,
+            "channel {c}: {} vs {want}",
+            sigma[c]
+        );
     }
-    assert!(matches!(g.desc.bsdfs[s.bsdf].kind, pt_scene::BsdfKind::Dielectric { int_ior, ext_ior } if int_ior == 1.5 && ext_ior == 1.0));
-    assert!(g.warnings.iter().any(|w| w.contains("default environment")), "{:?}", g.warnings);
+    assert!(
+        matches!(g.desc.bsdfs[s.bsdf].kind, pt_scene::BsdfKind::Dielectric { int_ior, ext_ior } if int_ior == 1.5 && ext_ior == 1.0)
+    );
+    assert!(
+        g.warnings.iter().any(|w| w.contains("default environment")),
+        "{:?}",
+        g.warnings
+    );
 }
 
 /// `pt info` on each asset lists the materials with the extensions they use and what each maps
@@ -150,21 +205,56 @@ fn volume_maps_to_beer_lambert_sigma_t() {
 fn info_lists_mapping_lights_cameras_and_mode() {
     let text = |name: &str| {
         let o = pt(&["info", asset(name).to_str().unwrap()]);
-        assert!(o.status.success(), "{name}: {}", String::from_utf8_lossy(&o.stderr));
-        (String::from_utf8_lossy(&o.stdout).into_owned(), String::from_utf8_lossy(&o.stderr).into_owned())
+        assert!(
+            o.status.success(),
+            "{name}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        (
+            String::from_utf8_lossy(&o.stdout).into_owned(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
     };
     let (out, _) = text("lights.gltf");
-    for want in ["point at", "spot at", "directional towards", "gltf metallic-roughness", "camera 0: node 1, perspective", "mode        rgb"] {
-        assert!(out.contains(want), "lights.gltf info lacks '{want}':\n{out}");
+    for want in [
+        "point at",
+        "spot at",
+        "directional towards",
+        "gltf metallic-roughness",
+        "camera 0: node 1, perspective",
+        "mode        rgb",
+    ] {
+        assert!(
+            out.contains(want),
+            "lights.gltf info lacks '{want}':\n{out}"
+        );
     }
     let (out, err) = text("iridescence.gltf");
-    for want in ["KHR_materials_iridescence", "thinfilm: 450 nm film of ior 1.33", "mode        spectral"] {
-        assert!(out.contains(want), "iridescence.gltf info lacks '{want}':\n{out}");
+    for want in [
+        "KHR_materials_iridescence",
+        "thinfilm: 450 nm film of ior 1.33",
+        "mode        spectral",
+    ] {
+        assert!(
+            out.contains(want),
+            "iridescence.gltf info lacks '{want}':\n{out}"
+        );
     }
-    assert!(err.contains("default environment"), "no default-light note on stderr: {err}");
+    assert!(
+        err.contains("default environment"),
+        "no default-light note on stderr: {err}"
+    );
     let (out, _) = text("glass-block.glb");
-    for want in ["KHR_materials_transmission", "KHR_materials_volume", "sigma_t", "dielectric, ior 1.5"] {
-        assert!(out.contains(want), "glass-block.glb info lacks '{want}':\n{out}");
+    for want in [
+        "KHR_materials_transmission",
+        "KHR_materials_volume",
+        "sigma_t",
+        "dielectric, ior 1.5",
+    ] {
+        assert!(
+            out.contains(want),
+            "glass-block.glb info lacks '{want}':\n{out}"
+        );
     }
 }
 
@@ -180,7 +270,8 @@ fn write_json(dir: &Path, name: &str, doc: &serde_json::Value) -> PathBuf {
 #[test]
 fn bad_gltf_exits_2_without_output() {
     let dir = scratch("gltf_bad");
-    let good: serde_json::Value = serde_json::from_slice(&std::fs::read(asset("lights.gltf")).unwrap()).unwrap();
+    let good: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(asset("lights.gltf")).unwrap()).unwrap();
     let mut cases: Vec<(PathBuf, &str)> = Vec::new();
 
     let p = dir.join("malformed.gltf");
@@ -201,12 +292,18 @@ fn bad_gltf_exits_2_without_output() {
     // An index to an accessor that does not exist.
     let mut d = good.clone();
     d["meshes"][0]["primitives"][0]["indices"] = 99.into();
-    cases.push((write_json(&dir, "bad-accessor-index.gltf", &d), "Index out of bounds"));
+    cases.push((
+        write_json(&dir, "bad-accessor-index.gltf", &d),
+        "Index out of bounds",
+    ));
 
     // An accessor that claims more elements than its buffer view holds.
     let mut d = good.clone();
     d["accessors"][0]["count"] = 1000.into();
-    cases.push((write_json(&dir, "accessor-overrun.gltf", &d), "need more than"));
+    cases.push((
+        write_json(&dir, "accessor-overrun.gltf", &d),
+        "need more than",
+    ));
 
     // Vertex indices beyond the vertex count (POSITION says 3 vertices, the triangles use 4).
     let mut d = good.clone();
@@ -214,12 +311,18 @@ fn bad_gltf_exits_2_without_output() {
         d["accessors"][a]["count"] = 3.into();
     }
     d["accessors"][0]["min"] = serde_json::json!([-3.0, 0.0, -3.0]);
-    cases.push((write_json(&dir, "vertex-index.gltf", &d), "out of range for 3 vertices"));
+    cases.push((
+        write_json(&dir, "vertex-index.gltf", &d),
+        "out of range for 3 vertices",
+    ));
 
     let mut d = good.clone();
     d["extensionsUsed"] = serde_json::json!(["KHR_lights_punctual", "KHR_draco_mesh_compression"]);
     d["extensionsRequired"] = serde_json::json!(["KHR_draco_mesh_compression"]);
-    cases.push((write_json(&dir, "required-ext.gltf", &d), "KHR_draco_mesh_compression"));
+    cases.push((
+        write_json(&dir, "required-ext.gltf", &d),
+        "KHR_draco_mesh_compression",
+    ));
 
     let mut d = good.clone();
     d["buffers"][0]["uri"] = "missing.bin".into();
@@ -227,14 +330,46 @@ fn bad_gltf_exits_2_without_output() {
 
     for (path, want) in &cases {
         let out = dir.join("out.exr");
-        let o = pt(&["render", path.to_str().unwrap(), "-o", out.to_str().unwrap(), "--spp", "1", "--quiet"]);
+        let o = pt(&[
+            "render",
+            path.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--spp",
+            "1",
+            "--quiet",
+        ]);
         let err = String::from_utf8_lossy(&o.stderr);
-        assert_eq!(o.status.code(), Some(2), "{}: exit {:?}, stderr {err}", path.display(), o.status.code());
-        assert!(err.contains(want), "{}: stderr lacks '{want}': {err}", path.display());
-        assert!(err.contains(path.file_name().unwrap().to_str().unwrap()), "{}: message does not name the file: {err}", path.display());
-        assert!(!out.exists(), "{}: an output file was written", path.display());
+        assert_eq!(
+            o.status.code(),
+            Some(2),
+            "{}: exit {:?}, stderr {err}",
+            path.display(),
+            o.status.code()
+        );
+        assert!(
+            err.contains(want),
+            "{}: stderr lacks '{want}': {err}",
+            path.display()
+        );
+        assert!(
+            err.contains(path.file_name().unwrap().to_str().unwrap()),
+            "{}: message does not name the file: {err}",
+            path.display()
+        );
+        assert!(
+            !out.exists(),
+            "{}: an output file was written",
+            path.display()
+        );
         let o = pt(&["info", path.to_str().unwrap()]);
-        assert_eq!(o.status.code(), Some(2), "info {}: exit {:?}", path.display(), o.status.code());
+        assert_eq!(
+            o.status.code(),
+            Some(2),
+            "info {}: exit {:?}",
+            path.display(),
+            o.status.code()
+        );
     }
 
     // Optional unsupported extension: rendered, with a warning naming it.
@@ -242,13 +377,34 @@ fn bad_gltf_exits_2_without_output() {
     d["extensionsUsed"] = serde_json::json!(["KHR_lights_punctual", "KHR_materials_sheen"]);
     let p = write_json(&dir, "optional-ext.gltf", &d);
     let out = dir.join("optional.exr");
-    let o = pt(&["render", p.to_str().unwrap(), "-o", out.to_str().unwrap(), "--spp", "1", "--width", "8", "--height", "8"]);
+    let o = pt(&[
+        "render",
+        p.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--spp",
+        "1",
+        "--width",
+        "8",
+        "--height",
+        "8",
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("KHR_materials_sheen"), "no warning naming the extension");
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("KHR_materials_sheen"),
+        "no warning naming the extension"
+    );
     assert!(out.exists());
 
     // --camera out of range is bad input too.
-    let o = pt(&["render", asset("lights.gltf").to_str().unwrap(), "-o", dir.join("c.exr").to_str().unwrap(), "--camera", "3"]);
+    let o = pt(&[
+        "render",
+        asset("lights.gltf").to_str().unwrap(),
+        "-o",
+        dir.join("c.exr").to_str().unwrap(),
+        "--camera",
+        "3",
+    ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(!dir.join("c.exr").exists());
 }
@@ -274,7 +430,15 @@ fn iridescent_sphere_reflects_thin_film_r() {
     use pt_bsdf::{FilmBase, ThinFilm};
     const W: u32 = 32;
     let n_base = 1.5f32;
-    let film = ThinFilm::rgb(450.0, 1.33, 1.0, FilmBase::Conductor { eta: SampledSpectrum::from_rgb([n_base; 3]), k: SampledSpectrum::from_rgb([0.0; 3]) });
+    let film = ThinFilm::rgb(
+        450.0,
+        1.33,
+        1.0,
+        FilmBase::Conductor {
+            eta: SampledSpectrum::from_rgb([n_base; 3]),
+            k: SampledSpectrum::from_rgb([0.0; 3]),
+        },
+    );
     let tan = 16.0f64.to_radians().tan();
     // cos(theta) at the analytic unit sphere for film position (u, v), or None on a miss.
     let cos_at = |u: f64, v: f64| -> Option<f64> {
@@ -291,7 +455,14 @@ fn iridescent_sphere_reflects_thin_film_r() {
         Some(-(d[0] * p[0] + d[1] * p[1] + d[2] * p[2]))
     };
     let dir = scratch("gltf_iridescence");
-    let (img, var) = render(&asset("iridescence.gltf"), &dir, "out", &["--width", "32", "--height", "32", "--spp", "64", "--mode", "rgb"]);
+    let (img, var) = render(
+        &asset("iridescence.gltf"),
+        &dir,
+        "out",
+        &[
+            "--width", "32", "--height", "32", "--spp", "64", "--mode", "rgb",
+        ],
+    );
     let n = 8;
     let mut checked = 0;
     for py in 0..W {
@@ -301,7 +472,9 @@ fn iridescent_sphere_reflects_thin_film_r() {
                 for i in 0..n {
                     let u = (px as f64 + (i as f64 + 0.5) / n as f64) / W as f64;
                     let v = (py as f64 + (j as f64 + 0.5) / n as f64) / W as f64;
-                    let Some(c) = cos_at(u, v).filter(|c| *c > 0.5) else { continue 'px };
+                    let Some(c) = cos_at(u, v).filter(|c| *c > 0.5) else {
+                        continue 'px;
+                    };
                     let r = film.reflectance(c as f32).rgb();
                     for k in 0..3 {
                         want[k] += f64::from(r[k]) / (n * n) as f64;
@@ -313,7 +486,12 @@ fn iridescent_sphere_reflects_thin_film_r() {
             for k in 0..3 {
                 let footprint_var = (want_sq[k] - want[k] * want[k]).max(0.0) / 64.0;
                 let tol = 4.5 * (sd[k] as f64).max(footprint_var).sqrt() + 3e-3 * want[k];
-                assert!((got[k] as f64 - want[k]).abs() <= tol, "pixel ({px}, {py}) channel {k}: got {} want {} (tol {tol:.2e})", got[k], want[k]);
+                assert!(
+                    (got[k] as f64 - want[k]).abs() <= tol,
+                    "pixel ({px}, {py}) channel {k}: got {} want {} (tol {tol:.2e})",
+                    got[k],
+                    want[k]
+                );
             }
             checked += 1;
         }
@@ -335,20 +513,48 @@ fn iridescent_sphere_reflects_thin_film_r() {
 #[test]
 fn textures_follow_uv_transform_srgb_and_factors() {
     let dir = scratch("gltf_textures");
-    let args = ["--width", "16", "--height", "16", "--spp", "16", "--seed", "3", "--max-depth", "3"];
+    let args = [
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "16",
+        "--seed",
+        "3",
+        "--max-depth",
+        "3",
+    ];
     let (a, _) = render(&asset("textures.gltf"), &dir, "rotated", &args);
     let (b, _) = render(&asset("textures-flat.gltf"), &dir, "flat", &args);
     for (i, (p, q)) in a.data.iter().zip(&b.data).enumerate() {
         for c in 0..3 {
-            assert!((p[c] - q[c]).abs() <= 1e-4 * q[c].abs().max(1e-3), "pixel {i} channel {c}: transformed {} vs flat {}", p[c], q[c]);
+            assert!(
+                (p[c] - q[c]).abs() <= 1e-4 * q[c].abs().max(1e-3),
+                "pixel {i} channel {c}: transformed {} vs flat {}",
+                p[c],
+                q[c]
+            );
         }
     }
-    let srgb = |c: f64| if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) };
-    let mut d: serde_json::Value = serde_json::from_slice(&std::fs::read(asset("textures-flat.gltf")).unwrap()).unwrap();
+    let srgb = |c: f64| {
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let mut d: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(asset("textures-flat.gltf")).unwrap()).unwrap();
     let pbr = &mut d["materials"][0]["pbrMetallicRoughness"];
     let factor = [0.8, 1.0, 0.9];
     let texel = [20.0, 60.0, 240.0];
-    pbr["baseColorFactor"] = serde_json::json!([factor[0] * srgb(texel[0] / 255.0), factor[1] * srgb(texel[1] / 255.0), factor[2] * srgb(texel[2] / 255.0), 1.0]);
+    pbr["baseColorFactor"] = serde_json::json!([
+        factor[0] * srgb(texel[0] / 255.0),
+        factor[1] * srgb(texel[1] / 255.0),
+        factor[2] * srgb(texel[2] / 255.0),
+        1.0
+    ]);
     pbr["metallicFactor"] = serde_json::json!(0.5 * 255.0 / 255.0);
     pbr["roughnessFactor"] = serde_json::json!(0.9 * 128.0 / 255.0);
     let obj = pbr.as_object_mut().unwrap();
@@ -360,7 +566,12 @@ fn textures_follow_uv_transform_srgb_and_factors() {
         for x in 0..16 {
             let (p, q) = (a.get(x, y), c.get(x, y));
             for k in 0..3 {
-                assert!((p[k] - q[k]).abs() <= 1e-4 * q[k].abs().max(1e-3), "pixel ({x}, {y}) channel {k}: textured {} vs factors {}", p[k], q[k]);
+                assert!(
+                    (p[k] - q[k]).abs() <= 1e-4 * q[k].abs().max(1e-3),
+                    "pixel ({x}, {y}) channel {k}: textured {} vs factors {}",
+                    p[k],
+                    q[k]
+                );
             }
         }
     }
@@ -393,24 +604,51 @@ fn xml_gltf_shape_places_the_mesh() {
     std::fs::write(&rect, scene(&format!(r#"<shape type="rectangle"><transform name="to_world"><scale value="3, 3, 1"/><rotate x="1" angle="-90"/></transform>{bsdf}</shape>"#))).unwrap();
     let gl = dir.join("gltf.xml");
     let file = asset("lights.gltf");
-    std::fs::write(&gl, scene(&format!(r#"<shape type="gltf"><string name="filename" value="{}"/>{bsdf}</shape>"#, file.display()))).unwrap();
+    std::fs::write(
+        &gl,
+        scene(&format!(
+            r#"<shape type="gltf"><string name="filename" value="{}"/>{bsdf}</shape>"#,
+            file.display()
+        )),
+    )
+    .unwrap();
     let (a, _) = render(&rect, &dir, "rect", &[]);
     let (b, _) = render(&gl, &dir, "gltf", &[]);
     for (i, (p, q)) in a.data.iter().zip(&b.data).enumerate() {
         for c in 0..3 {
-            assert!((p[c] - q[c]).abs() <= 1e-5 * p[c].abs().max(1e-3), "pixel {i}: rectangle {} vs glTF {}", p[c], q[c]);
+            assert!(
+                (p[c] - q[c]).abs() <= 1e-5 * p[c].abs().max(1e-3),
+                "pixel {i}: rectangle {} vs glTF {}",
+                p[c],
+                q[c]
+            );
         }
     }
     assert!(a.data.iter().map(|p| p[0]).sum::<f32>() > 1.0, "lit");
     let bad = dir.join("bad.gltf");
     std::fs::write(&bad, b"{ not json").unwrap();
     let badxml = dir.join("bad.xml");
-    std::fs::write(&badxml, scene(&format!(r#"<shape type="gltf"><string name="filename" value="{}"/></shape>"#, bad.display()))).unwrap();
+    std::fs::write(
+        &badxml,
+        scene(&format!(
+            r#"<shape type="gltf"><string name="filename" value="{}"/></shape>"#,
+            bad.display()
+        )),
+    )
+    .unwrap();
     let out = dir.join("bad.exr");
-    let o = pt(&["render", badxml.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    let o = pt(&[
+        "render",
+        badxml.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(err.contains("bad.gltf") && err.contains("shape type=\"gltf\""), "{err}");
+    assert!(
+        err.contains("bad.gltf") && err.contains("shape type=\"gltf\""),
+        "{err}"
+    );
     assert!(!out.exists());
 }
 
@@ -437,7 +675,12 @@ fn xml_gltf_shape_places_the_mesh() {
 fn glass_block_transmits_fresnel_times_beer_lambert() {
     const W: u32 = 16;
     let dir = scratch("gltf_glass");
-    let (img, var) = render(&asset("glass-block.glb"), &dir, "out", &["--width", "16", "--height", "16", "--spp", "256"]);
+    let (img, var) = render(
+        &asset("glass-block.glb"),
+        &dir,
+        "out",
+        &["--width", "16", "--height", "16", "--spp", "256"],
+    );
     let tan = 5.0f64.to_radians().tan();
     let sigma = [0.8f64, 0.5, 0.2].map(|c| -c.ln() / 0.5);
     let fresnel = |cos_i: f64| {
@@ -484,12 +727,23 @@ fn glass_block_transmits_fresnel_times_beer_lambert() {
     for (k, b) in blocks.iter().enumerate() {
         for c in 0..3 {
             let tol = 4.5 * b[2][c].sqrt() + 1e-3 * b[1][c];
-            assert!((b[0][c] - b[1][c]).abs() <= tol, "block {k} channel {c}: got {} want {} (tol {tol:.2e}, sums of 16 pixels)", b[0][c], b[1][c]);
+            assert!(
+                (b[0][c] - b[1][c]).abs() <= tol,
+                "block {k} channel {c}: got {} want {} (tol {tol:.2e}, sums of 16 pixels)",
+                b[0][c],
+                b[1][c]
+            );
         }
     }
     for c in 0..3 {
         let se = var_sum[c].sqrt();
-        assert!((got_sum[c] - want_sum[c]).abs() <= 4.5 * se + 1e-3 * want_sum[c], "channel {c}: mean {} vs {} (se {})", got_sum[c] / 256.0, want_sum[c] / 256.0, se / 256.0);
+        assert!(
+            (got_sum[c] - want_sum[c]).abs() <= 4.5 * se + 1e-3 * want_sum[c],
+            "channel {c}: mean {} vs {} (se {})",
+            got_sum[c] / 256.0,
+            want_sum[c] / 256.0,
+            se / 256.0
+        );
     }
 }
 
@@ -501,13 +755,21 @@ fn glass_block_transmits_fresnel_times_beer_lambert() {
 #[test]
 fn emissive_strength_scales_emitted_radiance() {
     let dir = scratch("gltf_emissive");
-    let mut d: serde_json::Value = serde_json::from_slice(&std::fs::read(asset("lights.gltf")).unwrap()).unwrap();
+    let mut d: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(asset("lights.gltf")).unwrap()).unwrap();
     d["scenes"][0]["nodes"] = serde_json::json!([0, 1]);
     d["materials"][0]["emissiveFactor"] = serde_json::json!([1.0, 0.5, 0.25]);
-    d["materials"][0]["extensions"] = serde_json::json!({"KHR_materials_emissive_strength": {"emissiveStrength": 4.0}});
-    d["extensionsUsed"] = serde_json::json!(["KHR_lights_punctual", "KHR_materials_emissive_strength"]);
+    d["materials"][0]["extensions"] =
+        serde_json::json!({"KHR_materials_emissive_strength": {"emissiveStrength": 4.0}});
+    d["extensionsUsed"] =
+        serde_json::json!(["KHR_lights_punctual", "KHR_materials_emissive_strength"]);
     let p = write_json(&dir, "emissive.gltf", &d);
-    let (img, _) = render(&p, &dir, "out", &["--width", "8", "--height", "8", "--spp", "4"]);
+    let (img, _) = render(
+        &p,
+        &dir,
+        "out",
+        &["--width", "8", "--height", "8", "--spp", "4"],
+    );
     for px in &img.data {
         for (c, want) in [4.0f32, 2.0, 1.0].iter().enumerate() {
             assert!((px[c] - want).abs() < 1e-4 * want, "{px:?}");
@@ -525,11 +787,13 @@ fn emissive_strength_scales_emitted_radiance() {
 #[test]
 fn alpha_blend_is_opacity() {
     let dir = scratch("gltf_alpha");
-    let mut d: serde_json::Value = serde_json::from_slice(&std::fs::read(asset("lights.gltf")).unwrap()).unwrap();
+    let mut d: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(asset("lights.gltf")).unwrap()).unwrap();
     d["scenes"][0]["nodes"] = serde_json::json!([0, 1]);
     let opaque = write_json(&dir, "opaque.gltf", &d);
     d["materials"][0]["alphaMode"] = "BLEND".into();
-    d["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = serde_json::json!([0.6, 0.6, 0.6, 0.25]);
+    d["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] =
+        serde_json::json!([0.6, 0.6, 0.6, 0.25]);
     let blend = write_json(&dir, "blend.gltf", &d);
     let args = ["--width", "16", "--height", "16", "--spp", "256"];
     let (a, va) = render(&opaque, &dir, "opaque", &args);
@@ -539,8 +803,17 @@ fn alpha_blend_is_opacity() {
     for c in 0..3 {
         let want = 0.25 * ma[c] + 0.75;
         let se = ((0.25 * sa[c]).powi(2) + sb[c].powi(2)).sqrt();
-        assert!((mb[c] - want).abs() <= 4.5 * se + 1e-3 * want, "channel {c}: blend mean {} vs 0.25 x {} + 0.75 = {want} (se {se})", mb[c], ma[c]);
-        assert!(ma[c] < 0.9, "the opaque plane must differ from the environment: {}", ma[c]);
+        assert!(
+            (mb[c] - want).abs() <= 4.5 * se + 1e-3 * want,
+            "channel {c}: blend mean {} vs 0.25 x {} + 0.75 = {want} (se {se})",
+            mb[c],
+            ma[c]
+        );
+        assert!(
+            ma[c] < 0.9,
+            "the opaque plane must differ from the environment: {}",
+            ma[c]
+        );
     }
 }
 
@@ -560,40 +833,87 @@ fn alpha_blend_is_opacity() {
 #[test]
 fn emissive_texture_multiplies_factor() {
     let dir = scratch("gltf_emissive_texture");
-    let mut d: serde_json::Value = serde_json::from_slice(&std::fs::read(asset("textures-flat.gltf")).unwrap()).unwrap();
+    let mut d: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(asset("textures-flat.gltf")).unwrap()).unwrap();
     let factor = [1.0f64, 0.5, 2.0];
     let strength = 3.0;
     d["materials"][0]["emissiveTexture"] = serde_json::json!({"index": 0});
     d["materials"][0]["emissiveFactor"] = serde_json::json!(factor);
-    d["materials"][0]["extensions"] = serde_json::json!({"KHR_materials_emissive_strength": {"emissiveStrength": strength}});
+    d["materials"][0]["extensions"] =
+        serde_json::json!({"KHR_materials_emissive_strength": {"emissiveStrength": strength}});
     let used = d["extensionsUsed"].as_array().cloned().unwrap_or_default();
-    let mut used: Vec<serde_json::Value> = used.into_iter().filter(|e| e != "KHR_materials_emissive_strength").collect();
+    let mut used: Vec<serde_json::Value> = used
+        .into_iter()
+        .filter(|e| e != "KHR_materials_emissive_strength")
+        .collect();
     used.push("KHR_materials_emissive_strength".into());
     d["extensionsUsed"] = serde_json::Value::Array(used);
     let p = write_json(&dir, "emissive-texture.gltf", &d);
-    let args = ["--width", "16", "--height", "16", "--spp", "4", "--max-depth", "3"];
+    let args = [
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "4",
+        "--max-depth",
+        "3",
+    ];
     let (img, _) = render(&p, &dir, "rgb", &args);
-    let srgb = |c: f64| if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) };
-    let want = |texel: [f64; 3]| -> [f64; 3] { std::array::from_fn(|k| factor[k] * strength * srgb(texel[k] / 255.0)) };
+    let srgb = |c: f64| {
+        if c <= 0.04045 {
+            c / 12.92
+        } else {
+            ((c + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let want = |texel: [f64; 3]| -> [f64; 3] {
+        std::array::from_fn(|k| factor[k] * strength * srgb(texel[k] / 255.0))
+    };
     for (rows, texel) in [(0..7, [20.0, 60.0, 240.0]), (9..16, [200.0, 100.0, 50.0])] {
         let w = want(texel);
         for y in rows {
             for x in 0..16 {
                 let px = img.get(x, y);
                 for k in 0..3 {
-                    assert!((px[k] as f64 - w[k]).abs() <= 1e-4 * w[k], "pixel ({x}, {y}) channel {k}: {} vs factor x strength x texel {}", px[k], w[k]);
+                    assert!(
+                        (px[k] as f64 - w[k]).abs() <= 1e-4 * w[k],
+                        "pixel ({x}, {y}) channel {k}: {} vs factor x strength x texel {}",
+                        px[k],
+                        w[k]
+                    );
                 }
             }
         }
     }
-    let args_spectral = ["--width", "16", "--height", "16", "--spp", "16", "--max-depth", "3", "--mode", "spectral"];
+    let args_spectral = [
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "16",
+        "--max-depth",
+        "3",
+        "--mode",
+        "spectral",
+    ];
     let (spec, _) = render(&p, &dir, "spectral", &args_spectral);
     for (rows, texel) in [(0..7, [20.0, 60.0, 240.0]), (9..16, [200.0, 100.0, 50.0])] {
         let w = want(texel);
         for k in 0..3 {
-            let mean: f64 = rows.clone().flat_map(|y| (0..16).map(move |x| (x, y))).map(|(x, y)| spec.get(x, y)[k] as f64).sum::<f64>() / (7.0 * 16.0);
+            let mean: f64 = rows
+                .clone()
+                .flat_map(|y| (0..16).map(move |x| (x, y)))
+                .map(|(x, y)| spec.get(x, y)[k] as f64)
+                .sum::<f64>()
+                / (7.0 * 16.0);
             let scale = w.iter().cloned().fold(0.0, f64::max);
-            assert!((mean - w[k]).abs() < 0.03 * scale, "spectral rows {rows:?} channel {k}: {mean} vs {} (largest channel {scale})", w[k]);
+            assert!(
+                (mean - w[k]).abs() < 0.03 * scale,
+                "spectral rows {rows:?} channel {k}: {mean} vs {} (largest channel {scale})",
+                w[k]
+            );
         }
     }
 }

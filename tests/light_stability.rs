@@ -25,12 +25,20 @@ fn run(name: &str, body: &str) -> (pt_image::Image, String) {
     let path = dir.join("scene.xml");
     std::fs::write(&path, xml).unwrap();
     let out = dir.join("out.exr");
-    let o = pt(&["render", path.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    let o = pt(&[
+        "render",
+        path.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
     let stderr = String::from_utf8_lossy(&o.stderr).into_owned();
     assert!(o.status.success(), "{name}: {stderr}");
     let (img, _) = pt_image::read_exr(&out).unwrap();
     assert_eq!(img.nonfinite_pixels(), 0, "{name}: NaN/Inf pixels");
-    assert!(!stderr.contains("NaN or infinite"), "{name}: non-finite samples: {stderr}");
+    assert!(
+        !stderr.contains("NaN or infinite"),
+        "{name}: non-finite samples: {stderr}"
+    );
     (img, stderr)
 }
 
@@ -38,9 +46,15 @@ fn run(name: &str, body: &str) -> (pt_image::Image, String) {
 fn point_light_touching_the_floor() {
     // Exactly on the surface: the floor's own points at distance 0 have no direction to the
     // light (skipped), the rest is lit at grazing angles, i.e. almost black but finite.
-    let (img, _) = run("point_on_surface", r#"<emitter type="point"><point name="position" value="0, 0, 0"/><rgb name="intensity" value="5"/></emitter>"#);
+    let (img, _) = run(
+        "point_on_surface",
+        r#"<emitter type="point"><point name="position" value="0, 0, 0"/><rgb name="intensity" value="5"/></emitter>"#,
+    );
     let m = img.mean();
-    assert!(m[0] >= 0.0 && m[0] < 1e-3, "a light in the plane lights it only at grazing incidence: {m:?}");
+    assert!(
+        m[0] >= 0.0 && m[0] < 1e-3,
+        "a light in the plane lights it only at grazing incidence: {m:?}"
+    );
 }
 
 #[test]
@@ -55,9 +69,15 @@ fn area_light_of_near_zero_size() {
     // Area 4e-12 m^2, so on-axis intensity L A = 4 W/sr; the area light falls off with the
     // cosine of the emission angle, which a point light does not: compare only the image mean
     // loosely (25%), the point of the test is finiteness at this scale.
-    let (point, _) = run("tiny_point", r#"<emitter type="point"><point name="position" value="0, 1, 0"/><rgb name="intensity" value="4"/></emitter>"#);
+    let (point, _) = run(
+        "tiny_point",
+        r#"<emitter type="point"><point name="position" value="0, 1, 0"/><rgb name="intensity" value="4"/></emitter>"#,
+    );
     let (a, b) = (tiny.mean()[1], point.mean()[1]);
-    assert!(a > 0.0 && a < b && a > 0.5 * b, "tiny area light {a} vs point light {b}");
+    assert!(
+        a > 0.0 && a < b && a > 0.5 * b,
+        "tiny area light {a} vs point light {b}"
+    );
 }
 
 #[test]

@@ -74,7 +74,11 @@ fn check(name: &str, light: &str, radiance: impl Fn(f64, f64) -> [f64; 3], backg
                     let u = (px as f64 + (i as f64 + 0.5) / n as f64) / W as f64;
                     let v = (py as f64 + (j as f64 + 0.5) / n as f64) / W as f64;
                     let (x, z) = plane_point(u, v);
-                    let l = if x.abs() <= 3.0 && z.abs() <= 3.0 { radiance(x, z) } else { background };
+                    let l = if x.abs() <= 3.0 && z.abs() <= 3.0 {
+                        radiance(x, z)
+                    } else {
+                        background
+                    };
                     for c in 0..3 {
                         want[c] += l[c] / (n * n) as f64;
                         want_sq[c] += l[c] * l[c] / (n * n) as f64;
@@ -85,7 +89,8 @@ fn check(name: &str, light: &str, radiance: impl Fn(f64, f64) -> [f64; 3], backg
             let sd = var.get(px, py);
             for c in 0..3 {
                 let footprint_var = (want_sq[c] - want[c] * want[c]).max(0.0) / SPP;
-                let tol = 4.5 * (sd[c] as f64).max(footprint_var).sqrt() + 2e-4 * want[c].abs() + 1e-7;
+                let tol =
+                    4.5 * (sd[c] as f64).max(footprint_var).sqrt() + 2e-4 * want[c].abs() + 1e-7;
                 assert!(
                     (got[c] as f64 - want[c]).abs() <= tol,
                     "{name}: pixel ({px}, {py}) channel {c}: got {} want {} (tol {tol:.3e})",
@@ -97,7 +102,11 @@ fn check(name: &str, light: &str, radiance: impl Fn(f64, f64) -> [f64; 3], backg
             }
         }
     }
-    assert!((sum_got / sum_want - 1.0).abs() < 2e-3, "{name}: mean ratio {}", sum_got / sum_want);
+    assert!(
+        (sum_got / sum_want - 1.0).abs() < 2e-3,
+        "{name}: mean ratio {}",
+        sum_got / sum_want
+    );
 }
 
 #[test]
@@ -105,11 +114,19 @@ fn point_light_inverse_square_and_cosine() {
     let (lx, lh, lz, i) = (0.7, 1.5, -0.4, 5.0);
     check(
         "point",
-        &format!(r#"<emitter type="point"><point name="position" value="{lx}, {lh}, {lz}"/><rgb name="intensity" value="{i}, {}, {}"/></emitter>"#, i * 0.5, i * 0.25),
+        &format!(
+            r#"<emitter type="point"><point name="position" value="{lx}, {lh}, {lz}"/><rgb name="intensity" value="{i}, {}, {}"/></emitter>"#,
+            i * 0.5,
+            i * 0.25
+        ),
         |x, z| {
             let d2 = (x - lx).powi(2) + lh * lh + (z - lz).powi(2);
             let e = i * lh / d2.powf(1.5); // I h / (h^2 + x^2)^(3/2)
-            [RHO / std::f64::consts::PI * e, RHO / std::f64::consts::PI * e * 0.5, RHO / std::f64::consts::PI * e * 0.25]
+            [
+                RHO / std::f64::consts::PI * e,
+                RHO / std::f64::consts::PI * e * 0.5,
+                RHO / std::f64::consts::PI * e * 0.25,
+            ]
         },
         [0.0; 3],
     );
@@ -128,7 +145,13 @@ fn spot_light_falloff() {
         |x, z| {
             let d2 = x * x + h * h + z * z;
             let angle = (h / d2.sqrt()).acos().to_degrees();
-            let fall = if angle <= beam { 1.0 } else if angle >= cutoff { 0.0 } else { (cutoff - angle) / (cutoff - beam) };
+            let fall = if angle <= beam {
+                1.0
+            } else if angle >= cutoff {
+                0.0
+            } else {
+                (cutoff - angle) / (cutoff - beam)
+            };
             let e = i * fall * h / d2.powf(1.5);
             [RHO / std::f64::consts::PI * e; 3]
         },
@@ -143,7 +166,9 @@ fn directional_and_sun_give_e_cos_theta() {
     let want = RHO / std::f64::consts::PI * e0 * 0.8;
     check(
         "directional",
-        &format!(r#"<emitter type="directional"><vector name="direction" value="0.6, -0.8, 0"/><rgb name="irradiance" value="{e0}"/></emitter>"#),
+        &format!(
+            r#"<emitter type="directional"><vector name="direction" value="0.6, -0.8, 0"/><rgb name="irradiance" value="{e0}"/></emitter>"#
+        ),
         |_, _| [want; 3],
         [0.0; 3],
     );
@@ -151,7 +176,9 @@ fn directional_and_sun_give_e_cos_theta() {
     // makes a cone wide enough that a wrong cone pdf would show.
     check(
         "sun",
-        &format!(r#"<emitter type="sun"><vector name="direction" value="0.6, -0.8, 0"/><rgb name="irradiance" value="{e0}"/><float name="angular_diameter" value="5"/></emitter>"#),
+        &format!(
+            r#"<emitter type="sun"><vector name="direction" value="0.6, -0.8, 0"/><rgb name="irradiance" value="{e0}"/><float name="angular_diameter" value="5"/></emitter>"#
+        ),
         |_, _| [want; 3],
         [0.0; 3],
     );
@@ -182,24 +209,49 @@ fn envmap_light_sampling_agrees_with_bsdf_sampling() {
         for x in 0..ew {
             let (u, v) = ((x as f32 + 0.5) / ew as f32, (y as f32 + 0.5) / eh as f32);
             let spot = (-((u - 0.3).powi(2) + (v - 0.3).powi(2)) / 0.002).exp() * 40.0;
-            env.set(x, y, [0.2 + spot + 0.5 * (1.0 - v), 0.3 + 0.5 * spot, 0.4 * u + 0.1]);
+            env.set(
+                x,
+                y,
+                [
+                    0.2 + spot + 0.5 * (1.0 - v),
+                    0.3 + 0.5 * spot,
+                    0.4 * u + 0.1,
+                ],
+            );
         }
     }
     pt_image::write_exr(&dir.join("sky.exr"), &env, &Default::default()).unwrap();
     let path = dir.join("scene.xml");
     let light = r#"<emitter type="envmap"><string name="filename" value="sky.exr"/><transform name="to_world"><rotate y="1" angle="30"/></transform></emitter>"#;
     std::fs::write(&path, scene(light, 2)).unwrap();
-    let (a, va) = render(&path, &dir, "light", &["--strategy", "light", "--spp", "256"]);
+    let (a, va) = render(
+        &path,
+        &dir,
+        "light",
+        &["--strategy", "light", "--spp", "256"],
+    );
     let (b, vb) = render(&path, &dir, "bsdf", &["--strategy", "bsdf", "--spp", "256"]);
     let (c, vc) = render(&path, &dir, "mis", &["--spp", "256"]);
-    for (x, vx, y, vy, what) in [(&a, &va, &b, &vb, "light vs bsdf"), (&c, &vc, &b, &vb, "mis vs bsdf")] {
+    for (x, vx, y, vy, what) in [
+        (&a, &va, &b, &vb, "light vs bsdf"),
+        (&c, &vc, &b, &vb, "mis vs bsdf"),
+    ] {
         let z = pt_image::stats::block_ztest(x, vx, y, vy, 8, 0.01).unwrap();
-        assert!(z.pass, "{what}: max |z| {:.2}, {} of {} blocks fail, chi2 p {:.3}", z.max_abs_z, z.failed, z.tests, z.chi2_p);
+        assert!(
+            z.pass,
+            "{what}: max |z| {:.2}, {} of {} blocks fail, chi2 p {:.3}",
+            z.max_abs_z, z.failed, z.tests, z.chi2_p
+        );
         let (mx, sx) = mean_and_stderr(x, vx);
         let (my, sy) = mean_and_stderr(y, vy);
         for ch in 0..3 {
             let zz = (mx[ch] - my[ch]) / sx[ch].hypot(sy[ch]);
-            assert!(zz.abs() < 4.5, "{what} channel {ch}: means {} vs {} (z {zz:.2})", mx[ch], my[ch]);
+            assert!(
+                zz.abs() < 4.5,
+                "{what} channel {ch}: means {} vs {} (z {zz:.2})",
+                mx[ch],
+                my[ch]
+            );
         }
     }
 }

@@ -57,9 +57,21 @@ fn check_mean(name: &str, xml: &str, want: [f64; 3]) {
     let (m, se) = mean_and_stderr(&img, &var);
     for c in 0..3 {
         let z = (m[c] - want[c]).abs() / se[c].max(1e-12);
-        eprintln!("{name} channel {c}: got {:.5} want {:.5} (stderr {:.2e}, z {z:.2})", m[c], want[c], se[c]);
-        assert!(se[c] < 0.0025 * want[c], "{name}: standard error {} too large to detect a 2% bias", se[c]);
-        assert!((m[c] - want[c]).abs() <= 4.5 * se[c] + 2e-4, "{name} channel {c}: {} vs closed form {} (z = {z:.1})", m[c], want[c]);
+        eprintln!(
+            "{name} channel {c}: got {:.5} want {:.5} (stderr {:.2e}, z {z:.2})",
+            m[c], want[c], se[c]
+        );
+        assert!(
+            se[c] < 0.0025 * want[c],
+            "{name}: standard error {} too large to detect a 2% bias",
+            se[c]
+        );
+        assert!(
+            (m[c] - want[c]).abs() <= 4.5 * se[c] + 2e-4,
+            "{name} channel {c}: {} vs closed form {} (z = {z:.1})",
+            m[c],
+            want[c]
+        );
     }
 }
 

@@ -47,7 +47,9 @@ const ANISOTROPIC: &str = r#"<bsdf type="roughconductor" id="w"><float name="alp
 fn unwelded(desc: &SceneDesc) -> SceneDesc {
     let mut d = desc.clone();
     for s in &mut d.shapes {
-        let Geometry::Mesh(m) = &mut s.geometry else { continue };
+        let Geometry::Mesh(m) = &mut s.geometry else {
+            continue;
+        };
         let order: Vec<u32> = m.indices.iter().flatten().copied().collect();
         fn pick<T: Copy>(v: &[T], order: &[u32]) -> Vec<T> {
             order.iter().map(|&i| v[i as usize]).collect()
@@ -56,14 +58,22 @@ fn unwelded(desc: &SceneDesc) -> SceneDesc {
         m.uvs = m.uvs.as_deref().map(|v| pick(v, &order));
         m.normals = m.normals.as_deref().map(|v| pick(v, &order));
         m.tangents = m.tangents.as_deref().map(|v| pick(v, &order));
-        m.indices = (0..m.indices.len() as u32).map(|k| [3 * k, 3 * k + 1, 3 * k + 2]).collect();
+        m.indices = (0..m.indices.len() as u32)
+            .map(|k| [3 * k, 3 * k + 1, 3 * k + 2])
+            .collect();
     }
     d
 }
 
 #[test]
 fn parallelograms_hit_like_their_triangles() {
-    let desc = pt_scene::load_str(&XML.replace("BSDF", ANISOTROPIC), Path::new("parallelograms.xml"), Path::new("."), &[]).unwrap();
+    let desc = pt_scene::load_str(
+        &XML.replace("BSDF", ANISOTROPIC),
+        Path::new("parallelograms.xml"),
+        Path::new("."),
+        &[],
+    )
+    .unwrap();
     let merged = Scene::build(&desc, BvhKind::default(), LightSelection::Power).unwrap();
     let split = Scene::build(&unwelded(&desc), BvhKind::default(), LightSelection::Power).unwrap();
     // 3 x 2 rectangle triangles, 2 x 12 cube triangles; the disk's fan stays triangles.
@@ -93,18 +103,35 @@ fn parallelograms_hit_like_their_triangles() {
         match (merged.intersect(&ray), split.intersect(&ray)) {
             (Some(a), Some(b)) => {
                 hits += 1;
-                let close = |x: f32, y: f32, tol: f32| (x - y).abs() <= tol * (1.0 + x.abs().max(y.abs()));
-                let near = |x: Vec3, y: Vec3, tol: f32| (x - y).abs().max_element() <= tol * (1.0 + x.abs().max_element().max(y.abs().max_element()));
+                let close =
+                    |x: f32, y: f32, tol: f32| (x - y).abs() <= tol * (1.0 + x.abs().max(y.abs()));
+                let near = |x: Vec3, y: Vec3, tol: f32| {
+                    (x - y).abs().max_element()
+                        <= tol * (1.0 + x.abs().max_element().max(y.abs().max_element()))
+                };
                 if a.shape != b.shape || !close(a.t, b.t, 1e-5) {
                     // Where two shapes meet (a cube's edge against the floor's) either may win.
-                    assert!(close(a.t, b.t, 1e-4), "ray {o} {d}: shape {} t {} vs shape {} t {}", a.shape, a.t, b.shape, b.t);
+                    assert!(
+                        close(a.t, b.t, 1e-4),
+                        "ray {o} {d}: shape {} t {} vs shape {} t {}",
+                        a.shape,
+                        a.t,
+                        b.shape,
+                        b.t
+                    );
                     edge += 1;
                     continue;
                 }
                 assert!(near(a.p, b.p, 1e-5), "p {} vs {}", a.p, b.p);
                 assert!(near(a.ng, b.ng, 1e-5), "ng {} vs {}", a.ng, b.ng);
                 assert!(near(a.ns, b.ns, 1e-5), "ns {} vs {}", a.ns, b.ns);
-                assert!((a.uv - b.uv).abs().max_element() <= 1e-5, "uv {} vs {} at {}", a.uv, b.uv, a.p);
+                assert!(
+                    (a.uv - b.uv).abs().max_element() <= 1e-5,
+                    "uv {} vs {} at {}",
+                    a.uv,
+                    b.uv,
+                    a.p
+                );
                 assert!(near(a.dpdu, b.dpdu, 1e-4), "dpdu {} vs {}", a.dpdu, b.dpdu);
             }
             (None, None) => {}
@@ -115,10 +142,16 @@ fn parallelograms_hit_like_their_triangles() {
                 let nudged = |e: Vec3| other.intersect(&Ray::new(o + e, d)).is_some();
                 let shift = 1e-4;
                 assert!(
-                    [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z].iter().any(|&e| nudged(e * shift)),
+                    [Vec3::X, Vec3::Y, Vec3::Z, -Vec3::X, -Vec3::Y, -Vec3::Z]
+                        .iter()
+                        .any(|&e| nudged(e * shift)),
                     "ray {o} {d}: hit at {} only by {}",
                     h.p,
-                    if a.is_some() { "the parallelograms" } else { "the triangles" }
+                    if a.is_some() {
+                        "the parallelograms"
+                    } else {
+                        "the triangles"
+                    }
                 );
                 edge += 1;
             }
@@ -131,11 +164,31 @@ fn parallelograms_hit_like_their_triangles() {
 
     // With a diffuse material nothing reads texture coordinates: hits skip them and dp/du.
     let diffuse = XML.replace("BSDF", r#"<bsdf type="diffuse" id="w"/>"#);
-    let desc = pt_scene::load_str(&diffuse, Path::new("parallelograms.xml"), Path::new("."), &[]).unwrap();
+    let desc = pt_scene::load_str(
+        &diffuse,
+        Path::new("parallelograms.xml"),
+        Path::new("."),
+        &[],
+    )
+    .unwrap();
     let plain = Scene::build(&desc, BvhKind::default(), LightSelection::Power).unwrap();
-    let floor = plain.intersect(&Ray::new(Vec3::new(0.9, 0.0, 0.9), Vec3::new(0.0, -1.0, 0.0))).expect("the floor");
-    assert!((floor.p.y + 1.0).abs() < 1e-5 && floor.dpdu == Vec3::ZERO, "{:?}", (floor.p, floor.dpdu));
+    let floor = plain
+        .intersect(&Ray::new(
+            Vec3::new(0.9, 0.0, 0.9),
+            Vec3::new(0.0, -1.0, 0.0),
+        ))
+        .expect("the floor");
+    assert!(
+        (floor.p.y + 1.0).abs() < 1e-5 && floor.dpdu == Vec3::ZERO,
+        "{:?}",
+        (floor.p, floor.dpdu)
+    );
     // The anisotropic material keeps them.
-    let floor = merged.intersect(&Ray::new(Vec3::new(0.9, 0.0, 0.9), Vec3::new(0.0, -1.0, 0.0))).expect("the floor");
+    let floor = merged
+        .intersect(&Ray::new(
+            Vec3::new(0.9, 0.0, 0.9),
+            Vec3::new(0.0, -1.0, 0.0),
+        ))
+        .expect("the floor");
     assert_ne!(floor.dpdu, Vec3::ZERO);
 }

@@ -48,9 +48,17 @@ fn phosphorescent_plane_decays_as_the_closed_form() {
         </emitter>
         </scene>"#
     );
-    let desc = pt_scene::load_str(&xml, Path::new("phosphor-test.xml"), Path::new("."), &[]).expect("scene loads");
-    let (a, e, band) = (Spectrum::parse_mitsuba(ABSORPTION).unwrap(), Spectrum::parse_mitsuba(EMISSION).unwrap(), Spectrum::parse_mitsuba(BAND).unwrap());
-    let phi = 0.8 * quad(360.0, 830.0, |l| a.eval(l as f32) as f64 * band.eval(l as f32) as f64 * l);
+    let desc = pt_scene::load_str(&xml, Path::new("phosphor-test.xml"), Path::new("."), &[])
+        .expect("scene loads");
+    let (a, e, band) = (
+        Spectrum::parse_mitsuba(ABSORPTION).unwrap(),
+        Spectrum::parse_mitsuba(EMISSION).unwrap(),
+        Spectrum::parse_mitsuba(BAND).unwrap(),
+    );
+    let phi = 0.8
+        * quad(360.0, 830.0, |l| {
+            a.eval(l as f32) as f64 * band.eval(l as f32) as f64 * l
+        });
     let e_area = quad(360.0, 830.0, |l| e.eval(l as f32) as f64);
     let lam = [500.0f32, 520.0, 540.0, 430.0];
     let ray = Ray::new(Vec3::new(0.3, -0.2, 1.0), Vec3::new(0.0, 0.0, -1.0));
@@ -61,27 +69,47 @@ fn phosphorescent_plane_decays_as_the_closed_form() {
         assert!(glow.lights.is_empty());
         let scene = Scene::build(&glow, BvhKind::default(), LightSelection::Power).expect("builds");
         let w = SampledWavelengths::sample_uniform(0.0).with_lambda(lam.into());
-        let v = li(&scene, ray, &settings, &mut Sampler::new(1, 0, 0), &w).0.to_array();
+        let v = li(&scene, ray, &settings, &mut Sampler::new(1, 0, 0), &w)
+            .0
+            .to_array();
         for i in 0..4 {
             let lo = lam[i] as f64;
-            let expect = 0.5 * (-(t as f64) / 2.0).exp() * e.eval(lam[i]) as f64 / e_area / (std::f64::consts::PI * lo) * phi;
+            let expect = 0.5 * (-(t as f64) / 2.0).exp() * e.eval(lam[i]) as f64
+                / e_area
+                / (std::f64::consts::PI * lo)
+                * phi;
             println!("t = {t} s, {lo} nm: {} (expected {expect})", v[i]);
             if expect == 0.0 {
                 // 430 nm: outside the emission band; the light is off, so nothing at all.
                 assert_eq!(v[i], 0.0, "{lo} nm");
             } else {
-                assert!((v[i] as f64 / expect - 1.0).abs() < 5e-3, "t = {t} s, {lo} nm: {} vs {expect}", v[i]);
+                assert!(
+                    (v[i] as f64 / expect - 1.0).abs() < 5e-3,
+                    "t = {t} s, {lo} nm: {} vs {expect}",
+                    v[i]
+                );
             }
         }
         if let Some(p) = previous {
             let r = v[1] as f64 / p;
-            assert!((r - (-1.5f64).exp()).abs() < 1e-4, "decay over 3 s with tau 2 s: {r}");
+            assert!(
+                (r - (-1.5f64).exp()).abs() < 1e-4,
+                "decay over 3 s with tau 2 s: {r}"
+            );
         }
         previous = Some(v[1] as f64);
     }
     // A scene without a phosphor has no afterglow to show: a clear error, not a black image.
-    let plain = pt_scene::load_str(r#"<scene version="3.0.0"><shape type="rectangle"/></scene>"#, Path::new("x.xml"), Path::new("."), &[]).unwrap();
-    let e = pt_render::phosphorescence::afterglow(&plain, 1.0, 5).err().expect("error");
+    let plain = pt_scene::load_str(
+        r#"<scene version="3.0.0"><shape type="rectangle"/></scene>"#,
+        Path::new("x.xml"),
+        Path::new("."),
+        &[],
+    )
+    .unwrap();
+    let e = pt_render::phosphorescence::afterglow(&plain, 1.0, 5)
+        .err()
+        .expect("error");
     assert!(e.message.contains("phosphorescent"), "{e}");
     assert!(pt_render::phosphorescence::afterglow(&desc, -1.0, 5).is_err());
 }

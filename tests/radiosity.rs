@@ -11,7 +11,18 @@ use common::*;
 fn radiosity_cornell_box_from_the_command_line() {
     let dir = scratch("radiosity_cli");
     let scene = repo().join("scenes/cornell-box.xml");
-    let args = ["--integrator", "radiosity", "--patch-size", "0.25", "--rays-per-patch", "256", "--spp", "4", "--radiosity-solver", "progressive"];
+    let args = [
+        "--integrator",
+        "radiosity",
+        "--patch-size",
+        "0.25",
+        "--rays-per-patch",
+        "256",
+        "--spp",
+        "4",
+        "--radiosity-solver",
+        "progressive",
+    ];
     let (img, _) = render(&scene, &dir, "rad", &args);
     let (reference, _) = reference("cornell-box");
     let m = pt_image::metrics::compare(&img, &reference).unwrap();
@@ -35,17 +46,45 @@ fn radiosity_integrator_from_the_scene_file_and_bad_options() {
     let path = dir.join("rad.xml");
     std::fs::write(&path, &xml).unwrap();
     let out = dir.join("rad.exr");
-    let o = pt(&["render", path.to_str().unwrap(), "-o", out.to_str().unwrap(), "--spp", "1", "--width", "32", "--height", "32"]);
+    let o = pt(&[
+        "render",
+        path.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+        "--spp",
+        "1",
+        "--width",
+        "32",
+        "--height",
+        "32",
+    ]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{stderr}");
     assert!(stderr.contains("radiosity:"), "{stderr}");
     let (_, meta) = pt_image::read_exr(&out).unwrap();
-    assert!(meta.extra.iter().any(|(k, v)| k == "integrator" && v == "radiosity"), "{:?}", meta.extra);
+    assert!(
+        meta.extra
+            .iter()
+            .any(|(k, v)| k == "integrator" && v == "radiosity"),
+        "{:?}",
+        meta.extra
+    );
     // A bad solver name is an input error naming the integrator element.
     let out2 = dir.join("bad.exr");
-    let o = pt(&["render", path.to_str().unwrap(), "-o", out2.to_str().unwrap(), "--radiosity-solver", "newton"]);
+    let o = pt(&[
+        "render",
+        path.to_str().unwrap(),
+        "-o",
+        out2.to_str().unwrap(),
+        "--radiosity-solver",
+        "newton",
+    ]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("integrator"), "{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("integrator"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     assert!(!out2.exists());
 }
 
@@ -63,13 +102,29 @@ fn radiosity_fails_on_glossy_surfaces_by_a_bias_floor() {
     let (reference, _) = reference("cornell-glass");
     let mut errs = Vec::new();
     for h in ["0.35", "0.18"] {
-        let args = ["--integrator", "radiosity", "--patch-size", h, "--rays-per-patch", "256", "--spp", "4"];
+        let args = [
+            "--integrator",
+            "radiosity",
+            "--patch-size",
+            h,
+            "--rays-per-patch",
+            "256",
+            "--spp",
+            "4",
+        ];
         let (img, _) = render(&scene, &dir, &format!("glass_{h}"), &args);
-        errs.push(pt_image::metrics::compare(&img, &reference).unwrap().relmse_all);
+        errs.push(
+            pt_image::metrics::compare(&img, &reference)
+                .unwrap()
+                .relmse_all,
+        );
     }
     eprintln!("radiosity on cornell-glass: relMSE {errs:?}");
     assert!(errs.iter().all(|&e| e > 0.02), "{errs:?}");
-    assert!((errs[0] / errs[1] - 1.0).abs() < 0.1, "finer patches should not help: {errs:?}");
+    assert!(
+        (errs[0] / errs[1] - 1.0).abs() < 0.1,
+        "finer patches should not help: {errs:?}"
+    );
 }
 
 /// Spectral radiosity: a scene with tabulated spectra is solved per wavelength bin (24 bins over
@@ -83,7 +138,16 @@ fn radiosity_fails_on_glossy_surfaces_by_a_bias_floor() {
 fn spectral_radiosity_matches_the_spectral_reference_on_the_walls() {
     let dir = scratch("radiosity_spectral");
     let scene = repo().join("scenes/cornell-spectral.xml");
-    let args = ["--integrator", "radiosity", "--patch-size", "0.18", "--rays-per-patch", "512", "--spp", "4"];
+    let args = [
+        "--integrator",
+        "radiosity",
+        "--patch-size",
+        "0.18",
+        "--rays-per-patch",
+        "512",
+        "--spp",
+        "4",
+    ];
     let (img, _) = render(&scene, &dir, "spectral", &args);
     let (reference, _) = reference("cornell-spectral");
     let (mut a, mut r) = ([0.0f64; 3], [0.0f64; 3]);

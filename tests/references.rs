@@ -25,9 +25,18 @@ const SPP: &str = "1024";
 
 fn check(scene: String) -> Result<(), Failed> {
     let dir = scratch(&format!("ref_{scene}"));
-    let (img, var) = render(&repo().join("scenes").join(format!("{scene}.xml")), &dir, &scene, &["--spp", SPP]);
+    let (img, var) = render(
+        &repo().join("scenes").join(format!("{scene}.xml")),
+        &dir,
+        &scene,
+        &["--spp", SPP],
+    );
     if img.nonfinite_pixels() > 0 {
-        return Err(format!("{scene}: {} pixels are NaN or infinite", img.nonfinite_pixels()).into());
+        return Err(format!(
+            "{scene}: {} pixels are NaN or infinite",
+            img.nonfinite_pixels()
+        )
+        .into());
     }
     let v = judge_against_reference(&img, &var, &scene, "1024spp");
     if v.agrees() {

@@ -24,26 +24,68 @@ fn asset(name: &str) -> PathBuf {
 #[test]
 fn base_colour_textures_render_in_spectral_mode() {
     let dir = scratch("spectral_textures");
-    let spectral = ["--width", "16", "--height", "16", "--spp", "16", "--seed", "3", "--max-depth", "3", "--mode", "spectral"];
+    let spectral = [
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "16",
+        "--seed",
+        "3",
+        "--max-depth",
+        "3",
+        "--mode",
+        "spectral",
+    ];
     let (a, _) = render(&asset("textures.gltf"), &dir, "rotated", &spectral);
     let (b, _) = render(&asset("textures-flat.gltf"), &dir, "flat", &spectral);
     for (i, (p, q)) in a.data.iter().zip(&b.data).enumerate() {
         for c in 0..3 {
-            assert!((p[c] - q[c]).abs() <= 1e-4 * q[c].abs().max(1e-3), "pixel {i} channel {c}: transformed {} vs flat {}", p[c], q[c]);
+            assert!(
+                (p[c] - q[c]).abs() <= 1e-4 * q[c].abs().max(1e-3),
+                "pixel {i} channel {c}: transformed {} vs flat {}",
+                p[c],
+                q[c]
+            );
         }
     }
-    let mut d: serde_json::Value = serde_json::from_slice(&std::fs::read(asset("textures-flat.gltf")).unwrap()).unwrap();
-    d["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = serde_json::json!([1.0, 1.0, 1.0, 1.0]);
+    let mut d: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(asset("textures-flat.gltf")).unwrap()).unwrap();
+    d["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] =
+        serde_json::json!([1.0, 1.0, 1.0, 1.0]);
     let white = dir.join("white-factor.gltf");
     std::fs::write(&white, serde_json::to_vec_pretty(&d).unwrap()).unwrap();
-    let args = |mode: &'static str| ["--width", "32", "--height", "32", "--spp", "256", "--max-depth", "2", "--mode", mode];
+    let args = |mode: &'static str| {
+        [
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "--spp",
+            "256",
+            "--max-depth",
+            "2",
+            "--mode",
+            mode,
+        ]
+    };
     let (s, sv) = render(&white, &dir, "spectral", &args("spectral"));
     let (r, rv) = render(&white, &dir, "rgb", &args("rgb"));
     let ((ms, ss), (mr, sr)) = (mean_and_stderr(&s, &sv), mean_and_stderr(&r, &rv));
     eprintln!("spectral {ms:?} +- {ss:?}, rgb {mr:?} +- {sr:?}");
     for c in 0..3 {
         let tol = 4.0 * (ss[c] * ss[c] + sr[c] * sr[c]).sqrt() + 3e-3 * mr[c];
-        assert!(tol < 0.02 * mr[c], "channel {c}: threshold {tol} would not detect a 2% error of {}", mr[c]);
-        assert!((ms[c] - mr[c]).abs() <= tol, "channel {c}: spectral {} vs rgb {} (threshold {tol})", ms[c], mr[c]);
+        assert!(
+            tol < 0.02 * mr[c],
+            "channel {c}: threshold {tol} would not detect a 2% error of {}",
+            mr[c]
+        );
+        assert!(
+            (ms[c] - mr[c]).abs() <= tol,
+            "channel {c}: spectral {} vs rgb {} (threshold {tol})",
+            ms[c],
+            mr[c]
+        );
     }
 }

@@ -36,7 +36,9 @@ use std::path::Path;
 /// (quantised) normal, normalised.
 fn constant_map(path: &Path, n: [f64; 3]) -> [f64; 3] {
     let c = n.map(|x| ((x + 1.0) * 0.5 * 255.0).round().clamp(0.0, 255.0) as u8);
-    image::RgbImage::from_pixel(2, 2, image::Rgb(c)).save(path).unwrap();
+    image::RgbImage::from_pixel(2, 2, image::Rgb(c))
+        .save(path)
+        .unwrap();
     let q = c.map(|v| 2.0 * v as f64 / 255.0 - 1.0);
     let l = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2]).sqrt();
     q.map(|x| x / l)
@@ -47,8 +49,16 @@ fn constant_tilt_matches_closed_form() {
     let (a, theta_l, rho, e) = (40f64.to_radians(), 60f64.to_radians(), 0.7, 2.0);
     // (name, map normal, direction towards the light), local frame of the rectangle = world.
     let cases = [
-        ("x", [a.sin(), 0.0, a.cos()], [theta_l.sin(), 0.0, theta_l.cos()]),
-        ("y", [0.0, a.sin(), a.cos()], [0.0, theta_l.sin(), theta_l.cos()]),
+        (
+            "x",
+            [a.sin(), 0.0, a.cos()],
+            [theta_l.sin(), 0.0, theta_l.cos()],
+        ),
+        (
+            "y",
+            [0.0, a.sin(), a.cos()],
+            [0.0, theta_l.sin(), theta_l.cos()],
+        ),
     ];
     for (name, n, l) in cases {
         let dir = scratch(&format!("normal_map_closed_{name}"));
@@ -80,7 +90,10 @@ fn constant_tilt_matches_closed_form() {
         let want = rho / std::f64::consts::PI * e * cos_p * g;
         eprintln!("{name}: got {m:?}, want {want:.6} (cos' {cos_p:.4}, G {g:.4})");
         for c in m {
-            assert!((c - want).abs() <= 2e-3 * want, "tilt in {name}: {c} vs closed form {want}");
+            assert!(
+                (c - want).abs() <= 2e-3 * want,
+                "tilt in {name}: {c} vs closed form {want}"
+            );
         }
     }
 }
@@ -101,21 +114,48 @@ fn shading_normal(scene: &Scene, x: f32, y: f32) -> Option<Vec3> {
 /// Returns the JSON and the binary buffer (`quad.bin`).
 fn quad_gltf(with_tangents: bool) -> (String, Vec<u8>) {
     let material = r#"{"normalTexture": {"index": 0}, "pbrMetallicRoughness": {"metallicFactor": 0, "roughnessFactor": 1}}"#;
-    quad_gltf_with(with_tangents, material, r#"[{"source": 0}]"#, r#"[{"uri": "bumps-normal.png"}]"#, "")
+    quad_gltf_with(
+        with_tangents,
+        material,
+        r#"[{"source": 0}]"#,
+        r#"[{"uri": "bumps-normal.png"}]"#,
+        "",
+    )
 }
 
 /// The quad of [`quad_gltf`] with the given material, textures, images and extra top-level
 /// members (JSON text).
-fn quad_gltf_with(with_tangents: bool, material: &str, textures: &str, images: &str, extra: &str) -> (String, Vec<u8>) {
-    let pos: [[f32; 3]; 4] = [[-1.0, -1.0, 0.0], [1.0, -1.0, 0.0], [1.0, 1.0, 0.0], [-1.0, 1.0, 0.0]];
+fn quad_gltf_with(
+    with_tangents: bool,
+    material: &str,
+    textures: &str,
+    images: &str,
+    extra: &str,
+) -> (String, Vec<u8>) {
+    let pos: [[f32; 3]; 4] = [
+        [-1.0, -1.0, 0.0],
+        [1.0, -1.0, 0.0],
+        [1.0, 1.0, 0.0],
+        [-1.0, 1.0, 0.0],
+    ];
     let nrm = [[0.0f32, 0.0, 1.0]; 4];
     let uv: [[f32; 2]; 4] = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
     let tan = [[1.0f32, 0.0, 0.0, 1.0]; 4];
     let idx: [u16; 6] = [0, 1, 2, 0, 2, 3];
     let mut bytes = Vec::new();
-    pos.iter().flatten().chain(nrm.iter().flatten()).chain(uv.iter().flatten()).chain(tan.iter().flatten()).for_each(|f| bytes.extend_from_slice(&f.to_le_bytes()));
-    idx.iter().for_each(|i| bytes.extend_from_slice(&i.to_le_bytes()));
-    let tangent_attr = if with_tangents { r#", "TANGENT": 3"# } else { "" };
+    pos.iter()
+        .flatten()
+        .chain(nrm.iter().flatten())
+        .chain(uv.iter().flatten())
+        .chain(tan.iter().flatten())
+        .for_each(|f| bytes.extend_from_slice(&f.to_le_bytes()));
+    idx.iter()
+        .for_each(|i| bytes.extend_from_slice(&i.to_le_bytes()));
+    let tangent_attr = if with_tangents {
+        r#", "TANGENT": 3"#
+    } else {
+        ""
+    };
     let json = format!(
         r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}], "nodes": [{{"mesh": 0}}],
   "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0, "NORMAL": 1, "TEXCOORD_0": 2{tangent_attr}}}, "indices": 4, "material": 0}}]}}],
@@ -139,7 +179,11 @@ fn gltf_normal_texture_matches_xml_normalmap() {
     pt_scene::set_gltf_mesh_reader(pt_gltf::load_mesh);
     for with_tangents in [true, false] {
         let dir = scratch(&format!("normal_map_gltf_{with_tangents}"));
-        std::fs::copy(repo().join("scenes/textures/bumps-normal.png"), dir.join("bumps-normal.png")).unwrap();
+        std::fs::copy(
+            repo().join("scenes/textures/bumps-normal.png"),
+            dir.join("bumps-normal.png"),
+        )
+        .unwrap();
         let (json, bin) = quad_gltf(with_tangents);
         std::fs::write(dir.join("quad.gltf"), json).unwrap();
         std::fs::write(dir.join("quad.bin"), bin).unwrap();
@@ -155,30 +199,51 @@ fn gltf_normal_texture_matches_xml_normalmap() {
 </scene>"#;
         std::fs::write(dir.join("scene.xml"), xml).unwrap();
         let xml_desc = pt_scene::load_file(&dir.join("scene.xml"), &[]).expect("XML scene loads");
-        let gltf = pt_gltf::load(&dir.join("quad.gltf"), &pt_gltf::LoadOptions::default()).expect("glTF loads");
-        assert!(!gltf.warnings.iter().any(|w| w.contains("normalTexture")), "{:?}", gltf.warnings);
+        let gltf = pt_gltf::load(&dir.join("quad.gltf"), &pt_gltf::LoadOptions::default())
+            .expect("glTF loads");
+        assert!(
+            !gltf.warnings.iter().any(|w| w.contains("normalTexture")),
+            "{:?}",
+            gltf.warnings
+        );
         let a = Scene::build(&xml_desc, BvhKind::default(), LightSelection::Power).unwrap();
         let b = Scene::build(&gltf.desc, BvhKind::default(), LightSelection::Power).unwrap();
         let (mut max_dev, mut max_tilt) = (0.0f32, 0.0f32);
         for i in 0..48 {
             for j in 0..48 {
-                let (x, y) = (-0.98 + 1.96 * (i as f32 + 0.5) / 48.0, -0.98 + 1.96 * (j as f32 + 0.5) / 48.0);
-                let (na, nb) = (shading_normal(&a, x, y).unwrap(), shading_normal(&b, x, y).unwrap());
+                let (x, y) = (
+                    -0.98 + 1.96 * (i as f32 + 0.5) / 48.0,
+                    -0.98 + 1.96 * (j as f32 + 0.5) / 48.0,
+                );
+                let (na, nb) = (
+                    shading_normal(&a, x, y).unwrap(),
+                    shading_normal(&b, x, y).unwrap(),
+                );
                 max_dev = max_dev.max((na - nb).length());
                 max_tilt = max_tilt.max(na.angle_between(Vec3::Z));
             }
         }
         eprintln!("tangents given {with_tangents}: max |n_xml - n_gltf| = {max_dev:e}, max tilt {:.1} deg", max_tilt.to_degrees());
         assert!(max_tilt > 30f32.to_radians(), "the map does not perturb");
-        assert!(max_dev < 1e-4, "glTF and XML shading normals differ by {max_dev}");
+        assert!(
+            max_dev < 1e-4,
+            "glTF and XML shading normals differ by {max_dev}"
+        );
     }
 }
 
 /// The BSDF values at a hit straight down at (x, y) for a few direction pairs (local frame).
 fn bsdf_values(scene: &Scene, x: f32, y: f32, lambda: &SampledWavelengths) -> Vec<[f32; 4]> {
-    let hit = scene.intersect(&Ray::new(Vec3::new(x, y, 5.0), Vec3::NEG_Z)).expect("hit");
+    let hit = scene
+        .intersect(&Ray::new(Vec3::new(x, y, 5.0), Vec3::NEG_Z))
+        .expect("hit");
     let b = scene.material_at_hit(&hit, lambda);
-    let dirs = [Vec3::new(0.3, 0.1, 0.9), Vec3::new(-0.2, 0.3, 0.9), Vec3::new(0.6, -0.2, 0.5), Vec3::new(-0.5, -0.4, 0.6)];
+    let dirs = [
+        Vec3::new(0.3, 0.1, 0.9),
+        Vec3::new(-0.2, 0.3, 0.9),
+        Vec3::new(0.6, -0.2, 0.5),
+        Vec3::new(-0.5, -0.4, 0.6),
+    ];
     let mut out = Vec::new();
     for wo in dirs {
         for wi in dirs {
@@ -199,9 +264,17 @@ fn bsdf_values(scene: &Scene, x: f32, y: f32, lambda: &SampledWavelengths) -> Ve
 fn iridescence_thickness_texture_gives_constant_films_per_texel() {
     pt_scene::set_gltf_mesh_reader(pt_gltf::load_mesh);
     let dir = scratch("iridescence_thickness_texture");
-    image::RgbImage::from_fn(2, 1, |x, _| image::Rgb([128, if x == 0 { 0 } else { 255 }, 30])).save(dir.join("thickness.png")).unwrap();
+    image::RgbImage::from_fn(2, 1, |x, _| {
+        image::Rgb([128, if x == 0 { 0 } else { 255 }, 30])
+    })
+    .save(dir.join("thickness.png"))
+    .unwrap();
     let iridescence = |thickness_max: f32, texture: bool| {
-        let tex = if texture { r#", "iridescenceThicknessTexture": {"index": 0}"# } else { "" };
+        let tex = if texture {
+            r#", "iridescenceThicknessTexture": {"index": 0}"#
+        } else {
+            ""
+        };
         format!(
             r#"{{"pbrMetallicRoughness": {{"baseColorFactor": [0.9, 0.8, 0.7, 1], "metallicFactor": 1, "roughnessFactor": 0.5}},
                "extensions": {{"KHR_materials_iridescence": {{"iridescenceFactor": 1, "iridescenceIor": 1.3,
@@ -210,23 +283,48 @@ fn iridescence_thickness_texture_gives_constant_films_per_texel() {
     };
     let extra = r#", "samplers": [{"magFilter": 9728, "minFilter": 9728}], "extensionsUsed": ["KHR_materials_iridescence"]"#;
     let load = |name: &str, material: String| {
-        let (json, bin) = quad_gltf_with(false, &material, r#"[{"source": 0, "sampler": 0}]"#, r#"[{"uri": "thickness.png"}]"#, extra);
+        let (json, bin) = quad_gltf_with(
+            false,
+            &material,
+            r#"[{"source": 0, "sampler": 0}]"#,
+            r#"[{"uri": "thickness.png"}]"#,
+            extra,
+        );
         std::fs::write(dir.join(format!("{name}.gltf")), json).unwrap();
         std::fs::write(dir.join("quad.bin"), bin).unwrap();
-        let g = pt_gltf::load(&dir.join(format!("{name}.gltf")), &pt_gltf::LoadOptions::default()).expect("glTF loads");
-        assert!(!g.warnings.iter().any(|w| w.contains("iridescence")), "{:?}", g.warnings);
+        let g = pt_gltf::load(
+            &dir.join(format!("{name}.gltf")),
+            &pt_gltf::LoadOptions::default(),
+        )
+        .expect("glTF loads");
+        assert!(
+            !g.warnings.iter().any(|w| w.contains("iridescence")),
+            "{:?}",
+            g.warnings
+        );
         Scene::build(&g.desc, BvhKind::default(), LightSelection::Power).unwrap()
     };
     let textured = load("textured", iridescence(600.0, true));
-    let (thin, thick) = (load("thin", iridescence(200.0, false)), load("thick", iridescence(600.0, false)));
+    let (thin, thick) = (
+        load("thin", iridescence(200.0, false)),
+        load("thick", iridescence(600.0, false)),
+    );
     let lambda = SampledWavelengths::sample_visible(0.37);
-    let close = |a: &[[f32; 4]], b: &[[f32; 4]]| a.iter().flatten().zip(b.iter().flatten()).all(|(x, y)| (x - y).abs() <= 1e-5 * x.abs().max(y.abs()) + 1e-9);
+    let close = |a: &[[f32; 4]], b: &[[f32; 4]]| {
+        a.iter()
+            .flatten()
+            .zip(b.iter().flatten())
+            .all(|(x, y)| (x - y).abs() <= 1e-5 * x.abs().max(y.abs()) + 1e-9)
+    };
     for (x, y) in [(-0.7, 0.3), (-0.2, -0.8), (0.2, 0.5), (0.9, -0.9)] {
         let got = bsdf_values(&textured, x, y, &lambda);
         let want = bsdf_values(if x < 0.0 { &thin } else { &thick }, x, y, &lambda);
         let other = bsdf_values(if x < 0.0 { &thick } else { &thin }, x, y, &lambda);
         assert!(close(&got, &want), "at ({x}, {y}): {got:?} vs {want:?}");
-        assert!(!close(&got, &other), "at ({x}, {y}) the two thicknesses give the same BSDF: the test cannot tell them apart");
+        assert!(
+            !close(&got, &other),
+            "at ({x}, {y}) the two thicknesses give the same BSDF: the test cannot tell them apart"
+        );
     }
 }
 
@@ -258,7 +356,15 @@ fn half_means(img: &pt_image::Image, var: &pt_image::Image) -> [([f64; 3], [f64;
 #[test]
 fn mask_opacity_texture_is_luminance_per_texel() {
     let dir = scratch("mask_opacity_texture");
-    image::RgbImage::from_fn(2, 1, |x, _| if x == 0 { image::Rgb([255, 0, 0]) } else { image::Rgb([128, 128, 128]) }).save(dir.join("opacity.png")).unwrap();
+    image::RgbImage::from_fn(2, 1, |x, _| {
+        if x == 0 {
+            image::Rgb([255, 0, 0])
+        } else {
+            image::Rgb([128, 128, 128])
+        }
+    })
+    .save(dir.join("opacity.png"))
+    .unwrap();
     let rho = 0.4;
     let sensor = sensor_xml(20.0, [0.0, 0.0, 10.0], 16, 16, 16);
     let xml = format!(
@@ -285,9 +391,20 @@ fn mask_opacity_texture_is_luminance_per_texel() {
     for (half, (m, se)) in half_means(&img, &var).into_iter().enumerate() {
         let want = opacity[half] * rho + (1.0 - opacity[half]);
         for c in 0..3 {
-            eprintln!("half {half} channel {c}: got {:.5} want {want:.5} (stderr {:.2e})", m[c], se[c]);
-            assert!(se[c] < 0.0025 * want, "standard error {} too large to detect a 2% bias", se[c]);
-            assert!((m[c] - want).abs() <= 4.5 * se[c] + 2e-4, "half {half} channel {c}: {} vs closed form {want}", m[c]);
+            eprintln!(
+                "half {half} channel {c}: got {:.5} want {want:.5} (stderr {:.2e})",
+                m[c], se[c]
+            );
+            assert!(
+                se[c] < 0.0025 * want,
+                "standard error {} too large to detect a 2% bias",
+                se[c]
+            );
+            assert!(
+                (m[c] - want).abs() <= 4.5 * se[c] + 2e-4,
+                "half {half} channel {c}: {} vs closed form {want}",
+                m[c]
+            );
         }
     }
 }
@@ -299,23 +416,65 @@ fn mask_opacity_texture_is_luminance_per_texel() {
 #[test]
 fn gltf_base_colour_alpha_is_opacity_per_texel() {
     let dir = scratch("gltf_alpha_texture");
-    image::RgbaImage::from_fn(2, 1, |x, _| if x == 0 { image::Rgba([200, 50, 50, 77]) } else { image::Rgba([50, 50, 200, 255]) }).save(dir.join("base.png")).unwrap();
+    image::RgbaImage::from_fn(2, 1, |x, _| {
+        if x == 0 {
+            image::Rgba([200, 50, 50, 77])
+        } else {
+            image::Rgba([50, 50, 200, 255])
+        }
+    })
+    .save(dir.join("base.png"))
+    .unwrap();
     let extra = r#", "samplers": [{"magFilter": 9728, "minFilter": 9728}]"#;
-    for (mode, want) in [("BLEND", [0.8 * 77.0 / 255.0, 0.8f32]), ("MASK", [0.0, 1.0])] {
-        let material = format!(r#"{{"alphaMode": "{mode}", "pbrMetallicRoughness": {{"baseColorFactor": [1, 1, 1, 0.8], "baseColorTexture": {{"index": 0}}, "metallicFactor": 0, "roughnessFactor": 0.6}}}}"#);
-        let (json, bin) = quad_gltf_with(false, &material, r#"[{"source": 0, "sampler": 0}]"#, r#"[{"uri": "base.png"}]"#, extra);
+    for (mode, want) in [
+        ("BLEND", [0.8 * 77.0 / 255.0, 0.8f32]),
+        ("MASK", [0.0, 1.0]),
+    ] {
+        let material = format!(
+            r#"{{"alphaMode": "{mode}", "pbrMetallicRoughness": {{"baseColorFactor": [1, 1, 1, 0.8], "baseColorTexture": {{"index": 0}}, "metallicFactor": 0, "roughnessFactor": 0.6}}}}"#
+        );
+        let (json, bin) = quad_gltf_with(
+            false,
+            &material,
+            r#"[{"source": 0, "sampler": 0}]"#,
+            r#"[{"uri": "base.png"}]"#,
+            extra,
+        );
         std::fs::write(dir.join("quad.gltf"), json).unwrap();
         std::fs::write(dir.join("quad.bin"), bin).unwrap();
-        let g = pt_gltf::load(&dir.join("quad.gltf"), &pt_gltf::LoadOptions::default()).expect("glTF loads");
-        assert!(!g.warnings.iter().any(|w| w.contains("alpha")), "{:?}", g.warnings);
+        let g = pt_gltf::load(&dir.join("quad.gltf"), &pt_gltf::LoadOptions::default())
+            .expect("glTF loads");
+        assert!(
+            !g.warnings.iter().any(|w| w.contains("alpha")),
+            "{:?}",
+            g.warnings
+        );
         let scene = Scene::build(&g.desc, BvhKind::default(), LightSelection::Power).unwrap();
         let lambda = SampledWavelengths::sample_visible(0.5);
-        let at = |x: f32| scene.material_at_hit(&scene.intersect(&Ray::new(Vec3::new(x, 0.3, 5.0), Vec3::NEG_Z)).unwrap(), &lambda);
+        let at = |x: f32| {
+            scene.material_at_hit(
+                &scene
+                    .intersect(&Ray::new(Vec3::new(x, 0.3, 5.0), Vec3::NEG_Z))
+                    .unwrap(),
+                &lambda,
+            )
+        };
         let (l, r) = (at(-0.5), at(0.5));
-        assert!((l.opacity - want[0]).abs() < 1e-5 && (r.opacity - want[1]).abs() < 1e-5, "{mode}: opacity {} / {}, want {want:?}", l.opacity, r.opacity);
-        let (wo, wi) = (Vec3::new(0.1, 0.2, 0.9).normalize(), Vec3::new(-0.3, 0.1, 0.8).normalize());
+        assert!(
+            (l.opacity - want[0]).abs() < 1e-5 && (r.opacity - want[1]).abs() < 1e-5,
+            "{mode}: opacity {} / {}, want {want:?}",
+            l.opacity,
+            r.opacity
+        );
+        let (wo, wi) = (
+            Vec3::new(0.1, 0.2, 0.9).normalize(),
+            Vec3::new(-0.3, 0.1, 0.8).normalize(),
+        );
         let (fl, fr) = (l.bsdf.eval(wo, wi).0, r.bsdf.eval(wo, wi).0);
-        assert!(fl.x > 1.5 * fl.z && fr.z > 1.5 * fr.x, "{mode}: base colour texture not applied: {fl} / {fr}");
+        assert!(
+            fl.x > 1.5 * fl.z && fr.z > 1.5 * fr.x,
+            "{mode}: base colour texture not applied: {fl} / {fr}"
+        );
     }
 }
 
@@ -328,30 +487,77 @@ fn gltf_base_colour_alpha_is_opacity_per_texel() {
 #[test]
 fn gltf_partial_factors_are_blends() {
     let dir = scratch("gltf_partial_factors");
-    image::RgbImage::from_pixel(1, 1, image::Rgb([255, 255, 255])).save(dir.join("white.png")).unwrap();
+    image::RgbImage::from_pixel(1, 1, image::Rgb([255, 255, 255]))
+        .save(dir.join("white.png"))
+        .unwrap();
     let cases = [
-        (r#"{"pbrMetallicRoughness": {"metallicFactor": 0.25, "roughnessFactor": 0.5}, "extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.4}}}"#, "KHR_materials_transmission", 0.3f32),
-        (r#"{"pbrMetallicRoughness": {"metallicFactor": 1, "roughnessFactor": 0.5}, "extensions": {"KHR_materials_iridescence": {"iridescenceFactor": 0.6, "iridescenceThicknessMaximum": 350}}}"#, "KHR_materials_iridescence", 0.6),
+        (
+            r#"{"pbrMetallicRoughness": {"metallicFactor": 0.25, "roughnessFactor": 0.5}, "extensions": {"KHR_materials_transmission": {"transmissionFactor": 0.4}}}"#,
+            "KHR_materials_transmission",
+            0.3f32,
+        ),
+        (
+            r#"{"pbrMetallicRoughness": {"metallicFactor": 1, "roughnessFactor": 0.5}, "extensions": {"KHR_materials_iridescence": {"iridescenceFactor": 0.6, "iridescenceThicknessMaximum": 350}}}"#,
+            "KHR_materials_iridescence",
+            0.6,
+        ),
     ];
     for (material, ext, w) in cases {
         let extra = format!(r#", "extensionsUsed": ["{ext}"]"#);
-        let (json, bin) = quad_gltf_with(false, material, r#"[{"source": 0}]"#, r#"[{"uri": "white.png"}]"#, &extra);
+        let (json, bin) = quad_gltf_with(
+            false,
+            material,
+            r#"[{"source": 0}]"#,
+            r#"[{"uri": "white.png"}]"#,
+            &extra,
+        );
         std::fs::write(dir.join("quad.gltf"), json).unwrap();
         std::fs::write(dir.join("quad.bin"), bin).unwrap();
-        let g = pt_gltf::load(&dir.join("quad.gltf"), &pt_gltf::LoadOptions::default()).expect("glTF loads");
-        let scene = Scene::build_with_mode(&g.desc, BvhKind::default(), LightSelection::Power, Some(pt_spectrum::ColorMode::Rgb)).unwrap();
-        let b = scene.material_at_hit(&scene.intersect(&Ray::new(Vec3::new(0.1, 0.2, 5.0), Vec3::NEG_Z)).unwrap(), &SampledWavelengths::sample_visible(0.5));
+        let g = pt_gltf::load(&dir.join("quad.gltf"), &pt_gltf::LoadOptions::default())
+            .expect("glTF loads");
+        let scene = Scene::build_with_mode(
+            &g.desc,
+            BvhKind::default(),
+            LightSelection::Power,
+            Some(pt_spectrum::ColorMode::Rgb),
+        )
+        .unwrap();
+        let b = scene.material_at_hit(
+            &scene
+                .intersect(&Ray::new(Vec3::new(0.1, 0.2, 5.0), Vec3::NEG_Z))
+                .unwrap(),
+            &SampledWavelengths::sample_visible(0.5),
+        );
         let (weight, second) = b.blend.unwrap_or_else(|| panic!("{ext}: no blend: {b:?}"));
-        assert!((weight - w).abs() < 1e-6, "{ext}: weight {weight}, want {w}");
+        assert!(
+            (weight - w).abs() < 1e-6,
+            "{ext}: weight {weight}, want {w}"
+        );
         match ext {
-            "KHR_materials_transmission" => assert!(matches!(second, pt_bsdf::Bsdf::ThinDielectric(_)), "{second:?}"),
-            _ => assert!(matches!(second, pt_bsdf::Bsdf::RoughThinFilm(_)), "{second:?}"),
+            "KHR_materials_transmission" => assert!(
+                matches!(second, pt_bsdf::Bsdf::ThinDielectric(_)),
+                "{second:?}"
+            ),
+            _ => assert!(
+                matches!(second, pt_bsdf::Bsdf::RoughThinFilm(_)),
+                "{second:?}"
+            ),
         }
-        let (wo, wi) = (Vec3::new(0.2, 0.1, 0.9).normalize(), Vec3::new(-0.3, 0.2, 0.8).normalize());
+        let (wo, wi) = (
+            Vec3::new(0.2, 0.1, 0.9).normalize(),
+            Vec3::new(-0.3, 0.2, 0.8).normalize(),
+        );
         let first = pt_bsdf::SurfaceBsdf { blend: None, ..b };
-        let only_second = pt_bsdf::SurfaceBsdf { bsdf: second, blend: None, ..b };
+        let only_second = pt_bsdf::SurfaceBsdf {
+            bsdf: second,
+            blend: None,
+            ..b
+        };
         let want = first.eval(wo, wi).0 * (1.0 - w) + only_second.eval(wo, wi).0 * w;
-        assert!((b.eval(wo, wi).0 - want).abs().max_element() < 1e-6 * want.max_element().max(1.0), "{ext}");
+        assert!(
+            (b.eval(wo, wi).0 - want).abs().max_element() < 1e-6 * want.max_element().max(1.0),
+            "{ext}"
+        );
     }
 }
 
@@ -360,20 +566,43 @@ fn gltf_partial_factors_are_blends() {
 #[test]
 fn gltf_iridescence_texture_scales_the_blend_weight_per_texel() {
     let dir = scratch("gltf_iridescence_factor_texture");
-    image::RgbImage::from_fn(2, 1, |x, _| image::Rgb([if x == 0 { 0 } else { 255 }, 90, 40])).save(dir.join("factor.png")).unwrap();
+    image::RgbImage::from_fn(2, 1, |x, _| {
+        image::Rgb([if x == 0 { 0 } else { 255 }, 90, 40])
+    })
+    .save(dir.join("factor.png"))
+    .unwrap();
     let material = r#"{"pbrMetallicRoughness": {"metallicFactor": 1, "roughnessFactor": 0.5}, "extensions": {"KHR_materials_iridescence": {"iridescenceFactor": 0.8, "iridescenceTexture": {"index": 0}}}}"#;
     let extra = r#", "samplers": [{"magFilter": 9728, "minFilter": 9728}], "extensionsUsed": ["KHR_materials_iridescence"]"#;
-    let (json, bin) = quad_gltf_with(false, material, r#"[{"source": 0, "sampler": 0}]"#, r#"[{"uri": "factor.png"}]"#, extra);
+    let (json, bin) = quad_gltf_with(
+        false,
+        material,
+        r#"[{"source": 0, "sampler": 0}]"#,
+        r#"[{"uri": "factor.png"}]"#,
+        extra,
+    );
     std::fs::write(dir.join("quad.gltf"), json).unwrap();
     std::fs::write(dir.join("quad.bin"), bin).unwrap();
-    let g = pt_gltf::load(&dir.join("quad.gltf"), &pt_gltf::LoadOptions::default()).expect("glTF loads");
-    assert!(!g.warnings.iter().any(|w| w.contains("iridescence")), "{:?}", g.warnings);
+    let g = pt_gltf::load(&dir.join("quad.gltf"), &pt_gltf::LoadOptions::default())
+        .expect("glTF loads");
+    assert!(
+        !g.warnings.iter().any(|w| w.contains("iridescence")),
+        "{:?}",
+        g.warnings
+    );
     let scene = Scene::build(&g.desc, BvhKind::default(), LightSelection::Power).unwrap();
     let lambda = SampledWavelengths::sample_visible(0.5);
     for (x, want) in [(-0.5f32, 0.0f32), (0.5, 0.8)] {
-        let b = scene.material_at_hit(&scene.intersect(&Ray::new(Vec3::new(x, -0.2, 5.0), Vec3::NEG_Z)).unwrap(), &lambda);
+        let b = scene.material_at_hit(
+            &scene
+                .intersect(&Ray::new(Vec3::new(x, -0.2, 5.0), Vec3::NEG_Z))
+                .unwrap(),
+            &lambda,
+        );
         let (w, second) = b.blend.expect("a blend");
-        assert!((w - want).abs() < 1e-6 && matches!(second, pt_bsdf::Bsdf::RoughThinFilm(_)), "x {x}: weight {w}, want {want}");
+        assert!(
+            (w - want).abs() < 1e-6 && matches!(second, pt_bsdf::Bsdf::RoughThinFilm(_)),
+            "x {x}: weight {w}, want {want}"
+        );
     }
 }
 
@@ -381,14 +610,29 @@ fn gltf_iridescence_texture_scales_the_blend_weight_per_texel() {
 /// file name, the inner model), not as nested debug dumps with source locations.
 #[test]
 fn info_describes_wrapper_materials() {
-    let o = pt(&["info", repo().join("scenes/normal-map.xml").to_str().unwrap()]);
+    let o = pt(&[
+        "info",
+        repo().join("scenes/normal-map.xml").to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let out = String::from_utf8_lossy(&o.stdout);
-    assert!(out.contains("normalmap(bumps-normal.png, Mitsuba tangent space, scale 1, Diffuse"), "{out}");
-    assert!(out.contains("normalmap(bumps-normal.png, Mitsuba tangent space, scale 1, RoughConductor"), "{out}");
+    assert!(
+        out.contains("normalmap(bumps-normal.png, Mitsuba tangent space, scale 1, Diffuse"),
+        "{out}"
+    );
+    assert!(
+        out.contains("normalmap(bumps-normal.png, Mitsuba tangent space, scale 1, RoughConductor"),
+        "{out}"
+    );
     assert!(!out.contains("SourceLoc"), "{out}");
-    let o = pt(&["info", repo().join("scenes/mask-texture.xml").to_str().unwrap()]);
+    let o = pt(&[
+        "info",
+        repo().join("scenes/mask-texture.xml").to_str().unwrap(),
+    ]);
     let out = String::from_utf8_lossy(&o.stdout);
-    assert!(out.contains("mask(opacity 1 x ") && out.contains("Luminance"), "{out}");
+    assert!(
+        out.contains("mask(opacity 1 x ") && out.contains("Luminance"),
+        "{out}"
+    );
     assert!(!out.contains("SourceLoc"), "{out}");
 }

@@ -37,7 +37,9 @@ use clap::{Args, ValueEnum};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use pt_image::fireflies::luminance;
-use pt_render::{BvhKind, LightSelection, RenderOutput, RenderSettings, RenderState, Scene, Strategy};
+use pt_render::{
+    BvhKind, LightSelection, RenderOutput, RenderSettings, RenderState, Scene, Strategy,
+};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -60,11 +62,31 @@ const BANDS_X: [f32; 5] = [-4.0, -1.11, 0.0, 1.11, 4.0];
 
 /// The caustic scenes, one per light radius (scene units), at equal power.
 const CAUSTIC: [(&str, f32, &str); 5] = [
-    ("caustic-r0.01", 0.01, include_str!("../../scenes/atlas/caustic-r0.01.xml")),
-    ("caustic-r0.03", 0.03, include_str!("../../scenes/atlas/caustic-r0.03.xml")),
-    ("caustic-r0.1", 0.1, include_str!("../../scenes/atlas/caustic-r0.1.xml")),
-    ("caustic-r0.3", 0.3, include_str!("../../scenes/atlas/caustic-r0.3.xml")),
-    ("caustic-r1", 1.0, include_str!("../../scenes/atlas/caustic-r1.xml")),
+    (
+        "caustic-r0.01",
+        0.01,
+        include_str!("../../scenes/atlas/caustic-r0.01.xml"),
+    ),
+    (
+        "caustic-r0.03",
+        0.03,
+        include_str!("../../scenes/atlas/caustic-r0.03.xml"),
+    ),
+    (
+        "caustic-r0.1",
+        0.1,
+        include_str!("../../scenes/atlas/caustic-r0.1.xml"),
+    ),
+    (
+        "caustic-r0.3",
+        0.3,
+        include_str!("../../scenes/atlas/caustic-r0.3.xml"),
+    ),
+    (
+        "caustic-r1",
+        1.0,
+        include_str!("../../scenes/atlas/caustic-r1.xml"),
+    ),
 ];
 /// The caustic region as fractions of the image (row0, row1, col0, col1; half-open): rows
 /// 40..51 and columns 52..74 of the 96 x 64 image, which hold the focused spot for every light
@@ -75,7 +97,14 @@ const CAUSTIC_FRAC: (f32, f32, f32, f32) = (40.0 / 64.0, 51.0 / 64.0, 52.0 / 96.
 /// The radiosity atlas scene.
 const RADIOSITY: &str = include_str!("../../scenes/atlas/radiosity-glossy.xml");
 /// Back-wall strips, left to right: `None` is the diffuse control, else the GGX alpha.
-const STRIP_ALPHA: [Option<f32>; 6] = [None, Some(0.5), Some(0.2), Some(0.08), Some(0.03), Some(0.01)];
+const STRIP_ALPHA: [Option<f32>; 6] = [
+    None,
+    Some(0.5),
+    Some(0.2),
+    Some(0.08),
+    Some(0.03),
+    Some(0.01),
+];
 /// Radiosity settings of the study: patches of edge 0.2 (about 3,400 triangles on the box),
 /// 256 rays per patch (form-factor noise ~1/sqrt(256 F), a few % for the ceiling seen from a
 /// wall patch), smoothed display; a few seconds on two cores.
@@ -148,18 +177,40 @@ pub(crate) enum Budget {
 /// per pixel, then steps of as many samples as the time per sample measured so far says fit in
 /// the rest (at most 4x the samples so far, so one slow estimate cannot overshoot far), until
 /// not one more sample fits. The image is that of a plain render at the final sample count.
-pub(crate) fn render_within(scene: &Scene, settings: &RenderSettings, budget: Budget) -> RenderOutput {
+pub(crate) fn render_within(
+    scene: &Scene,
+    settings: &RenderSettings,
+    budget: Budget,
+) -> RenderOutput {
     let cancel = AtomicBool::new(false);
     let mut state = RenderState::new(settings);
     match budget {
         Budget::Spp(n) => {
-            pt_render::render_passes(scene, &RenderSettings { spp: n.max(1), ..settings.clone() }, &mut state, &cancel, &|_| {});
+            pt_render::render_passes(
+                scene,
+                &RenderSettings {
+                    spp: n.max(1),
+                    ..settings.clone()
+                },
+                &mut state,
+                &cancel,
+                &|_| {},
+            );
         }
         Budget::Time(t) => {
             let budget = t.as_secs_f64();
             let mut target = 1u32;
             loop {
-                pt_render::render_passes(scene, &RenderSettings { spp: target, ..settings.clone() }, &mut state, &cancel, &|_| {});
+                pt_render::render_passes(
+                    scene,
+                    &RenderSettings {
+                        spp: target,
+                        ..settings.clone()
+                    },
+                    &mut state,
+                    &cancel,
+                    &|_| {},
+                );
                 let used = state.time.as_secs_f64();
                 let per_spp = used / f64::from(state.spp_done);
                 let fit = ((budget - used) / per_spp).floor();
@@ -188,7 +239,11 @@ pub(crate) struct Reference {
 /// the means of independent pixels: the sum over `k^4`.
 fn downsample(v: &[[f32; 3]], w: u32, k: u32, variance: bool) -> Vec<[f32; 3]> {
     let (sw, sh) = (w / k, v.len() as u32 / w / k);
-    let norm = if variance { (k * k * k * k) as f32 } else { (k * k) as f32 };
+    let norm = if variance {
+        (k * k * k * k) as f32
+    } else {
+        (k * k) as f32
+    };
     let mut out = vec![[0.0f32; 3]; (sw * sh) as usize];
     for y in 0..sh * k {
         for x in 0..sw * k {
@@ -204,31 +259,73 @@ fn downsample(v: &[[f32; 3]], w: u32, k: u32, variance: bool) -> Vec<[f32; 3]> {
 
 /// The Mitsuba reference `dir/name.exr` (+ `_var.exr`) at the size of `settings` (box-downsampled
 /// by an integer factor if the reference is larger), or else a pt MIS render at `fallback_spp`.
-pub(crate) fn reference(dir: &Path, name: &str, scene: &Scene, settings: &RenderSettings, fallback_spp: u32) -> Result<Reference> {
-    let (mp, vp) = (dir.join(format!("{name}.exr")), dir.join(format!("{name}_var.exr")));
+pub(crate) fn reference(
+    dir: &Path,
+    name: &str,
+    scene: &Scene,
+    settings: &RenderSettings,
+    fallback_spp: u32,
+) -> Result<Reference> {
+    let (mp, vp) = (
+        dir.join(format!("{name}.exr")),
+        dir.join(format!("{name}_var.exr")),
+    );
     let (w, h) = (settings.width, settings.height);
     if mp.is_file() && vp.is_file() {
-        let (m, _) = pt_image::read_exr(&mp).with_context(|| format!("cannot read the reference '{}'", mp.display()))?;
-        let (v, _) = pt_image::read_exr(&vp).with_context(|| format!("cannot read the reference variance '{}'", vp.display()))?;
+        let (m, _) = pt_image::read_exr(&mp)
+            .with_context(|| format!("cannot read the reference '{}'", mp.display()))?;
+        let (v, _) = pt_image::read_exr(&vp)
+            .with_context(|| format!("cannot read the reference variance '{}'", vp.display()))?;
         if (v.width, v.height) != (m.width, m.height) {
-            bail!("'{}' is {}x{} but '{}' is {}x{}", vp.display(), v.width, v.height, mp.display(), m.width, m.height);
+            bail!(
+                "'{}' is {}x{} but '{}' is {}x{}",
+                vp.display(),
+                v.width,
+                v.height,
+                mp.display(),
+                m.width,
+                m.height
+            );
         }
         let k = m.width / w.max(1);
         if k >= 1 && m.width == k * w && m.height == k * h {
             return Ok(Reference {
                 mean: downsample(&m.data, m.width, k, false),
                 var: downsample(&v.data, m.width, k, true),
-                source: format!("Mitsuba 3 (`{}`{})", mp.display(), if k > 1 { format!(", averaged over {k}x{k} pixels") } else { String::new() }),
-                    });
+                source: format!(
+                    "Mitsuba 3 (`{}`{})",
+                    mp.display(),
+                    if k > 1 {
+                        format!(", averaged over {k}x{k} pixels")
+                    } else {
+                        String::new()
+                    }
+                ),
+            });
         }
-        bail!("the reference '{}' is {}x{}, not a multiple of the {w}x{h} render", mp.display(), m.width, m.height);
+        bail!(
+            "the reference '{}' is {}x{}, not a multiple of the {w}x{h} render",
+            mp.display(),
+            m.width,
+            m.height
+        );
     }
-    let s = RenderSettings { seed: FALLBACK_SEED, path: pt_render::PathSettings { strategy: Strategy::Mis, ..settings.path }, ..settings.clone() };
+    let s = RenderSettings {
+        seed: FALLBACK_SEED,
+        path: pt_render::PathSettings {
+            strategy: Strategy::Mis,
+            ..settings.path
+        },
+        ..settings.clone()
+    };
     let out = render_within(scene, &s, Budget::Spp(fallback_spp));
     Ok(Reference {
         mean: out.mean,
         var: out.variance,
-        source: format!("pt's own MIS render at {fallback_spp} spp (no Mitsuba reference `{}`)", mp.display()),
+        source: format!(
+            "pt's own MIS render at {fallback_spp} spp (no Mitsuba reference `{}`)",
+            mp.display()
+        ),
     })
 }
 
@@ -238,10 +335,15 @@ pub(crate) fn region_error(img: &[[f32; 3]], r: &Reference, pixels: &[usize]) ->
     const W: [f64; 3] = [0.2126, 0.7152, 0.0722]; // Rec.709 luminance weights, as `luminance`
     let (mut se, mut s2, mut sv) = (0.0f64, 0.0f64, 0.0f64);
     for &i in pixels {
-        let (a, b) = (f64::from(luminance(img[i])), f64::from(luminance(r.mean[i])));
+        let (a, b) = (
+            f64::from(luminance(img[i])),
+            f64::from(luminance(r.mean[i])),
+        );
         se += (a - b) * (a - b);
         s2 += b * b;
-        let sd: f64 = (0..3).map(|c| W[c] * f64::from(r.var[i][c].max(0.0)).sqrt()).sum();
+        let sd: f64 = (0..3)
+            .map(|c| W[c] * f64::from(r.var[i][c].max(0.0)).sqrt())
+            .sum();
         sv += sd * sd;
     }
     let d = s2.max(1e-30);
@@ -250,13 +352,20 @@ pub(crate) fn region_error(img: &[[f32; 3]], r: &Reference, pixels: &[usize]) ->
 
 /// Mean of `img` over `pixels` divided by the reference's, minus 1 (luminance).
 fn mean_bias(img: &[[f32; 3]], r: &Reference, pixels: &[usize]) -> f64 {
-    let (a, b) = pixels.iter().fold((0.0f64, 0.0f64), |(a, b), &i| (a + f64::from(luminance(img[i])), b + f64::from(luminance(r.mean[i]))));
+    let (a, b) = pixels.iter().fold((0.0f64, 0.0f64), |(a, b), &i| {
+        (
+            a + f64::from(luminance(img[i])),
+            b + f64::from(luminance(r.mean[i])),
+        )
+    });
     a / b.max(1e-30) - 1.0
 }
 
 /// Pixel indices of a rectangle (row0, row1, col0, col1; half-open) in a `w`-wide image.
 fn rect(w: u32, r: (u32, u32, u32, u32)) -> Vec<usize> {
-    (r.0..r.1).flat_map(|y| (r.2..r.3).map(move |x| (y * w + x) as usize)).collect()
+    (r.0..r.1)
+        .flat_map(|y| (r.2..r.3).map(move |x| (y * w + x) as usize))
+        .collect()
 }
 
 /// One method's panel of a study: its error per region.
@@ -294,8 +403,17 @@ pub(crate) struct Study {
 
 /// Loads an embedded atlas scene with its film size divided by `shrink` (the camera is built
 /// for the film size, so this happens before the scene is built).
-fn load(xml: &str, name: &str, shrink: u32) -> Result<(Scene, RenderSettings, pt_scene::SceneDesc)> {
-    let mut desc = pt_scene::load_str(xml, Path::new(&format!("scenes/atlas/{name}.xml")), Path::new("."), &[])?;
+fn load(
+    xml: &str,
+    name: &str,
+    shrink: u32,
+) -> Result<(Scene, RenderSettings, pt_scene::SceneDesc)> {
+    let mut desc = pt_scene::load_str(
+        xml,
+        Path::new(&format!("scenes/atlas/{name}.xml")),
+        Path::new("."),
+        &[],
+    )?;
     desc.film.width /= shrink;
     desc.film.height /= shrink;
     let scene = Scene::build(&desc, BvhKind::Auto, LightSelection::Power)?;
@@ -304,7 +422,14 @@ fn load(xml: &str, name: &str, shrink: u32) -> Result<(Scene, RenderSettings, pt
 }
 
 fn with_strategy(base: &RenderSettings, strategy: Strategy) -> RenderSettings {
-    RenderSettings { seed: SEED, path: pt_render::PathSettings { strategy, ..base.path }, ..base.clone() }
+    RenderSettings {
+        seed: SEED,
+        path: pt_render::PathSettings {
+            strategy,
+            ..base.path
+        },
+        ..base.clone()
+    }
 }
 
 /// Options of a study run.
@@ -322,12 +447,20 @@ pub(crate) struct Opts {
     pub fallback_spp: u32,
 }
 
-const STRATEGIES: [(&str, Strategy); 3] = [("BSDF sampling", Strategy::Bsdf), ("light sampling", Strategy::Light), ("MIS", Strategy::Mis)];
+const STRATEGIES: [(&str, Strategy); 3] = [
+    ("BSDF sampling", Strategy::Bsdf),
+    ("light sampling", Strategy::Light),
+    ("MIS", Strategy::Mis),
+];
 
 /// Renders MIS at `o.spp`, then BSDF and light sampling at its time (or spp); returns the three
 /// outputs in the order of [`STRATEGIES`].
 fn three_strategies(scene: &Scene, base: &RenderSettings, o: &Opts) -> [RenderOutput; 3] {
-    let mis = render_within(scene, &with_strategy(base, Strategy::Mis), Budget::Spp(o.spp));
+    let mis = render_within(
+        scene,
+        &with_strategy(base, Strategy::Mis),
+        Budget::Spp(o.spp),
+    );
     let budget = match o.equal {
         Equal::Time => Budget::Time(mis.time),
         Equal::Spp => Budget::Spp(o.spp),
@@ -339,7 +472,10 @@ fn three_strategies(scene: &Scene, base: &RenderSettings, o: &Opts) -> [RenderOu
 
 fn budget_words(o: &Opts) -> String {
     match o.equal {
-        Equal::Time => format!("equal time: MIS renders {} spp and the other strategies get its wall time", o.spp),
+        Equal::Time => format!(
+            "equal time: MIS renders {} spp and the other strategies get its wall time",
+            o.spp
+        ),
         Equal::Spp => format!("equal samples: {} spp each", o.spp),
     }
 }
@@ -351,15 +487,27 @@ fn budget_words(o: &Opts) -> String {
 /// (partly background) stay out.
 fn veach_regions(w: u32, h: u32) -> [[(u32, u32, u32, u32); 4]; 4] {
     let f = (w as f32 / 2.0) / 23f32.to_radians().tan();
-    let row = |y: f32, z: f32| (h as f32 / 2.0 - f * y / (10.0 - z)).round().clamp(0.0, h as f32) as u32;
+    let row = |y: f32, z: f32| {
+        (h as f32 / 2.0 - f * y / (10.0 - z))
+            .round()
+            .clamp(0.0, h as f32) as u32
+    };
     let col = |x: f32| (w as f32 / 2.0 + f * x / 10.0).round().clamp(0.0, w as f32) as u32;
     let mut out = [[(0, 0, 0, 0); 4]; 4];
     for p in 0..4 {
         let a = PLATE_TILT_DEG[p].to_radians();
         // Rotation about x by a maps (0, +-0.4, 0) to (0, +-0.4 cos a, +-0.4 sin a).
-        let (top, bottom) = (row(PLATE_Y[p] + 0.4 * a.cos(), 0.4 * a.sin()), row(PLATE_Y[p] - 0.4 * a.cos(), -0.4 * a.sin()));
+        let (top, bottom) = (
+            row(PLATE_Y[p] + 0.4 * a.cos(), 0.4 * a.sin()),
+            row(PLATE_Y[p] - 0.4 * a.cos(), -0.4 * a.sin()),
+        );
         for l in 0..4 {
-            out[p][l] = (top + 1, bottom.saturating_sub(1), col(BANDS_X[l]) + 1, col(BANDS_X[l + 1]).saturating_sub(1));
+            out[p][l] = (
+                top + 1,
+                bottom.saturating_sub(1),
+                col(BANDS_X[l]) + 1,
+                col(BANDS_X[l + 1]).saturating_sub(1),
+            );
         }
     }
     out
@@ -382,7 +530,12 @@ pub(crate) fn veach(o: &Opts) -> Result<Study> {
                 ref_noise[p][l] = n;
             }
         }
-        panels.push(Panel { name: name.to_string(), cells, spp: vec![out.spp; 4], secs: vec![out.time.as_secs_f64(); 4] });
+        panels.push(Panel {
+            name: name.to_string(),
+            cells,
+            spp: vec![out.spp; 4],
+            secs: vec![out.time.as_secs_f64(); 4],
+        });
     }
     let text = format!(
         "Scene `scenes/atlas/veach-mis.xml` (in the style of Veach 1997, thesis fig. 9.2, written for this project): \
@@ -413,17 +566,31 @@ pub(crate) fn veach(o: &Opts) -> Result<Study> {
 /// The caustic and rest regions of a `w x h` caustic image.
 fn caustic_regions(w: u32, h: u32) -> [Vec<usize>; 2] {
     let (r0, r1, c0, c1) = CAUSTIC_FRAC;
-    let r = ((r0 * h as f32).round() as u32, (r1 * h as f32).round() as u32, (c0 * w as f32).round() as u32, (c1 * w as f32).round() as u32);
+    let r = (
+        (r0 * h as f32).round() as u32,
+        (r1 * h as f32).round() as u32,
+        (c0 * w as f32).round() as u32,
+        (c1 * w as f32).round() as u32,
+    );
     let caustic = rect(w, r);
     let inside: std::collections::HashSet<usize> = caustic.iter().copied().collect();
-    let rest = (0..(w * h) as usize).filter(|i| !inside.contains(i)).collect();
+    let rest = (0..(w * h) as usize)
+        .filter(|i| !inside.contains(i))
+        .collect();
     [caustic, rest]
 }
 
 /// The caustic study (on the current rayon pool). `radii` selects scenes of [`CAUSTIC`] by index.
 pub(crate) fn caustic(o: &Opts, radii: &[usize]) -> Result<Study> {
-    let mut panels: Vec<Panel> =
-        STRATEGIES.iter().map(|(n, _)| Panel { name: n.to_string(), cells: vec![Vec::new(), Vec::new()], spp: Vec::new(), secs: Vec::new() }).collect();
+    let mut panels: Vec<Panel> = STRATEGIES
+        .iter()
+        .map(|(n, _)| Panel {
+            name: n.to_string(),
+            cells: vec![Vec::new(), Vec::new()],
+            spp: Vec::new(),
+            secs: Vec::new(),
+        })
+        .collect();
     let mut ref_noise = vec![Vec::new(), Vec::new()];
     let mut sources = Vec::new();
     let mut size = (0, 0);
@@ -494,7 +661,15 @@ fn radiosity_regions(w: u32, h: u32) -> Vec<Vec<usize>> {
     let mut out: Vec<Vec<usize>> = (0..6)
         .map(|i| {
             let (x0, x1) = (-1.0 + i as f32 / 3.0, -1.0 + (i + 1) as f32 / 3.0);
-            rect(w, (row(1.0) + 1, row(-1.0).saturating_sub(1), col(x0) + 1, col(x1).saturating_sub(1)))
+            rect(
+                w,
+                (
+                    row(1.0) + 1,
+                    row(-1.0).saturating_sub(1),
+                    col(x0) + 1,
+                    col(x1).saturating_sub(1),
+                ),
+            )
         })
         .collect();
     let (c0, c1, r0, r1) = (col(-1.0), col(1.0), row(1.0), row(-1.0));
@@ -509,10 +684,22 @@ fn radiosity_regions(w: u32, h: u32) -> Vec<Vec<usize>> {
 /// The radiosity study (on the current rayon pool).
 pub(crate) fn radiosity(o: &Opts) -> Result<Study> {
     let (scene, base, desc) = load(RADIOSITY, "radiosity-glossy", o.shrink)?;
-    let reference = reference(&o.references, "radiosity-glossy", &scene, &base, o.fallback_spp)?;
+    let reference = reference(
+        &o.references,
+        "radiosity-glossy",
+        &scene,
+        &base,
+        o.fallback_spp,
+    )?;
     let regions = radiosity_regions(base.width, base.height);
-    let params = pt_radiosity::RadiosityParams { patch_size: Some(RADIOSITY_PATCH * o.shrink as f32), rays_per_patch: RADIOSITY_RAYS / o.shrink, seed: SEED, ..Default::default() };
-    let (rad, stats) = pt_radiosity::render(&desc, &params, &|_, _| {}).map_err(|e| anyhow!("radiosity: {e}"))?;
+    let params = pt_radiosity::RadiosityParams {
+        patch_size: Some(RADIOSITY_PATCH * o.shrink as f32),
+        rays_per_patch: RADIOSITY_RAYS / o.shrink,
+        seed: SEED,
+        ..Default::default()
+    };
+    let (rad, stats) =
+        pt_radiosity::render(&desc, &params, &|_, _| {}).map_err(|e| anyhow!("radiosity: {e}"))?;
     let budget = match o.equal {
         Equal::Time => Budget::Time(rad.time),
         Equal::Spp => Budget::Spp(o.spp),
@@ -529,9 +716,18 @@ pub(crate) fn radiosity(o: &Opts) -> Result<Study> {
             cells[1][g] = mean_bias(&out.mean, &reference, pixels).abs();
             ref_noise[0][g] = noise;
         }
-        panels.push(Panel { name: name.to_string(), cells, spp: vec![out.spp; n], secs: vec![out.time.as_secs_f64(); n] });
+        panels.push(Panel {
+            name: name.to_string(),
+            cells,
+            spp: vec![out.spp; n],
+            secs: vec![out.time.as_secs_f64(); n],
+        });
     }
-    let warning = stats.warnings.first().map(|w| w.split(": ").last().unwrap_or(w).to_string()).unwrap_or_default();
+    let warning = stats
+        .warnings
+        .first()
+        .map(|w| w.split(": ").last().unwrap_or(w).to_string())
+        .unwrap_or_default();
     let text = format!(
         "Scene `scenes/atlas/radiosity-glossy.xml` (written for this project): a closed box lit by its whole ceiling, \
          {}x{} pixels; the back wall is six strips, left to right a diffuse 0.5 control and GGX conductors of alpha \
@@ -562,7 +758,11 @@ pub(crate) fn radiosity(o: &Opts) -> Result<Study> {
         row_label: "error".into(),
         col_label: "back-wall strip (alpha)".into(),
         rows: vec!["rel. RMSE".into(), "mean bias (abs.)".into()],
-        cols: STRIP_ALPHA.iter().map(|a| a.map_or("diffuse".to_string(), |a| a.to_string())).chain(std::iter::once("walls".to_string())).collect(),
+        cols: STRIP_ALPHA
+            .iter()
+            .map(|a| a.map_or("diffuse".to_string(), |a| a.to_string()))
+            .chain(std::iter::once("walls".to_string()))
+            .collect(),
         panels,
         ref_noise,
         text,
@@ -574,20 +774,39 @@ pub(crate) fn study_report(s: &Study) -> String {
     let mut md = String::new();
     let _ = writeln!(md, "## {}\n\n{}\n", s.title, s.text);
     let header = |md: &mut String| {
-        let _ = writeln!(md, "| {} \\ {} | {} |", s.row_label, s.col_label, s.cols.join(" | "));
+        let _ = writeln!(
+            md,
+            "| {} \\ {} | {} |",
+            s.row_label,
+            s.col_label,
+            s.cols.join(" | ")
+        );
         let _ = writeln!(md, "|---|{}", "---|".repeat(s.cols.len()));
     };
     for p in &s.panels {
-        let same = p.spp.windows(2).all(|w| w[0] == w[1]) && p.secs.windows(2).all(|w| (w[0] - w[1]).abs() < 1e-9);
+        let same = p.spp.windows(2).all(|w| w[0] == w[1])
+            && p.secs.windows(2).all(|w| (w[0] - w[1]).abs() < 1e-9);
         if same {
-            let _ = writeln!(md, "**{}** ({} spp in {:.2} s)\n", p.name, p.spp[0], p.secs[0]);
+            let _ = writeln!(
+                md,
+                "**{}** ({} spp in {:.2} s)\n",
+                p.name, p.spp[0], p.secs[0]
+            );
         } else {
-            let cols: Vec<String> = p.spp.iter().zip(&p.secs).map(|(n, t)| format!("{n} spp / {t:.2} s")).collect();
+            let cols: Vec<String> = p
+                .spp
+                .iter()
+                .zip(&p.secs)
+                .map(|(n, t)| format!("{n} spp / {t:.2} s"))
+                .collect();
             let _ = writeln!(md, "**{}** (per column: {})\n", p.name, cols.join(", "));
         }
         header(&mut md);
         for (r, row) in s.rows.iter().enumerate() {
-            let cells: Vec<String> = p.cells[r].iter().map(|e| format!("{:.1}%", 100.0 * e)).collect();
+            let cells: Vec<String> = p.cells[r]
+                .iter()
+                .map(|e| format!("{:.1}%", 100.0 * e))
+                .collect();
             let _ = writeln!(md, "| {} | {} |", row, cells.join(" | "));
         }
         let _ = writeln!(md);
@@ -598,7 +817,16 @@ pub(crate) fn study_report(s: &Study) -> String {
         if s.ref_noise[r].iter().all(|v| v.is_nan()) {
             continue;
         }
-        let cells: Vec<String> = s.ref_noise[r].iter().map(|e| if e.is_nan() { "-".to_string() } else { format!("{:.2}%", 100.0 * e) }).collect();
+        let cells: Vec<String> = s.ref_noise[r]
+            .iter()
+            .map(|e| {
+                if e.is_nan() {
+                    "-".to_string()
+                } else {
+                    format!("{:.2}%", 100.0 * e)
+                }
+            })
+            .collect();
         let _ = writeln!(md, "| {} | {} |", row, cells.join(" | "));
     }
     let _ = writeln!(md, "\n![{}](atlas-{}.svg)\n", s.title, s.key);
@@ -608,11 +836,17 @@ pub(crate) fn study_report(s: &Study) -> String {
 /// Heat maps (one panel per method) of the errors, value written in each cell; SVG and PNG.
 pub(crate) fn study_charts(s: &Study) -> Result<(String, Vec<u8>)> {
     let size: (u32, u32) = (1200, 110 + 80 * s.rows.len() as u32);
-    Ok((crate::converge::chart_svg(s, size, "the atlas")?, crate::converge::chart_png(s, size, "the atlas")?))
+    Ok((
+        crate::converge::chart_svg(s, size, "the atlas")?,
+        crate::converge::chart_png(s, size, "the atlas")?,
+    ))
 }
 
 impl crate::converge::Chart for Study {
-    fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> std::result::Result<(), String>
+    fn draw_on<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+    ) -> std::result::Result<(), String>
     where
         DB::ErrorType: 'static,
     {
@@ -630,7 +864,11 @@ fn cell_index(v: f64) -> Option<usize> {
 /// beyond (red).
 fn heat(e: f64) -> RGBColor {
     let t = ((e.max(1e-3).log10() + 2.0) / 2.0).clamp(0.0, 1.0);
-    let (r, g) = if t < 0.5 { (2.0 * t, 1.0) } else { (1.0, 2.0 * (1.0 - t)) };
+    let (r, g) = if t < 0.5 {
+        (2.0 * t, 1.0)
+    } else {
+        (1.0, 2.0 * (1.0 - t))
+    };
     RGBColor((60.0 + 195.0 * r) as u8, (60.0 + 170.0 * g) as u8, 70)
 }
 
@@ -642,7 +880,10 @@ fn fmt_pct(e: f64) -> String {
     }
 }
 
-fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &Study) -> std::result::Result<(), Box<dyn std::error::Error>>
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    s: &Study,
+) -> std::result::Result<(), Box<dyn std::error::Error>>
 where
     DB::ErrorType: 'static,
 {
@@ -650,10 +891,24 @@ where
     let (nr, nc) = (s.rows.len(), s.cols.len());
     let panels = root.split_evenly((1, s.panels.len()));
     for (p, area) in s.panels.iter().zip(panels.iter()) {
-        let (s0, s1) = (p.spp.iter().min().copied().unwrap_or(0), p.spp.iter().max().copied().unwrap_or(0));
-        let (t0, t1) = (p.secs.iter().copied().fold(f64::INFINITY, f64::min), p.secs.iter().copied().fold(0.0, f64::max));
-        let spp = if s0 == s1 { s0.to_string() } else { format!("{s0}-{s1}") };
-        let secs = if t1 - t0 < 0.005 { format!("{t0:.2}") } else { format!("{t0:.2}-{t1:.2}") };
+        let (s0, s1) = (
+            p.spp.iter().min().copied().unwrap_or(0),
+            p.spp.iter().max().copied().unwrap_or(0),
+        );
+        let (t0, t1) = (
+            p.secs.iter().copied().fold(f64::INFINITY, f64::min),
+            p.secs.iter().copied().fold(0.0, f64::max),
+        );
+        let spp = if s0 == s1 {
+            s0.to_string()
+        } else {
+            format!("{s0}-{s1}")
+        };
+        let secs = if t1 - t0 < 0.005 {
+            format!("{t0:.2}")
+        } else {
+            format!("{t0:.2}-{t1:.2}")
+        };
         let caption = format!("{} ({spp} spp, {secs} s)", p.name);
         let mut c = ChartBuilder::on(area)
             .caption(caption, ("sans-serif", 17))
@@ -665,8 +920,18 @@ where
             .disable_mesh()
             .x_labels(2 * nc + 1)
             .y_labels(2 * nr + 1)
-            .x_label_formatter(&|x| cell_index(*x).and_then(|i| s.cols.get(i)).cloned().unwrap_or_default())
-            .y_label_formatter(&|y| cell_index(*y).and_then(|i| s.rows.get((nr - 1).checked_sub(i)?)).cloned().unwrap_or_default())
+            .x_label_formatter(&|x| {
+                cell_index(*x)
+                    .and_then(|i| s.cols.get(i))
+                    .cloned()
+                    .unwrap_or_default()
+            })
+            .y_label_formatter(&|y| {
+                cell_index(*y)
+                    .and_then(|i| s.rows.get((nr - 1).checked_sub(i)?))
+                    .cloned()
+                    .unwrap_or_default()
+            })
             .x_desc(s.col_label.as_str())
             .y_desc(s.row_label.as_str())
             .label_style(("sans-serif", 12))
@@ -676,8 +941,15 @@ where
             for k in 0..nc {
                 let e = p.cells[r][k];
                 let y0 = (nr - 1 - r) as f64;
-                c.draw_series(std::iter::once(Rectangle::new([(k as f64, y0), (k as f64 + 1.0, y0 + 1.0)], heat(e).filled())))?;
-                c.draw_series(std::iter::once(Text::new(fmt_pct(e), (k as f64 + 0.12, y0 + 0.6), ("sans-serif", font).into_font())))?;
+                c.draw_series(std::iter::once(Rectangle::new(
+                    [(k as f64, y0), (k as f64 + 1.0, y0 + 1.0)],
+                    heat(e).filled(),
+                )))?;
+                c.draw_series(std::iter::once(Text::new(
+                    fmt_pct(e),
+                    (k as f64 + 0.12, y0 + 0.6),
+                    ("sans-serif", font).into_font(),
+                )))?;
             }
         }
     }
@@ -690,8 +962,15 @@ pub fn run(args: AtlasArgs) -> Result<ExitCode> {
         bail!("--spp must be at least 1");
     }
     let pool = crate::thread_pool(args.threads)?;
-    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create the folder '{}'", args.out.display()))?;
-    let o = Opts { equal: args.equal, spp: 64, references: args.references.clone(), shrink: 1, fallback_spp: 4096 };
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create the folder '{}'", args.out.display()))?;
+    let o = Opts {
+        equal: args.equal,
+        spp: 64,
+        references: args.references.clone(),
+        shrink: 1,
+        fallback_spp: 4096,
+    };
     let mut md = String::from(
         "# Method failure atlas\n\nWhere each rendering method fails, measured: per-region error against a reference. \
          Made by `pt atlas` (see `crates/cli/atlas.rs`).\n\n",
@@ -704,16 +983,34 @@ pub fn run(args: AtlasArgs) -> Result<ExitCode> {
             eprintln!("atlas: {w:?} ...");
         }
         let study = pool.install(|| match w {
-            Which::Veach => veach(&Opts { spp: args.spp.unwrap_or(64), ..o.clone() }),
-            Which::Caustic => caustic(&Opts { spp: args.spp.unwrap_or(1024), ..o.clone() }, &[0, 1, 2, 3, 4]),
-            Which::Radiosity => radiosity(&Opts { spp: args.spp.unwrap_or(64), ..o.clone() }),
+            Which::Veach => veach(&Opts {
+                spp: args.spp.unwrap_or(64),
+                ..o.clone()
+            }),
+            Which::Caustic => caustic(
+                &Opts {
+                    spp: args.spp.unwrap_or(1024),
+                    ..o.clone()
+                },
+                &[0, 1, 2, 3, 4],
+            ),
+            Which::Radiosity => radiosity(&Opts {
+                spp: args.spp.unwrap_or(64),
+                ..o.clone()
+            }),
         })?;
         let (svg, png) = study_charts(&study)?;
-        crate::converge::write_atomic(&args.out.join(format!("atlas-{}.svg", study.key)), svg.as_bytes())?;
+        crate::converge::write_atomic(
+            &args.out.join(format!("atlas-{}.svg", study.key)),
+            svg.as_bytes(),
+        )?;
         crate::converge::write_atomic(&args.out.join(format!("atlas-{}.png", study.key)), &png)?;
         md.push_str(&study_report(&study));
         if !args.quiet {
-            eprintln!("atlas: {w:?} done in {:.1} s", start.elapsed().as_secs_f64());
+            eprintln!(
+                "atlas: {w:?} done in {:.1} s",
+                start.elapsed().as_secs_f64()
+            );
         }
     }
     crate::converge::write_atomic(&args.out.join("report.md"), md.as_bytes())?;
@@ -732,7 +1029,13 @@ mod tests {
     use super::*;
 
     fn opts(shrink: u32, spp: u32) -> Opts {
-        Opts { equal: Equal::Spp, spp, references: PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/references/atlas")), shrink, fallback_spp: 1024 }
+        Opts {
+            equal: Equal::Spp,
+            spp,
+            references: PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/references/atlas")),
+            shrink,
+            fallback_spp: 1024,
+        }
     }
 
     fn show(s: &Study) {
@@ -765,16 +1068,38 @@ mod tests {
     fn veach_bsdf_fails_on_rough_small_light_fails_on_smooth_large_mis_never_much_worse() {
         let s = veach(&opts(2, 16)).unwrap();
         show(&s);
-        assert!(s.text.contains("Reference: Mitsuba 3"), "the Mitsuba reference was not used: {}", s.text);
-        let (b, l, m) = (panel(&s, "BSDF sampling"), panel(&s, "light sampling"), panel(&s, "MIS"));
-        assert!(b.cells[3][0] > 4.0 * m.cells[3][0], "rough plate, small light: BSDF {} vs MIS {}", b.cells[3][0], m.cells[3][0]);
-        assert!(l.cells[0][3] > 4.0 * m.cells[0][3], "smooth plate, large light: light {} vs MIS {}", l.cells[0][3], m.cells[0][3]);
+        assert!(
+            s.text.contains("Reference: Mitsuba 3"),
+            "the Mitsuba reference was not used: {}",
+            s.text
+        );
+        let (b, l, m) = (
+            panel(&s, "BSDF sampling"),
+            panel(&s, "light sampling"),
+            panel(&s, "MIS"),
+        );
+        assert!(
+            b.cells[3][0] > 4.0 * m.cells[3][0],
+            "rough plate, small light: BSDF {} vs MIS {}",
+            b.cells[3][0],
+            m.cells[3][0]
+        );
+        assert!(
+            l.cells[0][3] > 4.0 * m.cells[0][3],
+            "smooth plate, large light: light {} vs MIS {}",
+            l.cells[0][3],
+            m.cells[0][3]
+        );
         let n = 16.0f64;
         for p in 0..4 {
             for k in 0..4 {
                 let best = b.cells[p][k].min(l.cells[p][k]);
                 let bound = (best * best + 1.0 / (2.0 * n)).sqrt();
-                assert!(m.cells[p][k] < 1.5 * bound, "plate {p} light {k}: MIS {} vs best {best}, bound {bound}", m.cells[p][k]);
+                assert!(
+                    m.cells[p][k] < 1.5 * bound,
+                    "plate {p} light {k}: MIS {} vs best {best}, bound {bound}",
+                    m.cells[p][k]
+                );
             }
         }
     }
@@ -792,11 +1117,23 @@ mod tests {
     fn caustic_error_explodes_as_the_light_shrinks_for_every_strategy() {
         let s = caustic(&opts(1, 256), &[0, 4]).unwrap();
         show(&s);
-        assert!(s.text.contains("References: Mitsuba 3"), "the Mitsuba references were not used: {}", s.text);
+        assert!(
+            s.text.contains("References: Mitsuba 3"),
+            "the Mitsuba references were not used: {}",
+            s.text
+        );
         for p in &s.panels {
             let (small, large) = (p.cells[0][0], p.cells[0][1]);
-            assert!(small > 0.9, "{}: caustic error {small} under the 0.01 light", p.name);
-            assert!(small > 4.0 * large, "{}: caustic error {small} (r 0.01) vs {large} (r 1)", p.name);
+            assert!(
+                small > 0.9,
+                "{}: caustic error {small} under the 0.01 light",
+                p.name
+            );
+            assert!(
+                small > 4.0 * large,
+                "{}: caustic error {small} (r 0.01) vs {large} (r 1)",
+                p.name
+            );
         }
     }
 
@@ -811,11 +1148,31 @@ mod tests {
     fn radiosity_error_grows_with_glossiness() {
         let s = radiosity(&opts(2, 16)).unwrap();
         show(&s);
-        assert!(s.text.contains("Reference: Mitsuba 3"), "the Mitsuba reference was not used: {}", s.text);
-        let (r, p) = (&panel(&s, "radiosity").cells[0], &panel(&s, "path tracing (MIS)").cells[0]);
-        assert!(r[5] > 4.0 * r[0], "radiosity: alpha 0.01 strip {} vs diffuse strip {}", r[5], r[0]);
-        assert!(r[5] > 3.0 * p[5], "alpha 0.01 strip: radiosity {} vs path tracing {}", r[5], p[5]);
-        assert!(r[1] < r[3] && r[3] < r[5], "radiosity error not growing with glossiness: {r:?}");
+        assert!(
+            s.text.contains("Reference: Mitsuba 3"),
+            "the Mitsuba reference was not used: {}",
+            s.text
+        );
+        let (r, p) = (
+            &panel(&s, "radiosity").cells[0],
+            &panel(&s, "path tracing (MIS)").cells[0],
+        );
+        assert!(
+            r[5] > 4.0 * r[0],
+            "radiosity: alpha 0.01 strip {} vs diffuse strip {}",
+            r[5],
+            r[0]
+        );
+        assert!(
+            r[5] > 3.0 * p[5],
+            "alpha 0.01 strip: radiosity {} vs path tracing {}",
+            r[5],
+            p[5]
+        );
+        assert!(
+            r[1] < r[3] && r[3] < r[5],
+            "radiosity error not growing with glossiness: {r:?}"
+        );
     }
 
     /// The equal-time render is an ordinary render at the sample count it reached: the same

@@ -70,7 +70,11 @@ pub struct ConvergeArgs {
     #[arg(long, value_name = "REF.exr")]
     pub reference: PathBuf,
     /// Sample counts per pixel, comma separated: one render (one point) each.
-    #[arg(long, value_delimiter = ',', default_value = "1,2,4,8,16,32,64,128,256,512,1024")]
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "1,2,4,8,16,32,64,128,256,512,1024"
+    )]
     pub spp: Vec<u32>,
     /// Direct-light strategies of pt, comma separated: one curve each.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "mis")]
@@ -231,7 +235,11 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
     }
     let defines = crate::parse_defines(&args.defines)?;
     let out_dir = args.out.clone().unwrap_or_else(|| {
-        let stem = args.scene.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
+        let stem = args
+            .scene
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "scene".into());
         PathBuf::from(format!("converge-{stem}"))
     });
 
@@ -239,7 +247,8 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
     if !args.reference.is_file() {
         bail!("reference '{}' not found", args.reference.display());
     }
-    let (reference, _) = pt_image::read_exr(&args.reference).with_context(|| format!("cannot read the reference '{}'", args.reference.display()))?;
+    let (reference, _) = pt_image::read_exr(&args.reference)
+        .with_context(|| format!("cannot read the reference '{}'", args.reference.display()))?;
     let load_start = Instant::now();
     let desc = pt_scene::load_file(&args.scene, &defines)?;
     if (desc.film.width, desc.film.height) != (reference.width, reference.height) {
@@ -254,9 +263,13 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
         );
     }
     if reference.nonfinite_pixels() > 0 {
-        eprintln!("warning: the reference has {} non-finite pixels; they are left out of the errors", reference.nonfinite_pixels());
+        eprintln!(
+            "warning: the reference has {} non-finite pixels; they are left out of the errors",
+            reference.nonfinite_pixels()
+        );
     }
-    std::fs::create_dir_all(&out_dir).with_context(|| format!("cannot create the output folder '{}'", out_dir.display()))?;
+    std::fs::create_dir_all(&out_dir)
+        .with_context(|| format!("cannot create the output folder '{}'", out_dir.display()))?;
     let pool = {
         let mut b = rayon::ThreadPoolBuilder::new();
         if let Some(t) = args.threads {
@@ -282,7 +295,11 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
     let mode_scenes: Vec<Scene> = modes
         .iter()
         .flatten()
-        .map(|m| pool.install(|| Scene::build_with_mode(&desc, BvhKind::Auto, LightSelection::Power, Some(m.mode()))))
+        .map(|m| {
+            pool.install(|| {
+                Scene::build_with_mode(&desc, BvhKind::Auto, LightSelection::Power, Some(m.mode()))
+            })
+        })
         .collect::<Result<_, _>>()?;
     let mut summary = String::new();
     let _ = writeln!(
@@ -296,7 +313,10 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
         args.reference.display(),
         pool.current_num_threads()
     );
-    let _ = writeln!(summary, "pt scene load {load_s:.4} s, build (BVH, lights) {build_s:.4} s: not in the render times");
+    let _ = writeln!(
+        summary,
+        "pt scene load {load_s:.4} s, build (BVH, lights) {build_s:.4} s: not in the render times"
+    );
     eprint!("{}", summary);
 
     let mut all: Vec<Series> = Vec::new();
@@ -312,31 +332,63 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
         settings.path.max_depth = d;
     }
     for (k, mode) in modes.iter().enumerate() {
-        let scene = if mode.is_some() { &mode_scenes[k] } else { &scene };
+        let scene = if mode.is_some() {
+            &mode_scenes[k]
+        } else {
+            &scene
+        };
         // Untimed warm-up (page faults, thread start-up), as Mitsuba gets one.
-        pool.install(|| pt_render::render(scene, &RenderSettings { spp: 1, seed: args.seed.wrapping_add(1_000_000), ..settings.clone() }, &|_| {}));
+        pool.install(|| {
+            pt_render::render(
+                scene,
+                &RenderSettings {
+                    spp: 1,
+                    seed: args.seed.wrapping_add(1_000_000),
+                    ..settings.clone()
+                },
+                &|_| {},
+            )
+        });
         for strategy in &strategies {
             let name = match mode {
                 None => format!("pt-{}", strategy.name()),
                 Some(m) => format!("pt-{}-{}", m.mode().name(), strategy.name()),
             };
             let dir = out_dir.join(&name);
-            std::fs::create_dir_all(&dir).with_context(|| format!("cannot create '{}'", dir.display()))?;
+            std::fs::create_dir_all(&dir)
+                .with_context(|| format!("cannot create '{}'", dir.display()))?;
             let mut points = Vec::new();
             for &n in &spp {
-                let s = RenderSettings { spp: n, path: pt_render::PathSettings { strategy: strategy.strategy(), ..settings.path }, ..settings.clone() };
+                let s = RenderSettings {
+                    spp: n,
+                    path: pt_render::PathSettings {
+                        strategy: strategy.strategy(),
+                        ..settings.path
+                    },
+                    ..settings.clone()
+                };
                 let out = pool.install(|| pt_render::render(scene, &s, &|_| {}));
-                let image = Image { width: out.width, height: out.height, data: out.mean };
+                let image = Image {
+                    width: out.width,
+                    height: out.height,
+                    data: out.mean,
+                };
                 let meta = ExrMeta {
                     spp: Some(n),
                     mode: Some(scene.mode.name().to_string()),
                     render_time_s: Some(out.time.as_secs_f64()),
-                    extra: vec![("strategy".into(), strategy.name().into()), ("seed".into(), args.seed.to_string())],
+                    extra: vec![
+                        ("strategy".into(), strategy.name().into()),
+                        ("seed".into(), args.seed.to_string()),
+                    ],
                 };
                 pt_image::write_exr(&dir.join(format!("spp{n}.exr")), &image, &meta)?;
                 let p = measure(&image, &reference, n, out.time.as_secs_f64(), &name)?;
                 if out.nonfinite_samples > 0 {
-                    eprintln!("warning: {name} at {n} spp: {} NaN or infinite samples were left out", out.nonfinite_samples);
+                    eprintln!(
+                        "warning: {name} at {n} spp: {} NaN or infinite samples were left out",
+                        out.nonfinite_samples
+                    );
                 }
                 points.push(p);
             }
@@ -345,26 +397,44 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
     }
 
     if !args.radiosity_patch_sizes.is_empty() {
-        all.push(run_radiosity(&args, &desc, &settings, &out_dir, &reference, &pool)?);
+        all.push(run_radiosity(
+            &args, &desc, &settings, &out_dir, &reference, &pool,
+        )?);
     }
 
     let csv = out_dir.join("converge.csv");
     let mut text = String::from("series,spp,seconds,relmse,rmse,flip\n");
     for s in &all {
         for p in &s.points {
-            let _ = writeln!(text, "{},{},{:.6},{:.6e},{:.6e},{:.6}", s.name, p.spp, p.seconds, p.relmse, p.rmse, p.flip);
+            let _ = writeln!(
+                text,
+                "{},{},{:.6},{:.6e},{:.6e},{:.6}",
+                s.name, p.spp, p.seconds, p.relmse, p.rmse, p.flip
+            );
         }
     }
     write_atomic(&csv, text.as_bytes())?;
 
-    let title = format!("{}: relMSE against render time (lower left is better)", args.scene.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default());
+    let title = format!(
+        "{}: relMSE against render time (lower left is better)",
+        args.scene
+            .file_name()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default()
+    );
     let svg = out_dir.join("converge.svg");
     let png = out_dir.join("converge.png");
     write_svg(&svg, &title, &all)?;
     write_png(&png, &title, &all)?;
 
     summary.push_str(&ratios(&all));
-    let _ = writeln!(summary, "wrote {}, {}, {}", csv.display(), svg.display(), png.display());
+    let _ = writeln!(
+        summary,
+        "wrote {}, {}, {}",
+        csv.display(),
+        svg.display(),
+        png.display()
+    );
     write_atomic(&out_dir.join("summary.txt"), summary.as_bytes())?;
     print!("{summary}");
     Ok(ExitCode::SUCCESS)
@@ -372,7 +442,14 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
 
 /// The radiosity curve: one full solve per patch size (mesh, form factors, solve, display),
 /// each timed as a whole, measured like the path-traced images. Points carry the patch count.
-fn run_radiosity(args: &ConvergeArgs, desc: &pt_scene::SceneDesc, settings: &RenderSettings, out_dir: &Path, reference: &Image, pool: &rayon::ThreadPool) -> Result<Series> {
+fn run_radiosity(
+    args: &ConvergeArgs,
+    desc: &pt_scene::SceneDesc,
+    settings: &RenderSettings,
+    out_dir: &Path,
+    reference: &Image,
+    pool: &rayon::ThreadPool,
+) -> Result<Series> {
     let name = "radiosity".to_string();
     let dir = out_dir.join(&name);
     std::fs::create_dir_all(&dir).with_context(|| format!("cannot create '{}'", dir.display()))?;
@@ -391,52 +468,115 @@ fn run_radiosity(args: &ConvergeArgs, desc: &pt_scene::SceneDesc, settings: &Ren
         let start = Instant::now();
         let (out, stats) = pool.install(|| pt_radiosity::render(desc, &params, &|_, _| {}))?;
         let seconds = start.elapsed().as_secs_f64();
-        let image = Image { width: out.width, height: out.height, data: out.mean };
-        let meta = ExrMeta { spp: Some(params.spp), mode: Some("rgb".into()), render_time_s: Some(seconds), extra: vec![("patch_size".into(), h.to_string()), ("patches".into(), stats.patches.to_string())] };
+        let image = Image {
+            width: out.width,
+            height: out.height,
+            data: out.mean,
+        };
+        let meta = ExrMeta {
+            spp: Some(params.spp),
+            mode: Some("rgb".into()),
+            render_time_s: Some(seconds),
+            extra: vec![
+                ("patch_size".into(), h.to_string()),
+                ("patches".into(), stats.patches.to_string()),
+            ],
+        };
         pt_image::write_exr(&dir.join(format!("h{h}.exr")), &image, &meta)?;
         let patches = u32::try_from(stats.patches).unwrap_or(u32::MAX);
-        points.push(measure(&image, reference, patches, seconds, &format!("{name} h={h} ({} patches)", stats.patches))?);
+        points.push(measure(
+            &image,
+            reference,
+            patches,
+            seconds,
+            &format!("{name} h={h} ({} patches)", stats.patches),
+        )?);
     }
     Ok(Series { name, points })
 }
 
-
 /// Errors of one image; prints the progress line.
-fn measure(image: &Image, reference: &Image, spp: u32, seconds: f64, series: &str) -> Result<Point> {
+fn measure(
+    image: &Image,
+    reference: &Image,
+    spp: u32,
+    seconds: f64,
+    series: &str,
+) -> Result<Point> {
     let m = pt_image::metrics::compare(image, reference)?;
     // RMSE over all pixel channels: sqrt of the mean of the per-channel mean squared errors.
     let rmse = (m.rmse.iter().map(|r| r * r).sum::<f64>() / 3.0).sqrt();
-    let nonfinite = if m.nonfinite_pixels > 0 { format!(" ({} non-finite pixels skipped)", m.nonfinite_pixels) } else { String::new() };
-    let unit = if series.starts_with("radiosity") { "patches" } else { "spp" };
+    let nonfinite = if m.nonfinite_pixels > 0 {
+        format!(" ({} non-finite pixels skipped)", m.nonfinite_pixels)
+    } else {
+        String::new()
+    };
+    let unit = if series.starts_with("radiosity") {
+        "patches"
+    } else {
+        "spp"
+    };
     // Measured after the timed render, so FLIP's cost does not enter the timings.
     let flip = pt_image::flip::flip(image, reference, 0.0)?.mean;
     eprintln!("{series:<22} {spp:>6} {unit} {seconds:>10.4} s   relMSE {:.4e}   RMSE {rmse:.4e}   FLIP {flip:.4}{nonfinite}", m.relmse_all);
-    Ok(Point { spp, seconds, relmse: m.relmse_all, rmse, flip })
+    Ok(Point {
+        spp,
+        seconds,
+        relmse: m.relmse_all,
+        rmse,
+        flip,
+    })
 }
 
 /// `references/mitsuba_converge.py`: beside the current folder's `references/`, else in the
 /// source tree this binary was built from.
 fn mitsuba_script() -> Result<PathBuf> {
     let rel = Path::new("references").join("mitsuba_converge.py");
-    let candidates = [rel.clone(), Path::new(env!("CARGO_MANIFEST_DIR")).join(&rel)];
+    let candidates = [
+        rel.clone(),
+        Path::new(env!("CARGO_MANIFEST_DIR")).join(&rel),
+    ];
     candidates
         .iter()
         .find(|p| p.is_file())
         .cloned()
-        .ok_or_else(|| anyhow!("--mitsuba needs references/mitsuba_converge.py; looked for {}", candidates.map(|p| format!("'{}'", p.display())).join(" and ")))
+        .ok_or_else(|| {
+            anyhow!(
+                "--mitsuba needs references/mitsuba_converge.py; looked for {}",
+                candidates
+                    .map(|p| format!("'{}'", p.display()))
+                    .join(" and ")
+            )
+        })
 }
 
 /// Runs Mitsuba at every sample count; returns its curve and a summary line.
-fn run_mitsuba(args: &ConvergeArgs, spp: &[u32], out_dir: &Path, reference: &Image) -> Result<(Series, String)> {
+fn run_mitsuba(
+    args: &ConvergeArgs,
+    spp: &[u32],
+    out_dir: &Path,
+    reference: &Image,
+) -> Result<(Series, String)> {
     let script = mitsuba_script()?;
     let python = args.python.clone().unwrap_or_else(|| {
-        let venv = script.parent().and_then(Path::parent).map(|repo| repo.join(".venv").join("bin").join("python"));
-        venv.filter(|p| p.is_file()).unwrap_or_else(|| PathBuf::from("python3"))
+        let venv = script
+            .parent()
+            .and_then(Path::parent)
+            .map(|repo| repo.join(".venv").join("bin").join("python"));
+        venv.filter(|p| p.is_file())
+            .unwrap_or_else(|| PathBuf::from("python3"))
     });
     let variant = args.mitsuba_variant.name();
     let dir = out_dir.join("mitsuba");
     let mut cmd = Command::new(&python);
-    cmd.arg(&script).arg(&args.scene).arg("--variant").arg(variant).arg("--seed").arg(args.seed.to_string()).arg("--out").arg(&dir);
+    cmd.arg(&script)
+        .arg(&args.scene)
+        .arg("--variant")
+        .arg(variant)
+        .arg("--seed")
+        .arg(args.seed.to_string())
+        .arg("--out")
+        .arg(&dir);
     cmd.arg("--spp").args(spp.iter().map(u32::to_string));
     if let Some(t) = args.threads {
         cmd.arg("--threads").arg(t.to_string());
@@ -447,8 +587,15 @@ fn run_mitsuba(args: &ConvergeArgs, spp: &[u32], out_dir: &Path, reference: &Ima
     for d in &args.defines {
         cmd.arg(format!("-D{d}"));
     }
-    cmd.stdout(Stdio::piped()).stderr(Stdio::inherit()).stdin(Stdio::null());
-    let mut child = cmd.spawn().with_context(|| format!("cannot run '{}' for --mitsuba (give the interpreter with --python)", python.display()))?;
+    cmd.stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
+        .stdin(Stdio::null());
+    let mut child = cmd.spawn().with_context(|| {
+        format!(
+            "cannot run '{}' for --mitsuba (give the interpreter with --python)",
+            python.display()
+        )
+    })?;
     let stdout = child.stdout.take().expect("piped stdout");
     let name = format!("mitsuba-{variant}");
     let mut points = Vec::new();
@@ -465,11 +612,16 @@ fn run_mitsuba(args: &ConvergeArgs, spp: &[u32], out_dir: &Path, reference: &Ima
                     Some((n, secs))
                 })();
                 let Some((n, secs)) = parsed else {
-                    failure = Some(anyhow!("unexpected line from {}: '{line}'", script.display()));
+                    failure = Some(anyhow!(
+                        "unexpected line from {}: '{line}'",
+                        script.display()
+                    ));
                     break;
                 };
                 let path = dir.join(format!("spp{n}.exr"));
-                let result = pt_image::read_exr(&path).map_err(anyhow::Error::from).and_then(|(img, _)| measure(&img, reference, n, secs, &name));
+                let result = pt_image::read_exr(&path)
+                    .map_err(anyhow::Error::from)
+                    .and_then(|(img, _)| measure(&img, reference, n, secs, &name));
                 match result {
                     Ok(p) => points.push(p),
                     Err(e) => {
@@ -489,7 +641,9 @@ fn run_mitsuba(args: &ConvergeArgs, spp: &[u32], out_dir: &Path, reference: &Ima
     if failure.is_some() {
         let _ = child.kill();
     }
-    let status = child.wait().context("cannot wait for the Mitsuba process")?;
+    let status = child
+        .wait()
+        .context("cannot wait for the Mitsuba process")?;
     if let Some(e) = failure {
         return Err(e);
     }
@@ -504,7 +658,12 @@ fn run_mitsuba(args: &ConvergeArgs, spp: &[u32], out_dir: &Path, reference: &Ima
     if got != spp {
         bail!("Mitsuba returned sample counts {got:?}, expected {spp:?}");
     }
-    let get = |k: &str| info.iter().find(|(key, _)| key == k).map_or("?", |(_, v)| v.as_str()).to_string();
+    let get = |k: &str| {
+        info.iter()
+            .find(|(key, _)| key == k)
+            .map_or("?", |(_, v)| v.as_str())
+            .to_string()
+    };
     let line = format!(
         "mitsuba {} {} ({} thread(s)): scene load {} s, untimed warm-up render (llvm tracing + JIT) {} s",
         get("mitsuba_version"),
@@ -529,8 +688,15 @@ fn time_to_reach(curve: &[Point], target: f64) -> (f64, bool) {
         let (a, b) = (&w[0], &w[1]);
         if a.relmse >= target && b.relmse <= target {
             let (la, lb) = (a.relmse.ln(), b.relmse.ln());
-            let f = if la == lb { 0.0 } else { (la - target.ln()) / (la - lb) };
-            return ((a.seconds.ln() + f * (b.seconds.ln() - a.seconds.ln())).exp(), false);
+            let f = if la == lb {
+                0.0
+            } else {
+                (la - target.ln()) / (la - lb)
+            };
+            return (
+                (a.seconds.ln() + f * (b.seconds.ln() - a.seconds.ln())).exp(),
+                false,
+            );
         }
     }
     let last = curve.last().expect("non-empty curve");
@@ -556,7 +722,11 @@ fn ratios(all: &[Series]) -> String {
             if extrapolated && cx.name.starts_with("radiosity") {
                 // Radiosity's error is discretisation bias, not noise: it does not fall as
                 // 1/time, so no extrapolation is honest.
-                let best = cx.points.iter().map(|p| p.relmse).fold(f64::INFINITY, f64::min);
+                let best = cx
+                    .points
+                    .iter()
+                    .map(|p| p.relmse)
+                    .fold(f64::INFINITY, f64::min);
                 let _ = writeln!(
                     s,
                     "  {:<20} does not reach {}'s final relMSE {:.3e} on its curve (best {:.3e}; its error is bias, not extrapolated)",
@@ -586,12 +756,17 @@ fn ratios(all: &[Series]) -> String {
 
 /// Writes `bytes` to a temporary file beside `path`, then renames it over `path`.
 pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
-    let name = path.file_name().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-    std::fs::write(&tmp, bytes).and_then(|_| std::fs::rename(&tmp, path)).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        anyhow!("cannot write '{}': {e}", path.display())
-    })
+    std::fs::write(&tmp, bytes)
+        .and_then(|_| std::fs::rename(&tmp, path))
+        .map_err(|e| {
+            let _ = std::fs::remove_file(&tmp);
+            anyhow!("cannot write '{}': {e}", path.display())
+        })
 }
 
 const CHART_SIZE: (u32, u32) = (960, 640);
@@ -601,7 +776,9 @@ const FONT: &str = "sans-serif";
 /// with the `ab_glyph` feature plotters draws text only with registered fonts.
 pub(crate) fn register_font() -> Result<()> {
     static OK: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    if *OK.get_or_init(|| plotters::style::register_font(FONT, FontStyle::Normal, dejavu::sans::regular()).is_ok()) {
+    if *OK.get_or_init(|| {
+        plotters::style::register_font(FONT, FontStyle::Normal, dejavu::sans::regular()).is_ok()
+    }) {
         Ok(())
     } else {
         bail!("the embedded chart font is not a valid TrueType font")
@@ -622,8 +799,11 @@ pub(crate) fn chart_svg(chart: &impl Chart, size: (u32, u32), what: &str) -> Res
     let mut text = String::new();
     {
         let root = SVGBackend::with_string(&mut text, size).into_drawing_area();
-        chart.draw_on(&root).map_err(|e| anyhow!("cannot draw {what}: {e}"))?;
-        root.present().map_err(|e| anyhow!("cannot draw {what}: {e:?}"))?;
+        chart
+            .draw_on(&root)
+            .map_err(|e| anyhow!("cannot draw {what}: {e}"))?;
+        root.present()
+            .map_err(|e| anyhow!("cannot draw {what}: {e:?}"))?;
     }
     Ok(text)
 }
@@ -636,8 +816,11 @@ pub(crate) fn chart_png(chart: &impl Chart, size: (u32, u32), what: &str) -> Res
     let mut rgb = vec![255u8; (w * h * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut rgb, size).into_drawing_area();
-        chart.draw_on(&root).map_err(|e| anyhow!("cannot draw {what}: {e}"))?;
-        root.present().map_err(|e| anyhow!("cannot draw {what}: {e:?}"))?;
+        chart
+            .draw_on(&root)
+            .map_err(|e| anyhow!("cannot draw {what}: {e}"))?;
+        root.present()
+            .map_err(|e| anyhow!("cannot draw {what}: {e:?}"))?;
     }
     let mut bytes = Vec::new();
     image::codecs::png::PngEncoder::new(&mut bytes)
@@ -662,12 +845,20 @@ impl Chart for ConvergeChart<'_> {
 }
 
 fn write_svg(path: &Path, title: &str, all: &[Series]) -> Result<()> {
-    let text = chart_svg(&ConvergeChart { title, all }, CHART_SIZE, &format!("'{}'", path.display()))?;
+    let text = chart_svg(
+        &ConvergeChart { title, all },
+        CHART_SIZE,
+        &format!("'{}'", path.display()),
+    )?;
     write_atomic(path, text.as_bytes())
 }
 
 fn write_png(path: &Path, title: &str, all: &[Series]) -> Result<()> {
-    let bytes = chart_png(&ConvergeChart { title, all }, CHART_SIZE, &format!("'{}'", path.display()))?;
+    let bytes = chart_png(
+        &ConvergeChart { title, all },
+        CHART_SIZE,
+        &format!("'{}'", path.display()),
+    )?;
     write_atomic(path, &bytes)
 }
 
@@ -688,13 +879,22 @@ fn tick(v: f64) -> String {
 /// Tick positions for a log axis over `[lo, hi]`: decades, or 1-2-5, 1-2-3-5-7 or every integer
 /// mantissa per decade, the first of these that gives at least four ticks.
 fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
-    let sets: [&[f64]; 4] = [&[1.0], &[1.0, 2.0, 5.0], &[1.0, 2.0, 3.0, 5.0, 7.0], &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]];
+    let sets: [&[f64]; 4] = [
+        &[1.0],
+        &[1.0, 2.0, 5.0],
+        &[1.0, 2.0, 3.0, 5.0, 7.0],
+        &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0],
+    ];
     let mut ticks = Vec::new();
     for set in sets {
         ticks.clear();
         for k in lo.log10().floor() as i32..=hi.log10().ceil() as i32 {
             let decade = 10f64.powi(k);
-            ticks.extend(set.iter().map(|m| m * decade).filter(|v| (lo..=hi).contains(v)));
+            ticks.extend(
+                set.iter()
+                    .map(|m| m * decade)
+                    .filter(|v| (lo..=hi).contains(v)),
+            );
         }
         if ticks.len() >= 4 {
             break;
@@ -703,10 +903,18 @@ fn log_ticks(lo: f64, hi: f64) -> Vec<f64> {
     ticks
 }
 
-fn draw_chart<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, title: &str, all: &[Series]) -> Result<(), String> {
+fn draw_chart<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+    all: &[Series],
+) -> Result<(), String> {
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| format!("{e:?}");
     root.fill(&WHITE).map_err(err)?;
-    let pts = || all.iter().flat_map(|s| s.points.iter()).filter(|p| p.seconds > 0.0 && p.relmse > 0.0);
+    let pts = || {
+        all.iter()
+            .flat_map(|s| s.points.iter())
+            .filter(|p| p.seconds > 0.0 && p.relmse > 0.0)
+    };
     let (mut t0, mut t1, mut e0, mut e1) = (f64::INFINITY, 0.0f64, f64::INFINITY, 0.0f64);
     for p in pts() {
         t0 = t0.min(p.seconds);
@@ -723,8 +931,12 @@ fn draw_chart<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, title: &str, al
         .x_label_area_size(48)
         .y_label_area_size(72)
         .build_cartesian_2d(
-            (t0 / 1.6..t1 * 1.6).log_scale().with_key_points(log_ticks(t0 / 1.6, t1 * 1.6)),
-            (e0 / 1.6..e1 * 1.6).log_scale().with_key_points(log_ticks(e0 / 1.6, e1 * 1.6)),
+            (t0 / 1.6..t1 * 1.6)
+                .log_scale()
+                .with_key_points(log_ticks(t0 / 1.6, t1 * 1.6)),
+            (e0 / 1.6..e1 * 1.6)
+                .log_scale()
+                .with_key_points(log_ticks(e0 / 1.6, e1 * 1.6)),
         )
         .map_err(err)?;
     chart
@@ -738,22 +950,45 @@ fn draw_chart<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, title: &str, al
         .light_line_style(TRANSPARENT)
         .draw()
         .map_err(err)?;
-    let palette = [RGBColor(31, 119, 180), RGBColor(214, 39, 40), RGBColor(44, 160, 44), RGBColor(148, 103, 189), RGBColor(255, 127, 14), RGBColor(140, 86, 75)];
+    let palette = [
+        RGBColor(31, 119, 180),
+        RGBColor(214, 39, 40),
+        RGBColor(44, 160, 44),
+        RGBColor(148, 103, 189),
+        RGBColor(255, 127, 14),
+        RGBColor(140, 86, 75),
+    ];
     for (k, s) in all.iter().enumerate() {
         let colour = palette[k % palette.len()];
-        let xy: Vec<(f64, f64)> = s.points.iter().filter(|p| p.seconds > 0.0 && p.relmse > 0.0).map(|p| (p.seconds, p.relmse)).collect();
+        let xy: Vec<(f64, f64)> = s
+            .points
+            .iter()
+            .filter(|p| p.seconds > 0.0 && p.relmse > 0.0)
+            .map(|p| (p.seconds, p.relmse))
+            .collect();
         chart
             .draw_series(LineSeries::new(xy.clone(), colour.stroke_width(2)))
             .map_err(err)?
             .label(s.name.as_str())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(3)));
-        chart.draw_series(xy.iter().map(|&p| Circle::new(p, 4, colour.filled()))).map_err(err)?;
+            .legend(move |(x, y)| {
+                PathElement::new(vec![(x, y), (x + 24, y)], colour.stroke_width(3))
+            });
+        chart
+            .draw_series(xy.iter().map(|&p| Circle::new(p, 4, colour.filled())))
+            .map_err(err)?;
         chart
             .draw_series(
                 s.points
                     .iter()
                     .filter(|p| p.seconds > 0.0 && p.relmse > 0.0)
-                    .map(|p| EmptyElement::at((p.seconds, p.relmse)) + Text::new(format!("{}", p.spp), (7, -18), (FONT, 13).into_font().color(&colour))),
+                    .map(|p| {
+                        EmptyElement::at((p.seconds, p.relmse))
+                            + Text::new(
+                                format!("{}", p.spp),
+                                (7, -18),
+                                (FONT, 13).into_font().color(&colour),
+                            )
+                    }),
             )
             .map_err(err)?;
     }
@@ -773,7 +1008,13 @@ mod tests {
     use super::*;
 
     fn p(spp: u32, seconds: f64, relmse: f64) -> Point {
-        Point { spp, seconds, relmse, rmse: 0.0, flip: 0.0 }
+        Point {
+            spp,
+            seconds,
+            relmse,
+            rmse: 0.0,
+            flip: 0.0,
+        }
     }
 
     #[test]
@@ -798,17 +1039,25 @@ mod tests {
         let t = log_ticks(0.0005, 20.0);
         assert_eq!(t.len(), 5, "{t:?}");
         let t = log_ticks(0.06, 0.5);
-        assert!(t.len() >= 4 && t.iter().all(|v| (0.06..=0.5).contains(v)), "{t:?}");
+        assert!(
+            t.len() >= 4 && t.iter().all(|v| (0.06..=0.5).contains(v)),
+            "{t:?}"
+        );
     }
 
     #[test]
     fn chart_draws_without_system_fonts() {
-        let all = vec![Series { name: "a".into(), points: vec![p(1, 0.1, 0.5), p(4, 0.4, 0.12)] }];
+        let all = vec![Series {
+            name: "a".into(),
+            points: vec![p(1, 0.1, 0.5), p(4, 0.4, 0.12)],
+        }];
         let dir = std::env::temp_dir().join(format!("pt-converge-test-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         write_png(&dir.join("c.png"), "t", &all).unwrap();
         write_svg(&dir.join("c.svg"), "t", &all).unwrap();
-        assert!(std::fs::read_to_string(dir.join("c.svg")).unwrap().contains("<svg"));
+        assert!(std::fs::read_to_string(dir.join("c.svg"))
+            .unwrap()
+            .contains("<svg"));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

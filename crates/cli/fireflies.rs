@@ -35,7 +35,15 @@ const SCENE: &str = r#"<scene version="3.0.0">
 </scene>"#;
 
 /// Clamp values studied (radiance; `None` is the unclamped render).
-const CLAMPS: [Option<f32>; 7] = [None, Some(1000.0), Some(100.0), Some(30.0), Some(10.0), Some(3.0), Some(1.0)];
+const CLAMPS: [Option<f32>; 7] = [
+    None,
+    Some(1000.0),
+    Some(100.0),
+    Some(30.0),
+    Some(10.0),
+    Some(3.0),
+    Some(1.0),
+];
 
 /// One clamp value's outcome.
 #[derive(Clone, Debug)]
@@ -87,22 +95,50 @@ pub(crate) fn clamp_bias_study() -> Result<ClampStudy> {
     let mut rows = Vec::new();
     let mut reference: Option<(f64, Vec<f64>)> = None;
     for clamp in CLAMPS {
-        let out = pt_render::render(&scene, &RenderSettings { clamp, ..base.clone() }, &|_| {});
-        let img = Image { width: out.width, height: out.height, data: out.mean };
-        let mean = img.data.iter().map(|&p| f64::from(luminance(p))).sum::<f64>() / img.data.len() as f64;
+        let out = pt_render::render(
+            &scene,
+            &RenderSettings {
+                clamp,
+                ..base.clone()
+            },
+            &|_| {},
+        );
+        let img = Image {
+            width: out.width,
+            height: out.height,
+            data: out.mean,
+        };
+        let mean = img
+            .data
+            .iter()
+            .map(|&p| f64::from(luminance(p)))
+            .sum::<f64>()
+            / img.data.len() as f64;
         let blocks = block_means(&img, 8);
         let (m0, b0) = reference.get_or_insert_with(|| (mean, blocks.clone()));
-        let worst_block_bias = blocks.iter().zip(b0.iter()).filter(|(_, &r)| r > 0.0).map(|(&v, &r)| v / r - 1.0).fold(0.0f64, f64::min);
+        let worst_block_bias = blocks
+            .iter()
+            .zip(b0.iter())
+            .filter(|(_, &r)| r > 0.0)
+            .map(|(&v, &r)| v / r - 1.0)
+            .fold(0.0f64, f64::min);
         rows.push(ClampRow {
             clamp,
             mean,
             bias: mean / *m0 - 1.0,
             worst_block_bias,
             fireflies: count_fireflies(&img, FireflyParams::default()),
-            max_pixel: img.data.iter().map(|&p| f64::from(luminance(p))).fold(0.0, f64::max),
+            max_pixel: img
+                .data
+                .iter()
+                .map(|&p| f64::from(luminance(p)))
+                .fold(0.0, f64::max),
         });
     }
-    Ok(ClampStudy { spp: base.spp, rows })
+    Ok(ClampStudy {
+        spp: base.spp,
+        rows,
+    })
 }
 
 /// The report section (Markdown).
@@ -142,11 +178,17 @@ pub(crate) fn clamp_report(s: &ClampStudy) -> String {
 /// Chart: bias (%) and firefly count against the clamp value (log scale), SVG and PNG.
 pub(crate) fn clamp_charts(s: &ClampStudy) -> Result<(String, Vec<u8>)> {
     const SIZE: (u32, u32) = (1000, 420);
-    Ok((crate::converge::chart_svg(s, SIZE, "the clamp chart")?, crate::converge::chart_png(s, SIZE, "the clamp chart")?))
+    Ok((
+        crate::converge::chart_svg(s, SIZE, "the clamp chart")?,
+        crate::converge::chart_png(s, SIZE, "the clamp chart")?,
+    ))
 }
 
 impl crate::converge::Chart for ClampStudy {
-    fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> std::result::Result<(), String>
+    fn draw_on<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+    ) -> std::result::Result<(), String>
     where
         DB::ErrorType: 'static,
     {
@@ -154,29 +196,55 @@ impl crate::converge::Chart for ClampStudy {
     }
 }
 
-fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, s: &ClampStudy) -> std::result::Result<(), Box<dyn std::error::Error>>
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    s: &ClampStudy,
+) -> std::result::Result<(), Box<dyn std::error::Error>>
 where
     DB::ErrorType: 'static,
 {
     root.fill(&WHITE)?;
     let (left, right) = root.split_horizontally(SIZE_HALF);
-    let pts: Vec<(f64, &ClampRow)> = s.rows.iter().filter_map(|r| r.clamp.map(|c| (f64::from(c), r))).collect();
+    let pts: Vec<(f64, &ClampRow)> = s
+        .rows
+        .iter()
+        .filter_map(|r| r.clamp.map(|c| (f64::from(c), r)))
+        .collect();
     let (x0, x1) = (0.5f64, 2000.0f64);
-    let ymin = pts.iter().map(|(_, r)| 100.0 * r.worst_block_bias).fold(-1.0f64, f64::min) * 1.1;
+    let ymin = pts
+        .iter()
+        .map(|(_, r)| 100.0 * r.worst_block_bias)
+        .fold(-1.0f64, f64::min)
+        * 1.1;
     let mut c = ChartBuilder::on(&left)
         .caption("bias of --clamp (same samples)", ("sans-serif", 18))
         .margin(10)
         .x_label_area_size(35)
         .y_label_area_size(55)
         .build_cartesian_2d((x0..x1).log_scale(), ymin..1.0f64)?;
-    c.configure_mesh().x_desc("clamp (radiance)").y_desc("bias, %").label_style(("sans-serif", 12)).draw()?;
-    c.draw_series(LineSeries::new(pts.iter().map(|(x, r)| (*x, 100.0 * r.bias)), BLUE.stroke_width(2)))?
-        .label("image mean")
-        .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLUE.stroke_width(2)));
-    c.draw_series(LineSeries::new(pts.iter().map(|(x, r)| (*x, 100.0 * r.worst_block_bias)), RED.stroke_width(2)))?
-        .label("worst 8x8 block")
-        .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], RED.stroke_width(2)));
-    c.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).label_font(("sans-serif", 12)).position(SeriesLabelPosition::LowerRight).draw()?;
+    c.configure_mesh()
+        .x_desc("clamp (radiance)")
+        .y_desc("bias, %")
+        .label_style(("sans-serif", 12))
+        .draw()?;
+    c.draw_series(LineSeries::new(
+        pts.iter().map(|(x, r)| (*x, 100.0 * r.bias)),
+        BLUE.stroke_width(2),
+    ))?
+    .label("image mean")
+    .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], BLUE.stroke_width(2)));
+    c.draw_series(LineSeries::new(
+        pts.iter().map(|(x, r)| (*x, 100.0 * r.worst_block_bias)),
+        RED.stroke_width(2),
+    ))?
+    .label("worst 8x8 block")
+    .legend(|(x, y)| PathElement::new([(x, y), (x + 16, y)], RED.stroke_width(2)));
+    c.configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 12))
+        .position(SeriesLabelPosition::LowerRight)
+        .draw()?;
     let off = s.rows.first().map_or(0, |r| r.fireflies);
     let ymax = s.rows.iter().map(|r| r.fireflies).max().unwrap_or(1).max(1) as f64 * 1.15;
     let mut c = ChartBuilder::on(&right)
@@ -185,9 +253,19 @@ where
         .x_label_area_size(35)
         .y_label_area_size(55)
         .build_cartesian_2d((x0..x1).log_scale(), 0.0..ymax)?;
-    c.configure_mesh().x_desc("clamp (radiance)").y_desc("pixels").label_style(("sans-serif", 12)).draw()?;
-    c.draw_series(LineSeries::new(pts.iter().map(|(x, r)| (*x, r.fireflies as f64)), BLACK.stroke_width(2)))?;
-    c.draw_series(pts.iter().map(|(x, r)| Circle::new((*x, r.fireflies as f64), 4, BLACK.filled())))?;
+    c.configure_mesh()
+        .x_desc("clamp (radiance)")
+        .y_desc("pixels")
+        .label_style(("sans-serif", 12))
+        .draw()?;
+    c.draw_series(LineSeries::new(
+        pts.iter().map(|(x, r)| (*x, r.fireflies as f64)),
+        BLACK.stroke_width(2),
+    ))?;
+    c.draw_series(
+        pts.iter()
+            .map(|(x, r)| Circle::new((*x, r.fireflies as f64), 4, BLACK.filled())),
+    )?;
     Ok(())
 }
 

@@ -116,14 +116,77 @@ const MODELS: &[(&str, &[&str])] = &[
     ("diffuse", &["reflectance"]),
     ("orennayar", &["reflectance", "sigma", "variant"]),
     ("minnaert", &["reflectance", "k"]),
-    ("roughconductor", &["material", "eta", "k", "specular_reflectance", "distribution", "alpha", "alpha_u", "alpha_v"]),
-    ("roughdielectric", &["int_ior", "ext_ior", "eta", "distribution", "alpha", "alpha_u", "alpha_v"]),
-    ("conductor", &["material", "eta", "k", "specular_reflectance"]),
+    (
+        "roughconductor",
+        &[
+            "material",
+            "eta",
+            "k",
+            "specular_reflectance",
+            "distribution",
+            "alpha",
+            "alpha_u",
+            "alpha_v",
+        ],
+    ),
+    (
+        "roughdielectric",
+        &[
+            "int_ior",
+            "ext_ior",
+            "eta",
+            "distribution",
+            "alpha",
+            "alpha_u",
+            "alpha_v",
+        ],
+    ),
+    (
+        "conductor",
+        &["material", "eta", "k", "specular_reflectance"],
+    ),
     ("dielectric", &["int_ior", "ext_ior", "eta"]),
     ("thindielectric", &["int_ior", "ext_ior", "eta"]),
-    ("roughplastic", &["diffuse_reflectance", "specular_reflectance", "int_ior", "ext_ior", "distribution", "alpha", "nonlinear"]),
-    ("thinfilm", &["thickness", "film_ior", "ext_ior", "int_ior", "material", "eta", "k"]),
-    ("roughthinfilm", &["thickness", "film_ior", "ext_ior", "int_ior", "material", "eta", "k", "distribution", "alpha", "alpha_u", "alpha_v"]),
+    (
+        "roughplastic",
+        &[
+            "diffuse_reflectance",
+            "specular_reflectance",
+            "int_ior",
+            "ext_ior",
+            "distribution",
+            "alpha",
+            "nonlinear",
+        ],
+    ),
+    (
+        "thinfilm",
+        &[
+            "thickness",
+            "film_ior",
+            "ext_ior",
+            "int_ior",
+            "material",
+            "eta",
+            "k",
+        ],
+    ),
+    (
+        "roughthinfilm",
+        &[
+            "thickness",
+            "film_ior",
+            "ext_ior",
+            "int_ior",
+            "material",
+            "eta",
+            "k",
+            "distribution",
+            "alpha",
+            "alpha_u",
+            "alpha_v",
+        ],
+    ),
 ];
 
 /// A model and its parameters as written by the user.
@@ -137,8 +200,13 @@ impl Spec {
     /// Parses "MODEL name=value ..." (whitespace-separated).
     pub(crate) fn parse(text: &str) -> Result<Spec> {
         let mut words = text.split_whitespace();
-        let Some(model) = words.next() else { bail!("empty model specification") };
-        let mut spec = Spec { model: model.to_ascii_lowercase(), params: Vec::new() };
+        let Some(model) = words.next() else {
+            bail!("empty model specification")
+        };
+        let mut spec = Spec {
+            model: model.to_ascii_lowercase(),
+            params: Vec::new(),
+        };
         let Some(&(_, known)) = MODELS.iter().find(|(m, _)| *m == spec.model) else {
             let names: Vec<&str> = MODELS.iter().map(|m| m.0).collect();
             bail!("unknown model '{model}' (known: {})", names.join(", "))
@@ -150,10 +218,16 @@ impl Spec {
     }
 
     fn add_param(&mut self, word: &str, known: &[&str]) -> Result<()> {
-        let Some((name, value)) = word.split_once('=') else { bail!("{}: expected NAME=VALUE, got '{word}'", self.model) };
+        let Some((name, value)) = word.split_once('=') else {
+            bail!("{}: expected NAME=VALUE, got '{word}'", self.model)
+        };
         let (name, value) = (name.trim().to_ascii_lowercase(), value.trim().to_string());
         if !known.contains(&name.as_str()) {
-            bail!("{}: unknown parameter '{name}' (parameters: {})", self.model, known.join(", "))
+            bail!(
+                "{}: unknown parameter '{name}' (parameters: {})",
+                self.model,
+                known.join(", ")
+            )
         }
         if value.is_empty() {
             bail!("{}: parameter '{name}' has no value", self.model)
@@ -161,10 +235,19 @@ impl Spec {
         if name == "reflectance" {
             // The scene format lets `diffuse` take any value (as Mitsuba does); a lobe chart
             // of a reflectance above 1 is a typo, so it is refused here for every model.
-            let parts: Vec<Option<f64>> = value.split(',').map(|p| p.trim().parse::<f64>().ok()).collect();
-            let ok = (parts.len() == 1 || parts.len() == 3) && parts.iter().all(|p| p.is_some_and(|x| (0.0..=1.0).contains(&x)));
+            let parts: Vec<Option<f64>> = value
+                .split(',')
+                .map(|p| p.trim().parse::<f64>().ok())
+                .collect();
+            let ok = (parts.len() == 1 || parts.len() == 3)
+                && parts
+                    .iter()
+                    .all(|p| p.is_some_and(|x| (0.0..=1.0).contains(&x)));
             if !ok {
-                bail!("{}: reflectance must be one number or r,g,b, each in [0, 1], got '{value}'", self.model)
+                bail!(
+                    "{}: reflectance must be one number or r,g,b, each in [0, 1], got '{value}'",
+                    self.model
+                )
             }
         }
         if self.params.iter().any(|(n, _)| *n == name) {
@@ -189,7 +272,11 @@ impl Spec {
         let mut props = String::new();
         for (name, value) in &self.params {
             let (name, value) = if dielectric && name == "eta" {
-                if self.params.iter().any(|(n, _)| n == "int_ior" || n == "ext_ior") {
+                if self
+                    .params
+                    .iter()
+                    .any(|(n, _)| n == "int_ior" || n == "ext_ior")
+                {
                     bail!("{}: give either eta or int_ior/ext_ior", self.model)
                 }
                 props.push_str(r#"<float name="ext_ior" value="1"/>"#);
@@ -198,7 +285,10 @@ impl Spec {
                 (name.as_str(), value.as_str())
             };
             let esc = xml_escape(value);
-            let numbers: Vec<Option<f64>> = value.split(',').map(|p| p.trim().parse::<f64>().ok()).collect();
+            let numbers: Vec<Option<f64>> = value
+                .split(',')
+                .map(|p| p.trim().parse::<f64>().ok())
+                .collect();
             if value.parse::<f64>().is_ok() {
                 let _ = write!(props, r#"<float name="{name}" value="{esc}"/>"#);
             } else if value == "true" || value == "false" {
@@ -209,12 +299,18 @@ impl Spec {
                 let _ = write!(props, r#"<string name="{name}" value="{esc}"/>"#);
             }
         }
-        Ok(format!(r#"<scene version="3.0.0"><shape type="sphere"><bsdf type="{}">{props}</bsdf></shape></scene>"#, self.model))
+        Ok(format!(
+            r#"<scene version="3.0.0"><shape type="sphere"><bsdf type="{}">{props}</bsdf></shape></scene>"#,
+            self.model
+        ))
     }
 }
 
 fn xml_escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
 }
 
 /// A model built by the renderer's material code, read through luminance.
@@ -237,12 +333,23 @@ impl Model {
     pub(crate) fn new(spec: &Spec) -> Result<Model> {
         let label = spec.label();
         let xml = spec.xml()?;
-        let desc = pt_scene::load_str(&xml, Path::new("<lobes>"), Path::new("."), &[]).map_err(|e| anyhow!("{label}: {}", e.message))?;
-        let scene = Scene::build_with_mode(&desc, BvhKind::default(), LightSelection::default(), Some(pt_spectrum::ColorMode::Rgb))
+        let desc = pt_scene::load_str(&xml, Path::new("<lobes>"), Path::new("."), &[])
             .map_err(|e| anyhow!("{label}: {}", e.message))?;
+        let scene = Scene::build_with_mode(
+            &desc,
+            BvhKind::default(),
+            LightSelection::default(),
+            Some(pt_spectrum::ColorMode::Rgb),
+        )
+        .map_err(|e| anyhow!("{label}: {}", e.message))?;
         let m = &scene.materials[0];
         let (delta, transmissive) = (!m.has_smooth_lobe(), m.bsdf.is_transmissive());
-        Ok(Model { label, scene, delta, transmissive })
+        Ok(Model {
+            label,
+            scene,
+            delta,
+            transmissive,
+        })
     }
 
     /// Luminance of f(wo, wi), without the cosine.
@@ -256,7 +363,12 @@ impl Model {
     }
 
     fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<Sampled> {
-        self.scene.materials[0].sample(wo, u_lobe, u).map(|s| Sampled { wi: s.wi, weight: s.weight.luminance_rgb() })
+        self.scene.materials[0]
+            .sample(wo, u_lobe, u)
+            .map(|s| Sampled {
+                wi: s.wi,
+                weight: s.weight.luminance_rgb(),
+            })
     }
 }
 
@@ -291,7 +403,11 @@ fn fixed_dir(theta_i: f64) -> Vec3 {
 /// Direction at elevation `theta` and azimuth `phi` (degrees).
 fn dir(theta: f64, phi: f64) -> Vec3 {
     let (t, p) = (theta.to_radians(), phi.to_radians());
-    Vec3::new((t.sin() * p.cos()) as f32, (t.sin() * p.sin()) as f32, t.cos() as f32)
+    Vec3::new(
+        (t.sin() * p.cos()) as f32,
+        (t.sin() * p.sin()) as f32,
+        t.cos() as f32,
+    )
 }
 
 /// A point of a lobe in the plane of incidence: `angle` is signed from the normal (positive
@@ -310,7 +426,11 @@ pub(crate) fn lobe(model: &Model, theta_i: f64) -> Vec<LobePoint> {
         .map(|i| {
             let angle = -180.0 + 0.5 * i as f64;
             let wi = dir(angle, 0.0);
-            LobePoint { angle, f: model.f(wo, wi) as f64, pdf: model.pdf(wo, wi) as f64 }
+            LobePoint {
+                angle,
+                f: model.f(wo, wi) as f64,
+                pdf: model.pdf(wo, wi) as f64,
+            }
         })
         .collect()
 }
@@ -338,12 +458,18 @@ pub(crate) fn albedo(model: &Model, theta_i: f64, n: u32, seed: u64) -> Albedo {
     let n = n.max(1) as f64;
     let mean = sum / n;
     let var = (sum2 / n - mean * mean).max(0.0) * n / (n - 1.0).max(1.0);
-    Albedo { theta_i, mean, stderr: (var / n).sqrt() }
+    Albedo {
+        theta_i,
+        mean,
+        stderr: (var / n).sqrt(),
+    }
 }
 
 /// Angles of the albedo curve: 0 to 89.9 degrees.
 fn albedo_angles() -> Vec<f64> {
-    (0..=60).map(|i| if i == 60 { 89.9 } else { 1.5 * i as f64 }).collect()
+    (0..=60)
+        .map(|i| if i == 60 { 89.9 } else { 1.5 * i as f64 })
+        .collect()
 }
 
 /// Sampled-direction histogram in `theta_o` against the integrated pdf.
@@ -360,7 +486,13 @@ pub(crate) struct Histogram {
     dof: usize,
 }
 
-pub(crate) fn histogram(model: &Model, theta_i: f64, n: u32, seed: u64, max_theta: f64) -> Histogram {
+pub(crate) fn histogram(
+    model: &Model,
+    theta_i: f64,
+    n: u32,
+    seed: u64,
+    max_theta: f64,
+) -> Histogram {
     let width = 2.0;
     let bins = (max_theta / width).round() as usize;
     let wo = fixed_dir(theta_i);
@@ -383,7 +515,10 @@ pub(crate) fn histogram(model: &Model, theta_i: f64, n: u32, seed: u64, max_thet
             }
             counts
         })
-        .reduce(|| vec![0u64; bins], |a, b| a.iter().zip(&b).map(|(x, y)| x + y).collect());
+        .reduce(
+            || vec![0u64; bins],
+            |a, b| a.iter().zip(&b).map(|(x, y)| x + y).collect(),
+        );
     // Midpoint rule over each bin: 16 rows in theta, 720 columns in phi.
     let (sub, nphi) = (16usize, 720usize);
     let expected: Vec<f64> = (0..bins)
@@ -413,7 +548,13 @@ pub(crate) fn histogram(model: &Model, theta_i: f64, n: u32, seed: u64, max_thet
             dof += 1;
         }
     }
-    Histogram { width, observed, expected, chi2, dof: dof.saturating_sub(1).max(1) }
+    Histogram {
+        width,
+        observed,
+        expected,
+        chi2,
+        dof: dof.saturating_sub(1).max(1),
+    }
 }
 
 /// Everything plotted.
@@ -453,7 +594,11 @@ impl Heat {
 /// Runs `pt lobes`.
 pub fn run(args: LobesArgs) -> Result<ExitCode> {
     let mut first = Spec::parse(&args.model)?;
-    let known = MODELS.iter().find(|(m, _)| *m == first.model).map(|m| m.1).unwrap_or(&[]);
+    let known = MODELS
+        .iter()
+        .find(|(m, _)| *m == first.model)
+        .map(|m| m.1)
+        .unwrap_or(&[]);
     for p in &args.params {
         first.add_param(p, known)?;
     }
@@ -469,11 +614,18 @@ pub fn run(args: LobesArgs) -> Result<ExitCode> {
     if args.albedo_samples < 2 || args.hist_samples < 1 {
         bail!("--albedo-samples must be at least 2 and --hist-samples at least 1")
     }
-    let ext = args.output.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    let ext = args
+        .output
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase);
     let png = match ext.as_deref() {
         Some("png") => true,
         Some("svg") => false,
-        _ => bail!("-o '{}': the figure must be .svg or .png", args.output.display()),
+        _ => bail!(
+            "-o '{}': the figure must be .svg or .png",
+            args.output.display()
+        ),
     };
     let models: Vec<Model> = specs.iter().map(Model::new).collect::<Result<_>>()?;
     let data = compute(models, &args);
@@ -491,32 +643,70 @@ pub fn run(args: LobesArgs) -> Result<ExitCode> {
     if let Some(csv) = &args.csv {
         write_atomic(csv, csv_text(&data).as_bytes())?;
     }
-    let bytes = if png { render_png(&data)? } else { render_svg(&data)?.into_bytes() };
+    let bytes = if png {
+        render_png(&data)?
+    } else {
+        render_svg(&data)?.into_bytes()
+    };
     write_atomic(&args.output, &bytes)?;
     Ok(ExitCode::SUCCESS)
 }
 
 fn compute(models: Vec<Model>, args: &LobesArgs) -> Data {
     let theta_i = args.theta_i.clone();
-    let lobes = models.iter().map(|m| if m.delta { Vec::new() } else { theta_i.iter().map(|&t| lobe(m, t)).collect() }).collect();
+    let lobes = models
+        .iter()
+        .map(|m| {
+            if m.delta {
+                Vec::new()
+            } else {
+                theta_i.iter().map(|&t| lobe(m, t)).collect()
+            }
+        })
+        .collect();
     let angles = albedo_angles();
     let albedo = models
         .iter()
         .enumerate()
-        .map(|(k, m)| angles.par_iter().map(|&t| albedo(m, t, args.albedo_samples, args.seed.wrapping_add(k as u64))).collect())
+        .map(|(k, m)| {
+            angles
+                .par_iter()
+                .map(|&t| albedo(m, t, args.albedo_samples, args.seed.wrapping_add(k as u64)))
+                .collect()
+        })
         .collect();
-    let max_theta = if models.iter().any(|m| m.transmissive && !m.delta) { 180.0 } else { 90.0 };
+    let max_theta = if models.iter().any(|m| m.transmissive && !m.delta) {
+        180.0
+    } else {
+        90.0
+    };
     let hist = models
         .iter()
         .enumerate()
-        .map(|(k, m)| (!m.delta).then(|| histogram(m, theta_i[0], args.hist_samples, args.seed.wrapping_add(1000 + k as u64), max_theta)))
+        .map(|(k, m)| {
+            (!m.delta).then(|| {
+                histogram(
+                    m,
+                    theta_i[0],
+                    args.hist_samples,
+                    args.seed.wrapping_add(1000 + k as u64),
+                    max_theta,
+                )
+            })
+        })
         .collect();
     let heat = models.iter().position(|m| !m.delta).map(|k| {
         let m = &models[k];
         let ht = if m.transmissive { 180.0 } else { 90.0 };
         let (rows, cols) = (if m.transmissive { 120 } else { 60 }, 144);
         let wo = fixed_dir(theta_i[0]);
-        let mut heat = Heat { model: k, rows, cols, max_theta: ht, cells: Vec::new() };
+        let mut heat = Heat {
+            model: k,
+            rows,
+            cols,
+            max_theta: ht,
+            cells: Vec::new(),
+        };
         heat.cells = (0..rows * cols)
             .map(|i| {
                 let wi = dir(heat.theta(i / cols), heat.phi(i % cols));
@@ -529,7 +719,17 @@ fn compute(models: Vec<Model>, args: &LobesArgs) -> Data {
         "albedo: {} samples per point (error bars +-2 s.e.)\nhistogram: {} samples; seed {}",
         args.albedo_samples, args.hist_samples, args.seed
     );
-    Data { models, theta_i, lobes, albedo, hist, heat, max_theta, settings, normalize: args.normalize }
+    Data {
+        models,
+        theta_i,
+        lobes,
+        albedo,
+        hist,
+        heat,
+        max_theta,
+        settings,
+        normalize: args.normalize,
+    }
 }
 
 fn csv_text(d: &Data) -> String {
@@ -538,20 +738,43 @@ fn csv_text(d: &Data) -> String {
     for (m, per) in d.models.iter().zip(&d.lobes) {
         for (t, pts) in d.theta_i.iter().zip(per) {
             for p in pts {
-                let (theta, phi) = if p.angle >= 0.0 { (p.angle, 0.0) } else { (-p.angle, 180.0) };
-                let _ = writeln!(s, "lobe,{},{t},{theta},{phi},{},{},,,", q(&m.label), p.f, p.pdf);
+                let (theta, phi) = if p.angle >= 0.0 {
+                    (p.angle, 0.0)
+                } else {
+                    (-p.angle, 180.0)
+                };
+                let _ = writeln!(
+                    s,
+                    "lobe,{},{t},{theta},{phi},{},{},,,",
+                    q(&m.label),
+                    p.f,
+                    p.pdf
+                );
             }
         }
     }
     for (m, al) in d.models.iter().zip(&d.albedo) {
         for a in al {
-            let _ = writeln!(s, "albedo,{},{},,,,,{},{},", q(&m.label), a.theta_i, a.mean, a.stderr);
+            let _ = writeln!(
+                s,
+                "albedo,{},{},,,,,{},{},",
+                q(&m.label),
+                a.theta_i,
+                a.mean,
+                a.stderr
+            );
         }
     }
     for (m, h) in d.models.iter().zip(&d.hist) {
         if let Some(h) = h {
             for (b, (o, e)) in h.observed.iter().zip(&h.expected).enumerate() {
-                let _ = writeln!(s, "histogram,{},{},{},,,{e},,,{o}", q(&m.label), d.theta_i[0], (b as f64 + 0.5) * h.width);
+                let _ = writeln!(
+                    s,
+                    "histogram,{},{},{},,,{e},,,{o}",
+                    q(&m.label),
+                    d.theta_i[0],
+                    (b as f64 + 0.5) * h.width
+                );
             }
         }
     }
@@ -576,7 +799,10 @@ const FONT: &str = "sans-serif";
 use crate::converge::write_atomic;
 
 impl crate::converge::Chart for Data {
-    fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> std::result::Result<(), String>
+    fn draw_on<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+    ) -> std::result::Result<(), String>
     where
         DB::ErrorType: 'static,
     {
@@ -619,17 +845,31 @@ fn series_colour(d: &Data, m: usize, a: usize) -> RGBColor {
     }
     let RGBColor(r, g, b) = palette(m);
     let k = 1.0 - 0.55 * a as f64 / d.theta_i.len().max(2) as f64;
-    RGBColor((r as f64 * k) as u8, (g as f64 * k) as u8, (b as f64 * k) as u8)
+    RGBColor(
+        (r as f64 * k) as u8,
+        (g as f64 * k) as u8,
+        (b as f64 * k) as u8,
+    )
 }
 
 /// Viridis, by linear interpolation between five stops.
 fn viridis(t: f64) -> RGBColor {
-    const STOPS: [(f64, f64, f64); 5] = [(68., 1., 84.), (59., 82., 139.), (33., 145., 140.), (94., 201., 98.), (253., 231., 37.)];
+    const STOPS: [(f64, f64, f64); 5] = [
+        (68., 1., 84.),
+        (59., 82., 139.),
+        (33., 145., 140.),
+        (94., 201., 98.),
+        (253., 231., 37.),
+    ];
     let x = t.clamp(0.0, 1.0) * 4.0;
     let i = (x.floor() as usize).min(3);
     let f = x - i as f64;
     let (a, b) = (STOPS[i], STOPS[i + 1]);
-    RGBColor((a.0 + (b.0 - a.0) * f) as u8, (a.1 + (b.1 - a.1) * f) as u8, (a.2 + (b.2 - a.2) * f) as u8)
+    RGBColor(
+        (a.0 + (b.0 - a.0) * f) as u8,
+        (a.1 + (b.1 - a.1) * f) as u8,
+        (a.2 + (b.2 - a.2) * f) as u8,
+    )
 }
 
 type DrawResult = std::result::Result<(), String>;
@@ -637,7 +877,12 @@ type DrawResult = std::result::Result<(), String>;
 fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data) -> DrawResult {
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     root.fill(&WHITE).map_err(e)?;
-    let root = root.titled("pt lobes: BSDF lobes, albedo and sampling (luminance of the RGB lanes)", (FONT, 26)).map_err(e)?;
+    let root = root
+        .titled(
+            "pt lobes: BSDF lobes, albedo and sampling (luminance of the RGB lanes)",
+            (FONT, 26),
+        )
+        .map_err(e)?;
     let panels = root.split_evenly((2, 3));
     polar(&panels[0], d, true)?;
     polar(&panels[1], d, false)?;
@@ -648,18 +893,40 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, d: &Data) -> DrawResu
     Ok(())
 }
 
-fn no_data<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, title: &str, why: &str) -> DrawResult {
+fn no_data<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    title: &str,
+    why: &str,
+) -> DrawResult {
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     let (w, h) = area.dim_in_pixel();
-    area.draw(&Text::new(title.to_string(), (20, 10), (FONT, 20))).map_err(e)?;
-    area.draw(&Text::new(why.to_string(), (w as i32 / 6, h as i32 / 2), (FONT, 16).into_font().color(&RGBColor(120, 120, 120)))).map_err(e)
+    area.draw(&Text::new(title.to_string(), (20, 10), (FONT, 20)))
+        .map_err(e)?;
+    area.draw(&Text::new(
+        why.to_string(),
+        (w as i32 / 6, h as i32 / 2),
+        (FONT, 16).into_font().color(&RGBColor(120, 120, 120)),
+    ))
+    .map_err(e)
 }
 
-fn polar<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data, with_cos: bool) -> DrawResult {
+fn polar<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    d: &Data,
+    with_cos: bool,
+) -> DrawResult {
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
-    let title = if with_cos { "(1) f * |cos theta_o|, plane of incidence" } else { "(2) f (no cosine), plane of incidence" };
+    let title = if with_cos {
+        "(1) f * |cos theta_o|, plane of incidence"
+    } else {
+        "(2) f (no cosine), plane of incidence"
+    };
     let raw = |p: &LobePoint| {
-        let v = if with_cos { p.f * p.angle.to_radians().cos().abs() } else { p.f };
+        let v = if with_cos {
+            p.f * p.angle.to_radians().cos().abs()
+        } else {
+            p.f
+        };
         if v.is_finite() {
             v
         } else {
@@ -667,7 +934,12 @@ fn polar<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data, with_cos: 
         }
     };
     let curve_max = |pts: &[LobePoint]| pts.iter().map(raw).fold(0.0f64, f64::max);
-    let peak = d.lobes.iter().flatten().map(|c| curve_max(c)).fold(0.0f64, f64::max);
+    let peak = d
+        .lobes
+        .iter()
+        .flatten()
+        .map(|c| curve_max(c))
+        .fold(0.0f64, f64::max);
     let rmax = if d.normalize { 1.0 } else { peak };
     if peak <= 0.0 {
         return no_data(area, title, "delta lobes only: no density to draw");
@@ -679,29 +951,66 @@ fn polar<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data, with_cos: 
     // whichever range is short.
     let (w, h) = area.dim_in_pixel();
     let aspect = (w as f64 - 70.0) / (h as f64 - 75.0);
-    let (half_x, r) = if 2.0 * r / (r - y0) > aspect { (r, y0 + 2.0 * r / aspect) } else { ((r - y0) * aspect / 2.0, r) };
+    let (half_x, r) = if 2.0 * r / (r - y0) > aspect {
+        (r, y0 + 2.0 * r / aspect)
+    } else {
+        ((r - y0) * aspect / 2.0, r)
+    };
     let mut chart = ChartBuilder::on(area)
-        .caption(if d.normalize { format!("{title} (each curve / its max)") } else { format!("{title} (max {rmax:.4})") }, (FONT, 18))
+        .caption(
+            if d.normalize {
+                format!("{title} (each curve / its max)")
+            } else {
+                format!("{title} (max {rmax:.4})")
+            },
+            (FONT, 18),
+        )
         .margin(8)
         .x_label_area_size(28)
         .y_label_area_size(52)
         .build_cartesian_2d(-half_x..half_x, y0..r)
         .map_err(e)?;
-    chart.configure_mesh().disable_mesh().label_style((FONT, 12)).draw().map_err(e)?;
+    chart
+        .configure_mesh()
+        .disable_mesh()
+        .label_style((FONT, 12))
+        .draw()
+        .map_err(e)?;
     let grey = RGBColor(200, 200, 200);
     for k in 1..=4 {
         let rr = rmax * k as f64 / 4.0;
         let lo = if transmissive { -180 } else { -90 };
-        let pts: Vec<(f64, f64)> = (lo..=(-lo)).map(|a| (rr * (a as f64).to_radians().sin(), rr * (a as f64).to_radians().cos())).collect();
+        let pts: Vec<(f64, f64)> = (lo..=(-lo))
+            .map(|a| {
+                (
+                    rr * (a as f64).to_radians().sin(),
+                    rr * (a as f64).to_radians().cos(),
+                )
+            })
+            .collect();
         chart.draw_series(LineSeries::new(pts, &grey)).map_err(e)?;
     }
-    chart.draw_series(LineSeries::new(vec![(-half_x, 0.0), (half_x, 0.0)], BLACK.stroke_width(2))).map_err(e)?;
+    chart
+        .draw_series(LineSeries::new(
+            vec![(-half_x, 0.0), (half_x, 0.0)],
+            BLACK.stroke_width(2),
+        ))
+        .map_err(e)?;
     for (m, per) in d.lobes.iter().enumerate() {
         for (a, pts) in per.iter().enumerate() {
             let c = series_colour(d, m, a);
             let t = d.theta_i[a].to_radians();
-            chart.draw_series(LineSeries::new(vec![(0.0, 0.0), (-r * t.sin(), r * t.cos())], c.mix(0.5).stroke_width(1))).map_err(e)?;
-            let scale = if d.normalize { 1.0 / curve_max(pts).max(f64::MIN_POSITIVE) } else { 1.0 };
+            chart
+                .draw_series(LineSeries::new(
+                    vec![(0.0, 0.0), (-r * t.sin(), r * t.cos())],
+                    c.mix(0.5).stroke_width(1),
+                ))
+                .map_err(e)?;
+            let scale = if d.normalize {
+                1.0 / curve_max(pts).max(f64::MIN_POSITIVE)
+            } else {
+                1.0
+            };
             let xy: Vec<(f64, f64)> = pts
                 .iter()
                 .map(|p| {
@@ -719,7 +1028,9 @@ fn polar<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data, with_cos: 
                 .draw_series(LineSeries::new(xy, c.stroke_width(2)))
                 .map_err(e)?
                 .label(label)
-                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2))
+                });
         }
     }
     if with_cos {
@@ -730,9 +1041,19 @@ fn polar<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data, with_cos: 
 
 fn albedo_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data) -> DrawResult {
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
-    let top = d.albedo.iter().flatten().map(|a| a.mean + 2.0 * a.stderr).filter(|v| v.is_finite()).fold(1.0f64, f64::max) * 1.05;
+    let top = d
+        .albedo
+        .iter()
+        .flatten()
+        .map(|a| a.mean + 2.0 * a.stderr)
+        .filter(|v| v.is_finite())
+        .fold(1.0f64, f64::max)
+        * 1.05;
     let mut chart = ChartBuilder::on(area)
-        .caption("(3) directional albedo E[f cos / pdf] (own sampler)", (FONT, 18))
+        .caption(
+            "(3) directional albedo E[f cos / pdf] (own sampler)",
+            (FONT, 18),
+        )
         .margin(8)
         .x_label_area_size(36)
         .y_label_area_size(52)
@@ -747,18 +1068,32 @@ fn albedo_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data) -> 
         .light_line_style(RGBColor(235, 235, 235))
         .draw()
         .map_err(e)?;
-    chart.draw_series(LineSeries::new(vec![(0.0, 1.0), (90.0, 1.0)], RGBColor(150, 150, 150))).map_err(e)?;
+    chart
+        .draw_series(LineSeries::new(
+            vec![(0.0, 1.0), (90.0, 1.0)],
+            RGBColor(150, 150, 150),
+        ))
+        .map_err(e)?;
     for (m, al) in d.albedo.iter().enumerate() {
         let c = palette(m);
         chart
-            .draw_series(LineSeries::new(al.iter().map(|a| (a.theta_i, a.mean)), c.stroke_width(2)))
+            .draw_series(LineSeries::new(
+                al.iter().map(|a| (a.theta_i, a.mean)),
+                c.stroke_width(2),
+            ))
             .map_err(e)?
             .label(d.models[m].label.clone())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
         chart
             // plotters' ErrorBar needs its `errorbar` feature: plain vertical segments instead.
             .draw_series(al.iter().map(|a| {
-                PathElement::new(vec![(a.theta_i, a.mean - 2.0 * a.stderr), (a.theta_i, a.mean + 2.0 * a.stderr)], c.stroke_width(1))
+                PathElement::new(
+                    vec![
+                        (a.theta_i, a.mean - 2.0 * a.stderr),
+                        (a.theta_i, a.mean + 2.0 * a.stderr),
+                    ],
+                    c.stroke_width(1),
+                )
             }))
             .map_err(e)?;
     }
@@ -782,7 +1117,10 @@ fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
 
 fn hist_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data) -> DrawResult {
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
-    let title = format!("(4) sampled theta_o at theta_i = {}: histogram vs integrated pdf", d.theta_i[0]);
+    let title = format!(
+        "(4) sampled theta_o at theta_i = {}: histogram vs integrated pdf",
+        d.theta_i[0]
+    );
     let top = d
         .hist
         .iter()
@@ -792,7 +1130,11 @@ fn hist_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data) -> Dr
         .filter(|v| v.is_finite())
         .fold(0.0f64, f64::max);
     if top <= 0.0 {
-        return no_data(area, &title, "delta lobes only: no density to sample against");
+        return no_data(
+            area,
+            &title,
+            "delta lobes only: no density to sample against",
+        );
     }
     let mut chart = ChartBuilder::on(area)
         .caption(title, (FONT, 18))
@@ -815,11 +1157,25 @@ fn hist_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data) -> Dr
         let c = palette(m);
         let centre = |b: usize| (b as f64 + 0.5) * h.width;
         chart
-            .draw_series(LineSeries::new(h.expected.iter().enumerate().map(|(b, &v)| (centre(b), v)), c.stroke_width(2)))
+            .draw_series(LineSeries::new(
+                h.expected.iter().enumerate().map(|(b, &v)| (centre(b), v)),
+                c.stroke_width(2),
+            ))
             .map_err(e)?
-            .label(format!("{}: pdf (line), samples (dots), chi2/dof {:.2}", d.models[m].label, h.chi2 / h.dof as f64))
+            .label(format!(
+                "{}: pdf (line), samples (dots), chi2/dof {:.2}",
+                d.models[m].label,
+                h.chi2 / h.dof as f64
+            ))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], c.stroke_width(2)));
-        chart.draw_series(h.observed.iter().enumerate().map(|(b, &v)| Circle::new((centre(b), v), 2, c.filled()))).map_err(e)?;
+        chart
+            .draw_series(
+                h.observed
+                    .iter()
+                    .enumerate()
+                    .map(|(b, &v)| Circle::new((centre(b), v), 2, c.filled())),
+            )
+            .map_err(e)?;
     }
     legend(&mut chart, SeriesLabelPosition::UpperRight).map_err(e)?;
     Ok(())
@@ -828,7 +1184,11 @@ fn hist_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data) -> Dr
 fn heat_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data) -> DrawResult {
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     let Some(h) = &d.heat else {
-        return no_data(area, "(5) f * |cos theta_o| over the sphere", "delta lobes only");
+        return no_data(
+            area,
+            "(5) f * |cos theta_o| over the sphere",
+            "delta lobes only",
+        );
     };
     let value = |i: usize| {
         let v = h.cells[i].0 * h.theta(i / h.cols).to_radians().cos().abs();
@@ -839,7 +1199,11 @@ fn heat_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data) -> Dr
         }
     };
     let vmax = (0..h.cells.len()).map(value).fold(0.0f64, f64::max);
-    let title = format!("(5) f*|cos theta_o| of model {} at theta_i = {} (sqrt colour scale)", h.model + 1, d.theta_i[0]);
+    let title = format!(
+        "(5) f*|cos theta_o| of model {} at theta_i = {} (sqrt colour scale)",
+        h.model + 1,
+        d.theta_i[0]
+    );
     let (pw, _) = area.dim_in_pixel();
     let (main, bar) = area.split_horizontally(pw.saturating_sub(70));
     let mut chart = ChartBuilder::on(&main)
@@ -862,8 +1226,15 @@ fn heat_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data) -> Dr
     chart
         .draw_series((0..h.cells.len()).map(|i| {
             let (t, p) = (h.theta(i / h.cols), h.phi(i % h.cols));
-            let c = viridis(if vmax > 0.0 { (value(i) / vmax).sqrt() } else { 0.0 });
-            Rectangle::new([(p - dp / 2.0, t - dt / 2.0), (p + dp / 2.0, t + dt / 2.0)], c.filled())
+            let c = viridis(if vmax > 0.0 {
+                (value(i) / vmax).sqrt()
+            } else {
+                0.0
+            });
+            Rectangle::new(
+                [(p - dp / 2.0, t - dt / 2.0), (p + dp / 2.0, t + dt / 2.0)],
+                c.filled(),
+            )
         }))
         .map_err(e)?;
     // Colour bar.
@@ -874,11 +1245,22 @@ fn heat_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data) -> Dr
         // Drawn on the same sqrt scale as the map: colour t stands for vmax * t^2.
         let y0 = (bh as f64 * (1.0 - (s + 1) as f64 / steps as f64)) as i32;
         let y1 = (bh as f64 * (1.0 - s as f64 / steps as f64)) as i32;
-        bar.draw(&Rectangle::new([(0, y0), (16, y1)], viridis((s as f64 + 0.5) / steps as f64).filled())).map_err(e)?;
+        bar.draw(&Rectangle::new(
+            [(0, y0), (16, y1)],
+            viridis((s as f64 + 0.5) / steps as f64).filled(),
+        ))
+        .map_err(e)?;
     }
-    bar.draw(&Text::new(format!("{vmax:.3}"), (0, -14), (FONT, 11))).map_err(e)?;
-    bar.draw(&Text::new(format!("{:.3}", vmax / 4.0), (18, bh as i32 / 2 - 6), (FONT, 11))).map_err(e)?;
-    bar.draw(&Text::new("0", (0, bh as i32 + 2), (FONT, 11))).map_err(e)?;
+    bar.draw(&Text::new(format!("{vmax:.3}"), (0, -14), (FONT, 11)))
+        .map_err(e)?;
+    bar.draw(&Text::new(
+        format!("{:.3}", vmax / 4.0),
+        (18, bh as i32 / 2 - 6),
+        (FONT, 11),
+    ))
+    .map_err(e)?;
+    bar.draw(&Text::new("0", (0, bh as i32 + 2), (FONT, 11)))
+        .map_err(e)?;
     Ok(())
 }
 
@@ -886,13 +1268,20 @@ fn legend_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data) -> 
     let e = |x: DrawingAreaErrorKind<DB::ErrorType>| x.to_string();
     let mut lines: Vec<(String, RGBColor)> = vec![("(6) models".into(), BLACK)];
     for (m, model) in d.models.iter().enumerate() {
-        let note = if model.delta { "  [delta lobes: albedo only]" } else { "" };
+        let note = if model.delta {
+            "  [delta lobes: albedo only]"
+        } else {
+            ""
+        };
         lines.push((format!("  {}. {}{note}", m + 1, model.label), palette(m)));
     }
     let grey = RGBColor(70, 70, 70);
     for l in [
         String::new(),
-        format!("theta_i: {:?} degrees (fixed direction = the wo given to sample(),", d.theta_i),
+        format!(
+            "theta_i: {:?} degrees (fixed direction = the wo given to sample(),",
+            d.theta_i
+        ),
         "  at phi = 180; plotted direction theta_o, phi = the sampled wi)".into(),
         "values: luminance 0.2126 R + 0.7152 G + 0.0722 B of the RGB lanes".into(),
         "f without cosine; pdf per solid angle; transmission carries 1/eta^2".into(),
@@ -903,8 +1292,12 @@ fn legend_panel<DB: DrawingBackend>(area: &DrawingArea<DB, Shift>, d: &Data) -> 
         lines.push((l, grey));
     }
     for (i, (text, c)) in lines.iter().enumerate() {
-        area.draw(&Text::new(text.clone(), (20, 20 + 24 * i as i32), (FONT, if i == 0 { 20 } else { 15 }).into_font().color(c)))
-            .map_err(e)?;
+        area.draw(&Text::new(
+            text.clone(),
+            (20, 20 + 24 * i as i32),
+            (FONT, if i == 0 { 20 } else { 15 }).into_font().color(c),
+        ))
+        .map_err(e)?;
     }
     Ok(())
 }
@@ -923,11 +1316,19 @@ mod tests {
         for theta_i in [0.0, 30.0, 80.0] {
             for p in lobe(&m, theta_i) {
                 let cos = p.angle.to_radians().cos();
-                let want = if cos > 0.0 { 0.6 / std::f64::consts::PI * cos } else { 0.0 };
+                let want = if cos > 0.0 {
+                    0.6 / std::f64::consts::PI * cos
+                } else {
+                    0.0
+                };
                 let got = p.f * cos.abs();
                 // f32 evaluation and the luminance weights (which sum to 1 up to rounding):
                 // a few ulps of f32.
-                assert!((got - want).abs() <= 1e-6 * want.max(1e-3), "angle {}: {got} vs {want}", p.angle);
+                assert!(
+                    (got - want).abs() <= 1e-6 * want.max(1e-3),
+                    "angle {}: {got} vs {want}",
+                    p.angle
+                );
             }
         }
     }
@@ -940,7 +1341,10 @@ mod tests {
         let m = model("diffuse reflectance=0.7");
         for t in [0.0, 45.0, 89.9] {
             let a = albedo(&m, t, 20_000, 7);
-            assert!((a.mean - 0.7).abs() <= 4.0 * a.stderr + 1e-5, "theta_i {t}: {a:?}");
+            assert!(
+                (a.mean - 0.7).abs() <= 4.0 * a.stderr + 1e-5,
+                "theta_i {t}: {a:?}"
+            );
         }
     }
 
@@ -949,20 +1353,33 @@ mod tests {
         let m = model("roughconductor alpha=0.3 distribution=ggx");
         let h = histogram(&m, 30.0, 200_000, 3, 90.0);
         let (sum_e, sum_o): (f64, f64) = (h.expected.iter().sum(), h.observed.iter().sum());
-        assert!((sum_e - sum_o).abs() < 0.01, "pdf mass {sum_e} vs sampled {sum_o}");
+        assert!(
+            (sum_e - sum_o).abs() < 0.01,
+            "pdf mass {sum_e} vs sampled {sum_o}"
+        );
         // chi^2/dof ~ 1 +- sqrt(2/dof); 2 is far outside chance for ~40 bins.
-        assert!(h.chi2 / (h.dof as f64) < 2.0, "chi2/dof {}", h.chi2 / h.dof as f64);
+        assert!(
+            h.chi2 / (h.dof as f64) < 2.0,
+            "chi2/dof {}",
+            h.chi2 / h.dof as f64
+        );
     }
 
     #[test]
     fn parse_errors_are_clear() {
-        let err = |t: &str| Spec::parse(t).and_then(|s| Model::new(&s).map(|_| ())).unwrap_err().to_string();
+        let err = |t: &str| {
+            Spec::parse(t)
+                .and_then(|s| Model::new(&s).map(|_| ()))
+                .unwrap_err()
+                .to_string()
+        };
         assert!(err("plastic").contains("unknown model 'plastic'"));
         assert!(err("orennayar foo=1").contains("unknown parameter 'foo'"));
         assert!(err("orennayar sigma").contains("expected NAME=VALUE"));
         assert!(err("orennayar sigma=-1").contains("sigma"));
         assert!(err("orennayar variant=bogus").contains("unknown Oren-Nayar variant"));
-        assert!(err("diffuse reflectance=2").contains("reflectance must be one number or r,g,b, each in [0, 1]"));
+        assert!(err("diffuse reflectance=2")
+            .contains("reflectance must be one number or r,g,b, each in [0, 1]"));
         assert!(err("minnaert k=0").contains("k must be positive"));
         assert!(err("roughconductor material=unobtainium").contains("unknown conductor"));
         assert!(err("dielectric eta=1.5 int_ior=1.3").contains("either eta or int_ior"));
@@ -976,7 +1393,10 @@ mod tests {
         // Normal incidence: R = ((1.5 - 1) / 2.5)^2 = 0.04, T weight (1 - R) / eta^2.
         let a = albedo(&m, 0.0, 50_000, 1);
         let want = 0.04 + 0.96 / 2.25;
-        assert!((a.mean - want).abs() < 4.0 * a.stderr + 1e-4, "{a:?} vs {want}");
+        assert!(
+            (a.mean - want).abs() < 4.0 * a.stderr + 1e-4,
+            "{a:?} vs {want}"
+        );
     }
 
     #[test]
@@ -993,12 +1413,17 @@ mod tests {
             seed: 1,
             normalize: true,
         };
-        let models = [&args.model, &args.compare[0]].iter().map(|t| model(t)).collect();
+        let models = [&args.model, &args.compare[0]]
+            .iter()
+            .map(|t| model(t))
+            .collect();
         let d = compute(models, &args);
         assert!(render_png(&d).unwrap().starts_with(b"\x89PNG"));
         assert!(render_svg(&d).unwrap().contains("<svg"));
         let csv = csv_text(&d);
-        assert!(csv.starts_with("panel,series,theta_i,theta_o,phi,f,pdf,albedo,albedo_stderr,hist\n"));
+        assert!(
+            csv.starts_with("panel,series,theta_i,theta_o,phi,f,pdf,albedo,albedo_stderr,hist\n")
+        );
         assert!(csv.lines().any(|l| l.starts_with("histogram,")));
     }
 }

@@ -33,7 +33,11 @@ use std::process::ExitCode;
 const BUILTIN_CORNELL: &str = include_str!("../../scenes/cornell-box.xml");
 
 #[derive(Parser)]
-#[command(name = "pt", version, about = "A physically based path tracer checked against Mitsuba 3")]
+#[command(
+    name = "pt",
+    version,
+    about = "A physically based path tracer checked against Mitsuba 3"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -307,12 +311,20 @@ fn load_scene(path: Option<&Path>, args: &SceneArgs) -> Result<SceneDesc> {
 
 /// [`load_scene`], and for a glTF file (`.gltf`, `.glb`) also its `pt info` listing; the glTF
 /// reader's warnings (defaults used, features ignored) go to stderr.
-fn load_scene_with_summary(path: Option<&Path>, args: &SceneArgs) -> Result<(SceneDesc, Vec<String>)> {
+fn load_scene_with_summary(
+    path: Option<&Path>,
+    args: &SceneArgs,
+) -> Result<(SceneDesc, Vec<String>)> {
     if let Some(p) = path.filter(|p| pt_gltf::is_gltf_path(p)) {
         if !args.defines.is_empty() {
             bail!("-D applies to Mitsuba XML scenes, not to glTF files");
         }
-        let g = pt_gltf::load(p, &pt_gltf::LoadOptions { camera: args.camera })?;
+        let g = pt_gltf::load(
+            p,
+            &pt_gltf::LoadOptions {
+                camera: args.camera,
+            },
+        )?;
         for w in &g.warnings {
             eprintln!("warning: {w}");
         }
@@ -326,7 +338,12 @@ fn load_scene_with_summary(path: Option<&Path>, args: &SceneArgs) -> Result<(Sce
         Some(p) => pt_scene::load_file(p, &defines)?,
         None => {
             let cwd = std::env::current_dir().context("cannot read the current folder")?;
-            pt_scene::load_str(BUILTIN_CORNELL, Path::new("<built-in cornell-box.xml>"), &cwd, &defines)?
+            pt_scene::load_str(
+                BUILTIN_CORNELL,
+                Path::new("<built-in cornell-box.xml>"),
+                &cwd,
+                &defines,
+            )?
         }
     };
     if desc.integrator.kind == pt_scene::IntegratorKind::Path {
@@ -349,7 +366,11 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
         desc.film.height = h;
     }
     if desc.film.width == 0 || desc.film.height == 0 {
-        bail!("image size must be at least 1x1, got {}x{}", desc.film.width, desc.film.height);
+        bail!(
+            "image size must be at least 1x1, got {}x{}",
+            desc.film.width,
+            desc.film.height
+        );
     }
     let mut settings = RenderSettings::from_desc(&desc);
     if let Some(spp) = args.spp {
@@ -388,7 +409,10 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
         BvhArg::Bvh2 => BvhKind::Bvh2,
         BvhArg::Flat => BvhKind::Flat,
     };
-    let output = args.output.clone().unwrap_or_else(|| default_output(args.scene.as_deref()));
+    let output = args
+        .output
+        .clone()
+        .unwrap_or_else(|| default_output(args.scene.as_deref()));
     check_output_path(&output)?;
 
     let pool = thread_pool(args.threads)?;
@@ -407,7 +431,9 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
         ModeArg::Spectral => pt_spectrum::ColorMode::Spectral,
     });
     let desc = match args.time {
-        Some(t) => pool.install(|| pt_render::phosphorescence::afterglow(&desc, t, settings.seed))?,
+        Some(t) => {
+            pool.install(|| pt_render::phosphorescence::afterglow(&desc, t, settings.seed))?
+        }
         None => desc,
     };
     let scene = pool.install(|| Scene::build_with_mode(&desc, bvh, selection, mode))?;
@@ -415,13 +441,22 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
 
     let total = settings.width as u64 * settings.height as u64 * settings.spp as u64;
     let show = !args.quiet && std::io::stderr().is_terminal();
-    let bar = if show { ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr()) } else { ProgressBar::hidden() };
+    let bar = if show {
+        ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr())
+    } else {
+        ProgressBar::hidden()
+    };
     bar.set_style(
-        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% {msps} M samples/s, ETA {eta}")
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .with_key("msps", |state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% {msps} M samples/s, ETA {eta}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .with_key(
+            "msps",
+            |state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
                 let _ = write!(w, "{:.2}", state.per_sec() / 1e6);
-            }),
+            },
+        ),
     );
     // Ctrl-C: finish the current pass, then write what was accumulated (image and, with
     // --save-state, the sums) and exit with code 130.
@@ -429,21 +464,30 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
     {
         let cancel = cancel.clone();
         // Failing to install the handler (one is already installed) only loses Ctrl-C handling.
-        let _ = ctrlc::set_handler(move || cancel.store(true, std::sync::atomic::Ordering::Relaxed));
+        let _ =
+            ctrlc::set_handler(move || cancel.store(true, std::sync::atomic::Ordering::Relaxed));
     }
     let key = state_key(&args, &desc, &settings, scene.mode.name());
     let mut state = match &args.resume {
         Some(path) => {
-            let bytes = std::fs::read(path).with_context(|| format!("cannot read render state {}", path.display()))?;
-            pt_render::RenderState::from_bytes(&bytes, key, &settings).map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))?
+            let bytes = std::fs::read(path)
+                .with_context(|| format!("cannot read render state {}", path.display()))?;
+            pt_render::RenderState::from_bytes(&bytes, key, &settings)
+                .map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))?
         }
         None => pt_render::RenderState::new(&settings),
     };
     if state.spp_done > settings.spp {
-        bail!("the saved render already has {} spp, more than --spp {}", state.spp_done, settings.spp);
+        bail!(
+            "the saved render already has {} spp, more than --spp {}",
+            state.spp_done,
+            settings.spp
+        );
     }
     bar.inc(settings.width as u64 * settings.height as u64 * u64::from(state.spp_done));
-    let complete = pool.install(|| pt_render::render_passes(&scene, &settings, &mut state, &cancel, &|n| bar.inc(n)));
+    let complete = pool.install(|| {
+        pt_render::render_passes(&scene, &settings, &mut state, &cancel, &|n| bar.inc(n))
+    });
     let out = state.output();
     bar.finish_and_clear();
     if let Some(path) = &args.save_state {
@@ -453,12 +497,23 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
     let extra: Vec<(String, String)> = vec![
         ("integrator".into(), "path".into()),
         ("max_depth".into(), settings.path.max_depth.to_string()),
-        ("strategy".into(), format!("{:?}", settings.path.strategy).to_lowercase()),
+        (
+            "strategy".into(),
+            format!("{:?}", settings.path.strategy).to_lowercase(),
+        ),
     ]
     .into_iter()
     .chain(settings.clamp.map(|c| ("clamp".to_string(), c.to_string())))
     .collect();
-    write_outputs(&args, &desc, &settings, &out, scene.mode.name(), extra, &output)?;
+    write_outputs(
+        &args,
+        &desc,
+        &settings,
+        &out,
+        scene.mode.name(),
+        extra,
+        &output,
+    )?;
     if !args.quiet {
         let secs = out.time.as_secs_f64();
         eprintln!(
@@ -472,7 +527,10 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
             output.display()
         );
         if out.nonfinite_samples > 0 {
-            eprintln!("warning: {} samples were NaN or infinite and were left out of their pixels", out.nonfinite_samples);
+            eprintln!(
+                "warning: {} samples were NaN or infinite and were left out of their pixels",
+                out.nonfinite_samples
+            );
         }
     }
     if !complete {
@@ -480,7 +538,11 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
             "interrupted: wrote the image of the {} of {} samples per pixel taken so far{}",
             out.spp,
             settings.spp,
-            if args.save_state.is_some() { " and the state to continue it with --resume" } else { " (add --save-state to be able to resume)" }
+            if args.save_state.is_some() {
+                " and the state to continue it with --resume"
+            } else {
+                " (add --save-state to be able to resume)"
+            }
         );
         return Ok(ExitCode::from(130));
     }
@@ -525,19 +587,35 @@ fn write_outputs(
     mut extra: Vec<(String, String)>,
     output: &Path,
 ) -> Result<()> {
-    let image = Image { width: out.width, height: out.height, data: out.mean.clone() };
+    let image = Image {
+        width: out.width,
+        height: out.height,
+        data: out.mean.clone(),
+    };
     extra.splice(
         0..0,
         [
-            ("pt_version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
+            (
+                "pt_version".to_string(),
+                env!("CARGO_PKG_VERSION").to_string(),
+            ),
             ("scene".to_string(), desc.source.display().to_string()),
             ("seed".to_string(), settings.seed.to_string()),
         ],
     );
-    let meta = ExrMeta { spp: Some(out.spp), mode: Some(mode.to_string()), render_time_s: Some(out.time.as_secs_f64()), extra };
+    let meta = ExrMeta {
+        spp: Some(out.spp),
+        mode: Some(mode.to_string()),
+        render_time_s: Some(out.time.as_secs_f64()),
+        extra,
+    };
     pt_image::write_exr(output, &image, &meta)?;
     if args.variance {
-        let var = Image { width: out.width, height: out.height, data: out.variance.clone() };
+        let var = Image {
+            width: out.width,
+            height: out.height,
+            data: out.variance.clone(),
+        };
         pt_image::write_exr(&variance_path(output), &var, &meta)?;
     }
     if let Some(png) = &args.png {
@@ -547,31 +625,66 @@ fn write_outputs(
 }
 
 /// `pt render --integrator radiosity` (or a scene whose integrator is `radiosity`).
-fn render_radiosity(args: &RenderArgs, desc: &SceneDesc, settings: &RenderSettings, output: &Path, pool: &rayon::ThreadPool) -> Result<ExitCode> {
+fn render_radiosity(
+    args: &RenderArgs,
+    desc: &SceneDesc,
+    settings: &RenderSettings,
+    output: &Path,
+    pool: &rayon::ThreadPool,
+) -> Result<ExitCode> {
     use pt_radiosity::{Display, RadiosityParams, Reciprocity, Solver};
-    if args.max_depth.is_some() || args.clamp.is_some() || !matches!(args.strategy, StrategyArg::Mis) || !matches!(args.light_selection, SelectionArg::Power) {
+    if args.max_depth.is_some()
+        || args.clamp.is_some()
+        || !matches!(args.strategy, StrategyArg::Mis)
+        || !matches!(args.light_selection, SelectionArg::Power)
+    {
         bail!("--max-depth, --clamp, --strategy and --light-selection apply to the path tracer, not to radiosity");
     }
     let o = &desc.integrator.radiosity;
     let r = &args.radiosity;
     let at = |what: &str, e: String| anyhow::anyhow!("{}: {what}: {e}", desc.integrator.loc);
-    let mut p = RadiosityParams { spp: settings.spp, seed: settings.seed, ..RadiosityParams::default() };
+    let mut p = RadiosityParams {
+        spp: settings.spp,
+        seed: settings.seed,
+        ..RadiosityParams::default()
+    };
     p.patch_size = r.patch_size.or(o.patch_size).or(p.patch_size);
-    p.rays_per_patch = r.rays_per_patch.or(o.rays_per_patch).unwrap_or(p.rays_per_patch);
+    p.rays_per_patch = r
+        .rays_per_patch
+        .or(o.rays_per_patch)
+        .unwrap_or(p.rays_per_patch);
     p.tolerance = r.tolerance.or(o.tolerance).unwrap_or(p.tolerance);
-    p.max_iterations = r.max_iterations.or(o.max_iterations).unwrap_or(p.max_iterations);
+    p.max_iterations = r
+        .max_iterations
+        .or(o.max_iterations)
+        .unwrap_or(p.max_iterations);
     if let Some(s) = r.radiosity_solver.as_ref().or(o.solver.as_ref()) {
-        p.solver = s.parse::<Solver>().map_err(|e| at("solver", e.to_string()))?;
+        p.solver = s
+            .parse::<Solver>()
+            .map_err(|e| at("solver", e.to_string()))?;
     }
     if let Some(s) = r.radiosity_display.as_ref().or(o.display.as_ref()) {
-        p.display = s.parse::<Display>().map_err(|e| at("display", e.to_string()))?;
+        p.display = s
+            .parse::<Display>()
+            .map_err(|e| at("display", e.to_string()))?;
     }
     if let Some(s) = r.reciprocity.as_ref().or(o.reciprocity.as_ref()) {
-        p.reciprocity = s.parse::<Reciprocity>().map_err(|e| at("reciprocity", e.to_string()))?;
+        p.reciprocity = s
+            .parse::<Reciprocity>()
+            .map_err(|e| at("reciprocity", e.to_string()))?;
     }
     let show = !args.quiet && std::io::stderr().is_terminal();
-    let bar = if show { ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::stderr()) } else { ProgressBar::hidden() };
-    bar.set_style(ProgressStyle::with_template("{spinner} [{elapsed_precise}] {msg:<14} {wide_bar} {percent:>3}%").unwrap_or_else(|_| ProgressStyle::default_bar()));
+    let bar = if show {
+        ProgressBar::with_draw_target(Some(1000), ProgressDrawTarget::stderr())
+    } else {
+        ProgressBar::hidden()
+    };
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {msg:<14} {wide_bar} {percent:>3}%",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
     let (out, stats) = pool.install(|| {
         pt_radiosity::render(desc, &p, &|stage, f| {
             bar.set_message(stage.to_string());
@@ -610,13 +723,19 @@ fn render_radiosity(args: &RenderArgs, desc: &SceneDesc, settings: &RenderSettin
 
 /// `scene.xml` -> `scene.exr` in the current folder; the built-in box -> `cornell-box.exr`.
 fn default_output(scene: Option<&Path>) -> PathBuf {
-    let stem = scene.and_then(|p| p.file_stem()).map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "cornell-box".into());
+    let stem = scene
+        .and_then(|p| p.file_stem())
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "cornell-box".into());
     PathBuf::from(format!("{stem}.exr"))
 }
 
 /// `out.exr` -> `out_var.exr`.
 fn variance_path(output: &Path) -> PathBuf {
-    let stem = output.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+    let stem = output
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
     output.with_file_name(format!("{stem}_var.exr"))
 }
 
@@ -635,12 +754,24 @@ pub(crate) fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
 }
 
 fn check_output_path(output: &Path) -> Result<()> {
-    if output.extension().and_then(|e| e.to_str()).map(|e| e.eq_ignore_ascii_case("exr")) != Some(true) {
+    if output
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.eq_ignore_ascii_case("exr"))
+        != Some(true)
+    {
         bail!("output '{}' must end in .exr", output.display());
     }
-    let dir = output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
+    let dir = output
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
     if !dir.is_dir() {
-        bail!("cannot write '{}': folder '{}' does not exist", output.display(), dir.display());
+        bail!(
+            "cannot write '{}': folder '{}' does not exist",
+            output.display(),
+            dir.display()
+        );
     }
     Ok(())
 }
@@ -651,31 +782,85 @@ fn check_output_path(output: &Path) -> Result<()> {
 fn describe_bsdf(kind: &pt_scene::BsdfKind) -> String {
     use pt_scene::BsdfKind as K;
     let tex = |t: &pt_scene::UvTexture| match &t.source {
-        pt_scene::ImageSource::File(p) => p.file_name().map_or_else(|| p.display().to_string(), |n| n.to_string_lossy().into_owned()),
+        pt_scene::ImageSource::File(p) => p.file_name().map_or_else(
+            || p.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        ),
         pt_scene::ImageSource::Embedded { name, .. } => name.clone(),
     };
     match kind {
         K::TwoSided { inner } => format!("twosided({})", describe_bsdf(&inner.kind)),
-        K::Mask { opacity, inner } => format!("mask(opacity {opacity}, {})", describe_bsdf(&inner.kind)),
-        K::NormalMap { texture, scale, gltf, inner } => {
-            format!("normalmap({}, {} tangent space, scale {scale}, {})", tex(texture), if *gltf { "glTF" } else { "Mitsuba" }, describe_bsdf(&inner.kind))
+        K::Mask { opacity, inner } => {
+            format!("mask(opacity {opacity}, {})", describe_bsdf(&inner.kind))
         }
-        K::Blend { weight, weight_texture, first, second } => {
+        K::NormalMap {
+            texture,
+            scale,
+            gltf,
+            inner,
+        } => {
+            format!(
+                "normalmap({}, {} tangent space, scale {scale}, {})",
+                tex(texture),
+                if *gltf { "glTF" } else { "Mitsuba" },
+                describe_bsdf(&inner.kind)
+            )
+        }
+        K::Blend {
+            weight,
+            weight_texture,
+            first,
+            second,
+        } => {
             let w = match weight_texture {
                 Some((t, channel)) => format!("weight {weight} x {} {channel:?}", tex(t)),
                 None => format!("weight {weight}"),
             };
-            format!("blend({w}, {} | {})", describe_bsdf(&first.kind), describe_bsdf(&second.kind))
+            format!(
+                "blend({w}, {} | {})",
+                describe_bsdf(&first.kind),
+                describe_bsdf(&second.kind)
+            )
         }
-        K::OpacityTexture { texture, channel, factor, cutoff, inner } => {
+        K::OpacityTexture {
+            texture,
+            channel,
+            factor,
+            cutoff,
+            inner,
+        } => {
             let cut = cutoff.map(|c| format!(", cutoff {c}")).unwrap_or_default();
-            format!("mask(opacity {factor} x {} {channel:?}{cut}, {})", tex(texture), describe_bsdf(&inner.kind))
+            format!(
+                "mask(opacity {factor} x {} {channel:?}{cut}, {})",
+                tex(texture),
+                describe_bsdf(&inner.kind)
+            )
         }
-        K::FilmThicknessTexture { texture, min_nm, max_nm, inner } => {
-            format!("film-thickness({}, {min_nm}..{max_nm} nm, {})", tex(texture), describe_bsdf(&inner.kind))
+        K::FilmThicknessTexture {
+            texture,
+            min_nm,
+            max_nm,
+            inner,
+        } => {
+            format!(
+                "film-thickness({}, {min_nm}..{max_nm} nm, {})",
+                tex(texture),
+                describe_bsdf(&inner.kind)
+            )
         }
-        K::GltfPbr { base_color, metallic, roughness, ior, base_color_texture, metallic_roughness_texture } => {
-            let t = |o: &Option<Box<pt_scene::UvTexture>>, what: &str| o.as_ref().map(|t| format!(", {what} x {}", tex(t))).unwrap_or_default();
+        K::GltfPbr {
+            base_color,
+            metallic,
+            roughness,
+            ior,
+            base_color_texture,
+            metallic_roughness_texture,
+        } => {
+            let t = |o: &Option<Box<pt_scene::UvTexture>>, what: &str| {
+                o.as_ref()
+                    .map(|t| format!(", {what} x {}", tex(t)))
+                    .unwrap_or_default()
+            };
             format!(
                 "GltfPbr {{ base_color: {base_color:?}{}, metallic: {metallic}, roughness: {roughness}{}, ior: {ior} }}",
                 t(base_color_texture, "texture"),
@@ -690,8 +875,17 @@ fn cmd_info(args: InfoArgs) -> Result<ExitCode> {
     let (desc, gltf_summary) = load_scene_with_summary(args.scene.as_deref(), &args.scene_args)?;
     let scene = Scene::build(&desc, BvhKind::Auto, LightSelection::Power)?;
     out!("scene       {}", desc.source.display());
-    out!("film        {}x{}, filter {:?}", desc.film.width, desc.film.height, desc.film.filter);
-    out!("sampler     {} spp, seed {}", desc.sampler.sample_count, desc.sampler.seed);
+    out!(
+        "film        {}x{}, filter {:?}",
+        desc.film.width,
+        desc.film.height,
+        desc.film.filter
+    );
+    out!(
+        "sampler     {} spp, seed {}",
+        desc.sampler.sample_count,
+        desc.sampler.seed
+    );
     let i = &desc.integrator;
     out!(
         "integrator  {:?}, max_depth {}, rr_depth {}, hide_emitters {}{}",
@@ -699,19 +893,46 @@ fn cmd_info(args: InfoArgs) -> Result<ExitCode> {
         i.max_depth,
         i.rr_depth,
         i.hide_emitters,
-        if i.moment { " (moment: variance requested)" } else { "" }
+        if i.moment {
+            " (moment: variance requested)"
+        } else {
+            ""
+        }
     );
     let c = &desc.camera;
     let pos = c.to_world.transform_point3(pt_math::Vec3::ZERO);
     let dir = c.to_world.transform_vector3(pt_math::Vec3::Z).normalize();
-    out!("camera      {:?}, at ({:.3}, {:.3}, {:.3}) looking ({:.3}, {:.3}, {:.3})", c.projection, pos.x, pos.y, pos.z, dir.x, dir.y, dir.z);
+    out!(
+        "camera      {:?}, at ({:.3}, {:.3}, {:.3}) looking ({:.3}, {:.3}, {:.3})",
+        c.projection,
+        pos.x,
+        pos.y,
+        pos.z,
+        dir.x,
+        dir.y,
+        dir.z
+    );
     out!(
         "geometry    {} shapes, {} triangles{}, {} spheres{}",
         desc.shapes.len(),
         scene.stats.triangles,
-        if scene.stats.parallelograms > 0 { format!(" ({} pairs tested as parallelograms)", scene.stats.parallelograms) } else { String::new() },
+        if scene.stats.parallelograms > 0 {
+            format!(
+                " ({} pairs tested as parallelograms)",
+                scene.stats.parallelograms
+            )
+        } else {
+            String::new()
+        },
         scene.stats.spheres,
-        if scene.stats.degenerate_triangles > 0 { format!(" ({} zero-area triangles skipped)", scene.stats.degenerate_triangles) } else { String::new() }
+        if scene.stats.degenerate_triangles > 0 {
+            format!(
+                " ({} zero-area triangles skipped)",
+                scene.stats.degenerate_triangles
+            )
+        } else {
+            String::new()
+        }
     );
     for (k, s) in desc.shapes.iter().enumerate() {
         let geo = match &s.geometry {
@@ -724,14 +945,34 @@ fn cmd_info(args: InfoArgs) -> Result<ExitCode> {
             s.plugin,
             geo,
             bsdf.id.as_deref().unwrap_or("-"),
-            s.emitter.as_ref().map(|e| format!("emits {:?}{}", e.radiance, if e.texture.is_some() || e.uv_texture.is_some() { " x texture" } else { "" })).unwrap_or_default()
-                + &s.interior.as_ref().map(|m| format!(" interior medium sigma_t {:?}", m.sigma_t)).unwrap_or_default(),
-            s.id.as_deref().map(|id| format!(" id={id}")).unwrap_or_default(),
+            s.emitter
+                .as_ref()
+                .map(|e| format!(
+                    "emits {:?}{}",
+                    e.radiance,
+                    if e.texture.is_some() || e.uv_texture.is_some() {
+                        " x texture"
+                    } else {
+                        ""
+                    }
+                ))
+                .unwrap_or_default()
+                + &s.interior
+                    .as_ref()
+                    .map(|m| format!(" interior medium sigma_t {:?}", m.sigma_t))
+                    .unwrap_or_default(),
+            s.id.as_deref()
+                .map(|id| format!(" id={id}"))
+                .unwrap_or_default(),
         );
     }
     out!("materials   {}", desc.bsdfs.len());
     for b in &desc.bsdfs {
-        out!("  {:<12} {}", b.id.as_deref().unwrap_or("-"), describe_bsdf(&b.kind));
+        out!(
+            "  {:<12} {}",
+            b.id.as_deref().unwrap_or("-"),
+            describe_bsdf(&b.kind)
+        );
     }
     out!("lights      {} area light(s)", scene.lights.len());
     if !gltf_summary.is_empty() {
@@ -755,9 +996,18 @@ fn sibling_variance(path: &Path) -> Option<PathBuf> {
 
 fn cmd_compare(args: CompareArgs) -> Result<ExitCode> {
     // Output names are checked before any work, so a bad one fails fast with nothing written.
-    for (flag, out) in [("--error-image", &args.error_image), ("--flip-image", &args.flip_image)] {
+    for (flag, out) in [
+        ("--error-image", &args.error_image),
+        ("--flip-image", &args.flip_image),
+    ] {
         if let Some(out) = out {
-            if !matches!(out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref(), Some("png" | "exr")) {
+            if !matches!(
+                out.extension()
+                    .and_then(|e| e.to_str())
+                    .map(str::to_ascii_lowercase)
+                    .as_deref(),
+                Some("png" | "exr")
+            ) {
                 bail!("{flag} '{}' must end in .png or .exr", out.display());
             }
         }
@@ -778,13 +1028,29 @@ fn cmd_compare(args: CompareArgs) -> Result<ExitCode> {
     let m = pt_image::metrics::compare(&img, &reference)?;
     let ch = |v: [f64; 3]| format!("{:>12.6e} {:>12.6e} {:>12.6e}", v[0], v[1], v[2]);
     out!("{:<22} {:>12} {:>12} {:>12}", "metric", "R", "G", "B");
-    out!("{:<22} {}   (all: {:.6e})", "relMSE", ch(m.relmse), m.relmse_all);
+    out!(
+        "{:<22} {}   (all: {:.6e})",
+        "relMSE",
+        ch(m.relmse),
+        m.relmse_all
+    );
     out!("{:<22} {}", "RMSE", ch(m.rmse));
     out!("{:<22} {}", "MAE", ch(m.mae));
     out!("{:<22} {}", "mean ratio", ch(m.mean_ratio));
-    out!("{:<22} {} / {}", "non-finite pixels", img.nonfinite_pixels(), reference.nonfinite_pixels());
+    out!(
+        "{:<22} {} / {}",
+        "non-finite pixels",
+        img.nonfinite_pixels(),
+        reference.nonfinite_pixels()
+    );
     let flip = pt_image::flip::flip(&img, &reference, args.flip_exposure)?;
-    out!("{:<22} {:>12.6}   (mean, tone-mapped at {:+} stops, {} px/degree)", "FLIP", flip.mean, args.flip_exposure, pt_image::flip::DEFAULT_PIXELS_PER_DEGREE);
+    out!(
+        "{:<22} {:>12.6}   (mean, tone-mapped at {:+} stops, {} px/degree)",
+        "FLIP",
+        flip.mean,
+        args.flip_exposure,
+        pt_image::flip::DEFAULT_PIXELS_PER_DEGREE
+    );
     let ff = pt_image::fireflies::FireflyParams::default();
     out!(
         "{:<22} {} / {}   (image / reference: luminance > median + {} MAD-sigma of the {}x{} neighbourhood)",
@@ -795,14 +1061,21 @@ fn cmd_compare(args: CompareArgs) -> Result<ExitCode> {
         2 * ff.radius + 1,
         2 * ff.radius + 1
     );
-    let img_var = args.image_variance.clone().or_else(|| sibling_variance(&args.image));
-    let ref_var = args.variance.clone().or_else(|| sibling_variance(&args.reference));
+    let img_var = args
+        .image_variance
+        .clone()
+        .or_else(|| sibling_variance(&args.image));
+    let ref_var = args
+        .variance
+        .clone()
+        .or_else(|| sibling_variance(&args.reference));
     let mut agree = img.nonfinite_pixels() == 0;
     match (img_var, ref_var) {
         (Some(iv), Some(rv)) => {
             let (iv, _) = pt_image::read_exr(&iv)?;
             let (rv, _) = pt_image::read_exr(&rv)?;
-            let z = pt_image::stats::block_ztest(&img, &iv, &reference, &rv, args.block, args.alpha)?;
+            let z =
+                pt_image::stats::block_ztest(&img, &iv, &reference, &rv, args.block, args.alpha)?;
             out!(
                 "block z-test ({}x{} px, alpha {}): max |z| {:.2}, {} of {} block-channels fail (per-test p < {:.2e}), chi2 {:.1} on {} dof (p {:.3}): {}",
                 args.block,
@@ -818,7 +1091,11 @@ fn cmd_compare(args: CompareArgs) -> Result<ExitCode> {
                 if z.pass { "PASS" } else { "FAIL" }
             );
             let pz = pt_image::stats::pixel_ztest(&img, &iv, &reference, &rv, args.alpha)?;
-            out!("pixel z-test: {:.3}% of pixel-channels fail at p < {}", 100.0 * pz.fraction_failed, args.alpha);
+            out!(
+                "pixel z-test: {:.3}% of pixel-channels fail at p < {}",
+                100.0 * pz.fraction_failed,
+                args.alpha
+            );
             agree &= z.pass;
         }
         _ => {
@@ -828,21 +1105,45 @@ fn cmd_compare(args: CompareArgs) -> Result<ExitCode> {
     if let Some(out) = &args.error_image {
         let err = pt_image::colormap::relative_error_image(&img, &reference)?;
         let e = pt_image::colormap::false_colour(&err, img.width, img.height, 0.0, 0.2, false);
-        match out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        match out
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref()
+        {
             Some("png") => pt_image::write_png_preview(out, &e, 0.0)?,
             Some("exr") => pt_image::write_exr(out, &e, &ExrMeta::default())?,
             _ => bail!("--error-image '{}' must end in .png or .exr", out.display()),
         }
-        out!("relative error image (0 to 20%, viridis) -> {}", out.display());
+        out!(
+            "relative error image (0 to 20%, viridis) -> {}",
+            out.display()
+        );
     }
     if let Some(out) = &args.flip_image {
-        let e = pt_image::colormap::false_colour(&flip.error_map, img.width, img.height, 0.0, 1.0, false);
-        match out.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        let e = pt_image::colormap::false_colour(
+            &flip.error_map,
+            img.width,
+            img.height,
+            0.0,
+            1.0,
+            false,
+        );
+        match out
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref()
+        {
             Some("png") => pt_image::write_png_preview(out, &e, 0.0)?,
             Some("exr") => pt_image::write_exr(out, &e, &ExrMeta::default())?,
             _ => bail!("--flip-image '{}' must end in .png or .exr", out.display()),
         }
         out!("FLIP error image (0 to 1, viridis) -> {}", out.display());
     }
-    Ok(if agree { ExitCode::SUCCESS } else { ExitCode::from(1) })
+    Ok(if agree {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
 }

@@ -37,11 +37,12 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use pt_bsdf::{
-    Bsdf, Conductor, Dielectric, Distribution, FilmBase, Lambert, Microfacet, Minnaert, OrenNayar, OrenNayarVariant, RoughConductor,
-    GltfPbr, RoughDielectric, RoughPlastic, RoughThinFilm, ThinDielectric, ThinFilm,
-};
 use pt_bsdf::rough_plastic::CoatingTable;
+use pt_bsdf::{
+    Bsdf, Conductor, Dielectric, Distribution, FilmBase, GltfPbr, Lambert, Microfacet, Minnaert,
+    OrenNayar, OrenNayarVariant, RoughConductor, RoughDielectric, RoughPlastic, RoughThinFilm,
+    ThinDielectric, ThinFilm,
+};
 use pt_math::{Vec2, Vec3, Vec4};
 use pt_spectrum::SampledSpectrum;
 use pt_testkit::{Chi2Config, Pcg32, Sample};
@@ -143,13 +144,43 @@ fn white() -> SampledSpectrum {
 /// "beyond": the constructors must still produce a finite model.
 pub(crate) fn cases() -> Vec<Case> {
     let mut v = Vec::new();
-    let mut push = |family, param_name, param: f32, detail: String, in_range, energy_bound, bsdf| {
-        v.push(Case { family, param_name, param, detail, in_range, energy_bound, bsdf })
-    };
+    let mut push =
+        |family, param_name, param: f32, detail: String, in_range, energy_bound, bsdf| {
+            v.push(Case {
+                family,
+                param_name,
+                param,
+                detail,
+                in_range,
+                energy_bound,
+                bsdf,
+            })
+        };
     for rho in [0.0f32, 0.5, 1.0] {
-        push("lambert", "reflectance", rho, String::new(), true, 1.0, Bsdf::Lambert(Lambert::new(SampledSpectrum::splat(rho))));
+        push(
+            "lambert",
+            "reflectance",
+            rho,
+            String::new(),
+            true,
+            1.0,
+            Bsdf::Lambert(Lambert::new(SampledSpectrum::splat(rho))),
+        );
     }
-    let sigmas = [0.0f32, 0.1, 0.3, 0.6, 1.0, std::f32::consts::FRAC_PI_2, 3.0, 10.0, 1e3, -1.0, f32::NAN, f32::INFINITY];
+    let sigmas = [
+        0.0f32,
+        0.1,
+        0.3,
+        0.6,
+        1.0,
+        std::f32::consts::FRAC_PI_2,
+        3.0,
+        10.0,
+        1e3,
+        -1.0,
+        f32::NAN,
+        f32::INFINITY,
+    ];
     for (fam, var) in [
         ("orennayar-qualitative", OrenNayarVariant::Qualitative),
         ("orennayar-full", OrenNayarVariant::Full),
@@ -159,39 +190,133 @@ pub(crate) fn cases() -> Vec<Case> {
         // The 1994 models are not energy conserving (crates/pt-bsdf/tests/diffuse.rs bounds
         // them by 1.1): the qualitative model exceeds 1 at grazing view, the full model's
         // interreflection term adds energy. Fujii and EON must stay <= 1.
-        let bound = if matches!(var, OrenNayarVariant::Qualitative | OrenNayarVariant::Full) { 1.1 } else { 1.0 };
+        let bound = if matches!(var, OrenNayarVariant::Qualitative | OrenNayarVariant::Full) {
+            1.1
+        } else {
+            1.0
+        };
         for s in sigmas {
-            push(fam, "sigma", s, String::new(), s >= 0.0 && s.is_finite(), bound, Bsdf::OrenNayar(OrenNayar::new(white(), s, var)));
+            push(
+                fam,
+                "sigma",
+                s,
+                String::new(),
+                s >= 0.0 && s.is_finite(),
+                bound,
+                Bsdf::OrenNayar(OrenNayar::new(white(), s, var)),
+            );
         }
     }
-    for k in [0.0f32, 0.25, 0.5, 1.0, 2.0, 5.0, 20.0, 1e3, -1.0, f32::NAN, f32::INFINITY] {
-        push("minnaert", "k", k, String::new(), k >= 0.0 && k.is_finite(), 1.0, Bsdf::Minnaert(Minnaert::new(white(), k)));
+    for k in [
+        0.0f32,
+        0.25,
+        0.5,
+        1.0,
+        2.0,
+        5.0,
+        20.0,
+        1e3,
+        -1.0,
+        f32::NAN,
+        f32::INFINITY,
+    ] {
+        push(
+            "minnaert",
+            "k",
+            k,
+            String::new(),
+            k >= 0.0 && k.is_finite(),
+            1.0,
+            Bsdf::Minnaert(Minnaert::new(white(), k)),
+        );
     }
     for eta in [0.0f32, 0.2, 1.5, 10.0] {
         for k in [0.0f32, 1.0, 5.0, 100.0, -1.0, f32::NAN] {
             let ok = k >= 0.0 && k.is_finite();
-            let b = Bsdf::Conductor(Conductor::new(SampledSpectrum::splat(eta), SampledSpectrum::splat(k), white()));
+            let b = Bsdf::Conductor(Conductor::new(
+                SampledSpectrum::splat(eta),
+                SampledSpectrum::splat(k),
+                white(),
+            ));
             push("conductor", "k", k, format!("eta={eta}"), ok, 1.0, b);
         }
     }
-    let alphas = [0.0f32, 1e-5, 1e-3, 0.01, 0.05, 0.1, 0.3, 0.6, 1.0, 2.0, 10.0, 100.0, f32::NAN];
+    let alphas = [
+        0.0f32,
+        1e-5,
+        1e-3,
+        0.01,
+        0.05,
+        0.1,
+        0.3,
+        0.6,
+        1.0,
+        2.0,
+        10.0,
+        100.0,
+        f32::NAN,
+    ];
     let alpha_ok = |a: f32| (1e-3..=10.0).contains(&a);
-    for (fam, dist) in [("roughconductor-ggx", Distribution::Ggx), ("roughconductor-beckmann", Distribution::Beckmann)] {
+    for (fam, dist) in [
+        ("roughconductor-ggx", Distribution::Ggx),
+        ("roughconductor-beckmann", Distribution::Beckmann),
+    ] {
         for a in alphas {
             // A perfect-mirror Fresnel term (eta 0, k 1 is F = 1) isolates the microfacet part.
-            let b = Bsdf::RoughConductor(RoughConductor::new(SampledSpectrum::ZERO, white(), white(), Microfacet::new(dist, a, a)));
+            let b = Bsdf::RoughConductor(RoughConductor::new(
+                SampledSpectrum::ZERO,
+                white(),
+                white(),
+                Microfacet::new(dist, a, a),
+            ));
             push(fam, "alpha", a, "isotropic".into(), alpha_ok(a), 1.0, b);
-            let b = Bsdf::RoughConductor(RoughConductor::new(SampledSpectrum::ZERO, white(), white(), Microfacet::new(dist, a, 0.3)));
+            let b = Bsdf::RoughConductor(RoughConductor::new(
+                SampledSpectrum::ZERO,
+                white(),
+                white(),
+                Microfacet::new(dist, a, 0.3),
+            ));
             push(fam, "alpha", a, "alpha_v=0.3".into(), alpha_ok(a), 1.0, b);
         }
     }
-    let etas = [1.0f32, 1.0001, 1.33, 1.5, 2.4, 4.0, 0.5, 0.0, -1.5, f32::NAN, 1e6];
+    let etas = [
+        1.0f32,
+        1.0001,
+        1.33,
+        1.5,
+        2.4,
+        4.0,
+        0.5,
+        0.0,
+        -1.5,
+        f32::NAN,
+        1e6,
+    ];
     let eta_ok = |e: f32| e > 0.0 && e.is_finite() && e < 100.0;
     for e in etas {
-        push("dielectric", "eta", e, String::new(), eta_ok(e), 1.0, Bsdf::Dielectric(Dielectric::new(e)));
-        push("thindielectric", "eta", e, String::new(), eta_ok(e), 1.0, Bsdf::ThinDielectric(ThinDielectric::new(e)));
+        push(
+            "dielectric",
+            "eta",
+            e,
+            String::new(),
+            eta_ok(e),
+            1.0,
+            Bsdf::Dielectric(Dielectric::new(e)),
+        );
+        push(
+            "thindielectric",
+            "eta",
+            e,
+            String::new(),
+            eta_ok(e),
+            1.0,
+            Bsdf::ThinDielectric(ThinDielectric::new(e)),
+        );
     }
-    for (fam, dist) in [("roughdielectric-ggx", Distribution::Ggx), ("roughdielectric-beckmann", Distribution::Beckmann)] {
+    for (fam, dist) in [
+        ("roughdielectric-ggx", Distribution::Ggx),
+        ("roughdielectric-beckmann", Distribution::Beckmann),
+    ] {
         for a in alphas {
             for e in [1.5f32, 1.0001, 4.0] {
                 let b = Bsdf::RoughDielectric(RoughDielectric::new(e, Microfacet::new(dist, a, a)));
@@ -199,7 +324,10 @@ pub(crate) fn cases() -> Vec<Case> {
             }
         }
     }
-    for (fam, dist) in [("roughplastic-ggx", Distribution::Ggx), ("roughplastic-beckmann", Distribution::Beckmann)] {
+    for (fam, dist) in [
+        ("roughplastic-ggx", Distribution::Ggx),
+        ("roughplastic-beckmann", Distribution::Beckmann),
+    ] {
         for a in [0.0f32, 1e-3, 0.01, 0.1, 0.3, 1.0, 10.0, f32::NAN] {
             for e in [1.49f32, 1.0001, 4.0] {
                 for nonlinear in [false, true] {
@@ -207,39 +335,93 @@ pub(crate) fn cases() -> Vec<Case> {
                     let table = CoatingTable::get(dist, mf.alpha_u, e);
                     // White base and coating; sampling weight mean(ks) / (mean(ks) + mean(rho)), as
                     // the scene builder sets it.
-                    let b = Bsdf::RoughPlastic(RoughPlastic::new(white(), white(), e, mf, nonlinear, 0.5, table));
-                    push(fam, "alpha", a, format!("eta={e} nonlinear={nonlinear}"), alpha_ok(a), 1.0, b);
+                    let b = Bsdf::RoughPlastic(RoughPlastic::new(
+                        white(),
+                        white(),
+                        e,
+                        mf,
+                        nonlinear,
+                        0.5,
+                        table,
+                    ));
+                    push(
+                        fam,
+                        "alpha",
+                        a,
+                        format!("eta={e} nonlinear={nonlinear}"),
+                        alpha_ok(a),
+                        1.0,
+                        b,
+                    );
                 }
             }
         }
     }
     // Lane wavelengths: 12 values from 360 to 830 nm in three sets of four.
     let lam = |i: usize| 360.0 + (830.0 - 360.0) * i as f32 / 11.0;
-    let lane_sets: Vec<Vec4> = (0..3).map(|s| Vec4::new(lam(s), lam(s + 3), lam(s + 6), lam(s + 9))).collect();
+    let lane_sets: Vec<Vec4> = (0..3)
+        .map(|s| Vec4::new(lam(s), lam(s + 3), lam(s + 6), lam(s + 9)))
+        .collect();
     let bases = [
         ("dielectric 1.5", FilmBase::Dielectric { ior: 1.5 }),
         // Gold-like conductor base (eta, k at about 550 nm).
-        ("conductor 0.4+2.5i", FilmBase::Conductor { eta: SampledSpectrum::splat(0.4), k: SampledSpectrum::splat(2.5) }),
+        (
+            "conductor 0.4+2.5i",
+            FilmBase::Conductor {
+                eta: SampledSpectrum::splat(0.4),
+                k: SampledSpectrum::splat(2.5),
+            },
+        ),
     ];
-    for d in [0.0f32, 1.0, 50.0, 300.0, 700.0, 1200.0, 2000.0, 1e5, -10.0, f32::NAN] {
+    for d in [
+        0.0f32,
+        1.0,
+        50.0,
+        300.0,
+        700.0,
+        1200.0,
+        2000.0,
+        1e5,
+        -10.0,
+        f32::NAN,
+    ] {
         let ok = d >= 0.0 && d <= 2000.0;
         for (bname, base) in bases {
             for nf in [1.33f32, 2.5] {
                 for (s, l) in lane_sets.iter().enumerate() {
                     let b = Bsdf::ThinFilm(ThinFilm::spectral(d, nf, 1.0, base, *l));
-                    push("thinfilm-spectral", "thickness_nm", d, format!("film_ior={nf} base={bname} lanes={s}"), ok, 1.0, b);
+                    push(
+                        "thinfilm-spectral",
+                        "thickness_nm",
+                        d,
+                        format!("film_ior={nf} base={bname} lanes={s}"),
+                        ok,
+                        1.0,
+                        b,
+                    );
                 }
                 let b = Bsdf::ThinFilm(ThinFilm::rgb(d, nf, 1.0, base));
                 // Belcour-Barla gives linear sRGB: a reflectance spectrum <= 1 can map to a
                 // channel above 1 (sRGB primaries have negative lobes), so only the spectral
                 // form is held to 1; the RGB form is reported.
-                push("thinfilm-rgb", "thickness_nm", d, format!("film_ior={nf} base={bname}"), ok, 1.1, b);
+                push(
+                    "thinfilm-rgb",
+                    "thickness_nm",
+                    d,
+                    format!("film_ior={nf} base={bname}"),
+                    ok,
+                    1.1,
+                    b,
+                );
             }
         }
     }
     // Rough thin film: the film of every facet (thickness 0, 500 nm and 1e5 nm beyond the
     // range) over both bases, spectral lanes 360-830 nm and the RGB form.
-    for (fam, dist) in [("roughthinfilm-ggx", Distribution::Ggx), ("roughthinfilm-beckmann", Distribution::Beckmann)] {
+    for (fam, dist) in [
+        ("roughthinfilm-ggx", Distribution::Ggx),
+        ("roughthinfilm-beckmann", Distribution::Beckmann),
+    ] {
         // A small grid: each evaluation runs the Airy sum (and in RGB form the Belcour-Barla
         // series) per facet, about 20x the cost of a rough conductor.
         for a in [1e-3f32, 0.3] {
@@ -249,11 +431,27 @@ pub(crate) fn cases() -> Vec<Case> {
                     let ok = alpha_ok(a) && d <= 2000.0;
                     let film = ThinFilm::spectral(d, 1.33, 1.0, base, lane_sets[0]);
                     let detail = format!("thickness={d} base={bname} spectral");
-                    push(fam, "alpha", a, detail, ok, 1.0, Bsdf::RoughThinFilm(RoughThinFilm::new(film, mf)));
+                    push(
+                        fam,
+                        "alpha",
+                        a,
+                        detail,
+                        ok,
+                        1.0,
+                        Bsdf::RoughThinFilm(RoughThinFilm::new(film, mf)),
+                    );
                     let film = ThinFilm::rgb(d, 1.33, 1.0, base);
                     let detail = format!("thickness={d} base={bname} rgb");
                     // RGB form: bound 1.1, as the smooth RGB film.
-                    push(fam, "alpha", a, detail, ok, 1.1, Bsdf::RoughThinFilm(RoughThinFilm::new(film, mf)));
+                    push(
+                        fam,
+                        "alpha",
+                        a,
+                        detail,
+                        ok,
+                        1.1,
+                        Bsdf::RoughThinFilm(RoughThinFilm::new(film, mf)),
+                    );
                 }
             }
         }
@@ -264,7 +462,15 @@ pub(crate) fn cases() -> Vec<Case> {
         for metallic in [0.0f32, 0.5, 1.0] {
             for ior in [1.5f32, 3.0] {
                 let b = Bsdf::GltfPbr(GltfPbr::new(white(), metallic, r, ior));
-                push("gltfpbr", "roughness", r, format!("metallic={metallic} ior={ior}"), (0.0..=1.0).contains(&r), 1.0, b);
+                push(
+                    "gltfpbr",
+                    "roughness",
+                    r,
+                    format!("metallic={metallic} ior={ior}"),
+                    (0.0..=1.0).contains(&r),
+                    1.0,
+                    b,
+                );
             }
         }
     }
@@ -315,7 +521,14 @@ fn rel_diff(a: f32, b: f32) -> f32 {
 
 /// Probes `case` at `theta_deg` (see the module doc) with `n` samples, and a chi-square test
 /// with `chi2_samples` samples when the model has a smooth lobe and `chi2_samples > 0`.
-pub(crate) fn probe(ci: usize, case: &Case, theta_deg: f64, back: bool, n: usize, chi2_samples: usize) -> Row {
+pub(crate) fn probe(
+    ci: usize,
+    case: &Case,
+    theta_deg: f64,
+    back: bool,
+    n: usize,
+    chi2_samples: usize,
+) -> Row {
     let b = case.bsdf;
     let wo = incident(theta_deg, back);
     let seed = (ci as u64) << 16 ^ (theta_deg * 100.0) as u64 ^ (back as u64) << 40;
@@ -326,10 +539,23 @@ pub(crate) fn probe(ci: usize, case: &Case, theta_deg: f64, back: bool, n: usize
     let smooth = b.has_smooth_lobe();
     // eval and pdf over special and random directions on the whole sphere.
     let mirror = Vec3::new(-wo.x, -wo.y, wo.z);
-    let special = [Vec3::Z, -Vec3::Z, Vec3::X, Vec3::Y, wo, -wo, mirror, -mirror, Vec3::new(1.0, 0.0, 1e-7).normalize()];
+    let special = [
+        Vec3::Z,
+        -Vec3::Z,
+        Vec3::X,
+        Vec3::Y,
+        wo,
+        -wo,
+        mirror,
+        -mirror,
+        Vec3::new(1.0, 0.0, 1e-7).normalize(),
+    ];
     let random = (0..1000).map(|_| {
         let (u, v) = (rng.next_f32(), rng.next_f32());
-        pt_testkit::spherical(f64::from(2.0 * u - 1.0), 2.0 * std::f64::consts::PI * f64::from(v))
+        pt_testkit::spherical(
+            f64::from(2.0 * u - 1.0),
+            2.0 * std::f64::consts::PI * f64::from(v),
+        )
     });
     let dirs: Vec<Vec3> = special.into_iter().chain(random).collect();
     for &wi in &dirs {
@@ -346,7 +572,9 @@ pub(crate) fn probe(ci: usize, case: &Case, theta_deg: f64, back: bool, n: usize
     let (mut sum, mut sum2) = (Vec4::ZERO, Vec4::ZERO);
     for _ in 0..n {
         let u = rng.next_vec3();
-        let Some(s) = b.sample(wo, u.x, Vec2::new(u.y, u.z)) else { continue };
+        let Some(s) = b.sample(wo, u.x, Vec2::new(u.y, u.z)) else {
+            continue;
+        };
         if !s.wi.is_finite() || !finite4(s.weight) || !s.pdf.is_finite() || !s.eta.is_finite() {
             nonfinite += 1;
             continue;
@@ -391,17 +619,46 @@ pub(crate) fn probe(ci: usize, case: &Case, theta_deg: f64, back: bool, n: usize
     let (mut chi2_p, mut chi2_hard) = (None, None);
     // The chi-square test needs a pdf that is not identically zero: skip wo exactly on the
     // horizon (one-sided models are black there) and wo below one-sided models.
-    if smooth && chi2_samples > 0 && wo.z != 0.0 && (b.is_transmissive() || !back) && chi2_resolvable(&b) {
+    if smooth
+        && chi2_samples > 0
+        && wo.z != 0.0
+        && (b.is_transmissive() || !back)
+        && chi2_resolvable(&b)
+    {
         let sample = |wo: Vec3, u: Vec3| {
-            b.sample(wo, u.x, Vec2::new(u.y, u.z)).map(|s| Sample { wi: s.wi, weight: s.weight.0.x, pdf: s.pdf, delta: s.delta })
+            b.sample(wo, u.x, Vec2::new(u.y, u.z)).map(|s| Sample {
+                wi: s.wi,
+                weight: s.weight.0.x,
+                pdf: s.pdf,
+                delta: s.delta,
+            })
         };
         let pdf = |wo: Vec3, wi: Vec3| b.pdf(wo, wi);
-        let cfg = Chi2Config { samples: chi2_samples, res_cos: 16, res_phi: 32, min_expected: 20.0, seed: 7 + ci as u64 };
+        let cfg = Chi2Config {
+            samples: chi2_samples,
+            res_cos: 16,
+            res_phi: 32,
+            min_expected: 20.0,
+            seed: 7 + ci as u64,
+        };
         let r = pt_testkit::chi2_sphere("", wo, &sample, &pdf, &cfg);
         chi2_p = Some(r.p_value);
         chi2_hard = r.hard_failure;
     }
-    Row { case: ci, theta_deg, back, nonfinite, albedo, albedo_se, energy_gain, pdf_mismatch, weight_mismatch, chi2_p, chi2_hard, chi2_fail: false }
+    Row {
+        case: ci,
+        theta_deg,
+        back,
+        nonfinite,
+        albedo,
+        albedo_se,
+        energy_gain,
+        pdf_mismatch,
+        weight_mismatch,
+        chi2_p,
+        chi2_hard,
+        chi2_fail: false,
+    }
 }
 
 /// Whether the chi-square test can judge the model: its quadrature of the pdf over a 16 x 32
@@ -415,7 +672,9 @@ pub(crate) fn chi2_resolvable(b: &Bsdf) -> bool {
     const MIN_ALPHA: f32 = 0.05;
     match b {
         Bsdf::RoughConductor(m) => m.mf.alpha_u.min(m.mf.alpha_v) >= MIN_ALPHA,
-        Bsdf::RoughDielectric(m) => m.mf.alpha_u.min(m.mf.alpha_v) >= MIN_ALPHA && (m.eta - 1.0).abs() >= 0.01,
+        Bsdf::RoughDielectric(m) => {
+            m.mf.alpha_u.min(m.mf.alpha_v) >= MIN_ALPHA && (m.eta - 1.0).abs() >= 0.01
+        }
         Bsdf::RoughPlastic(m) => m.mf.alpha_u.min(m.mf.alpha_v) >= MIN_ALPHA,
         Bsdf::RoughThinFilm(m) => m.mf.alpha_u.min(m.mf.alpha_v) >= MIN_ALPHA,
         Bsdf::GltfPbr(m) => m.mf.alpha_u.min(m.mf.alpha_v) >= MIN_ALPHA,
@@ -424,7 +683,12 @@ pub(crate) fn chi2_resolvable(b: &Bsdf) -> bool {
 }
 
 /// Runs the whole sweep (in parallel on the current rayon pool) and marks chi-square failures.
-pub(crate) fn sweep(cases: &[Case], n: usize, chi2_samples: usize, progress: &(dyn Fn() + Sync)) -> Vec<Row> {
+pub(crate) fn sweep(
+    cases: &[Case],
+    n: usize,
+    chi2_samples: usize,
+    progress: &(dyn Fn() + Sync),
+) -> Vec<Row> {
     let mut jobs = Vec::new();
     for (ci, c) in cases.iter().enumerate() {
         for &t in &ANGLES_DEG {
@@ -457,12 +721,16 @@ pub fn run(args: StabilityArgs) -> Result<ExitCode> {
         bail!("--samples must be at least 100, got {}", args.samples);
     }
     let pool = crate::thread_pool(args.threads)?;
-    std::fs::create_dir_all(&args.out).with_context(|| format!("cannot create the folder '{}'", args.out.display()))?;
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create the folder '{}'", args.out.display()))?;
     let start = std::time::Instant::now();
     let cases = cases();
     let done = std::sync::atomic::AtomicUsize::new(0);
     let show = !args.quiet;
-    let total: usize = cases.iter().map(|c| ANGLES_DEG.len() * if c.bsdf.is_transmissive() { 2 } else { 1 }).sum();
+    let total: usize = cases
+        .iter()
+        .map(|c| ANGLES_DEG.len() * if c.bsdf.is_transmissive() { 2 } else { 1 })
+        .sum();
     let progress = || {
         let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
         if show && k % 200 == 0 {
@@ -472,7 +740,10 @@ pub fn run(args: StabilityArgs) -> Result<ExitCode> {
     let rows = pool.install(|| sweep(&cases, args.samples, args.chi2_samples, &progress));
     let secs = start.elapsed().as_secs_f64();
     let clamp = pool.install(crate::fireflies::clamp_bias_study)?;
-    write_atomic(&args.out.join("stability.csv"), csv_text(&cases, &rows).as_bytes())?;
+    write_atomic(
+        &args.out.join("stability.csv"),
+        csv_text(&cases, &rows).as_bytes(),
+    )?;
     let (svg, png) = albedo_charts(&cases, &rows)?;
     write_atomic(&args.out.join("albedo.svg"), svg.as_bytes())?;
     write_atomic(&args.out.join("albedo.png"), &png)?;
@@ -498,7 +769,13 @@ pub fn run(args: StabilityArgs) -> Result<ExitCode> {
             args.out.join("report.md").display()
         );
     }
-    Ok(if args.strict && (s.nonfinite > 0 || s.gains_in_range > 0) { ExitCode::from(1) } else { ExitCode::SUCCESS })
+    Ok(
+        if args.strict && (s.nonfinite > 0 || s.gains_in_range > 0) {
+            ExitCode::from(1)
+        } else {
+            ExitCode::SUCCESS
+        },
+    )
 }
 
 /// Counts over a set of rows.
@@ -533,7 +810,8 @@ impl Summary {
             s.gains += usize::from(r.energy_gain);
             if c.in_range {
                 s.worst_albedo_in_range = s.worst_albedo_in_range.max(r.albedo);
-                s.gains_in_range += usize::from(r.albedo > c.energy_bound + ENERGY_TOL + 4.0 * r.albedo_se);
+                s.gains_in_range +=
+                    usize::from(r.albedo > c.energy_bound + ENERGY_TOL + 4.0 * r.albedo_se);
             } else {
                 s.worst_albedo_beyond = s.worst_albedo_beyond.max(r.albedo);
             }
@@ -598,7 +876,13 @@ fn families(cases: &[Case]) -> Vec<&'static str> {
     f
 }
 
-fn report_text(cases: &[Case], rows: &[Row], args: &StabilityArgs, secs: f64, clamp: &crate::fireflies::ClampStudy) -> String {
+fn report_text(
+    cases: &[Case],
+    rows: &[Row],
+    args: &StabilityArgs,
+    secs: f64,
+    clamp: &crate::fireflies::ClampStudy,
+) -> String {
     let mut md = String::new();
     let all = Summary::of(cases, rows, |_| true);
     let _ = writeln!(md, "# BSDF stability report\n");
@@ -674,12 +958,27 @@ fn report_text(cases: &[Case], rows: &[Row], args: &StabilityArgs, secs: f64, cl
     let _ = writeln!(md, "![directional albedo](albedo.svg)\n");
     let _ = writeln!(md, "Worst albedo over incident angles and the other parameters, per swept parameter value; red: the documented bound. Parameters beyond the documented range are drawn hollow.\n");
     // Problems, worst first.
-    let mut bad: Vec<&Row> = rows.iter().filter(|r| r.nonfinite > 0 || r.energy_gain || r.pdf_mismatch > 0 || r.weight_mismatch > 0 || r.chi2_fail).collect();
+    let mut bad: Vec<&Row> = rows
+        .iter()
+        .filter(|r| {
+            r.nonfinite > 0
+                || r.energy_gain
+                || r.pdf_mismatch > 0
+                || r.weight_mismatch > 0
+                || r.chi2_fail
+        })
+        .collect();
     bad.sort_by(|a, b| {
         let key = |r: &Row| (r.nonfinite > 0, cases[r.case].in_range, r.albedo);
-        key(b).partial_cmp(&key(a)).unwrap_or(std::cmp::Ordering::Equal)
+        key(b)
+            .partial_cmp(&key(a))
+            .unwrap_or(std::cmp::Ordering::Equal)
     });
-    let _ = writeln!(md, "## Findings ({} probes with a problem; the first 40)\n", bad.len());
+    let _ = writeln!(
+        md,
+        "## Findings ({} probes with a problem; the first 40)\n",
+        bad.len()
+    );
     if bad.is_empty() {
         let _ = writeln!(md, "None.\n");
     } else {
@@ -720,7 +1019,10 @@ fn report_text(cases: &[Case], rows: &[Row], args: &StabilityArgs, secs: f64, cl
 fn albedo_charts(cases: &[Case], rows: &[Row]) -> Result<(String, Vec<u8>)> {
     const SIZE: (u32, u32) = (1800, 1500);
     let chart = AlbedoChart { cases, rows };
-    Ok((crate::converge::chart_svg(&chart, SIZE, "the albedo chart")?, crate::converge::chart_png(&chart, SIZE, "the albedo chart")?))
+    Ok((
+        crate::converge::chart_svg(&chart, SIZE, "the albedo chart")?,
+        crate::converge::chart_png(&chart, SIZE, "the albedo chart")?,
+    ))
 }
 
 /// The albedo sweep's chart: the cases and their result rows.
@@ -730,7 +1032,10 @@ struct AlbedoChart<'a> {
 }
 
 impl crate::converge::Chart for AlbedoChart<'_> {
-    fn draw_on<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> std::result::Result<(), String>
+    fn draw_on<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+    ) -> std::result::Result<(), String>
     where
         DB::ErrorType: 'static,
     {
@@ -739,11 +1044,24 @@ impl crate::converge::Chart for AlbedoChart<'_> {
 }
 
 /// Tableau 10 colours, one per incident angle.
-const PALETTE: [(u8, u8, u8); 8] = [(31, 119, 180), (255, 127, 14), (44, 160, 44), (214, 39, 40), (148, 103, 189), (140, 86, 75), (227, 119, 194), (127, 127, 127)];
+const PALETTE: [(u8, u8, u8); 8] = [
+    (31, 119, 180),
+    (255, 127, 14),
+    (44, 160, 44),
+    (214, 39, 40),
+    (148, 103, 189),
+    (140, 86, 75),
+    (227, 119, 194),
+    (127, 127, 127),
+];
 
 type DrawResult = std::result::Result<(), Box<dyn std::error::Error>>;
 
-fn draw_albedo<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, cases: &[Case], rows: &[Row]) -> DrawResult
+fn draw_albedo<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    cases: &[Case],
+    rows: &[Row],
+) -> DrawResult
 where
     DB::ErrorType: 'static,
 {
@@ -760,22 +1078,46 @@ where
                 params.push(c.param);
             }
         }
-        let idx = |p: f32| params.iter().position(|q| q.to_bits() == p.to_bits()).unwrap_or(0);
+        let idx = |p: f32| {
+            params
+                .iter()
+                .position(|q| q.to_bits() == p.to_bits())
+                .unwrap_or(0)
+        };
         // worst[param][angle] and whether the param value is in range.
         let mut worst = vec![[f64::NAN; ANGLES_DEG.len()]; params.len()];
         let mut in_range = vec![false; params.len()];
         let mut bound = 1.0f64;
         for r in rows.iter().filter(|r| cases[r.case].family == *fam) {
             let c = &cases[r.case];
-            let (i, a) = (idx(c.param), ANGLES_DEG.iter().position(|&t| t == r.theta_deg).unwrap_or(0));
+            let (i, a) = (
+                idx(c.param),
+                ANGLES_DEG
+                    .iter()
+                    .position(|&t| t == r.theta_deg)
+                    .unwrap_or(0),
+            );
             let w = &mut worst[i][a];
-            *w = if w.is_nan() { r.albedo } else { w.max(r.albedo) };
+            *w = if w.is_nan() {
+                r.albedo
+            } else {
+                w.max(r.albedo)
+            };
             in_range[i] |= c.in_range;
             bound = c.energy_bound;
         }
-        let ymax = worst.iter().flatten().filter(|v| v.is_finite()).fold(1.05f64, |m, &v| m.max(v * 1.02)).min(3.0);
+        let ymax = worst
+            .iter()
+            .flatten()
+            .filter(|v| v.is_finite())
+            .fold(1.05f64, |m, &v| m.max(v * 1.02))
+            .min(3.0);
         let labels: Vec<String> = params.iter().map(|&p| fmt_param(p)).collect();
-        let pname = cases.iter().find(|c| c.family == *fam).map(|c| c.param_name).unwrap_or("");
+        let pname = cases
+            .iter()
+            .find(|c| c.family == *fam)
+            .map(|c| c.param_name)
+            .unwrap_or("");
         let mut chart = ChartBuilder::on(area)
             .caption(*fam, ("sans-serif", 20))
             .margin(8)
@@ -797,7 +1139,10 @@ where
             .y_desc("albedo")
             .label_style(("sans-serif", 12))
             .draw()?;
-        chart.draw_series(LineSeries::new([(-0.5, bound), (params.len() as f64 - 0.5, bound)], RED.stroke_width(2)))?;
+        chart.draw_series(LineSeries::new(
+            [(-0.5, bound), (params.len() as f64 - 0.5, bound)],
+            RED.stroke_width(2),
+        ))?;
         for (a, &theta) in ANGLES_DEG.iter().enumerate() {
             let (r, g, b) = PALETTE[a];
             let col = RGBColor(r, g, b);
@@ -805,11 +1150,28 @@ where
                 .iter()
                 .enumerate()
                 .filter(|(_, w)| w[a].is_finite())
-                .map(|(i, w)| (i as f64 + (a as f64 - 3.5) * 0.06, w[a].min(ymax), in_range[i]))
+                .map(|(i, w)| {
+                    (
+                        i as f64 + (a as f64 - 3.5) * 0.06,
+                        w[a].min(ymax),
+                        in_range[i],
+                    )
+                })
                 .collect();
-            let s = chart.draw_series(pts.iter().map(|&(x, y, ok)| Circle::new((x, y), 4, if ok { col.filled() } else { col.stroke_width(1) })))?;
+            let s = chart.draw_series(pts.iter().map(|&(x, y, ok)| {
+                Circle::new(
+                    (x, y),
+                    4,
+                    if ok {
+                        col.filled()
+                    } else {
+                        col.stroke_width(1)
+                    },
+                )
+            }))?;
             if fam == &fams[0] {
-                s.label(format!("{theta} deg")).legend(move |(x, y)| Circle::new((x, y), 4, col.filled()));
+                s.label(format!("{theta} deg"))
+                    .legend(move |(x, y)| Circle::new((x, y), 4, col.filled()));
             }
         }
         if fam == &fams[0] {
@@ -843,18 +1205,37 @@ mod tests {
         let mut msgs = Vec::new();
         for r in &rows {
             let c = &cases[r.case];
-            let what = format!("{} {}={} {} theta={} back={}", c.family, c.param_name, fmt_param(c.param), c.detail, r.theta_deg, r.back);
+            let what = format!(
+                "{} {}={} {} theta={} back={}",
+                c.family,
+                c.param_name,
+                fmt_param(c.param),
+                c.detail,
+                r.theta_deg,
+                r.back
+            );
             if r.nonfinite > 0 {
                 msgs.push(format!("{what}: {} non-finite values", r.nonfinite));
             }
             if c.in_range && r.albedo > c.energy_bound + ENERGY_TOL + 4.0 * r.albedo_se {
-                msgs.push(format!("{what}: albedo {} ± {} above {}", r.albedo, r.albedo_se, c.energy_bound));
+                msgs.push(format!(
+                    "{what}: albedo {} ± {} above {}",
+                    r.albedo, r.albedo_se, c.energy_bound
+                ));
             }
             if c.in_range && (r.pdf_mismatch > 0 || r.weight_mismatch > 0) {
-                msgs.push(format!("{what}: {} pdf and {} weight mismatches", r.pdf_mismatch, r.weight_mismatch));
+                msgs.push(format!(
+                    "{what}: {} pdf and {} weight mismatches",
+                    r.pdf_mismatch, r.weight_mismatch
+                ));
             }
         }
-        assert!(msgs.is_empty(), "{} problems:\n{}", msgs.len(), msgs.join("\n"));
+        assert!(
+            msgs.is_empty(),
+            "{} problems:\n{}",
+            msgs.len(),
+            msgs.join("\n")
+        );
     }
 
     /// The checks can fail: a Lambertian model built around the constructor with albedo 1.05
@@ -868,12 +1249,29 @@ mod tests {
             detail: String::new(),
             in_range: true,
             energy_bound: 1.0,
-            bsdf: Bsdf::Lambert(Lambert { reflectance: SampledSpectrum::splat(1.05) }),
+            bsdf: Bsdf::Lambert(Lambert {
+                reflectance: SampledSpectrum::splat(1.05),
+            }),
         };
-        let nan = Case { bsdf: Bsdf::Lambert(Lambert { reflectance: SampledSpectrum::splat(f32::NAN) }), ..hot.clone() };
+        let nan = Case {
+            bsdf: Bsdf::Lambert(Lambert {
+                reflectance: SampledSpectrum::splat(f32::NAN),
+            }),
+            ..hot.clone()
+        };
         let rows = sweep(&[hot, nan], 2000, 0, &|| {});
-        assert!(rows.iter().filter(|r| r.case == 0 && r.theta_deg < 90.0).all(|r| r.energy_gain), "albedo 1.05 not flagged");
-        assert!(rows.iter().filter(|r| r.case == 1 && r.theta_deg < 90.0).all(|r| r.nonfinite > 0), "NaN albedo not flagged");
+        assert!(
+            rows.iter()
+                .filter(|r| r.case == 0 && r.theta_deg < 90.0)
+                .all(|r| r.energy_gain),
+            "albedo 1.05 not flagged"
+        );
+        assert!(
+            rows.iter()
+                .filter(|r| r.case == 1 && r.theta_deg < 90.0)
+                .all(|r| r.nonfinite > 0),
+            "NaN albedo not flagged"
+        );
     }
 
     /// Control of the chi-square wiring: a correct GGX rough conductor (alpha 0.3, 60 degrees)
@@ -882,7 +1280,10 @@ mod tests {
     /// (`fails_for_slightly_wrong_pdf_and_for_lost_samples`).
     #[test]
     fn chi2_passes_for_a_correct_rough_conductor() {
-        let c = cases().into_iter().find(|c| c.family == "roughconductor-ggx" && c.param == 0.3).unwrap();
+        let c = cases()
+            .into_iter()
+            .find(|c| c.family == "roughconductor-ggx" && c.param == 0.3)
+            .unwrap();
         let r = probe(0, &c, 60.0, false, 2000, 100_000);
         assert!(r.chi2_hard.is_none() && r.chi2_p.unwrap() > 1e-4, "{r:?}");
     }

@@ -36,7 +36,11 @@ pub fn sensor_xml(fov: f32, origin: [f32; 3], spp: u32, width: u32, height: u32)
 
 /// Runs `pt` with the given arguments from the repository root.
 pub fn pt(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pt")).args(args).current_dir(repo()).output().expect("run pt")
+    Command::new(env!("CARGO_BIN_EXE_pt"))
+        .args(args)
+        .current_dir(repo())
+        .output()
+        .expect("run pt")
 }
 
 /// Renders `scene` with extra arguments into `dir/name.exr` (+ variance) and reads both back.
@@ -47,7 +51,11 @@ pub fn render(scene: &Path, dir: &Path, name: &str, extra: &[&str]) -> (Image, I
     let mut args = vec!["render", scene_s, "-o", out_s, "--variance", "--quiet"];
     args.extend_from_slice(extra);
     let o = pt(&args);
-    assert!(o.status.success(), "pt {args:?} failed: {}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        o.status.success(),
+        "pt {args:?} failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let (img, _) = pt_image::read_exr(&out).expect("read render");
     let (var, _) = pt_image::read_exr(&dir.join(format!("{name}_var.exr"))).expect("read variance");
     (img, var)
@@ -97,16 +105,23 @@ pub const MITSUBA_SPECTRAL_SCALE: f64 = 106.750_259 / 106.856_914_916_767;
 pub fn d65_normalised(scene: &str) -> bool {
     use pt_scene::{LightKind, SpectrumDesc};
     let path = repo().join("scenes").join(format!("{scene}.xml"));
-    let desc = pt_scene::load_file(&path, &[]).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let desc =
+        pt_scene::load_file(&path, &[]).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let white = |s: &SpectrumDesc| match s {
         SpectrumDesc::Constant(_) | SpectrumDesc::Rgb(_) => true,
         SpectrumDesc::Illuminant { name, .. } => name.eq_ignore_ascii_case("d65"),
         SpectrumDesc::Tabulated(_) | SpectrumDesc::Blackbody { .. } => false,
     };
-    let shapes = desc.shapes.iter().filter_map(|s| s.emitter.as_ref()).all(|e| e.primaries.is_none() && white(&e.radiance));
+    let shapes = desc
+        .shapes
+        .iter()
+        .filter_map(|s| s.emitter.as_ref())
+        .all(|e| e.primaries.is_none() && white(&e.radiance));
     let lights = desc.lights.iter().all(|l| match &l.kind {
         LightKind::Point { intensity, .. } | LightKind::Spot { intensity, .. } => white(intensity),
-        LightKind::Directional { irradiance, .. } | LightKind::Sun { irradiance, .. } => white(irradiance),
+        LightKind::Directional { irradiance, .. } | LightKind::Sun { irradiance, .. } => {
+            white(irradiance)
+        }
         LightKind::Constant { radiance } => white(radiance),
         LightKind::EnvMap { .. } => true,
     });
@@ -118,14 +133,22 @@ pub fn d65_normalised(scene: &str) -> bool {
 /// ([`d65_normalised`]).
 pub fn reference(scene: &str) -> (Image, Image) {
     let r = repo().join("references");
-    let (img, meta) = pt_image::read_exr(&r.join(format!("{scene}.exr"))).unwrap_or_else(|e| panic!("reference of {scene}: {e}"));
-    let (var, _) = pt_image::read_exr(&r.join(format!("{scene}_var.exr"))).unwrap_or_else(|e| panic!("reference variance of {scene}: {e}"));
-    let spectral = meta.extra.iter().any(|(k, v)| k == "variant" && v.contains("spectral"));
+    let (img, meta) = pt_image::read_exr(&r.join(format!("{scene}.exr")))
+        .unwrap_or_else(|e| panic!("reference of {scene}: {e}"));
+    let (var, _) = pt_image::read_exr(&r.join(format!("{scene}_var.exr")))
+        .unwrap_or_else(|e| panic!("reference variance of {scene}: {e}"));
+    let spectral = meta
+        .extra
+        .iter()
+        .any(|(k, v)| k == "variant" && v.contains("spectral"));
     if !spectral || d65_normalised(scene) {
         return (img, var);
     }
     let k = MITSUBA_SPECTRAL_SCALE as f32;
-    let scale = |im: Image, f: f32| Image { data: im.data.iter().map(|p| p.map(|c| c * f)).collect(), ..im };
+    let scale = |im: Image, f: f32| Image {
+        data: im.data.iter().map(|p| p.map(|c| c * f)).collect(),
+        ..im
+    };
     (scale(img, k), scale(var, k * k))
 }
 
@@ -141,7 +164,11 @@ impl Verdict {
     /// Block z-test passes and every channel's mean ratio is within [`MEAN_RATIO_TOL`] of 1
     /// (channels whose reference mean is 0 must be 0 too).
     pub fn agrees(&self) -> bool {
-        self.z.pass && self.ratio.iter().all(|r| (r - 1.0).abs() < MEAN_RATIO_TOL || r.is_nan())
+        self.z.pass
+            && self
+                .ratio
+                .iter()
+                .all(|r| (r - 1.0).abs() < MEAN_RATIO_TOL || r.is_nan())
     }
 }
 
@@ -151,9 +178,16 @@ impl Verdict {
 /// target/tmp/diag_<scene>_<label>/ and says where.
 pub fn judge_against_reference(img: &Image, var: &Image, scene: &str, label: &str) -> Verdict {
     let (rimg, rvar) = reference(scene);
-    let z = pt_image::stats::block_ztest(img, var, &rimg, &rvar, BLOCK, ALPHA).expect("same size as the reference");
+    let z = pt_image::stats::block_ztest(img, var, &rimg, &rvar, BLOCK, ALPHA)
+        .expect("same size as the reference");
     let (m, mr) = (img.mean(), rimg.mean());
-    let ratio = std::array::from_fn(|c| if mr[c] == 0.0 && m[c] == 0.0 { f64::NAN } else { m[c] / mr[c] });
+    let ratio = std::array::from_fn(|c| {
+        if mr[c] == 0.0 && m[c] == 0.0 {
+            f64::NAN
+        } else {
+            m[c] / mr[c]
+        }
+    });
     eprintln!(
         "{scene} {label}: max |z| {:.2} (per-test p threshold {:.2e}), failed blocks {}/{}, chi2 {:.1} (p {:.3}), mean ratio {:.4} {:.4} {:.4}",
         z.max_abs_z, z.p_threshold, z.failed, z.tests, z.chi2, z.chi2_p, ratio[0], ratio[1], ratio[2]
@@ -166,12 +200,20 @@ pub fn judge_against_reference(img: &Image, var: &Image, scene: &str, label: &st
 
 fn write_diagnostics(img: &Image, reference: &Image, z: &pt_image::stats::ZTestReport, name: &str) {
     let dir = scratch(&format!("diag_{name}"));
-    let Ok(err) = pt_image::colormap::relative_error_image(img, reference) else { return };
+    let Ok(err) = pt_image::colormap::relative_error_image(img, reference) else {
+        return;
+    };
     let err_img = pt_image::colormap::false_colour(&err, img.width, img.height, 0.0, 0.2, false);
-    let zs: Vec<f32> = z.z.iter().map(|b| b.iter().fold(0.0f64, |a, v| a.max(v.abs())) as f32).collect();
+    let zs: Vec<f32> =
+        z.z.iter()
+            .map(|b| b.iter().fold(0.0f64, |a, v| a.max(v.abs())) as f32)
+            .collect();
     let z_img = pt_image::colormap::false_colour(&zs, z.blocks_x, z.blocks_y, 0.0, 6.0, false);
     let _ = pt_image::write_exr(&dir.join("render.exr"), img, &Default::default());
     let _ = pt_image::write_png_preview(&dir.join("relative_error.png"), &err_img, 0.0);
     let _ = pt_image::write_png_preview(&dir.join("block_abs_z.png"), &z_img, 0.0);
-    eprintln!("{name}: render, relative error (0-20%) and per-block |z| (0-6) written to {}", dir.display());
+    eprintln!(
+        "{name}: render, relative error (0-20%) and per-block |z| (0-6) written to {}",
+        dir.display()
+    );
 }

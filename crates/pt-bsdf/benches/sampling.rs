@@ -3,25 +3,59 @@
 //! Run: `cargo bench -p pt-bsdf --bench sampling`.
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use pt_bsdf::{Bsdf, Conductor, Dielectric, Distribution, Lambert, Microfacet, Minnaert, OrenNayar, OrenNayarVariant, RoughConductor, RoughDielectric};
+use pt_bsdf::{
+    Bsdf, Conductor, Dielectric, Distribution, Lambert, Microfacet, Minnaert, OrenNayar,
+    OrenNayarVariant, RoughConductor, RoughDielectric,
+};
 use pt_math::{Vec2, Vec3};
 use pt_spectrum::SampledSpectrum;
 use std::hint::black_box;
 
 fn models() -> Vec<(&'static str, Bsdf)> {
     let rho = SampledSpectrum::from_rgb([0.7, 0.5, 0.3]);
-    let (eta, k) = (SampledSpectrum::from_rgb([0.14, 0.37, 1.44]), SampledSpectrum::from_rgb([3.98, 2.39, 1.60]));
+    let (eta, k) = (
+        SampledSpectrum::from_rgb([0.14, 0.37, 1.44]),
+        SampledSpectrum::from_rgb([3.98, 2.39, 1.60]),
+    );
     let one = SampledSpectrum::from_rgb([1.0; 3]);
     vec![
         ("lambert", Bsdf::Lambert(Lambert::new(rho))),
-        ("orennayar_qualitative", Bsdf::OrenNayar(OrenNayar::new(rho, 0.5, OrenNayarVariant::Qualitative))),
-        ("orennayar_eon", Bsdf::OrenNayar(OrenNayar::new(rho, 0.5, OrenNayarVariant::Eon))),
+        (
+            "orennayar_qualitative",
+            Bsdf::OrenNayar(OrenNayar::new(rho, 0.5, OrenNayarVariant::Qualitative)),
+        ),
+        (
+            "orennayar_eon",
+            Bsdf::OrenNayar(OrenNayar::new(rho, 0.5, OrenNayarVariant::Eon)),
+        ),
         ("minnaert", Bsdf::Minnaert(Minnaert::new(rho, 1.8))),
         ("conductor", Bsdf::Conductor(Conductor::new(eta, k, one))),
-        ("roughconductor_ggx", Bsdf::RoughConductor(RoughConductor::new(eta, k, one, Microfacet::new(Distribution::Ggx, 0.2, 0.2)))),
-        ("roughconductor_beckmann", Bsdf::RoughConductor(RoughConductor::new(eta, k, one, Microfacet::new(Distribution::Beckmann, 0.2, 0.2)))),
+        (
+            "roughconductor_ggx",
+            Bsdf::RoughConductor(RoughConductor::new(
+                eta,
+                k,
+                one,
+                Microfacet::new(Distribution::Ggx, 0.2, 0.2),
+            )),
+        ),
+        (
+            "roughconductor_beckmann",
+            Bsdf::RoughConductor(RoughConductor::new(
+                eta,
+                k,
+                one,
+                Microfacet::new(Distribution::Beckmann, 0.2, 0.2),
+            )),
+        ),
         ("dielectric", Bsdf::Dielectric(Dielectric::new(1.5))),
-        ("roughdielectric_ggx", Bsdf::RoughDielectric(RoughDielectric::new(1.5, Microfacet::new(Distribution::Ggx, 0.2, 0.2)))),
+        (
+            "roughdielectric_ggx",
+            Bsdf::RoughDielectric(RoughDielectric::new(
+                1.5,
+                Microfacet::new(Distribution::Ggx, 0.2, 0.2),
+            )),
+        ),
     ]
 }
 
@@ -39,7 +73,11 @@ fn bench(c: &mut Criterion) {
         .map(|_| {
             let (z, phi) = (rnd().max(1e-3), 2.0 * std::f32::consts::PI * rnd());
             let r = (1.0 - z * z).sqrt();
-            (Vec3::new(r * phi.cos(), r * phi.sin(), z), rnd(), Vec2::new(rnd(), rnd()))
+            (
+                Vec3::new(r * phi.cos(), r * phi.sin(), z),
+                rnd(),
+                Vec2::new(rnd(), rnd()),
+            )
         })
         .collect();
     let mut g = c.benchmark_group("bsdf_sample_eval_pdf");

@@ -49,7 +49,10 @@ pub fn sample(
     let (mut bs, p_sel) = if u_lobe < w {
         (sample_b((u_lobe / w).min(ONE_MINUS_EPSILON))?, w)
     } else {
-        (sample_a(((u_lobe - w) / (1.0 - w)).min(ONE_MINUS_EPSILON))?, 1.0 - w)
+        (
+            sample_a(((u_lobe - w) / (1.0 - w)).min(ONE_MINUS_EPSILON))?,
+            1.0 - w,
+        )
     };
     if bs.delta {
         bs.pdf *= p_sel;

@@ -68,8 +68,16 @@ pub struct Conductor {
 
 impl Conductor {
     /// A smooth conductor of complex index `eta + i k`.
-    pub fn new(eta: SampledSpectrum, k: SampledSpectrum, specular_reflectance: SampledSpectrum) -> Self {
-        Conductor { eta, k, specular_reflectance }
+    pub fn new(
+        eta: SampledSpectrum,
+        k: SampledSpectrum,
+        specular_reflectance: SampledSpectrum,
+    ) -> Self {
+        Conductor {
+            eta,
+            k,
+            specular_reflectance,
+        }
     }
 
     /// Reflectance at `cos_o`: `specular_reflectance * F(cos_o)`.
@@ -93,7 +101,13 @@ impl Conductor {
             return None;
         }
         let wi = Vec3::new(-wo.x, -wo.y, wo.z);
-        Some(BsdfSample { wi, weight: self.reflectance(wo.z), pdf: 1.0, delta: true, eta: 1.0 })
+        Some(BsdfSample {
+            wi,
+            weight: self.reflectance(wo.z),
+            pdf: 1.0,
+            delta: true,
+            eta: 1.0,
+        })
     }
 }
 
@@ -112,8 +126,18 @@ pub struct RoughConductor {
 
 impl RoughConductor {
     /// A rough conductor of complex index `eta + i k` with the distribution `mf`.
-    pub fn new(eta: SampledSpectrum, k: SampledSpectrum, specular_reflectance: SampledSpectrum, mf: Microfacet) -> Self {
-        RoughConductor { eta, k, specular_reflectance, mf }
+    pub fn new(
+        eta: SampledSpectrum,
+        k: SampledSpectrum,
+        specular_reflectance: SampledSpectrum,
+        mf: Microfacet,
+    ) -> Self {
+        RoughConductor {
+            eta,
+            k,
+            specular_reflectance,
+            mf,
+        }
     }
 
     /// f(wo, wi) without the cosine.
@@ -154,7 +178,13 @@ impl RoughConductor {
             return None;
         }
         let weight = self.eval(wo, wi) * (wi.z / pdf);
-        Some(BsdfSample { wi, weight, pdf, delta: false, eta: 1.0 })
+        Some(BsdfSample {
+            wi,
+            weight,
+            pdf,
+            delta: false,
+            eta: 1.0,
+        })
     }
 }
 
@@ -165,9 +195,17 @@ mod tests {
     #[test]
     fn gold_like_normal_incidence() {
         // eta = 0.2, k = 3.4: R = ((n-1)^2 + k^2)/((n+1)^2 + k^2) = 12.2/13.0 = 0.93846.
-        let c = Conductor::new(SampledSpectrum::splat(0.2), SampledSpectrum::splat(3.4), SampledSpectrum::splat(1.0));
+        let c = Conductor::new(
+            SampledSpectrum::splat(0.2),
+            SampledSpectrum::splat(3.4),
+            SampledSpectrum::splat(1.0),
+        );
         let s = c.sample(Vec3::Z, Vec2::ZERO).unwrap();
         assert!(s.delta && s.wi == Vec3::Z && s.pdf == 1.0);
-        assert!((s.weight.0.x - 12.2 / 13.0).abs() < 1e-6, "{}", s.weight.0.x);
+        assert!(
+            (s.weight.0.x - 12.2 / 13.0).abs() < 1e-6,
+            "{}",
+            s.weight.0.x
+        );
     }
 }

@@ -70,7 +70,11 @@ impl Dielectric {
     /// A smooth dielectric with relative index `eta = int_ior / ext_ior` and unit multipliers.
     pub fn new(eta: f32) -> Self {
         let one = SampledSpectrum::splat(1.0);
-        Dielectric { eta: sane_eta(eta), specular_reflectance: one, specular_transmittance: one }
+        Dielectric {
+            eta: sane_eta(eta),
+            specular_reflectance: one,
+            specular_transmittance: one,
+        }
     }
 
     /// Delta lobes: 0.
@@ -92,14 +96,26 @@ impl Dielectric {
         let t = 1.0 - r;
         if u_lobe < r || t <= 0.0 {
             let wi = Vec3::new(-wo.x, -wo.y, wo.z);
-            return Some(BsdfSample { wi, weight: self.specular_reflectance, pdf: r, delta: true, eta: 1.0 });
+            return Some(BsdfSample {
+                wi,
+                weight: self.specular_reflectance,
+                pdf: r,
+                delta: true,
+                eta: 1.0,
+            });
         }
         let (wi, etap) = refract(wo, Vec3::Z, self.eta)?;
         if wi.z * wo.z >= 0.0 {
             return None;
         }
         let weight = self.specular_transmittance * (1.0 / (etap * etap));
-        Some(BsdfSample { wi, weight, pdf: t, delta: true, eta: etap })
+        Some(BsdfSample {
+            wi,
+            weight,
+            pdf: t,
+            delta: true,
+            eta: etap,
+        })
     }
 }
 

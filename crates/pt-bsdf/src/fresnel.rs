@@ -8,7 +8,11 @@
 /// normal, signed: negative means the direction is on the inside. `eta` is the relative index
 /// inside / outside. Returns 1 under total internal reflection.
 pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
-    let (cos_i, eta) = if cos_i < 0.0 { (-cos_i, 1.0 / eta) } else { (cos_i, eta) };
+    let (cos_i, eta) = if cos_i < 0.0 {
+        (-cos_i, 1.0 / eta)
+    } else {
+        (cos_i, eta)
+    };
     let cos_i = cos_i.min(1.0);
     let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
     if sin2_t >= 1.0 {
@@ -62,20 +66,35 @@ impl C64 {
         C64 { re: x, im: 0.0 }
     }
     pub(crate) fn add(self, o: Self) -> Self {
-        C64 { re: self.re + o.re, im: self.im + o.im }
+        C64 {
+            re: self.re + o.re,
+            im: self.im + o.im,
+        }
     }
     pub(crate) fn sub(self, o: Self) -> Self {
-        C64 { re: self.re - o.re, im: self.im - o.im }
+        C64 {
+            re: self.re - o.re,
+            im: self.im - o.im,
+        }
     }
     pub(crate) fn mul(self, o: Self) -> Self {
-        C64 { re: self.re * o.re - self.im * o.im, im: self.re * o.im + self.im * o.re }
+        C64 {
+            re: self.re * o.re - self.im * o.im,
+            im: self.re * o.im + self.im * o.re,
+        }
     }
     pub(crate) fn scale(self, s: f64) -> Self {
-        C64 { re: self.re * s, im: self.im * s }
+        C64 {
+            re: self.re * s,
+            im: self.im * s,
+        }
     }
     pub(crate) fn div(self, o: Self) -> Self {
         let d = o.norm();
-        C64 { re: (self.re * o.re + self.im * o.im) / d, im: (self.im * o.re - self.re * o.im) / d }
+        C64 {
+            re: (self.re * o.re + self.im * o.im) / d,
+            im: (self.im * o.re - self.re * o.im) / d,
+        }
     }
     /// |z|^2.
     pub(crate) fn norm(self) -> f64 {
@@ -91,7 +110,10 @@ impl C64 {
     /// `e^{i theta}` times `e^{-phi}` for `z = theta + i phi`: `exp(i z)`.
     pub(crate) fn exp_i(self) -> Self {
         let m = (-self.im).exp();
-        C64 { re: m * self.re.cos(), im: m * self.re.sin() }
+        C64 {
+            re: m * self.re.cos(),
+            im: m * self.re.sin(),
+        }
     }
     pub(crate) fn arg(self) -> f64 {
         self.im.atan2(self.re)
@@ -107,7 +129,10 @@ impl C64 {
 /// `R = ((eta-1)^2 + k^2)/((eta+1)^2 + k^2)`.
 pub fn fresnel_conductor(cos_i: f32, eta: f32, k: f32) -> f32 {
     let c = f64::from(cos_i.clamp(0.0, 1.0));
-    let e = C64 { re: f64::from(eta), im: f64::from(k) };
+    let e = C64 {
+        re: f64::from(eta),
+        im: f64::from(k),
+    };
     let sin2_i = C64::real(1.0 - c * c);
     let e2 = e.mul(e);
     if e2.norm() == 0.0 {
@@ -116,7 +141,9 @@ pub fn fresnel_conductor(cos_i: f32, eta: f32, k: f32) -> f32 {
     let cos_t = C64::real(1.0).sub(sin2_i.div(e2)).sqrt();
     let ec = e.mul(C64::real(c));
     let r_parl = ec.sub(cos_t).div(ec.add(cos_t));
-    let r_perp = C64::real(c).sub(e.mul(cos_t)).div(C64::real(c).add(e.mul(cos_t)));
+    let r_perp = C64::real(c)
+        .sub(e.mul(cos_t))
+        .div(C64::real(c).add(e.mul(cos_t)));
     let r = 0.5 * (r_parl.norm() + r_perp.norm());
     if r.is_finite() {
         r.clamp(0.0, 1.0) as f32
@@ -135,7 +162,10 @@ mod tests {
         for eta in [1.33f32, 1.5, 2.4] {
             let r0 = ((eta - 1.0) / (eta + 1.0)).powi(2);
             assert!((fresnel_dielectric(1.0, eta) - r0).abs() < 1e-6);
-            assert!((fresnel_dielectric(-1.0, eta) - r0).abs() < 1e-6, "same from inside");
+            assert!(
+                (fresnel_dielectric(-1.0, eta) - r0).abs() < 1e-6,
+                "same from inside"
+            );
             // Beyond the critical angle from inside: total internal reflection.
             let crit = (1.0 / eta).asin();
             assert_eq!(fresnel_dielectric(-(crit + 0.01).cos(), eta), 1.0);
@@ -154,14 +184,20 @@ mod tests {
     fn conductor_normal_incidence_and_limits() {
         for (n, k) in [(0.2f32, 3.4f32), (1.1, 2.6), (0.05, 4.0), (1.5, 0.0)] {
             let expect = ((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k);
-            assert!((fresnel_conductor(1.0, n, k) - expect).abs() < 1e-6, "{n} {k}");
+            assert!(
+                (fresnel_conductor(1.0, n, k) - expect).abs() < 1e-6,
+                "{n} {k}"
+            );
         }
         // k = 0 reduces to the dielectric formula at every angle.
         for c in [0.05f32, 0.3, 0.7, 1.0] {
             assert!((fresnel_conductor(c, 1.5, 0.0) - fresnel_dielectric(c, 1.5)).abs() < 1e-5);
         }
         assert!((fresnel_conductor(0.4, 0.0, 1.0) - 1.0).abs() < 1e-6);
-        assert!((fresnel_conductor(0.0, 0.2, 3.4) - 1.0).abs() < 1e-6, "grazing reflects fully");
+        assert!(
+            (fresnel_conductor(0.0, 0.2, 3.4) - 1.0).abs() < 1e-6,
+            "grazing reflects fully"
+        );
     }
 
     #[test]

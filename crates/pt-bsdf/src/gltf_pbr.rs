@@ -83,15 +83,27 @@ impl GltfPbr {
     /// The BRDF of glTF parameters: `roughness` is the perceptual roughness (alpha =
     /// roughness^2), `ior` the dielectric's index (1.5 without KHR_materials_ior).
     pub fn new(base_color: SampledSpectrum, metallic: f32, roughness: f32, ior: f32) -> Self {
-        let r = if roughness.is_finite() { roughness.clamp(0.0, 1.0) } else { 1.0 };
+        let r = if roughness.is_finite() {
+            roughness.clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
         let alpha = r * r;
-        let ior = if ior.is_finite() && ior >= 1.0 { ior } else { 1.5 };
+        let ior = if ior.is_finite() && ior >= 1.0 {
+            ior
+        } else {
+            1.5
+        };
         let f0 = ((ior - 1.0) / (ior + 1.0)).powi(2);
         let mf = Microfacet::new(Distribution::Ggx, alpha, alpha);
         let eavg = albedo_tables().e_avg(mf.alpha_u, f0);
         GltfPbr {
             base_color,
-            metallic: if metallic.is_finite() { metallic.clamp(0.0, 1.0) } else { 1.0 },
+            metallic: if metallic.is_finite() {
+                metallic.clamp(0.0, 1.0)
+            } else {
+                1.0
+            },
             mf,
             f0,
             inv_one_minus_eavg: 1.0 / (1.0 - eavg).max(1e-4),
@@ -123,7 +135,9 @@ impl GltfPbr {
         }
         let m = self.metallic;
         // Coupled diffuse (Kelemen & Szirmay-Kalos 2001 eq. 3).
-        let k = (1.0 - self.specular_albedo(wo.z)) * (1.0 - self.specular_albedo(wi.z)) * self.inv_one_minus_eavg;
+        let k = (1.0 - self.specular_albedo(wo.z))
+            * (1.0 - self.specular_albedo(wi.z))
+            * self.inv_one_minus_eavg;
         let mut f = self.base_color * ((1.0 - m) * FRAC_1_PI * k);
         let h = (wo + wi).normalize_or_zero();
         // Same support as the specular pdf (wo.h > 0), as in RoughPlastic: at grazing angles the
@@ -183,7 +197,13 @@ impl GltfPbr {
         if !weight.is_finite() {
             return None;
         }
-        Some(BsdfSample { wi, weight, pdf, delta: false, eta: 1.0 })
+        Some(BsdfSample {
+            wi,
+            weight,
+            pdf,
+            delta: false,
+            eta: 1.0,
+        })
     }
 }
 
@@ -222,7 +242,8 @@ const R_MIN: f32 = 0.031_622_78;
 #[inline]
 fn alpha_coordinate(alpha: f32) -> f32 {
     let s_min = R_MIN.sqrt();
-    ((alpha.clamp(0.0, 1.0).sqrt().sqrt() - s_min) / (1.0 - s_min)).clamp(0.0, 1.0) * (N_ALPHA - 1) as f32
+    ((alpha.clamp(0.0, 1.0).sqrt().sqrt() - s_min) / (1.0 - s_min)).clamp(0.0, 1.0)
+        * (N_ALPHA - 1) as f32
 }
 
 /// The alpha of node `ia` of the roughness axis (inverse of [`alpha_coordinate`]).
@@ -251,7 +272,10 @@ impl AlbedoTables {
                 let (mut sa, mut sb) = (0.0f64, 0.0f64);
                 for i in 0..N_QUAD {
                     for j in 0..N_QUAD {
-                        let u = Vec2::new((i as f32 + 0.5) / N_QUAD as f32, (j as f32 + 0.5) / N_QUAD as f32);
+                        let u = Vec2::new(
+                            (i as f32 + 0.5) / N_QUAD as f32,
+                            (j as f32 + 0.5) / N_QUAD as f32,
+                        );
                         let m = mf.sample_m(wo, u);
                         let wom = wo.dot(m);
                         if wom <= 0.0 {
@@ -278,7 +302,8 @@ impl AlbedoTables {
             let mut s = 0.0;
             for im in 0..N_MU - 1 {
                 let (x0, x1) = (im as f32 * h, (im + 1) as f32 * h);
-                s += 0.5 * h * (t[ia * N_MU + im] * x0.powi(7) + t[ia * N_MU + im + 1] * x1.powi(7));
+                s +=
+                    0.5 * h * (t[ia * N_MU + im] * x0.powi(7) + t[ia * N_MU + im + 1] * x1.powi(7));
             }
             8.0 * s
         };
@@ -295,13 +320,15 @@ impl AlbedoTables {
         let (x0, y0) = ((x as usize).min(N_MU - 2), (y as usize).min(N_ALPHA - 2));
         let (fx, fy) = (x - x0 as f32, y - y0 as f32);
         let at = |i: usize, j: usize| t[j * N_MU + i];
-        (at(x0, y0) * (1.0 - fx) + at(x0 + 1, y0) * fx) * (1.0 - fy) + (at(x0, y0 + 1) * (1.0 - fx) + at(x0 + 1, y0 + 1) * fx) * fy
+        (at(x0, y0) * (1.0 - fx) + at(x0 + 1, y0) * fx) * (1.0 - fy)
+            + (at(x0, y0 + 1) * (1.0 - fx) + at(x0 + 1, y0 + 1) * fx) * fy
     }
 
     /// E(mu) = f0 A + (1 - f0) B.
     #[inline]
     fn e(&self, mu: f32, alpha: f32, f0: f32) -> f32 {
-        (f0 * Self::lookup(&self.a, mu, alpha) + (1.0 - f0) * Self::lookup(&self.b, mu, alpha)).clamp(0.0, 1.0)
+        (f0 * Self::lookup(&self.a, mu, alpha) + (1.0 - f0) * Self::lookup(&self.b, mu, alpha))
+            .clamp(0.0, 1.0)
     }
 
     /// E_avg = f0 A_avg + (1 - f0) B_avg, linear in sqrt(alpha) between nodes.
@@ -324,7 +351,11 @@ mod tests {
         let p = GltfPbr::new(SampledSpectrum::from_rgb([0.5; 3]), 0.0, 0.0, 1.5);
         for mu in [1.0f32, 0.5, 0.2] {
             let want = 0.04 + 0.96 * schlick_weight(mu);
-            assert!((p.specular_albedo(mu) - want).abs() < 2e-3, "mu {mu}: {} vs {want}", p.specular_albedo(mu));
+            assert!(
+                (p.specular_albedo(mu) - want).abs() < 2e-3,
+                "mu {mu}: {} vs {want}",
+                p.specular_albedo(mu)
+            );
         }
     }
 }

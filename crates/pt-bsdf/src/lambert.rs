@@ -60,7 +60,13 @@ impl Lambert {
         if pdf <= 0.0 {
             return None; // grazing sample exactly on the horizon carries no energy
         }
-        Some(BsdfSample { wi, weight: self.reflectance, pdf, delta: false, eta: 1.0 })
+        Some(BsdfSample {
+            wi,
+            weight: self.reflectance,
+            pdf,
+            delta: false,
+            eta: 1.0,
+        })
     }
 }
 

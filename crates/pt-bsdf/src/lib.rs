@@ -24,8 +24,8 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
-pub mod conductor;
 pub mod blend;
+pub mod conductor;
 pub mod dielectric;
 pub mod fresnel;
 pub mod gltf_pbr;
@@ -48,13 +48,13 @@ pub use lambert::Lambert;
 pub use microfacet::{Distribution, Microfacet};
 pub use minnaert::Minnaert;
 pub use oren_nayar::{OrenNayar, OrenNayarVariant};
+use pt_math::{Vec2, Vec3, Vec4};
+use pt_spectrum::SampledSpectrum;
 pub use rough_dielectric::RoughDielectric;
 pub use rough_plastic::{CoatingTable, RoughPlastic};
 pub use rough_thin_film::RoughThinFilm;
 pub use thin_dielectric::ThinDielectric;
 pub use thin_film::{FilmBase, FilmColor, ThinFilm};
-use pt_math::{Vec2, Vec3, Vec4};
-use pt_spectrum::SampledSpectrum;
 
 /// Applies `f` to each of the four lanes.
 #[inline]
@@ -192,7 +192,10 @@ impl Bsdf {
             | Bsdf::GltfPbr(_)
             | Bsdf::RoughPlastic(_)
             | Bsdf::RoughThinFilm(_) => true,
-            Bsdf::Conductor(_) | Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_) | Bsdf::ThinFilm(_) => false,
+            Bsdf::Conductor(_)
+            | Bsdf::Dielectric(_)
+            | Bsdf::ThinDielectric(_)
+            | Bsdf::ThinFilm(_) => false,
         }
     }
 }
@@ -220,7 +223,13 @@ pub struct SurfaceBsdf {
 impl SurfaceBsdf {
     /// An opaque surface with the given model.
     pub fn new(bsdf: Bsdf, two_sided: bool) -> Self {
-        SurfaceBsdf { bsdf, two_sided, opacity: 1.0, normal: None, blend: None }
+        SurfaceBsdf {
+            bsdf,
+            two_sided,
+            opacity: 1.0,
+            normal: None,
+            blend: None,
+        }
     }
 
     /// Flips directions to the front side when two-sided and seen from the back (never for
@@ -242,7 +251,10 @@ impl SurfaceBsdf {
         match self.normal {
             None => bsdf.eval(wo, wi),
             Some(n) => match normal_map::perturb(n, wo, wi) {
-                Some((f, pwo, pwi)) => bsdf.eval(pwo, pwi) * (pwi.z.abs() * normal_map::shadowing(f.n, wi) / wi.z.abs()),
+                Some((f, pwo, pwi)) => {
+                    bsdf.eval(pwo, pwi)
+                        * (pwi.z.abs() * normal_map::shadowing(f.n, wi) / wi.z.abs())
+                }
                 None => SampledSpectrum::ZERO,
             },
         }
@@ -255,7 +267,9 @@ impl SurfaceBsdf {
         let (wo, wi) = (flip_z(wo, s), flip_z(wi, s));
         match self.normal {
             None => bsdf.pdf(wo, wi),
-            Some(n) => normal_map::perturb(n, wo, wi).map_or(0.0, |(_, pwo, pwi)| bsdf.pdf(pwo, pwi)),
+            Some(n) => {
+                normal_map::perturb(n, wo, wi).map_or(0.0, |(_, pwo, pwi)| bsdf.pdf(pwo, pwi))
+            }
         }
     }
 
@@ -277,7 +291,10 @@ impl SurfaceBsdf {
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
         match &self.blend {
             None => self.eval_of(&self.bsdf, wo, wi) * self.opacity,
-            Some((w, b)) => (self.eval_of(&self.bsdf, wo, wi) * (1.0 - w) + self.eval_of(b, wo, wi) * *w) * self.opacity,
+            Some((w, b)) => {
+                (self.eval_of(&self.bsdf, wo, wi) * (1.0 - w) + self.eval_of(b, wo, wi) * *w)
+                    * self.opacity
+            }
         }
     }
 
@@ -286,7 +303,10 @@ impl SurfaceBsdf {
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         match &self.blend {
             None => self.pdf_of(&self.bsdf, wo, wi) * self.opacity,
-            Some((w, b)) => ((1.0 - w) * self.pdf_of(&self.bsdf, wo, wi) + w * self.pdf_of(b, wo, wi)) * self.opacity,
+            Some((w, b)) => {
+                ((1.0 - w) * self.pdf_of(&self.bsdf, wo, wi) + w * self.pdf_of(b, wo, wi))
+                    * self.opacity
+            }
         }
     }
 
@@ -299,10 +319,20 @@ impl SurfaceBsdf {
         };
         let mut bs = match &self.blend {
             None => self.sample_of(&self.bsdf, wo, u_lobe, u)?,
-            Some((w, b)) => blend::sample(*w, u_lobe, |ul| self.sample_of(&self.bsdf, wo, ul, u), |ul| self.sample_of(b, wo, ul, u), |wi| {
-                let f = self.eval_of(&self.bsdf, wo, wi) * (1.0 - w) + self.eval_of(b, wo, wi) * *w;
-                (f, (1.0 - w) * self.pdf_of(&self.bsdf, wo, wi) + w * self.pdf_of(b, wo, wi))
-            })?,
+            Some((w, b)) => blend::sample(
+                *w,
+                u_lobe,
+                |ul| self.sample_of(&self.bsdf, wo, ul, u),
+                |ul| self.sample_of(b, wo, ul, u),
+                |wi| {
+                    let f =
+                        self.eval_of(&self.bsdf, wo, wi) * (1.0 - w) + self.eval_of(b, wo, wi) * *w;
+                    (
+                        f,
+                        (1.0 - w) * self.pdf_of(&self.bsdf, wo, wi) + w * self.pdf_of(b, wo, wi),
+                    )
+                },
+            )?,
         };
         // The nested lobe was chosen with probability `opacity`; its weight is unchanged (the
         // opacity in f and in the pdf cancel).
@@ -347,7 +377,13 @@ mod tests {
         // with eta' = 1/1.5, whatever two_sided says.
         let glass = SurfaceBsdf::new(Bsdf::Dielectric(Dielectric::new(1.5)), true);
         let bs = glass.sample(-Vec3::Z, 0.99, Vec2::ZERO).unwrap();
-        assert!(bs.wi.z > 0.99 && (bs.eta - 1.0 / 1.5).abs() < 1e-6, "{bs:?}");
-        assert!((bs.weight.0.x - 2.25).abs() < 1e-5, "radiance gains eta^2 leaving glass");
+        assert!(
+            bs.wi.z > 0.99 && (bs.eta - 1.0 / 1.5).abs() < 1e-6,
+            "{bs:?}"
+        );
+        assert!(
+            (bs.weight.0.x - 2.25).abs() < 1e-5,
+            "radiance gains eta^2 leaving glass"
+        );
     }
 }

@@ -40,10 +40,20 @@ pub fn choose(opacity: f32, wo: Vec3, u_lobe: f32) -> Result<f32, BsdfSample> {
     // `|`: one branch, always taken for opaque surfaces.
     if (opacity >= 1.0) | (u_lobe < opacity) {
         // Reuse the part of u_lobe below `opacity` for the nested BSDF (stays uniform).
-        let u = if opacity >= 1.0 { u_lobe } else { u_lobe / opacity };
+        let u = if opacity >= 1.0 {
+            u_lobe
+        } else {
+            u_lobe / opacity
+        };
         Ok(u.min(ONE_MINUS_EPSILON))
     } else {
-        Err(BsdfSample { wi: -wo, weight: SampledSpectrum::splat(1.0), pdf: 1.0 - opacity, delta: true, eta: 1.0 })
+        Err(BsdfSample {
+            wi: -wo,
+            weight: SampledSpectrum::splat(1.0),
+            pdf: 1.0 - opacity,
+            delta: true,
+            eta: 1.0,
+        })
     }
 }
 

@@ -87,14 +87,32 @@ pub fn erf_inv(y: f64) -> f64 {
     let mut x = if w < 5.0 {
         let w = w - 2.5;
         let mut p = 2.810_226_36e-08;
-        for c in [3.432_739_39e-07, -3.523_387_7e-06, -4.391_506_54e-06, 0.000_218_580_87, -0.001_253_725_03, -0.004_177_681_64, 0.246_640_727, 1.501_409_41] {
+        for c in [
+            3.432_739_39e-07,
+            -3.523_387_7e-06,
+            -4.391_506_54e-06,
+            0.000_218_580_87,
+            -0.001_253_725_03,
+            -0.004_177_681_64,
+            0.246_640_727,
+            1.501_409_41,
+        ] {
             p = c + p * w;
         }
         p * y
     } else {
         let w = w.sqrt() - 3.0;
         let mut p = -0.000_200_214_257;
-        for c in [0.000_100_950_558, 0.001_349_343_22, -0.003_673_428_44, 0.005_739_507_73, -0.007_622_461_3, 0.009_438_870_47, 1.001_674_06, 2.832_976_82] {
+        for c in [
+            0.000_100_950_558,
+            0.001_349_343_22,
+            -0.003_673_428_44,
+            0.005_739_507_73,
+            -0.007_622_461_3,
+            0.009_438_870_47,
+            1.001_674_06,
+            2.832_976_82,
+        ] {
             p = c + p * w;
         }
         p * y
@@ -160,8 +178,18 @@ fn beckmann_visible_slopes_11(cos_theta: f64, u1: f64, u2: f64) -> (f64, f64) {
 impl Microfacet {
     /// A distribution; alphas are clamped to [1e-3, 10] (non-finite taken as 1e-3).
     pub fn new(dist: Distribution, alpha_u: f32, alpha_v: f32) -> Self {
-        let c = |a: f32| if a.is_finite() { a.clamp(MIN_ALPHA, 10.0) } else { MIN_ALPHA };
-        Microfacet { dist, alpha_u: c(alpha_u), alpha_v: c(alpha_v) }
+        let c = |a: f32| {
+            if a.is_finite() {
+                a.clamp(MIN_ALPHA, 10.0)
+            } else {
+                MIN_ALPHA
+            }
+        };
+        Microfacet {
+            dist,
+            alpha_u: c(alpha_u),
+            alpha_v: c(alpha_v),
+        }
     }
 
     /// D(m) per unit solid angle of m (projected area normalised: int D(m) m.z dm = 1).
@@ -269,7 +297,11 @@ impl Microfacet {
                 // Heitz 2018, Listing 1: stretch, sample the projected hemisphere, unstretch.
                 let vh = Vec3::new(ax * wo.x, ay * wo.y, wo.z).normalize();
                 let len2 = vh.x * vh.x + vh.y * vh.y;
-                let t1 = if len2 > 0.0 { Vec3::new(-vh.y, vh.x, 0.0) / len2.sqrt() } else { Vec3::X };
+                let t1 = if len2 > 0.0 {
+                    Vec3::new(-vh.y, vh.x, 0.0) / len2.sqrt()
+                } else {
+                    Vec3::X
+                };
                 let t2v = vh.cross(t1);
                 let r = u.x.sqrt();
                 let phi = 2.0 * PI * u.y;
@@ -285,11 +317,21 @@ impl Microfacet {
                 // the viewer's azimuth, unstretch; the normal is (-slope_x, -slope_y, 1).
                 let ws = Vec3::new(ax * wo.x, ay * wo.y, wo.z).normalize();
                 let cos_theta = f64::from(ws.z.clamp(0.0, 1.0));
-                let (sx, sy) = beckmann_visible_slopes_11(cos_theta, f64::from(u.x), f64::from(u.y));
+                let (sx, sy) =
+                    beckmann_visible_slopes_11(cos_theta, f64::from(u.x), f64::from(u.y));
                 let r = f64::from(ws.x.hypot(ws.y));
-                let (cos_phi, sin_phi) = if r > 0.0 { (f64::from(ws.x) / r, f64::from(ws.y) / r) } else { (1.0, 0.0) };
+                let (cos_phi, sin_phi) = if r > 0.0 {
+                    (f64::from(ws.x) / r, f64::from(ws.y) / r)
+                } else {
+                    (1.0, 0.0)
+                };
                 let (rx, ry) = (cos_phi * sx - sin_phi * sy, sin_phi * sx + cos_phi * sy);
-                let m = Vec3::new((-rx * f64::from(ax)) as f32, (-ry * f64::from(ay)) as f32, 1.0).normalize();
+                let m = Vec3::new(
+                    (-rx * f64::from(ax)) as f32,
+                    (-ry * f64::from(ay)) as f32,
+                    1.0,
+                )
+                .normalize();
                 if m.is_finite() {
                     m
                 } else {
@@ -337,7 +379,13 @@ pub fn generalized_half(wo: Vec3, wi: Vec3, eta: f32) -> Option<(Vec3, f32, bool
 /// 17): reflection `pdf_m(h) p / (4 |wo.h|)`, refraction
 /// `pdf_m(h) (1 - p) |wi.h| / (wi.h + wo.h/eta')^2`; `h`, `eta'`, `reflect` from
 /// [`generalized_half`]. 0 where not finite.
-pub fn interface_pdf(mf: &Microfacet, wo: Vec3, wi: Vec3, (h, etap, reflect): (Vec3, f32, bool), p_reflect: f32) -> f32 {
+pub fn interface_pdf(
+    mf: &Microfacet,
+    wo: Vec3,
+    wi: Vec3,
+    (h, etap, reflect): (Vec3, f32, bool),
+    p_reflect: f32,
+) -> f32 {
     let wo_up = if wo.z < 0.0 { -wo } else { wo };
     let pm = mf.pdf_m(wo_up, h);
     let p = if reflect {
@@ -360,7 +408,11 @@ mod tests {
     fn erf_inv_inverts_erf() {
         for &x in &[-4.0f64, -2.5, -1.0, -0.3, 0.0, 1e-4, 0.7, 1.9, 3.5] {
             let y = libm::erf(x);
-            assert!((erf_inv(y) - x).abs() < 1e-9 * x.abs().max(1.0), "{x}: {}", erf_inv(y));
+            assert!(
+                (erf_inv(y) - x).abs() < 1e-9 * x.abs().max(1.0),
+                "{x}: {}",
+                erf_inv(y)
+            );
         }
         assert!(erf_inv(1.0).is_infinite() && erf_inv(-1.0).is_infinite());
     }
@@ -375,7 +427,10 @@ mod tests {
                 for j in 0..64 {
                     let u = Vec2::new((i as f32 + 0.5) / 64.0, (j as f32 + 0.5) / 64.0);
                     let m = mf.sample_m(wo, u);
-                    assert!(m.is_finite() && m.z > 0.0 && wo.dot(m) > -1e-5, "theta {th}: m {m:?}");
+                    assert!(
+                        m.is_finite() && m.z > 0.0 && wo.dot(m) > -1e-5,
+                        "theta {th}: m {m:?}"
+                    );
                 }
             }
         }
@@ -387,14 +442,30 @@ mod tests {
         for dist in [Distribution::Ggx, Distribution::Beckmann] {
             for (ax, ay) in [(0.3f32, 0.3f32), (0.1, 0.5), (0.8, 0.8)] {
                 let mf = Microfacet::new(dist, ax, ay);
-                let cells = pt_testkit::integrate_cells(&|m: Vec3| f64::from(mf.d(m) * m.z.max(0.0)), 32, 64, 1e-9, 1e-5);
+                let cells = pt_testkit::integrate_cells(
+                    &|m: Vec3| f64::from(mf.d(m) * m.z.max(0.0)),
+                    32,
+                    64,
+                    1e-9,
+                    1e-5,
+                );
                 let s: f64 = cells.iter().sum();
                 assert!((s - 1.0).abs() < 2e-3, "{dist:?} {ax} {ay}: {s}");
                 let wo = pt_testkit::dir_deg(70.0, 30.0);
                 // Projected area of visible normals = wo.z: int <wo.m>+ D G1 dm = wo.z (Heitz 2014 eq. 18).
-                let cells = pt_testkit::integrate_cells(&|m: Vec3| f64::from(mf.g1(wo) * wo.dot(m).max(0.0) * mf.d(m)), 32, 64, 1e-9, 1e-5);
+                let cells = pt_testkit::integrate_cells(
+                    &|m: Vec3| f64::from(mf.g1(wo) * wo.dot(m).max(0.0) * mf.d(m)),
+                    32,
+                    64,
+                    1e-9,
+                    1e-5,
+                );
                 let s: f64 = cells.iter().sum();
-                assert!((s - f64::from(wo.z)).abs() < 3e-3, "{dist:?} {ax} {ay}: {s} vs {}", wo.z);
+                assert!(
+                    (s - f64::from(wo.z)).abs() < 3e-3,
+                    "{dist:?} {ax} {ay}: {s} vs {}",
+                    wo.z
+                );
             }
         }
     }

@@ -105,7 +105,13 @@ impl Minnaert {
         if !(pdf > 0.0) || !pdf.is_finite() {
             return None;
         }
-        Some(BsdfSample { wi, weight: self.albedo(wo), pdf, delta: false, eta: 1.0 })
+        Some(BsdfSample {
+            wi,
+            weight: self.albedo(wo),
+            pdf,
+            delta: false,
+            eta: 1.0,
+        })
     }
 }
 
@@ -134,7 +140,11 @@ mod tests {
             let wo = pt_testkit::dir_deg(50.0, 0.0);
             let s = m.sample(wo, Vec2::new(0.3, 0.6)).unwrap();
             let w = m.eval(wo, s.wi).0.x * s.wi.z / s.pdf;
-            assert!((w - s.weight.0.x).abs() < 1e-5 * w, "k = {k}: {w} vs {}", s.weight.0.x);
+            assert!(
+                (w - s.weight.0.x).abs() < 1e-5 * w,
+                "k = {k}: {w} vs {}",
+                s.weight.0.x
+            );
         }
     }
 }

@@ -58,7 +58,11 @@ use pt_math::{Frame, Vec2, Vec3};
 /// `wo`: steps 1 and 2 of the module doc.
 #[inline]
 pub fn frame(n: Vec3, wo: Vec3) -> Frame {
-    let n = if wo.z * wo.dot(n) <= 0.0 { Vec3::new(-n.x, -n.y, n.z) } else { n };
+    let n = if wo.z * wo.dot(n) <= 0.0 {
+        Vec3::new(-n.x, -n.y, n.z)
+    } else {
+        n
+    };
     let n = n.try_normalize().unwrap_or(Vec3::Z);
     Frame::from_normal_tangent(n, Vec3::X)
 }
@@ -110,7 +114,13 @@ mod tests {
     use pt_spectrum::SampledSpectrum;
 
     fn lambert_nm(n: Vec3) -> SurfaceBsdf {
-        SurfaceBsdf { normal: Some(n), ..SurfaceBsdf::new(Bsdf::Lambert(Lambert::new(SampledSpectrum::splat(0.6))), false) }
+        SurfaceBsdf {
+            normal: Some(n),
+            ..SurfaceBsdf::new(
+                Bsdf::Lambert(Lambert::new(SampledSpectrum::splat(0.6))),
+                false,
+            )
+        }
     }
 
     /// Tilting the normal by `a` about local y: f |cos wi| must be
@@ -129,15 +139,29 @@ mod tests {
             let got = b.eval(wo, wi).0.x * wi.z;
             let alpha2 = (a.tan().powi(2) / 8.0).min(1.0);
             let g = 2.0 / (1.0 + (1.0 + alpha2 * t.tan().powi(2)).sqrt());
-            let want = if (t - a).cos() > 0.0 { 0.6 / std::f32::consts::PI * (t - a).cos() * g } else { 0.0 };
+            let want = if (t - a).cos() > 0.0 {
+                0.6 / std::f32::consts::PI * (t - a).cos() * g
+            } else {
+                0.0
+            };
             assert!((got - want).abs() < 1e-5, "theta {deg}: {got} vs {want}");
         }
-        let m = lambert_nm(Vec3::new(35f32.to_radians().sin(), 0.0, 35f32.to_radians().cos()));
+        let m = lambert_nm(Vec3::new(
+            35f32.to_radians().sin(),
+            0.0,
+            35f32.to_radians().cos(),
+        ));
         let wi = Vec3::new(1.0, 0.0, 1.0).normalize();
-        assert!((m.eval(Vec3::Z, wi).0.x * wi.z * std::f32::consts::PI / 0.6 - 0.9702).abs() < 1e-4);
+        assert!(
+            (m.eval(Vec3::Z, wi).0.x * wi.z * std::f32::consts::PI / 0.6 - 0.9702).abs() < 1e-4
+        );
         // Viewer below the mapped normal: the tangential part is mirrored (Mitsuba's flip).
         let wo_low = Vec3::new(-0.95, 0.0, 0.3122).normalize();
-        let mirrored = lambert_nm(Vec3::new(-35f32.to_radians().sin(), 0.0, 35f32.to_radians().cos()));
+        let mirrored = lambert_nm(Vec3::new(
+            -35f32.to_radians().sin(),
+            0.0,
+            35f32.to_radians().cos(),
+        ));
         assert!((m.eval(wo_low, wi).0.x - mirrored.eval(wo_low, wi).0.x).abs() < 1e-6);
         // Below the unperturbed surface but above the perturbed one: no light leaks through.
         let wi = Vec3::new(1.0, 0.0, -0.1).normalize();
@@ -147,13 +171,21 @@ mod tests {
     /// An unperturbed map (0, 0, 1) changes nothing: eval, pdf and samples equal the plain model.
     #[test]
     fn flat_map_is_the_identity() {
-        let plain = SurfaceBsdf::new(Bsdf::Lambert(Lambert::new(SampledSpectrum::splat(0.6))), true);
-        let nm = SurfaceBsdf { normal: Some(Vec3::Z), ..plain };
+        let plain = SurfaceBsdf::new(
+            Bsdf::Lambert(Lambert::new(SampledSpectrum::splat(0.6))),
+            true,
+        );
+        let nm = SurfaceBsdf {
+            normal: Some(Vec3::Z),
+            ..plain
+        };
         let mut rng = pt_testkit::Pcg32::new(3, 4);
         for _ in 0..1000 {
             let wo = rng.next_vec3() * 2.0 - Vec3::ONE;
             let wi = rng.next_vec3() * 2.0 - Vec3::ONE;
-            let (Some(wo), Some(wi)) = (wo.try_normalize(), wi.try_normalize()) else { continue };
+            let (Some(wo), Some(wi)) = (wo.try_normalize(), wi.try_normalize()) else {
+                continue;
+            };
             assert!((plain.eval(wo, wi).0.x - nm.eval(wo, wi).0.x).abs() < 1e-6);
             assert!((plain.pdf(wo, wi) - nm.pdf(wo, wi)).abs() < 1e-6);
             let u = Vec2::new(rng.next_f32(), rng.next_f32());

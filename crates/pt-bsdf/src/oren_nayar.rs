@@ -125,7 +125,8 @@ pub fn fon_albedo(mu: f32, r: f32) -> f32 {
     let a_f = 1.0 / (1.0 + C1_FON * r);
     let b_f = r * a_f;
     let si = (1.0 - mu * mu).max(0.0).sqrt();
-    let g = si * (mu.acos() - si * mu) + (2.0 / 3.0) * (si * mu * (1.0 + si + si * si) / (1.0 + si) - si);
+    let g = si * (mu.acos() - si * mu)
+        + (2.0 / 3.0) * (si * mu * (1.0 + si + si * si) / (1.0 + si) - si);
     a_f + b_f * FRAC_1_PI * g
 }
 
@@ -148,11 +149,21 @@ impl OrenNayar {
     /// values are taken as 0) and the given formula. Fujii and EON convert `sigma` with
     /// [`fujii_roughness`].
     pub fn new(reflectance: SampledSpectrum, sigma: f32, variant: OrenNayarVariant) -> Self {
-        let sigma = if sigma.is_finite() { sigma.max(0.0) } else { 0.0 };
+        let sigma = if sigma.is_finite() {
+            sigma.max(0.0)
+        } else {
+            0.0
+        };
         match variant {
             OrenNayarVariant::Qualitative | OrenNayarVariant::Full => {
                 let (a, b) = qualitative_ab(sigma);
-                OrenNayar { reflectance, sigma: Some(sigma), variant, a, b }
+                OrenNayar {
+                    reflectance,
+                    sigma: Some(sigma),
+                    variant,
+                    a,
+                    b,
+                }
             }
             OrenNayarVariant::Fujii | OrenNayarVariant::Eon => {
                 Self::from_fujii_roughness(reflectance, fujii_roughness(sigma), variant)
@@ -163,10 +174,28 @@ impl OrenNayar {
 
     /// Fujii or EON with Fujii's roughness `r` given directly, clamped to [0, 1]. Any other
     /// variant is treated as Fujii.
-    pub fn from_fujii_roughness(reflectance: SampledSpectrum, r: f32, variant: OrenNayarVariant) -> Self {
-        let r = if r.is_finite() { r.clamp(0.0, 1.0) } else { 0.0 };
-        let variant = if variant == OrenNayarVariant::Eon { variant } else { OrenNayarVariant::Fujii };
-        OrenNayar { reflectance, sigma: None, variant, a: 1.0 / (1.0 + C1_FON * r), b: r }
+    pub fn from_fujii_roughness(
+        reflectance: SampledSpectrum,
+        r: f32,
+        variant: OrenNayarVariant,
+    ) -> Self {
+        let r = if r.is_finite() {
+            r.clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let variant = if variant == OrenNayarVariant::Eon {
+            variant
+        } else {
+            OrenNayarVariant::Fujii
+        };
+        OrenNayar {
+            reflectance,
+            sigma: None,
+            variant,
+            a: 1.0 / (1.0 + C1_FON * r),
+            b: r,
+        }
     }
 
     fn with_sigma(mut self, sigma: f32) -> Self {
@@ -214,7 +243,8 @@ impl OrenNayar {
                 let (e_o, e_i) = (fon_albedo(cos_o, r), fon_albedo(cos_i, r));
                 let avg = self.a * (1.0 + C2_FON * r);
                 const EPS: f32 = 1e-7;
-                let lobe = FRAC_1_PI * (1.0 - e_o).max(EPS) * (1.0 - e_i).max(EPS) / (1.0 - avg).max(EPS);
+                let lobe =
+                    FRAC_1_PI * (1.0 - e_o).max(EPS) * (1.0 - e_i).max(EPS) / (1.0 - avg).max(EPS);
                 f_ss + self.rho_ms(avg) * lobe
             }
         }
@@ -222,7 +252,9 @@ impl OrenNayar {
 
     /// `rho_ms = rho^2 Ebar / (1 - rho (1 - Ebar))` per lane (EON Listing 1).
     fn rho_ms(&self, avg: f32) -> SampledSpectrum {
-        map_lanes(self.reflectance, |rho| rho * rho * avg / (1.0 - rho * (1.0 - avg)).max(1e-7))
+        map_lanes(self.reflectance, |rho| {
+            rho * rho * avg / (1.0 - rho * (1.0 - avg)).max(1e-7)
+        })
     }
 
     fn eval_full(&self, wo: Vec3, wi: Vec3, s: f32) -> SampledSpectrum {
@@ -233,17 +265,27 @@ impl OrenNayar {
         let sin_i = (1.0 - wi.z * wi.z).max(0.0).sqrt();
         let sin_o = (1.0 - wo.z * wo.z).max(0.0).sqrt();
         let denom = sin_i * sin_o;
-        let cos_phi = if denom > 1e-6 { (s / denom).clamp(-1.0, 1.0) } else { 0.0 };
+        let cos_phi = if denom > 1e-6 {
+            (s / denom).clamp(-1.0, 1.0)
+        } else {
+            0.0
+        };
         let k = 0.45 * sigma2 / (sigma2 + 0.09);
         let two_beta_pi = 2.0 * beta / PI;
-        let c2 = if cos_phi >= 0.0 { k * alpha.sin() } else { k * (alpha.sin() - two_beta_pi.powi(3)) };
+        let c2 = if cos_phi >= 0.0 {
+            k * alpha.sin()
+        } else {
+            k * (alpha.sin() - two_beta_pi.powi(3))
+        };
         let c3 = 0.125 * sigma2 / (sigma2 + 0.09) * (4.0 * alpha * beta / (PI * PI)).powi(2);
         // tan of angles < pi/2, guarded where both directions graze (value stays finite).
         let tan_beta = beta.sin() / beta.cos().max(1e-7);
         let half = 0.5 * (alpha + beta);
         let tan_half = half.sin() / half.cos().max(1e-7);
-        let l1 = FRAC_1_PI * (self.a + cos_phi * c2 * tan_beta + (1.0 - cos_phi.abs()) * c3 * tan_half);
-        let l2 = FRAC_1_PI * 0.17 * sigma2 / (sigma2 + 0.13) * (1.0 - cos_phi * two_beta_pi * two_beta_pi);
+        let l1 =
+            FRAC_1_PI * (self.a + cos_phi * c2 * tan_beta + (1.0 - cos_phi.abs()) * c3 * tan_half);
+        let l2 = FRAC_1_PI * 0.17 * sigma2 / (sigma2 + 0.13)
+            * (1.0 - cos_phi * two_beta_pi * two_beta_pi);
         map_lanes(self.reflectance, |rho| (rho * l1 + rho * rho * l2).max(0.0))
     }
 
@@ -261,7 +303,9 @@ impl OrenNayar {
                 Some(self.reflectance * e + self.rho_ms(avg) * (1.0 - e))
             }
             OrenNayarVariant::Fujii if self.b == 0.0 => Some(self.reflectance),
-            OrenNayarVariant::Qualitative | OrenNayarVariant::Full if self.sigma == Some(0.0) => Some(self.reflectance),
+            OrenNayarVariant::Qualitative | OrenNayarVariant::Full if self.sigma == Some(0.0) => {
+                Some(self.reflectance)
+            }
             _ => None,
         }
     }
@@ -293,15 +337,23 @@ impl OrenNayar {
             return None;
         }
         let weight = self.eval(wo, wi) * (wi.z / pdf);
-        Some(BsdfSample { wi, weight, pdf, delta: false, eta: 1.0 })
+        Some(BsdfSample {
+            wi,
+            weight,
+            pdf,
+            delta: false,
+            eta: 1.0,
+        })
     }
 }
 
 /// LTC coefficients (a, b, c, d) of `M = [[a, 0, b], [0, c, 0], [d, 0, 1]]` fitted to FON's
 /// `f cos` at `mu = cos_o` and roughness `r` (EON paper, `ltc_terms`).
 fn ltc_terms(mu: f32, r: f32) -> (f32, f32, f32, f32) {
-    let a = 1.0 + r * (0.303392 + (-0.518982 + 0.111709 * mu) * mu + (-0.276266 + 0.335918 * mu) * r);
-    let b = r * (-1.16407 + 1.15859 * mu + (0.150815 - 0.150105 * mu) * r) / (mu * mu * mu - 1.43545);
+    let a =
+        1.0 + r * (0.303392 + (-0.518982 + 0.111709 * mu) * mu + (-0.276266 + 0.335918 * mu) * r);
+    let b =
+        r * (-1.16407 + 1.15859 * mu + (0.150815 - 0.150105 * mu) * r) / (mu * mu * mu - 1.43545);
     let c = 1.0 + (0.20013 + (-0.506373 + 0.261777 * mu) * mu) * r;
     let d = ((0.540852 + (-1.01625 + 0.475392 * mu) * mu) * r) / (-1.0743 + mu * (0.0725628 + mu));
     (a, b, c, d)
@@ -310,7 +362,11 @@ fn ltc_terms(mu: f32, r: f32) -> (f32, f32, f32, f32) {
 /// Frame of the LTC: x along the azimuth of `wo`, z the normal (EON `orthonormal_basis_ltc`).
 fn ltc_basis(wo: Vec3) -> (Vec3, Vec3) {
     let len2 = wo.x * wo.x + wo.y * wo.y;
-    let x = if len2 > 0.0 { Vec3::new(wo.x, wo.y, 0.0) / len2.sqrt() } else { Vec3::X };
+    let x = if len2 > 0.0 {
+        Vec3::new(wo.x, wo.y, 0.0) / len2.sqrt()
+    } else {
+        Vec3::X
+    };
     (x, Vec3::new(-x.y, x.x, 0.0))
 }
 
@@ -330,7 +386,11 @@ fn cltc_pdf(wo: Vec3, wi: Vec3, r: f32) -> f32 {
     let (a, b, c, d) = ltc_terms(wo.z.clamp(0.0, 1.0), r);
     let det = c * (a - b * d);
     // adj(M) w = det(M) M^-1 w.
-    let wh = Vec3::new(c * (w.x - b * w.z), (a - b * d) * w.y, -c * (d * w.x - a * w.z));
+    let wh = Vec3::new(
+        c * (w.x - b * w.z),
+        (a - b * d) * w.y,
+        -c * (d * w.x - a * w.z),
+    );
     let len2 = wh.length_squared();
     let vz = 1.0 / (d * d + 1.0).sqrt();
     let s = 0.5 * (1.0 + vz);
@@ -381,8 +441,12 @@ mod tests {
     use super::*;
     use crate::Lambert;
 
-    const VARIANTS: [OrenNayarVariant; 4] =
-        [OrenNayarVariant::Qualitative, OrenNayarVariant::Full, OrenNayarVariant::Fujii, OrenNayarVariant::Eon];
+    const VARIANTS: [OrenNayarVariant; 4] = [
+        OrenNayarVariant::Qualitative,
+        OrenNayarVariant::Full,
+        OrenNayarVariant::Fujii,
+        OrenNayarVariant::Eon,
+    ];
 
     #[test]
     fn sigma_zero_equals_lambert_exactly() {
@@ -406,16 +470,26 @@ mod tests {
     fn qualitative_closed_form_at_a_known_configuration() {
         // theta_i = 60 deg, theta_o = 30 deg, same azimuth: f = rho/pi (A + B sin 60 tan 30).
         let sigma = 0.5f32;
-        let on = OrenNayar::new(SampledSpectrum::from_rgb([1.0; 3]), sigma, OrenNayarVariant::Qualitative);
+        let on = OrenNayar::new(
+            SampledSpectrum::from_rgb([1.0; 3]),
+            sigma,
+            OrenNayarVariant::Qualitative,
+        );
         let wi = Vec3::new(60f32.to_radians().sin(), 0.0, 60f32.to_radians().cos());
         let wo = Vec3::new(30f32.to_radians().sin(), 0.0, 30f32.to_radians().cos());
         let (a, b) = qualitative_ab(sigma);
         let expect = (a + b * 60f32.to_radians().sin() * 30f32.to_radians().tan()) / PI;
         assert!((on.eval(wo, wi).0.x - expect).abs() < 1e-6);
         // Fujii at the same point with r = B/A equals the qualitative value times A_F/A.
-        let fu = OrenNayar::new(SampledSpectrum::from_rgb([1.0; 3]), sigma, OrenNayarVariant::Fujii);
+        let fu = OrenNayar::new(
+            SampledSpectrum::from_rgb([1.0; 3]),
+            sigma,
+            OrenNayarVariant::Fujii,
+        );
         let r = b / a;
-        let expect_f = (1.0 + r * 60f32.to_radians().sin() * 30f32.to_radians().tan()) / (1.0 + C1_FON * r) / PI;
+        let expect_f = (1.0 + r * 60f32.to_radians().sin() * 30f32.to_radians().tan())
+            / (1.0 + C1_FON * r)
+            / PI;
         assert!((fu.eval(wo, wi).0.x - expect_f).abs() < 1e-6);
     }
 

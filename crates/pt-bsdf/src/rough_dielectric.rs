@@ -91,7 +91,12 @@ impl RoughDielectric {
     /// A rough dielectric with relative index `eta = int_ior / ext_ior`, unit multipliers.
     pub fn new(eta: f32, mf: Microfacet) -> Self {
         let one = SampledSpectrum::splat(1.0);
-        RoughDielectric { eta: sane_eta(eta), mf, specular_reflectance: one, specular_transmittance: one }
+        RoughDielectric {
+            eta: sane_eta(eta),
+            mf,
+            specular_reflectance: one,
+            specular_transmittance: one,
+        }
     }
 
     fn half(&self, wo: Vec3, wi: Vec3) -> Option<Half> {
@@ -101,7 +106,9 @@ impl RoughDielectric {
 
     /// f(wo, wi) without the cosine (radiance transport).
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
-        let Some(Half { h, etap, reflect }) = self.half(wo, wi) else { return SampledSpectrum::ZERO };
+        let Some(Half { h, etap, reflect }) = self.half(wo, wi) else {
+            return SampledSpectrum::ZERO;
+        };
         let d = self.mf.d(h);
         if d == 0.0 {
             return SampledSpectrum::ZERO;
@@ -109,11 +116,17 @@ impl RoughDielectric {
         let g = self.mf.g2(wo, wi);
         let (v, mult) = if reflect {
             let f = fresnel_dielectric(wo.dot(h), self.eta);
-            (f * d * g / (4.0 * (wi.z * wo.z).abs()), self.specular_reflectance)
+            (
+                f * d * g / (4.0 * (wi.z * wo.z).abs()),
+                self.specular_reflectance,
+            )
         } else {
             let t = fresnel_transmittance_pair(wo.dot(h).abs(), wi.dot(h).abs(), etap);
             let denom = (wi.dot(h) + wo.dot(h) / etap).powi(2) * wi.z * wo.z;
-            (t * d * g * (wi.dot(h) * wo.dot(h) / denom).abs() / (etap * etap), self.specular_transmittance)
+            (
+                t * d * g * (wi.dot(h) * wo.dot(h) / denom).abs() / (etap * etap),
+                self.specular_transmittance,
+            )
         };
         if v.is_finite() {
             mult * v
@@ -124,7 +137,9 @@ impl RoughDielectric {
 
     /// Solid-angle pdf of `wi`.
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        let Some(Half { h, etap, reflect }) = self.half(wo, wi) else { return 0.0 };
+        let Some(Half { h, etap, reflect }) = self.half(wo, wi) else {
+            return 0.0;
+        };
         let r = fresnel_dielectric(wo.dot(h), self.eta);
         crate::microfacet::interface_pdf(&self.mf, wo, wi, (h, etap, reflect), r)
     }
@@ -161,6 +176,12 @@ impl RoughDielectric {
         if !weight.is_finite() {
             return None;
         }
-        Some(BsdfSample { wi, weight, pdf, delta: false, eta })
+        Some(BsdfSample {
+            wi,
+            weight,
+            pdf,
+            delta: false,
+            eta,
+        })
     }
 }

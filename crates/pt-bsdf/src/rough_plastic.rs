@@ -81,7 +81,10 @@ impl CoatingTable {
             *t = interface_albedo(&mf, mu, eta, false);
             internal += f64::from(interface_albedo(&mf, mu, 1.0 / eta, true) * mu);
         }
-        CoatingTable { external_transmittance, internal_reflectance: (2.0 * internal / TABLE_SIZE as f64) as f32 }
+        CoatingTable {
+            external_transmittance,
+            internal_reflectance: (2.0 * internal / TABLE_SIZE as f64) as f32,
+        }
     }
 
     /// The shared table for these parameters, computed on first use and kept for the life of
@@ -90,8 +93,13 @@ impl CoatingTable {
         type Key = (bool, u32, u32);
         static CACHE: OnceLock<Mutex<HashMap<Key, &'static CoatingTable>>> = OnceLock::new();
         let key = (dist == Distribution::Ggx, alpha.to_bits(), eta.to_bits());
-        let mut cache = CACHE.get_or_init(Default::default).lock().unwrap_or_else(|e| e.into_inner());
-        *cache.entry(key).or_insert_with(|| Box::leak(Box::new(CoatingTable::compute(dist, alpha, eta))))
+        let mut cache = CACHE
+            .get_or_init(Default::default)
+            .lock()
+            .unwrap_or_else(|e| e.into_inner());
+        *cache
+            .entry(key)
+            .or_insert_with(|| Box::leak(Box::new(CoatingTable::compute(dist, alpha, eta))))
     }
 
     /// `T(mu)` by linear interpolation between the nodes, as Mitsuba's `lerp_gather`.
@@ -141,7 +149,9 @@ fn interface_albedo(mf: &Microfacet, mu: f32, eta: f32, reflect: bool) -> f32 {
                 }
                 f * mf.g1(wi) * visible
             } else {
-                let Some((wt, _)) = refract(wo, m, eta) else { continue };
+                let Some((wt, _)) = refract(wo, m, eta) else {
+                    continue;
+                };
                 if wt.z >= 0.0 {
                     continue;
                 }
@@ -215,9 +225,25 @@ impl RoughPlastic {
         sampling_weight: f32,
         table: &'static CoatingTable,
     ) -> Self {
-        let eta = if eta.is_finite() && eta > 0.0 && eta != 1.0 { eta } else { 1.49 };
-        let w = if sampling_weight.is_finite() { sampling_weight.clamp(0.0, 1.0) } else { 0.5 };
-        RoughPlastic { diffuse_reflectance, specular_reflectance, eta, mf, nonlinear, specular_sampling_weight: w, table }
+        let eta = if eta.is_finite() && eta > 0.0 && eta != 1.0 {
+            eta
+        } else {
+            1.49
+        };
+        let w = if sampling_weight.is_finite() {
+            sampling_weight.clamp(0.0, 1.0)
+        } else {
+            0.5
+        };
+        RoughPlastic {
+            diffuse_reflectance,
+            specular_reflectance,
+            eta,
+            mf,
+            nonlinear,
+            specular_sampling_weight: w,
+            table,
+        }
     }
 
     /// f(wo, wi) without the cosine, local frame.
@@ -233,17 +259,28 @@ impl RoughPlastic {
         // diffuse-lobe sample landing there got a weight of 1e14 (`pt stability`, Beckmann
         // alpha 1e-3 at 89.99 degrees: albedo 2e12).
         if h.z > 0.0 && wo.dot(h) > 0.0 {
-            let v = fresnel_dielectric(wo.dot(h), self.eta) * self.mf.d(h) * self.mf.g2(wo, wi) / (4.0 * wo.z * wi.z);
+            let v = fresnel_dielectric(wo.dot(h), self.eta) * self.mf.d(h) * self.mf.g2(wo, wi)
+                / (4.0 * wo.z * wi.z);
             if v.is_finite() {
                 result += self.specular_reflectance * v;
             }
         }
         let r_i = self.table.internal_reflectance;
         let rho = self.diffuse_reflectance;
-        let denom = if self.nonlinear { crate::map_lanes(rho, |x| 1.0 - x * r_i) } else { SampledSpectrum::splat(1.0 - r_i) };
+        let denom = if self.nonlinear {
+            crate::map_lanes(rho, |x| 1.0 - x * r_i)
+        } else {
+            SampledSpectrum::splat(1.0 - r_i)
+        };
         let t = self.table.transmittance(wo.z) * self.table.transmittance(wi.z);
         let scale = FRAC_1_PI * t / (self.eta * self.eta);
-        result += crate::map_lanes(SampledSpectrum(rho.0 / denom.0), |x| if x.is_finite() { x * scale } else { 0.0 });
+        result += crate::map_lanes(SampledSpectrum(rho.0 / denom.0), |x| {
+            if x.is_finite() {
+                x * scale
+            } else {
+                0.0
+            }
+        });
         result
     }
 
@@ -292,7 +329,13 @@ impl RoughPlastic {
             return None;
         }
         let weight = self.eval(wo, wi) * (wi.z / pdf);
-        Some(BsdfSample { wi, weight, pdf, delta: false, eta: 1.0 })
+        Some(BsdfSample {
+            wi,
+            weight,
+            pdf,
+            delta: false,
+            eta: 1.0,
+        })
     }
 }
 
@@ -304,11 +347,19 @@ mod tests {
     fn smooth_limit_of_the_table_is_fresnel() {
         // At alpha 1e-3 the coating is smooth: T(mu) = 1 - F(mu), so T(1) = 1 - 0.04 for eta 1.5.
         let t = CoatingTable::compute(Distribution::Ggx, 1e-3, 1.5);
-        assert!((t.transmittance(1.0) - 0.96).abs() < 1e-3, "{}", t.transmittance(1.0));
+        assert!(
+            (t.transmittance(1.0) - 0.96).abs() < 1e-3,
+            "{}",
+            t.transmittance(1.0)
+        );
         assert!((t.transmittance(0.5) - (1.0 - fresnel_dielectric(0.5, 1.5))).abs() < 2e-3);
         // Internal reflectance of a smooth interface from inside, 2 int F(mu, 1/1.5) mu dmu =
         // 0.596 (the classic diffuse internal reflectance for n = 1.5), up to the 64-node sum.
-        assert!((t.internal_reflectance - 0.596).abs() < 0.02, "{}", t.internal_reflectance);
+        assert!(
+            (t.internal_reflectance - 0.596).abs() < 0.02,
+            "{}",
+            t.internal_reflectance
+        );
     }
 
     #[test]

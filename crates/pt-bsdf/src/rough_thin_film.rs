@@ -80,7 +80,9 @@ impl RoughThinFilm {
 
     /// f(wo, wi) without the cosine (radiance transport), per lane.
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
-        let Some((h, etap, reflect)) = self.half(wo, wi) else { return SampledSpectrum::ZERO };
+        let Some((h, etap, reflect)) = self.half(wo, wi) else {
+            return SampledSpectrum::ZERO;
+        };
         let d = self.mf.d(h);
         if d == 0.0 {
             return SampledSpectrum::ZERO;
@@ -105,8 +107,14 @@ impl RoughThinFilm {
 
     /// Solid-angle pdf of `wi`.
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        let Some(half) = self.half(wo, wi) else { return 0.0 };
-        let p_r = if self.eta().is_some() { self.mean(self.film.reflectance(wo.dot(half.0))) } else { 1.0 };
+        let Some(half) = self.half(wo, wi) else {
+            return 0.0;
+        };
+        let p_r = if self.eta().is_some() {
+            self.mean(self.film.reflectance(wo.dot(half.0)))
+        } else {
+            1.0
+        };
         crate::microfacet::interface_pdf(&self.mf, wo, wi, half, p_r)
     }
 
@@ -144,6 +152,12 @@ impl RoughThinFilm {
         if !weight.is_finite() {
             return None;
         }
-        Some(BsdfSample { wi, weight, pdf, delta: false, eta })
+        Some(BsdfSample {
+            wi,
+            weight,
+            pdf,
+            delta: false,
+            eta,
+        })
     }
 }

@@ -44,7 +44,11 @@ impl ThinDielectric {
     /// A sheet of relative index `eta = int_ior / ext_ior`, unit multipliers.
     pub fn new(eta: f32) -> Self {
         let one = SampledSpectrum::splat(1.0);
-        ThinDielectric { eta: sane_eta(eta), specular_reflectance: one, specular_transmittance: one }
+        ThinDielectric {
+            eta: sane_eta(eta),
+            specular_reflectance: one,
+            specular_transmittance: one,
+        }
     }
 
     /// Reflectance of the sheet at `|cos_o|`: `R' = 2R/(1+R)`.
@@ -75,9 +79,21 @@ impl ThinDielectric {
         let r = self.reflectance(wo.z);
         if u_lobe < r || r >= 1.0 {
             let wi = Vec3::new(-wo.x, -wo.y, wo.z);
-            Some(BsdfSample { wi, weight: self.specular_reflectance, pdf: r, delta: true, eta: 1.0 })
+            Some(BsdfSample {
+                wi,
+                weight: self.specular_reflectance,
+                pdf: r,
+                delta: true,
+                eta: 1.0,
+            })
         } else {
-            Some(BsdfSample { wi: -wo, weight: self.specular_transmittance, pdf: 1.0 - r, delta: true, eta: 1.0 })
+            Some(BsdfSample {
+                wi: -wo,
+                weight: self.specular_transmittance,
+                pdf: 1.0 - r,
+                delta: true,
+                eta: 1.0,
+            })
         }
     }
 }

@@ -144,8 +144,17 @@ pub struct ThinFilm {
 }
 
 impl ThinFilm {
-    fn sanitised(thickness_nm: f32, film_ior: f32, ext_ior: f32, base: FilmBase) -> (f32, f32, f32, FilmBase) {
-        let d = if thickness_nm.is_finite() && thickness_nm > 0.0 { thickness_nm } else { 0.0 };
+    fn sanitised(
+        thickness_nm: f32,
+        film_ior: f32,
+        ext_ior: f32,
+        base: FilmBase,
+    ) -> (f32, f32, f32, FilmBase) {
+        let d = if thickness_nm.is_finite() && thickness_nm > 0.0 {
+            thickness_nm
+        } else {
+            0.0
+        };
         let base = match base {
             FilmBase::Dielectric { ior } => FilmBase::Dielectric { ior: sane_eta(ior) },
             b => b,
@@ -155,16 +164,38 @@ impl ThinFilm {
 
     /// A film whose lane `i` is the exact Airy reflectance at `lambda_nm[i]` nm (spectral mode).
     /// Thickness in nm; indices absolute.
-    pub fn spectral(thickness_nm: f32, film_ior: f32, ext_ior: f32, base: FilmBase, lambda_nm: Vec4) -> Self {
-        let (thickness_nm, film_ior, ext_ior, base) = Self::sanitised(thickness_nm, film_ior, ext_ior, base);
-        ThinFilm { thickness_nm, film_ior, ext_ior, base, lambda_nm, color: FilmColor::Lanes }
+    pub fn spectral(
+        thickness_nm: f32,
+        film_ior: f32,
+        ext_ior: f32,
+        base: FilmBase,
+        lambda_nm: Vec4,
+    ) -> Self {
+        let (thickness_nm, film_ior, ext_ior, base) =
+            Self::sanitised(thickness_nm, film_ior, ext_ior, base);
+        ThinFilm {
+            thickness_nm,
+            film_ior,
+            ext_ior,
+            base,
+            lambda_nm,
+            color: FilmColor::Lanes,
+        }
     }
 
     /// A film whose lanes are linear sRGB, spectrally integrated (Belcour & Barla 2017).
     /// Thickness in nm; indices absolute; a conductor base gives `eta`/`k` per RGB channel.
     pub fn rgb(thickness_nm: f32, film_ior: f32, ext_ior: f32, base: FilmBase) -> Self {
-        let (thickness_nm, film_ior, ext_ior, base) = Self::sanitised(thickness_nm, film_ior, ext_ior, base);
-        ThinFilm { thickness_nm, film_ior, ext_ior, base, lambda_nm: RGB_WAVELENGTHS_NM, color: FilmColor::RgbIntegrated }
+        let (thickness_nm, film_ior, ext_ior, base) =
+            Self::sanitised(thickness_nm, film_ior, ext_ior, base);
+        ThinFilm {
+            thickness_nm,
+            film_ior,
+            ext_ior,
+            base,
+            lambda_nm: RGB_WAVELENGTHS_NM,
+            color: FilmColor::RgbIntegrated,
+        }
     }
 
     /// Whether the base transmits.
@@ -199,7 +230,8 @@ impl ThinFilm {
                 match self.color {
                     FilmColor::Lanes => {
                         for (o, l) in out.iter_mut().zip(self.lambda_nm.to_array()) {
-                            *o = airy_reflectance(c, n0, nf, base, d, f64::from(l)).clamp(0.0, 1.0) as f32;
+                            *o = airy_reflectance(c, n0, nf, base, d, f64::from(l)).clamp(0.0, 1.0)
+                                as f32;
                         }
                     }
                     FilmColor::RgbIntegrated => {
@@ -215,9 +247,15 @@ impl ThinFilm {
                 let n0 = f64::from(self.ext_ior);
                 let (eta, k) = (eta.0.to_array(), k.0.to_array());
                 for i in 0..self.lanes() {
-                    let base = C64 { re: f64::from(eta[i]), im: f64::from(k[i]) };
+                    let base = C64 {
+                        re: f64::from(eta[i]),
+                        im: f64::from(k[i]),
+                    };
                     out[i] = match self.color {
-                        FilmColor::Lanes => airy_reflectance(c, n0, nf, base, d, f64::from(self.lambda_nm[i])).clamp(0.0, 1.0),
+                        FilmColor::Lanes => {
+                            airy_reflectance(c, n0, nf, base, d, f64::from(self.lambda_nm[i]))
+                                .clamp(0.0, 1.0)
+                        }
                         FilmColor::RgbIntegrated => self.rgb_lane(c, n0, nf, base, d)[i],
                     } as f32;
                 }
@@ -230,10 +268,13 @@ impl ThinFilm {
     fn rgb_lane(&self, c: f64, n0: f64, nf: f64, base: C64, d: f64) -> [f64; 3] {
         // Clamped: saturated interference colours lie outside the sRGB gamut (a negative channel
         // would make a negative throughput), and the Gaussian fits can overshoot slightly.
-        belcour_barla_rgb(c, n0, nf, base, d).map(|v| v.map(|x| x.clamp(0.0, 1.0))).unwrap_or_else(|| {
-            let l = self.lambda_nm;
-            [l.x, l.y, l.z].map(|l| airy_reflectance(c, n0, nf, base, d, f64::from(l)).clamp(0.0, 1.0))
-        })
+        belcour_barla_rgb(c, n0, nf, base, d)
+            .map(|v| v.map(|x| x.clamp(0.0, 1.0)))
+            .unwrap_or_else(|| {
+                let l = self.lambda_nm;
+                [l.x, l.y, l.z]
+                    .map(|l| airy_reflectance(c, n0, nf, base, d, f64::from(l)).clamp(0.0, 1.0))
+            })
     }
 
     /// Delta lobes: 0.
@@ -258,24 +299,49 @@ impl ThinFilm {
             if wo.z < 0.0 {
                 return None;
             }
-            return Some(BsdfSample { wi: refl, weight: r, pdf: 1.0, delta: true, eta: 1.0 });
+            return Some(BsdfSample {
+                wi: refl,
+                weight: r,
+                pdf: 1.0,
+                delta: true,
+                eta: 1.0,
+            });
         };
         let n = self.lanes();
         let p = (r.0.to_array()[..n].iter().sum::<f32>() / n as f32).clamp(0.0, 1.0);
-        let refracted = refract(wo, Vec3::Z, ior / self.ext_ior).filter(|(wi, _)| wi.z * wo.z < 0.0);
+        let refracted =
+            refract(wo, Vec3::Z, ior / self.ext_ior).filter(|(wi, _)| wi.z * wo.z < 0.0);
         let Some((wt, etap)) = refracted else {
             // Total internal reflection in the last medium: the lossless stack reflects all.
-            return Some(BsdfSample { wi: refl, weight: SampledSpectrum::splat(1.0), pdf: 1.0, delta: true, eta: 1.0 });
+            return Some(BsdfSample {
+                wi: refl,
+                weight: SampledSpectrum::splat(1.0),
+                pdf: 1.0,
+                delta: true,
+                eta: 1.0,
+            });
         };
         if p > 0.0 && (u_lobe < p || p >= 1.0) {
-            return Some(BsdfSample { wi: refl, weight: r * (1.0 / p), pdf: p, delta: true, eta: 1.0 });
+            return Some(BsdfSample {
+                wi: refl,
+                weight: r * (1.0 / p),
+                pdf: p,
+                delta: true,
+                eta: 1.0,
+            });
         }
         let mut t = SampledSpectrum::splat(1.0) + r * -1.0;
         if n == 3 {
             t.0.w = 0.0;
         }
         let weight = t * (1.0 / ((1.0 - p) * etap * etap));
-        Some(BsdfSample { wi: wt, weight, pdf: 1.0 - p, delta: true, eta: etap })
+        Some(BsdfSample {
+            wi: wt,
+            weight,
+            pdf: 1.0 - p,
+            delta: true,
+            eta: etap,
+        })
     }
 }
 
@@ -292,14 +358,22 @@ fn film_interfaces(c: f64, n0: f64, nf: f64, nb: C64, s2: f64) -> (C64, (C64, C6
     let q0 = C64::real(n0 * c);
     let qf = q_of(nfc, s2);
     let qb = q_of(nb, s2);
-    (qf, fresnel_amplitudes(n0c, q0, nfc, qf), fresnel_amplitudes(nfc, qf, nb, qb))
+    (
+        qf,
+        fresnel_amplitudes(n0c, q0, nfc, qf),
+        fresnel_amplitudes(nfc, qf, nb, qb),
+    )
 }
 
 /// `q = n cos(theta) = sqrt(n^2 - s^2)` in a medium of index `n`, for Snell's invariant `s`.
 fn q_of(n: C64, s2: f64) -> C64 {
     // `+ 0.0` turns a -0 imaginary part into +0, so that the evanescent branch is +i.
     let z = n.mul(n).sub(C64::real(s2));
-    C64 { re: z.re, im: z.im + 0.0 }.sqrt()
+    C64 {
+        re: z.re,
+        im: z.im + 0.0,
+    }
+    .sqrt()
 }
 
 /// Amplitude reflection coefficients (s, p) from medium i to medium j (Born & Wolf 1999,
@@ -317,12 +391,21 @@ fn fresnel_amplitudes(ni: C64, qi: C64, nj: C64, qj: C64) -> (C64, C64) {
 /// thickness `d_nm` and vacuum wavelength `lambda_nm` (Born & Wolf 1999 Sec. 1.6.4).
 /// Non-finite results (only at exactly grazing incidence with an index-matched film, 0/0)
 /// become 1, the grazing limit. Not clamped to [0, 1] (the tests check that it stays there).
-pub fn airy_reflectance_sp(cos0: f64, n0: f64, nf: f64, nb: C64, d_nm: f64, lambda_nm: f64) -> (f64, f64) {
+pub fn airy_reflectance_sp(
+    cos0: f64,
+    n0: f64,
+    nf: f64,
+    nb: C64,
+    d_nm: f64,
+    lambda_nm: f64,
+) -> (f64, f64) {
     let c = cos0.clamp(0.0, 1.0);
     let s2 = n0 * n0 * (1.0 - c * c);
     let (qf, (r01s, r01p), (r12s, r12p)) = film_interfaces(c, n0, nf, nb, s2);
     // e^{2 i delta}, delta = 2 pi d q_f / lambda (q_f = n_f cos theta_f).
-    let e = qf.scale(4.0 * std::f64::consts::PI * d_nm / lambda_nm).exp_i();
+    let e = qf
+        .scale(4.0 * std::f64::consts::PI * d_nm / lambda_nm)
+        .exp_i();
     let airy = |r01: C64, r12: C64| {
         let x = r12.mul(e);
         let r = r01.add(x).div(C64::real(1.0).add(r01.mul(x)));
@@ -355,7 +438,9 @@ fn bb_sensitivity_xyz(opd_nm: f64, shift: f64) -> [f64; 3] {
     const POS: [f64; 3] = [1.6810e+06, 1.7953e+06, 2.2084e+06];
     const VAR: [f64; 3] = [4.3278e+09, 9.3046e+09, 6.6121e+09];
     let phase = 2.0 * PI * opd_nm * 1.0e-9;
-    let g = |val: f64, pos: f64, var: f64| val * (2.0 * PI * var).sqrt() * (pos * phase + shift).cos() * (-var * phase * phase).exp();
+    let g = |val: f64, pos: f64, var: f64| {
+        val * (2.0 * PI * var).sqrt() * (pos * phase + shift).cos() * (-var * phase * phase).exp()
+    };
     let mut xyz = [0.0; 3];
     for i in 0..3 {
         xyz[i] = g(VAL[i], POS[i], VAR[i]);
@@ -396,9 +481,18 @@ fn bb_series(r01: f64, r12: C64) -> Series {
     let r12_2 = r12.norm();
     let t = 1.0 - r01_2;
     let denom = 1.0 - r01_2 * r12_2;
-    let rs = if denom > 0.0 { t * t * r12_2 / denom } else { 0.0 };
+    let rs = if denom > 0.0 {
+        t * t * r12_2 / denom
+    } else {
+        0.0
+    };
     let phi21 = if r01 > 0.0 { std::f64::consts::PI } else { 0.0 };
-    Series { c0: r01_2 + rs, amp: rs - t, r123: (r01_2 * r12_2).sqrt(), phi: phi21 + r12.arg() }
+    Series {
+        c0: r01_2 + rs,
+        amp: rs - t,
+        r123: (r01_2 * r12_2).sqrt(),
+        phi: phi21 + r12.arg(),
+    }
 }
 
 /// Belcour-Barla spectrally integrated linear sRGB reflectance of the film (white-normalised, see
@@ -453,7 +547,12 @@ mod tests {
     /// series converges geometrically with ratio r123 <= 0.9 at these angles, 400 terms).
     #[test]
     fn series_equals_airy_pointwise() {
-        for (nb, nf) in [(C64::real(1.5), 1.33), (C64::real(1.2), 2.0), (C64 { re: 0.2, im: 3.4 }, 1.4), (C64 { re: 1.5, im: 0.3 }, 1.8)] {
+        for (nb, nf) in [
+            (C64::real(1.5), 1.33),
+            (C64::real(1.2), 2.0),
+            (C64 { re: 0.2, im: 3.4 }, 1.4),
+            (C64 { re: 1.5, im: 0.3 }, 1.8),
+        ] {
             for c in [1.0, 0.7, 0.3] {
                 for lambda in [420.0, 550.0, 700.0] {
                     let (n0, d) = (1.0, 333.0);
@@ -473,7 +572,10 @@ mod tests {
                             cm *= s.r123;
                             v += 2.0 * cm * (m as f64 * (big_phi + s.phi)).cos();
                         }
-                        assert!((v - exact).abs() < 1e-9, "nb={nb:?} nf={nf} c={c} l={lambda}: series {v} airy {exact}");
+                        assert!(
+                            (v - exact).abs() < 1e-9,
+                            "nb={nb:?} nf={nf} c={c} l={lambda}: series {v} airy {exact}"
+                        );
                     }
                 }
             }
@@ -496,7 +598,10 @@ mod tests {
                     // cos and sin of a complex argument via exp.
                     let e1 = beta.exp_i();
                     let e2 = beta.scale(-1.0).exp_i();
-                    (e1.add(e2).scale(0.5), e1.sub(e2).div(C64 { re: 0.0, im: 2.0 }))
+                    (
+                        e1.add(e2).scale(0.5),
+                        e1.sub(e2).div(C64 { re: 0.0, im: 2.0 }),
+                    )
                 };
                 let i = C64 { re: 0.0, im: 1.0 };
                 let r_of = |p0: C64, pf: C64, pb: C64| {
@@ -524,6 +629,11 @@ mod tests {
     fn bb_white_is_about_equal_energy_srgb() {
         let w = bb_white();
         // XYZ (1,1,1) in linear sRGB is about (1.205, 0.948, 0.909).
-        assert!((w[0] - 1.205).abs() < 0.01 && (w[1] - 0.948).abs() < 0.01 && (w[2] - 0.909).abs() < 0.01, "{w:?}");
+        assert!(
+            (w[0] - 1.205).abs() < 0.01
+                && (w[1] - 0.948).abs() < 0.01
+                && (w[2] - 0.909).abs() < 0.01,
+            "{w:?}"
+        );
     }
 }

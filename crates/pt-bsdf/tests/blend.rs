@@ -25,11 +25,19 @@ fn lambert(r: f32) -> Bsdf {
 }
 
 fn rough_gold(alpha: f32) -> Bsdf {
-    Bsdf::RoughConductor(RoughConductor::new(SampledSpectrum::splat(0.2), SampledSpectrum::splat(3.0), SampledSpectrum::splat(1.0), Microfacet::new(Distribution::Ggx, alpha, alpha)))
+    Bsdf::RoughConductor(RoughConductor::new(
+        SampledSpectrum::splat(0.2),
+        SampledSpectrum::splat(3.0),
+        SampledSpectrum::splat(1.0),
+        Microfacet::new(Distribution::Ggx, alpha, alpha),
+    ))
 }
 
 fn blend(a: Bsdf, w: f32, b: Bsdf, two_sided: bool) -> SurfaceBsdf {
-    SurfaceBsdf { blend: Some((w, b)), ..SurfaceBsdf::new(a, two_sided) }
+    SurfaceBsdf {
+        blend: Some((w, b)),
+        ..SurfaceBsdf::new(a, two_sided)
+    }
 }
 
 #[test]
@@ -39,17 +47,39 @@ fn blend_sampling_matches_mixture_pdf_and_weights() {
         for alpha in [0.05f32, 0.4] {
             for two_sided in [false, true] {
                 let s = blend(lambert(0.8), w, rough_gold(alpha), two_sided);
-                for wo in [dir_deg(0.0, 0.0), dir_deg(45.0, 30.0), dir_deg(80.0, 200.0), dir_deg(130.0, 10.0)] {
+                for wo in [
+                    dir_deg(0.0, 0.0),
+                    dir_deg(45.0, 30.0),
+                    dir_deg(80.0, 200.0),
+                    dir_deg(130.0, 10.0),
+                ] {
                     if !two_sided && wo.z < 0.0 {
                         continue;
                     }
-                    let label = format!("blend w={w} alpha={alpha} two_sided={two_sided} wo={wo:?}");
-                    report.push(chi2_sphere(&label, wo, &surface_sampler(s), &|wo, wi| s.pdf(wo, wi), &Chi2Config::default()));
+                    let label =
+                        format!("blend w={w} alpha={alpha} two_sided={two_sided} wo={wo:?}");
+                    report.push(chi2_sphere(
+                        &label,
+                        wo,
+                        &surface_sampler(s),
+                        &|wo, wi| s.pdf(wo, wi),
+                        &Chi2Config::default(),
+                    ));
                     let mut rng = pt_testkit::Pcg32::new(11, 5);
                     for _ in 0..2000 {
-                        let Some(bs) = s.sample(wo, rng.next_f32(), pt_math::Vec2::new(rng.next_f32(), rng.next_f32())) else { continue };
+                        let Some(bs) = s.sample(
+                            wo,
+                            rng.next_f32(),
+                            pt_math::Vec2::new(rng.next_f32(), rng.next_f32()),
+                        ) else {
+                            continue;
+                        };
                         let want = s.eval(wo, bs.wi).0.x * bs.wi.z.abs() / s.pdf(wo, bs.wi);
-                        assert!((bs.weight.0.x - want).abs() <= 1e-3 * want.max(1e-3), "{label}: weight {} vs {want}", bs.weight.0.x);
+                        assert!(
+                            (bs.weight.0.x - want).abs() <= 1e-3 * want.max(1e-3),
+                            "{label}: weight {} vs {want}",
+                            bs.weight.0.x
+                        );
                     }
                 }
             }
@@ -68,16 +98,39 @@ fn blend_albedo_is_the_weighted_sum() {
             let qb = albedo_quadrature(wo, &f(SurfaceBsdf::new(b, false)), 1e-6);
             let want = (1.0 - w as f64) * qa + w as f64 * qb;
             let (m, se) = albedo_mc(wo, &surface_sampler(blend(a, w, b, false)), 400_000, 3);
-            assert!(((1.0 - 2.0 * w as f64) * (qa - qb)).abs() > 0.05, "test cannot tell w from 1 - w");
-            assert!((m - want).abs() <= 4.5 * se + 1e-3, "w={w} wo={wo:?}: albedo {m} +- {se} vs {want}");
+            assert!(
+                ((1.0 - 2.0 * w as f64) * (qa - qb)).abs() > 0.05,
+                "test cannot tell w from 1 - w"
+            );
+            assert!(
+                (m - want).abs() <= 4.5 * se + 1e-3,
+                "w={w} wo={wo:?}: albedo {m} +- {se} vs {want}"
+            );
         }
     }
     // With a delta model: albedo = (1 - w) rho + w F(cos), F the conductor's Fresnel reflectance.
     let (w, rho) = (0.4f32, 0.6f32);
-    let mirror = Bsdf::Conductor(Conductor::new(SampledSpectrum::splat(0.2), SampledSpectrum::splat(3.0), SampledSpectrum::splat(1.0)));
+    let mirror = Bsdf::Conductor(Conductor::new(
+        SampledSpectrum::splat(0.2),
+        SampledSpectrum::splat(3.0),
+        SampledSpectrum::splat(1.0),
+    ));
     let wo = dir_deg(30.0, 0.0);
-    let fresnel = mirror.sample(wo, 0.5, pt_math::Vec2::splat(0.5)).unwrap().weight.0.x as f64;
-    let (m, se) = albedo_mc(wo, &surface_sampler(blend(lambert(rho), w, mirror, false)), 400_000, 4);
+    let fresnel = mirror
+        .sample(wo, 0.5, pt_math::Vec2::splat(0.5))
+        .unwrap()
+        .weight
+        .0
+        .x as f64;
+    let (m, se) = albedo_mc(
+        wo,
+        &surface_sampler(blend(lambert(rho), w, mirror, false)),
+        400_000,
+        4,
+    );
     let want = (1.0 - w as f64) * rho as f64 + w as f64 * fresnel;
-    assert!((m - want).abs() <= 4.5 * se + 1e-4, "delta blend: albedo {m} +- {se} vs {want}");
+    assert!(
+        (m - want).abs() <= 4.5 * se + 1e-4,
+        "delta blend: albedo {m} +- {se} vs {want}"
+    );
 }

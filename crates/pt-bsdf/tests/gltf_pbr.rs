@@ -5,10 +5,17 @@ mod common;
 use common::*;
 use pt_bsdf::{Bsdf, GltfPbr};
 use pt_spectrum::SampledSpectrum;
-use pt_testkit::{albedo_mc, albedo_quadrature, dir_deg, reciprocity_error, upper_hemisphere, Chi2Report};
+use pt_testkit::{
+    albedo_mc, albedo_quadrature, dir_deg, reciprocity_error, upper_hemisphere, Chi2Report,
+};
 
 fn pbr(c: f32, metallic: f32, roughness: f32) -> Bsdf {
-    Bsdf::GltfPbr(GltfPbr::new(SampledSpectrum::from_rgb([c; 3]), metallic, roughness, 1.5))
+    Bsdf::GltfPbr(GltfPbr::new(
+        SampledSpectrum::from_rgb([c; 3]),
+        metallic,
+        roughness,
+        1.5,
+    ))
 }
 
 /// Parameter grid: dielectric, half-metal and metal, smooth-ish to fully rough.
@@ -56,10 +63,16 @@ fn white_furnace() {
             let wo = dir_deg(th, 0.0);
             let (mc, se) = albedo_mc(wo, &sampler(b), 20_000, 9);
             let q = albedo_quadrature(wo, &eval_fn(b), 1e-7);
-            assert!((mc - q).abs() <= 5.0 * se + 3e-3, "{name} theta={th}: MC {mc} +- {se} vs quadrature {q}");
+            assert!(
+                (mc - q).abs() <= 5.0 * se + 3e-3,
+                "{name} theta={th}: MC {mc} +- {se} vs quadrature {q}"
+            );
             assert!(q <= 1.0 + 3e-3, "{name} theta={th}: albedo {q} > 1");
             if name.contains("metallic=0 ") && th < 85.0 {
-                assert!((q - 1.0).abs() < 1e-2, "{name} theta={th}: white dielectric albedo {q}, want 1");
+                assert!(
+                    (q - 1.0).abs() < 1e-2,
+                    "{name} theta={th}: white dielectric albedo {q}, want 1"
+                );
             }
         }
     }
@@ -82,10 +95,17 @@ fn black_dielectric_is_fresnel_weighted_ggx_and_metal_uses_base_colour() {
     let b = pbr(0.0, 0.0, 0.5);
     let q = albedo_quadrature(dir_deg(0.0, 0.0), &eval_fn(b), 1e-8);
     let Bsdf::GltfPbr(p) = b else { unreachable!() };
-    assert!((q as f32 - p.specular_albedo(1.0)).abs() < 2e-3, "{q} vs table {}", p.specular_albedo(1.0));
+    assert!(
+        (q as f32 - p.specular_albedo(1.0)).abs() < 2e-3,
+        "{q} vs table {}",
+        p.specular_albedo(1.0)
+    );
     assert!(q > 0.03 && q < 0.05, "about F0 = 0.04: {q}");
     let (w, g) = (pbr(1.0, 1.0, 0.3), pbr(0.3, 1.0, 0.3));
     let (wo, wi) = (dir_deg(0.0, 0.0), dir_deg(2.0, 0.0));
     let r = g.eval(wo, wi).0.x / w.eval(wo, wi).0.x;
-    assert!((r - 0.3).abs() < 1e-3, "metal at normal incidence scales with base colour: {r}");
+    assert!(
+        (r - 0.3).abs() < 1e-3,
+        "metal at normal incidence scales with base colour: {r}"
+    );
 }

@@ -19,7 +19,15 @@ use pt_testkit::{albedo_mc, albedo_quadrature, dir_deg, Chi2Report};
 fn plastic(dist: Distribution, alpha: f32, rho: f32, eta: f32) -> Bsdf {
     let mf = Microfacet::new(dist, alpha, alpha);
     let table = CoatingTable::get(mf.dist, mf.alpha_u, eta);
-    Bsdf::RoughPlastic(RoughPlastic::new(SampledSpectrum::splat(rho), SampledSpectrum::splat(1.0), eta, mf, false, 1.0 / (1.0 + rho), table))
+    Bsdf::RoughPlastic(RoughPlastic::new(
+        SampledSpectrum::splat(rho),
+        SampledSpectrum::splat(1.0),
+        eta,
+        mf,
+        false,
+        1.0 / (1.0 + rho),
+        table,
+    ))
 }
 
 fn grid() -> Vec<(String, Bsdf)> {
@@ -27,7 +35,10 @@ fn grid() -> Vec<(String, Bsdf)> {
     for dist in [Distribution::Ggx, Distribution::Beckmann] {
         for alpha in [0.05f32, 0.3, 1.0] {
             for rho in [0.0f32, 0.5, 1.0] {
-                v.push((format!("roughplastic {dist:?} alpha={alpha} rho={rho}"), plastic(dist, alpha, rho, 1.49)));
+                v.push((
+                    format!("roughplastic {dist:?} alpha={alpha} rho={rho}"),
+                    plastic(dist, alpha, rho, 1.49),
+                ));
             }
         }
     }
@@ -58,10 +69,16 @@ fn white_furnace_and_quadrature() {
             let wo = dir_deg(th, 10.0);
             let (e, se) = albedo_mc(wo, &sampler(b), 40_000, 3);
             max_albedo = max_albedo.max(e);
-            assert!(e <= 1.005 + 5.0 * se, "{name} theta={th}: albedo {e} +- {se}");
+            assert!(
+                e <= 1.005 + 5.0 * se,
+                "{name} theta={th}: albedo {e} +- {se}"
+            );
             if name.contains("alpha=0.3") || name.contains("alpha=1") {
                 let q = albedo_quadrature(wo, &eval_fn(b), 1e-7);
-                assert!((e - q).abs() <= 5.0 * se + 3e-3, "{name} theta={th}: MC {e} +- {se} vs quadrature {q}");
+                assert!(
+                    (e - q).abs() <= 5.0 * se + 3e-3,
+                    "{name} theta={th}: MC {e} +- {se} vs quadrature {q}"
+                );
             }
         }
     }
@@ -76,7 +93,10 @@ fn black_base_smooth_coating_is_fresnel() {
         let b = plastic(Distribution::Ggx, 0.002, 0.0, 1.5);
         let (e, se) = albedo_mc(wo, &sampler(b), 20_000, 9);
         let f = f64::from(fresnel_dielectric(wo.z, 1.5));
-        assert!((e - f).abs() <= 5.0 * se + 2e-3 * f, "theta {th}: albedo {e} +- {se} vs Fresnel {f}");
+        assert!(
+            (e - f).abs() <= 5.0 * se + 2e-3 * f,
+            "theta {th}: albedo {e} +- {se} vs Fresnel {f}"
+        );
     }
 }
 
@@ -86,9 +106,16 @@ fn white_base_brightens_and_coating_table_is_monotone() {
     // base gives a brighter diffuse term.
     let t = CoatingTable::get(Distribution::Ggx, 0.3, 1.49);
     for k in 1..t.external_transmittance.len() {
-        assert!(t.external_transmittance[k] + 1e-4 >= t.external_transmittance[k - 1], "T not monotone at {k}: {:?}", t.external_transmittance);
+        assert!(
+            t.external_transmittance[k] + 1e-4 >= t.external_transmittance[k - 1],
+            "T not monotone at {k}: {:?}",
+            t.external_transmittance
+        );
     }
-    let (a, b) = (plastic(Distribution::Ggx, 0.3, 0.2, 1.49), plastic(Distribution::Ggx, 0.3, 0.8, 1.49));
+    let (a, b) = (
+        plastic(Distribution::Ggx, 0.3, 0.2, 1.49),
+        plastic(Distribution::Ggx, 0.3, 0.8, 1.49),
+    );
     let (wo, wi) = (dir_deg(30.0, 0.0), dir_deg(50.0, 100.0));
     assert!(b.eval(wo, wi).0.x > a.eval(wo, wi).0.x);
 }
@@ -98,6 +125,9 @@ fn no_nan_for_any_direction() {
     for (name, b) in grid() {
         assert_finite_everywhere(&name, b);
     }
-    assert_finite_everywhere("roughplastic min alpha", plastic(Distribution::Beckmann, 0.0, 0.5, 1.49));
+    assert_finite_everywhere(
+        "roughplastic min alpha",
+        plastic(Distribution::Beckmann, 0.0, 0.5, 1.49),
+    );
     let _ = Vec3::Z;
 }

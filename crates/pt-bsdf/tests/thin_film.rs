@@ -19,7 +19,10 @@ const ANGLES_DEG: [f64; 6] = [0.0, 20.0, 45.0, 70.0, 85.0, 89.99];
 const LANES: Vec4 = Vec4::new(420.0, 510.0, 600.0, 730.0);
 
 fn conductor(eta: f32, k: f32) -> FilmBase {
-    FilmBase::Conductor { eta: SampledSpectrum::splat(eta), k: SampledSpectrum::splat(k) }
+    FilmBase::Conductor {
+        eta: SampledSpectrum::splat(eta),
+        k: SampledSpectrum::splat(k),
+    }
 }
 
 fn cosd(deg: f64) -> f64 {
@@ -35,16 +38,30 @@ fn zero_thickness_is_the_bare_base() {
                 let f = ThinFilm::spectral(0.0, nf, 1.0, FilmBase::Dielectric { ior: nb }, LANES);
                 let r = f.reflectance(c).0;
                 let bare = fresnel_dielectric(c, nb);
-                assert!((r - Vec4::splat(bare)).abs().max_element() < 1e-6, "{deg} deg nb={nb} nf={nf}: {r} vs {bare}");
-                let rgb = ThinFilm::rgb(0.0, nf, 1.0, FilmBase::Dielectric { ior: nb }).reflectance(c).0;
-                assert!((rgb.truncate() - pt_math::Vec3::splat(bare)).abs().max_element() < 1e-6, "rgb {rgb}");
+                assert!(
+                    (r - Vec4::splat(bare)).abs().max_element() < 1e-6,
+                    "{deg} deg nb={nb} nf={nf}: {r} vs {bare}"
+                );
+                let rgb = ThinFilm::rgb(0.0, nf, 1.0, FilmBase::Dielectric { ior: nb })
+                    .reflectance(c)
+                    .0;
+                assert!(
+                    (rgb.truncate() - pt_math::Vec3::splat(bare))
+                        .abs()
+                        .max_element()
+                        < 1e-6,
+                    "rgb {rgb}"
+                );
             }
         }
         for (eta, k) in [(0.2f32, 3.4f32), (1.1, 2.6), (1.5, 0.3)] {
             let f = ThinFilm::spectral(0.0, 1.45, 1.0, conductor(eta, k), LANES);
             let r = f.reflectance(c).0;
             let bare = fresnel_conductor(c, eta, k);
-            assert!((r - Vec4::splat(bare)).abs().max_element() < 1e-6, "{deg} deg conductor ({eta},{k}): {r} vs {bare}");
+            assert!(
+                (r - Vec4::splat(bare)).abs().max_element() < 1e-6,
+                "{deg} deg conductor ({eta},{k}): {r} vs {bare}"
+            );
         }
     }
 }
@@ -57,10 +74,16 @@ fn index_matched_film_is_the_bare_base() {
             let c = cosd(deg) as f32;
             let f = ThinFilm::spectral(d, 1.0, 1.0, FilmBase::Dielectric { ior: 1.5 }, LANES);
             let bare = fresnel_dielectric(c, 1.5);
-            assert!((f.reflectance(c).0 - Vec4::splat(bare)).abs().max_element() < 1e-6, "d={d} {deg}");
+            assert!(
+                (f.reflectance(c).0 - Vec4::splat(bare)).abs().max_element() < 1e-6,
+                "d={d} {deg}"
+            );
             let f = ThinFilm::spectral(d, 1.2, 1.2, conductor(0.2, 3.4), LANES);
             let bare = fresnel_conductor(c, 0.2 / 1.2, 3.4 / 1.2);
-            assert!((f.reflectance(c).0 - Vec4::splat(bare)).abs().max_element() < 1e-6, "conductor d={d} {deg}");
+            assert!(
+                (f.reflectance(c).0 - Vec4::splat(bare)).abs().max_element() < 1e-6,
+                "conductor d={d} {deg}"
+            );
         }
     }
 }
@@ -79,7 +102,13 @@ fn quarter_wave_coating_cancels_at_design_wavelength() {
         let r = airy_reflectance(1.0, 1.0, nf, C64::real(nb), d, l);
         assert!(r > 3e-3 && r < 0.04, "lambda {l}: {r}");
     }
-    let f = ThinFilm::spectral(d as f32, nf as f32, 1.0, FilmBase::Dielectric { ior: 1.5 }, Vec4::new(550.0, 420.0, 700.0, 550.0));
+    let f = ThinFilm::spectral(
+        d as f32,
+        nf as f32,
+        1.0,
+        FilmBase::Dielectric { ior: 1.5 },
+        Vec4::new(550.0, 420.0, 700.0, 550.0),
+    );
     let r = f.reflectance(1.0).0;
     assert!(r.x < 1e-6 && r.w < 1e-6 && r.y > 3e-3 && r.z > 3e-3, "{r}");
 }
@@ -104,7 +133,10 @@ fn energy_bounds_and_finiteness() {
                 for d in (0..=2000).step_by(50) {
                     for l in (360..=830).step_by(10) {
                         let r = airy_reflectance(cosd(deg), n0, nf, nb, f64::from(d), f64::from(l));
-                        assert!(r.is_finite() && (-1e-12..=1.0 + 1e-12).contains(&r), "n0={n0} nb={nb:?} nf={nf} {deg} deg d={d} l={l}: {r}");
+                        assert!(
+                            r.is_finite() && (-1e-12..=1.0 + 1e-12).contains(&r),
+                            "n0={n0} nb={nb:?} nf={nf} {deg} deg d={d} l={l}: {r}"
+                        );
                         n += 1;
                     }
                 }
@@ -118,31 +150,87 @@ fn energy_bounds_and_finiteness() {
 /// periods of `Phi = 2 pi OPD / lambda`, `OPD = 2 n_f d cos theta_f`, within 1 (end effects).
 #[test]
 fn thick_film_oscillates_with_the_optical_path() {
-    for (d, deg) in [(3000.0f64, 0.0f64), (3000.0, 60.0), (1500.0, 30.0), (5000.0, 75.0)] {
+    for (d, deg) in [
+        (3000.0f64, 0.0f64),
+        (3000.0, 60.0),
+        (1500.0, 30.0),
+        (5000.0, 75.0),
+    ] {
         let (nf, nb) = (1.33f64, 1.5f64);
         let sin0 = deg.to_radians().sin();
         let cos_f = (1.0 - sin0 * sin0 / (nf * nf)).sqrt();
         let opd = 2.0 * nf * d * cos_f;
         let expected = opd * (1.0 / 400.0 - 1.0 / 800.0);
-        let r: Vec<f64> = (0..=40000).map(|i| airy_reflectance(cosd(deg), 1.0, nf, C64::real(nb), d, 400.0 + 0.01 * f64::from(i))).collect();
+        let r: Vec<f64> = (0..=40000)
+            .map(|i| {
+                airy_reflectance(
+                    cosd(deg),
+                    1.0,
+                    nf,
+                    C64::real(nb),
+                    d,
+                    400.0 + 0.01 * f64::from(i),
+                )
+            })
+            .collect();
         let maxima = r.windows(3).filter(|w| w[1] > w[0] && w[1] >= w[2]).count() as f64;
-        assert!((maxima - expected).abs() <= 1.0, "d={d} {deg} deg: {maxima} maxima, expected {expected:.2}");
+        assert!(
+            (maxima - expected).abs() <= 1.0,
+            "d={d} {deg} deg: {maxima} maxima, expected {expected:.2}"
+        );
     }
 }
 
 #[test]
 fn no_nan_at_normal_and_grazing_through_bsdf() {
     let films = [
-        Bsdf::ThinFilm(ThinFilm::spectral(500.0, 1.33, 1.0, FilmBase::Dielectric { ior: 1.5 }, LANES)),
-        Bsdf::ThinFilm(ThinFilm::spectral(500.0, 1.33, 1.0, conductor(0.2, 3.4), LANES)),
-        Bsdf::ThinFilm(ThinFilm::rgb(500.0, 1.33, 1.0, FilmBase::Dielectric { ior: 1.5 })),
-        Bsdf::ThinFilm(ThinFilm::rgb(500.0, 1.33, 1.0, FilmBase::Conductor { eta: SampledSpectrum::from_rgb([0.2, 0.4, 1.4]), k: SampledSpectrum::from_rgb([3.4, 2.4, 1.8]) })),
+        Bsdf::ThinFilm(ThinFilm::spectral(
+            500.0,
+            1.33,
+            1.0,
+            FilmBase::Dielectric { ior: 1.5 },
+            LANES,
+        )),
+        Bsdf::ThinFilm(ThinFilm::spectral(
+            500.0,
+            1.33,
+            1.0,
+            conductor(0.2, 3.4),
+            LANES,
+        )),
+        Bsdf::ThinFilm(ThinFilm::rgb(
+            500.0,
+            1.33,
+            1.0,
+            FilmBase::Dielectric { ior: 1.5 },
+        )),
+        Bsdf::ThinFilm(ThinFilm::rgb(
+            500.0,
+            1.33,
+            1.0,
+            FilmBase::Conductor {
+                eta: SampledSpectrum::from_rgb([0.2, 0.4, 1.4]),
+                k: SampledSpectrum::from_rgb([3.4, 2.4, 1.8]),
+            },
+        )),
     ];
     for b in films {
-        for wo in [Vec3::Z, -Vec3::Z, dir_deg(89.99, 30.0), dir_deg(90.0 - 1e-5, 0.0), dir_deg(180.0 - 89.99, 0.0)] {
+        for wo in [
+            Vec3::Z,
+            -Vec3::Z,
+            dir_deg(89.99, 30.0),
+            dir_deg(90.0 - 1e-5, 0.0),
+            dir_deg(180.0 - 89.99, 0.0),
+        ] {
             for u in [0.0f32, 0.3, 0.7, 0.999] {
                 if let Some(s) = b.sample(wo, u, Vec2::splat(0.5)) {
-                    assert!(s.weight.is_finite() && s.pdf.is_finite() && s.pdf > 0.0 && s.wi.is_finite(), "{b:?} {wo} {s:?}");
+                    assert!(
+                        s.weight.is_finite()
+                            && s.pdf.is_finite()
+                            && s.pdf > 0.0
+                            && s.wi.is_finite(),
+                        "{b:?} {wo} {s:?}"
+                    );
                     assert!(s.weight.0.min_element() >= 0.0);
                 }
             }
@@ -158,13 +246,27 @@ fn delta_lobes() {
     let film = ThinFilm::spectral(420.0, 1.38, 1.0, FilmBase::Dielectric { ior: 1.5 }, LANES);
     let b = Bsdf::ThinFilm(film);
     assert!(b.is_transmissive() && !b.has_smooth_lobe());
-    for wo in [dir_deg(0.0, 0.0), dir_deg(40.0, 20.0), dir_deg(80.0, 200.0), dir_deg(150.0, 10.0), dir_deg(175.0, 0.0)] {
+    for wo in [
+        dir_deg(0.0, 0.0),
+        dir_deg(40.0, 20.0),
+        dir_deg(80.0, 200.0),
+        dir_deg(150.0, 10.0),
+        dir_deg(175.0, 0.0),
+    ] {
         let r = film.reflectance(wo.z).0;
         let p = (r.x + r.y + r.z + r.w) / 4.0;
         let (wt, etap) = pt_bsdf::fresnel::refract(wo, Vec3::Z, 1.5).unwrap();
         let lobes = [
-            DeltaLobe { wi: Vec3::new(-wo.x, -wo.y, wo.z), prob: p, weight: r.x / p },
-            DeltaLobe { wi: wt, prob: 1.0 - p, weight: (1.0 - r.x) / ((1.0 - p) * etap * etap) },
+            DeltaLobe {
+                wi: Vec3::new(-wo.x, -wo.y, wo.z),
+                prob: p,
+                weight: r.x / p,
+            },
+            DeltaLobe {
+                wi: wt,
+                prob: 1.0 - p,
+                weight: (1.0 - r.x) / ((1.0 - p) * etap * etap),
+            },
         ];
         check_delta("thinfilm/dielectric", wo, &sampler(b), &lobes, 20_000);
         // Energy per lane: R + T = 1 (the eta'^2-corrected weights of the two lobes).
@@ -183,17 +285,27 @@ fn delta_lobes() {
     // Total internal reflection from inside: all reflected.
     let wo = dir_deg(180.0 - 50.0, 0.0);
     let s = b.sample(wo, 0.999, Vec2::ZERO).unwrap();
-    assert!(s.wi.z < 0.0 && s.pdf == 1.0 && (s.weight.0 - Vec4::ONE).abs().max_element() < 1e-5, "{s:?}");
+    assert!(
+        s.wi.z < 0.0 && s.pdf == 1.0 && (s.weight.0 - Vec4::ONE).abs().max_element() < 1e-5,
+        "{s:?}"
+    );
 
     let m = ThinFilm::spectral(420.0, 1.38, 1.0, conductor(0.2, 3.4), LANES);
     let b = Bsdf::ThinFilm(m);
     assert!(!b.is_transmissive());
     let wo = dir_deg(35.0, 60.0);
-    let lobes = [DeltaLobe { wi: Vec3::new(-wo.x, -wo.y, wo.z), prob: 1.0, weight: m.reflectance(wo.z).0.x }];
+    let lobes = [DeltaLobe {
+        wi: Vec3::new(-wo.x, -wo.y, wo.z),
+        prob: 1.0,
+        weight: m.reflectance(wo.z).0.x,
+    }];
     check_delta("thinfilm/conductor", wo, &sampler(b), &lobes, 1000);
     assert!(b.sample(-wo, 0.5, Vec2::ZERO).is_none(), "one-sided");
     let two = SurfaceBsdf::new(b, true);
-    assert!(two.sample(-wo, 0.5, Vec2::ZERO).unwrap().wi.z < 0.0, "two-sided mirrors it");
+    assert!(
+        two.sample(-wo, 0.5, Vec2::ZERO).unwrap().wi.z < 0.0,
+        "two-sided mirrors it"
+    );
 }
 
 #[test]
@@ -202,7 +314,14 @@ fn spectral_lanes_are_pointwise_airy() {
     let c = 0.6f32;
     let r = f.reflectance(c).0.to_array();
     for (i, l) in LANES.to_array().iter().enumerate() {
-        let e = airy_reflectance(f64::from(c), 1.0, 1.6, C64 { re: 1.1, im: 2.6 }, 640.0, f64::from(*l));
+        let e = airy_reflectance(
+            f64::from(c),
+            1.0,
+            1.6,
+            C64 { re: 1.1, im: 2.6 },
+            640.0,
+            f64::from(*l),
+        );
         assert!((f64::from(r[i]) - e).abs() < 1e-6);
     }
     // Wavelength matters: the lanes differ.
@@ -213,7 +332,9 @@ fn spectral_lanes_are_pointwise_airy() {
 /// spectral mode's film does), to linear sRGB, normalised so that R = 1 gives Y = 1.
 fn brute_force_rgb(r: impl Fn(f64) -> f64, illum: impl Fn(f64) -> f64) -> [f64; 3] {
     let norm = cie::integrate_visible(|l| illum(l) * f64::from(cie::cmf(l as f32)[1]));
-    let xyz = [0, 1, 2].map(|i| cie::integrate_visible(|l| r(l) * illum(l) * f64::from(cie::cmf(l as f32)[i])) / norm);
+    let xyz = [0, 1, 2].map(|i| {
+        cie::integrate_visible(|l| r(l) * illum(l) * f64::from(cie::cmf(l as f32)[i])) / norm
+    });
     pt_spectrum::xyz_to_srgb(xyz.map(|v| v as f32)).map(f64::from)
 }
 
@@ -228,35 +349,56 @@ fn d65(l: f64) -> f64 {
 /// below; the threshold is stated at the assert.
 #[test]
 fn belcour_barla_matches_spectral_integration() {
-    for (nb, n_label) in [(C64::real(1.5), "glass"), (C64 { re: 0.2, im: 3.4 }, "conductor")] {
+    for (nb, n_label) in [
+        (C64::real(1.5), "glass"),
+        (C64 { re: 0.2, im: 3.4 }, "conductor"),
+    ] {
         for deg in [0.0, 45.0, 80.0] {
             let c = cosd(deg);
             let bare = airy_reflectance(c, 1.0, 1.33, nb, 0.0, 550.0);
             for d in [0.0, 1e-4] {
                 let v = belcour_barla_rgb(c, 1.0, 1.33, nb, d).unwrap();
-                assert!(v.iter().all(|x| (x - bare).abs() < 1e-5), "{n_label} {deg} d={d}: {v:?} vs {bare}");
+                assert!(
+                    v.iter().all(|x| (x - bare).abs() < 1e-5),
+                    "{n_label} {deg} d={d}: {v:?} vs {bare}"
+                );
             }
         }
     }
     let mut worst: f64 = 0.0;
     let mut worst_e: f64 = 0.0;
     let mut worst_point: f64 = 0.0;
-    for (nb, nf) in [(C64::real(1.5), 1.33), (C64::real(1.0), 1.33), (C64 { re: 0.2, im: 3.4 }, 1.45), (C64 { re: 1.5, im: 0.3 }, 2.0)] {
+    for (nb, nf) in [
+        (C64::real(1.5), 1.33),
+        (C64::real(1.0), 1.33),
+        (C64 { re: 0.2, im: 3.4 }, 1.45),
+        (C64 { re: 1.5, im: 0.3 }, 2.0),
+    ] {
         for deg in [0.0, 45.0, 70.0] {
             let c = cosd(deg);
             for d in [50.0, 150.0, 300.0, 500.0, 800.0, 1200.0] {
                 let bb = belcour_barla_rgb(c, 1.0, nf, nb, d).unwrap();
                 let reference = brute_force_rgb(|l| airy_reflectance(c, 1.0, nf, nb, d, l), d65);
-                let reference_e = brute_force_rgb(|l| airy_reflectance(c, 1.0, nf, nb, d, l), |_| 1.0);
+                let reference_e =
+                    brute_force_rgb(|l| airy_reflectance(c, 1.0, nf, nb, d, l), |_| 1.0);
                 let white_e = brute_force_rgb(|_| 1.0, |_| 1.0);
-                let err = (0..3).map(|i| (bb[i] - reference[i]).abs()).fold(0.0, f64::max);
-                let err_e = (0..3).map(|i| (bb[i] - reference_e[i] / white_e[i]).abs()).fold(0.0, f64::max);
+                let err = (0..3)
+                    .map(|i| (bb[i] - reference[i]).abs())
+                    .fold(0.0, f64::max);
+                let err_e = (0..3)
+                    .map(|i| (bb[i] - reference_e[i] / white_e[i]).abs())
+                    .fold(0.0, f64::max);
                 eprintln!("nb={nb:?} nf={nf} {deg:>4} deg d={d:>6}: bb {bb:.4?} d65 {reference:.4?} |err| {err:.4} (E-weighted {err_e:.4})");
                 worst = worst.max(err);
                 worst_e = worst_e.max(err_e);
                 let l = RGB_WAVELENGTHS_NM;
-                let point = [l.x, l.y, l.z].map(|l| airy_reflectance(c, 1.0, nf, nb, d, f64::from(l)));
-                worst_point = worst_point.max((0..3).map(|i| (point[i] - reference[i]).abs()).fold(0.0, f64::max));
+                let point =
+                    [l.x, l.y, l.z].map(|l| airy_reflectance(c, 1.0, nf, nb, d, f64::from(l)));
+                worst_point = worst_point.max(
+                    (0..3)
+                        .map(|i| (point[i] - reference[i]).abs())
+                        .fold(0.0, f64::max),
+                );
             }
         }
     }
@@ -265,7 +407,10 @@ fn belcour_barla_matches_spectral_integration() {
     // the spectrum): a few percent of the oscillation amplitude, from the Gaussian CMF fits.
     // 0.025 leaves room for rounding only; point sampling at three wavelengths is far worse.
     assert!(worst < 0.025, "{worst}");
-    assert!(worst_point > 4.0 * worst, "point sampling {worst_point} vs BB {worst}");
+    assert!(
+        worst_point > 4.0 * worst,
+        "point sampling {worst_point} vs BB {worst}"
+    );
 }
 
 #[test]

@@ -87,8 +87,10 @@ use base64::Engine as _;
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use gltf::json::validation::Validate as _;
 use pt_scene::{
-    AreaEmitterDesc, BsdfDesc, BsdfKind, CameraDesc, FilmDesc, FilterDesc, FovAxis, Geometry, ImageSource, IntegratorDesc, IntegratorKind, LightDesc, LightKind, MediumDesc, UvTexture,
-    Projection, RadiosityOptions, SamplerDesc, SceneDesc, ShapeDesc, SourceLoc, SpectrumDesc, TriangleMesh,
+    AreaEmitterDesc, BsdfDesc, BsdfKind, CameraDesc, FilmDesc, FilterDesc, FovAxis, Geometry,
+    ImageSource, IntegratorDesc, IntegratorKind, LightDesc, LightKind, MediumDesc, Projection,
+    RadiosityOptions, SamplerDesc, SceneDesc, ShapeDesc, SourceLoc, SpectrumDesc, TriangleMesh,
+    UvTexture,
 };
 use std::path::{Path, PathBuf};
 
@@ -144,7 +146,18 @@ pub struct GltfScene {
 /// Mitsuba XML scene ([`pt_scene::GltfMeshReader`]). Errors name the file and the element.
 pub fn load_mesh(path: &Path) -> Result<TriangleMesh, String> {
     let g = load(path, &LoadOptions::default()).map_err(|e| e.to_string())?;
-    let meshes: Vec<&TriangleMesh> = g.desc.shapes.iter().filter_map(|s| if let Geometry::Mesh(m) = &s.geometry { Some(m) } else { None }).collect();
+    let meshes: Vec<&TriangleMesh> = g
+        .desc
+        .shapes
+        .iter()
+        .filter_map(|s| {
+            if let Geometry::Mesh(m) = &s.geometry {
+                Some(m)
+            } else {
+                None
+            }
+        })
+        .collect();
     if meshes.is_empty() {
         return Err(format!("{}: no triangles", path.display()));
     }
@@ -155,7 +168,8 @@ pub fn load_mesh(path: &Path) -> Result<TriangleMesh, String> {
     for m in meshes {
         let base = out.positions.len() as u32;
         out.positions.extend_from_slice(&m.positions);
-        out.indices.extend(m.indices.iter().map(|t| t.map(|i| i + base)));
+        out.indices
+            .extend(m.indices.iter().map(|t| t.map(|i| i + base)));
         if let (true, Some(n)) = (all_normals, &m.normals) {
             normals.extend_from_slice(n);
         }
@@ -170,7 +184,13 @@ pub fn load_mesh(path: &Path) -> Result<TriangleMesh, String> {
 
 /// Whether a path names a glTF file (`.gltf` or `.glb`, any case).
 pub fn is_gltf_path(path: &Path) -> bool {
-    matches!(path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref(), Some("gltf" | "glb"))
+    matches!(
+        path.extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref(),
+        Some("gltf" | "glb")
+    )
 }
 
 struct Ctx<'a> {
@@ -181,43 +201,76 @@ struct Ctx<'a> {
 
 impl Ctx<'_> {
     fn err(&self, message: impl Into<String>) -> GltfError {
-        GltfError { file: self.file.to_path_buf(), message: message.into() }
+        GltfError {
+            file: self.file.to_path_buf(),
+            message: message.into(),
+        }
     }
     fn loc(&self, element: String) -> SourceLoc {
-        SourceLoc { file: self.file.to_path_buf(), line: 0, col: 0, element }
+        SourceLoc {
+            file: self.file.to_path_buf(),
+            line: 0,
+            col: 0,
+            element,
+        }
     }
 }
 
 /// Reads a `.gltf` or `.glb` file (see the module doc for the mapping).
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<GltfScene, GltfError> {
-    let bytes = std::fs::read(path).map_err(|e| GltfError { file: path.to_path_buf(), message: format!("cannot read: {e}") })?;
+    let bytes = std::fs::read(path).map_err(|e| GltfError {
+        file: path.to_path_buf(),
+        message: format!("cannot read: {e}"),
+    })?;
     load_slice(&bytes, path, opts)
 }
 
 /// Reads glTF from memory; `path` names it in messages and is where relative buffer URIs are
 /// resolved from.
 pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfScene, GltfError> {
-    let mut cx = Ctx { file: path, warnings: Vec::new(), summary: Vec::new() };
-    let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| cx.err(format!("malformed glTF: {e}")))?;
+    let mut cx = Ctx {
+        file: path,
+        warnings: Vec::new(),
+        summary: Vec::new(),
+    };
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes)
+        .map_err(|e| cx.err(format!("malformed glTF: {e}")))?;
     let doc = &gltf.document;
 
     // Required extensions first (the gltf crate would call every extension it does not model
     // "unsupported", including ones this reader handles from the raw JSON).
-    let unsupported: Vec<&str> = doc.extensions_required().filter(|e| !SUPPORTED_EXTENSIONS.contains(e)).collect();
+    let unsupported: Vec<&str> = doc
+        .extensions_required()
+        .filter(|e| !SUPPORTED_EXTENSIONS.contains(e))
+        .collect();
     if !unsupported.is_empty() {
-        return Err(cx.err(format!("requires extension(s) this renderer does not support: {} (supported: {})", unsupported.join(", "), SUPPORTED_EXTENSIONS.join(", "))));
+        return Err(cx.err(format!(
+            "requires extension(s) this renderer does not support: {} (supported: {})",
+            unsupported.join(", "),
+            SUPPORTED_EXTENSIONS.join(", ")
+        )));
     }
-    let ignored: Vec<&str> = doc.extensions_used().filter(|e| !SUPPORTED_EXTENSIONS.contains(e)).collect();
+    let ignored: Vec<&str> = doc
+        .extensions_used()
+        .filter(|e| !SUPPORTED_EXTENSIONS.contains(e))
+        .collect();
     if !ignored.is_empty() {
-        cx.warnings.push(format!("ignoring optional extension(s): {}", ignored.join(", ")));
+        cx.warnings.push(format!(
+            "ignoring optional extension(s): {}",
+            ignored.join(", ")
+        ));
     }
     let root = doc.as_json();
     let mut errors = Vec::new();
-    root.validate(root, gltf::json::Path::new, &mut |p: &dyn Fn() -> gltf::json::Path, e| {
-        if !matches!(e, gltf::json::validation::Error::Unsupported) {
-            errors.push(format!("{}: {e}", p()));
-        }
-    });
+    root.validate(
+        root,
+        gltf::json::Path::new,
+        &mut |p: &dyn Fn() -> gltf::json::Path, e| {
+            if !matches!(e, gltf::json::validation::Error::Unsupported) {
+                errors.push(format!("{}: {e}", p()));
+            }
+        },
+    );
     if !errors.is_empty() {
         return Err(cx.err(format!("invalid glTF: {}", errors.join("; "))));
     }
@@ -225,12 +278,36 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
     let buffers = load_buffers(&cx, doc, gltf.blob.as_deref())?;
     let mut desc = SceneDesc {
         source: path.to_path_buf(),
-        camera: CameraDesc { loc: cx.loc("camera".into()), projection: Projection::Perspective { fov_deg: DEFAULT_FOV_Y_DEG, fov_axis: FovAxis::Y }, to_world: Mat4::IDENTITY, near_clip: 0.01, far_clip: 1e4 },
+        camera: CameraDesc {
+            loc: cx.loc("camera".into()),
+            projection: Projection::Perspective {
+                fov_deg: DEFAULT_FOV_Y_DEG,
+                fov_axis: FovAxis::Y,
+            },
+            to_world: Mat4::IDENTITY,
+            near_clip: 0.01,
+            far_clip: 1e4,
+        },
         // Box filter: each pixel is the plain average over its own footprint (glTF has no film
         // settings; Mitsuba's default Gaussian would blur across neighbours).
-        film: FilmDesc { width: DEFAULT_WIDTH, height: DEFAULT_HEIGHT, filter: FilterDesc::Box { radius: 0.5 } },
-        sampler: SamplerDesc { sample_count: 64, seed: 0 },
-        integrator: IntegratorDesc { kind: IntegratorKind::VolPath, max_depth: -1, rr_depth: 5, hide_emitters: false, moment: false, radiosity: RadiosityOptions::default(), loc: cx.loc("integrator".into()) },
+        film: FilmDesc {
+            width: DEFAULT_WIDTH,
+            height: DEFAULT_HEIGHT,
+            filter: FilterDesc::Box { radius: 0.5 },
+        },
+        sampler: SamplerDesc {
+            sample_count: 64,
+            seed: 0,
+        },
+        integrator: IntegratorDesc {
+            kind: IntegratorKind::VolPath,
+            max_depth: -1,
+            rr_depth: 5,
+            hide_emitters: false,
+            moment: false,
+            radiosity: RadiosityOptions::default(),
+            loc: cx.loc("integrator".into()),
+        },
         shapes: Vec::new(),
         bsdfs: Vec::new(),
         lights: Vec::new(),
@@ -239,14 +316,26 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
     // Materials: one BSDF each, plus glTF's default material (index = count) for primitives
     // without one.
     let mut mats = Vec::new();
-    cx.summary.push(format!("materials   {} (glTF)", doc.materials().len()));
+    cx.summary
+        .push(format!("materials   {} (glTF)", doc.materials().len()));
     for m in doc.materials() {
         let mm = map_material(&mut cx, doc, &m, &buffers)?;
         desc.bsdfs.push(mm.bsdf.clone());
         mats.push(mm);
     }
     let default_mat = MappedMaterial {
-        bsdf: BsdfDesc { loc: cx.loc("default material".into()), id: Some("gltf-default".into()), kind: BsdfKind::GltfPbr { base_color: SpectrumDesc::Constant(1.0), metallic: 1.0, roughness: 1.0, ior: 1.5, base_color_texture: None, metallic_roughness_texture: None } },
+        bsdf: BsdfDesc {
+            loc: cx.loc("default material".into()),
+            id: Some("gltf-default".into()),
+            kind: BsdfKind::GltfPbr {
+                base_color: SpectrumDesc::Constant(1.0),
+                metallic: 1.0,
+                roughness: 1.0,
+                ior: 1.5,
+                base_color_texture: None,
+                metallic_roughness_texture: None,
+            },
+        },
         emission: None,
         emissive_texture: None,
         interior: None,
@@ -268,13 +357,20 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
         }
     };
     let mut cameras: Vec<(gltf::Camera, Mat4, usize)> = Vec::new();
-    let mut stack: Vec<(gltf::Node, Mat4, usize)> = roots.into_iter().rev().map(|n| (n, Mat4::IDENTITY, 0)).collect();
+    let mut stack: Vec<(gltf::Node, Mat4, usize)> = roots
+        .into_iter()
+        .rev()
+        .map(|n| (n, Mat4::IDENTITY, 0))
+        .collect();
     let mut visited = 0usize;
     let mut mesh_lines = Vec::new();
     while let Some((node, parent, depth)) = stack.pop() {
         visited += 1;
         if depth > 1000 || visited > 1_000_000 {
-            return Err(cx.err(format!("nodes[{}]: node hierarchy too deep or cyclic", node.index())));
+            return Err(cx.err(format!(
+                "nodes[{}]: node hierarchy too deep or cyclic",
+                node.index()
+            )));
         }
         let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
         if !world.is_finite() {
@@ -284,7 +380,8 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
             cameras.push((cam, world, node.index()));
         }
         if let Some(light) = node.light() {
-            desc.lights.push(map_light(&mut cx, &light, world, node.index())?);
+            desc.lights
+                .push(map_light(&mut cx, &light, world, node.index())?);
         }
         if let Some(mesh) = node.mesh() {
             if node.skin().is_some() || mesh.weights().is_some() {
@@ -293,15 +390,25 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
             for prim in mesh.primitives() {
                 let elem = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
                 if prim.mode() != gltf::mesh::Mode::Triangles {
-                    cx.warnings.push(format!("{elem}: mode {:?} skipped (only triangles are rendered)", prim.mode()));
+                    cx.warnings.push(format!(
+                        "{elem}: mode {:?} skipped (only triangles are rendered)",
+                        prim.mode()
+                    ));
                     continue;
                 }
-                let normal_mapped = prim.material().index().is_some_and(|i| matches!(mats[i].bsdf.kind, BsdfKind::NormalMap { .. }));
+                let normal_mapped = prim
+                    .material()
+                    .index()
+                    .is_some_and(|i| matches!(mats[i].bsdf.kind, BsdfKind::NormalMap { .. }));
                 let tri = read_primitive(&mut cx, &prim, &buffers, world, &elem, normal_mapped)?;
                 let (mm, bsdf) = match prim.material().index() {
                     Some(i) => (&mats[i], i),
                     None => {
-                        if !desc.bsdfs.iter().any(|b| b.id.as_deref() == Some("gltf-default")) {
+                        if !desc
+                            .bsdfs
+                            .iter()
+                            .any(|b| b.id.as_deref() == Some("gltf-default"))
+                        {
                             desc.bsdfs.push(default_mat.bsdf.clone());
                         }
                         (&default_mat, desc.bsdfs.len() - 1)
@@ -311,7 +418,9 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
                     "  {elem:<28} node {:<3} {:>7} triangles  material {}{}",
                     node.index(),
                     tri.indices.len(),
-                    prim.material().index().map_or("default".to_string(), |i| i.to_string()),
+                    prim.material()
+                        .index()
+                        .map_or("default".to_string(), |i| i.to_string()),
                     mesh.name().map(|n| format!("  '{n}'")).unwrap_or_default()
                 ));
                 let loc = cx.loc(format!("{elem} (node {})", node.index()));
@@ -321,7 +430,13 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
                     id: mesh.name().map(str::to_string),
                     geometry: Geometry::Mesh(tri),
                     bsdf,
-                    emitter: mm.emission.clone().map(|radiance| AreaEmitterDesc { loc: loc.clone(), radiance, texture: None, primaries: None, uv_texture: mm.emissive_texture.clone() }),
+                    emitter: mm.emission.clone().map(|radiance| AreaEmitterDesc {
+                        loc: loc.clone(),
+                        radiance,
+                        texture: None,
+                        primaries: None,
+                        uv_texture: mm.emissive_texture.clone(),
+                    }),
                     interior: mm.interior.clone(),
                 });
             }
@@ -330,28 +445,64 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
             stack.push((c, world, depth + 1));
         }
     }
-    let n_tris: usize = desc.shapes.iter().map(|s| if let Geometry::Mesh(m) = &s.geometry { m.indices.len() } else { 0 }).sum();
-    cx.summary.push(format!("meshes      {} primitive(s), {} triangles", desc.shapes.len(), n_tris));
+    let n_tris: usize = desc
+        .shapes
+        .iter()
+        .map(|s| {
+            if let Geometry::Mesh(m) = &s.geometry {
+                m.indices.len()
+            } else {
+                0
+            }
+        })
+        .sum();
+    cx.summary.push(format!(
+        "meshes      {} primitive(s), {} triangles",
+        desc.shapes.len(),
+        n_tris
+    ));
     cx.summary.extend(mesh_lines);
 
     // Camera.
-    cx.summary.push(format!("cameras     {} (in node order; choose with --camera N)", cameras.len()));
+    cx.summary.push(format!(
+        "cameras     {} (in node order; choose with --camera N)",
+        cameras.len()
+    ));
     for (i, (c, _, node)) in cameras.iter().enumerate() {
         let kind = match c.projection() {
-            gltf::camera::Projection::Perspective(p) => format!("perspective, yfov {:.2} deg, aspect {:?}", p.yfov().to_degrees(), p.aspect_ratio()),
+            gltf::camera::Projection::Perspective(p) => format!(
+                "perspective, yfov {:.2} deg, aspect {:?}",
+                p.yfov().to_degrees(),
+                p.aspect_ratio()
+            ),
             gltf::camera::Projection::Orthographic(_) => "orthographic (not supported)".into(),
         };
-        cx.summary.push(format!("  camera {i}: node {node}, {kind}"));
+        cx.summary
+            .push(format!("  camera {i}: node {node}, {kind}"));
     }
-    let perspective: Vec<usize> = (0..cameras.len()).filter(|&i| matches!(cameras[i].0.projection(), gltf::camera::Projection::Perspective(_))).collect();
+    let perspective: Vec<usize> = (0..cameras.len())
+        .filter(|&i| {
+            matches!(
+                cameras[i].0.projection(),
+                gltf::camera::Projection::Perspective(_)
+            )
+        })
+        .collect();
     let chosen = match opts.camera {
         Some(n) if n < cameras.len() => {
             if !perspective.contains(&n) {
-                return Err(cx.err(format!("camera {n} is orthographic: only perspective cameras are supported")));
+                return Err(cx.err(format!(
+                    "camera {n} is orthographic: only perspective cameras are supported"
+                )));
             }
             Some(n)
         }
-        Some(n) => return Err(cx.err(format!("--camera {n}: the file has {} camera(s) (0-based)", cameras.len()))),
+        Some(n) => {
+            return Err(cx.err(format!(
+                "--camera {n}: the file has {} camera(s) (0-based)",
+                cameras.len()
+            )))
+        }
         None => perspective.first().copied(),
     };
     let bounds = scene_bounds(&desc.shapes);
@@ -361,11 +512,18 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
             if let gltf::camera::Projection::Perspective(p) = cam.projection() {
                 let yfov = p.yfov().to_degrees();
                 if !(yfov > 0.0 && yfov < 180.0) {
-                    return Err(cx.err(format!("cameras[{}]: yfov {} rad is not in (0, pi)", cam.index(), p.yfov())));
+                    return Err(cx.err(format!(
+                        "cameras[{}]: yfov {} rad is not in (0, pi)",
+                        cam.index(),
+                        p.yfov()
+                    )));
                 }
                 desc.camera = CameraDesc {
                     loc: cx.loc(format!("cameras[{}] (node {node})", cam.index())),
-                    projection: Projection::Perspective { fov_deg: yfov, fov_axis: FovAxis::Y },
+                    projection: Projection::Perspective {
+                        fov_deg: yfov,
+                        fov_axis: FovAxis::Y,
+                    },
                     to_world: *world * Mat4::from_scale(Vec3::new(-1.0, 1.0, -1.0)),
                     near_clip: p.znear().max(1e-6),
                     far_clip: p.zfar().unwrap_or(1e6),
@@ -375,7 +533,10 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
                 }
             }
             if cameras.len() > 1 {
-                cx.warnings.push(format!("using camera {i} of {} (choose another with --camera N)", cameras.len()));
+                cx.warnings.push(format!(
+                    "using camera {i} of {} (choose another with --camera N)",
+                    cameras.len()
+                ));
             }
         }
         None => {
@@ -383,7 +544,8 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
             let dist = 1.1 * r / (0.5 * DEFAULT_FOV_Y_DEG.to_radians()).sin();
             let eye = c + Vec3::Z * dist;
             // A glTF camera at `eye` with no rotation looks down -z with +y up.
-            desc.camera.to_world = Mat4::from_translation(eye) * Mat4::from_scale(Vec3::new(-1.0, 1.0, -1.0));
+            desc.camera.to_world =
+                Mat4::from_translation(eye) * Mat4::from_scale(Vec3::new(-1.0, 1.0, -1.0));
             desc.camera.near_clip = (dist - r).max(dist * 1e-3) * 0.5;
             desc.camera.far_clip = (dist + r) * 2.0;
             cx.warnings.push(format!(
@@ -395,49 +557,96 @@ pub fn load_slice(bytes: &[u8], path: &Path, opts: &LoadOptions) -> Result<GltfS
 
     // Lights.
     let emissive = desc.shapes.iter().any(|s| s.emitter.is_some());
-    cx.summary.push(format!("lights      {} punctual, {} emissive primitive(s)", desc.lights.len(), desc.shapes.iter().filter(|s| s.emitter.is_some()).count()));
+    cx.summary.push(format!(
+        "lights      {} punctual, {} emissive primitive(s)",
+        desc.lights.len(),
+        desc.shapes.iter().filter(|s| s.emitter.is_some()).count()
+    ));
     for l in &desc.lights {
-        cx.summary.push(format!("  {}: {}", l.loc.element, describe_light(&l.kind)));
+        cx.summary
+            .push(format!("  {}: {}", l.loc.element, describe_light(&l.kind)));
     }
     if desc.lights.is_empty() && !emissive {
-        desc.lights.push(LightDesc { loc: cx.loc("default environment".into()), kind: LightKind::Constant { radiance: SpectrumDesc::Constant(1.0) } });
+        desc.lights.push(LightDesc {
+            loc: cx.loc("default environment".into()),
+            kind: LightKind::Constant {
+                radiance: SpectrumDesc::Constant(1.0),
+            },
+        });
         cx.warnings.push("no light and no emissive material: using the default environment (constant radiance 1, white)".into());
     }
-    Ok(GltfScene { desc, warnings: cx.warnings, summary: cx.summary })
+    Ok(GltfScene {
+        desc,
+        warnings: cx.warnings,
+        summary: cx.summary,
+    })
 }
 
 fn describe_light(k: &LightKind) -> String {
     match k {
-        LightKind::Point { position, intensity } => format!("point at {position:.3}, intensity {intensity:?} (cd -> per sr, 1:1)"),
-        LightKind::Spot { intensity, cutoff_deg, beam_width_deg, to_world } => {
+        LightKind::Point {
+            position,
+            intensity,
+        } => format!("point at {position:.3}, intensity {intensity:?} (cd -> per sr, 1:1)"),
+        LightKind::Spot {
+            intensity,
+            cutoff_deg,
+            beam_width_deg,
+            to_world,
+        } => {
             format!("spot at {:.3}, intensity {intensity:?} (cd, 1:1), full to {beam_width_deg:.2} deg, off beyond {cutoff_deg:.2} deg", to_world.transform_point3(Vec3::ZERO))
         }
-        LightKind::Directional { direction, irradiance } => format!("directional towards {direction:.3}, irradiance {irradiance:?} (lux -> per m^2, 1:1)"),
+        LightKind::Directional {
+            direction,
+            irradiance,
+        } => format!(
+            "directional towards {direction:.3}, irradiance {irradiance:?} (lux -> per m^2, 1:1)"
+        ),
         other => format!("{other:?}"),
     }
 }
 
 /// Data of every buffer: the GLB binary chunk, a `data:` URI (base64) or a file beside the
 /// glTF. Each must hold at least `byteLength` bytes (a shorter one is a truncated file).
-fn load_buffers(cx: &Ctx, doc: &gltf::Document, blob: Option<&[u8]>) -> Result<Vec<Vec<u8>>, GltfError> {
+fn load_buffers(
+    cx: &Ctx,
+    doc: &gltf::Document,
+    blob: Option<&[u8]>,
+) -> Result<Vec<Vec<u8>>, GltfError> {
     let mut out = Vec::new();
     for b in doc.buffers() {
         let elem = format!("buffers[{}]", b.index());
         let data = match b.source() {
-            gltf::buffer::Source::Bin => blob.ok_or_else(|| cx.err(format!("{elem}: refers to the GLB binary chunk, which the file does not have")))?.to_vec(),
+            gltf::buffer::Source::Bin => blob
+                .ok_or_else(|| {
+                    cx.err(format!(
+                        "{elem}: refers to the GLB binary chunk, which the file does not have"
+                    ))
+                })?
+                .to_vec(),
             gltf::buffer::Source::Uri(uri) => {
                 if let Some(rest) = uri.strip_prefix("data:") {
-                    let (_, b64) = rest.split_once(";base64,").ok_or_else(|| cx.err(format!("{elem}: data URI is not base64")))?;
-                    base64::engine::general_purpose::STANDARD.decode(b64).map_err(|e| cx.err(format!("{elem}: bad base64 data: {e}")))?
+                    let (_, b64) = rest
+                        .split_once(";base64,")
+                        .ok_or_else(|| cx.err(format!("{elem}: data URI is not base64")))?;
+                    base64::engine::general_purpose::STANDARD
+                        .decode(b64)
+                        .map_err(|e| cx.err(format!("{elem}: bad base64 data: {e}")))?
                 } else {
                     let dir = cx.file.parent().unwrap_or(Path::new("."));
                     let p = dir.join(uri);
-                    std::fs::read(&p).map_err(|e| cx.err(format!("{elem}: cannot read '{}': {e}", p.display())))?
+                    std::fs::read(&p).map_err(|e| {
+                        cx.err(format!("{elem}: cannot read '{}': {e}", p.display()))
+                    })?
                 }
             }
         };
         if data.len() < b.length() {
-            return Err(cx.err(format!("{elem}: truncated: byteLength {} but only {} bytes", b.length(), data.len())));
+            return Err(cx.err(format!(
+                "{elem}: truncated: byteLength {} but only {} bytes",
+                b.length(),
+                data.len()
+            )));
         }
         out.push(data);
     }
@@ -446,16 +655,28 @@ fn load_buffers(cx: &Ctx, doc: &gltf::Document, blob: Option<&[u8]>) -> Result<V
 
 /// Checks that every element of an accessor lies inside its buffer view and buffer, so the
 /// gltf crate's reader can never read out of bounds or return short data.
-fn check_accessor(cx: &Ctx, acc: &gltf::Accessor, buffers: &[Vec<u8>], what: &str, elem: &str) -> Result<(), GltfError> {
+fn check_accessor(
+    cx: &Ctx,
+    acc: &gltf::Accessor,
+    buffers: &[Vec<u8>],
+    what: &str,
+    elem: &str,
+) -> Result<(), GltfError> {
     let name = format!("{elem} {what} (accessors[{}])", acc.index());
     if acc.sparse().is_some() {
-        return Err(cx.err(format!("{name}: sparse accessors are not supported (not yet implemented)")));
+        return Err(cx.err(format!(
+            "{name}: sparse accessors are not supported (not yet implemented)"
+        )));
     }
-    let view = acc.view().ok_or_else(|| cx.err(format!("{name}: has no bufferView")))?;
+    let view = acc
+        .view()
+        .ok_or_else(|| cx.err(format!("{name}: has no bufferView")))?;
     let size = acc.size();
     let stride = view.stride().unwrap_or(size);
     if stride < size {
-        return Err(cx.err(format!("{name}: byteStride {stride} is smaller than the element size {size}")));
+        return Err(cx.err(format!(
+            "{name}: byteStride {stride} is smaller than the element size {size}"
+        )));
     }
     let buf = &buffers[view.buffer().index()];
     let view_end = view.offset().checked_add(view.length());
@@ -465,9 +686,18 @@ fn check_accessor(cx: &Ctx, acc: &gltf::Accessor, buffers: &[Vec<u8>], what: &st
     if acc.count() == 0 {
         return Ok(());
     }
-    let need = (acc.count() - 1).checked_mul(stride).and_then(|x| x.checked_add(acc.offset())).and_then(|x| x.checked_add(size));
+    let need = (acc.count() - 1)
+        .checked_mul(stride)
+        .and_then(|x| x.checked_add(acc.offset()))
+        .and_then(|x| x.checked_add(size));
     if need.is_none_or(|n| n > view.length()) {
-        return Err(cx.err(format!("{name}: {} elements from offset {} need more than the {} bytes of bufferViews[{}]", acc.count(), acc.offset(), view.length(), view.index())));
+        return Err(cx.err(format!(
+            "{name}: {} elements from offset {} need more than the {} bytes of bufferViews[{}]",
+            acc.count(),
+            acc.offset(),
+            view.length(),
+            view.index()
+        )));
     }
     Ok(())
 }
@@ -475,8 +705,17 @@ fn check_accessor(cx: &Ctx, acc: &gltf::Accessor, buffers: &[Vec<u8>], what: &st
 /// Positions, normals, uvs and indices of a triangle primitive, in world space.
 /// With `want_tangents` (a normal-mapped material) also the tangents: `TANGENT` (xyz by the
 /// node's matrix, w negated when it mirrors), or generated from the uvs ([`generate_tangents`]).
-fn read_primitive(cx: &mut Ctx, prim: &gltf::Primitive, buffers: &[Vec<u8>], world: Mat4, elem: &str, want_tangents: bool) -> Result<TriangleMesh, GltfError> {
-    let pos_acc = prim.get(&gltf::Semantic::Positions).ok_or_else(|| cx.err(format!("{elem}: no POSITION attribute")))?;
+fn read_primitive(
+    cx: &mut Ctx,
+    prim: &gltf::Primitive,
+    buffers: &[Vec<u8>],
+    world: Mat4,
+    elem: &str,
+    want_tangents: bool,
+) -> Result<TriangleMesh, GltfError> {
+    let pos_acc = prim
+        .get(&gltf::Semantic::Positions)
+        .ok_or_else(|| cx.err(format!("{elem}: no POSITION attribute")))?;
     check_accessor(cx, &pos_acc, buffers, "POSITION", elem)?;
     let nrm_acc = prim.get(&gltf::Semantic::Normals);
     if let Some(a) = &nrm_acc {
@@ -489,22 +728,33 @@ fn read_primitive(cx: &mut Ctx, prim: &gltf::Primitive, buffers: &[Vec<u8>], wor
     if let Some(a) = prim.indices() {
         check_accessor(cx, &a, buffers, "indices", elem)?;
     }
-    let tan_acc = prim.get(&gltf::Semantic::Tangents).filter(|_| want_tangents);
+    let tan_acc = prim
+        .get(&gltf::Semantic::Tangents)
+        .filter(|_| want_tangents);
     if let Some(a) = &tan_acc {
         check_accessor(cx, a, buffers, "TANGENT", elem)?;
     }
     let reader = prim.reader(|b| buffers.get(b.index()).map(|v| v.as_slice()));
-    let positions: Vec<Vec3> = reader.read_positions().ok_or_else(|| cx.err(format!("{elem}: POSITION cannot be read")))?.map(Vec3::from).collect();
+    let positions: Vec<Vec3> = reader
+        .read_positions()
+        .ok_or_else(|| cx.err(format!("{elem}: POSITION cannot be read")))?
+        .map(Vec3::from)
+        .collect();
     let n = positions.len();
     let normal_m = Mat3::from_mat4(world).inverse().transpose();
     let flip = Mat3::from_mat4(world).determinant() < 0.0;
-    let positions: Vec<Vec3> = positions.into_iter().map(|p| world.transform_point3(p)).collect();
+    let positions: Vec<Vec3> = positions
+        .into_iter()
+        .map(|p| world.transform_point3(p))
+        .collect();
     if positions.iter().any(|p| !p.is_finite()) {
         return Err(cx.err(format!("{elem}: non-finite vertex position")));
     }
     let normals = match reader.read_normals() {
         Some(it) => {
-            let v: Vec<Vec3> = it.map(|nn| (normal_m * Vec3::from(nn)).normalize_or_zero()).collect();
+            let v: Vec<Vec3> = it
+                .map(|nn| (normal_m * Vec3::from(nn)).normalize_or_zero())
+                .collect();
             if v.len() != n {
                 return Err(cx.err(format!("{elem}: {} normals for {n} positions", v.len())));
             }
@@ -521,7 +771,10 @@ fn read_primitive(cx: &mut Ctx, prim: &gltf::Primitive, buffers: &[Vec<u8>], wor
         Some(it) => {
             let v: Vec<Vec2> = it.into_f32().map(Vec2::from).collect();
             if v.len() != n {
-                return Err(cx.err(format!("{elem}: {} texture coordinates for {n} positions", v.len())));
+                return Err(cx.err(format!(
+                    "{elem}: {} texture coordinates for {n} positions",
+                    v.len()
+                )));
             }
             Some(v)
         }
@@ -532,18 +785,40 @@ fn read_primitive(cx: &mut Ctx, prim: &gltf::Primitive, buffers: &[Vec<u8>], wor
         None => (0..n as u32).collect(),
     };
     if flat.len() % 3 != 0 {
-        return Err(cx.err(format!("{elem}: {} indices is not a multiple of 3", flat.len())));
+        return Err(cx.err(format!(
+            "{elem}: {} indices is not a multiple of 3",
+            flat.len()
+        )));
     }
     if let Some((k, &i)) = flat.iter().enumerate().find(|(_, &i)| i as usize >= n) {
-        return Err(cx.err(format!("{elem}: index {k} is {i}, out of range for {n} vertices")));
+        return Err(cx.err(format!(
+            "{elem}: index {k} is {i}, out of range for {n} vertices"
+        )));
     }
-    let indices: Vec<[u32; 3]> = flat.chunks_exact(3).map(|t| if flip { [t[0], t[2], t[1]] } else { [t[0], t[1], t[2]] }).collect();
+    let indices: Vec<[u32; 3]> = flat
+        .chunks_exact(3)
+        .map(|t| {
+            if flip {
+                [t[0], t[2], t[1]]
+            } else {
+                [t[0], t[1], t[2]]
+            }
+        })
+        .collect();
     let mut tangents = None;
     if want_tangents {
         let given = match (&tan_acc, reader.read_tangents()) {
             (Some(_), Some(it)) => {
                 let m3 = Mat3::from_mat4(world);
-                let v: Vec<Vec4> = it.map(|t| (m3 * Vec3::new(t[0], t[1], t[2])).extend(if (t[3] < 0.0) != flip { -1.0 } else { 1.0 })).collect();
+                let v: Vec<Vec4> = it
+                    .map(|t| {
+                        (m3 * Vec3::new(t[0], t[1], t[2])).extend(if (t[3] < 0.0) != flip {
+                            -1.0
+                        } else {
+                            1.0
+                        })
+                    })
+                    .collect();
                 if v.len() != n {
                     return Err(cx.err(format!("{elem}: {} tangents for {n} positions", v.len())));
                 }
@@ -553,14 +828,25 @@ fn read_primitive(cx: &mut Ctx, prim: &gltf::Primitive, buffers: &[Vec<u8>], wor
         };
         tangents = match (given, &uvs) {
             (Some(t), _) => Some(t),
-            (None, Some(uv)) => Some(generate_tangents(&positions, normals.as_deref(), uv, &indices)),
+            (None, Some(uv)) => Some(generate_tangents(
+                &positions,
+                normals.as_deref(),
+                uv,
+                &indices,
+            )),
             (None, None) => {
                 cx.warnings.push(format!("{elem}: normal map without TEXCOORD_0 or TANGENT: no tangent space, normal map ignored"));
                 None
             }
         };
     }
-    Ok(TriangleMesh { positions, normals, uvs, tangents, indices })
+    Ok(TriangleMesh {
+        positions,
+        normals,
+        uvs,
+        tangents,
+        indices,
+    })
 }
 
 /// Per-vertex tangents from the uvs when a mesh has no `TANGENT` (Lengyel 2001, "Computing
@@ -573,9 +859,18 @@ fn read_primitive(cx: &mut Ctx, prim: &gltf::Primitive, buffers: &[Vec<u8>], wor
 /// triangles around a vertex (planes, boxes, cylinders unrolled evenly: every test asset here);
 /// elsewhere MikkTSpace weights by corner angle rather than area and splits vertices at mirrored
 /// uv seams, which this does not (a vertex on such a seam gets one averaged tangent).
-pub fn generate_tangents(positions: &[Vec3], normals: Option<&[Vec3]>, uvs: &[Vec2], indices: &[[u32; 3]]) -> Vec<Vec4> {
+pub fn generate_tangents(
+    positions: &[Vec3],
+    normals: Option<&[Vec3]>,
+    uvs: &[Vec2],
+    indices: &[[u32; 3]],
+) -> Vec<Vec4> {
     let n = positions.len();
-    let (mut tacc, mut bacc, mut nacc) = (vec![Vec3::ZERO; n], vec![Vec3::ZERO; n], vec![Vec3::ZERO; n]);
+    let (mut tacc, mut bacc, mut nacc) = (
+        vec![Vec3::ZERO; n],
+        vec![Vec3::ZERO; n],
+        vec![Vec3::ZERO; n],
+    );
     for tri in indices {
         let [i0, i1, i2] = tri.map(|i| i as usize);
         let (e1, e2) = (positions[i1] - positions[i0], positions[i2] - positions[i0]);
@@ -592,7 +887,9 @@ pub fn generate_tangents(positions: &[Vec3], normals: Option<&[Vec3]>, uvs: &[Ve
         // [e1 e2] = [dpdu dpdv] [d1 d2] (pbrt-v4 eq. 6.7).
         let dpdu = (e1 * d2.y - e2 * d1.y) / det;
         let dpdv = (e2 * d1.x - e1 * d2.x) / det;
-        let (Some(t), Some(b)) = (dpdu.try_normalize(), (-dpdv).try_normalize()) else { continue };
+        let (Some(t), Some(b)) = (dpdu.try_normalize(), (-dpdv).try_normalize()) else {
+            continue;
+        };
         for i in [i0, i1, i2] {
             tacc[i] += t * area;
             bacc[i] += b * area;
@@ -600,9 +897,16 @@ pub fn generate_tangents(positions: &[Vec3], normals: Option<&[Vec3]>, uvs: &[Ve
     }
     (0..n)
         .map(|i| {
-            let nn = normals.map(|ns| ns[i]).unwrap_or(nacc[i]).normalize_or_zero();
+            let nn = normals
+                .map(|ns| ns[i])
+                .unwrap_or(nacc[i])
+                .normalize_or_zero();
             match (tacc[i] - nn * nn.dot(tacc[i])).try_normalize() {
-                Some(t) => t.extend(if nn.cross(t).dot(bacc[i]) < 0.0 { -1.0 } else { 1.0 }),
+                Some(t) => t.extend(if nn.cross(t).dot(bacc[i]) < 0.0 {
+                    -1.0
+                } else {
+                    1.0
+                }),
                 None => Vec4::ZERO, // the renderer falls back to dp/du
             }
         })
@@ -627,34 +931,70 @@ fn scene_bounds(shapes: &[ShapeDesc]) -> (Vec3, f32) {
     (0.5 * (lo + hi), (0.5 * (hi - lo).length()).max(1e-3))
 }
 
-fn map_light(cx: &mut Ctx, light: &gltf::khr_lights_punctual::Light, world: Mat4, node: usize) -> Result<LightDesc, GltfError> {
+fn map_light(
+    cx: &mut Ctx,
+    light: &gltf::khr_lights_punctual::Light,
+    world: Mat4,
+    node: usize,
+) -> Result<LightDesc, GltfError> {
     use gltf::khr_lights_punctual::Kind;
-    let elem = format!("KHR_lights_punctual.lights[{}] (node {node})", light.index());
+    let elem = format!(
+        "KHR_lights_punctual.lights[{}] (node {node})",
+        light.index()
+    );
     let c = light.color();
     let i = light.intensity();
     if !(i >= 0.0 && i.is_finite()) || c.iter().any(|x| !(*x >= 0.0 && x.is_finite())) {
-        return Err(cx.err(format!("{elem}: intensity and colour must be finite and >= 0")));
+        return Err(cx.err(format!(
+            "{elem}: intensity and colour must be finite and >= 0"
+        )));
     }
     if light.range().is_some() {
-        cx.warnings.push(format!("{elem}: range ignored (physical inverse-square falloff)"));
+        cx.warnings.push(format!(
+            "{elem}: range ignored (physical inverse-square falloff)"
+        ));
     }
     // Photometric units used 1:1 (module doc): cd -> intensity per sr, lx -> irradiance.
     let value = SpectrumDesc::Rgb([c[0] * i, c[1] * i, c[2] * i]);
     let position = world.transform_point3(Vec3::ZERO);
-    let dir = world.transform_vector3(-Vec3::Z).try_normalize().ok_or_else(|| cx.err(format!("{elem}: the node's transform has no direction")))?;
+    let dir = world
+        .transform_vector3(-Vec3::Z)
+        .try_normalize()
+        .ok_or_else(|| cx.err(format!("{elem}: the node's transform has no direction")))?;
     let kind = match light.kind() {
-        Kind::Point => LightKind::Point { position, intensity: value },
-        Kind::Directional => LightKind::Directional { direction: dir, irradiance: value },
-        Kind::Spot { inner_cone_angle, outer_cone_angle } => {
-            if !(outer_cone_angle > 0.0 && outer_cone_angle <= std::f32::consts::FRAC_PI_2 && inner_cone_angle >= 0.0 && inner_cone_angle < outer_cone_angle) {
+        Kind::Point => LightKind::Point {
+            position,
+            intensity: value,
+        },
+        Kind::Directional => LightKind::Directional {
+            direction: dir,
+            irradiance: value,
+        },
+        Kind::Spot {
+            inner_cone_angle,
+            outer_cone_angle,
+        } => {
+            if !(outer_cone_angle > 0.0
+                && outer_cone_angle <= std::f32::consts::FRAC_PI_2
+                && inner_cone_angle >= 0.0
+                && inner_cone_angle < outer_cone_angle)
+            {
                 return Err(cx.err(format!("{elem}: need 0 <= innerConeAngle < outerConeAngle <= pi/2, got {inner_cone_angle}, {outer_cone_angle}")));
             }
             // The renderer's spot points along its +z: a rotation taking +z to the glTF axis.
             let rot = glam::Quat::from_rotation_arc(Vec3::Z, dir);
-            LightKind::Spot { to_world: Mat4::from_rotation_translation(rot, position), intensity: value, cutoff_deg: outer_cone_angle.to_degrees(), beam_width_deg: inner_cone_angle.to_degrees() }
+            LightKind::Spot {
+                to_world: Mat4::from_rotation_translation(rot, position),
+                intensity: value,
+                cutoff_deg: outer_cone_angle.to_degrees(),
+                beam_width_deg: inner_cone_angle.to_degrees(),
+            }
         }
     };
-    Ok(LightDesc { loc: cx.loc(elem), kind })
+    Ok(LightDesc {
+        loc: cx.loc(elem),
+        kind,
+    })
 }
 
 struct MappedMaterial {
@@ -667,13 +1007,21 @@ struct MappedMaterial {
 
 /// A number from an extension's JSON object, or its default.
 fn ext_f32(v: Option<&serde_json::Value>, key: &str, default: f32) -> f32 {
-    v.and_then(|o| o.get(key)).and_then(|x| x.as_f64()).map_or(default, |x| x as f32)
+    v.and_then(|o| o.get(key))
+        .and_then(|x| x.as_f64())
+        .map_or(default, |x| x as f32)
 }
 
 /// A material's texture: its image (embedded or a file), sampler filter and
 /// KHR_texture_transform as an affine uv map. `None` (with a warning) for what is not supported:
 /// texture coordinate sets other than 0, clamped or mirrored wrapping.
-fn texture_of(cx: &mut Ctx, info: &gltf::texture::Info, srgb: bool, buffers: &[Vec<u8>], what: &str) -> Result<Option<Box<UvTexture>>, GltfError> {
+fn texture_of(
+    cx: &mut Ctx,
+    info: &gltf::texture::Info,
+    srgb: bool,
+    buffers: &[Vec<u8>],
+    what: &str,
+) -> Result<Option<Box<UvTexture>>, GltfError> {
     let mut tex_coord = info.tex_coord();
     // KHR_texture_transform: uv' = T R S uv (the extension's GLSL, column-major mat3s):
     // u' = sx u cos(r) - sy v sin(r) + ox, v' = sx u sin(r) + sy v cos(r) + oy.
@@ -686,16 +1034,34 @@ fn texture_of(cx: &mut Ctx, info: &gltf::texture::Info, srgb: bool, buffers: &[V
             tex_coord = tc;
         }
     }
-    texture_source(cx, info.texture(), tex_coord, transform, srgb, buffers, what)
+    texture_source(
+        cx,
+        info.texture(),
+        tex_coord,
+        transform,
+        srgb,
+        buffers,
+        what,
+    )
 }
 
 /// KHR_texture_transform read from a textureInfo's raw `extensions` JSON (for texture slots the
 /// gltf crate does not model: `normalTexture`, extension textures), as in [`texture_of`];
 /// its `texCoord` overrides `tex_coord`.
 fn transform_from_json(ext: Option<&serde_json::Value>, tex_coord: &mut u32) -> [f32; 6] {
-    let Some(t) = ext else { return [1.0, 0.0, 0.0, 0.0, 1.0, 0.0] };
-    let pair = |k: &str, d: f32| t.get(k).and_then(|v| v.as_array()).map_or([d, d], |a| [0, 1].map(|i| a.get(i).and_then(|x| x.as_f64()).map_or(d, |x| x as f32)));
-    let ([ox, oy], r, [sx, sy]) = (pair("offset", 0.0), ext_f32(Some(t), "rotation", 0.0), pair("scale", 1.0));
+    let Some(t) = ext else {
+        return [1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+    };
+    let pair = |k: &str, d: f32| {
+        t.get(k).and_then(|v| v.as_array()).map_or([d, d], |a| {
+            [0, 1].map(|i| a.get(i).and_then(|x| x.as_f64()).map_or(d, |x| x as f32))
+        })
+    };
+    let ([ox, oy], r, [sx, sy]) = (
+        pair("offset", 0.0),
+        ext_f32(Some(t), "rotation", 0.0),
+        pair("scale", 1.0),
+    );
     if let Some(tc) = t.get("texCoord").and_then(|v| v.as_u64()) {
         *tex_coord = tc as u32;
     }
@@ -705,23 +1071,53 @@ fn transform_from_json(ext: Option<&serde_json::Value>, tex_coord: &mut u32) -> 
 
 /// A texture given by a raw textureInfo JSON object (`index`, `texCoord`, KHR_texture_transform)
 /// of an extension the gltf crate does not model, as [`texture_of`].
-fn json_texture(cx: &mut Ctx, doc: &gltf::Document, info: &serde_json::Value, srgb: bool, buffers: &[Vec<u8>], what: &str) -> Result<Option<Box<UvTexture>>, GltfError> {
-    let index = info.get("index").and_then(|v| v.as_u64()).ok_or_else(|| cx.err(format!("{what}: textureInfo without an index")))? as usize;
-    let tex = doc.textures().nth(index).ok_or_else(|| cx.err(format!("{what}: textures[{index}] does not exist ({} textures)", doc.textures().len())))?;
+fn json_texture(
+    cx: &mut Ctx,
+    doc: &gltf::Document,
+    info: &serde_json::Value,
+    srgb: bool,
+    buffers: &[Vec<u8>],
+    what: &str,
+) -> Result<Option<Box<UvTexture>>, GltfError> {
+    let index = info
+        .get("index")
+        .and_then(|v| v.as_u64())
+        .ok_or_else(|| cx.err(format!("{what}: textureInfo without an index")))?
+        as usize;
+    let tex = doc.textures().nth(index).ok_or_else(|| {
+        cx.err(format!(
+            "{what}: textures[{index}] does not exist ({} textures)",
+            doc.textures().len()
+        ))
+    })?;
     let mut tex_coord = info.get("texCoord").and_then(|v| v.as_u64()).unwrap_or(0) as u32;
-    let transform = transform_from_json(info.get("extensions").and_then(|e| e.get("KHR_texture_transform")), &mut tex_coord);
+    let transform = transform_from_json(
+        info.get("extensions")
+            .and_then(|e| e.get("KHR_texture_transform")),
+        &mut tex_coord,
+    );
     texture_source(cx, tex, tex_coord, transform, srgb, buffers, what)
 }
 
 /// The image, sampler and uv map of a texture (see [`texture_of`]).
-fn texture_source(cx: &mut Ctx, tex: gltf::Texture, tex_coord: u32, transform: [f32; 6], srgb: bool, buffers: &[Vec<u8>], what: &str) -> Result<Option<Box<UvTexture>>, GltfError> {
+fn texture_source(
+    cx: &mut Ctx,
+    tex: gltf::Texture,
+    tex_coord: u32,
+    transform: [f32; 6],
+    srgb: bool,
+    buffers: &[Vec<u8>],
+    what: &str,
+) -> Result<Option<Box<UvTexture>>, GltfError> {
     let elem = format!("{what} (textures[{}])", tex.index());
     if tex_coord != 0 {
         cx.warnings.push(format!("{elem}: texture coordinate set {tex_coord} is not read (only TEXCOORD_0): texture ignored"));
         return Ok(None);
     }
     let sampler = tex.sampler();
-    if sampler.wrap_s() != gltf::texture::WrappingMode::Repeat || sampler.wrap_t() != gltf::texture::WrappingMode::Repeat {
+    if sampler.wrap_s() != gltf::texture::WrappingMode::Repeat
+        || sampler.wrap_t() != gltf::texture::WrappingMode::Repeat
+    {
         cx.warnings.push(format!("{elem}: clamped or mirrored wrapping is not supported (not yet implemented): the texture repeats"));
     }
     let nearest = sampler.mag_filter() == Some(gltf::texture::MagFilter::Nearest);
@@ -730,23 +1126,52 @@ fn texture_source(cx: &mut Ctx, tex: gltf::Texture, tex_coord: u32, transform: [
     let source = match img.source() {
         gltf::image::Source::View { view, .. } => {
             let buf = &buffers[view.buffer().index()];
-            let end = view.offset().checked_add(view.length()).filter(|e| *e <= buf.len()).ok_or_else(|| cx.err(format!("{name}: bufferViews[{}] runs past the end of its buffer", view.index())))?;
-            ImageSource::Embedded { name, bytes: std::sync::Arc::new(buf[view.offset()..end].to_vec()) }
+            let end = view
+                .offset()
+                .checked_add(view.length())
+                .filter(|e| *e <= buf.len())
+                .ok_or_else(|| {
+                    cx.err(format!(
+                        "{name}: bufferViews[{}] runs past the end of its buffer",
+                        view.index()
+                    ))
+                })?;
+            ImageSource::Embedded {
+                name,
+                bytes: std::sync::Arc::new(buf[view.offset()..end].to_vec()),
+            }
         }
         gltf::image::Source::Uri { uri, .. } => {
             if let Some(rest) = uri.strip_prefix("data:") {
-                let (_, b64) = rest.split_once(";base64,").ok_or_else(|| cx.err(format!("{name}: data URI is not base64")))?;
-                let bytes = base64::engine::general_purpose::STANDARD.decode(b64).map_err(|e| cx.err(format!("{name}: bad base64 data: {e}")))?;
-                ImageSource::Embedded { name, bytes: std::sync::Arc::new(bytes) }
+                let (_, b64) = rest
+                    .split_once(";base64,")
+                    .ok_or_else(|| cx.err(format!("{name}: data URI is not base64")))?;
+                let bytes = base64::engine::general_purpose::STANDARD
+                    .decode(b64)
+                    .map_err(|e| cx.err(format!("{name}: bad base64 data: {e}")))?;
+                ImageSource::Embedded {
+                    name,
+                    bytes: std::sync::Arc::new(bytes),
+                }
             } else {
                 ImageSource::File(cx.file.parent().unwrap_or(Path::new(".")).join(uri))
             }
         }
     };
-    Ok(Some(Box::new(UvTexture { source, srgb, nearest, transform })))
+    Ok(Some(Box::new(UvTexture {
+        source,
+        srgb,
+        nearest,
+        transform,
+    })))
 }
 
-fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers: &[Vec<u8>]) -> Result<MappedMaterial, GltfError> {
+fn map_material(
+    cx: &mut Ctx,
+    doc: &gltf::Document,
+    m: &gltf::Material,
+    buffers: &[Vec<u8>],
+) -> Result<MappedMaterial, GltfError> {
     let idx = m.index().unwrap_or(0);
     let elem = format!("materials[{idx}]");
     let name = m.name().map(|n| format!(" '{n}'")).unwrap_or_default();
@@ -758,51 +1183,101 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
     let mut used = Vec::new();
     let mut notes = Vec::new();
     let base_color_texture = match pbr.base_color_texture() {
-        Some(i) => texture_of(cx, &i, true, buffers, &format!("{elem}{name} baseColorTexture"))?,
+        Some(i) => texture_of(
+            cx,
+            &i,
+            true,
+            buffers,
+            &format!("{elem}{name} baseColorTexture"),
+        )?,
         None => None,
     };
     let metallic_roughness_texture = match pbr.metallic_roughness_texture() {
-        Some(i) => texture_of(cx, &i, false, buffers, &format!("{elem}{name} metallicRoughnessTexture"))?,
+        Some(i) => texture_of(
+            cx,
+            &i,
+            false,
+            buffers,
+            &format!("{elem}{name} metallicRoughnessTexture"),
+        )?,
         None => None,
     };
-    for (slot, texture) in [("baseColorTexture", &base_color_texture), ("metallicRoughnessTexture", &metallic_roughness_texture)] {
+    for (slot, texture) in [
+        ("baseColorTexture", &base_color_texture),
+        ("metallicRoughnessTexture", &metallic_roughness_texture),
+    ] {
         if let Some(t) = texture {
-            let ext = if t.transform != [1.0, 0.0, 0.0, 0.0, 1.0, 0.0] { format!(", KHR_texture_transform {:?}", t.transform) } else { String::new() };
-            notes.push(format!("{slot}: {} {}{ext}", if t.srgb { "sRGB-decoded" } else { "linear" }, if t.nearest { "nearest" } else { "bilinear" }));
+            let ext = if t.transform != [1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+                format!(", KHR_texture_transform {:?}", t.transform)
+            } else {
+                String::new()
+            };
+            notes.push(format!(
+                "{slot}: {} {}{ext}",
+                if t.srgb { "sRGB-decoded" } else { "linear" },
+                if t.nearest { "nearest" } else { "bilinear" }
+            ));
         }
     }
     let normal_texture = match m.normal_texture() {
         Some(nt) => {
             let mut tc = nt.tex_coord();
-            let transform = transform_from_json(nt.extension_value("KHR_texture_transform"), &mut tc);
+            let transform =
+                transform_from_json(nt.extension_value("KHR_texture_transform"), &mut tc);
             let scale = nt.scale();
             if !scale.is_finite() {
-                return Err(cx.err(format!("{elem}: normalTexture.scale must be finite, got {scale}")));
+                return Err(cx.err(format!(
+                    "{elem}: normalTexture.scale must be finite, got {scale}"
+                )));
             }
-            texture_source(cx, nt.texture(), tc, transform, false, buffers, &format!("{elem}{name} normalTexture"))?.map(|t| (t, scale))
+            texture_source(
+                cx,
+                nt.texture(),
+                tc,
+                transform,
+                false,
+                buffers,
+                &format!("{elem}{name} normalTexture"),
+            )?
+            .map(|t| (t, scale))
         }
         None => None,
     };
     if let Some((t, scale)) = &normal_texture {
-        let ext = if t.transform != [1.0, 0.0, 0.0, 0.0, 1.0, 0.0] { format!(", KHR_texture_transform {:?}", t.transform) } else { String::new() };
+        let ext = if t.transform != [1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
+            format!(", KHR_texture_transform {:?}", t.transform)
+        } else {
+            String::new()
+        };
         notes.push(format!("normalTexture: linear {}, scale {scale}, tangent space from TANGENT (or generated from the uvs){ext}", if t.nearest { "nearest" } else { "bilinear" }));
     }
     // Emissive texture: sRGB colour data multiplying emissiveFactor x strength. The area light
     // looks its image up at the hit's uv without KHR_texture_transform, so a transformed one is
     // refused rather than shown in the wrong place.
     let emissive_texture = match m.emissive_texture() {
-        Some(i) => texture_of(cx, &i, true, buffers, &format!("{elem}{name} emissiveTexture"))?,
+        Some(i) => texture_of(
+            cx,
+            &i,
+            true,
+            buffers,
+            &format!("{elem}{name} emissiveTexture"),
+        )?,
         None => None,
     };
     if let Some(t) = &emissive_texture {
         if t.transform != [1.0, 0.0, 0.0, 0.0, 1.0, 0.0] {
             return Err(cx.err(format!("{elem}{name}: KHR_texture_transform on emissiveTexture is not yet supported (not yet implemented)")));
         }
-        notes.push(format!("emissiveTexture: sRGB-decoded {}, times the emissive factor", if t.nearest { "nearest" } else { "bilinear" }));
+        notes.push(format!(
+            "emissiveTexture: sRGB-decoded {}, times the emissive factor",
+            if t.nearest { "nearest" } else { "bilinear" }
+        ));
     }
     if m.occlusion_texture().is_some() {
         // Ambient occlusion is a rasteriser's stand-in for what the path tracer computes.
-        cx.warnings.push(format!("{elem}{name}: occlusionTexture ignored (a path tracer computes occlusion)"));
+        cx.warnings.push(format!(
+            "{elem}{name}: occlusionTexture ignored (a path tracer computes occlusion)"
+        ));
     }
     // Alpha as opacity (the renderer's `mask`: light meets the surface with probability
     // `opacity`, else passes straight through): BLEND uses the factor's alpha, MASK makes it 0
@@ -823,8 +1298,15 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
     let alpha_texture = match (&base_color_texture, m.alpha_mode()) {
         (_, gltf::material::AlphaMode::Opaque) | (None, _) => None,
         (Some(t), mode) => {
-            let cutoff = (mode == gltf::material::AlphaMode::Mask).then(|| m.alpha_cutoff().unwrap_or(0.5));
-            Some((Box::new(UvTexture { srgb: false, ..(**t).clone() }), cutoff))
+            let cutoff =
+                (mode == gltf::material::AlphaMode::Mask).then(|| m.alpha_cutoff().unwrap_or(0.5));
+            Some((
+                Box::new(UvTexture {
+                    srgb: false,
+                    ..(**t).clone()
+                }),
+                cutoff,
+            ))
         }
     };
     if m.alpha_mode() != gltf::material::AlphaMode::Opaque {
@@ -840,7 +1322,14 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
     }
     let iridescence = m.extension_value("KHR_materials_iridescence");
     let textured = base_color_texture.is_some() || metallic_roughness_texture.is_some();
-    let mut kind = BsdfKind::GltfPbr { base_color: base_color.clone(), metallic, roughness, ior, base_color_texture, metallic_roughness_texture };
+    let mut kind = BsdfKind::GltfPbr {
+        base_color: base_color.clone(),
+        metallic,
+        roughness,
+        ior,
+        base_color_texture,
+        metallic_roughness_texture,
+    };
     let mut interior = None;
     let mut mapping = format!("gltf metallic-roughness: base colour {:?}, metallic {metallic}, roughness {roughness} (alpha {:.4}), dielectric ior {ior}", [bc[0], bc[1], bc[2]], roughness * roughness);
     if let Some(t) = m.transmission().filter(|t| t.transmission_factor() > 0.0) {
@@ -850,25 +1339,50 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
             notes.push("base colour / metallic-roughness textures ignored (transmissive)".into());
         }
         if t.transmission_texture().is_some() {
-            cx.warnings.push(format!("{elem}{name}: transmissionTexture ignored (textures are not yet implemented)"));
+            cx.warnings.push(format!(
+                "{elem}{name}: transmissionTexture ignored (textures are not yet implemented)"
+            ));
         }
         let vol = m.volume().filter(|v| v.thickness_factor() > 0.0);
         let alpha = roughness * roughness;
         if let Some(v) = &vol {
             kind = if alpha < 1e-3 {
                 mapping = format!("dielectric, ior {ior}");
-                BsdfKind::Dielectric { int_ior: ior, ext_ior: 1.0 }
+                BsdfKind::Dielectric {
+                    int_ior: ior,
+                    ext_ior: 1.0,
+                }
             } else {
                 mapping = format!("roughdielectric GGX alpha {alpha:.4}, ior {ior}");
-                BsdfKind::RoughDielectric { int_ior: ior, ext_ior: 1.0, distribution: "ggx".into(), alpha_u: alpha, alpha_v: alpha }
+                BsdfKind::RoughDielectric {
+                    int_ior: ior,
+                    ext_ior: 1.0,
+                    distribution: "ggx".into(),
+                    alpha_u: alpha,
+                    alpha_v: alpha,
+                }
             };
             let (d, c) = (v.attenuation_distance(), v.attenuation_color());
-            let mut vol_note = format!("KHR_materials_volume (thicknessFactor {} only marks a volume)", v.thickness_factor());
+            let mut vol_note = format!(
+                "KHR_materials_volume (thicknessFactor {} only marks a volume)",
+                v.thickness_factor()
+            );
             if d.is_finite() && d > 0.0 {
                 // Beer-Lambert: white light is c after distance d, so exp(-sigma_t d) = c.
-                let sigma = c.map(|ci| if ci > 0.0 { -ci.min(1.0).ln() / d } else { f32::MAX.sqrt() });
-                interior = Some(MediumDesc { loc: loc.clone(), sigma_t: SpectrumDesc::Rgb(sigma) });
-                vol_note = format!("{vol_note}: interior medium sigma_t = -ln({c:?})/{d} = {sigma:?} per m");
+                let sigma = c.map(|ci| {
+                    if ci > 0.0 {
+                        -ci.min(1.0).ln() / d
+                    } else {
+                        f32::MAX.sqrt()
+                    }
+                });
+                interior = Some(MediumDesc {
+                    loc: loc.clone(),
+                    sigma_t: SpectrumDesc::Rgb(sigma),
+                });
+                vol_note = format!(
+                    "{vol_note}: interior medium sigma_t = -ln({c:?})/{d} = {sigma:?} per m"
+                );
             } else {
                 vol_note = format!("{vol_note}: no attenuation (attenuationDistance infinite)");
             }
@@ -876,9 +1390,14 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
         } else {
             mapping = format!("thindielectric (thin-walled: no volume), ior {ior}");
             if alpha >= 1e-3 {
-                notes.push(format!("roughness {roughness} ignored (thin-walled transmission is smooth)"));
+                notes.push(format!(
+                    "roughness {roughness} ignored (thin-walled transmission is smooth)"
+                ));
             }
-            kind = BsdfKind::ThinDielectric { int_ior: ior, ext_ior: 1.0 };
+            kind = BsdfKind::ThinDielectric {
+                int_ior: ior,
+                ext_ior: 1.0,
+            };
         }
         if bc[..3].iter().any(|c| (c - 1.0).abs() > 1e-6) {
             notes.push("baseColor tint of transmitted light ignored".into());
@@ -891,9 +1410,26 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
         // roughness, so nearly the same lobe).
         let w = f.min(1.0) * (1.0 - metallic.clamp(0.0, 1.0));
         if w < 1.0 {
-            mapping = format!("blend of {:.4} x ({mapping}) and {:.4} x (the opaque metallic-roughness material)", w, 1.0 - w);
+            mapping = format!(
+                "blend of {:.4} x ({mapping}) and {:.4} x (the opaque metallic-roughness material)",
+                w,
+                1.0 - w
+            );
             notes.push(format!("transmissionFactor {f} with metallic {metallic}: blend weight f (1 - metallic) = {w} (approximates glTF's layering: see the module doc)"));
-            kind = BsdfKind::Blend { weight: w, weight_texture: None, first: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind: opaque }), second: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
+            kind = BsdfKind::Blend {
+                weight: w,
+                weight_texture: None,
+                first: Box::new(BsdfDesc {
+                    loc: loc.clone(),
+                    id: None,
+                    kind: opaque,
+                }),
+                second: Box::new(BsdfDesc {
+                    loc: loc.clone(),
+                    id: None,
+                    kind,
+                }),
+            };
         }
         used.push(format!("KHR_materials_transmission (factor {f})"));
     } else if m.volume().is_some() {
@@ -904,7 +1440,11 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
         if factor > 0.0 {
             let film_ior = ext_f32(Some(ir), "iridescenceIor", 1.3);
             let thickness = ext_f32(Some(ir), "iridescenceThicknessMaximum", 400.0);
-            if !(thickness >= 0.0 && thickness.is_finite() && film_ior >= 1.0 && film_ior.is_finite()) {
+            if !(thickness >= 0.0
+                && thickness.is_finite()
+                && film_ior >= 1.0
+                && film_ior.is_finite())
+            {
                 return Err(cx.err(format!("{elem}: KHR_materials_iridescence needs thickness >= 0 and ior >= 1, got {thickness}, {film_ior}")));
             }
             // iridescenceThicknessTexture: thickness = mix(min, max, green) per texel.
@@ -914,18 +1454,34 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
                     if !(min_nm >= 0.0 && min_nm.is_finite()) {
                         return Err(cx.err(format!("{elem}: iridescenceThicknessMinimum must be finite and >= 0, got {min_nm}")));
                     }
-                    json_texture(cx, doc, info, false, buffers, &format!("{elem}{name} iridescenceThicknessTexture"))?.map(|t| (t, min_nm))
+                    json_texture(
+                        cx,
+                        doc,
+                        info,
+                        false,
+                        buffers,
+                        &format!("{elem}{name} iridescenceThicknessTexture"),
+                    )?
+                    .map(|t| (t, min_nm))
                 }
                 None => None,
             };
             // iridescenceTexture: its red channel multiplies the factor per texel.
             let factor_texture = match ir.get("iridescenceTexture") {
-                Some(info) => json_texture(cx, doc, info, false, buffers, &format!("{elem}{name} iridescenceTexture"))?,
+                Some(info) => json_texture(
+                    cx,
+                    doc,
+                    info,
+                    false,
+                    buffers,
+                    &format!("{elem}{name} iridescenceTexture"),
+                )?,
                 None => None,
             };
             // A partial iridescence blends the material without the film and the film; with a
             // partial transmission already blended, nested blends are not supported: factor 1.
-            let partial = (factor < 1.0 || factor_texture.is_some()) && !matches!(kind, BsdfKind::Blend { .. });
+            let partial = (factor < 1.0 || factor_texture.is_some())
+                && !matches!(kind, BsdfKind::Blend { .. });
             if (factor < 1.0 || factor_texture.is_some()) && !partial {
                 cx.warnings.push(format!("{elem}{name}: iridescenceFactor {factor} and iridescenceTexture treated as 1: the material already blends a partial transmission (nested blends are not yet implemented)"));
             }
@@ -946,24 +1502,69 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
             let alpha = roughness * roughness;
             if alpha < 1e-3 {
                 mapping = format!("thinfilm: {thickness} nm film of ior {film_ior} over an opaque base of index {eta:?} (k = 0); smooth, diffuse dropped");
-                kind = BsdfKind::ThinFilm { thickness, film_ior, ext_ior: 1.0, int_ior: None, eta, k: SpectrumDesc::Constant(0.0) };
+                kind = BsdfKind::ThinFilm {
+                    thickness,
+                    film_ior,
+                    ext_ior: 1.0,
+                    int_ior: None,
+                    eta,
+                    k: SpectrumDesc::Constant(0.0),
+                };
             } else {
                 mapping = format!("roughthinfilm: {thickness} nm film of ior {film_ior} over an opaque base of index {eta:?} (k = 0), GGX alpha {alpha:.4}; diffuse dropped");
-                kind = BsdfKind::RoughThinFilm { thickness, film_ior, ext_ior: 1.0, int_ior: None, eta, k: SpectrumDesc::Constant(0.0), distribution: "ggx".into(), alpha_u: alpha, alpha_v: alpha };
+                kind = BsdfKind::RoughThinFilm {
+                    thickness,
+                    film_ior,
+                    ext_ior: 1.0,
+                    int_ior: None,
+                    eta,
+                    k: SpectrumDesc::Constant(0.0),
+                    distribution: "ggx".into(),
+                    alpha_u: alpha,
+                    alpha_v: alpha,
+                };
             }
             if partial {
                 notes.push(format!("iridescenceFactor {factor}: blend of {factor} x film and {} x the material without it (approximates glTF's Fresnel mix: see the module doc)", 1.0 - factor));
-                mapping = format!("blend of {factor} x ({mapping}) and {} x (the material without the film)", 1.0 - factor);
-                let film = BsdfDesc { loc: loc.clone(), id: None, kind };
+                mapping = format!(
+                    "blend of {factor} x ({mapping}) and {} x (the material without the film)",
+                    1.0 - factor
+                );
+                let film = BsdfDesc {
+                    loc: loc.clone(),
+                    id: None,
+                    kind,
+                };
                 if factor_texture.is_some() {
-                    notes.push("iridescenceTexture: its red channel multiplies the blend weight per texel".into());
+                    notes.push(
+                        "iridescenceTexture: its red channel multiplies the blend weight per texel"
+                            .into(),
+                    );
                 }
                 let weight_texture = factor_texture.map(|t| (t, pt_scene::TextureChannel::Red));
-                kind = BsdfKind::Blend { weight: factor, weight_texture, first: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind: without_film }), second: Box::new(film) };
+                kind = BsdfKind::Blend {
+                    weight: factor,
+                    weight_texture,
+                    first: Box::new(BsdfDesc {
+                        loc: loc.clone(),
+                        id: None,
+                        kind: without_film,
+                    }),
+                    second: Box::new(film),
+                };
             }
             if let Some((texture, min_nm)) = thickness_texture {
                 notes.push(format!("iridescenceThicknessTexture: thickness = {min_nm} + ({thickness} - {min_nm}) x green, nm, per texel"));
-                kind = BsdfKind::FilmThicknessTexture { texture, min_nm, max_nm: thickness, inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
+                kind = BsdfKind::FilmThicknessTexture {
+                    texture,
+                    min_nm,
+                    max_nm: thickness,
+                    inner: Box::new(BsdfDesc {
+                        loc: loc.clone(),
+                        id: None,
+                        kind,
+                    }),
+                };
             }
             used.push(format!("KHR_materials_iridescence (factor {factor}, ior {film_ior}, thickness max {thickness} nm)"));
         }
@@ -983,19 +1584,56 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
     } else {
         None
     };
-    if !matches!(kind, BsdfKind::Dielectric { .. } | BsdfKind::RoughDielectric { .. } | BsdfKind::ThinDielectric { .. }) {
+    if !matches!(
+        kind,
+        BsdfKind::Dielectric { .. }
+            | BsdfKind::RoughDielectric { .. }
+            | BsdfKind::ThinDielectric { .. }
+    ) {
         // glTF's doubleSided only controls back-face culling in rasterisers; a path tracer sees
         // back faces anyway, so opaque materials shade both sides.
-        kind = BsdfKind::TwoSided { inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
+        kind = BsdfKind::TwoSided {
+            inner: Box::new(BsdfDesc {
+                loc: loc.clone(),
+                id: None,
+                kind,
+            }),
+        };
     }
     if let Some((texture, cutoff)) = alpha_texture {
         let factor = bc[3].clamp(0.0, 1.0);
-        kind = BsdfKind::OpacityTexture { texture, channel: pt_scene::TextureChannel::Alpha, factor, cutoff, inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
+        kind = BsdfKind::OpacityTexture {
+            texture,
+            channel: pt_scene::TextureChannel::Alpha,
+            factor,
+            cutoff,
+            inner: Box::new(BsdfDesc {
+                loc: loc.clone(),
+                id: None,
+                kind,
+            }),
+        };
     } else if opacity < 1.0 {
-        kind = BsdfKind::Mask { opacity, inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
+        kind = BsdfKind::Mask {
+            opacity,
+            inner: Box::new(BsdfDesc {
+                loc: loc.clone(),
+                id: None,
+                kind,
+            }),
+        };
     }
     if let Some((texture, scale)) = normal_texture {
-        kind = BsdfKind::NormalMap { texture, scale, gltf: true, inner: Box::new(BsdfDesc { loc: loc.clone(), id: None, kind }) };
+        kind = BsdfKind::NormalMap {
+            texture,
+            scale,
+            gltf: true,
+            inner: Box::new(BsdfDesc {
+                loc: loc.clone(),
+                id: None,
+                kind,
+            }),
+        };
     }
     cx.summary.push(format!("  {elem}{name}: {mapping}"));
     for u in &used {
@@ -1005,7 +1643,16 @@ fn map_material(cx: &mut Ctx, doc: &gltf::Document, m: &gltf::Material, buffers:
         cx.summary.push(format!("      note: {nt}"));
     }
     let emissive_texture = emission.as_ref().and(emissive_texture);
-    Ok(MappedMaterial { bsdf: BsdfDesc { loc, id: Some(m.name().map_or(format!("material{idx}"), str::to_string)), kind }, emission, emissive_texture, interior })
+    Ok(MappedMaterial {
+        bsdf: BsdfDesc {
+            loc,
+            id: Some(m.name().map_or(format!("material{idx}"), str::to_string)),
+            kind,
+        },
+        emission,
+        emissive_texture,
+        interior,
+    })
 }
 
 #[cfg(test)]
@@ -1016,7 +1663,14 @@ mod tests {
     /// the given extra node properties, plus `extra` top-level members.
     fn triangle(node: &str, extra: &str) -> Vec<u8> {
         let mut bytes = Vec::new();
-        for v in [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, 1.0], [0.0, 0.0, 1.0]] {
+        for v in [
+            [0.0f32, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, 1.0],
+            [0.0, 0.0, 1.0],
+        ] {
             for c in v {
                 bytes.extend_from_slice(&c.to_le_bytes());
             }
@@ -1048,25 +1702,48 @@ mod tests {
         // geometric normal (p1 - p0) x (p2 - p0) still points along the (transformed) vertex
         // normal, +z.
         for (node, flipped) in [("", false), (r#", "scale": [-1, 1, 1]"#, true)] {
-            let g = load_slice(&triangle(node, ""), Path::new("t.gltf"), &LoadOptions::default()).unwrap();
+            let g = load_slice(
+                &triangle(node, ""),
+                Path::new("t.gltf"),
+                &LoadOptions::default(),
+            )
+            .unwrap();
             let m = mesh(&g);
             let [a, b, c] = m.indices[0].map(|i| m.positions[i as usize]);
             let ng = (b - a).cross(c - a);
             assert!(ng.z > 0.0, "flipped {flipped}: geometric normal {ng}");
-            assert!(m.normals.as_ref().unwrap().iter().all(|n| (n.z - 1.0).abs() < 1e-6));
+            assert!(m
+                .normals
+                .as_ref()
+                .unwrap()
+                .iter()
+                .all(|n| (n.z - 1.0).abs() < 1e-6));
             assert_eq!(m.positions[1].x, if flipped { -1.0 } else { 1.0 });
         }
     }
 
     #[test]
     fn default_camera_frames_the_bounds_and_default_light_is_announced() {
-        let g = load_slice(&triangle("", ""), Path::new("t.gltf"), &LoadOptions::default()).unwrap();
+        let g = load_slice(
+            &triangle("", ""),
+            Path::new("t.gltf"),
+            &LoadOptions::default(),
+        )
+        .unwrap();
         // Bounds: box (0,0,0)-(1,1,0), centre (0.5, 0.5, 0), radius sqrt(2)/2.
         let eye = g.desc.camera.to_world.transform_point3(Vec3::ZERO);
-        let look = g.desc.camera.to_world.transform_vector3(Vec3::Z).normalize();
+        let look = g
+            .desc
+            .camera
+            .to_world
+            .transform_vector3(Vec3::Z)
+            .normalize();
         let r = 0.5f32 * 2f32.sqrt();
         let dist = 1.1 * r / (0.5 * DEFAULT_FOV_Y_DEG.to_radians()).sin();
-        assert!((eye - Vec3::new(0.5, 0.5, dist)).length() < 1e-5, "eye {eye}");
+        assert!(
+            (eye - Vec3::new(0.5, 0.5, dist)).length() < 1e-5,
+            "eye {eye}"
+        );
         assert!((look - Vec3::NEG_Z).length() < 1e-6, "looks along {look}");
         // Mitsuba camera space: +x is image left, so world +x (glTF right) must map to camera -x.
         assert!(g.desc.camera.to_world.transform_vector3(Vec3::X).x < 0.0);
@@ -1080,16 +1757,31 @@ mod tests {
         // Camera node at (0, 0, 5) with no rotation: looks down -z, image right is +x.
         let extra = r#", "cameras": [{"type": "perspective", "perspective": {"yfov": 0.5, "znear": 0.1}},
                                       {"type": "orthographic", "orthographic": {"xmag": 1, "ymag": 1, "znear": 0.1, "zfar": 10}}]"#;
-        let node = r#", "children": [1, 2]}, {"camera": 0, "translation": [0, 0, 5]}, {"camera": 1"#;
+        let node =
+            r#", "children": [1, 2]}, {"camera": 0, "translation": [0, 0, 5]}, {"camera": 1"#;
         let bytes = triangle(node, extra);
         let g = load_slice(&bytes, Path::new("t.gltf"), &LoadOptions::default()).unwrap();
         let c = &g.desc.camera;
-        assert!((c.to_world.transform_point3(Vec3::ZERO) - Vec3::new(0.0, 0.0, 5.0)).length() < 1e-6);
+        assert!(
+            (c.to_world.transform_point3(Vec3::ZERO) - Vec3::new(0.0, 0.0, 5.0)).length() < 1e-6
+        );
         assert!((c.to_world.transform_vector3(Vec3::Z) - Vec3::NEG_Z).length() < 1e-6);
-        assert!(matches!(c.projection, Projection::Perspective { fov_deg, fov_axis: FovAxis::Y } if (fov_deg - 0.5f32.to_degrees()).abs() < 1e-4));
-        let e = load_slice(&bytes, Path::new("t.gltf"), &LoadOptions { camera: Some(1) }).unwrap_err();
+        assert!(
+            matches!(c.projection, Projection::Perspective { fov_deg, fov_axis: FovAxis::Y } if (fov_deg - 0.5f32.to_degrees()).abs() < 1e-4)
+        );
+        let e = load_slice(
+            &bytes,
+            Path::new("t.gltf"),
+            &LoadOptions { camera: Some(1) },
+        )
+        .unwrap_err();
         assert!(e.message.contains("orthographic"), "{e}");
-        let e = load_slice(&bytes, Path::new("t.gltf"), &LoadOptions { camera: Some(2) }).unwrap_err();
+        let e = load_slice(
+            &bytes,
+            Path::new("t.gltf"),
+            &LoadOptions { camera: Some(2) },
+        )
+        .unwrap_err();
         assert!(e.message.contains("2 camera(s)"), "{e}");
     }
 }

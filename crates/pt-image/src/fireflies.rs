@@ -103,7 +103,10 @@ mod tests {
 
     /// Deterministic pseudo-noise in [-0.5, 0.5).
     fn noise(i: u32) -> f32 {
-        let x = i.wrapping_mul(2_654_435_761).rotate_left(13).wrapping_mul(40_503);
+        let x = i
+            .wrapping_mul(2_654_435_761)
+            .rotate_left(13)
+            .wrapping_mul(40_503);
         (x >> 8) as f32 / 16_777_216.0 - 0.5
     }
 

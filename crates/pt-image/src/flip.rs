@@ -30,7 +30,10 @@ pub struct Flip {
 /// rounded (NaN becomes 0, as in the PNG preview).
 fn tone_map(img: &Image, exposure_stops: f32) -> Vec<u8> {
     let scale = exposure_stops.exp2();
-    img.data.iter().flat_map(|p| p.map(|v| to_srgb8(v, scale))).collect()
+    img.data
+        .iter()
+        .flat_map(|p| p.map(|v| to_srgb8(v, scale)))
+        .collect()
 }
 
 /// FLIP between `img` and `reference` (same size, else [`ImageError::SizeMismatch`]), both
@@ -38,13 +41,24 @@ fn tone_map(img: &Image, exposure_stops: f32) -> Vec<u8> {
 pub fn flip(img: &Image, reference: &Image, exposure_stops: f32) -> Result<Flip, ImageError> {
     check_same_size("image", img, reference, "reference")?;
     if img.pixel_count() == 0 {
-        return Ok(Flip { mean: 0.0, error_map: Vec::new() });
+        return Ok(Flip {
+            mean: 0.0,
+            error_map: Vec::new(),
+        });
     }
-    let test = nv_flip::FlipImageRgb8::with_data(img.width, img.height, &tone_map(img, exposure_stops));
-    let refr = nv_flip::FlipImageRgb8::with_data(reference.width, reference.height, &tone_map(reference, exposure_stops));
+    let test =
+        nv_flip::FlipImageRgb8::with_data(img.width, img.height, &tone_map(img, exposure_stops));
+    let refr = nv_flip::FlipImageRgb8::with_data(
+        reference.width,
+        reference.height,
+        &tone_map(reference, exposure_stops),
+    );
     let map = nv_flip::flip(refr, test, DEFAULT_PIXELS_PER_DEGREE);
     let mean = nv_flip::FlipPool::from_image(&map).mean();
-    Ok(Flip { mean, error_map: map.to_vec() })
+    Ok(Flip {
+        mean,
+        error_map: map.to_vec(),
+    })
 }
 
 #[cfg(test)]
@@ -57,7 +71,11 @@ mod tests {
         for y in 0..h {
             for x in 0..w {
                 let (u, v) = (x as f32 / w as f32, y as f32 / h as f32);
-                let ring = if ((u - 0.5).powi(2) + (v - 0.5).powi(2)).sqrt() < 0.2 { 0.5 } else { 0.0 };
+                let ring = if ((u - 0.5).powi(2) + (v - 0.5).powi(2)).sqrt() < 0.2 {
+                    0.5
+                } else {
+                    0.0
+                };
                 img.set(x, y, [0.2 + 0.6 * u, 0.1 + 0.5 * v + ring, 0.3 + ring]);
             }
         }
@@ -94,7 +112,9 @@ mod tests {
         assert!(small < mid && mid < large, "{small} {mid} {large}");
         assert!(small < 0.05, "{small}");
         let offset = Image::filled(32, 32, [0.7; 3]);
-        let f = flip(&offset, &Image::filled(32, 32, [0.2; 3]), 0.0).unwrap().mean;
+        let f = flip(&offset, &Image::filled(32, 32, [0.2; 3]), 0.0)
+            .unwrap()
+            .mean;
         assert!(f > 0.05, "{f}");
     }
 

@@ -12,10 +12,10 @@
 
 mod atomic;
 pub mod colormap;
-pub mod flip;
-pub mod fireflies;
 mod error;
 mod exr_io;
+pub mod fireflies;
+pub mod flip;
 pub mod metrics;
 mod png;
 pub mod stats;
@@ -193,6 +193,7 @@ mod tests {
 pub fn write_bytes_atomically(path: &std::path::Path, bytes: &[u8]) -> Result<(), ImageError> {
     atomic::write_atomically(path, |f| {
         use std::io::Write;
-        f.write_all(bytes).map_err(|e| ImageError::io(path, "write file", e))
+        f.write_all(bytes)
+            .map_err(|e| ImageError::io(path, "write file", e))
     })
 }

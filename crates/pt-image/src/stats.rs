@@ -379,7 +379,9 @@ pub fn block_ztest(
                     for c in 0..3 {
                         let (a, r) = (f64::from(img.data[i][c]), f64::from(reference.data[i][c]));
                         sum_d[c] += a - r;
-                        sum_var[c] += f64::from(img_var.data[i][c]) + f64::from(ref_var.data[i][c]) + rounding_variance(a, r);
+                        sum_var[c] += f64::from(img_var.data[i][c])
+                            + f64::from(ref_var.data[i][c])
+                            + rounding_variance(a, r);
                     }
                 }
             }
@@ -503,7 +505,8 @@ pub fn pixel_ztest(
         let mut min_p = 1.0f64;
         for c in 0..3 {
             let d = f64::from(img.data[i][c]) - f64::from(reference.data[i][c]);
-            let var = f64::from(img_var.data[i][c]) + f64::from(ref_var.data[i][c])
+            let var = f64::from(img_var.data[i][c])
+                + f64::from(ref_var.data[i][c])
                 + rounding_variance(f64::from(img.data[i][c]), f64::from(reference.data[i][c]));
             let (p, abs_z) = match z_outcome(valid, d, var) {
                 Outcome::Skipped => continue,

@@ -17,7 +17,16 @@ impl Distribution1D {
         if weights.is_empty() {
             return None;
         }
-        let clean: Vec<f64> = weights.iter().map(|&w| if w.is_finite() && w > 0.0 { w as f64 } else { 0.0 }).collect();
+        let clean: Vec<f64> = weights
+            .iter()
+            .map(|&w| {
+                if w.is_finite() && w > 0.0 {
+                    w as f64
+                } else {
+                    0.0
+                }
+            })
+            .collect();
         let total: f64 = clean.iter().sum();
         let n = weights.len();
         let pmf: Vec<f32> = if total > 0.0 {
@@ -64,14 +73,26 @@ impl Distribution1D {
         let n = self.pmf.len();
         if n == 1 {
             let p = self.pmf[0];
-            return (0, p, if p > 0.0 { ((u - self.cdf[0]) / p).clamp(0.0, 1.0 - f32::EPSILON) } else { 0.0 });
+            return (
+                0,
+                p,
+                if p > 0.0 {
+                    ((u - self.cdf[0]) / p).clamp(0.0, 1.0 - f32::EPSILON)
+                } else {
+                    0.0
+                },
+            );
         }
         let mut i = self.cdf[1..].partition_point(|&c| c <= u).min(n - 1);
         while self.pmf[i] == 0.0 && i > 0 {
             i -= 1; // u at the very top can land past zero-weight tail items.
         }
         let p = self.pmf[i];
-        let u_rescaled = if p > 0.0 { ((u - self.cdf[i]) / p).clamp(0.0, 1.0 - f32::EPSILON) } else { 0.0 };
+        let u_rescaled = if p > 0.0 {
+            ((u - self.cdf[i]) / p).clamp(0.0, 1.0 - f32::EPSILON)
+        } else {
+            0.0
+        };
         (i, p, u_rescaled)
     }
 }
@@ -131,13 +152,31 @@ impl Distribution2D {
         if width == 0 || height == 0 || weights.len() != width * height {
             return None;
         }
-        let rows: Vec<Distribution1D> = weights.chunks(width).map(|r| Distribution1D::new(r)).collect::<Option<_>>()?;
+        let rows: Vec<Distribution1D> = weights
+            .chunks(width)
+            .map(|r| Distribution1D::new(r))
+            .collect::<Option<_>>()?;
         let row_sums: Vec<f32> = weights
             .chunks(width)
-            .map(|r| r.iter().map(|&w| if w.is_finite() && w > 0.0 { w as f64 } else { 0.0 }).sum::<f64>() as f32)
+            .map(|r| {
+                r.iter()
+                    .map(|&w| {
+                        if w.is_finite() && w > 0.0 {
+                            w as f64
+                        } else {
+                            0.0
+                        }
+                    })
+                    .sum::<f64>() as f32
+            })
             .collect();
         let marginal = Distribution1D::new(&row_sums)?;
-        Some(Distribution2D { width, height, rows, marginal })
+        Some(Distribution2D {
+            width,
+            height,
+            rows,
+            marginal,
+        })
     }
 
     /// Samples a point in [0,1)^2 from `u`; returns it with its pdf per unit area.
@@ -149,7 +188,10 @@ impl Distribution2D {
         let y = (row as f32 + v_in) / self.height as f32;
         // Discrete probability of the cell times the cell count = density on the unit square.
         let pdf = p_row * p_col * (self.width * self.height) as f32;
-        (glam::Vec2::new(x.min(1.0 - f32::EPSILON), y.min(1.0 - f32::EPSILON)), pdf)
+        (
+            glam::Vec2::new(x.min(1.0 - f32::EPSILON), y.min(1.0 - f32::EPSILON)),
+            pdf,
+        )
     }
 
     /// Density per unit area of \[0,1\]^2 at `p`.
@@ -174,7 +216,10 @@ mod tests_2d {
         let mut total = 0.0;
         for r in 0..3 {
             for c in 0..4 {
-                total += d.pdf(glam::Vec2::new((c as f32 + 0.5) / 4.0, (r as f32 + 0.5) / 3.0)) / 12.0;
+                total += d.pdf(glam::Vec2::new(
+                    (c as f32 + 0.5) / 4.0,
+                    (r as f32 + 0.5) / 3.0,
+                )) / 12.0;
             }
         }
         assert!((total - 1.0).abs() < 1e-5, "{total}");

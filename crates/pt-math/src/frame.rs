@@ -32,7 +32,11 @@ impl Frame {
     /// back to [`Frame::from_normal`] when `tangent` is zero or parallel to `n`.
     pub fn from_normal_tangent(n: Vec3, tangent: Vec3) -> Self {
         match (tangent - n * n.dot(tangent)).try_normalize() {
-            Some(s) => Frame { s, t: n.cross(s), n },
+            Some(s) => Frame {
+                s,
+                t: n.cross(s),
+                n,
+            },
             None => Frame::from_normal(n),
         }
     }
@@ -68,7 +72,9 @@ mod tests {
             let f = Frame::from_normal(n);
             assert!((f.s.length() - 1.0).abs() < 1e-5);
             assert!((f.t.length() - 1.0).abs() < 1e-5);
-            assert!(f.s.dot(f.t).abs() < 1e-5 && f.s.dot(n).abs() < 1e-5 && f.t.dot(n).abs() < 1e-5);
+            assert!(
+                f.s.dot(f.t).abs() < 1e-5 && f.s.dot(n).abs() < 1e-5 && f.t.dot(n).abs() < 1e-5
+            );
             // Right-handed: s x t = n.
             assert!((f.s.cross(f.t) - n).length() < 1e-5);
             let g = Frame::from_normal_tangent(n, Vec3::new(0.3, 0.9, -0.2));

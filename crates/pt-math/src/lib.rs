@@ -34,7 +34,12 @@ pub struct Ray {
 impl Ray {
     /// A ray from `origin` along the unit direction `dir`, unbounded.
     pub fn new(origin: Vec3, dir: Vec3) -> Self {
-        Ray { origin, dir, tmin: 0.0, tmax: f32::INFINITY }
+        Ray {
+            origin,
+            dir,
+            tmin: 0.0,
+            tmax: f32::INFINITY,
+        }
     }
 
     /// The point at distance `t`.

@@ -34,13 +34,18 @@ pub fn offset_ray_origin(p: Vec3, ng: Vec3) -> Vec3 {
 #[inline(always)]
 pub fn offset_coordinate(p: f32, n: f32) -> f32 {
     // Both candidates, then a select: no branch per coordinate.
-    let of_i = ((INT_SCALE * n + ROUND_MAGIC).to_bits() as i32).wrapping_sub(ROUND_MAGIC.to_bits() as i32);
+    let of_i =
+        ((INT_SCALE * n + ROUND_MAGIC).to_bits() as i32).wrapping_sub(ROUND_MAGIC.to_bits() as i32);
     let bits = p.to_bits() as i32;
     // Outside the origin's box p is not zero, so its sign bit says p < 0: then step the
     // integer down (two's complement: (x ^ -1) - (-1) = -x), else up.
     let neg = bits >> 31;
     let stepped = f32::from_bits(bits.wrapping_add((of_i ^ neg).wrapping_sub(neg)) as u32);
-    if p.abs() < ORIGIN { p + FLOAT_SCALE * n } else { stepped }
+    if p.abs() < ORIGIN {
+        p + FLOAT_SCALE * n
+    } else {
+        stepped
+    }
 }
 
 /// 1.5 x 2^23: a float of magnitude below 2^22 plus this is rounded to an integer, which sits in
@@ -67,7 +72,11 @@ fn offset_scalar(p: Vec3, ng: Vec3) -> Vec3 {
             // Stepping the integer representation moves p by |of_i| ULPs, away from 0 when n has
             // the sign of p and towards 0 otherwise.
             let bits = p.to_bits() as i32;
-            let moved = if p < 0.0 { bits.wrapping_sub(of_i) } else { bits.wrapping_add(of_i) };
+            let moved = if p < 0.0 {
+                bits.wrapping_sub(of_i)
+            } else {
+                bits.wrapping_add(of_i)
+            };
             f32::from_bits(moved as u32)
         }
     };
@@ -84,7 +93,9 @@ mod tests {
         // and zeros; normals in every direction.
         let mut s = 7u64;
         let mut rnd = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((s >> 40) as f32) / (1u64 << 24) as f32 * 2.0 - 1.0
         };
         for k in 0..100_000 {
@@ -92,9 +103,17 @@ mod tests {
             let p = Vec3::new(rnd(), rnd(), rnd()) * scale;
             let n = Vec3::new(rnd(), rnd(), rnd()).normalize_or(Vec3::Z);
             let (a, b) = (offset_ray_origin(p, n), offset_scalar(p, n));
-            assert_eq!(a.to_array().map(f32::to_bits), b.to_array().map(f32::to_bits), "p {p} n {n}");
+            assert_eq!(
+                a.to_array().map(f32::to_bits),
+                b.to_array().map(f32::to_bits),
+                "p {p} n {n}"
+            );
         }
-        for p in [Vec3::splat(1.0 / 32.0), Vec3::splat(-1.0 / 32.0), Vec3::new(0.0, -0.0, 1.0)] {
+        for p in [
+            Vec3::splat(1.0 / 32.0),
+            Vec3::splat(-1.0 / 32.0),
+            Vec3::new(0.0, -0.0, 1.0),
+        ] {
             for n in [Vec3::X, -Vec3::Y, Vec3::new(0.6, 0.0, -0.8)] {
                 assert_eq!(offset_ray_origin(p, n), offset_scalar(p, n));
             }

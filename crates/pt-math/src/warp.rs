@@ -30,7 +30,11 @@ pub fn square_to_disk_concentric(u: Vec2) -> Vec2 {
 /// other sample where `c` is a coin flip.
 #[inline(always)]
 fn select(c: bool, a: (f32, f32), b: (f32, f32)) -> (f32, f32) {
-    let v = glam::Vec4::select(glam::BVec4A::splat(c), glam::Vec4::new(a.0, a.1, 0.0, 0.0), glam::Vec4::new(b.0, b.1, 0.0, 0.0));
+    let v = glam::Vec4::select(
+        glam::BVec4A::splat(c),
+        glam::Vec4::new(a.0, a.1, 0.0, 0.0),
+        glam::Vec4::new(b.0, b.1, 0.0, 0.0),
+    );
     (v.x, v.y)
 }
 
@@ -42,8 +46,13 @@ fn select(c: bool, a: (f32, f32), b: (f32, f32)) -> (f32, f32) {
 pub fn sin_cos_quarter(q: f32) -> (f32, f32) {
     let q2 = q * q;
     // 1/3!, 1/5!, 1/7!, 1/9! and 1/2!, 1/4!, 1/6!, 1/8!, 1/10!.
-    let s = q * (1.0 - q2 * (1.0 / 6.0 - q2 * (1.0 / 120.0 - q2 * (1.0 / 5040.0 - q2 * (1.0 / 362880.0)))));
-    let c = 1.0 - q2 * (0.5 - q2 * (1.0 / 24.0 - q2 * (1.0 / 720.0 - q2 * (1.0 / 40320.0 - q2 * (1.0 / 3628800.0)))));
+    let s = q
+        * (1.0
+            - q2 * (1.0 / 6.0 - q2 * (1.0 / 120.0 - q2 * (1.0 / 5040.0 - q2 * (1.0 / 362880.0)))));
+    let c = 1.0
+        - q2 * (0.5
+            - q2 * (1.0 / 24.0
+                - q2 * (1.0 / 720.0 - q2 * (1.0 / 40320.0 - q2 * (1.0 / 3628800.0)))));
     (s, c)
 }
 
@@ -86,7 +95,6 @@ pub fn square_to_uniform_triangle(u: Vec2) -> Vec2 {
     Vec2::new(1.0 - su, u.y * su)
 }
 
-
 /// Uniform direction in the cone of half-angle `theta_max` around +z, given
 /// `one_minus_cos_max = 1 - cos(theta_max)` (pass `2 sin^2(theta_max / 2)`: for the Sun's 0.27
 /// degrees, 1 - cos computed in f32 would lose 1% to cancellation).
@@ -112,7 +120,12 @@ mod tests {
     /// Deterministic low-discrepancy points for integration checks (Fibonacci lattice).
     fn lattice(n: usize) -> impl Iterator<Item = Vec2> {
         let g = 0.618_034_f64;
-        (0..n).map(move |i| Vec2::new(((i as f64 + 0.5) / n as f64) as f32, ((i as f64 * g).fract()) as f32))
+        (0..n).map(move |i| {
+            Vec2::new(
+                ((i as f64 + 0.5) / n as f64) as f32,
+                ((i as f64 * g).fract()) as f32,
+            )
+        })
     }
 
     #[test]
@@ -124,8 +137,14 @@ mod tests {
             let q = (k as f32 / 50_000.0 - 1.0) * FRAC_PI_4;
             let (s, c) = sin_cos_quarter(q);
             let (es, ec) = (q as f64).sin_cos();
-            assert!((s as f64 - es).abs() <= f32::EPSILON as f64 * es.abs().max(1e-30), "sin {q}: {s} vs {es}");
-            assert!((c as f64 - ec).abs() <= f32::EPSILON as f64 * ec.abs(), "cos {q}: {c} vs {ec}");
+            assert!(
+                (s as f64 - es).abs() <= f32::EPSILON as f64 * es.abs().max(1e-30),
+                "sin {q}: {s} vs {es}"
+            );
+            assert!(
+                (c as f64 - ec).abs() <= f32::EPSILON as f64 * ec.abs(),
+                "cos {q}: {c} vs {ec}"
+            );
         }
     }
 
@@ -137,14 +156,21 @@ mod tests {
             if o.x == 0.0 && o.y == 0.0 {
                 return Vec2::ZERO;
             }
-            let (r, theta) = if o.x.abs() > o.y.abs() { (o.x, FRAC_PI_4 * (o.y / o.x)) } else { (o.y, 2.0 * FRAC_PI_4 - FRAC_PI_4 * (o.x / o.y)) };
+            let (r, theta) = if o.x.abs() > o.y.abs() {
+                (o.x, FRAC_PI_4 * (o.y / o.x))
+            } else {
+                (o.y, 2.0 * FRAC_PI_4 - FRAC_PI_4 * (o.x / o.y))
+            };
             Vec2::new(r * theta.cos(), r * theta.sin())
         };
         for i in 0..=200 {
             for j in 0..=200 {
                 let u = Vec2::new(i as f32 / 200.0, j as f32 / 200.0);
                 let (a, b) = (square_to_disk_concentric(u), reference(u));
-                assert!((a - b).abs().max_element() <= 4.0 * f32::EPSILON, "{u}: {a} vs {b}");
+                assert!(
+                    (a - b).abs().max_element() <= 4.0 * f32::EPSILON,
+                    "{u}: {a} vs {b}"
+                );
                 assert!(a.length() <= 1.0 + f32::EPSILON);
             }
         }
@@ -163,7 +189,10 @@ mod tests {
         }
         assert!((acc / n as f64 - PI as f64).abs() < 1e-3);
         // And E[z] = 2/3 under cos-weighting (integral of cos^2 / pi over the hemisphere).
-        let mean_z: f64 = lattice(n).map(|u| square_to_cosine_hemisphere(u).z as f64).sum::<f64>() / n as f64;
+        let mean_z: f64 = lattice(n)
+            .map(|u| square_to_cosine_hemisphere(u).z as f64)
+            .sum::<f64>()
+            / n as f64;
         assert!((mean_z - 2.0 / 3.0).abs() < 1e-3, "{mean_z}");
     }
 
@@ -172,7 +201,10 @@ mod tests {
         let n = 1 << 16;
         let mean: Vec3 = lattice(n).map(square_to_uniform_sphere).sum::<Vec3>() / n as f32;
         assert!(mean.length() < 1e-3);
-        let mean_z2: f32 = lattice(n).map(|u| square_to_uniform_sphere(u).z.powi(2)).sum::<f32>() / n as f32;
+        let mean_z2: f32 = lattice(n)
+            .map(|u| square_to_uniform_sphere(u).z.powi(2))
+            .sum::<f32>()
+            / n as f32;
         assert!((mean_z2 - 1.0 / 3.0).abs() < 1e-3);
     }
 

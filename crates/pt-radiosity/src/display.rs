@@ -129,8 +129,18 @@ fn hit(mesh: &PatchMesh, accel: &Accel, ray: &Ray) -> Option<(u32, usize, f32, f
 }
 
 /// Renders the solution. `progress` receives the fraction of rows done.
-pub fn render_image(input: &DisplayInput, camera: &Camera, settings: &ImageSettings, display: Display, progress: &(dyn Fn(f32) + Sync)) -> RenderOutput {
-    let DisplayInput { mesh, accel, radiosity: b } = *input;
+pub fn render_image(
+    input: &DisplayInput,
+    camera: &Camera,
+    settings: &ImageSettings,
+    display: Display,
+    progress: &(dyn Fn(f32) + Sync),
+) -> RenderOutput {
+    let DisplayInput {
+        mesh,
+        accel,
+        radiosity: b,
+    } = *input;
     let corners = match display {
         Display::Smoothed => corner_radiosity(mesh, b),
         _ => Vec::new(),
@@ -139,7 +149,9 @@ pub fn render_image(input: &DisplayInput, camera: &Camera, settings: &ImageSetti
     let start = Instant::now();
     let done = AtomicUsize::new(0);
     let radiance = |ray: Ray, sampler: &mut Sampler| -> [f32; 3] {
-        let Some((p, tri, b1, b2)) = hit(mesh, accel, &ray) else { return [0.0; 3] };
+        let Some((p, tri, b1, b2)) = hit(mesh, accel, &ray) else {
+            return [0.0; 3];
+        };
         if p == NO_PATCH {
             return [0.0; 3];
         }
@@ -156,13 +168,17 @@ pub fn render_image(input: &DisplayInput, camera: &Camera, settings: &ImageSetti
                 let v = t.v.map(|i| mesh.vertices[i as usize]);
                 let x = v[0] * (1.0 - b1 - b2) + v[1] * b1 + v[2] * b2;
                 let frame = Frame::from_normal(patch.normal);
-                let dir = frame.to_world(square_to_cosine_hemisphere(sampler.next_2d())).normalize();
+                let dir = frame
+                    .to_world(square_to_cosine_hemisphere(sampler.next_2d()))
+                    .normalize();
                 let gray = Ray::new(offset_ray_origin(x, patch.normal), dir);
                 let incoming = match hit(mesh, accel, &gray) {
                     Some((q, ..)) if q != NO_PATCH => b[q as usize],
                     _ => [0.0; 3],
                 };
-                std::array::from_fn(|k| (patch.emission[k] + patch.reflectance[k] * incoming[k]) * FRAC_1_PI)
+                std::array::from_fn(|k| {
+                    (patch.emission[k] + patch.reflectance[k] * incoming[k]) * FRAC_1_PI
+                })
             }
         }
     };
@@ -197,5 +213,13 @@ pub fn render_image(input: &DisplayInput, camera: &Camera, settings: &ImageSetti
         variance.push(px.variance_of_mean());
         nonfinite += px.nonfinite as u64;
     }
-    RenderOutput { width: w, height: h, mean, variance, spp: settings.spp, time, nonfinite_samples: nonfinite }
+    RenderOutput {
+        width: w,
+        height: h,
+        mean,
+        variance,
+        spp: settings.spp,
+        time,
+        nonfinite_samples: nonfinite,
+    }
 }

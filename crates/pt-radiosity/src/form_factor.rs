@@ -118,13 +118,22 @@ impl FormFactors {
 
     /// Bytes held (capacity of all arrays).
     pub fn memory_bytes(&self) -> usize {
-        self.row_start.capacity() * 8 + self.col.capacity() * 4 + self.val.capacity() * 4 + self.hit_fraction.capacity() * 4
+        self.row_start.capacity() * 8
+            + self.col.capacity() * 4
+            + self.val.capacity() * 4
+            + self.hit_fraction.capacity() * 4
     }
 
     /// Estimates all form factors with `rays` rays per patch, in parallel over patches. The result
     /// depends only on the mesh, `rays` and `seed`, not on the thread count. `progress` receives
     /// the fraction done.
-    pub fn estimate(mesh: &PatchMesh, accel: &Accel, rays: u32, seed: u64, progress: &(dyn Fn(f32) + Sync)) -> FormFactors {
+    pub fn estimate(
+        mesh: &PatchMesh,
+        accel: &Accel,
+        rays: u32,
+        seed: u64,
+        progress: &(dyn Fn(f32) + Sync),
+    ) -> FormFactors {
         let n = mesh.patches.len();
         let rays = rays.max(1);
         let chunks = n.div_ceil(CHUNK);
@@ -132,7 +141,10 @@ impl FormFactors {
         let parts: Vec<ChunkRows> = (0..chunks)
             .into_par_iter()
             .map_init(
-                || Scratch { perm: Vec::with_capacity(rays as usize), hits: Vec::with_capacity(rays as usize) },
+                || Scratch {
+                    perm: Vec::with_capacity(rays as usize),
+                    hits: Vec::with_capacity(rays as usize),
+                },
                 |scratch, c| {
                     let range = c * CHUNK..((c + 1) * CHUNK).min(n);
                     let mut lens = Vec::with_capacity(range.len());
@@ -141,7 +153,8 @@ impl FormFactors {
                     let mut fracs = Vec::with_capacity(range.len());
                     for i in range {
                         let before = cols.len();
-                        let frac = estimate_row(mesh, accel, i, rays, seed, scratch, &mut cols, &mut vals);
+                        let frac =
+                            estimate_row(mesh, accel, i, rays, seed, scratch, &mut cols, &mut vals);
                         lens.push((cols.len() - before) as u32);
                         fracs.push(frac);
                     }
@@ -255,7 +268,9 @@ impl FormFactors {
     /// target or no entries keep `d_i = 1`.
     fn balance(&mut self, area: &[f32], tol: f64, max_iter: u32) {
         let n = self.len();
-        let target: Vec<f64> = (0..n).map(|i| area[i] as f64 * self.hit_fraction[i] as f64).collect();
+        let target: Vec<f64> = (0..n)
+            .map(|i| area[i] as f64 * self.hit_fraction[i] as f64)
+            .collect();
         let mut d = vec![1.0f64; n];
         let mut s = vec![0.0f64; n];
         let mut iterations = 0;
@@ -264,7 +279,11 @@ impl FormFactors {
             // s = G d
             s.par_iter_mut().enumerate().for_each(|(i, si)| {
                 let (c, v) = self.row(i);
-                *si = area[i] as f64 * c.iter().zip(v).map(|(&j, &f)| f as f64 * d[j as usize]).sum::<f64>();
+                *si = area[i] as f64
+                    * c.iter()
+                        .zip(v)
+                        .map(|(&j, &f)| f as f64 * d[j as usize])
+                        .sum::<f64>();
             });
             let mut worst = 0.0f64;
             for i in 0..n {
@@ -313,7 +332,16 @@ impl FormFactors {
 /// Casts patch `i`'s rays and appends its row (sorted by column) to `cols` / `vals`. Returns the
 /// fraction of rays that hit a patch.
 #[allow(clippy::too_many_arguments)]
-fn estimate_row(mesh: &PatchMesh, accel: &Accel, i: usize, rays: u32, seed: u64, scratch: &mut Scratch, cols: &mut Vec<u32>, vals: &mut Vec<f32>) -> f32 {
+fn estimate_row(
+    mesh: &PatchMesh,
+    accel: &Accel,
+    i: usize,
+    rays: u32,
+    seed: u64,
+    scratch: &mut Scratch,
+    cols: &mut Vec<u32>,
+    vals: &mut Vec<f32>,
+) -> f32 {
     let patch = &mesh.patches[i];
     let tri = &mesh.triangles[patch.triangle as usize];
     let p = tri.v.map(|v| mesh.vertices[v as usize]);
@@ -330,7 +358,12 @@ fn estimate_row(mesh: &PatchMesh, accel: &Accel, i: usize, rays: u32, seed: u64,
     }
     scratch.hits.clear();
     let inv_m = 1.0 / m as f32;
-    let cell = |s: u32, u: Vec2| Vec2::new(((s % m) as f32 + u.x) * inv_m, ((s / m) as f32 + u.y) * inv_m);
+    let cell = |s: u32, u: Vec2| {
+        Vec2::new(
+            ((s % m) as f32 + u.x) * inv_m,
+            ((s / m) as f32 + u.y) * inv_m,
+        )
+    };
     for k in 0..rays {
         let (u_pos, u_dir) = if k < strat {
             let a = sampler.next_2d();
@@ -344,7 +377,9 @@ fn estimate_row(mesh: &PatchMesh, accel: &Accel, i: usize, rays: u32, seed: u64,
         let u_dir = u_dir.min(Vec2::splat(1.0 - f32::EPSILON));
         let b = square_to_uniform_triangle(u_pos);
         let x = p[0] * (1.0 - b.x - b.y) + p[1] * b.x + p[2] * b.y;
-        let dir = frame.to_world(square_to_cosine_hemisphere(u_dir)).normalize();
+        let dir = frame
+            .to_world(square_to_cosine_hemisphere(u_dir))
+            .normalize();
         let ray = Ray::new(offset_ray_origin(x, patch.normal), dir);
         if let Some(prim) = accel.intersect(&ray).map(|h| h.index) {
             let t = accel.original_index[prim] as usize;

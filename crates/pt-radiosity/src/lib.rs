@@ -117,7 +117,10 @@ pub enum RadiosityError {
 
 impl RadiosityError {
     pub(crate) fn scene(loc: &SourceLoc, message: impl Into<String>) -> Self {
-        RadiosityError::Scene { loc: loc.clone(), message: message.into() }
+        RadiosityError::Scene {
+            loc: loc.clone(),
+            message: message.into(),
+        }
     }
 }
 
@@ -176,7 +179,10 @@ impl RadiosityParams {
             return bad("rays_per_patch must be at least 1".into());
         }
         if !(self.tolerance.is_finite() && self.tolerance > 0.0) {
-            return bad(format!("tolerance must be positive, got {}", self.tolerance));
+            return bad(format!(
+                "tolerance must be positive, got {}",
+                self.tolerance
+            ));
         }
         if self.spp == 0 {
             return bad("spp must be at least 1".into());
@@ -249,7 +255,11 @@ pub fn build_accel(mesh: &PatchMesh) -> Accel {
         .iter()
         .map(|t| {
             let p = t.v.map(|v| mesh.vertices[v as usize]);
-            Primitive::Triangle { v0: p[0].into(), e1: (p[1] - p[0]).into(), e2: (p[2] - p[0]).into() }
+            Primitive::Triangle {
+                v0: p[0].into(),
+                e1: (p[1] - p[0]).into(),
+                e2: (p[2] - p[0]).into(),
+            }
         })
         .collect();
     Accel::build(prims, BvhKind::CwBvh)
@@ -258,7 +268,11 @@ pub fn build_accel(mesh: &PatchMesh) -> Accel {
 /// Meshes the scene, estimates the form factors and solves the system. `progress(stage,
 /// fraction)` is called from worker threads with the stage name (`"mesh"`, `"form factors"`,
 /// `"solve"`) and its fraction done in [0, 1].
-pub fn simulate(desc: &SceneDesc, params: &RadiosityParams, progress: &(dyn Fn(&str, f32) + Sync)) -> Result<Simulation, RadiosityError> {
+pub fn simulate(
+    desc: &SceneDesc,
+    params: &RadiosityParams,
+    progress: &(dyn Fn(&str, f32) + Sync),
+) -> Result<Simulation, RadiosityError> {
     params.validate()?;
     let t0 = Instant::now();
     let mesh = PatchMesh::build(desc, params.patch_size, params.max_patches)?;
@@ -268,8 +282,12 @@ pub fn simulate(desc: &SceneDesc, params: &RadiosityParams, progress: &(dyn Fn(&
 
     let t1 = Instant::now();
     let area: Vec<f32> = mesh.patches.iter().map(|p| p.area).collect();
-    let mut ff = FormFactors::estimate(&mesh, &accel, params.rays_per_patch, params.seed, &|f| progress("form factors", f));
-    let raw_rows: f64 = (0..ff.len()).map(|i| area[i] as f64 * ff.hit_fraction[i] as f64).sum();
+    let mut ff = FormFactors::estimate(&mesh, &accel, params.rays_per_patch, params.seed, &|f| {
+        progress("form factors", f)
+    });
+    let raw_rows: f64 = (0..ff.len())
+        .map(|i| area[i] as f64 * ff.hit_fraction[i] as f64)
+        .sum();
     let t_rec = Instant::now();
     ff.enforce_reciprocity(&area, params.reciprocity);
     let reciprocity_time = t_rec.elapsed();
@@ -285,9 +303,14 @@ pub fn simulate(desc: &SceneDesc, params: &RadiosityParams, progress: &(dyn Fn(&
     }
     let t2 = Instant::now();
     let max_iter = params.max_iterations;
-    let solution = solve::solve(&mesh.patches, &ff, params.solver, params.tolerance, max_iter, &|it, _r| {
-        progress("solve", it as f32 / max_iter.max(1) as f32)
-    });
+    let solution = solve::solve(
+        &mesh.patches,
+        &ff,
+        params.solver,
+        params.tolerance,
+        max_iter,
+        &|it, _r| progress("solve", it as f32 / max_iter.max(1) as f32),
+    );
     let solve_time = t2.elapsed();
 
     let total_area = mesh.total_area();
@@ -297,10 +320,17 @@ pub fn simulate(desc: &SceneDesc, params: &RadiosityParams, progress: &(dyn Fn(&
         patch_size: mesh.patch_size,
         form_factor_rays: mesh.patches.len() as u64 * params.rays_per_patch as u64,
         nnz: ff.nnz(),
-        mean_row_sum: if total_area > 0.0 { (raw_rows / total_area) as f32 } else { 0.0 },
+        mean_row_sum: if total_area > 0.0 {
+            (raw_rows / total_area) as f32
+        } else {
+            0.0
+        },
         balance_iterations: ff.balance_iterations,
         form_factor_bytes: ff.memory_bytes(),
-        memory_bytes: ff.memory_bytes() + mesh.memory_bytes() + accel.prims.capacity() * std::mem::size_of::<Primitive>() + accel.original_index.capacity() * 4,
+        memory_bytes: ff.memory_bytes()
+            + mesh.memory_bytes()
+            + accel.prims.capacity() * std::mem::size_of::<Primitive>()
+            + accel.original_index.capacity() * 4,
         mesh_time,
         form_factor_time,
         reciprocity_time,
@@ -312,17 +342,40 @@ pub fn simulate(desc: &SceneDesc, params: &RadiosityParams, progress: &(dyn Fn(&
         converged: solution.converged,
         warnings,
     };
-    Ok(Simulation { mesh, accel, form_factors: ff, solution, stats })
+    Ok(Simulation {
+        mesh,
+        accel,
+        form_factors: ff,
+        solution,
+        stats,
+    })
 }
 
 impl Simulation {
     /// Renders the solution from the scene camera at the scene film's size and filter with
     /// `display`, `spp` samples per pixel and `seed`.
-    pub fn render_image(&self, desc: &SceneDesc, display: Display, spp: u32, seed: u64, progress: &(dyn Fn(f32) + Sync)) -> RenderOutput {
+    pub fn render_image(
+        &self,
+        desc: &SceneDesc,
+        display: Display,
+        spp: u32,
+        seed: u64,
+        progress: &(dyn Fn(f32) + Sync),
+    ) -> RenderOutput {
         let (w, h) = (desc.film.width, desc.film.height);
         let camera = Camera::new(&desc.camera, w, h);
-        let settings = ImageSettings { width: w, height: h, filter: desc.film.filter, spp: spp.max(1), seed };
-        let input = display::DisplayInput { mesh: &self.mesh, accel: &self.accel, radiosity: &self.solution.radiosity };
+        let settings = ImageSettings {
+            width: w,
+            height: h,
+            filter: desc.film.filter,
+            spp: spp.max(1),
+            seed,
+        };
+        let input = display::DisplayInput {
+            mesh: &self.mesh,
+            accel: &self.accel,
+            radiosity: &self.solution.radiosity,
+        };
         display::render_image(&input, &camera, &settings, display, progress)
     }
 }
@@ -331,17 +384,26 @@ impl Simulation {
 /// --integrator radiosity` entry point). The image is linear RGB radiance at the scene film's
 /// size, with the per-pixel variance of the camera sampling, so it can be written like a
 /// path-traced image. `RenderOutput::time` is the whole run (meshing to display).
-pub fn render(desc: &SceneDesc, params: &RadiosityParams, progress: &(dyn Fn(&str, f32) + Sync)) -> Result<(RenderOutput, RadiosityStats), RadiosityError> {
+pub fn render(
+    desc: &SceneDesc,
+    params: &RadiosityParams,
+    progress: &(dyn Fn(&str, f32) + Sync),
+) -> Result<(RenderOutput, RadiosityStats), RadiosityError> {
     let start = Instant::now();
     if desc.film.width == 0 || desc.film.height == 0 {
-        return Err(RadiosityError::Params(format!("image size must be at least 1x1, got {}x{}", desc.film.width, desc.film.height)));
+        return Err(RadiosityError::Params(format!(
+            "image size must be at least 1x1, got {}x{}",
+            desc.film.width, desc.film.height
+        )));
     }
     let sim = simulate(desc, params, progress)?;
     let mut out = if desc.spectral_reason().is_some() {
         // Wavelength-dependent inputs: solve per wavelength bin (see `spectral`).
         spectral::render(desc, params, &sim, progress)?
     } else {
-        sim.render_image(desc, params.display, params.spp, params.seed, &|f| progress("display", f))
+        sim.render_image(desc, params.display, params.spp, params.seed, &|f| {
+            progress("display", f)
+        })
     };
     out.time = start.elapsed();
     Ok((out, sim.stats))
@@ -377,9 +439,18 @@ mod tests {
 
     #[test]
     fn names_parse() {
-        assert_eq!("gauss-seidel".parse::<Solver>().unwrap(), Solver::GaussSeidel);
-        assert_eq!("Final_Gather".parse::<Display>().unwrap(), Display::FinalGather);
-        assert_eq!("balanced".parse::<Reciprocity>().unwrap(), Reciprocity::Balanced);
+        assert_eq!(
+            "gauss-seidel".parse::<Solver>().unwrap(),
+            Solver::GaussSeidel
+        );
+        assert_eq!(
+            "Final_Gather".parse::<Display>().unwrap(),
+            Display::FinalGather
+        );
+        assert_eq!(
+            "balanced".parse::<Reciprocity>().unwrap(),
+            Reciprocity::Balanced
+        );
         let e = "sor".parse::<Solver>().unwrap_err().to_string();
         assert!(e.contains("jacobi, gauss_seidel, progressive"), "{e}");
     }

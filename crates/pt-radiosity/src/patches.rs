@@ -98,7 +98,10 @@ fn material(b: &BsdfDesc, warnings: &mut Vec<String>) -> Result<([f32; 3], bool)
         BsdfKind::Diffuse { reflectance } => {
             let r = rgb(reflectance);
             if !r.iter().all(|v| v.is_finite() && *v >= 0.0) {
-                return Err(RadiosityError::scene(&b.loc, format!("diffuse reflectance {r:?} must be finite and non-negative")));
+                return Err(RadiosityError::scene(
+                    &b.loc,
+                    format!("diffuse reflectance {r:?} must be finite and non-negative"),
+                ));
             }
             if r.iter().any(|&v| v > 1.0) {
                 return Err(RadiosityError::scene(
@@ -232,16 +235,31 @@ impl PatchMesh {
     /// [`DEFAULT_RELATIVE_PATCH_SIZE`] of the scene diagonal). Fails, naming the element, on
     /// invalid input (index out of range, non-finite vertex, bad material or emitter) and when
     /// more than `max_patches` patches would be made.
-    pub fn build(desc: &SceneDesc, patch_size: Option<f32>, max_patches: usize) -> Result<PatchMesh, RadiosityError> {
+    pub fn build(
+        desc: &SceneDesc,
+        patch_size: Option<f32>,
+        max_patches: usize,
+    ) -> Result<PatchMesh, RadiosityError> {
         let bounds = scene_bounds(desc);
         let diag = (bounds.1 - bounds.0).length();
         let h = match patch_size {
             Some(h) if h.is_finite() && h > 0.0 => h,
-            Some(h) => return Err(RadiosityError::Params(format!("patch_size must be positive and finite, got {h}"))),
+            Some(h) => {
+                return Err(RadiosityError::Params(format!(
+                    "patch_size must be positive and finite, got {h}"
+                )))
+            }
             None => (diag * DEFAULT_RELATIVE_PATCH_SIZE).max(f32::MIN_POSITIVE),
         };
-        let mut mesh = PatchMesh { patch_size: h, bounds, ..Default::default() };
-        let mut welder = Welder { map: HashMap::new(), inv_quantum: 1.0 / (1e-6 * diag).max(1e-12) };
+        let mut mesh = PatchMesh {
+            patch_size: h,
+            bounds,
+            ..Default::default()
+        };
+        let mut welder = Welder {
+            map: HashMap::new(),
+            inv_quantum: 1.0 / (1e-6 * diag).max(1e-12),
+        };
 
         // First pass: validate and count, so that a tiny patch size fails before allocating.
         let mut count = 0u64;
@@ -261,13 +279,18 @@ impl PatchMesh {
             ));
         }
         for (si, s) in desc.shapes.iter().enumerate() {
-            let bsdf = desc.bsdfs.get(s.bsdf).ok_or_else(|| RadiosityError::scene(&s.loc, format!("BSDF index {} out of range", s.bsdf)))?;
+            let bsdf = desc.bsdfs.get(s.bsdf).ok_or_else(|| {
+                RadiosityError::scene(&s.loc, format!("BSDF index {} out of range", s.bsdf))
+            })?;
             let (reflectance, two_sided) = material(bsdf, &mut mesh.warnings)?;
             let emission = match &s.emitter {
                 Some(em) => {
                     let le = rgb(&em.radiance);
                     if !le.iter().all(|v| v.is_finite() && *v >= 0.0) {
-                        return Err(RadiosityError::scene(&em.loc, "radiance must be finite and non-negative"));
+                        return Err(RadiosityError::scene(
+                            &em.loc,
+                            "radiance must be finite and non-negative",
+                        ));
                     }
                     le.map(|v| std::f32::consts::PI * v)
                 }
@@ -286,14 +309,37 @@ impl PatchMesh {
                 let centroid = (t[0] + t[1] + t[2]) / 3.0;
                 let tri = mesh.triangles.len() as u32;
                 let front = mesh.patches.len() as u32;
-                mesh.patches.push(Patch { corners: v, area, normal, centroid, reflectance, emission, shape: si as u32, triangle: tri });
+                mesh.patches.push(Patch {
+                    corners: v,
+                    area,
+                    normal,
+                    centroid,
+                    reflectance,
+                    emission,
+                    shape: si as u32,
+                    triangle: tri,
+                });
                 let back = if two_sided {
-                    mesh.patches.push(Patch { corners: v, area, normal: -normal, centroid, reflectance, emission: [0.0; 3], shape: si as u32, triangle: tri });
+                    mesh.patches.push(Patch {
+                        corners: v,
+                        area,
+                        normal: -normal,
+                        centroid,
+                        reflectance,
+                        emission: [0.0; 3],
+                        shape: si as u32,
+                        triangle: tri,
+                    });
                     front + 1
                 } else {
                     NO_PATCH
                 };
-                mesh.triangles.push(Triangle { v, normal, front, back });
+                mesh.triangles.push(Triangle {
+                    v,
+                    normal,
+                    front,
+                    back,
+                });
             };
             match &s.geometry {
                 Geometry::Mesh(m) => {
@@ -303,7 +349,11 @@ impl PatchMesh {
                         split(p, k, &|q| q, &mut |t| add(t, &mut mesh));
                     }
                 }
-                &Geometry::Sphere { center, radius, flip_normals } => {
+                &Geometry::Sphere {
+                    center,
+                    radius,
+                    flip_normals,
+                } => {
                     let (v, faces) = icosahedron();
                     let k = sphere_subdivisions(radius, h);
                     for f in faces {
@@ -311,12 +361,17 @@ impl PatchMesh {
                         if flip_normals {
                             p.swap(1, 2);
                         }
-                        split(p, k, &|q| center + q.normalize() * radius, &mut |t| add(t, &mut mesh));
+                        split(p, k, &|q| center + q.normalize() * radius, &mut |t| {
+                            add(t, &mut mesh)
+                        });
                     }
                 }
             }
             if degenerate > 0 {
-                mesh.warnings.push(format!("{}: {degenerate} zero-area triangles were left out", s.loc));
+                mesh.warnings.push(format!(
+                    "{}: {degenerate} zero-area triangles were left out",
+                    s.loc
+                ));
             }
         }
         Ok(mesh)
@@ -330,11 +385,17 @@ impl PatchMesh {
                 let mut count = 0u64;
                 for (k, idx) in m.indices.iter().enumerate() {
                     if idx.iter().any(|&i| i as usize >= n) {
-                        return Err(RadiosityError::scene(&s.loc, format!("triangle {k} has a vertex index out of range ({n} vertices)")));
+                        return Err(RadiosityError::scene(
+                            &s.loc,
+                            format!("triangle {k} has a vertex index out of range ({n} vertices)"),
+                        ));
                     }
                     let p = idx.map(|i| m.positions[i as usize]);
                     if !p.iter().all(|v| v.is_finite()) {
-                        return Err(RadiosityError::scene(&s.loc, format!("triangle {k} has a non-finite vertex")));
+                        return Err(RadiosityError::scene(
+                            &s.loc,
+                            format!("triangle {k} has a non-finite vertex"),
+                        ));
                     }
                     let k = subdivisions_f(&p, h);
                     count += (k * k).min(u64::MAX as f64 / 4.0) as u64;
@@ -343,7 +404,10 @@ impl PatchMesh {
             }
             &Geometry::Sphere { center, radius, .. } => {
                 if !(center.is_finite() && radius.is_finite() && radius > 0.0) {
-                    return Err(RadiosityError::scene(&s.loc, format!("sphere radius must be positive and finite, got {radius}")));
+                    return Err(RadiosityError::scene(
+                        &s.loc,
+                        format!("sphere radius must be positive and finite, got {radius}"),
+                    ));
                 }
                 let k = sphere_subdivisions_f(radius, h);
                 Ok((20.0 * k * k).min(u64::MAX as f64 / 4.0) as u64)
@@ -377,7 +441,10 @@ impl PatchMesh {
 }
 
 fn subdivisions_f(p: &[Vec3; 3], h: f32) -> f64 {
-    let longest = (p[1] - p[0]).length().max((p[2] - p[1]).length()).max((p[0] - p[2]).length());
+    let longest = (p[1] - p[0])
+        .length()
+        .max((p[2] - p[1]).length())
+        .max((p[0] - p[2]).length());
     ((longest / h) as f64).ceil().max(1.0)
 }
 
@@ -388,7 +455,9 @@ fn subdivisions(p: &[Vec3; 3], h: f32) -> u32 {
 /// Subdivisions of each icosahedron face so that chords stay below `h`: projecting the flat grid
 /// onto the sphere stretches it by at most 1 / inradius = 1.258 (at the face centres).
 fn sphere_subdivisions_f(radius: f32, h: f32) -> f64 {
-    ((ICO_EDGE * radius / (ICO_INRADIUS * h)) as f64).ceil().max(1.0)
+    ((ICO_EDGE * radius / (ICO_INRADIUS * h)) as f64)
+        .ceil()
+        .max(1.0)
 }
 
 fn sphere_subdivisions(radius: f32, h: f32) -> u32 {

@@ -89,12 +89,19 @@ pub fn residual(patches: &[Patch], ff: &FormFactors, b: &[[f32; 3]]) -> [f32; 3]
             let p = &patches[i];
             let mut r = [0.0f64; 3];
             for c in 0..3 {
-                r[c] = p.area as f64 * (p.emission[c] + p.reflectance[c] * h[c] - b[i][c]).abs() as f64;
+                r[c] = p.area as f64
+                    * (p.emission[c] + p.reflectance[c] * h[c] - b[i][c]).abs() as f64;
             }
             r
         })
         .reduce(|| [0.0; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]]);
-    std::array::from_fn(|c| if power[c] > 0.0 { (sums[c] / power[c]) as f32 } else { 0.0 })
+    std::array::from_fn(|c| {
+        if power[c] > 0.0 {
+            (sums[c] / power[c]) as f32
+        } else {
+            0.0
+        }
+    })
 }
 
 fn below(r: &[f32; 3], tol: f32) -> bool {
@@ -104,7 +111,14 @@ fn below(r: &[f32; 3], tol: f32) -> bool {
 /// Solves `B = E + R F B` with `solver` until the relative residual of every channel is below
 /// `tolerance` or `max_iterations` iterations were done. `progress` receives the iteration
 /// count and the largest residual channel.
-pub fn solve(patches: &[Patch], ff: &FormFactors, solver: Solver, tolerance: f32, max_iterations: u32, progress: &(dyn Fn(u32, f32) + Sync)) -> Solution {
+pub fn solve(
+    patches: &[Patch],
+    ff: &FormFactors,
+    solver: Solver,
+    tolerance: f32,
+    max_iterations: u32,
+    progress: &(dyn Fn(u32, f32) + Sync),
+) -> Solution {
     let n = patches.len();
     let mut b: Vec<[f32; 3]> = patches.iter().map(|p| p.emission).collect();
     let mut history = Vec::new();
@@ -131,7 +145,13 @@ pub fn solve(patches: &[Patch], ff: &FormFactors, solver: Solver, tolerance: f32
                         r
                     })
                     .reduce(|| [0.0; 3], |a, b| [a[0] + b[0], a[1] + b[1], a[2] + b[2]]);
-                let r: [f32; 3] = std::array::from_fn(|c| if power[c] > 0.0 { (sums[c] / power[c]) as f32 } else { 0.0 });
+                let r: [f32; 3] = std::array::from_fn(|c| {
+                    if power[c] > 0.0 {
+                        (sums[c] / power[c]) as f32
+                    } else {
+                        0.0
+                    }
+                });
                 // The residual just measured belongs to b, before this update.
                 if below(&r, tolerance) {
                     converged = true;
@@ -164,7 +184,8 @@ pub fn solve(patches: &[Patch], ff: &FormFactors, solver: Solver, tolerance: f32
             // Radiosity and unshot radiosity accumulate thousands of small shots per patch: kept
             // in f64 so that rounding stays far below the tolerance (f32 drifted by 1e-5).
             let power = emitted_power(patches);
-            let mut acc: Vec<[f64; 3]> = patches.iter().map(|p| p.emission.map(f64::from)).collect();
+            let mut acc: Vec<[f64; 3]> =
+                patches.iter().map(|p| p.emission.map(f64::from)).collect();
             let mut unshot = acc.clone();
             let key = |u: &[f64; 3], a: f32| (a as f64 * (u[0] + u[1] + u[2])) as f32;
             let mut tree = MaxTree::new(n);
@@ -178,7 +199,13 @@ pub fn solve(patches: &[Patch], ff: &FormFactors, solver: Solver, tolerance: f32
                         s[c] += p.area as f64 * u[c];
                     }
                 }
-                std::array::from_fn(|c| if power[c] > 0.0 { (s[c] / power[c]) as f32 } else { 0.0 })
+                std::array::from_fn(|c| {
+                    if power[c] > 0.0 {
+                        (s[c] / power[c]) as f32
+                    } else {
+                        0.0
+                    }
+                })
             };
             'outer: while iterations < max_iterations {
                 let r = unshot_fraction(&unshot);
@@ -222,7 +249,14 @@ pub fn solve(patches: &[Patch], ff: &FormFactors, solver: Solver, tolerance: f32
         }
     }
     let residual = residual(patches, ff, &b);
-    Solution { radiosity: b, iterations, shots, residual, history, converged }
+    Solution {
+        radiosity: b,
+        iterations,
+        shots,
+        residual,
+        history,
+        converged,
+    }
 }
 
 /// A max segment tree over `n` non-negative keys: `set` and `argmax` in O(log n).
@@ -239,7 +273,11 @@ impl MaxTree {
         for (i, v) in idx[size..].iter_mut().enumerate() {
             *v = i as u32;
         }
-        MaxTree { size, key: vec![0.0; 2 * size], idx }
+        MaxTree {
+            size,
+            key: vec![0.0; 2 * size],
+            idx,
+        }
     }
 
     fn set(&mut self, i: usize, k: f32) {

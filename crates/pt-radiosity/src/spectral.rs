@@ -34,7 +34,10 @@ fn bin_means(s: &Spectrum) -> [f32; BINS] {
     std::array::from_fn(|b| {
         let (a, z) = bin_range(b);
         let n = (z - a).round().max(1.0) as usize;
-        (0..n).map(|i| s.eval(a + (i as f32 + 0.5) * (z - a) / n as f32)).sum::<f32>() / n as f32
+        (0..n)
+            .map(|i| s.eval(a + (i as f32 + 0.5) * (z - a) / n as f32))
+            .sum::<f32>()
+            / n as f32
     })
 }
 
@@ -68,18 +71,35 @@ fn reflectance(kind: &BsdfKind) -> Spectrum {
 /// Solves and displays `sim` (solved in RGB, which built the mesh and form factors) per
 /// wavelength bin and returns the sRGB image. The variance is the conservative bound
 /// `(sum_b |w_b| sd_b)^2` of the sum of correlated bin images (they share camera samples).
-pub fn render(desc: &SceneDesc, params: &RadiosityParams, sim: &Simulation, progress: &(dyn Fn(&str, f32) + Sync)) -> Result<RenderOutput, RadiosityError> {
+pub fn render(
+    desc: &SceneDesc,
+    params: &RadiosityParams,
+    sim: &Simulation,
+    progress: &(dyn Fn(&str, f32) + Sync),
+) -> Result<RenderOutput, RadiosityError> {
     // Per shape: bin means of reflectance and of emitted radiosity (pi Le).
     let mut shape_bins: Vec<([f32; BINS], [f32; BINS])> = Vec::with_capacity(desc.shapes.len());
     for shape in &desc.shapes {
-        let refl = desc.bsdfs.get(shape.bsdf).map_or([0.0; BINS], |b| bin_means(&reflectance(&b.kind)));
-        let emit = shape.emitter.as_ref().map_or([0.0; BINS], |e| bin_means(&pt_render::scene::spectrum_for(&e.radiance, true)).map(|v| v * std::f32::consts::PI));
+        let refl = desc
+            .bsdfs
+            .get(shape.bsdf)
+            .map_or([0.0; BINS], |b| bin_means(&reflectance(&b.kind)));
+        let emit = shape.emitter.as_ref().map_or([0.0; BINS], |e| {
+            bin_means(&pt_render::scene::spectrum_for(&e.radiance, true))
+                .map(|v| v * std::f32::consts::PI)
+        });
         shape_bins.push((refl, emit));
     }
     let weights = film_weights();
     let (w, h) = (desc.film.width, desc.film.height);
     let camera = Camera::new(&desc.camera, w, h);
-    let settings = ImageSettings { width: w, height: h, filter: desc.film.filter, spp: params.spp.max(1), seed: params.seed };
+    let settings = ImageSettings {
+        width: w,
+        height: h,
+        filter: desc.film.filter,
+        spp: params.spp.max(1),
+        seed: params.seed,
+    };
     let npx = (w * h) as usize;
     let mut xyz = vec![[0.0f64; 3]; npx];
     let mut sd = vec![[0.0f64; 3]; npx];
@@ -87,22 +107,42 @@ pub fn render(desc: &SceneDesc, params: &RadiosityParams, sim: &Simulation, prog
     for group in 0..BINS / 3 {
         let mut mesh: PatchMesh = sim.mesh.clone();
         for p in &mut mesh.patches {
-            let (refl, emit) = shape_bins.get(p.shape as usize).copied().unwrap_or(([0.0; BINS], [0.0; BINS]));
+            let (refl, emit) = shape_bins
+                .get(p.shape as usize)
+                .copied()
+                .unwrap_or(([0.0; BINS], [0.0; BINS]));
             // Patches the RGB solve made black (the back of one-sided surfaces) or not
             // emitting stay so.
             let reflects = p.reflectance.iter().any(|&r| r > 0.0);
             let emits = p.emission.iter().any(|&e| e > 0.0);
-            p.reflectance = std::array::from_fn(|c| if reflects { refl[3 * group + c] } else { 0.0 });
+            p.reflectance =
+                std::array::from_fn(|c| if reflects { refl[3 * group + c] } else { 0.0 });
             p.emission = std::array::from_fn(|c| if emits { emit[3 * group + c] } else { 0.0 });
         }
-        let solution = solve::solve(&mesh.patches, &sim.form_factors, params.solver, params.tolerance, params.max_iterations, &|_, _| {});
-        let input = DisplayInput { mesh: &mesh, accel: &sim.accel, radiosity: &solution.radiosity };
-        let img = display::render_image(&input, &camera, &settings, params.display, &|f| progress("display", (group as f32 + f) / (BINS / 3) as f32));
+        let solution = solve::solve(
+            &mesh.patches,
+            &sim.form_factors,
+            params.solver,
+            params.tolerance,
+            params.max_iterations,
+            &|_, _| {},
+        );
+        let input = DisplayInput {
+            mesh: &mesh,
+            accel: &sim.accel,
+            radiosity: &solution.radiosity,
+        };
+        let img = display::render_image(&input, &camera, &settings, params.display, &|f| {
+            progress("display", (group as f32 + f) / (BINS / 3) as f32)
+        });
         time += img.time;
         for i in 0..npx {
             for c in 0..3 {
                 let wb = weights[3 * group + c];
-                let (l, v) = (img.mean[i][c] as f64, (img.variance[i][c] as f64).max(0.0).sqrt());
+                let (l, v) = (
+                    img.mean[i][c] as f64,
+                    (img.variance[i][c] as f64).max(0.0).sqrt(),
+                );
                 for k in 0..3 {
                     xyz[i][k] += l * wb[k];
                     sd[i][k] += v * wb[k].abs();
@@ -110,7 +150,10 @@ pub fn render(desc: &SceneDesc, params: &RadiosityParams, sim: &Simulation, prog
             }
         }
     }
-    let mean = xyz.iter().map(|x| xyz_to_srgb([x[0] as f32, x[1] as f32, x[2] as f32])).collect();
+    let mean = xyz
+        .iter()
+        .map(|x| xyz_to_srgb([x[0] as f32, x[1] as f32, x[2] as f32]))
+        .collect();
     // sRGB is a linear map of XYZ: bound each channel's sd by the absolute row sums.
     let variance = sd
         .iter()
@@ -121,5 +164,13 @@ pub fn render(desc: &SceneDesc, params: &RadiosityParams, sim: &Simulation, prog
             std::array::from_fn(|c| (b[c] + g[c] + z[c]).powi(2))
         })
         .collect();
-    Ok(RenderOutput { width: w, height: h, mean, variance, spp: settings.spp, time, nonfinite_samples: 0 })
+    Ok(RenderOutput {
+        width: w,
+        height: h,
+        mean,
+        variance,
+        spp: settings.spp,
+        time,
+        nonfinite_samples: 0,
+    })
 }

@@ -57,7 +57,12 @@ const ROOM: &str = r#"<scene version="3.0.0">
 </scene>"#;
 
 fn params(h: f32, rays: u32) -> RadiosityParams {
-    RadiosityParams { patch_size: Some(h), rays_per_patch: rays, tolerance: 1e-5, ..Default::default() }
+    RadiosityParams {
+        patch_size: Some(h),
+        rays_per_patch: rays,
+        tolerance: 1e-5,
+        ..Default::default()
+    }
 }
 
 /// Inside a closed sphere with uniform emission E and reflectance R, every patch has
@@ -70,11 +75,16 @@ fn params(h: f32, rays: u32) -> RadiosityParams {
 #[test]
 fn sphere_interior_matches_closed_form() {
     let desc = load(SPHERE);
-    let want_b: [f32; 3] = std::array::from_fn(|c| std::f32::consts::PI * SPHERE_LE[c] / (1.0 - SPHERE_R[c]));
+    let want_b: [f32; 3] =
+        std::array::from_fn(|c| std::f32::consts::PI * SPHERE_LE[c] / (1.0 - SPHERE_R[c]));
     let mut worst = 0.0f32;
     for reciprocity in [Reciprocity::None, Reciprocity::Balanced] {
         for solver in [Solver::Jacobi, Solver::GaussSeidel, Solver::Progressive] {
-            let p = RadiosityParams { reciprocity, solver, ..params(0.3, 256) };
+            let p = RadiosityParams {
+                reciprocity,
+                solver,
+                ..params(0.3, 256)
+            };
             let sim = simulate(&desc, &p, &|_, _| {}).unwrap();
             assert!(sim.stats.converged, "{solver:?} {reciprocity:?}");
             if solver == Solver::Progressive && reciprocity == Reciprocity::None {
@@ -87,14 +97,23 @@ fn sphere_interior_matches_closed_form() {
                 // Every ray hits: the raw row sums are exactly 1 (counts / 256 are exact in f32).
                 for i in 0..sim.form_factors.len() {
                     assert_eq!(sim.form_factors.hit_fraction[i], 1.0);
-                    assert!((sim.form_factors.row_sum(i) - 1.0).abs() < 1e-6, "row {i}: {}", sim.form_factors.row_sum(i));
+                    assert!(
+                        (sim.form_factors.row_sum(i) - 1.0).abs() < 1e-6,
+                        "row {i}: {}",
+                        sim.form_factors.row_sum(i)
+                    );
                 }
             }
             for b in &sim.solution.radiosity {
                 for c in 0..3 {
                     let e = (b[c] / want_b[c] - 1.0).abs();
                     worst = worst.max(e);
-                    assert!(e < 1e-3, "{solver:?} {reciprocity:?} channel {c}: B {} vs {}", b[c], want_b[c]);
+                    assert!(
+                        e < 1e-3,
+                        "{solver:?} {reciprocity:?} channel {c}: B {} vs {}",
+                        b[c],
+                        want_b[c]
+                    );
                 }
             }
             if solver == Solver::GaussSeidel && reciprocity == Reciprocity::Balanced {
@@ -103,16 +122,40 @@ fn sphere_interior_matches_closed_form() {
                     for px in &img.mean {
                         for c in 0..3 {
                             let want = SPHERE_LE[c] / (1.0 - SPHERE_R[c]);
-                            assert!((px[c] / want - 1.0).abs() < 1e-3, "{display:?}: {} vs {want}", px[c]);
+                            assert!(
+                                (px[c] / want - 1.0).abs() < 1e-3,
+                                "{display:?}: {} vs {want}",
+                                px[c]
+                            );
                         }
                     }
                 }
             }
         }
     }
-    println!("sphere interior: {} patches, largest relative error of B {worst:.2e}", simulate(&desc, &params(0.3, 256), &|_, _| {}).unwrap().stats.patches);
-    let raw_progressive = simulate(&desc, &RadiosityParams { reciprocity: Reciprocity::None, solver: Solver::Progressive, ..params(0.3, 256) }, &|_, _| {}).unwrap();
-    let e = raw_progressive.solution.radiosity.iter().map(|b| (b[0] / want_b[0] - 1.0).abs()).fold(0.0f32, f32::max);
+    println!(
+        "sphere interior: {} patches, largest relative error of B {worst:.2e}",
+        simulate(&desc, &params(0.3, 256), &|_, _| {})
+            .unwrap()
+            .stats
+            .patches
+    );
+    let raw_progressive = simulate(
+        &desc,
+        &RadiosityParams {
+            reciprocity: Reciprocity::None,
+            solver: Solver::Progressive,
+            ..params(0.3, 256)
+        },
+        &|_, _| {},
+    )
+    .unwrap();
+    let e = raw_progressive
+        .solution
+        .radiosity
+        .iter()
+        .map(|b| (b[0] / want_b[0] - 1.0).abs())
+        .fold(0.0f32, f32::max);
     println!("progressive without reciprocity: largest relative error of B {e:.2e} (solves the transposed estimate)");
 }
 
@@ -128,8 +171,21 @@ fn sphere_interior_matches_closed_form() {
 fn energy_balance() {
     let desc = load(ROOM);
     for solver in [Solver::Jacobi, Solver::GaussSeidel, Solver::Progressive] {
-        for reciprocity in [Reciprocity::None, Reciprocity::Average, Reciprocity::Balanced] {
-            let sim = simulate(&desc, &RadiosityParams { solver, reciprocity, ..params(0.25, 256) }, &|_, _| {}).unwrap();
+        for reciprocity in [
+            Reciprocity::None,
+            Reciprocity::Average,
+            Reciprocity::Balanced,
+        ] {
+            let sim = simulate(
+                &desc,
+                &RadiosityParams {
+                    solver,
+                    reciprocity,
+                    ..params(0.25, 256)
+                },
+                &|_, _| {},
+            )
+            .unwrap();
             let (mesh, ff, b) = (&sim.mesh, &sim.form_factors, &sim.solution.radiosity);
             let mut emitted = [0.0f64; 3];
             let mut leaving = [0.0f64; 3];
@@ -150,11 +206,17 @@ fn energy_balance() {
                 // Progressive shooting without reciprocity solves the transposed estimate, not
                 // this system (see sphere_interior_matches_closed_form).
                 if !(solver == Solver::Progressive && reciprocity == Reciprocity::None) {
-                    assert!(local < 1e-5, "{solver:?} {reciprocity:?}: sum A B off by {local:.2e}");
+                    assert!(
+                        local < 1e-5,
+                        "{solver:?} {reciprocity:?}: sum A B off by {local:.2e}"
+                    );
                 }
                 let global = (absorbed[c] / emitted[c] - 1.0).abs();
                 if reciprocity == Reciprocity::Balanced {
-                    assert!(global < 1e-3, "{solver:?}: absorbed/emitted - 1 = {global:.2e}");
+                    assert!(
+                        global < 1e-3,
+                        "{solver:?}: absorbed/emitted - 1 = {global:.2e}"
+                    );
                 }
                 if c == 0 && solver == Solver::GaussSeidel {
                     println!("{reciprocity:?}: emitted {:.4} absorbed {:.4} (relative error {global:.2e}), sum AB identity {local:.1e}", emitted[c], absorbed[c]);
@@ -172,16 +234,37 @@ fn energy_balance() {
 #[test]
 fn reciprocity_after_symmetrisation() {
     let desc = load(ROOM);
-    let raw = simulate(&desc, &RadiosityParams { reciprocity: Reciprocity::None, ..params(0.25, 256) }, &|_, _| {}).unwrap();
+    let raw = simulate(
+        &desc,
+        &RadiosityParams {
+            reciprocity: Reciprocity::None,
+            ..params(0.25, 256)
+        },
+        &|_, _| {},
+    )
+    .unwrap();
     let area: Vec<f32> = raw.mesh.patches.iter().map(|p| p.area).collect();
     let raw_err = raw.form_factors.max_reciprocity_error(&area);
-    assert!(raw_err > 0.5, "raw estimates should not be reciprocal: {raw_err}");
+    assert!(
+        raw_err > 0.5,
+        "raw estimates should not be reciprocal: {raw_err}"
+    );
     for mode in [Reciprocity::Average, Reciprocity::Balanced] {
-        let sim = simulate(&desc, &RadiosityParams { reciprocity: mode, ..params(0.25, 256) }, &|_, _| {}).unwrap();
+        let sim = simulate(
+            &desc,
+            &RadiosityParams {
+                reciprocity: mode,
+                ..params(0.25, 256)
+            },
+            &|_, _| {},
+        )
+        .unwrap();
         let ff = &sim.form_factors;
         let err = ff.max_reciprocity_error(&area);
         assert!(err < 1e-5, "{mode:?}: {err}");
-        let row_err = (0..ff.len()).map(|i| (ff.row_sum(i) - ff.hit_fraction[i]).abs()).fold(0.0f32, f32::max);
+        let row_err = (0..ff.len())
+            .map(|i| (ff.row_sum(i) - ff.hit_fraction[i]).abs())
+            .fold(0.0f32, f32::max);
         if mode == Reciprocity::Balanced {
             assert!(row_err < 1e-5, "balanced row sums off by {row_err}");
         }
@@ -199,16 +282,46 @@ fn solvers_agree() {
     let desc = load(ROOM);
     let sims: Vec<_> = [Solver::Jacobi, Solver::GaussSeidel, Solver::Progressive]
         .into_iter()
-        .map(|solver| simulate(&desc, &RadiosityParams { solver, ..params(0.25, 256) }, &|_, _| {}).unwrap())
+        .map(|solver| {
+            simulate(
+                &desc,
+                &RadiosityParams {
+                    solver,
+                    ..params(0.25, 256)
+                },
+                &|_, _| {},
+            )
+            .unwrap()
+        })
         .collect();
     let area: Vec<f64> = sims[0].mesh.patches.iter().map(|p| p.area as f64).collect();
-    let norm: f64 = sims[0].solution.radiosity.iter().zip(&area).map(|(b, a)| a * b[0] as f64).sum();
+    let norm: f64 = sims[0]
+        .solution
+        .radiosity
+        .iter()
+        .zip(&area)
+        .map(|(b, a)| a * b[0] as f64)
+        .sum();
     for s in &sims[1..] {
-        let diff: f64 = s.solution.radiosity.iter().zip(&sims[0].solution.radiosity).zip(&area).map(|((x, y), a)| a * (x[0] - y[0]).abs() as f64).sum();
-        assert!(diff / norm < 1e-4, "solutions differ by {:.2e}", diff / norm);
+        let diff: f64 = s
+            .solution
+            .radiosity
+            .iter()
+            .zip(&sims[0].solution.radiosity)
+            .zip(&area)
+            .map(|((x, y), a)| a * (x[0] - y[0]).abs() as f64)
+            .sum();
+        assert!(
+            diff / norm < 1e-4,
+            "solutions differ by {:.2e}",
+            diff / norm
+        );
     }
     let h = &sims[0].solution.history;
-    assert!(h.windows(2).all(|w| w[1][0] <= w[0][0]), "Jacobi residual not decreasing: {h:?}");
+    assert!(
+        h.windows(2).all(|w| w[1][0] <= w[0][0]),
+        "Jacobi residual not decreasing: {h:?}"
+    );
     assert!(sims[1].solution.iterations <= sims[0].solution.iterations);
     for (s, name) in sims.iter().zip(["Jacobi", "Gauss-Seidel", "progressive"]) {
         println!(
@@ -216,7 +329,11 @@ fn solvers_agree() {
             s.solution.iterations,
             s.solution.shots,
             s.solution.residual[0],
-            s.solution.history.iter().map(|r| format!("{:.1e}", r[0])).collect::<Vec<_>>()
+            s.solution
+                .history
+                .iter()
+                .map(|r| format!("{:.1e}", r[0]))
+                .collect::<Vec<_>>()
         );
     }
 }
@@ -226,16 +343,29 @@ fn solvers_agree() {
 #[test]
 fn deterministic_for_a_seed() {
     let desc = load(ROOM);
-    let p = RadiosityParams { display: Display::FinalGather, spp: 2, ..params(0.3, 64) };
+    let p = RadiosityParams {
+        display: Display::FinalGather,
+        spp: 2,
+        ..params(0.3, 64)
+    };
     let run = |threads: usize, p: &RadiosityParams| {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
         pool.install(|| render(&desc, p, &|_, _| {}).unwrap())
     };
     let (a, sa) = run(1, &p);
     let (b, sb) = run(2, &p);
     assert_eq!(a.mean, b.mean);
     assert_eq!(sa.nnz, sb.nnz);
-    let (c, _) = run(2, &RadiosityParams { seed: 7, ..p.clone() });
+    let (c, _) = run(
+        2,
+        &RadiosityParams {
+            seed: 7,
+            ..p.clone()
+        },
+    );
     assert_ne!(a.mean, c.mean);
 }
 
@@ -245,26 +375,63 @@ fn deterministic_for_a_seed() {
 fn bad_input_is_an_error() {
     let desc = load(ROOM);
     for p in [
-        RadiosityParams { rays_per_patch: 0, ..Default::default() },
-        RadiosityParams { tolerance: 0.0, ..Default::default() },
-        RadiosityParams { spp: 0, ..Default::default() },
-        RadiosityParams { patch_size: Some(-1.0), ..Default::default() },
-        RadiosityParams { patch_size: Some(f32::NAN), ..Default::default() },
-        RadiosityParams { patch_size: Some(1e-6), ..Default::default() },
+        RadiosityParams {
+            rays_per_patch: 0,
+            ..Default::default()
+        },
+        RadiosityParams {
+            tolerance: 0.0,
+            ..Default::default()
+        },
+        RadiosityParams {
+            spp: 0,
+            ..Default::default()
+        },
+        RadiosityParams {
+            patch_size: Some(-1.0),
+            ..Default::default()
+        },
+        RadiosityParams {
+            patch_size: Some(f32::NAN),
+            ..Default::default()
+        },
+        RadiosityParams {
+            patch_size: Some(1e-6),
+            ..Default::default()
+        },
     ] {
         let err = render(&desc, &p, &|_, _| {}).expect_err("must fail");
         assert!(matches!(err, RadiosityError::Params(_)), "{err}");
     }
-    let bright = ROOM.replace(r#"<float name="reflectance" value="0.3"/>"#, r#"<float name="reflectance" value="1.5"/>"#);
-    let err = render(&load(&bright), &params(0.5, 16), &|_, _| {}).expect_err("albedo > 1 must fail");
-    assert!(matches!(err, RadiosityError::Scene { .. }) && err.to_string().contains("<test>:"), "{err}");
+    let bright = ROOM.replace(
+        r#"<float name="reflectance" value="0.3"/>"#,
+        r#"<float name="reflectance" value="1.5"/>"#,
+    );
+    let err =
+        render(&load(&bright), &params(0.5, 16), &|_, _| {}).expect_err("albedo > 1 must fail");
+    assert!(
+        matches!(err, RadiosityError::Scene { .. }) && err.to_string().contains("<test>:"),
+        "{err}"
+    );
     // Lights radiosity cannot represent are reported, not silently dropped.
-    let point = ROOM.replace("</scene>", r#"<emitter type="point"><point name="position" value="0, 0, 0"/>
-        <rgb name="intensity" value="1, 1, 1"/></emitter></scene>"#);
+    let point = ROOM.replace(
+        "</scene>",
+        r#"<emitter type="point"><point name="position" value="0, 0, 0"/>
+        <rgb name="intensity" value="1, 1, 1"/></emitter></scene>"#,
+    );
     let (_, stats) = render(&load(&point), &params(0.5, 16), &|_, _| {}).unwrap();
-    assert!(stats.warnings.iter().any(|w| w.contains("light is ignored") && w.contains("<test>:")), "{:?}", stats.warnings);
-    let empty = load(r#"<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm">
-        <integer name="width" value="4"/><integer name="height" value="4"/></film></sensor></scene>"#);
+    assert!(
+        stats
+            .warnings
+            .iter()
+            .any(|w| w.contains("light is ignored") && w.contains("<test>:")),
+        "{:?}",
+        stats.warnings
+    );
+    let empty = load(
+        r#"<scene version="3.0.0"><sensor type="perspective"><film type="hdrfilm">
+        <integer name="width" value="4"/><integer name="height" value="4"/></film></sensor></scene>"#,
+    );
     let (img, stats) = render(&empty, &RadiosityParams::default(), &|_, _| {}).unwrap();
     assert_eq!(stats.patches, 0);
     assert!(img.mean.iter().all(|p| *p == [0.0; 3]));
@@ -303,7 +470,11 @@ fn relmse(img: &pt_render::RenderOutput, reference: &pt_image::Image) -> f64 {
 
 /// relMSE after averaging both images over `k x k` blocks (k = 1: per pixel).
 fn relmse_blocks(img: &pt_render::RenderOutput, reference: &pt_image::Image, k: u32) -> f64 {
-    let img = pt_image::Image { width: img.width, height: img.height, data: img.mean.clone() };
+    let img = pt_image::Image {
+        width: img.width,
+        height: img.height,
+        data: img.mean.clone(),
+    };
     let m = pt_image::metrics::compare(&blocks(&img, k), &blocks(reference, k)).unwrap();
     assert_eq!(m.nonfinite_pixels, 0);
     m.relmse_all
@@ -329,9 +500,21 @@ fn cornell_converges_to_path_traced_reference() {
     let mut flat_blocks = 0.0;
     for (k, &h) in sizes.iter().enumerate() {
         let t = std::time::Instant::now();
-        let sim = simulate(&desc, &RadiosityParams { patch_size: Some(h), rays_per_patch: 256, ..Default::default() }, &|_, _| {}).unwrap();
+        let sim = simulate(
+            &desc,
+            &RadiosityParams {
+                patch_size: Some(h),
+                rays_per_patch: 256,
+                ..Default::default()
+            },
+            &|_, _| {},
+        )
+        .unwrap();
         assert!(sim.stats.converged && sim.stats.warnings.is_empty());
-        smooth.push(relmse(&sim.render_image(&desc, Display::Smoothed, 4, 0, &|_| {}), &reference));
+        smooth.push(relmse(
+            &sim.render_image(&desc, Display::Smoothed, 4, 0, &|_| {}),
+            &reference,
+        ));
         let constant = sim.render_image(&desc, Display::Constant, 4, 0, &|_| {});
         flat.push(relmse(&constant, &reference));
         if k == 0 {
@@ -353,11 +536,17 @@ fn cornell_converges_to_path_traced_reference() {
         );
     }
     for w in smooth.windows(2) {
-        assert!(w[1] < 0.95 * w[0], "smoothed relMSE must decrease: {smooth:?}");
+        assert!(
+            w[1] < 0.95 * w[0],
+            "smoothed relMSE must decrease: {smooth:?}"
+        );
     }
     assert!(smooth[3] < 0.6 * smooth[0], "{smooth:?}");
     assert!(flat[3] < 0.85 * flat[0], "{flat:?}");
-    assert!(gather < flat_blocks, "gather {gather} vs constant {flat_blocks}");
+    assert!(
+        gather < flat_blocks,
+        "gather {gather} vs constant {flat_blocks}"
+    );
 }
 
 /// Memory and time at about 10k and 50k patches (Cornell box, default 1024 rays per patch).
@@ -367,10 +556,16 @@ fn cornell_converges_to_path_traced_reference() {
 fn memory_and_time_study() {
     let (desc, reference) = cornell();
     for h in [0.1f32, 0.045] {
-        let params = RadiosityParams { patch_size: Some(h), ..Default::default() };
+        let params = RadiosityParams {
+            patch_size: Some(h),
+            ..Default::default()
+        };
         let sim = simulate(&desc, &params, &|_, _| {}).unwrap();
         let s = &sim.stats;
-        let e = relmse(&sim.render_image(&desc, Display::Smoothed, 4, 0, &|_| {}), &reference);
+        let e = relmse(
+            &sim.render_image(&desc, Display::Smoothed, 4, 0, &|_| {}),
+            &reference,
+        );
         println!(
             "h {h}: {} patches, {} rays, nnz {} ({:.0}/row), form factors {:.1} MB, total {:.1} MB, ff {:.1} s (reciprocity {:.1} s, {} balancing it), solve {:.2} s ({} it), relMSE {e:.5}",
             s.patches,

@@ -58,7 +58,10 @@ struct Rng(u64);
 
 impl Rng {
     fn next_f32(&mut self) -> f32 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
         (self.0 >> 40) as f32 / (1u64 << 24) as f32
     }
 }
@@ -89,7 +92,10 @@ fn displaced_sphere(n: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
         let base = pos.len() as u32;
         for j in 0..=n {
             for i in 0..=n {
-                let (s, t) = (2.0 * i as f32 / n as f32 - 1.0, 2.0 * j as f32 / n as f32 - 1.0);
+                let (s, t) = (
+                    2.0 * i as f32 / n as f32 - 1.0,
+                    2.0 * j as f32 / n as f32 - 1.0,
+                );
                 let d = (normal + u * s + v * t).normalize();
                 let bump = 0.06 * (7.0 * d.x).sin() * (9.0 * d.y).sin() * (5.0 * d.z).sin()
                     + 0.02 * (31.0 * d.x + 3.0).sin() * (27.0 * d.z).sin()
@@ -114,7 +120,12 @@ fn lookat(origin: Vec3, target: Vec3, up: Vec3) -> Mat4 {
     let dir = (target - origin).normalize();
     let left = up.cross(dir).normalize();
     let new_up = dir.cross(left);
-    Mat4::from_cols(left.extend(0.0), new_up.extend(0.0), dir.extend(0.0), origin.extend(1.0))
+    Mat4::from_cols(
+        left.extend(0.0),
+        new_up.extend(0.0),
+        dir.extend(0.0),
+        origin.extend(1.0),
+    )
 }
 
 /// One ray through each pixel centre of a RES x RES image, scanline order.
@@ -131,10 +142,12 @@ fn camera_rays(camera: &Camera) -> Vec<Ray> {
 
 /// Origins uniform in the bounds of `prims`, directions uniform on the sphere.
 fn random_rays(prims: &[Primitive], seed: u64) -> Vec<Ray> {
-    let (lo, hi) = prims.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
-        let b = p.aabb();
-        (lo.min(Vec3::from(b.min)), hi.max(Vec3::from(b.max)))
-    });
+    let (lo, hi) = prims
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+            let b = p.aabb();
+            (lo.min(Vec3::from(b.min)), hi.max(Vec3::from(b.max)))
+        });
     let mut rng = Rng(seed);
     (0..RAYS)
         .map(|_| {
@@ -156,13 +169,25 @@ struct Case {
 
 fn cornell_case() -> Case {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.xml");
-    let desc = pt_scene::load_file(&path, &[("width".into(), RES.to_string()), ("height".into(), RES.to_string())])
-        .unwrap_or_else(|e| panic!("cannot load {}: {e}", path.display()));
+    let desc = pt_scene::load_file(
+        &path,
+        &[
+            ("width".into(), RES.to_string()),
+            ("height".into(), RES.to_string()),
+        ],
+    )
+    .unwrap_or_else(|e| panic!("cannot load {}: {e}", path.display()));
     // The primitives as the renderer builds them: the box's 36 triangles are 18 parallelograms.
-    let scene = Scene::build(&desc, BvhKind::CwBvh, LightSelection::Power).unwrap_or_else(|e| panic!("cannot build {}: {e:?}", path.display()));
+    let scene = Scene::build(&desc, BvhKind::CwBvh, LightSelection::Power)
+        .unwrap_or_else(|e| panic!("cannot build {}: {e:?}", path.display()));
     let prims = scene.primitives().to_vec();
     let camera = Camera::new(&desc.camera, RES, RES);
-    Case { scene: "cornell".into(), coherent: camera_rays(&camera), incoherent: random_rays(&prims, 7), prims }
+    Case {
+        scene: "cornell".into(),
+        coherent: camera_rays(&camera),
+        incoherent: random_rays(&prims, 7),
+        prims,
+    }
 }
 
 fn mesh_case() -> Case {
@@ -170,13 +195,21 @@ fn mesh_case() -> Case {
     let prims: Vec<Primitive> = triangles(&pos, &idx).collect();
     let desc = CameraDesc {
         loc: SourceLoc::default(),
-        projection: Projection::Perspective { fov_deg: 45.0, fov_axis: FovAxis::X },
+        projection: Projection::Perspective {
+            fov_deg: 45.0,
+            fov_axis: FovAxis::X,
+        },
         to_world: lookat(Vec3::new(0.4, 0.8, 3.2), Vec3::ZERO, Vec3::Y),
         near_clip: 0.01,
         far_clip: 100.0,
     };
     let camera = Camera::new(&desc, RES, RES);
-    Case { scene: "sphere1m".into(), coherent: camera_rays(&camera), incoherent: random_rays(&prims, 11), prims }
+    Case {
+        scene: "sphere1m".into(),
+        coherent: camera_rays(&camera),
+        incoherent: random_rays(&prims, 11),
+        prims,
+    }
 }
 
 /// Sum of the closest-hit distances of `rays` (hits only).
@@ -233,7 +266,11 @@ fn has_v3() -> bool {
 }
 
 fn bench_traversal(c: &mut Criterion, case: &Case) {
-    let kinds: &[(BvhKind, &str)] = if case.prims.len() <= 128 { &[KINDS[0], KINDS[1], SMALL_KINDS[1]] } else { &KINDS };
+    let kinds: &[(BvhKind, &str)] = if case.prims.len() <= 128 {
+        &[KINDS[0], KINDS[1], SMALL_KINDS[1]]
+    } else {
+        &KINDS
+    };
     bench_kinds(c, case, kinds);
 }
 
@@ -241,7 +278,10 @@ fn bench_kinds(c: &mut Criterion, case: &Case, kinds: &[(BvhKind, &str)]) {
     for &(kind, kname) in kinds {
         // As `Scene::build` builds it (above 2^18 primitives: a CWBVH per spatial group).
         let accel = Accel::build_compact(case.prims.clone(), kind, |i| case.prims[i]);
-        for (rays, rname) in [(&case.coherent, "coherent"), (&case.incoherent, "incoherent")] {
+        for (rays, rname) in [
+            (&case.coherent, "coherent"),
+            (&case.incoherent, "incoherent"),
+        ] {
             if rays.is_empty() {
                 continue;
             }
@@ -255,8 +295,12 @@ fn bench_kinds(c: &mut Criterion, case: &Case, kinds: &[(BvhKind, &str)]) {
             );
             let mut g = c.benchmark_group(format!("{}/{rname}", case.scene));
             g.throughput(Throughput::Elements(rays.len() as u64));
-            g.bench_function(BenchmarkId::new("closest", kname), |b| b.iter(|| closest_sum_dispatch(&accel, rays)));
-            g.bench_function(BenchmarkId::new("occluded", kname), |b| b.iter(|| occluded_count_dispatch(&accel, rays)));
+            g.bench_function(BenchmarkId::new("closest", kname), |b| {
+                b.iter(|| closest_sum_dispatch(&accel, rays))
+            });
+            g.bench_function(BenchmarkId::new("occluded", kname), |b| {
+                b.iter(|| occluded_count_dispatch(&accel, rays))
+            });
             g.finish();
         }
     }
@@ -265,14 +309,29 @@ fn bench_kinds(c: &mut Criterion, case: &Case, kinds: &[(BvhKind, &str)]) {
 /// `n` random triangles and parallelograms (every third) in the unit cube, edges up to 0.5.
 fn small_case(n: usize) -> Case {
     let mut rng = Rng(n as u64);
-    let mut v = |s: f32| Vec3A::new(rng.next_f32() - 0.5, rng.next_f32() - 0.5, rng.next_f32() - 0.5) * s;
+    let mut v = |s: f32| {
+        Vec3A::new(
+            rng.next_f32() - 0.5,
+            rng.next_f32() - 0.5,
+            rng.next_f32() - 0.5,
+        ) * s
+    };
     let prims: Vec<Primitive> = (0..n)
         .map(|k| {
             let (v0, e1, e2) = (v(1.0), v(0.5), v(0.5));
-            if k % 3 == 0 { Primitive::Parallelogram { v0, e1, e2 } } else { Primitive::Triangle { v0, e1, e2 } }
+            if k % 3 == 0 {
+                Primitive::Parallelogram { v0, e1, e2 }
+            } else {
+                Primitive::Triangle { v0, e1, e2 }
+            }
         })
         .collect();
-    Case { scene: format!("small/{n}"), coherent: Vec::new(), incoherent: random_rays(&prims, 5), prims }
+    Case {
+        scene: format!("small/{n}"),
+        coherent: Vec::new(),
+        incoherent: random_rays(&prims, 5),
+        prims,
+    }
 }
 
 fn traversal(c: &mut Criterion) {
@@ -296,7 +355,10 @@ fn build(c: &mut Criterion) {
     g.throughput(Throughput::Elements(prims.len() as u64));
     let all = rayon::current_num_threads();
     for threads in [1, all] {
-        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().expect("thread pool");
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("thread pool");
         for (kind, kname) in KINDS {
             g.bench_function(BenchmarkId::new(kname, format!("{threads}thr")), |b| {
                 b.iter_batched(

@@ -11,13 +11,13 @@ use obvhs::aabb::Aabb;
 use obvhs::bvh2::builder::build_bvh2;
 use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
 use obvhs::bvh2::Bvh2;
-use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
 use obvhs::cwbvh::builder::build_cwbvh;
+use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
 use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::cwbvh::CwBvh;
 use obvhs::faststack::StackStack;
-use obvhs::ray::{Ray as BvhRay, RayHit};
 use obvhs::ploc::PlocBuilder;
+use obvhs::ray::{Ray as BvhRay, RayHit};
 use obvhs::{Boundable, BvhBuildParams};
 // The `traverse!` macro of obvhs names `UVec2` unqualified.
 use glam::UVec2;
@@ -53,7 +53,10 @@ enum Tree {
     Two(Bvh2),
     /// No tree: `prims[..blocks.len() * LANES]` (at most) are the triangles and parallelograms,
     /// also held in `blocks`; spheres follow them and are tested one by one.
-    Flat { blocks: Vec<Block>, spheres_from: usize },
+    Flat {
+        blocks: Vec<Block>,
+        spheres_from: usize,
+    },
     Empty,
 }
 
@@ -96,7 +99,13 @@ impl Accel {
     /// primitives are permuted in place afterwards (no second copy).
     pub fn build(mut prims: Vec<Primitive>, kind: BvhKind) -> Self {
         if prims.is_empty() {
-            return Accel { tree: Tree::Empty, small_stack: true, prims, original_index: Vec::new(), unit_normals: Vec::new() };
+            return Accel {
+                tree: Tree::Empty,
+                small_stack: true,
+                prims,
+                original_index: Vec::new(),
+                unit_normals: Vec::new(),
+            };
         }
         if use_flat(kind, prims.len()) {
             return Accel::build_flat(prims);
@@ -116,7 +125,13 @@ impl Accel {
             }
         };
         permute_in_place(&mut prims, &order);
-        Accel { small_stack: fits_small_stack(&tree), tree, prims, original_index: order, unit_normals: Vec::new() }
+        Accel {
+            small_stack: fits_small_stack(&tree),
+            tree,
+            prims,
+            original_index: order,
+            unit_normals: Vec::new(),
+        }
     }
 
     /// [`Accel::build`] with a lower memory peak, for large meshes: the primitives are dropped
@@ -129,15 +144,30 @@ impl Accel {
     /// temporaries (112 MB of cost table next to the 96 MB binary tree) are the peak. This is
     /// obvhs's `build_cwbvh` (PLOC, reinsertion, conversion with the same parameters) written
     /// out so that the boxes can be freed in between.
-    pub fn build_compact(prims: Vec<Primitive>, kind: BvhKind, remake: impl Fn(usize) -> Primitive) -> Self {
+    pub fn build_compact(
+        prims: Vec<Primitive>,
+        kind: BvhKind,
+        remake: impl Fn(usize) -> Primitive,
+    ) -> Self {
         Self::build_compact_chunked(prims, kind, remake, CHUNK_PRIMS)
     }
 
     /// [`Accel::build_compact`] with CWBVH groups of at most `chunk_prims` primitives (as long
     /// as that makes at most [`MAX_CHUNKS`] groups).
-    fn build_compact_chunked(prims: Vec<Primitive>, kind: BvhKind, remake: impl Fn(usize) -> Primitive, chunk_prims: usize) -> Self {
+    fn build_compact_chunked(
+        prims: Vec<Primitive>,
+        kind: BvhKind,
+        remake: impl Fn(usize) -> Primitive,
+        chunk_prims: usize,
+    ) -> Self {
         if prims.is_empty() {
-            return Accel { tree: Tree::Empty, small_stack: true, prims, original_index: Vec::new(), unit_normals: Vec::new() };
+            return Accel {
+                tree: Tree::Empty,
+                small_stack: true,
+                prims,
+                original_index: Vec::new(),
+                unit_normals: Vec::new(),
+            };
         }
         if use_flat(kind, prims.len()) {
             return Accel::build_flat(prims);
@@ -153,18 +183,27 @@ impl Accel {
                 (Tree::Cw(bvh), order)
             }
             BvhKind::CwBvh | BvhKind::Auto | BvhKind::Flat => {
-                let parts = boxes.len().div_ceil(chunk_prims).next_power_of_two().min(MAX_CHUNKS);
+                let parts = boxes
+                    .len()
+                    .div_ceil(chunk_prims)
+                    .next_power_of_two()
+                    .min(MAX_CHUNKS);
                 let mut ids: Vec<u32> = (0..boxes.len() as u32).collect();
                 split_median(&mut ids, &boxes, parts);
                 let mut order = Vec::with_capacity(ids.len());
                 let mut chunks = Vec::with_capacity(parts);
                 let size = ids.len().div_ceil(parts);
                 for group in ids.chunks(size) {
-                    let group_boxes: Vec<BuildBox> = group.iter().map(|&i| boxes[i as usize]).collect();
+                    let group_boxes: Vec<BuildBox> =
+                        group.iter().map(|&i| boxes[i as usize]).collect();
                     let bvh = build_cw_low_memory(group_boxes, &params);
                     let base = order.len();
                     order.extend(bvh.primitive_indices.iter().map(|&k| group[k as usize]));
-                    chunks.push(Chunk { bounds: bvh.total_aabb, bvh, base });
+                    chunks.push(Chunk {
+                        bounds: bvh.total_aabb,
+                        bvh,
+                        base,
+                    });
                 }
                 drop(boxes);
                 (Tree::CwChunks(chunks), order)
@@ -178,7 +217,13 @@ impl Accel {
         };
         let mut prims = Vec::with_capacity(order.len());
         prims.extend(order.iter().map(|&i| remake(i as usize)));
-        Accel { small_stack: fits_small_stack(&tree), tree, prims, original_index: order, unit_normals: Vec::new() }
+        Accel {
+            small_stack: fits_small_stack(&tree),
+            tree,
+            prims,
+            original_index: order,
+            unit_normals: Vec::new(),
+        }
     }
 
     /// The flat "tree" ([`BvhKind::Flat`]): triangles and parallelograms first, in their given
@@ -188,23 +233,44 @@ impl Accel {
         // Stable: the order within each kind is kept.
         order.sort_by_key(|&i| matches!(prims[i as usize], Primitive::Sphere { .. }));
         permute_in_place(&mut prims, &order);
-        let spheres_from = prims.iter().position(|p| matches!(p, Primitive::Sphere { .. })).unwrap_or(prims.len());
-        let blocks = prims[..spheres_from].chunks(LANES).map(Block::new).collect();
+        let spheres_from = prims
+            .iter()
+            .position(|p| matches!(p, Primitive::Sphere { .. }))
+            .unwrap_or(prims.len());
+        let blocks = prims[..spheres_from]
+            .chunks(LANES)
+            .map(Block::new)
+            .collect();
         let unit_normals = prims[..spheres_from]
             .iter()
             .map(|p| match *p {
-                Primitive::Triangle { e1, e2, .. } | Primitive::Parallelogram { e1, e2, .. } => pt_math::Vec3::from(e1.cross(e2)).normalize(),
+                Primitive::Triangle { e1, e2, .. } | Primitive::Parallelogram { e1, e2, .. } => {
+                    pt_math::Vec3::from(e1.cross(e2)).normalize()
+                }
                 Primitive::Sphere { .. } => pt_math::Vec3::ZERO,
             })
             .collect();
-        Accel { tree: Tree::Flat { blocks, spheres_from }, small_stack: false, prims, original_index: order, unit_normals }
+        Accel {
+            tree: Tree::Flat {
+                blocks,
+                spheres_from,
+            },
+            small_stack: false,
+            prims,
+            original_index: order,
+            unit_normals,
+        }
     }
 
     /// Closest hit along the ray: which primitive, at what distance, with the edge coordinates
     /// its test found (so the caller need not test it again).
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray) -> Option<AccelHit> {
-        if let Tree::Flat { blocks, spheres_from } = &self.tree {
+        if let Tree::Flat {
+            blocks,
+            spheres_from,
+        } = &self.tree
+        {
             return flat_closest(blocks, &self.prims[*spheres_from..], *spheres_from, ray);
         }
         let r = bvh_ray(ray);
@@ -228,14 +294,23 @@ impl Accel {
             Tree::Flat { .. } => unreachable!("handled above"),
             Tree::Empty => false,
         };
-        found.then_some(AccelHit { index: hit.primitive_id as usize, t: hit.t, b1: bary.0, b2: bary.1 })
+        found.then_some(AccelHit {
+            index: hit.primitive_id as usize,
+            t: hit.t,
+            b1: bary.0,
+            b2: bary.1,
+        })
     }
 
     /// Whether anything blocks the ray within `(tmin, tmax)` (any-hit traversal, stops at the
     /// first blocker).
     #[inline(always)]
     pub fn occluded(&self, ray: &Ray) -> bool {
-        if let Tree::Flat { blocks, spheres_from } = &self.tree {
+        if let Tree::Flat {
+            blocks,
+            spheres_from,
+        } = &self.tree
+        {
             return flat_any(blocks, &self.prims[*spheres_from..], ray);
         }
         let r = bvh_ray(ray);
@@ -326,14 +401,24 @@ impl Block {
         let (o, d) = (ray.origin, ray.dir);
         let e1 = [self.e1[0][i], self.e1[1][i], self.e1[2][i]];
         let e2 = [self.e2[0][i], self.e2[1][i], self.e2[2][i]];
-        let cross = |a: [f32; 3], b: [f32; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+        let cross = |a: [f32; 3], b: [f32; 3]| {
+            [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ]
+        };
         let dot = |a: [f32; 3], b: [f32; 3]| (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2];
         // Möller-Trumbore's scalar triple products regrouped around the stored normal
         // n = e1 x e2 and r = tvec x d (one cross product per lane instead of two):
         // det = e1 . (d x e2) = -d . n, b1 det = tvec . (d x e2) = e2 . r,
         // b2 det = d . (tvec x e1) = -e1 . r, t det = e2 . (tvec x e1) = tvec . n.
         let n = [self.n[0][i], self.n[1][i], self.n[2][i]];
-        let tvec = [o.x - self.v0[0][i], o.y - self.v0[1][i], o.z - self.v0[2][i]];
+        let tvec = [
+            o.x - self.v0[0][i],
+            o.y - self.v0[1][i],
+            o.z - self.v0[2][i],
+        ];
         let r = cross(tvec, [d.x, d.y, d.z]);
         let det = -dot([d.x, d.y, d.z], n);
         let inv_det = 1.0 / det;
@@ -347,7 +432,10 @@ impl Block {
         // b1 or b2, which min and max might pass on, only arises there).
         let min = |a: f32, b: f32| if a < b { a } else { b };
         let max = |a: f32, b: f32| if a > b { a } else { b };
-        let hit = (min(b1, b2) >= 0.0) & (max(b1, self.k1[i] * b1 + b2) <= 1.0) & (t > ray.tmin) & (t < tmax);
+        let hit = (min(b1, b2) >= 0.0)
+            & (max(b1, self.k1[i] * b1 + b2) <= 1.0)
+            & (t > ray.tmin)
+            & (t < tmax);
         (hit, t, b1, b2)
     }
 
@@ -382,8 +470,18 @@ impl Block {
 /// and `spheres` (primitives `spheres_from..`). Ties go to the lowest lane, then the earliest
 /// block.
 #[inline(always)]
-fn flat_closest(blocks: &[Block], spheres: &[Primitive], spheres_from: usize, ray: &Ray) -> Option<AccelHit> {
-    let mut best = LaneBest { t: [ray.tmax; LANES], b1: [0.0; LANES], b2: [0.0; LANES], id: [u32::MAX; LANES] };
+fn flat_closest(
+    blocks: &[Block],
+    spheres: &[Primitive],
+    spheres_from: usize,
+    ray: &Ray,
+) -> Option<AccelHit> {
+    let mut best = LaneBest {
+        t: [ray.tmax; LANES],
+        b1: [0.0; LANES],
+        b2: [0.0; LANES],
+        id: [u32::MAX; LANES],
+    };
     for (k, b) in blocks.iter().enumerate() {
         b.closest(ray, (k * LANES) as u32, &mut best);
     }
@@ -391,19 +489,34 @@ fn flat_closest(blocks: &[Block], spheres: &[Primitive], spheres_from: usize, ra
     // minima, then the lowest lane holding it. No NaN occurs (hits and tmax only).
     let min = |a: f32, b: f32| if a < b { a } else { b };
     let t = &best.t;
-    let m4 = [min(t[0], t[4]), min(t[1], t[5]), min(t[2], t[6]), min(t[3], t[7])];
+    let m4 = [
+        min(t[0], t[4]),
+        min(t[1], t[5]),
+        min(t[2], t[6]),
+        min(t[3], t[7]),
+    ];
     let nearest = min(min(m4[0], m4[2]), min(m4[1], m4[3]));
     let mut at_nearest = 0u32;
     for (i, &ti) in t.iter().enumerate() {
         at_nearest |= u32::from(ti == nearest) << i;
     }
     let lane = at_nearest.trailing_zeros() as usize & (LANES - 1);
-    let mut hit = AccelHit { index: best.id[lane] as usize, t: best.t[lane], b1: best.b1[lane], b2: best.b2[lane] };
+    let mut hit = AccelHit {
+        index: best.id[lane] as usize,
+        t: best.t[lane],
+        b1: best.b1[lane],
+        b2: best.b2[lane],
+    };
     let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
     for (j, s) in spheres.iter().enumerate() {
         let t = s.intersect(o, d, ray.tmin, hit.t);
         if t < hit.t {
-            hit = AccelHit { index: spheres_from + j, t, b1: 0.0, b2: 0.0 };
+            hit = AccelHit {
+                index: spheres_from + j,
+                t,
+                b1: 0.0,
+                b2: 0.0,
+            };
         }
     }
     (hit.t < ray.tmax).then_some(hit)
@@ -449,7 +562,13 @@ fn bvh_ray(ray: &Ray) -> BvhRay {
     let d = Vec3A::from(ray.dir);
     let tiny = d.abs().cmple(Vec3A::splat(f32::EPSILON));
     let inv_direction = Vec3A::select(tiny, d.signum() / f32::EPSILON, Vec3A::ONE / d);
-    BvhRay { origin: Vec3A::from(ray.origin), direction: d, inv_direction, tmin: ray.tmin, tmax: ray.tmax }
+    BvhRay {
+        origin: Vec3A::from(ray.origin),
+        direction: d,
+        inv_direction,
+        tmin: ray.tmin,
+        tmax: ray.tmax,
+    }
 }
 
 /// Stack entries for CWBVHs of depth below [`SMALL_STACK`]: a traversal pushes at most one
@@ -471,8 +590,13 @@ fn fits_small_stack(tree: &Tree) -> bool {
 /// Number of internal-node levels from `node` down (1 for a node whose children are all
 /// leaves; 0 for an empty tree). A node's `imask` marks its internal children.
 fn cw_depth(bvh: &CwBvh, node: usize) -> u32 {
-    let Some(n) = bvh.nodes.get(node) else { return 0 };
-    let deepest = (0..8).filter(|&ch| n.imask >> ch & 1 != 0).map(|ch| cw_depth(bvh, n.child_node_index(ch) as usize)).max();
+    let Some(n) = bvh.nodes.get(node) else {
+        return 0;
+    };
+    let deepest = (0..8)
+        .filter(|&ch| n.imask >> ch & 1 != 0)
+        .map(|ch| cw_depth(bvh, n.child_node_index(ch) as usize))
+        .max();
     1 + deepest.unwrap_or(0)
 }
 
@@ -509,10 +633,21 @@ impl<'s, const N: usize> CwTraversal<'s, N> {
     /// empty tree.
     #[inline(always)]
     fn new(bvh: &CwBvh, dir: Vec3A, stack: &'s mut StackStack<UVec2, N>) -> Self {
-        let current_group = if bvh.nodes.is_empty() { UVec2::ZERO } else { UVec2::new(0, 0x8000_0000) };
+        let current_group = if bvh.nodes.is_empty() {
+            UVec2::ZERO
+        } else {
+            UVec2::new(0, 0x8000_0000)
+        };
         // Same comparisons as obvhs (`< 0.0`, so -0.0 counts as positive), one vector compare.
         let oct_inv4 = OCT_INV4[dir.cmplt(Vec3A::ZERO).bitmask() as usize];
-        CwTraversal { stack, current_group, primitive_group: UVec2::ZERO, oct_inv4, primitive_id: 0, hitmask: 0 }
+        CwTraversal {
+            stack,
+            current_group,
+            primitive_group: UVec2::ZERO,
+            oct_inv4,
+            primitive_id: 0,
+            hitmask: 0,
+        }
     }
 }
 
@@ -521,19 +656,30 @@ impl<'s, const N: usize> CwTraversal<'s, N> {
 /// and an `N`-entry stack. `hit` receives the closest primitive in `(ray.tmin, ray.tmax)`;
 /// returns whether there is one.
 #[inline(always)]
-fn cw_closest<const N: usize>(bvh: &CwBvh, ray: BvhRay, hit: &mut RayHit, mut f: impl FnMut(&BvhRay, usize) -> f32) -> bool {
+fn cw_closest<const N: usize>(
+    bvh: &CwBvh,
+    ray: BvhRay,
+    hit: &mut RayHit,
+    mut f: impl FnMut(&BvhRay, usize) -> f32,
+) -> bool {
     let mut traverse_ray = ray;
     let mut stack = StackStack::default();
     let mut state = CwTraversal::<N>::new(bvh, ray.direction, &mut stack);
     let mut node;
-    obvhs::traverse!(bvh, node, state, intersect_node(node, &traverse_ray, state.oct_inv4), {
-        let t = f(&traverse_ray, state.primitive_id as usize);
-        if t < traverse_ray.tmax {
-            hit.primitive_id = state.primitive_id;
-            hit.t = t;
-            traverse_ray.tmax = t;
+    obvhs::traverse!(
+        bvh,
+        node,
+        state,
+        intersect_node(node, &traverse_ray, state.oct_inv4),
+        {
+            let t = f(&traverse_ray, state.primitive_id as usize);
+            if t < traverse_ray.tmax {
+                hit.primitive_id = state.primitive_id;
+                hit.t = t;
+                traverse_ray.tmax = t;
+            }
         }
-    });
+    );
     hit.t < ray.tmax
 }
 
@@ -549,12 +695,24 @@ fn cw_any<const N: usize>(bvh: &CwBvh, ray: BvhRay, prims: &[Primitive]) -> bool
     let mut node;
     let mut hit = false;
     'outer: {
-        obvhs::traverse!(bvh, node, state, intersect_node(node, &ray, state.oct_inv4), {
-            if prims[state.primitive_id as usize].intersect(ray.origin, ray.direction, ray.tmin, ray.tmax) < ray.tmax {
-                hit = true;
-                break 'outer;
+        obvhs::traverse!(
+            bvh,
+            node,
+            state,
+            intersect_node(node, &ray, state.oct_inv4),
+            {
+                if prims[state.primitive_id as usize].intersect(
+                    ray.origin,
+                    ray.direction,
+                    ray.tmin,
+                    ray.tmax,
+                ) < ray.tmax
+                {
+                    hit = true;
+                    break 'outer;
+                }
             }
-        });
+        );
     }
     hit
 }
@@ -589,9 +747,18 @@ fn split_median(ids: &mut [u32], boxes: &[BuildBox], parts: usize) {
         let b = &boxes[i as usize];
         (b.min + b.max) * 0.5
     };
-    let (lo, hi) = ids.iter().fold((pt_math::Vec3::INFINITY, pt_math::Vec3::NEG_INFINITY), |(lo, hi), &i| (lo.min(centre(i)), hi.max(centre(i))));
+    let (lo, hi) = ids.iter().fold(
+        (pt_math::Vec3::INFINITY, pt_math::Vec3::NEG_INFINITY),
+        |(lo, hi), &i| (lo.min(centre(i)), hi.max(centre(i))),
+    );
     let ext = hi - lo;
-    let axis = if ext.x >= ext.y && ext.x >= ext.z { 0 } else if ext.y >= ext.z { 1 } else { 2 };
+    let axis = if ext.x >= ext.y && ext.x >= ext.z {
+        0
+    } else if ext.y >= ext.z {
+        1
+    } else {
+        2
+    };
     // Equal groups at every level: the left half gets ceil(len / parts) * parts / 2 items.
     let size = ids.len().div_ceil(parts);
     let mid = (size * parts / 2).min(ids.len());
@@ -599,7 +766,9 @@ fn split_median(ids: &mut [u32], boxes: &[BuildBox], parts: usize) {
         return;
     }
     // Ties broken by index, so the split does not depend on the input order.
-    ids.select_nth_unstable_by(mid, |&a, &b| centre(a)[axis].total_cmp(&centre(b)[axis]).then(a.cmp(&b)));
+    ids.select_nth_unstable_by(mid, |&a, &b| {
+        centre(a)[axis].total_cmp(&centre(b)[axis]).then(a.cmp(&b))
+    });
     let (left, right) = ids.split_at_mut(mid);
     split_median(left, boxes, parts / 2);
     split_median(right, boxes, parts / 2);
@@ -609,7 +778,12 @@ fn split_median(ids: &mut [u32], boxes: &[BuildBox], parts: usize) {
 /// entry first, each traversed with the closest hit so far as its `tmax`. `hit` receives the
 /// index into `prims` and the distance.
 #[inline]
-fn chunks_closest(chunks: &[Chunk], ray: BvhRay, hit: &mut RayHit, f: &mut impl FnMut(&BvhRay, usize) -> f32) -> bool {
+fn chunks_closest(
+    chunks: &[Chunk],
+    ray: BvhRay,
+    hit: &mut RayHit,
+    f: &mut impl FnMut(&BvhRay, usize) -> f32,
+) -> bool {
     let mut entries = [(f32::INFINITY, 0usize); MAX_CHUNKS];
     let mut n = 0;
     for (k, c) in chunks.iter().enumerate() {
@@ -653,7 +827,10 @@ struct BuildBox {
 
 impl From<Aabb> for BuildBox {
     fn from(b: Aabb) -> Self {
-        BuildBox { min: b.min.into(), max: b.max.into() }
+        BuildBox {
+            min: b.min.into(),
+            max: b.max.into(),
+        }
     }
 }
 
@@ -678,7 +855,8 @@ fn intersect_node(node: &CwBvhNode, ray: &BvhRay, oct_inv4: u32) -> u32 {
     let scale = node.compute_extent() * ray.inv_direction;
     let offset = (Vec3A::from(node.p) - ray.origin) * ray.inv_direction;
     // For a negative direction component the ray enters through the child's max plane.
-    let pick = |neg: bool, min: &[u8; 8], max: &[u8; 8]| if neg { (*max, *min) } else { (*min, *max) };
+    let pick =
+        |neg: bool, min: &[u8; 8], max: &[u8; 8]| if neg { (*max, *min) } else { (*min, *max) };
     let (near_x, far_x) = pick(ray.direction.x < 0.0, &node.child_min_x, &node.child_max_x);
     let (near_y, far_y) = pick(ray.direction.y < 0.0, &node.child_min_y, &node.child_max_y);
     let (near_z, far_z) = pick(ray.direction.z < 0.0, &node.child_min_z, &node.child_max_z);
@@ -747,11 +925,23 @@ mod tests {
         for i in 0..n {
             for j in 0..n {
                 let p = Vec3A::new(i as f32, j as f32, 0.0);
-                v.push(Primitive::Triangle { v0: p, e1: Vec3A::X, e2: Vec3A::Y });
-                v.push(Primitive::Triangle { v0: p + Vec3A::X + Vec3A::Y, e1: -Vec3A::X, e2: -Vec3A::Y });
+                v.push(Primitive::Triangle {
+                    v0: p,
+                    e1: Vec3A::X,
+                    e2: Vec3A::Y,
+                });
+                v.push(Primitive::Triangle {
+                    v0: p + Vec3A::X + Vec3A::Y,
+                    e1: -Vec3A::X,
+                    e2: -Vec3A::Y,
+                });
             }
         }
-        v.push(Primitive::Sphere { center: Vec3A::new(2.5, 2.5, 3.0), radius: 1.0, flip: false });
+        v.push(Primitive::Sphere {
+            center: Vec3A::new(2.5, 2.5, 3.0),
+            radius: 1.0,
+            flip: false,
+        });
         v
     }
 
@@ -774,7 +964,9 @@ mod tests {
             assert_eq!(a.original_index, b.original_index, "{kind:?}");
             match (&a.tree, &b.tree) {
                 (Tree::Cw(x), Tree::Cw(y)) => assert!(x == y),
-                (Tree::Two(x), Tree::Two(y)) => assert_eq!(format!("{:?}", x.nodes), format!("{:?}", y.nodes)),
+                (Tree::Two(x), Tree::Two(y)) => {
+                    assert_eq!(format!("{:?}", x.nodes), format!("{:?}", y.nodes))
+                }
                 _ => panic!("{kind:?}: different tree kinds"),
             }
             for (p, q) in a.prims.iter().zip(&b.prims) {
@@ -789,13 +981,23 @@ mod tests {
         // positions (so the groups do not overlap).
         let mut xs: Vec<u32> = (0..1000).collect();
         xs.sort_by_key(|&i| (i * 7919) % 1000);
-        let boxes: Vec<BuildBox> = xs.iter().map(|&x| BuildBox { min: Vec3::new(x as f32, 0.0, 0.0), max: Vec3::new(x as f32 + 0.5, 1.0, 1.0) }).collect();
+        let boxes: Vec<BuildBox> = xs
+            .iter()
+            .map(|&x| BuildBox {
+                min: Vec3::new(x as f32, 0.0, 0.0),
+                max: Vec3::new(x as f32 + 0.5, 1.0, 1.0),
+            })
+            .collect();
         let mut ids: Vec<u32> = (0..1000).collect();
         split_median(&mut ids, &boxes, 4);
         for (g, group) in ids.chunks(250).enumerate() {
             let mut pos: Vec<u32> = group.iter().map(|&i| xs[i as usize]).collect();
             pos.sort();
-            assert_eq!(pos, ((250 * g as u32)..(250 * (g as u32 + 1))).collect::<Vec<_>>(), "group {g}");
+            assert_eq!(
+                pos,
+                ((250 * g as u32)..(250 * (g as u32 + 1))).collect::<Vec<_>>(),
+                "group {g}"
+            );
         }
     }
 
@@ -805,15 +1007,37 @@ mod tests {
         // than obvhs's node-test bound (1e-4), which skipped boxes left that early, so whether
         // these were found depended on the tree. Every one must be found, by every tree kind.
         let prims = grid(8);
-        for (kind, chunk) in [(BvhKind::CwBvh, usize::MAX), (BvhKind::Bvh2, usize::MAX), (BvhKind::CwBvh, 40), (BvhKind::Flat, usize::MAX)] {
-            let accel = if chunk == usize::MAX { Accel::build(prims.clone(), kind) } else { Accel::build_compact_chunked(prims.clone(), kind, |i| prims[i], chunk) };
+        for (kind, chunk) in [
+            (BvhKind::CwBvh, usize::MAX),
+            (BvhKind::Bvh2, usize::MAX),
+            (BvhKind::CwBvh, 40),
+            (BvhKind::Flat, usize::MAX),
+        ] {
+            let accel = if chunk == usize::MAX {
+                Accel::build(prims.clone(), kind)
+            } else {
+                Accel::build_compact_chunked(prims.clone(), kind, |i| prims[i], chunk)
+            };
             for k in 0..1000 {
                 let h = 1e-6 + 1e-4 * (k as f32 / 1000.0);
-                let o = Vec3::new(0.1 + 7.8 * ((k * 37) % 1000) as f32 / 1000.0, 0.1 + 7.8 * ((k * 91) % 1000) as f32 / 1000.0, h);
+                let o = Vec3::new(
+                    0.1 + 7.8 * ((k * 37) % 1000) as f32 / 1000.0,
+                    0.1 + 7.8 * ((k * 91) % 1000) as f32 / 1000.0,
+                    h,
+                );
                 let ray = Ray::new(o, Vec3::new(0.01, -0.02, -1.0).normalize());
-                let hit = accel.intersect(&ray).unwrap_or_else(|| panic!("{kind:?} {chunk}: missed the plane from height {h}"));
-                assert!((hit.t - h).abs() < 1e-2 * h, "{kind:?}: t {} for height {h}", hit.t);
-                assert!(accel.occluded(&ray), "{kind:?} {chunk}: shadow ray from height {h}");
+                let hit = accel.intersect(&ray).unwrap_or_else(|| {
+                    panic!("{kind:?} {chunk}: missed the plane from height {h}")
+                });
+                assert!(
+                    (hit.t - h).abs() < 1e-2 * h,
+                    "{kind:?}: t {} for height {h}",
+                    hit.t
+                );
+                assert!(
+                    accel.occluded(&ray),
+                    "{kind:?} {chunk}: shadow ray from height {h}"
+                );
             }
         }
     }
@@ -824,9 +1048,15 @@ mod tests {
         for (n, small) in [(2, true), (8, true), (300, false)] {
             let prims = grid(n);
             let accel = Accel::build(prims.clone(), BvhKind::CwBvh);
-            let Tree::Cw(b) = &accel.tree else { panic!("not a single CWBVH") };
+            let Tree::Cw(b) = &accel.tree else {
+                panic!("not a single CWBVH")
+            };
             let levels = cw_depth(b, 0);
-            assert_eq!(levels, b.validate(&accel.prims, true).max_depth + 1, "grid {n}");
+            assert_eq!(
+                levels,
+                b.validate(&accel.prims, true).max_depth + 1,
+                "grid {n}"
+            );
             // 180,001 primitives need more levels than the small stack holds.
             assert_eq!(accel.small_stack, small, "grid {n}: {levels} levels");
             // Closest hits through the large stack agree with a brute-force search.
@@ -834,8 +1064,15 @@ mod tests {
                 for k in 0..200 {
                     let o = Vec3::new(k as f32 * 1.37 % 300.0, k as f32 * 2.71 % 300.0, 6.0);
                     let ray = Ray::new(o, Vec3::new(0.3, -0.2, -1.0).normalize());
-                    let brute = prims.iter().map(|p| p.intersect(o.into(), ray.dir.into(), 0.0, f32::INFINITY)).fold(f32::INFINITY, f32::min);
-                    assert_eq!(accel.intersect(&ray).map_or(f32::INFINITY, |h| h.t), brute, "ray {k}");
+                    let brute = prims
+                        .iter()
+                        .map(|p| p.intersect(o.into(), ray.dir.into(), 0.0, f32::INFINITY))
+                        .fold(f32::INFINITY, f32::min);
+                    assert_eq!(
+                        accel.intersect(&ray).map_or(f32::INFINITY, |h| h.t),
+                        brute,
+                        "ray {k}"
+                    );
                 }
             }
         }
@@ -849,7 +1086,9 @@ mod tests {
         // interval. A wrong sign or bound in the lanes misses or invents hits here.
         let mut s = 99u64;
         let mut rnd = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((s >> 40) as f32) / (1u64 << 24) as f32
         };
         let mut prims = Vec::new();
@@ -857,13 +1096,27 @@ mod tests {
             let v0 = Vec3A::new(rnd() * 8.0 - 4.0, rnd() * 8.0 - 4.0, rnd() * 8.0 - 4.0);
             let e1 = Vec3A::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5) * 3.0;
             let e2 = Vec3A::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5) * 3.0;
-            prims.push(if k % 3 == 0 { Primitive::Parallelogram { v0, e1, e2 } } else { Primitive::Triangle { v0, e1, e2 } });
+            prims.push(if k % 3 == 0 {
+                Primitive::Parallelogram { v0, e1, e2 }
+            } else {
+                Primitive::Triangle { v0, e1, e2 }
+            });
             if k % 20 == 7 {
-                prims.push(Primitive::Sphere { center: v0, radius: 0.7, flip: false });
+                prims.push(Primitive::Sphere {
+                    center: v0,
+                    radius: 0.7,
+                    flip: false,
+                });
             }
         }
         let accel = Accel::build(prims.clone(), BvhKind::Flat);
-        let Tree::Flat { blocks, spheres_from } = &accel.tree else { panic!("not flat") };
+        let Tree::Flat {
+            blocks,
+            spheres_from,
+        } = &accel.tree
+        else {
+            panic!("not flat")
+        };
         assert_eq!((blocks.len(), *spheres_from), (6, 45));
         let mut hits = 0;
         for _ in 0..20_000 {
@@ -871,7 +1124,13 @@ mod tests {
             let d = Vec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5).normalize();
             let mut ray = Ray::new(o, d);
             ray.tmax = 1.0 + 6.0 * rnd();
-            let brute = accel.prims.iter().enumerate().map(|(i, p)| (i, p.intersect_bary(o.into(), d.into(), ray.tmin, ray.tmax))).filter(|h| h.1 .0 < ray.tmax).min_by(|a, b| a.1 .0.total_cmp(&b.1 .0));
+            let brute = accel
+                .prims
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (i, p.intersect_bary(o.into(), d.into(), ray.tmin, ray.tmax)))
+                .filter(|h| h.1 .0 < ray.tmax)
+                .min_by(|a, b| a.1 .0.total_cmp(&b.1 .0));
             let got = accel.intersect(&ray);
             match (brute, got) {
                 (None, None) => {}
@@ -885,20 +1144,44 @@ mod tests {
                     // size): allow 1e-6 (8 ulp) of that distance per unit of 1/cos. At a grazing
                     // 0.18 degrees the two differ by 2e-5 of t; a wrong term would be far off.
                     let (v0, cos) = match accel.prims[i] {
-                        Primitive::Triangle { v0, e1, e2 } | Primitive::Parallelogram { v0, e1, e2 } => (v0, e1.cross(e2).normalize().dot(d.into()).abs()),
+                        Primitive::Triangle { v0, e1, e2 }
+                        | Primitive::Parallelogram { v0, e1, e2 } => {
+                            (v0, e1.cross(e2).normalize().dot(d.into()).abs())
+                        }
                         Primitive::Sphere { center, .. } => (center, 1.0),
                     };
                     let tol = 1e-6 / cos;
                     let scale = t + (Vec3A::from(o) - v0).length();
-                    assert!((h.t - t).abs() <= tol * scale, "t {} vs {t} (cos {cos}, scale {scale})", h.t);
+                    assert!(
+                        (h.t - t).abs() <= tol * scale,
+                        "t {} vs {t} (cos {cos}, scale {scale})",
+                        h.t
+                    );
                     // Equal distances (two primitives through one point) may pick either.
                     if h.index == i {
-                        assert!((h.b1 - b1).abs() <= tol && (h.b2 - b2).abs() <= tol, "{:?} vs {:?}", (h.b1, h.b2), (b1, b2));
+                        assert!(
+                            (h.b1 - b1).abs() <= tol && (h.b2 - b2).abs() <= tol,
+                            "{:?} vs {:?}",
+                            (h.b1, h.b2),
+                            (b1, b2)
+                        );
                     } else {
-                        assert!((accel.prims[h.index].intersect(o.into(), d.into(), ray.tmin, ray.tmax) - t).abs() <= tol * scale);
+                        assert!(
+                            (accel.prims[h.index].intersect(
+                                o.into(),
+                                d.into(),
+                                ray.tmin,
+                                ray.tmax
+                            ) - t)
+                                .abs()
+                                <= tol * scale
+                        );
                     }
                     let orig = accel.original_index[h.index] as usize;
-                    assert_eq!(format!("{:?}", accel.prims[h.index]), format!("{:?}", prims[orig]));
+                    assert_eq!(
+                        format!("{:?}", accel.prims[h.index]),
+                        format!("{:?}", prims[orig])
+                    );
                 }
                 other => panic!("{other:?}"),
             }
@@ -907,9 +1190,18 @@ mod tests {
         // The rays must exercise both outcomes.
         assert!((1_000..19_000).contains(&hits), "{hits} hits");
         // Auto: flat up to FLAT_MAX primitives, a tree above.
-        assert!(matches!(Accel::build(prims[..FLAT_MAX].to_vec(), BvhKind::Auto).tree, Tree::Flat { .. }));
-        assert!(matches!(Accel::build(prims[..FLAT_MAX + 1].to_vec(), BvhKind::Auto).tree, Tree::Cw(_)));
-        assert!(matches!(Accel::build_compact(prims[..FLAT_MAX].to_vec(), BvhKind::Auto, |i| prims[i]).tree, Tree::Flat { .. }));
+        assert!(matches!(
+            Accel::build(prims[..FLAT_MAX].to_vec(), BvhKind::Auto).tree,
+            Tree::Flat { .. }
+        ));
+        assert!(matches!(
+            Accel::build(prims[..FLAT_MAX + 1].to_vec(), BvhKind::Auto).tree,
+            Tree::Cw(_)
+        ));
+        assert!(matches!(
+            Accel::build_compact(prims[..FLAT_MAX].to_vec(), BvhKind::Auto, |i| prims[i]).tree,
+            Tree::Flat { .. }
+        ));
     }
 
     #[test]
@@ -929,14 +1221,25 @@ mod tests {
                 Accel::build(prims.clone(), kind)
             } else {
                 let accel = Accel::build_compact_chunked(prims.clone(), kind, |i| prims[i], chunk);
-                let Tree::CwChunks(c) = &accel.tree else { panic!("{chunk}: not chunked") };
-                assert_eq!(c.len(), prims.len().div_ceil(chunk).next_power_of_two().min(MAX_CHUNKS));
+                let Tree::CwChunks(c) = &accel.tree else {
+                    panic!("{chunk}: not chunked")
+                };
+                assert_eq!(
+                    c.len(),
+                    prims
+                        .len()
+                        .div_ceil(chunk)
+                        .next_power_of_two()
+                        .min(MAX_CHUNKS)
+                );
                 accel
             };
             assert_eq!(accel.prims.len(), prims.len());
             let mut s = 12345u64;
             let mut rnd = || {
-                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
                 ((s >> 40) as f32) / (1u64 << 24) as f32
             };
             for _ in 0..2000 {
@@ -952,15 +1255,30 @@ mod tests {
                 let got = accel.intersect(&ray);
                 match (brute, got) {
                     (None, None) => {}
-                    (Some((_, tb)), Some(AccelHit { index: i, t, b1, b2 })) => {
+                    (
+                        Some((_, tb)),
+                        Some(AccelHit {
+                            index: i,
+                            t,
+                            b1,
+                            b2,
+                        }),
+                    ) => {
                         assert_eq!(t, tb);
                         // The barycentrics are those of the accepted primitive's own test.
-                        let (_, eb1, eb2) = accel.prims[i].intersect_bary(o.into(), d.into(), 0.0, f32::INFINITY);
+                        let (_, eb1, eb2) =
+                            accel.prims[i].intersect_bary(o.into(), d.into(), 0.0, f32::INFINITY);
                         assert_eq!((b1, b2), (eb1, eb2));
                         // The returned index is where the hit primitive is stored.
                         let orig = accel.original_index[i] as usize;
-                        assert_eq!(format!("{:?}", accel.prims[i]), format!("{:?}", prims[orig]));
-                        assert_eq!(prims[orig].intersect(o.into(), d.into(), 0.0, f32::INFINITY), t);
+                        assert_eq!(
+                            format!("{:?}", accel.prims[i]),
+                            format!("{:?}", prims[orig])
+                        );
+                        assert_eq!(
+                            prims[orig].intersect(o.into(), d.into(), 0.0, f32::INFINITY),
+                            t
+                        );
                     }
                     other => panic!("{kind:?} {chunk}: {other:?}"),
                 }

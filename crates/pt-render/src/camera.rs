@@ -29,8 +29,20 @@ impl Camera {
             FovAxis::X => t,
             FovAxis::Y => t * w / h,
             FovAxis::Diagonal => t * w / (w * w + h * h).sqrt(),
-            FovAxis::Smaller => if w <= h { t } else { t * w / h },
-            FovAxis::Larger => if w >= h { t } else { t * w / h },
+            FovAxis::Smaller => {
+                if w <= h {
+                    t
+                } else {
+                    t * w / h
+                }
+            }
+            FovAxis::Larger => {
+                if w >= h {
+                    t
+                } else {
+                    t * w / h
+                }
+            }
         };
         Camera {
             to_world: desc.to_world,
@@ -47,12 +59,21 @@ impl Camera {
     #[inline]
     pub fn generate_ray(&self, film: Vec2) -> Ray {
         let ndc = film * self.inv_size; // [0,1]^2, y down
-        let d_cam = Vec3::new((1.0 - 2.0 * ndc.x) * self.tan_half.x, (1.0 - 2.0 * ndc.y) * self.tan_half.y, 1.0);
+        let d_cam = Vec3::new(
+            (1.0 - 2.0 * ndc.x) * self.tan_half.x,
+            (1.0 - 2.0 * ndc.y) * self.tan_half.y,
+            1.0,
+        );
         let d_world = self.to_world.transform_vector3(d_cam);
         let len = d_world.length();
         // d_cam has z = 1, so the clip planes z = near/far are at t = near * |d_cam|/|d_world|
         // along the normalised world ray... scaled by the world length of d_cam.
-        Ray { origin: self.origin, dir: d_world / len, tmin: self.near * len, tmax: self.far * len }
+        Ray {
+            origin: self.origin,
+            dir: d_world / len,
+            tmin: self.near * len,
+            tmax: self.far * len,
+        }
     }
 }
 
@@ -66,14 +87,22 @@ mod tests {
         let dir = (target - origin).normalize();
         let left = up.cross(dir).normalize();
         let new_up = dir.cross(left);
-        Mat4::from_cols(left.extend(0.0), new_up.extend(0.0), dir.extend(0.0), origin.extend(1.0))
+        Mat4::from_cols(
+            left.extend(0.0),
+            new_up.extend(0.0),
+            dir.extend(0.0),
+            origin.extend(1.0),
+        )
     }
 
     #[test]
     fn image_orientation_and_fov() {
         let desc = CameraDesc {
             loc: SourceLoc::default(),
-            projection: Projection::Perspective { fov_deg: 90.0, fov_axis: FovAxis::X },
+            projection: Projection::Perspective {
+                fov_deg: 90.0,
+                fov_axis: FovAxis::X,
+            },
             to_world: lookat(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y),
             near_clip: 0.01,
             far_clip: 100.0,
@@ -84,7 +113,11 @@ mod tests {
         assert!((centre.tmin - 0.01).abs() < 1e-7);
         // Right edge of the image looks towards world +x at 45 degrees (fov 90 on x).
         let right = cam.generate_ray(Vec2::new(200.0, 50.0));
-        assert!((right.dir - Vec3::new(1.0, 0.0, -1.0).normalize()).length() < 1e-6, "{:?}", right.dir);
+        assert!(
+            (right.dir - Vec3::new(1.0, 0.0, -1.0).normalize()).length() < 1e-6,
+            "{:?}",
+            right.dir
+        );
         // Top edge looks up, with half the tangent (aspect 2:1).
         let top = cam.generate_ray(Vec2::new(100.0, 0.0));
         assert!((top.dir - Vec3::new(0.0, 0.5, -1.0).normalize()).length() < 1e-6);

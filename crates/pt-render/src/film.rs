@@ -108,11 +108,23 @@ mod tests {
         // standard error of about 1e-3 on these variances; the threshold is 5 standard errors.
         let n = 100_000;
         let mut s = Sampler::new(3, 0, 0);
-        for (f, want) in [(FilterDesc::Box { radius: 0.5 }, 0.25 / 3.0), (FilterDesc::Tent { radius: 1.0 }, 1.0 / 6.0)] {
-            let v: f64 = (0..n).map(|_| sample_filter(&f, &mut s).x as f64).map(|x| x * x).sum::<f64>() / n as f64;
-            assert!((v - want).abs() < 5e-3 * want.max(0.1) * 2.0, "{f:?}: {v} vs {want}");
+        for (f, want) in [
+            (FilterDesc::Box { radius: 0.5 }, 0.25 / 3.0),
+            (FilterDesc::Tent { radius: 1.0 }, 1.0 / 6.0),
+        ] {
+            let v: f64 = (0..n)
+                .map(|_| sample_filter(&f, &mut s).x as f64)
+                .map(|x| x * x)
+                .sum::<f64>()
+                / n as f64;
+            assert!(
+                (v - want).abs() < 5e-3 * want.max(0.1) * 2.0,
+                "{f:?}: {v} vs {want}"
+            );
         }
-        let g: Vec<f32> = (0..n).map(|_| sample_filter(&FilterDesc::Gaussian { stddev: 0.5 }, &mut s).y).collect();
+        let g: Vec<f32> = (0..n)
+            .map(|_| sample_filter(&FilterDesc::Gaussian { stddev: 0.5 }, &mut s).y)
+            .collect();
         assert!(g.iter().all(|x| x.abs() <= 2.0));
         let v: f64 = g.iter().map(|&x| (x as f64).powi(2)).sum::<f64>() / n as f64;
         assert!(v > 0.2 && v < 0.25, "{v}");

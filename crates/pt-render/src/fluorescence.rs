@@ -88,15 +88,24 @@ impl Fluorescent {
     /// Builds the model from its spectra (spectral-mode forms). Errors (as text) when the
     /// emission has no area, when `r + a > 1` somewhere on 360-830 nm (checked at every
     /// 1 nm, with a 1e-4 allowance for rounding in the input numbers), or `Q` is outside [0, 1].
-    pub fn new(reflectance: Spectrum, absorption: &Spectrum, emission: &Spectrum, quantum_yield: f32) -> Result<Self, String> {
+    pub fn new(
+        reflectance: Spectrum,
+        absorption: &Spectrum,
+        emission: &Spectrum,
+        quantum_yield: f32,
+    ) -> Result<Self, String> {
         if !(0.0..=1.0).contains(&quantum_yield) {
-            return Err(format!("quantum yield must be in [0, 1], got {quantum_yield}"));
+            return Err(format!(
+                "quantum yield must be in [0, 1], got {quantum_yield}"
+            ));
         }
         for k in 0..=BINS {
             let l = LAMBDA_MIN + k as f32;
             let (r, a) = (reflectance.eval(l), absorption.eval(l));
             if r < 0.0 || a < 0.0 || r + a > 1.0 + 1e-4 {
-                return Err(format!("reflectance + absorption must be in [0, 1]: at {l} nm they are {r} + {a}"));
+                return Err(format!(
+                    "reflectance + absorption must be in [0, 1]: at {l} nm they are {r} + {a}"
+                ));
             }
         }
         let area = pt_spectrum::cie::integrate_visible(|l| emission.eval(l as f32) as f64);
@@ -112,7 +121,13 @@ impl Fluorescent {
             acc += absorption.eval(c as f32) as f64 * c;
             cdf.push(acc);
         }
-        Ok(Fluorescent { reflectance, absorption: absorption.clone(), emission, quantum_yield, cdf })
+        Ok(Fluorescent {
+            reflectance,
+            absorption: absorption.clone(),
+            emission,
+            quantum_yield,
+            cdf,
+        })
     }
 
     /// The reradiation kernel `P(li -> lo) = Q a(li) e(lo) li / lo` for `li < lo`, else 0
@@ -137,17 +152,24 @@ impl Fluorescent {
     /// `F(lo) = Q e(lo) / lo int_{360}^{lo} a(l) l dl` (module doc).
     #[inline]
     pub fn albedos(&self, lo: f32) -> (f32, f32) {
-        let f = self.quantum_yield as f64 * self.emission.eval(lo) as f64 * self.cumulative(lo) / lo as f64;
+        let f = self.quantum_yield as f64 * self.emission.eval(lo) as f64 * self.cumulative(lo)
+            / lo as f64;
         (self.reflectance.eval(lo), f as f32)
     }
 
     /// Total albedo `r + F` per lane at the lanes' (emitted) wavelengths: the reflectance of the
     /// Lambertian BSDF the integrator uses at this vertex.
     pub fn albedo(&self, lambda: &SampledWavelengths) -> SampledSpectrum {
-        SampledSpectrum(lambda.lambda().to_array().map(|l| {
-            let (r, f) = self.albedos(l);
-            r + f
-        }).into())
+        SampledSpectrum(
+            lambda
+                .lambda()
+                .to_array()
+                .map(|l| {
+                    let (r, f) = self.albedos(l);
+                    r + f
+                })
+                .into(),
+        )
     }
 
     /// Excitation wavelength for emitted `lo`, drawn with density `a(l) l / int_{360}^{lo} a x dx`
@@ -163,7 +185,11 @@ impl Fluorescent {
         // first bin whose upper node exceeds the target).
         let j = self.cdf.partition_point(|&c| c <= target).clamp(1, BINS) - 1;
         let g = self.cdf[j + 1] - self.cdf[j];
-        let t = if g > 0.0 { (target - self.cdf[j]) / g } else { 0.0 };
+        let t = if g > 0.0 {
+            (target - self.cdf[j]) / g
+        } else {
+            0.0
+        };
         let li = (LAMBDA_MIN as f64 + j as f64 + t.clamp(0.0, 1.0)).min(lo as f64 - 1e-4) as f32;
         Some((li, (g / total) as f32))
     }
@@ -203,10 +229,12 @@ fn scaled(s: &Spectrum, k: f32) -> Spectrum {
             let (l, v) = t.samples();
             l.iter().zip(v).map(|(&l, &v)| (l, v * k)).collect()
         }
-        _ => (0..=BINS).map(|j| {
-            let l = LAMBDA_MIN + j as f32;
-            (l, s.eval(l) * k)
-        }).collect(),
+        _ => (0..=BINS)
+            .map(|j| {
+                let l = LAMBDA_MIN + j as f32;
+                (l, s.eval(l) * k)
+            })
+            .collect(),
     };
     Spectrum::tabulated(&pairs).unwrap_or(Spectrum::constant(0.0))
 }
@@ -235,13 +263,18 @@ mod tests {
         for lo in [450.0f32, 480.0, 520.0, 560.0, 599.0, 700.0] {
             let n = ((lo - 360.0) * 100.0) as usize;
             let h = (lo - 360.0) as f64 / n as f64;
-            let int: f64 = (0..n).map(|i| {
-                let l = 360.0 + (i as f64 + 0.5) * h;
-                a.eval(l as f32) as f64 * l * h
-            }).sum();
+            let int: f64 = (0..n)
+                .map(|i| {
+                    let l = 360.0 + (i as f64 + 0.5) * h;
+                    a.eval(l as f32) as f64 * l * h
+                })
+                .sum();
             let expect = 0.7 * m.emission.eval(lo) as f64 * int / lo as f64;
             let (r, f) = m.albedos(lo);
-            assert!((f as f64 - expect).abs() <= 1e-3 * expect + 1e-9, "{lo}: {f} vs {expect}");
+            assert!(
+                (f as f64 - expect).abs() <= 1e-3 * expect + 1e-9,
+                "{lo}: {f} vs {expect}"
+            );
             assert!((r - (0.1 + 0.2 * (lo - 360.0) / 470.0)).abs() < 1e-6);
         }
         // Stokes: nothing is emitted where the emission spectrum is zero.
@@ -268,7 +301,10 @@ mod tests {
                 .sum::<f64>()
                 / a_li;
             let expect = q as f64 * (1.0 - cut);
-            assert!((photons - expect).abs() < 2e-4, "li {li}: {photons} vs {expect}");
+            assert!(
+                (photons - expect).abs() < 2e-4,
+                "li {li}: {photons} vs {expect}"
+            );
             assert!(photons <= q as f64 + 1e-6);
         }
         for lo in [480.0f32, 520.0, 580.0] {
@@ -277,7 +313,10 @@ mod tests {
                 .map(|i| m.reradiation((360.0 + (i as f64 + 0.5) * h) as f32, lo) as f64 * h)
                 .sum();
             let (_, f_model) = m.albedos(lo);
-            assert!((f_model as f64 / f - 1.0).abs() < 1e-3, "lo {lo}: {f_model} vs {f}");
+            assert!(
+                (f_model as f64 / f - 1.0).abs() < 1e-3,
+                "lo {lo}: {f_model} vs {f}"
+            );
         }
     }
 
@@ -293,16 +332,21 @@ mod tests {
         let nb = 32; // 360..520 in 5 nm bins
         let mut hist = vec![0.0f64; nb];
         for k in 0..n {
-            let (li, pdf) = m.sample_excitation(lo, (k as f32 + 0.5) / n as f32).unwrap();
+            let (li, pdf) = m
+                .sample_excitation(lo, (k as f32 + 0.5) / n as f32)
+                .unwrap();
             assert!(li < lo && li >= 360.0 && pdf > 0.0, "{li}");
             hist[(((li - 360.0) / 5.0) as usize).min(nb - 1)] += 1.0 / n as f64;
         }
         let total = m.cumulative(lo);
         for (b, h) in hist.iter().enumerate() {
-            let expect: f64 = (0..5).map(|i| {
-                let c = 360.0 + 5.0 * b as f64 + i as f64 + 0.5;
-                a.eval(c as f32) as f64 * c
-            }).sum::<f64>() / total;
+            let expect: f64 = (0..5)
+                .map(|i| {
+                    let c = 360.0 + 5.0 * b as f64 + i as f64 + 0.5;
+                    a.eval(c as f32) as f64 * c
+                })
+                .sum::<f64>()
+                / total;
             assert!((h - expect).abs() < 1e-4, "bin {b}: {h} vs {expect}");
         }
         assert!(m.sample_excitation(360.0, 0.5).is_none());
@@ -313,11 +357,15 @@ mod tests {
     #[test]
     fn scatter_chooses_lanes_with_the_right_odds() {
         let m = model(0.9);
-        let w = SampledWavelengths::sample_uniform(0.0).with_lambda([520.0, 560.0, 450.0, 700.0].into());
+        let w = SampledWavelengths::sample_uniform(0.0)
+            .with_lambda([520.0, 560.0, 450.0, 700.0].into());
         let n = 40_000;
         let mut kept = [0.0f64; 4];
         for k in 0..n {
-            let out = m.scatter(&w, (k as f32 + 0.5) / n as f32).lambda().to_array();
+            let out = m
+                .scatter(&w, (k as f32 + 0.5) / n as f32)
+                .lambda()
+                .to_array();
             for (i, (&o, &l)) in out.iter().zip(w.lambda().to_array().iter()).enumerate() {
                 assert!(o <= l);
                 if o == l {
@@ -328,15 +376,31 @@ mod tests {
         for (i, &l) in w.lambda().to_array().iter().enumerate() {
             let (r, f) = m.albedos(l);
             let p = (r / (r + f)) as f64;
-            assert!((kept[i] - p).abs() < 5e-3, "lane {i} at {l}: {} vs {p}", kept[i]);
+            assert!(
+                (kept[i] - p).abs() < 5e-3,
+                "lane {i} at {l}: {} vs {p}",
+                kept[i]
+            );
         }
     }
 
     #[test]
     fn rejects_unphysical_parameters() {
         let e = Spectrum::parse_mitsuba("440:0, 520:2, 600:0").unwrap();
-        assert!(Fluorescent::new(Spectrum::constant(0.6), &Spectrum::constant(0.5), &e, 1.0).unwrap_err().contains("reflectance + absorption"));
-        assert!(Fluorescent::new(Spectrum::constant(0.2), &Spectrum::constant(0.5), &e, 1.2).is_err());
-        assert!(Fluorescent::new(Spectrum::constant(0.2), &Spectrum::constant(0.5), &Spectrum::constant(0.0), 1.0).is_err());
+        assert!(
+            Fluorescent::new(Spectrum::constant(0.6), &Spectrum::constant(0.5), &e, 1.0)
+                .unwrap_err()
+                .contains("reflectance + absorption")
+        );
+        assert!(
+            Fluorescent::new(Spectrum::constant(0.2), &Spectrum::constant(0.5), &e, 1.2).is_err()
+        );
+        assert!(Fluorescent::new(
+            Spectrum::constant(0.2),
+            &Spectrum::constant(0.5),
+            &Spectrum::constant(0.0),
+            1.0
+        )
+        .is_err());
     }
 }

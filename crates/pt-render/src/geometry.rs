@@ -73,20 +73,44 @@ impl Primitive {
     #[inline(always)]
     pub fn intersect(&self, origin: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> f32 {
         match *self {
-            Primitive::Triangle { v0, e1, e2 } => intersect_triangle(origin, dir, v0, e1, e2, tmin, tmax).map_or(f32::INFINITY, |h| h.0),
-            Primitive::Parallelogram { v0, e1, e2 } => intersect_parallelogram(origin, dir, v0, e1, e2, tmin, tmax).map_or(f32::INFINITY, |h| h.0),
-            Primitive::Sphere { center, radius, .. } => intersect_sphere(origin, dir, center, radius, tmin, tmax),
+            Primitive::Triangle { v0, e1, e2 } => {
+                intersect_triangle(origin, dir, v0, e1, e2, tmin, tmax)
+                    .map_or(f32::INFINITY, |h| h.0)
+            }
+            Primitive::Parallelogram { v0, e1, e2 } => {
+                intersect_parallelogram(origin, dir, v0, e1, e2, tmin, tmax)
+                    .map_or(f32::INFINITY, |h| h.0)
+            }
+            Primitive::Sphere { center, radius, .. } => {
+                intersect_sphere(origin, dir, center, radius, tmin, tmax)
+            }
         }
     }
 
     /// [`Primitive::intersect`] with the hit's barycentrics `(t, b1, b2)` (the weights of
     /// `v0 + e1` and `v0 + e2`; 0 for spheres); `t` is +inf on a miss.
     #[inline(always)]
-    pub fn intersect_bary(&self, origin: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> (f32, f32, f32) {
+    pub fn intersect_bary(
+        &self,
+        origin: Vec3A,
+        dir: Vec3A,
+        tmin: f32,
+        tmax: f32,
+    ) -> (f32, f32, f32) {
         match *self {
-            Primitive::Triangle { v0, e1, e2 } => intersect_triangle(origin, dir, v0, e1, e2, tmin, tmax).unwrap_or((f32::INFINITY, 0.0, 0.0)),
-            Primitive::Parallelogram { v0, e1, e2 } => intersect_parallelogram(origin, dir, v0, e1, e2, tmin, tmax).unwrap_or((f32::INFINITY, 0.0, 0.0)),
-            Primitive::Sphere { center, radius, .. } => (intersect_sphere(origin, dir, center, radius, tmin, tmax), 0.0, 0.0),
+            Primitive::Triangle { v0, e1, e2 } => intersect_triangle(
+                origin, dir, v0, e1, e2, tmin, tmax,
+            )
+            .unwrap_or((f32::INFINITY, 0.0, 0.0)),
+            Primitive::Parallelogram { v0, e1, e2 } => intersect_parallelogram(
+                origin, dir, v0, e1, e2, tmin, tmax,
+            )
+            .unwrap_or((f32::INFINITY, 0.0, 0.0)),
+            Primitive::Sphere { center, radius, .. } => (
+                intersect_sphere(origin, dir, center, radius, tmin, tmax),
+                0.0,
+                0.0,
+            ),
         }
     }
 }
@@ -94,7 +118,15 @@ impl Primitive {
 /// Möller & Trumbore 1997, "Fast, Minimum Storage Ray/Triangle Intersection": returns
 /// `(t, b1, b2)`. Written so that NaN from degenerate input fails every comparison and misses.
 #[inline(always)]
-pub fn intersect_triangle(o: Vec3A, d: Vec3A, v0: Vec3A, e1: Vec3A, e2: Vec3A, tmin: f32, tmax: f32) -> Option<(f32, f32, f32)> {
+pub fn intersect_triangle(
+    o: Vec3A,
+    d: Vec3A,
+    v0: Vec3A,
+    e1: Vec3A,
+    e2: Vec3A,
+    tmin: f32,
+    tmax: f32,
+) -> Option<(f32, f32, f32)> {
     moller_trumbore::<false>(o, d, v0, e1, e2, tmin, tmax)
 }
 
@@ -102,14 +134,30 @@ pub fn intersect_triangle(o: Vec3A, d: Vec3A, v0: Vec3A, e1: Vec3A, e2: Vec3A, t
 /// barycentrics are the parallelogram's edge coordinates, so only the last bound changes
 /// (`b2 <= 1` in place of `b1 + b2 <= 1`). Returns `(t, b1, b2)`.
 #[inline(always)]
-pub fn intersect_parallelogram(o: Vec3A, d: Vec3A, v0: Vec3A, e1: Vec3A, e2: Vec3A, tmin: f32, tmax: f32) -> Option<(f32, f32, f32)> {
+pub fn intersect_parallelogram(
+    o: Vec3A,
+    d: Vec3A,
+    v0: Vec3A,
+    e1: Vec3A,
+    e2: Vec3A,
+    tmin: f32,
+    tmax: f32,
+) -> Option<(f32, f32, f32)> {
     moller_trumbore::<true>(o, d, v0, e1, e2, tmin, tmax)
 }
 
 /// Möller & Trumbore's test over the triangle (`PARALLELOGRAM` false) or the parallelogram
 /// spanned by `e1` and `e2` at `v0`.
 #[inline(always)]
-fn moller_trumbore<const PARALLELOGRAM: bool>(o: Vec3A, d: Vec3A, v0: Vec3A, e1: Vec3A, e2: Vec3A, tmin: f32, tmax: f32) -> Option<(f32, f32, f32)> {
+fn moller_trumbore<const PARALLELOGRAM: bool>(
+    o: Vec3A,
+    d: Vec3A,
+    v0: Vec3A,
+    e1: Vec3A,
+    e2: Vec3A,
+    tmin: f32,
+    tmax: f32,
+) -> Option<(f32, f32, f32)> {
     // Everything is computed and tested once at the end: about half the candidates a ray meets
     // are misses, and early exits on each bound were branches the processor could not predict.
     // A zero determinant gives infinite or NaN coordinates, which fail the bounds.
@@ -121,9 +169,14 @@ fn moller_trumbore<const PARALLELOGRAM: bool>(o: Vec3A, d: Vec3A, v0: Vec3A, e1:
     let qvec = tvec.cross(e1);
     let b2 = d.dot(qvec) * inv_det;
     let t = e2.dot(qvec) * inv_det;
-    let inside = if PARALLELOGRAM { b2 <= 1.0 } else { b1 + b2 <= 1.0 };
+    let inside = if PARALLELOGRAM {
+        b2 <= 1.0
+    } else {
+        b1 + b2 <= 1.0
+    };
     // `&` rather than `&&`: evaluate every comparison, branch once.
-    let hit = (det != 0.0) & (b1 >= 0.0) & (b1 <= 1.0) & (b2 >= 0.0) & inside & (t > tmin) & (t < tmax);
+    let hit =
+        (det != 0.0) & (b1 >= 0.0) & (b1 <= 1.0) & (b2 >= 0.0) & inside & (t > tmin) & (t < tmax);
     hit.then_some((t, b1, b2))
 }
 
@@ -132,7 +185,14 @@ fn moller_trumbore<const PARALLELOGRAM: bool>(o: Vec3A, d: Vec3A, v0: Vec3A, e1:
 /// ch. 7, eq. 10): the discriminant is computed from the perpendicular distance, which avoids the
 /// cancellation of b^2 - c for far-away origins.
 #[inline(always)]
-pub fn intersect_sphere(o: Vec3A, d: Vec3A, center: Vec3A, radius: f32, tmin: f32, tmax: f32) -> f32 {
+pub fn intersect_sphere(
+    o: Vec3A,
+    d: Vec3A,
+    center: Vec3A,
+    radius: f32,
+    tmin: f32,
+    tmax: f32,
+) -> f32 {
     let f = o - center;
     let b = -f.dot(d); // distance along d to the point closest to the centre
     let perp = f + d * b; // offset of that point from the centre
@@ -195,18 +255,33 @@ mod tests {
         let (v0, e1, e2) = (Vec3A::ZERO, Vec3A::X, Vec3A::Y);
         let d = Vec3A::NEG_Z;
         for (a, b) in [(e1, e2), (e2, e1)] {
-            let hit = intersect_triangle(Vec3A::new(0.25, 0.5, 2.0), d, v0, a, b, 0.0, f32::INFINITY).unwrap();
+            let hit =
+                intersect_triangle(Vec3A::new(0.25, 0.5, 2.0), d, v0, a, b, 0.0, f32::INFINITY)
+                    .unwrap();
             assert_eq!(hit.0, 2.0);
             let (b1, b2) = (hit.1, hit.2);
             let p = v0 + a * b1 + b * b2;
             assert!((p - Vec3A::new(0.25, 0.5, 0.0)).length() < 1e-6, "{p}");
-            for o in [Vec3A::new(0.6, 0.6, 2.0), Vec3A::new(-0.01, 0.5, 2.0), Vec3A::new(0.5, -0.01, 2.0), Vec3A::splat(f32::NAN)] {
-                assert!(intersect_triangle(o, d, v0, a, b, 0.0, f32::INFINITY).is_none(), "{o}");
+            for o in [
+                Vec3A::new(0.6, 0.6, 2.0),
+                Vec3A::new(-0.01, 0.5, 2.0),
+                Vec3A::new(0.5, -0.01, 2.0),
+                Vec3A::splat(f32::NAN),
+            ] {
+                assert!(
+                    intersect_triangle(o, d, v0, a, b, 0.0, f32::INFINITY).is_none(),
+                    "{o}"
+                );
             }
             // Outside (tmin, tmax): no hit.
-            assert!(intersect_triangle(Vec3A::new(0.25, 0.25, 2.0), d, v0, a, b, 0.0, 1.5).is_none());
+            assert!(
+                intersect_triangle(Vec3A::new(0.25, 0.25, 2.0), d, v0, a, b, 0.0, 1.5).is_none()
+            );
             // Parallel ray: det = 0, no hit.
-            assert!(intersect_triangle(Vec3A::new(0.25, 0.25, 0.0), Vec3A::X, v0, a, b, -1.0, 1.0).is_none());
+            assert!(
+                intersect_triangle(Vec3A::new(0.25, 0.25, 0.0), Vec3A::X, v0, a, b, -1.0, 1.0)
+                    .is_none()
+            );
         }
     }
 }

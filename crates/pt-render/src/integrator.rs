@@ -9,8 +9,8 @@
 use crate::geometry::Interaction;
 use crate::light::LightSample;
 use crate::sampler::Sampler;
-use crate::scene::Scene;
 use crate::scene::LaneShading;
+use crate::scene::Scene;
 use pt_math::{offset_coordinate, offset_ray_origin, power_heuristic, Frame, Ray, Vec3, Vec4};
 use pt_spectrum::{ColorMode, SampledSpectrum, SampledWavelengths};
 use std::f32::consts::FRAC_1_PI;
@@ -46,7 +46,13 @@ pub struct PathSettings {
 
 impl Default for PathSettings {
     fn default() -> Self {
-        PathSettings { max_depth: -1, rr_depth: 5, hide_emitters: false, strategy: Strategy::Mis, media: false }
+        PathSettings {
+            max_depth: -1,
+            rr_depth: 5,
+            hide_emitters: false,
+            strategy: Strategy::Mis,
+            media: false,
+        }
     }
 }
 
@@ -59,13 +65,29 @@ const SHADOW_RAY_SHORTEN: f32 = 1.0 - 1e-5;
 ///
 /// The same computation as [`trace_paths`] for one path (which is how it is done).
 #[inline(always)]
-pub fn li(scene: &Scene, ray: Ray, s: &PathSettings, sampler: &mut Sampler, lambda: &SampledWavelengths) -> SampledSpectrum {
-    let mut first = Some(PathStart { path: PathState::new(scene, ray, lambda), sampler: sampler.clone(), lambda: *lambda, tag: 0 });
-    let mut radiance = SampledSpectrum::ZERO;
-    trace_paths(scene, s, || first.take(), |done| {
-        radiance = done.path.radiance;
-        *sampler = done.sampler.clone();
+pub fn li(
+    scene: &Scene,
+    ray: Ray,
+    s: &PathSettings,
+    sampler: &mut Sampler,
+    lambda: &SampledWavelengths,
+) -> SampledSpectrum {
+    let mut first = Some(PathStart {
+        path: PathState::new(scene, ray, lambda),
+        sampler: sampler.clone(),
+        lambda: *lambda,
+        tag: 0,
     });
+    let mut radiance = SampledSpectrum::ZERO;
+    trace_paths(
+        scene,
+        s,
+        || first.take(),
+        |done| {
+            radiance = done.path.radiance;
+            *sampler = done.sampler.clone();
+        },
+    );
     radiance
 }
 
@@ -151,7 +173,12 @@ pub const MAX_PATHS: usize = 8;
 /// numbers and adds its terms in the same order as it would alone, so each result is
 /// bit-identical to tracing the path alone.
 #[inline(always)]
-pub fn trace_paths(scene: &Scene, s: &PathSettings, mut start: impl FnMut() -> Option<PathStart>, mut finish: impl FnMut(&PathStart)) {
+pub fn trace_paths(
+    scene: &Scene,
+    s: &PathSettings,
+    mut start: impl FnMut() -> Option<PathStart>,
+    mut finish: impl FnMut(&PathStart),
+) {
     let mut slots: [Option<PathStart>; MAX_PATHS] = [const { None }; MAX_PATHS];
     for slot in slots.iter_mut() {
         *slot = start();
@@ -185,14 +212,19 @@ pub fn trace_paths(scene: &Scene, s: &PathSettings, mut start: impl FnMut() -> O
         let lane_shading = scene.lane_shading().filter(|_| s.strategy == Strategy::Mis);
         let mut lanes = [None; MAX_PATHS];
         for ((slot, hit), lane) in slots.iter_mut().zip(&hits).zip(lanes.iter_mut()) {
-            let Some(PathStart { path, sampler, .. }) = slot else { continue };
+            let Some(PathStart { path, sampler, .. }) = slot else {
+                continue;
+            };
             if !arrive(scene, s, path, hit) {
                 continue;
             }
             let Some(hit) = hit else { continue };
             // The vectorised shading builds the frame from the normal alone, as the general
             // code does when there is no dp/du.
-            match lane_shading.filter(|_| hit.dpdu == Vec3::ZERO).and_then(|ls| scene.lane_lambert(ls, hit.shape)) {
+            match lane_shading
+                .filter(|_| hit.dpdu == Vec3::ZERO)
+                .and_then(|ls| scene.lane_lambert(ls, hit.shape))
+            {
                 Some(m) => *lane = Some(m),
                 None => scatter_at(scene, s, path, hit, sampler),
             }
@@ -210,9 +242,29 @@ pub fn trace_paths(scene: &Scene, s: &PathSettings, mut start: impl FnMut() -> O
 /// [`scatter_at`]); otherwise the path has ended (`alive = false`) where Mitsuba's `path`
 /// integrator stops.
 #[inline(always)]
-fn arrive(scene: &Scene, s: &PathSettings, path: &mut PathState, hit: &Option<Interaction>) -> bool {
-    let max_depth = if s.max_depth < 0 { u32::MAX } else { s.max_depth as u32 };
-    let PathState { ray, lambda, radiance, throughput, prev_p, prev_pdf, prev_delta, depth, alive, .. } = path;
+fn arrive(
+    scene: &Scene,
+    s: &PathSettings,
+    path: &mut PathState,
+    hit: &Option<Interaction>,
+) -> bool {
+    let max_depth = if s.max_depth < 0 {
+        u32::MAX
+    } else {
+        s.max_depth as u32
+    };
+    let PathState {
+        ray,
+        lambda,
+        radiance,
+        throughput,
+        prev_p,
+        prev_pdf,
+        prev_delta,
+        depth,
+        alive,
+        ..
+    } = path;
     let (depth_now, prev_delta_now, prev_pdf_now) = (*depth, *prev_delta, *prev_pdf);
     let Some(hit) = hit else {
         // The ray left the scene: environment and sun.
@@ -220,7 +272,9 @@ fn arrive(scene: &Scene, s: &PathSettings, path: &mut PathState, hit: &Option<In
             let light = &scene.lights[i];
             let le = light.escaped_radiance(ray.dir, lambda) * scene.emission(i, lambda);
             if !le.is_black() {
-                let w = emission_weight(s, depth_now, prev_delta_now, prev_pdf_now, || scene.light_pmf(i) * light.escaped_pdf(ray.dir));
+                let w = emission_weight(s, depth_now, prev_delta_now, prev_pdf_now, || {
+                    scene.light_pmf(i) * light.escaped_pdf(ray.dir)
+                });
                 *radiance += *throughput * le * w;
             }
         }
@@ -248,7 +302,9 @@ fn arrive(scene: &Scene, s: &PathSettings, path: &mut PathState, hit: &Option<In
         let le = light.emitted(hit.ns, wo_world, hit.uv, lambda) * scene.emission(li_idx, lambda);
         if !le.is_black() {
             let prev = *prev_p;
-            let w = emission_weight(s, depth_now, prev_delta_now, prev_pdf_now, || scene.light_pmf(li_idx) * light.pdf(prev, hit.p, hit.ns));
+            let w = emission_weight(s, depth_now, prev_delta_now, prev_pdf_now, || {
+                scene.light_pmf(li_idx) * light.pdf(prev, hit.p, hit.ns)
+            });
             *radiance += *throughput * le * w;
         }
     }
@@ -265,9 +321,27 @@ fn arrive(scene: &Scene, s: &PathSettings, path: &mut PathState, hit: &Option<In
 /// leaves in `path.shadow`, the BSDF sample that makes the next segment, and Russian roulette.
 /// Ends the path (`alive = false`) where Mitsuba's `path` integrator stops.
 #[inline(always)]
-fn scatter_at(scene: &Scene, s: &PathSettings, path: &mut PathState, hit: &Interaction, sampler: &mut Sampler) {
+fn scatter_at(
+    scene: &Scene,
+    s: &PathSettings,
+    path: &mut PathState,
+    hit: &Interaction,
+    sampler: &mut Sampler,
+) {
     let use_light = s.strategy != Strategy::Bsdf;
-    let PathState { ray, lambda, throughput, prev_p, prev_pdf, prev_delta, depth, eta_scale, alive, shadow, .. } = path;
+    let PathState {
+        ray,
+        lambda,
+        throughput,
+        prev_p,
+        prev_pdf,
+        prev_delta,
+        depth,
+        eta_scale,
+        alive,
+        shadow,
+        ..
+    } = path;
     let wo_world = -ray.dir;
     let bsdf = scene.material_at_hit(hit, lambda);
     // Fluorescence: the BSDF holds each lane's total albedo at its emitted wavelength; now
@@ -296,8 +370,19 @@ fn scatter_at(scene: &Scene, s: &PathSettings, path: &mut PathState, hit: &Inter
                         let light_pdf = pmf * ls.pdf;
                         // Delta lights cannot be hit by BSDF sampling: light sampling is the
                         // only strategy, weight 1.
-                        let w = if s.strategy != Strategy::Light && !ls.delta { power_heuristic(light_pdf, bsdf.pdf(wo, wi)) } else { 1.0 };
-                        *shadow = Some((shadow_ray, *throughput * f * ls.radiance * scene.emission(li_idx, lambda) * (wi.z.abs() * w / light_pdf)));
+                        let w = if s.strategy != Strategy::Light && !ls.delta {
+                            power_heuristic(light_pdf, bsdf.pdf(wo, wi))
+                        } else {
+                            1.0
+                        };
+                        *shadow = Some((
+                            shadow_ray,
+                            *throughput
+                                * f
+                                * ls.radiance
+                                * scene.emission(li_idx, lambda)
+                                * (wi.z.abs() * w / light_pdf),
+                        ));
                     }
                 }
             }
@@ -344,7 +429,14 @@ fn scatter_at(scene: &Scene, s: &PathSettings, path: &mut PathState, hit: &Inter
 /// compiler runs it in SIMD lanes (AVX2 in the x86-64-v3 render loop). Each path draws its
 /// random numbers in the same order as in [`scatter_at`], so the results are bit-identical.
 #[inline(always)]
-fn scatter_lanes(scene: &Scene, s: &PathSettings, ls: &LaneShading, slots: &mut [Option<PathStart>; MAX_PATHS], hits: &[Option<Interaction>; MAX_PATHS], lanes: &[Option<([f32; 4], bool)>; MAX_PATHS]) {
+fn scatter_lanes(
+    scene: &Scene,
+    s: &PathSettings,
+    ls: &LaneShading,
+    slots: &mut [Option<PathStart>; MAX_PATHS],
+    hits: &[Option<Interaction>; MAX_PATHS],
+    lanes: &[Option<([f32; 4], bool)>; MAX_PATHS],
+) {
     const N: usize = MAX_PATHS;
     // Inputs, gathered one lane per path. Unused lanes keep harmless values and are ignored.
     let mut p = [[0.0f32; N]; 3];
@@ -356,14 +448,25 @@ fn scatter_lanes(scene: &Scene, s: &PathSettings, ls: &LaneShading, slots: &mut 
     let mut thr = [[0.0f32; N]; 4];
     let mut pmf = [1.0f32; N];
     let (mut u_light, mut u_bsdf) = ([[0.5f32; N]; 2], [[0.5f32; N]; 2]);
-    let (mut lv0, mut le1, mut le2, mut ln) = ([[0.0f32; N]; 3], [[0.0f32; N]; 3], [[0.0f32; N]; 3], [[0.0f32; N]; 3]);
+    let (mut lv0, mut le1, mut le2, mut ln) = (
+        [[0.0f32; N]; 3],
+        [[0.0f32; N]; 3],
+        [[0.0f32; N]; 3],
+        [[0.0f32; N]; 3],
+    );
     let mut larea = [1.0f32; N];
     let mut lrad = [[0.0f32; N]; 4];
     for k in 0..N {
-        let (Some(h), Some((alb, two)), Some(PathStart { path, sampler, .. })) = (&hits[k], lanes[k], &mut slots[k]) else { continue };
+        let (Some(h), Some((alb, two)), Some(PathStart { path, sampler, .. })) =
+            (&hits[k], lanes[k], &mut slots[k])
+        else {
+            continue;
+        };
         // The draws of `scatter_at`: light choice, light point, lobe (unused by Lambert),
         // direction; Russian roulette's comes after, as there.
-        let (li, pm, _) = scene.sample_light(sampler.next_1d()).expect("LaneShading requires a light to choose");
+        let (li, pm, _) = scene
+            .sample_light(sampler.next_1d())
+            .expect("LaneShading requires a light to choose");
         let ul = sampler.next_2d();
         let _u_lobe = sampler.next_1d();
         let ub = sampler.next_2d();
@@ -391,7 +494,12 @@ fn scatter_lanes(scene: &Scene, s: &PathSettings, ls: &LaneShading, slots: &mut 
 
     // Outputs: the shadow ray and its contribution, the next segment.
     let mut shadow_ok = [false; N];
-    let (mut sh_o, mut sh_d, mut sh_tmax, mut sh_c) = ([[0.0f32; N]; 3], [[0.0f32; N]; 3], [0.0f32; N], [[0.0f32; N]; 4]);
+    let (mut sh_o, mut sh_d, mut sh_tmax, mut sh_c) = (
+        [[0.0f32; N]; 3],
+        [[0.0f32; N]; 3],
+        [0.0f32; N],
+        [[0.0f32; N]; 4],
+    );
     let mut next_ok = [false; N];
     let (mut nx_o, mut nx_d, mut nx_pdf) = ([[0.0f32; N]; 3], [[0.0f32; N]; 3], [0.0f32; N]);
     let dot = |a: [f32; 3], b: [f32; 3]| (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2];
@@ -410,16 +518,38 @@ fn scatter_lanes(scene: &Scene, s: &PathSettings, ls: &LaneShading, slots: &mut 
         // SpawnPoint: the side the path came from, offset there; the other side on demand.
         let flip = -dot(n_g, d).signum();
         let n_out = [n_g[0] * flip, n_g[1] * flip, n_g[2] * flip];
-        let out = [offset_coordinate(x[0], n_out[0]), offset_coordinate(x[1], n_out[1]), offset_coordinate(x[2], n_out[2])];
-        let origin = |w: [f32; 3]| if dot(n_out, w) >= 0.0 { out } else { [offset_coordinate(x[0], -n_out[0]), offset_coordinate(x[1], -n_out[1]), offset_coordinate(x[2], -n_out[2])] };
+        let out = [
+            offset_coordinate(x[0], n_out[0]),
+            offset_coordinate(x[1], n_out[1]),
+            offset_coordinate(x[2], n_out[2]),
+        ];
+        let origin = |w: [f32; 3]| {
+            if dot(n_out, w) >= 0.0 {
+                out
+            } else {
+                [
+                    offset_coordinate(x[0], -n_out[0]),
+                    offset_coordinate(x[1], -n_out[1]),
+                    offset_coordinate(x[2], -n_out[2]),
+                ]
+            }
+        };
         // Two-sided Lambert seen from behind is mirrored (SurfaceBsdf::side).
-        let side = if two_sided[k] && wo[2] < 0.0 { -1.0 } else { 1.0 };
+        let side = if two_sided[k] && wo[2] < 0.0 {
+            -1.0
+        } else {
+            1.0
+        };
         let wo_z = wo[2] * side;
 
         // Light sample: a point of the parallelogram by area (AreaLight::sample).
         let (ux, uy) = (u_light[0][k], u_light[1][k]);
         let (v0, e1, e2, l_n) = (get(&lv0), get(&le1), get(&le2), get(&ln));
-        let lp = [v0[0] + e1[0] * ux + e2[0] * uy, v0[1] + e1[1] * ux + e2[1] * uy, v0[2] + e1[2] * ux + e2[2] * uy];
+        let lp = [
+            v0[0] + e1[0] * ux + e2[0] * uy,
+            v0[1] + e1[1] * ux + e2[1] * uy,
+            v0[2] + e1[2] * ux + e2[2] * uy,
+        ];
         let to = [lp[0] - x[0], lp[1] - x[1], lp[2] - x[2]];
         let dist2 = dot(to, to);
         let dist = dist2.sqrt();
@@ -442,11 +572,19 @@ fn scatter_lanes(scene: &Scene, s: &PathSettings, ls: &LaneShading, slots: &mut 
         // The shadow ray (shadow_ray): to the light point offset off the light's surface.
         let o = origin(wi);
         let tn_sign = cos_l.signum();
-        let target = [offset_coordinate(lp[0], l_n[0] * tn_sign), offset_coordinate(lp[1], l_n[1] * tn_sign), offset_coordinate(lp[2], l_n[2] * tn_sign)];
+        let target = [
+            offset_coordinate(lp[0], l_n[0] * tn_sign),
+            offset_coordinate(lp[1], l_n[1] * tn_sign),
+            offset_coordinate(lp[2], l_n[2] * tn_sign),
+        ];
         let seg = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
         let seg_len = dot(seg, seg).sqrt();
         let light_pdf = pmf[k] * l_pdf;
-        let bsdf_pdf = if wo_z > 0.0 && wi_z > 0.0 { wi_z * FRAC_1_PI } else { 0.0 };
+        let bsdf_pdf = if wo_z > 0.0 && wi_z > 0.0 {
+            wi_z * FRAC_1_PI
+        } else {
+            0.0
+        };
         let w = power_heuristic(light_pdf, bsdf_pdf);
         let scale = wi_l[2].abs() * w / light_pdf;
         shadow_ok[k] = sampled & !black(&le) & !black(&f) & (seg_len > 0.0);
@@ -472,7 +610,11 @@ fn scatter_lanes(scene: &Scene, s: &PathSettings, ls: &LaneShading, slots: &mut 
         let pdf = if z > 0.0 { z * FRAC_1_PI } else { 0.0 };
         next_ok[k] = !(wo_z <= 0.0) & !(pdf <= 0.0);
         let wz = z * side;
-        let wi_world = [fs[0] * dx + ft[0] * dy + n[0] * wz, fs[1] * dx + ft[1] * dy + n[1] * wz, fs[2] * dx + ft[2] * dy + n[2] * wz];
+        let wi_world = [
+            fs[0] * dx + ft[0] * dy + n[0] * wz,
+            fs[1] * dx + ft[1] * dy + n[1] * wz,
+            fs[2] * dx + ft[2] * dy + n[2] * wz,
+        ];
         let no = origin(wi_world);
         for a in 0..3 {
             nx_o[a][k] = no[a];
@@ -483,11 +625,23 @@ fn scatter_lanes(scene: &Scene, s: &PathSettings, ls: &LaneShading, slots: &mut 
 
     // Results back to the paths, then Russian roulette as in `scatter_at`.
     for k in 0..N {
-        let (Some(h), Some((alb, _)), Some(PathStart { path, sampler, .. })) = (&hits[k], lanes[k], &mut slots[k]) else { continue };
+        let (Some(h), Some((alb, _)), Some(PathStart { path, sampler, .. })) =
+            (&hits[k], lanes[k], &mut slots[k])
+        else {
+            continue;
+        };
         let col = |v: &[[f32; N]; 3]| Vec3::new(v[0][k], v[1][k], v[2][k]);
         if shadow_ok[k] {
-            let ray = Ray { origin: col(&sh_o), dir: col(&sh_d), tmin: 0.0, tmax: sh_tmax[k] };
-            path.shadow = Some((ray, SampledSpectrum(Vec4::new(sh_c[0][k], sh_c[1][k], sh_c[2][k], sh_c[3][k]))));
+            let ray = Ray {
+                origin: col(&sh_o),
+                dir: col(&sh_d),
+                tmin: 0.0,
+                tmax: sh_tmax[k],
+            };
+            path.shadow = Some((
+                ray,
+                SampledSpectrum(Vec4::new(sh_c[0][k], sh_c[1][k], sh_c[2][k], sh_c[3][k])),
+            ));
         }
         let weight = SampledSpectrum(Vec4::from_array(alb));
         if !next_ok[k] || weight.is_black() {
@@ -529,7 +683,11 @@ impl SpawnPoint {
     #[inline(always)]
     fn new(hit: &Interaction, ray_dir: Vec3) -> Self {
         let n_out = hit.ng * -hit.ng.dot(ray_dir).signum();
-        SpawnPoint { p: hit.p, n_out, out: offset_ray_origin(hit.p, n_out) }
+        SpawnPoint {
+            p: hit.p,
+            n_out,
+            out: offset_ray_origin(hit.p, n_out),
+        }
     }
 
     /// Origin for a ray leaving in direction `dir` (world space).
@@ -552,13 +710,22 @@ fn shadow_ray(origin: Vec3, ls: &LightSample) -> Option<Ray> {
     if ls.dist.is_infinite() {
         return Some(Ray::new(origin, ls.wi));
     }
-    let target = if ls.n == pt_math::Vec3::ZERO { ls.p } else { offset_ray_origin(ls.p, ls.n * ls.n.dot(-ls.wi).signum()) };
+    let target = if ls.n == pt_math::Vec3::ZERO {
+        ls.p
+    } else {
+        offset_ray_origin(ls.p, ls.n * ls.n.dot(-ls.wi).signum())
+    };
     let seg = target - origin;
     let dist = seg.length();
     if !(dist > 0.0) {
         return None;
     }
-    Some(Ray { origin, dir: seg / dist, tmin: 0.0, tmax: dist * SHADOW_RAY_SHORTEN })
+    Some(Ray {
+        origin,
+        dir: seg / dist,
+        tmin: 0.0,
+        tmax: dist * SHADOW_RAY_SHORTEN,
+    })
 }
 
 /// Weight of emission that the traced ray found (an emitter hit or an escaped ray), given the
@@ -568,7 +735,13 @@ fn shadow_ray(origin: Vec3, ls: &LightSample) -> Option<Ray> {
 /// light sampling under MIS, 1 with BSDF sampling alone, and 0 with light sampling alone (NEE
 /// already counted it).
 #[inline]
-fn emission_weight(s: &PathSettings, depth: u32, prev_delta: bool, prev_pdf: f32, light_pdf: impl FnOnce() -> f32) -> f32 {
+fn emission_weight(
+    s: &PathSettings,
+    depth: u32,
+    prev_delta: bool,
+    prev_pdf: f32,
+    light_pdf: impl FnOnce() -> f32,
+) -> f32 {
     if depth == 0 {
         return if s.hide_emitters { 0.0 } else { 1.0 };
     }

@@ -40,7 +40,9 @@ impl RenderSettings {
         let i = &desc.integrator;
         let max_depth = match i.kind {
             // Radiosity scenes rendered by the path tracer (`--integrator path`) keep their depth.
-            pt_scene::IntegratorKind::Path | pt_scene::IntegratorKind::VolPath | pt_scene::IntegratorKind::Radiosity => i.max_depth,
+            pt_scene::IntegratorKind::Path
+            | pt_scene::IntegratorKind::VolPath
+            | pt_scene::IntegratorKind::Radiosity => i.max_depth,
             pt_scene::IntegratorKind::Direct => 2,
         };
         RenderSettings {
@@ -49,7 +51,13 @@ impl RenderSettings {
             spp: desc.sampler.sample_count,
             seed: desc.sampler.seed,
             filter: desc.film.filter,
-            path: PathSettings { max_depth, rr_depth: i.rr_depth, hide_emitters: i.hide_emitters, strategy: Strategy::Mis, media: i.kind == pt_scene::IntegratorKind::VolPath },
+            path: PathSettings {
+                max_depth,
+                rr_depth: i.rr_depth,
+                hide_emitters: i.hide_emitters,
+                strategy: Strategy::Mis,
+                media: i.kind == pt_scene::IntegratorKind::VolPath,
+            },
             clamp: None,
         }
     }

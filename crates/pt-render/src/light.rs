@@ -12,11 +12,13 @@
 //! surface), so `pdf_area = 1 / total area`, and the solid-angle pdf seen from a point `x` is
 //! `pdf_area * |x - y|^2 / |cos theta_y|` (pbrt-v4 eq. 4.15; Veach 1997 eq. 8.10).
 
-use pt_math::warp::{square_to_uniform_cone, square_to_uniform_sphere, square_to_uniform_triangle, uniform_cone_pdf};
-use pt_math::{Distribution1D, Distribution2D, Frame, Mat3, Vec2, Vec3};
-use std::f32::consts::PI;
-use pt_spectrum::{SampledSpectrum, SampledWavelengths};
 use crate::spectral_texture::{SpectralEmission, TexelSpectrum};
+use pt_math::warp::{
+    square_to_uniform_cone, square_to_uniform_sphere, square_to_uniform_triangle, uniform_cone_pdf,
+};
+use pt_math::{Distribution1D, Distribution2D, Frame, Mat3, Vec2, Vec3};
+use pt_spectrum::{SampledSpectrum, SampledWavelengths};
+use std::f32::consts::PI;
 use std::sync::Arc;
 
 /// Shape data a mesh light samples from (world space).
@@ -129,8 +131,19 @@ impl AreaLight {
     /// Returns `None` when the pdf is not finite (the point coincides with `x` or is seen
     /// exactly edge-on). `lambda`: the path's wavelengths (spectral textures).
     #[inline(always)]
-    pub fn sample(&self, x: Vec3, u_sel: f32, u: Vec2, lambda: &SampledWavelengths) -> Option<LightSample> {
-        if let LightShape::Sphere { center, radius, flip } = &self.shape {
+    pub fn sample(
+        &self,
+        x: Vec3,
+        u_sel: f32,
+        u: Vec2,
+        lambda: &SampledWavelengths,
+    ) -> Option<LightSample> {
+        if let LightShape::Sphere {
+            center,
+            radius,
+            flip,
+        } = &self.shape
+        {
             if let Some(cone) = SphereCone::new(*center, *radius, x) {
                 return cone.sample(u, *flip, self.radiance, x);
             }
@@ -145,10 +158,22 @@ impl AreaLight {
                 let n = (t.n[0] * b0 + t.n[1] * b.x + t.n[2] * b.y).normalize_or_zero();
                 (p, n, t.uv[0] * b0 + t.uv[1] * b.x + t.uv[2] * b.y)
             }
-            &LightShape::Parallelogram { v0, e1, e2, n, uv } => (v0 + e1 * u.x + e2 * u.y, n, uv[0] + uv[1] * u.x + uv[2] * u.y),
-            LightShape::Sphere { center, radius, flip } => {
+            &LightShape::Parallelogram { v0, e1, e2, n, uv } => (
+                v0 + e1 * u.x + e2 * u.y,
+                n,
+                uv[0] + uv[1] * u.x + uv[2] * u.y,
+            ),
+            LightShape::Sphere {
+                center,
+                radius,
+                flip,
+            } => {
                 let d = square_to_uniform_sphere(u);
-                (*center + d * *radius, if *flip { -d } else { d }, Vec2::ZERO)
+                (
+                    *center + d * *radius,
+                    if *flip { -d } else { d },
+                    Vec2::ZERO,
+                )
             }
         };
         let to = p - x;
@@ -163,8 +188,20 @@ impl AreaLight {
         if !pdf.is_finite() {
             return None;
         }
-        let radiance = if cos_l > 0.0 { self.radiance_at(uv, lambda) } else { SampledSpectrum::ZERO };
-        Some(LightSample { p, n, wi, dist, radiance, pdf, delta: false })
+        let radiance = if cos_l > 0.0 {
+            self.radiance_at(uv, lambda)
+        } else {
+            SampledSpectrum::ZERO
+        };
+        Some(LightSample {
+            p,
+            n,
+            wi,
+            dist,
+            radiance,
+            pdf,
+            delta: false,
+        })
     }
 
     /// Solid-angle pdf, from `x`, of having sampled the point `p` with normal `n` on this light
@@ -180,14 +217,28 @@ impl AreaLight {
         let dist2 = to.length_squared();
         let cos_l = n.dot(to).abs() / dist2.sqrt();
         let pdf = dist2 / (cos_l * self.area);
-        if pdf.is_finite() { pdf } else { 0.0 }
+        if pdf.is_finite() {
+            pdf
+        } else {
+            0.0
+        }
     }
 
     /// Radiance leaving the light at a point with normal `n` towards direction `w` (unit,
     /// pointing away from the light), at the path's wavelengths `lambda` (spectral textures).
     #[inline]
-    pub fn emitted(&self, n: Vec3, w: Vec3, uv: Vec2, lambda: &SampledWavelengths) -> SampledSpectrum {
-        if n.dot(w) > 0.0 { self.radiance_at(uv, lambda) } else { SampledSpectrum::ZERO }
+    pub fn emitted(
+        &self,
+        n: Vec3,
+        w: Vec3,
+        uv: Vec2,
+        lambda: &SampledWavelengths,
+    ) -> SampledSpectrum {
+        if n.dot(w) > 0.0 {
+            self.radiance_at(uv, lambda)
+        } else {
+            SampledSpectrum::ZERO
+        }
     }
 }
 
@@ -220,18 +271,38 @@ impl SphereCone {
         let sin2_max = r2 / d2;
         // 1 - sqrt(1 - s) computed as s / (1 + sqrt(1 - s)): no cancellation for small s.
         let one_minus_cos_max = sin2_max / (1.0 + (1.0 - sin2_max).sqrt());
-        Some(SphereCone { center, radius, frame: Frame::from_normal(d / d2.sqrt()), sin2_max, one_minus_cos_max })
+        Some(SphereCone {
+            center,
+            radius,
+            frame: Frame::from_normal(d / d2.sqrt()),
+            sin2_max,
+            one_minus_cos_max,
+        })
     }
 
-    fn sample(&self, u: Vec2, flip: bool, radiance: SampledSpectrum, x: Vec3) -> Option<LightSample> {
+    fn sample(
+        &self,
+        u: Vec2,
+        flip: bool,
+        radiance: SampledSpectrum,
+        x: Vec3,
+    ) -> Option<LightSample> {
         let omc = u.x * self.one_minus_cos_max; // 1 - cos(theta), uniform in cos(theta)
         let cos_t = 1.0 - omc;
         let sin2_t = omc * (2.0 - omc);
-        let cos_alpha = sin2_t / self.sin2_max.sqrt() + cos_t * (1.0 - sin2_t / self.sin2_max).max(0.0).sqrt();
+        let cos_alpha =
+            sin2_t / self.sin2_max.sqrt() + cos_t * (1.0 - sin2_t / self.sin2_max).max(0.0).sqrt();
         let sin_alpha = (1.0 - cos_alpha * cos_alpha).max(0.0).sqrt();
         let phi = 2.0 * PI * u.y;
         // The point's outward normal, measured from the axis towards x.
-        let n_out = self.frame.to_world(Vec3::new(sin_alpha * phi.cos(), sin_alpha * phi.sin(), cos_alpha)).normalize();
+        let n_out = self
+            .frame
+            .to_world(Vec3::new(
+                sin_alpha * phi.cos(),
+                sin_alpha * phi.sin(),
+                cos_alpha,
+            ))
+            .normalize();
         let p = self.center + n_out * self.radius;
         let to = p - x;
         let dist = to.length();
@@ -240,8 +311,20 @@ impl SphereCone {
         }
         let wi = to / dist;
         let n = if flip { -n_out } else { n_out };
-        let radiance = if n.dot(-wi) > 0.0 { radiance } else { SampledSpectrum::ZERO };
-        Some(LightSample { p, n, wi, dist, radiance, pdf: uniform_cone_pdf(self.one_minus_cos_max), delta: false })
+        let radiance = if n.dot(-wi) > 0.0 {
+            radiance
+        } else {
+            SampledSpectrum::ZERO
+        };
+        Some(LightSample {
+            p,
+            n,
+            wi,
+            dist,
+            radiance,
+            pdf: uniform_cone_pdf(self.one_minus_cos_max),
+            delta: false,
+        })
     }
 }
 
@@ -325,7 +408,15 @@ impl EnvMap {
             }
         }
         let distr = Distribution2D::new(&w, width, height)?;
-        Some(EnvMap { width, height, texels, spectral: None, distr, to_world, to_local: to_world.transpose() })
+        Some(EnvMap {
+            width,
+            height,
+            texels,
+            spectral: None,
+            distr,
+            to_world,
+            to_local: to_world.transpose(),
+        })
     }
 
     fn dir_to_uv(&self, world: Vec3) -> Vec2 {
@@ -346,7 +437,11 @@ impl EnvMap {
 
     /// Spectral mode: upsamples every texel (load time; see the type's docs).
     pub fn upsample(&mut self) {
-        self.spectral = Some(crate::spectral_texture::upsample_texels(&self.texels, self.width, crate::spectral_texture::Upsampling::Emission));
+        self.spectral = Some(crate::spectral_texture::upsample_texels(
+            &self.texels,
+            self.width,
+            crate::spectral_texture::Upsampling::Emission,
+        ));
     }
 
     /// The four texels (indices a, b, c, d: (x0, y0), (x0 + 1, y0), (x0, y0 + 1),
@@ -362,27 +457,47 @@ impl EnvMap {
         let xi = |k: f32| (k as i64).rem_euclid(self.width as i64) as usize;
         let yi = |k: f32| (k as usize).min(self.height - 1);
         let t = |xx: f32, yy: f32| yi(yy) * self.width + xi(xx);
-        ([t(x0, y0), t(x0 + 1.0, y0), t(x0, y0 + 1.0), t(x0 + 1.0, y0 + 1.0)], fx, fy)
+        (
+            [
+                t(x0, y0),
+                t(x0 + 1.0, y0),
+                t(x0, y0 + 1.0),
+                t(x0 + 1.0, y0 + 1.0),
+            ],
+            fx,
+            fy,
+        )
     }
 
     /// Bilinearly interpolated radiance at `uv`.
     fn lookup(&self, uv: Vec2) -> [f32; 3] {
         let ([ia, ib, ic, id], fx, fy) = self.footprint(uv);
-        let (a, b, c, d) = (self.texels[ia], self.texels[ib], self.texels[ic], self.texels[id]);
-        std::array::from_fn(|k| (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + d[k] * fx) * fy)
+        let (a, b, c, d) = (
+            self.texels[ia],
+            self.texels[ib],
+            self.texels[ic],
+            self.texels[id],
+        );
+        std::array::from_fn(|k| {
+            (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + d[k] * fx) * fy
+        })
     }
 
     /// Radiance at `uv`: RGB lanes, or in spectral mode the interpolated sigmoid values times
     /// the interpolated scales (Mitsuba 3), at the path's wavelengths.
     #[inline]
     fn radiance_uv(&self, uv: Vec2, lambda: &SampledWavelengths) -> SampledSpectrum {
-        let Some(spec) = &self.spectral else { return SampledSpectrum::from_rgb(self.lookup(uv)) };
+        let Some(spec) = &self.spectral else {
+            return SampledSpectrum::from_rgb(self.lookup(uv));
+        };
         let (idx, fx, fy) = self.footprint(uv);
         let [a, b, c, d] = idx.map(|i| spec[i]);
         let l = lambda.lambda();
         let s = |t: TexelSpectrum| t.sigmoid.eval4(l);
-        let sig = (s(a) * (1.0 - fx) + s(b) * fx) * (1.0 - fy) + (s(c) * (1.0 - fx) + s(d) * fx) * fy;
-        let scale = (a.scale * (1.0 - fx) + b.scale * fx) * (1.0 - fy) + (c.scale * (1.0 - fx) + d.scale * fx) * fy;
+        let sig =
+            (s(a) * (1.0 - fx) + s(b) * fx) * (1.0 - fy) + (s(c) * (1.0 - fx) + s(d) * fx) * fy;
+        let scale = (a.scale * (1.0 - fx) + b.scale * fx) * (1.0 - fy)
+            + (c.scale * (1.0 - fx) + d.scale * fx) * fy;
         SampledSpectrum(sig * scale)
     }
 
@@ -403,13 +518,21 @@ impl EnvMap {
     }
 
     /// Samples a direction: (dir, radiance at the path's wavelengths, solid-angle pdf).
-    pub fn sample(&self, u: Vec2, lambda: &SampledWavelengths) -> Option<(Vec3, SampledSpectrum, f32)> {
+    pub fn sample(
+        &self,
+        u: Vec2,
+        lambda: &SampledWavelengths,
+    ) -> Option<(Vec3, SampledSpectrum, f32)> {
         let (uv, pdf_uv) = self.distr.sample(u);
         let (dir, sin_t) = self.uv_to_dir(uv);
         if sin_t <= 0.0 || pdf_uv <= 0.0 {
             return None;
         }
-        Some((dir, self.radiance_uv(uv, lambda), pdf_uv / (2.0 * PI * PI * sin_t)))
+        Some((
+            dir,
+            self.radiance_uv(uv, lambda),
+            pdf_uv / (2.0 * PI * PI * sin_t),
+        ))
     }
 
     /// Mean radiance luminance over the sphere (for light selection).
@@ -479,7 +602,10 @@ pub enum Light {
 impl Light {
     /// Whether rays escaping the scene can see this light (environment and sun).
     pub fn is_infinite(&self) -> bool {
-        matches!(self, Light::Sun { .. } | Light::Constant { .. } | Light::EnvMap(_))
+        matches!(
+            self,
+            Light::Sun { .. } | Light::Constant { .. } | Light::EnvMap(_)
+        )
     }
 
     /// Power estimate for light selection, W (luminance). Distant lights use the scene's
@@ -489,13 +615,19 @@ impl Light {
         let p = match self {
             Light::Area(a) => a.power(),
             Light::Point { intensity, .. } => 4.0 * PI * intensity.luminance_rgb(),
-            Light::Spot { intensity, cone, .. } => {
+            Light::Spot {
+                intensity, cone, ..
+            } => {
                 // Full cone up to the mid-falloff angle: exact for a hard cutoff.
                 let mid = 0.5 * (cone.cutoff + cone.beam_width);
                 2.0 * PI * (1.0 - mid.cos()) * intensity.luminance_rgb()
             }
             Light::Directional { irradiance, .. } => disk * irradiance.luminance_rgb(),
-            Light::Sun { radiance, one_minus_cos, .. } => {
+            Light::Sun {
+                radiance,
+                one_minus_cos,
+                ..
+            } => {
                 // E = L pi sin^2(alpha) = L pi (1 - cos)(1 + cos).
                 disk * radiance.luminance_rgb() * PI * one_minus_cos * (2.0 - one_minus_cos)
             }
@@ -508,10 +640,19 @@ impl Light {
     /// Samples a direction towards the light from `x`; `lambda` are the path's wavelengths
     /// (spectral textures and environment maps).
     #[inline(always)]
-    pub fn sample(&self, x: Vec3, u_sel: f32, u: Vec2, lambda: &SampledWavelengths) -> Option<LightSample> {
+    pub fn sample(
+        &self,
+        x: Vec3,
+        u_sel: f32,
+        u: Vec2,
+        lambda: &SampledWavelengths,
+    ) -> Option<LightSample> {
         match self {
             Light::Area(a) => a.sample(x, u_sel, u, lambda),
-            Light::Point { position, intensity } => {
+            Light::Point {
+                position,
+                intensity,
+            } => {
                 let to = *position - x;
                 let d2 = to.length_squared();
                 let dist = d2.sqrt();
@@ -519,9 +660,22 @@ impl Light {
                     return None;
                 }
                 let radiance = *intensity / d2;
-                radiance.is_finite().then_some(LightSample { p: *position, n: Vec3::ZERO, wi: to / dist, dist, radiance, pdf: 1.0, delta: true })
+                radiance.is_finite().then_some(LightSample {
+                    p: *position,
+                    n: Vec3::ZERO,
+                    wi: to / dist,
+                    dist,
+                    radiance,
+                    pdf: 1.0,
+                    delta: true,
+                })
             }
-            Light::Spot { position, frame, intensity, cone } => {
+            Light::Spot {
+                position,
+                frame,
+                intensity,
+                cone,
+            } => {
                 let to = *position - x;
                 let d2 = to.length_squared();
                 let dist = d2.sqrt();
@@ -531,22 +685,69 @@ impl Light {
                 let wi = to / dist;
                 let fall = cone.falloff(frame.n.dot(-wi));
                 let radiance = *intensity * (fall / d2);
-                radiance.is_finite().then_some(LightSample { p: *position, n: Vec3::ZERO, wi, dist, radiance, pdf: 1.0, delta: true })
+                radiance.is_finite().then_some(LightSample {
+                    p: *position,
+                    n: Vec3::ZERO,
+                    wi,
+                    dist,
+                    radiance,
+                    pdf: 1.0,
+                    delta: true,
+                })
             }
-            Light::Directional { to_light, irradiance } => {
-                Some(LightSample { p: x, n: Vec3::ZERO, wi: *to_light, dist: f32::INFINITY, radiance: *irradiance, pdf: 1.0, delta: true })
-            }
-            Light::Sun { frame, radiance, one_minus_cos } => {
-                let wi = frame.to_world(square_to_uniform_cone(u, *one_minus_cos)).normalize();
-                Some(LightSample { p: x, n: Vec3::ZERO, wi, dist: f32::INFINITY, radiance: *radiance, pdf: uniform_cone_pdf(*one_minus_cos), delta: false })
+            Light::Directional {
+                to_light,
+                irradiance,
+            } => Some(LightSample {
+                p: x,
+                n: Vec3::ZERO,
+                wi: *to_light,
+                dist: f32::INFINITY,
+                radiance: *irradiance,
+                pdf: 1.0,
+                delta: true,
+            }),
+            Light::Sun {
+                frame,
+                radiance,
+                one_minus_cos,
+            } => {
+                let wi = frame
+                    .to_world(square_to_uniform_cone(u, *one_minus_cos))
+                    .normalize();
+                Some(LightSample {
+                    p: x,
+                    n: Vec3::ZERO,
+                    wi,
+                    dist: f32::INFINITY,
+                    radiance: *radiance,
+                    pdf: uniform_cone_pdf(*one_minus_cos),
+                    delta: false,
+                })
             }
             Light::Constant { radiance } => {
                 let wi = square_to_uniform_sphere(u);
-                Some(LightSample { p: x, n: Vec3::ZERO, wi, dist: f32::INFINITY, radiance: *radiance, pdf: pt_math::warp::UNIFORM_SPHERE_PDF, delta: false })
+                Some(LightSample {
+                    p: x,
+                    n: Vec3::ZERO,
+                    wi,
+                    dist: f32::INFINITY,
+                    radiance: *radiance,
+                    pdf: pt_math::warp::UNIFORM_SPHERE_PDF,
+                    delta: false,
+                })
             }
             Light::EnvMap(e) => {
                 let (wi, radiance, pdf) = e.sample(u, lambda)?;
-                Some(LightSample { p: x, n: Vec3::ZERO, wi, dist: f32::INFINITY, radiance, pdf, delta: false })
+                Some(LightSample {
+                    p: x,
+                    n: Vec3::ZERO,
+                    wi,
+                    dist: f32::INFINITY,
+                    radiance,
+                    pdf,
+                    delta: false,
+                })
             }
         }
     }
@@ -555,10 +756,18 @@ impl Light {
     /// at the path's wavelengths `lambda` (spectral environment maps).
     pub fn escaped_radiance(&self, dir: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
         match self {
-            Light::Sun { frame, radiance, one_minus_cos } => {
+            Light::Sun {
+                frame,
+                radiance,
+                one_minus_cos,
+            } => {
                 // Inside the cone: 1 - cos(theta) < 1 - cos(alpha), compared without cancellation
                 // as |dir - n|^2 / 2 = 1 - cos(theta).
-                if 0.5 * (dir - frame.n).length_squared() < *one_minus_cos { *radiance } else { SampledSpectrum::ZERO }
+                if 0.5 * (dir - frame.n).length_squared() < *one_minus_cos {
+                    *radiance
+                } else {
+                    SampledSpectrum::ZERO
+                }
             }
             Light::Constant { radiance } => *radiance,
             Light::EnvMap(e) => e.radiance(dir, lambda),
@@ -569,8 +778,16 @@ impl Light {
     /// Solid-angle pdf that `sample` produces direction `dir` (infinite lights only).
     pub fn escaped_pdf(&self, dir: Vec3) -> f32 {
         match self {
-            Light::Sun { frame, one_minus_cos, .. } => {
-                if 0.5 * (dir - frame.n).length_squared() < *one_minus_cos { uniform_cone_pdf(*one_minus_cos) } else { 0.0 }
+            Light::Sun {
+                frame,
+                one_minus_cos,
+                ..
+            } => {
+                if 0.5 * (dir - frame.n).length_squared() < *one_minus_cos {
+                    uniform_cone_pdf(*one_minus_cos)
+                } else {
+                    0.0
+                }
             }
             Light::Constant { .. } => pt_math::warp::UNIFORM_SPHERE_PDF,
             Light::EnvMap(e) => e.pdf(dir),
@@ -596,7 +813,12 @@ mod tests {
         // 550, 650 nm: the product of the interpolated sigmoid values and the interpolated
         // scales. Interpolating the products instead gives 6.046, 5.535, 4.472 (+51%, +25%,
         // -2.5%). 1% allows for Mitsuba's tabulated coefficients against pt's exact fit.
-        let cols = [[1.0f32, 0.5, 0.2], [10.0, 10.0, 10.0], [0.1, 0.2, 0.8], [2.0, 1.0, 1.0]];
+        let cols = [
+            [1.0f32, 0.5, 0.2],
+            [10.0, 10.0, 10.0],
+            [0.1, 0.2, 0.8],
+            [2.0, 1.0, 1.0],
+        ];
         let texels: Vec<[f32; 3]> = (0..12).map(|i| cols[i % 4]).collect();
         let mut e = EnvMap::new(4, 3, texels, Mat3::IDENTITY).unwrap();
         e.upsample();
@@ -604,7 +826,10 @@ mod tests {
         let d65 = pt_spectrum::Spectrum::illuminant(pt_spectrum::NamedIlluminant::D65, 1.0);
         for (l, mitsuba) in [(450.0f32, 3.99998f32), (550.0, 4.43127), (650.0, 4.58698)] {
             let v = e.radiance(dir, &at(l)).0.x * d65.eval(l);
-            assert!((v / mitsuba - 1.0).abs() < 0.01, "{l} nm: {v} vs Mitsuba {mitsuba}");
+            assert!(
+                (v / mitsuba - 1.0).abs() < 0.01,
+                "{l} nm: {v} vs Mitsuba {mitsuba}"
+            );
         }
     }
 
@@ -630,13 +855,17 @@ mod tests {
         let n = 200_000;
         let mut s = 7u64;
         let mut rnd = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((s >> 40) as f32) / (1u64 << 24) as f32
         };
         let (mut sum, mut sum2) = (0.0f64, 0.0f64);
         let mut boundary = 0;
         for _ in 0..n {
-            let Some((dir, l, pdf)) = e.sample(Vec2::new(rnd(), rnd()), &lambda) else { continue };
+            let Some((dir, l, pdf)) = e.sample(Vec2::new(rnd(), rnd()), &lambda) else {
+                continue;
+            };
             // A sample on a cell boundary can come back (dir -> uv in f32) in the neighbouring
             // cell, whose pdf differs: allowed for a few; a wrong pdf would mismatch everywhere.
             if (e.pdf(dir) - pdf).abs() > 1e-3 * pdf {
@@ -644,12 +873,18 @@ mod tests {
             }
             // Same lookup up to the uv -> direction -> uv round trip in f32.
             let back = e.radiance(dir, &lambda);
-            assert!((l.0 - back.0).abs().max_element() <= 1e-4 * back.0.abs().max_element().max(1e-3), "{l:?} vs {back:?}");
+            assert!(
+                (l.0 - back.0).abs().max_element() <= 1e-4 * back.0.abs().max_element().max(1e-3),
+                "{l:?} vs {back:?}"
+            );
             let f = (l.0.x / pdf) as f64;
             sum += f;
             sum2 += f * f;
         }
-        assert!(boundary < n / 1000, "{boundary} of {n} samples have a pdf that pdf(dir) does not reproduce");
+        assert!(
+            boundary < n / 1000,
+            "{boundary} of {n} samples have a pdf that pdf(dir) does not reproduce"
+        );
         let mean = sum / n as f64;
         let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
         let m = 1000;
@@ -659,30 +894,71 @@ mod tests {
             for i in 0..2 * m {
                 let u = (i as f32 + 0.5) / (2 * m) as f32;
                 let (dir, sin_t) = e.uv_to_dir(Vec2::new(u, v));
-                quad += (e.radiance(dir, &lambda).0.x * 2.0 * PI * PI * sin_t) as f64 / (2 * m * m) as f64;
+                quad += (e.radiance(dir, &lambda).0.x * 2.0 * PI * PI * sin_t) as f64
+                    / (2 * m * m) as f64;
             }
         }
-        assert!((mean - quad).abs() < 5.0 * se + 1e-3 * quad, "E[L/pdf] {mean} +- {se} vs integral {quad}");
+        assert!(
+            (mean - quad).abs() < 5.0 * se + 1e-3 * quad,
+            "E[L/pdf] {mean} +- {se} vs integral {quad}"
+        );
     }
 
     #[test]
     fn sampled_pdf_matches_pdf_query() {
         let tri = |a: Vec3, b: Vec3, c: Vec3| {
             let n = (b - a).cross(c - a).normalize();
-            LightTriangle { p: [a, b, c], n: [n; 3], uv: [Vec2::ZERO; 3] }
+            LightTriangle {
+                p: [a, b, c],
+                n: [n; 3],
+                uv: [Vec2::ZERO; 3],
+            }
         };
         // A 2 x 1 rectangle at y = 1 facing down, split into two triangles of equal area.
         let tris = vec![
-            tri(Vec3::new(-1.0, 1.0, -0.5), Vec3::new(1.0, 1.0, -0.5), Vec3::new(1.0, 1.0, 0.5)),
-            tri(Vec3::new(-1.0, 1.0, -0.5), Vec3::new(1.0, 1.0, 0.5), Vec3::new(-1.0, 1.0, 0.5)),
+            tri(
+                Vec3::new(-1.0, 1.0, -0.5),
+                Vec3::new(1.0, 1.0, -0.5),
+                Vec3::new(1.0, 1.0, 0.5),
+            ),
+            tri(
+                Vec3::new(-1.0, 1.0, -0.5),
+                Vec3::new(1.0, 1.0, 0.5),
+                Vec3::new(-1.0, 1.0, 0.5),
+            ),
         ];
-        assert!(tris[0].n.iter().all(|n| (n.y + 1.0).abs() < 1e-6), "faces down");
+        assert!(
+            tris[0].n.iter().all(|n| (n.y + 1.0).abs() < 1e-6),
+            "faces down"
+        );
         // The same rectangle as a parallelogram.
-        let (v0, e1, e2) = (Vec3::new(-1.0, 1.0, -0.5), Vec3::new(2.0, 0.0, 0.0), Vec3::new(0.0, 0.0, 1.0));
-        let parallelogram = LightShape::Parallelogram { v0, e1, e2, n: e1.cross(e2).normalize(), uv: [Vec2::ZERO, Vec2::X, Vec2::Y] };
+        let (v0, e1, e2) = (
+            Vec3::new(-1.0, 1.0, -0.5),
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(0.0, 0.0, 1.0),
+        );
+        let parallelogram = LightShape::Parallelogram {
+            v0,
+            e1,
+            e2,
+            n: e1.cross(e2).normalize(),
+            uv: [Vec2::ZERO, Vec2::X, Vec2::Y],
+        };
         assert_eq!(e1.cross(e2).normalize(), -Vec3::Y, "faces down");
-        for shape in [LightShape::Mesh { tris, distr: Distribution1D::new(&[1.0, 1.0]).unwrap() }, parallelogram] {
-            solid_angle_matches_quadrature(AreaLight { radiance: SampledSpectrum::from_rgb([1.0; 3]), texture: None, spectral: None, shape, area: 2.0 });
+        for shape in [
+            LightShape::Mesh {
+                tris,
+                distr: Distribution1D::new(&[1.0, 1.0]).unwrap(),
+            },
+            parallelogram,
+        ] {
+            solid_angle_matches_quadrature(AreaLight {
+                radiance: SampledSpectrum::from_rgb([1.0; 3]),
+                texture: None,
+                spectral: None,
+                shape,
+                area: 2.0,
+            });
         }
     }
 
@@ -696,13 +972,17 @@ mod tests {
         let n = 200_000;
         let mut s = 99u64;
         let mut rnd = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            s = s
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             ((s >> 40) as f32) / (1u64 << 24) as f32
         };
         let mut est = 0.0f64;
         let lambda = SampledWavelengths::sample_visible(0.5);
         for _ in 0..n {
-            let ls = light.sample(x, rnd(), Vec2::new(rnd(), rnd()), &lambda).unwrap();
+            let ls = light
+                .sample(x, rnd(), Vec2::new(rnd(), rnd()), &lambda)
+                .unwrap();
             assert!((light.pdf(x, ls.p, ls.n) - ls.pdf).abs() <= 1e-4 * ls.pdf);
             assert!(!ls.radiance.is_black(), "front side faces x");
             est += 1.0 / ls.pdf as f64;
@@ -712,7 +992,11 @@ mod tests {
         let mut quad = 0.0f64;
         for i in 0..m {
             for j in 0..m {
-                let p = Vec3::new(-1.0 + 2.0 * (i as f32 + 0.5) / m as f32, 1.0, -0.5 + (j as f32 + 0.5) / m as f32);
+                let p = Vec3::new(
+                    -1.0 + 2.0 * (i as f32 + 0.5) / m as f32,
+                    1.0,
+                    -0.5 + (j as f32 + 0.5) / m as f32,
+                );
                 let d = p - x;
                 let cos = d.y / d.length();
                 quad += (cos / d.length_squared()) as f64 * (2.0 / (m * m) as f64);

@@ -73,7 +73,13 @@ const TABLE_STEP: f32 = 2.0;
 /// `(absorption, emission, yield, lifetime)`.
 fn phosphor(kind: &BsdfKind) -> Option<(&SpectrumDesc, &SpectrumDesc, f32, f32)> {
     match kind {
-        BsdfKind::Phosphorescent { absorption, emission, quantum_yield, lifetime, .. } => Some((absorption, emission, *quantum_yield, *lifetime)),
+        BsdfKind::Phosphorescent {
+            absorption,
+            emission,
+            quantum_yield,
+            lifetime,
+            ..
+        } => Some((absorption, emission, *quantum_yield, *lifetime)),
         BsdfKind::TwoSided { inner } => phosphor(&inner.kind),
         _ => None,
     }
@@ -84,15 +90,42 @@ fn phosphor(kind: &BsdfKind) -> Option<(&SpectrumDesc, &SpectrumDesc, f32, f32)>
 /// The first pass renders `desc` in spectral mode with `seed`. Errors if the scene has no
 /// phosphorescent shape or `time_s` is negative.
 pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, BuildError> {
-    let err = |m: String| BuildError { loc: pt_scene::SourceLoc { file: desc.source.clone(), line: 0, col: 0, element: "scene".into() }, message: m };
+    let err = |m: String| BuildError {
+        loc: pt_scene::SourceLoc {
+            file: desc.source.clone(),
+            line: 0,
+            col: 0,
+            element: "scene".into(),
+        },
+        message: m,
+    };
     if !(time_s >= 0.0 && time_s.is_finite()) {
-        return Err(err(format!("--time must be a non-negative number of seconds, got {time_s}")));
+        return Err(err(format!(
+            "--time must be a non-negative number of seconds, got {time_s}"
+        )));
     }
-    if !desc.shapes.iter().any(|s| phosphor(&desc.bsdfs[s.bsdf].kind).is_some()) {
-        return Err(err("--time shows the afterglow of phosphorescent materials, and this scene has none".into()));
+    if !desc
+        .shapes
+        .iter()
+        .any(|s| phosphor(&desc.bsdfs[s.bsdf].kind).is_some())
+    {
+        return Err(err(
+            "--time shows the afterglow of phosphorescent materials, and this scene has none"
+                .into(),
+        ));
     }
-    let lit = Scene::build_with_mode(desc, BvhKind::CwBvh, LightSelection::Power, Some(ColorMode::Spectral))?;
-    let settings = PathSettings { max_depth: desc.integrator.max_depth, rr_depth: desc.integrator.rr_depth, hide_emitters: true, ..PathSettings::default() };
+    let lit = Scene::build_with_mode(
+        desc,
+        BvhKind::CwBvh,
+        LightSelection::Power,
+        Some(ColorMode::Spectral),
+    )?;
+    let settings = PathSettings {
+        max_depth: desc.integrator.max_depth,
+        rr_depth: desc.integrator.rr_depth,
+        hide_emitters: true,
+        ..PathSettings::default()
+    };
     let mut out = desc.clone();
     out.lights.clear();
     out.shapes.clear();
@@ -107,7 +140,10 @@ pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, 
         let e = spectrum_for(emission, false);
         let area = integrate_visible(|l| e.eval(l as f32) as f64);
         if !(area > 0.0) {
-            return Err(BuildError { loc: shape.loc.clone(), message: "phosphor emission spectrum has no area over 360-830 nm".into() });
+            return Err(BuildError {
+                loc: shape.loc.clone(),
+                message: "phosphor emission spectrum has no area over 360-830 nm".into(),
+            });
         }
         // L(lo) = k Phi e(lo) / lo with k = Q e^{-t/tau} / (pi area).
         let k = q as f64 * (-(time_s as f64) / tau as f64).exp() / (std::f64::consts::PI * area);
@@ -123,7 +159,13 @@ pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, 
                     (l, (scale * e.eval(l) as f64 / l as f64) as f32)
                 })
                 .collect();
-            Some(AreaEmitterDesc { loc: shape.loc.clone(), radiance: SpectrumDesc::Tabulated(Arc::new(pairs)), texture: None, primaries: None, uv_texture: None })
+            Some(AreaEmitterDesc {
+                loc: shape.loc.clone(),
+                radiance: SpectrumDesc::Tabulated(Arc::new(pairs)),
+                texture: None,
+                primaries: None,
+                uv_texture: None,
+            })
         };
         let mut sampler_index = 0u64;
         let mut next = || {
@@ -140,14 +182,26 @@ pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, 
                     let phi = absorbed(&lit, &a, &mut s, &settings, |u| {
                         // Uniform point on the triangle (pbrt-v4 SampleUniformTriangle, square root form).
                         let su = u.x.sqrt();
-                        (p[0] * (1.0 - su) + p[1] * (su * (1.0 - u.y)) + p[2] * (su * u.y), n)
+                        (
+                            p[0] * (1.0 - su) + p[1] * (su * (1.0 - u.y)) + p[2] * (su * u.y),
+                            n,
+                        )
                     });
                     let mut tri = dark.clone();
                     tri.geometry = Geometry::Mesh(TriangleMesh {
                         positions: p.to_vec(),
-                        normals: m.normals.as_ref().map(|ns| idx.map(|i| ns[i as usize]).to_vec()),
-                        uvs: m.uvs.as_ref().map(|uv| idx.map(|i| uv[i as usize]).to_vec()),
-                        tangents: m.tangents.as_ref().map(|ts| idx.map(|i| ts[i as usize]).to_vec()),
+                        normals: m
+                            .normals
+                            .as_ref()
+                            .map(|ns| idx.map(|i| ns[i as usize]).to_vec()),
+                        uvs: m
+                            .uvs
+                            .as_ref()
+                            .map(|uv| idx.map(|i| uv[i as usize]).to_vec()),
+                        tangents: m
+                            .tangents
+                            .as_ref()
+                            .map(|ts| idx.map(|i| ts[i as usize]).to_vec()),
                         indices: vec![[0, 1, 2]],
                     });
                     tri.emitter = emitter(phi);
@@ -155,7 +209,11 @@ pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, 
                     out.shapes.push(tri);
                 }
             }
-            &Geometry::Sphere { center, radius, flip_normals } => {
+            &Geometry::Sphere {
+                center,
+                radius,
+                flip_normals,
+            } => {
                 let mut s = next();
                 let phi = absorbed(&lit, &a, &mut s, &settings, |u| {
                     let d = pt_math::warp::square_to_uniform_sphere(u);
@@ -171,13 +229,20 @@ pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, 
 
 /// Estimate of `Phi = int a(l) E(l) l dl` (W m^-2 nm, before dividing by hc) averaged over a
 /// surface, whose points and front normals `point(u)` draws uniformly by area.
-fn absorbed(scene: &Scene, a: &Spectrum, sampler: &mut Sampler, settings: &PathSettings, point: impl Fn(Vec2) -> (Vec3, Vec3)) -> f64 {
+fn absorbed(
+    scene: &Scene,
+    a: &Spectrum,
+    sampler: &mut Sampler,
+    settings: &PathSettings,
+    point: impl Fn(Vec2) -> (Vec3, Vec3),
+) -> f64 {
     let n_samples = AFTERGLOW_SAMPLES;
     let mut sum = 0.0f64;
     for k in 0..n_samples {
         let (p, n) = point(sampler.next_2d());
         // Wavelengths stratified over the samples: the hero lane in the k-th of N strata.
-        let lambda = SampledWavelengths::sample_uniform((k as f32 + sampler.next_1d()) / n_samples as f32);
+        let lambda =
+            SampledWavelengths::sample_uniform((k as f32 + sampler.next_1d()) / n_samples as f32);
         let origin = offset_ray_origin(p, n);
         // Direct: one light sample.
         let mut e = pt_spectrum::SampledSpectrum::ZERO;
@@ -208,8 +273,18 @@ fn unoccluded(scene: &Scene, origin: Vec3, ls: &crate::light::LightSample) -> bo
     if ls.dist.is_infinite() {
         return !scene.occluded(&Ray::new(origin, ls.wi));
     }
-    let target = if ls.n == Vec3::ZERO { ls.p } else { offset_ray_origin(ls.p, ls.n * ls.n.dot(-ls.wi).signum()) };
+    let target = if ls.n == Vec3::ZERO {
+        ls.p
+    } else {
+        offset_ray_origin(ls.p, ls.n * ls.n.dot(-ls.wi).signum())
+    };
     let seg = target - origin;
     let dist = seg.length();
-    dist > 0.0 && !scene.occluded(&Ray { origin, dir: seg / dist, tmin: 0.0, tmax: dist * (1.0 - 1e-5) })
+    dist > 0.0
+        && !scene.occluded(&Ray {
+            origin,
+            dir: seg / dist,
+            tmin: 0.0,
+            tmax: dist * (1.0 - 1e-5),
+        })
 }

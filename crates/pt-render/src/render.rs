@@ -61,9 +61,19 @@ const TILE: u32 = 16;
 /// Renders the image. `progress` is called after each tile with the number of samples it took
 /// (called from worker threads). The result depends only on the scene, settings and seed, not
 /// on the number of threads.
-pub fn render(scene: &Scene, settings: &RenderSettings, progress: &(dyn Fn(u64) + Sync)) -> RenderOutput {
+pub fn render(
+    scene: &Scene,
+    settings: &RenderSettings,
+    progress: &(dyn Fn(u64) + Sync),
+) -> RenderOutput {
     let mut state = RenderState::new(settings);
-    render_passes(scene, settings, &mut state, &AtomicBool::new(false), progress);
+    render_passes(
+        scene,
+        settings,
+        &mut state,
+        &AtomicBool::new(false),
+        progress,
+    );
     state.output()
 }
 
@@ -94,7 +104,14 @@ impl RenderState {
     /// An empty state for `settings` (no samples yet).
     pub fn new(settings: &RenderSettings) -> Self {
         let n = settings.width as usize * settings.height as usize;
-        RenderState { width: settings.width, height: settings.height, seed: settings.seed, spp_done: 0, time: Duration::ZERO, pixels: vec![PixelStats::default(); n] }
+        RenderState {
+            width: settings.width,
+            height: settings.height,
+            seed: settings.seed,
+            spp_done: 0,
+            time: Duration::ZERO,
+            pixels: vec![PixelStats::default(); n],
+        }
     }
 
     /// The image so far (its `spp` is `spp_done`).
@@ -103,7 +120,11 @@ impl RenderState {
             width: self.width,
             height: self.height,
             mean: self.pixels.iter().map(PixelStats::mean).collect(),
-            variance: self.pixels.iter().map(PixelStats::variance_of_mean).collect(),
+            variance: self
+                .pixels
+                .iter()
+                .map(PixelStats::variance_of_mean)
+                .collect(),
             spp: self.spp_done,
             time: self.time,
             nonfinite_samples: self.pixels.iter().map(|p| p.nonfinite as u64).sum(),
@@ -116,7 +137,14 @@ impl RenderState {
     pub fn to_bytes(&self, scene_key: u64) -> Vec<u8> {
         let mut b = Vec::with_capacity(48 + self.pixels.len() * 56);
         b.extend_from_slice(STATE_MAGIC);
-        for v in [scene_key, self.seed, u64::from(self.width), u64::from(self.height), u64::from(self.spp_done), self.time.as_nanos() as u64] {
+        for v in [
+            scene_key,
+            self.seed,
+            u64::from(self.width),
+            u64::from(self.height),
+            u64::from(self.spp_done),
+            self.time.as_nanos() as u64,
+        ] {
             b.extend_from_slice(&v.to_le_bytes());
         }
         for p in &self.pixels {
@@ -131,31 +159,68 @@ impl RenderState {
 
     /// Reads a state written by [`RenderState::to_bytes`] for the same `scene_key`, seed and
     /// image size; a message saying what does not match otherwise.
-    pub fn from_bytes(bytes: &[u8], scene_key: u64, settings: &RenderSettings) -> Result<RenderState, String> {
+    pub fn from_bytes(
+        bytes: &[u8],
+        scene_key: u64,
+        settings: &RenderSettings,
+    ) -> Result<RenderState, String> {
         let header = 8 + 6 * 8;
         if bytes.len() < header || &bytes[..8] != STATE_MAGIC {
             return Err("not a pt render state (wrong magic number or truncated header)".into());
         }
-        let u = |i: usize| u64::from_le_bytes(bytes[8 + 8 * i..16 + 8 * i].try_into().expect("8 bytes"));
+        let u = |i: usize| {
+            u64::from_le_bytes(bytes[8 + 8 * i..16 + 8 * i].try_into().expect("8 bytes"))
+        };
         let (key, seed, w, h, spp_done, nanos) = (u(0), u(1), u(2), u(3), u(4), u(5));
         if key != scene_key {
-            return Err("the state belongs to a different scene or different render settings".into());
+            return Err(
+                "the state belongs to a different scene or different render settings".into(),
+            );
         }
-        if seed != settings.seed || w != u64::from(settings.width) || h != u64::from(settings.height) {
-            return Err(format!("the state is for seed {seed} at {w}x{h}, this render is seed {} at {}x{}", settings.seed, settings.width, settings.height));
+        if seed != settings.seed
+            || w != u64::from(settings.width)
+            || h != u64::from(settings.height)
+        {
+            return Err(format!(
+                "the state is for seed {seed} at {w}x{h}, this render is seed {} at {}x{}",
+                settings.seed, settings.width, settings.height
+            ));
         }
         let n = (w * h) as usize;
         if bytes.len() != header + n * 56 {
-            return Err(format!("truncated state: {} bytes, expected {}", bytes.len(), header + n * 56));
+            return Err(format!(
+                "truncated state: {} bytes, expected {}",
+                bytes.len(),
+                header + n * 56
+            ));
         }
         let mut pixels = Vec::with_capacity(n);
         for k in 0..n {
             let o = header + k * 56;
-            let u32_at = |i: usize| u32::from_le_bytes(bytes[o + i..o + i + 4].try_into().expect("4 bytes"));
-            let f = |i: usize| f64::from_bits(u64::from_le_bytes(bytes[o + 8 + 8 * i..o + 16 + 8 * i].try_into().expect("8 bytes")));
-            pixels.push(PixelStats { n: u32_at(0), nonfinite: u32_at(4), sum: [f(0), f(1), f(2)], sum_sq: [f(3), f(4), f(5)] });
+            let u32_at =
+                |i: usize| u32::from_le_bytes(bytes[o + i..o + i + 4].try_into().expect("4 bytes"));
+            let f = |i: usize| {
+                f64::from_bits(u64::from_le_bytes(
+                    bytes[o + 8 + 8 * i..o + 16 + 8 * i]
+                        .try_into()
+                        .expect("8 bytes"),
+                ))
+            };
+            pixels.push(PixelStats {
+                n: u32_at(0),
+                nonfinite: u32_at(4),
+                sum: [f(0), f(1), f(2)],
+                sum_sq: [f(3), f(4), f(5)],
+            });
         }
-        Ok(RenderState { width: w as u32, height: h as u32, seed, spp_done: spp_done as u32, time: Duration::from_nanos(nanos), pixels })
+        Ok(RenderState {
+            width: w as u32,
+            height: h as u32,
+            seed,
+            spp_done: spp_done as u32,
+            time: Duration::from_nanos(nanos),
+            pixels,
+        })
     }
 }
 
@@ -166,7 +231,13 @@ impl RenderState {
 /// honoured within about a second. (Each pass ends at a barrier where one core may idle for a
 /// tile: doubling from 1 spp, with more passes, cost 3% of the Cornell box's speed at 64 spp.)
 /// Returns whether all samples were taken.
-pub fn render_passes(scene: &Scene, settings: &RenderSettings, state: &mut RenderState, cancel: &AtomicBool, progress: &(dyn Fn(u64) + Sync)) -> bool {
+pub fn render_passes(
+    scene: &Scene,
+    settings: &RenderSettings,
+    state: &mut RenderState,
+    cancel: &AtomicBool,
+    progress: &(dyn Fn(u64) + Sync),
+) -> bool {
     let (w, h) = (settings.width, settings.height);
     // The image is rendered in place, in bands of whole rows (contiguous in `state.pixels`),
     // each band in tiles of TILE columns. Bands are TILE rows high, lower for small images on
@@ -180,17 +251,30 @@ pub fn render_passes(scene: &Scene, settings: &RenderSettings, state: &mut Rende
         if cancel.load(Ordering::Relaxed) {
             return false;
         }
-        let (s0, s1) = (state.spp_done, state.spp_done.saturating_add(pass).min(settings.spp));
+        let (s0, s1) = (
+            state.spp_done,
+            state.spp_done.saturating_add(pass).min(settings.spp),
+        );
         let start = Instant::now();
-        state.pixels.par_chunks_mut((w * rows) as usize).enumerate().for_each(|(b, band)| {
-            let y0 = b as u32 * rows;
-            let y1 = (y0 + rows).min(h);
-            for x0 in (0..w).step_by(TILE as usize) {
-                let tile = Tile { x0, y0, x1: (x0 + TILE).min(w), y1, samples: s0..s1 };
-                render_tile(scene, settings, band, &tile);
-                progress(u64::from((tile.x1 - tile.x0) * (y1 - y0)) * u64::from(s1 - s0));
-            }
-        });
+        state
+            .pixels
+            .par_chunks_mut((w * rows) as usize)
+            .enumerate()
+            .for_each(|(b, band)| {
+                let y0 = b as u32 * rows;
+                let y1 = (y0 + rows).min(h);
+                for x0 in (0..w).step_by(TILE as usize) {
+                    let tile = Tile {
+                        x0,
+                        y0,
+                        x1: (x0 + TILE).min(w),
+                        y1,
+                        samples: s0..s1,
+                    };
+                    render_tile(scene, settings, band, &tile);
+                    progress(u64::from((tile.x1 - tile.x0) * (y1 - y0)) * u64::from(s1 - s0));
+                }
+            });
         let took = start.elapsed();
         state.time += took;
         state.spp_done = s1;
@@ -269,13 +353,26 @@ fn render_tile_v3(scene: &Scene, settings: &RenderSettings, band: &mut [PixelSta
 
 /// The body of [`render_tile`], inlined into each instruction-set variant.
 #[inline(always)]
-fn render_tile_portable(scene: &Scene, settings: &RenderSettings, band: &mut [PixelStats], tile: &Tile) {
+fn render_tile_portable(
+    scene: &Scene,
+    settings: &RenderSettings,
+    band: &mut [PixelStats],
+    tile: &Tile,
+) {
     // RGB mode draws no wavelength sample (its lanes are R, G, B), so its random sequence is the
     // same as before the spectral mode existed; these wavelengths are only carried along.
     let rgb_lambda = SampledWavelengths::sample_visible(0.5);
     for y in tile.y0..tile.y1 {
         let row = &mut band[((y - tile.y0) * settings.width) as usize..][..settings.width as usize];
-        render_row_samples(scene, settings, y, tile.x0..tile.x1, tile.samples.clone(), &rgb_lambda, row);
+        render_row_samples(
+            scene,
+            settings,
+            y,
+            tile.x0..tile.x1,
+            tile.samples.clone(),
+            &rgb_lambda,
+            row,
+        );
     }
 }
 
@@ -289,7 +386,15 @@ const SAMPLE_CHUNK: u32 = 64;
 /// and traced up to `MAX_PATHS` at a time (see [`trace_paths`]), so that passes of few samples
 /// per pixel still keep the paths in flight; each sample is the same as traced alone.
 #[inline(always)]
-fn render_row_samples(scene: &Scene, settings: &RenderSettings, y: u32, xs: std::ops::Range<u32>, samples: std::ops::Range<u32>, rgb_lambda: &SampledWavelengths, row: &mut [PixelStats]) {
+fn render_row_samples(
+    scene: &Scene,
+    settings: &RenderSettings,
+    y: u32,
+    xs: std::ops::Range<u32>,
+    samples: std::ops::Range<u32>,
+    rgb_lambda: &SampledWavelengths,
+    row: &mut [PixelStats],
+) {
     if samples.is_empty() || xs.is_empty() {
         return;
     }
@@ -307,7 +412,11 @@ fn render_row_samples(scene: &Scene, settings: &RenderSettings, y: u32, xs: std:
             }
             let pixel = y as u64 * settings.width as u64 + x as u64;
             let mut sampler = Sampler::new(settings.seed, pixel, u64::from(k));
-            let lambda = if spectral { SampledWavelengths::sample_visible(sampler.next_1d()) } else { rgb_lambda };
+            let lambda = if spectral {
+                SampledWavelengths::sample_visible(sampler.next_1d())
+            } else {
+                rgb_lambda
+            };
             let offset = sample_filter(&settings.filter, &mut sampler);
             let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
             let path = PathState::new(scene, scene.camera.generate_ray(centre + offset), &lambda);
@@ -317,11 +426,20 @@ fn render_row_samples(scene: &Scene, settings: &RenderSettings, y: u32, xs: std:
             if k == samples.end {
                 (x, k) = (x + 1, samples.start);
             }
-            Some(PathStart { path, sampler, lambda, tag })
+            Some(PathStart {
+                path,
+                sampler,
+                lambda,
+                tag,
+            })
         };
         let finish = |done: &PathStart| {
             let l = done.path.radiance;
-            let rgb = if spectral { spectrum_to_srgb(l, &done.lambda) } else { l.rgb() };
+            let rgb = if spectral {
+                spectrum_to_srgb(l, &done.lambda)
+            } else {
+                l.rgb()
+            };
             results[done.tag as usize] = match settings.clamp {
                 Some(c) => clamp_sample(rgb, c),
                 None => rgb,
@@ -374,26 +492,59 @@ mod tests {
                 <emitter type="area"><rgb name="radiance" value="1, 3, 2"/></emitter></shape>
         </scene>"#;
         let descs = [
-            ("cornell-box.xml", pt_scene::load_file(&dir.join("cornell-box.xml"), &[]).expect("cornell-box")),
-            ("cornell-glass.xml", pt_scene::load_file(&dir.join("cornell-glass.xml"), &[]).expect("cornell-glass")),
-            ("inline", pt_scene::load_str(inline, std::path::Path::new("inline.xml"), &dir, &[]).expect("inline scene")),
+            (
+                "cornell-box.xml",
+                pt_scene::load_file(&dir.join("cornell-box.xml"), &[]).expect("cornell-box"),
+            ),
+            (
+                "cornell-glass.xml",
+                pt_scene::load_file(&dir.join("cornell-glass.xml"), &[]).expect("cornell-glass"),
+            ),
+            (
+                "inline",
+                pt_scene::load_str(inline, std::path::Path::new("inline.xml"), &dir, &[])
+                    .expect("inline scene"),
+            ),
         ];
         for (name, desc) in descs {
-            let mut scene = Scene::build(&desc, BvhKind::Auto, LightSelection::Power).unwrap_or_else(|e| panic!("{name}: {e}"));
-            assert!(scene.lane_shading().is_some(), "{name}: the vectorised shading is not used, the test checks nothing");
+            let mut scene = Scene::build(&desc, BvhKind::Auto, LightSelection::Power)
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert!(
+                scene.lane_shading().is_some(),
+                "{name}: the vectorised shading is not used, the test checks nothing"
+            );
             let settings = RenderSettings::from_desc(&desc);
             let (x0, y0) = (settings.width / 2 - 8, settings.height / 2 - 8);
-            let tile = Tile { x0, y0, x1: x0 + 16, y1: y0 + 16, samples: 0..70 };
+            let tile = Tile {
+                x0,
+                y0,
+                x1: x0 + 16,
+                y1: y0 + 16,
+                samples: 0..70,
+            };
             let mut lanes = vec![PixelStats::default(); (settings.width * 16) as usize];
             render_tile(&scene, &settings, &mut lanes, &tile);
             scene.disable_lane_shading();
             let mut general = vec![PixelStats::default(); (settings.width * 16) as usize];
             render_tile(&scene, &settings, &mut general, &tile);
-            let bits = |v: &[PixelStats]| v.iter().flat_map(|p| p.sum.iter().chain(&p.sum_sq).map(|x| x.to_bits()).chain([u64::from(p.n), u64::from(p.nonfinite)])).collect::<Vec<u64>>();
+            let bits = |v: &[PixelStats]| {
+                v.iter()
+                    .flat_map(|p| {
+                        p.sum
+                            .iter()
+                            .chain(&p.sum_sq)
+                            .map(|x| x.to_bits())
+                            .chain([u64::from(p.n), u64::from(p.nonfinite)])
+                    })
+                    .collect::<Vec<u64>>()
+            };
             let (a, b) = (bits(&lanes), bits(&general));
             let differ = a.iter().zip(&b).filter(|(x, y)| x != y).count();
             assert_eq!(differ, 0, "{name}: {differ} of {} pixel-sum values differ between the vectorised shading and the general code", a.len());
-            assert!(lanes.iter().any(|p| p.sum.iter().any(|&s| s > 0.0)), "{name}: the tile is black, the test checks nothing");
+            assert!(
+                lanes.iter().any(|p| p.sum.iter().any(|&s| s > 0.0)),
+                "{name}: the tile is black, the test checks nothing"
+            );
         }
     }
 
@@ -405,28 +556,68 @@ mod tests {
     #[test]
     fn v3_variant_matches_portable_bit_for_bit() {
         if !has_x86_64_v3() {
-            eprintln!("skipped: this processor lacks x86-64-v3 (the portable variant is the only one)");
+            eprintln!(
+                "skipped: this processor lacks x86-64-v3 (the portable variant is the only one)"
+            );
             return;
         }
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
-        let scenes = ["cornell-box.xml", "conductors.xml", "dielectrics.xml", "plastic.xml", "rough-thin-film.xml", "diffuse-models.xml", "fluorescence.xml", "coloured-glass.xml", "normal-map.xml", "envmap-spectral.xml"];
+        let scenes = [
+            "cornell-box.xml",
+            "conductors.xml",
+            "dielectrics.xml",
+            "plastic.xml",
+            "rough-thin-film.xml",
+            "diffuse-models.xml",
+            "fluorescence.xml",
+            "coloured-glass.xml",
+            "normal-map.xml",
+            "envmap-spectral.xml",
+        ];
         for name in scenes {
-            let desc = pt_scene::load_file(&dir.join(name), &[]).unwrap_or_else(|e| panic!("{name}: {e}"));
-            let scene = Scene::build(&desc, BvhKind::CwBvh, LightSelection::Power).unwrap_or_else(|e| panic!("{name}: {e}"));
+            let desc =
+                pt_scene::load_file(&dir.join(name), &[]).unwrap_or_else(|e| panic!("{name}: {e}"));
+            let scene = Scene::build(&desc, BvhKind::CwBvh, LightSelection::Power)
+                .unwrap_or_else(|e| panic!("{name}: {e}"));
             let mut settings = RenderSettings::from_desc(&desc);
             settings.path.media = true;
             // A 16 x 16 tile across the image centre, 4 samples per pixel, in its band of rows.
             let (x0, y0) = (settings.width / 2 - 8, settings.height / 2 - 8);
-            let tile = Tile { x0, y0, x1: x0 + 16, y1: y0 + 16, samples: 0..4 };
+            let tile = Tile {
+                x0,
+                y0,
+                x1: x0 + 16,
+                y1: y0 + 16,
+                samples: 0..4,
+            };
             let mut portable = vec![PixelStats::default(); (settings.width * 16) as usize];
             let mut v3 = portable.clone();
             render_tile_portable(&scene, &settings, &mut portable, &tile);
             #[allow(unsafe_code)]
             // SAFETY: checked above that the processor has the features.
-            unsafe { render_tile_v3(&scene, &settings, &mut v3, &tile) };
-            let bits = |v: &[PixelStats]| v.iter().flat_map(|p| p.sum.iter().chain(&p.sum_sq).map(|x| x.to_bits()).chain([u64::from(p.n), u64::from(p.nonfinite)])).collect::<Vec<u64>>();
-            assert_eq!(bits(&portable), bits(&v3), "{name}: the x86-64-v3 variant differs");
-            assert!(portable.iter().any(|p| p.sum.iter().any(|&s| s > 0.0)), "{name}: the tile is black, the test checks nothing");
+            unsafe {
+                render_tile_v3(&scene, &settings, &mut v3, &tile)
+            };
+            let bits = |v: &[PixelStats]| {
+                v.iter()
+                    .flat_map(|p| {
+                        p.sum
+                            .iter()
+                            .chain(&p.sum_sq)
+                            .map(|x| x.to_bits())
+                            .chain([u64::from(p.n), u64::from(p.nonfinite)])
+                    })
+                    .collect::<Vec<u64>>()
+            };
+            assert_eq!(
+                bits(&portable),
+                bits(&v3),
+                "{name}: the x86-64-v3 variant differs"
+            );
+            assert!(
+                portable.iter().any(|p| p.sum.iter().any(|&s| s > 0.0)),
+                "{name}: the tile is black, the test checks nothing"
+            );
         }
     }
 }

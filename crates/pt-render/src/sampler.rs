@@ -31,7 +31,9 @@ impl Sampler {
         let state = splitmix64(splitmix64(splitmix64(seed) ^ pixel) ^ sample);
         // One fixed stream constant: distinct states on one stream are independent sequences,
         // whereas nearby stream increments of PCG are known to be correlated.
-        Sampler { rng: Pcg32::new(state, 0xa02b_dbf7_bb3c_0a7) }
+        Sampler {
+            rng: Pcg32::new(state, 0xa02b_dbf7_bb3c_0a7),
+        }
     }
 
     /// Uniform in [0, 1): the top 24 bits, so the result is exactly representable and < 1.

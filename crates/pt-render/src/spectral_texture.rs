@@ -44,7 +44,9 @@
 
 use crate::texture::Bitmap;
 use pt_math::Vec2;
-use pt_spectrum::{xyz_to_srgb, NamedIlluminant, RgbSigmoid, SampledSpectrum, SampledWavelengths, Spectrum};
+use pt_spectrum::{
+    xyz_to_srgb, NamedIlluminant, RgbSigmoid, SampledSpectrum, SampledWavelengths, Spectrum,
+};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -103,7 +105,12 @@ pub fn upsample_texels(texels: &[[f32; 3]], width: usize, form: Upsampling) -> V
         return Vec::new();
     }
     let key = |t: &[f32; 3]| t.map(f32::to_bits);
-    let mut distinct: Vec<[u32; 3]> = texels.iter().map(key).collect::<std::collections::HashSet<_>>().into_iter().collect();
+    let mut distinct: Vec<[u32; 3]> = texels
+        .iter()
+        .map(key)
+        .collect::<std::collections::HashSet<_>>()
+        .into_iter()
+        .collect();
     distinct.sort_unstable();
     let fitted: Vec<TexelSpectrum> = distinct
         .par_chunks(FIT_CHUNK)
@@ -123,7 +130,8 @@ pub fn upsample_texels(texels: &[[f32; 3]], width: usize, form: Upsampling) -> V
                 .collect::<Vec<_>>()
         })
         .collect();
-    let index: HashMap<[u32; 3], usize> = distinct.iter().enumerate().map(|(i, k)| (*k, i)).collect();
+    let index: HashMap<[u32; 3], usize> =
+        distinct.iter().enumerate().map(|(i, k)| (*k, i)).collect();
     texels.iter().map(|t| fitted[index[&key(t)]]).collect()
 }
 
@@ -144,7 +152,12 @@ impl SpectralBitmap {
     /// Upsamples an image as reflectances ([`Upsampling::Reflectance`]).
     pub fn new(bitmap: &Bitmap) -> Self {
         let (width, height) = bitmap.size();
-        SpectralBitmap { width, height, nearest: bitmap.is_nearest(), texels: upsample_texels(bitmap.texels(), width, Upsampling::Reflectance) }
+        SpectralBitmap {
+            width,
+            height,
+            nearest: bitmap.is_nearest(),
+            texels: upsample_texels(bitmap.texels(), width, Upsampling::Reflectance),
+        }
     }
 
     /// The spectrum at texture coordinates `uv`, at the path's wavelengths: the bilinear
@@ -155,14 +168,17 @@ impl SpectralBitmap {
         let (w, h) = (self.width as i64, self.height as i64);
         let x = uv.x * self.width as f32 - 0.5;
         let y = uv.y * self.height as f32 - 0.5;
-        let at = |xi: i64, yi: i64| self.texels[(yi.rem_euclid(h) * w + xi.rem_euclid(w)) as usize].eval(lambda);
+        let at = |xi: i64, yi: i64| {
+            self.texels[(yi.rem_euclid(h) * w + xi.rem_euclid(w)) as usize].eval(lambda)
+        };
         if self.nearest {
             return at(x.round() as i64, y.round() as i64);
         }
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         let (xi, yi) = (x0 as i64, y0 as i64);
-        (at(xi, yi) * (1.0 - fx) + at(xi + 1, yi) * fx) * (1.0 - fy) + (at(xi, yi + 1) * (1.0 - fx) + at(xi + 1, yi + 1) * fx) * fy
+        (at(xi, yi) * (1.0 - fx) + at(xi + 1, yi) * fx) * (1.0 - fy)
+            + (at(xi, yi + 1) * (1.0 - fx) + at(xi + 1, yi + 1) * fx) * fy
     }
 }
 
@@ -191,7 +207,9 @@ impl DisplayPrimaries {
                 _ => (360..=830).any(|l| s.eval(l as f32) < 0.0),
             };
             if negative {
-                return Err(format!("{name} has negative values (a spectral radiance cannot be negative)"));
+                return Err(format!(
+                    "{name} has negative values (a spectral radiance cannot be negative)"
+                ));
             }
         }
         let xyz = [0, 1, 2].map(|i| spectra[i].emission_xyz());
@@ -199,15 +217,24 @@ impl DisplayPrimaries {
         // Solve sum_i k_i xyz_i = white by Cramer's rule in f64 (columns are the primaries).
         let m = glam::DMat3::from_cols_array_2d(&xyz.map(|c| c.map(|v| v as f64)));
         let det = m.determinant();
-        let scale = xyz.iter().flatten().fold(0.0f64, |a, &v| a.max(v.abs() as f64));
+        let scale = xyz
+            .iter()
+            .flatten()
+            .fold(0.0f64, |a, &v| a.max(v.abs() as f64));
         if !(det.abs() > 1e-9 * scale * scale * scale) {
-            return Err("the three primaries are linearly dependent (their colours lie on a line)".into());
+            return Err(
+                "the three primaries are linearly dependent (their colours lie on a line)".into(),
+            );
         }
         let k = m.inverse() * glam::DVec3::new(white[0] as f64, white[1] as f64, white[2] as f64);
         if !(k.min_element() > 0.0 && k.is_finite()) {
             return Err(format!("D65 white lies outside the primaries' gamut (weights {:.4}, {:.4}, {:.4}: each must be positive)", k.x, k.y, k.z));
         }
-        Ok(DisplayPrimaries { spectra, weights: [k.x as f32, k.y as f32, k.z as f32], xyz })
+        Ok(DisplayPrimaries {
+            spectra,
+            weights: [k.x as f32, k.y as f32, k.z as f32],
+            xyz,
+        })
     }
 
     /// The normalisation weights `k_r, k_g, k_b`.
@@ -231,7 +258,11 @@ impl DisplayPrimaries {
     /// CIE XYZ emitted for drive values `rgb` (exact quadrature; film convention, Y of a
     /// constant 1 is 1).
     pub fn xyz(&self, rgb: [f32; 3]) -> [f32; 3] {
-        std::array::from_fn(|c| (0..3).map(|i| rgb[i] * self.weights[i] * self.xyz[i][c]).sum())
+        std::array::from_fn(|c| {
+            (0..3)
+                .map(|i| rgb[i] * self.weights[i] * self.xyz[i][c])
+                .sum()
+        })
     }
 
     /// Linear sRGB matrix (rows: output channel) giving the display's colour for drive values
@@ -277,7 +308,12 @@ mod tests {
     /// quadrature on 1 nm.
     fn reflectance_rgb(f: impl Fn(f32) -> f32) -> [f32; 3] {
         let d65 = Spectrum::illuminant(NamedIlluminant::D65, 1.0);
-        let s = Spectrum::tabulated(&(360..=830).map(|l| (l as f32, f(l as f32) * d65.eval(l as f32))).collect::<Vec<_>>()).unwrap();
+        let s = Spectrum::tabulated(
+            &(360..=830)
+                .map(|l| (l as f32, f(l as f32) * d65.eval(l as f32)))
+                .collect::<Vec<_>>(),
+        )
+        .unwrap();
         xyz_to_srgb(s.emission_xyz())
     }
 
@@ -292,18 +328,30 @@ mod tests {
         // texel's largest component (the fit's own round-trip tolerance in pt-spectrum, plus the
         // 1 nm tabulation here). Includes HDR texels (scaled form) and black.
         let texels: Vec<[f32; 3]> = vec![
-            [0.8, 0.2, 0.1], [0.1, 0.6, 0.3], [0.5, 0.5, 0.9], [0.0, 0.0, 0.0], [1.0, 1.0, 1.0],
-            [0.02, 0.9, 0.98], [3.0, 1.0, 0.5], [60.0, 50.0, 35.0], [0.25, 0.2, 0.15],
+            [0.8, 0.2, 0.1],
+            [0.1, 0.6, 0.3],
+            [0.5, 0.5, 0.9],
+            [0.0, 0.0, 0.0],
+            [1.0, 1.0, 1.0],
+            [0.02, 0.9, 0.98],
+            [3.0, 1.0, 0.5],
+            [60.0, 50.0, 35.0],
+            [0.25, 0.2, 0.15],
         ];
         for form in [Upsampling::Reflectance, Upsampling::Emission] {
             let up = upsample_texels(&texels, 3, form);
             for (rgb, t) in texels.iter().zip(&up) {
                 let back = texel_rgb(t);
                 let tol = 1e-3 * rgb.iter().cloned().fold(1.0, f32::max);
-                assert!((0..3).all(|c| (back[c] - rgb[c]).abs() <= tol), "{form:?}: {rgb:?} -> {back:?} ({t:?})");
+                assert!(
+                    (0..3).all(|c| (back[c] - rgb[c]).abs() <= tol),
+                    "{form:?}: {rgb:?} -> {back:?} ({t:?})"
+                );
                 let m = rgb.iter().cloned().fold(0.0, f32::max);
                 match form {
-                    Upsampling::Reflectance if m <= 1.0 => assert_eq!(t.scale, 1.0, "Mitsuba bitmap: in-gamut texels unscaled"),
+                    Upsampling::Reflectance if m <= 1.0 => {
+                        assert_eq!(t.scale, 1.0, "Mitsuba bitmap: in-gamut texels unscaled")
+                    }
                     _ => assert_eq!(t.scale, 2.0 * m, "scaled form: 2 max"),
                 }
             }
@@ -325,14 +373,25 @@ mod tests {
         img.save(&path).unwrap();
         let lambda = SampledWavelengths::sample_visible(0.3);
         for filter in ["bilinear", "nearest"] {
-            let desc = pt_scene::BitmapDesc { loc: pt_scene::SourceLoc::default(), filename: path.clone(), raw: false, filter: filter.into() };
+            let desc = pt_scene::BitmapDesc {
+                loc: pt_scene::SourceLoc::default(),
+                filename: path.clone(),
+                raw: false,
+                filter: filter.into(),
+            };
             let b = Bitmap::load(&desc).unwrap();
             let s = SpectralBitmap::new(&b);
             for k in 0..200 {
-                let uv = Vec2::new(-0.3 + 1.7 * ((k * 37 % 200) as f32 / 200.0), -0.2 + 1.5 * (k as f32 / 200.0));
+                let uv = Vec2::new(
+                    -0.3 + 1.7 * ((k * 37 % 200) as f32 / 200.0),
+                    -0.2 + 1.5 * (k as f32 / 200.0),
+                );
                 let rgb = b.eval(uv)[0];
                 let v = s.eval(uv, &lambda).0;
-                assert!((v - pt_math::Vec4::splat(rgb)).abs().max_element() < 1e-5, "{filter} {uv}: {v} vs {rgb}");
+                assert!(
+                    (v - pt_math::Vec4::splat(rgb)).abs().max_element() < 1e-5,
+                    "{filter} {uv}: {v} vs {rgb}"
+                );
             }
         }
         let _ = std::fs::remove_dir_all(&dir);
@@ -345,7 +404,12 @@ mod tests {
         // coefficients would give another curve.
         let texels = [[0.9f32, 0.1, 0.1], [0.1, 0.1, 0.9]];
         let up = upsample_texels(&texels, 2, Upsampling::Reflectance);
-        let b = SpectralBitmap { width: 2, height: 1, nearest: false, texels: up.clone() };
+        let b = SpectralBitmap {
+            width: 2,
+            height: 1,
+            nearest: false,
+            texels: up.clone(),
+        };
         for u in [0.1f32, 0.37, 0.8] {
             let lambda = SampledWavelengths::sample_visible(u);
             let mid = b.eval(Vec2::new(0.5, 0.5), &lambda).0;
@@ -356,7 +420,14 @@ mod tests {
 
     fn lcd() -> [Spectrum; 3] {
         // Gaussian-like primaries (centre, width in nm), as in scenes/spectra/lcd-*.spd.
-        let g = |c: f32, w: f32| Spectrum::tabulated(&(360..=830).map(|l| (l as f32, (-0.5 * ((l as f32 - c) / w).powi(2)).exp())).collect::<Vec<_>>()).unwrap();
+        let g = |c: f32, w: f32| {
+            Spectrum::tabulated(
+                &(360..=830)
+                    .map(|l| (l as f32, (-0.5 * ((l as f32 - c) / w).powi(2)).exp()))
+                    .collect::<Vec<_>>(),
+            )
+            .unwrap()
+        };
         [g(615.0, 18.0), g(535.0, 16.0), g(455.0, 10.0)]
     }
 
@@ -365,7 +436,10 @@ mod tests {
         let d = DisplayPrimaries::new(lcd()).unwrap();
         let white = Spectrum::illuminant(NamedIlluminant::D65, 1.0).emission_xyz();
         let w = d.xyz([1.0; 3]);
-        assert!((0..3).all(|c| (w[c] - white[c]).abs() < 1e-5), "{w:?} vs {white:?}");
+        assert!(
+            (0..3).all(|c| (w[c] - white[c]).abs() < 1e-5),
+            "{w:?} vs {white:?}"
+        );
         // RGB-mode matrix: white maps to (1, 1, 1) up to D65's table-vs-matrix white (2e-3).
         let m = d.to_srgb_matrix();
         for r in m {
@@ -381,7 +455,10 @@ mod tests {
             (0..3).for_each(|c| acc[c] += xyz[c] as f64 / n as f64);
         }
         let exact = d.xyz(rgb);
-        assert!((0..3).all(|c| (acc[c] as f32 - exact[c]).abs() < 3e-3 * exact[1]), "{acc:?} vs {exact:?}");
+        assert!(
+            (0..3).all(|c| (acc[c] as f32 - exact[c]).abs() < 3e-3 * exact[1]),
+            "{acc:?} vs {exact:?}"
+        );
         // sRGB-chromaticity primaries would reproduce sRGB; these narrow ones are more saturated:
         // pure red drive gives a red outside the sRGB gamut (negative green or blue).
         let red = xyz_to_srgb(d.xyz([1.0, 0.0, 0.0]));
@@ -391,12 +468,18 @@ mod tests {
     #[test]
     fn bad_primaries_are_rejected() {
         let [r, g, b] = lcd();
-        assert!(DisplayPrimaries::new([r.clone(), r.clone(), b.clone()]).unwrap_err().contains("linearly dependent"));
+        assert!(DisplayPrimaries::new([r.clone(), r.clone(), b.clone()])
+            .unwrap_err()
+            .contains("linearly dependent"));
         // Without a short-wavelength primary, D65 (which has blue) needs a negative weight.
         let yellow = Spectrum::tabulated(&[(560.0, 0.0), (580.0, 1.0), (600.0, 0.0)]).unwrap();
-        assert!(DisplayPrimaries::new([r.clone(), g.clone(), yellow]).unwrap_err().contains("gamut"));
+        assert!(DisplayPrimaries::new([r.clone(), g.clone(), yellow])
+            .unwrap_err()
+            .contains("gamut"));
         let neg = Spectrum::tabulated(&[(400.0, -0.1), (500.0, 1.0)]).unwrap();
-        assert!(DisplayPrimaries::new([r, g, neg]).unwrap_err().contains("negative"));
+        assert!(DisplayPrimaries::new([r, g, neg])
+            .unwrap_err()
+            .contains("negative"));
     }
 }
 
@@ -409,16 +492,30 @@ mod timing_probe {
         let mut s = 1u64;
         let texels: Vec<[f32; 3]> = (0..w * h)
             .map(|i| {
-                s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                s = s
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
                 let n = ((s >> 40) as f32 / (1u64 << 24) as f32 - 0.5) * 0.1;
                 let (x, y) = ((i % w) as f32 / w as f32, (i / w) as f32 / h as f32);
-                [(0.2 + 0.6 * x + n).clamp(0.0, 1.0), (0.7 - 0.5 * y + n).clamp(0.0, 1.0), (0.3 + 0.4 * x * y).clamp(0.0, 1.0)]
+                [
+                    (0.2 + 0.6 * x + n).clamp(0.0, 1.0),
+                    (0.7 - 0.5 * y + n).clamp(0.0, 1.0),
+                    (0.3 + 0.4 * x * y).clamp(0.0, 1.0),
+                ]
             })
             .map(|t: [f32; 3]| t.map(|v| (v * 255.0).round() / 255.0))
             .collect();
         let t = std::time::Instant::now();
         let up = super::upsample_texels(&texels, w, super::Upsampling::Reflectance);
-        let distinct = texels.iter().map(|t| t.map(f32::to_bits)).collect::<std::collections::HashSet<_>>().len();
-        eprintln!("{} texels ({distinct} distinct colours) in {:.2} s", up.len(), t.elapsed().as_secs_f64());
+        let distinct = texels
+            .iter()
+            .map(|t| t.map(f32::to_bits))
+            .collect::<std::collections::HashSet<_>>()
+            .len();
+        eprintln!(
+            "{} texels ({distinct} distinct colours) in {:.2} s",
+            up.len(),
+            t.elapsed().as_secs_f64()
+        );
     }
 }

@@ -28,8 +28,14 @@ fn srgb_to_linear(c: f32) -> f32 {
 /// cannot be read or has no pixels.
 fn decode_source(source: &pt_scene::ImageSource) -> Result<image::DynamicImage, String> {
     let (img, name) = match source {
-        pt_scene::ImageSource::File(p) => (image::open(p).map_err(|e| format!("cannot read image '{}': {e}", p.display()))?, p.display().to_string()),
-        pt_scene::ImageSource::Embedded { name, bytes } => (image::load_from_memory(bytes).map_err(|e| format!("cannot decode {name}: {e}"))?, name.clone()),
+        pt_scene::ImageSource::File(p) => (
+            image::open(p).map_err(|e| format!("cannot read image '{}': {e}", p.display()))?,
+            p.display().to_string(),
+        ),
+        pt_scene::ImageSource::Embedded { name, bytes } => (
+            image::load_from_memory(bytes).map_err(|e| format!("cannot decode {name}: {e}"))?,
+            name.clone(),
+        ),
     };
     if img.width() == 0 || img.height() == 0 {
         return Err(format!("image {name} is empty"));
@@ -41,7 +47,11 @@ impl Bitmap {
     /// Loads a PNG or JPEG (through the `image` crate) or an EXR (already linear).
     pub fn load(desc: &BitmapDesc) -> Result<Bitmap, String> {
         let path: &Path = &desc.filename;
-        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).unwrap_or_default();
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .unwrap_or_default();
         let (width, height, texels) = if ext == "exr" {
             let (img, _) = pt_image::read_exr(path).map_err(|e| e.to_string())?;
             (img.width as usize, img.height as usize, img.data)
@@ -49,38 +59,72 @@ impl Bitmap {
             let img = decode_source(&pt_scene::ImageSource::File(path.to_path_buf()))?.to_rgb32f();
             let (w, h) = img.dimensions();
             let decode = |c: f32| if desc.raw { c } else { srgb_to_linear(c) };
-            let texels = img.pixels().map(|p| [decode(p.0[0]), decode(p.0[1]), decode(p.0[2])]).collect();
+            let texels = img
+                .pixels()
+                .map(|p| [decode(p.0[0]), decode(p.0[1]), decode(p.0[2])])
+                .collect();
             (w as usize, h as usize, texels)
         };
         if width == 0 || height == 0 {
             return Err(format!("image '{}' is empty", path.display()));
         }
-        if texels.iter().any(|t: &[f32; 3]| t.iter().any(|c| !c.is_finite() || *c < 0.0)) {
-            return Err(format!("image '{}' has negative or non-finite values", path.display()));
+        if texels
+            .iter()
+            .any(|t: &[f32; 3]| t.iter().any(|c| !c.is_finite() || *c < 0.0))
+        {
+            return Err(format!(
+                "image '{}' has negative or non-finite values",
+                path.display()
+            ));
         }
-        Ok(Bitmap { width, height, texels, nearest: desc.filter == "nearest" })
+        Ok(Bitmap {
+            width,
+            height,
+            texels,
+            nearest: desc.filter == "nearest",
+        })
     }
 
     /// Decodes an image given by file or by embedded bytes (glTF textures): PNG or JPEG through
     /// the `image` crate; `srgb` decodes sRGB-encoded values to linear, otherwise values are
     /// used as stored (normalised to [0, 1]).
-    pub fn from_source(source: &pt_scene::ImageSource, srgb: bool, nearest: bool) -> Result<Bitmap, String> {
+    pub fn from_source(
+        source: &pt_scene::ImageSource,
+        srgb: bool,
+        nearest: bool,
+    ) -> Result<Bitmap, String> {
         let img = decode_source(source)?;
         let img = img.to_rgb32f();
         let (w, h) = img.dimensions();
         let decode = |c: f32| if srgb { srgb_to_linear(c) } else { c };
-        let texels = img.pixels().map(|p| [decode(p.0[0]), decode(p.0[1]), decode(p.0[2])]).collect();
-        Ok(Bitmap { width: w as usize, height: h as usize, texels, nearest })
+        let texels = img
+            .pixels()
+            .map(|p| [decode(p.0[0]), decode(p.0[1]), decode(p.0[2])])
+            .collect();
+        Ok(Bitmap {
+            width: w as usize,
+            height: h as usize,
+            texels,
+            nearest,
+        })
     }
 
     /// The alpha channel of an image given by file or embedded bytes (glTF base colour alpha),
     /// as stored (alpha is linear in glTF), in all three channels; 1 where the image has none.
-    pub fn alpha_from_source(source: &pt_scene::ImageSource, nearest: bool) -> Result<Bitmap, String> {
+    pub fn alpha_from_source(
+        source: &pt_scene::ImageSource,
+        nearest: bool,
+    ) -> Result<Bitmap, String> {
         let img = decode_source(source)?;
         let img = img.to_rgba32f();
         let (w, h) = img.dimensions();
         let texels = img.pixels().map(|p| [p.0[3]; 3]).collect();
-        Ok(Bitmap { width: w as usize, height: h as usize, texels, nearest })
+        Ok(Bitmap {
+            width: w as usize,
+            height: h as usize,
+            texels,
+            nearest,
+        })
     }
 
     /// Linear RGB at texture coordinates `uv`.
@@ -95,13 +139,24 @@ impl Bitmap {
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         let (xi, yi) = (x0 as i64, y0 as i64);
-        let (a, b, c, d) = (at(xi, yi), at(xi + 1, yi), at(xi, yi + 1), at(xi + 1, yi + 1));
-        std::array::from_fn(|k| (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + d[k] * fx) * fy)
+        let (a, b, c, d) = (
+            at(xi, yi),
+            at(xi + 1, yi),
+            at(xi, yi + 1),
+            at(xi + 1, yi + 1),
+        );
+        std::array::from_fn(|k| {
+            (a[k] * (1.0 - fx) + b[k] * fx) * (1.0 - fy) + (c[k] * (1.0 - fx) + d[k] * fx) * fy
+        })
     }
 
     /// Mean luminance (Rec. 709 Y) of the texels, for light selection.
     pub fn mean_luminance(&self) -> f32 {
-        let sum: f64 = self.texels.iter().map(|t| (0.212_671 * t[0] + 0.715_160 * t[1] + 0.072_169 * t[2]) as f64).sum();
+        let sum: f64 = self
+            .texels
+            .iter()
+            .map(|t| (0.212_671 * t[0] + 0.715_160 * t[1] + 0.072_169 * t[2]) as f64)
+            .sum();
         (sum / self.texels.len() as f64) as f32
     }
 }
@@ -126,7 +181,12 @@ impl Bitmap {
 
     /// The same image with every texel (linear values) replaced by `f(texel)`.
     pub fn map_texels(&self, f: impl Fn([f32; 3]) -> [f32; 3]) -> Bitmap {
-        Bitmap { width: self.width, height: self.height, texels: self.texels.iter().map(|&t| f(t)).collect(), nearest: self.nearest }
+        Bitmap {
+            width: self.width,
+            height: self.height,
+            texels: self.texels.iter().map(|&t| f(t)).collect(),
+            nearest: self.nearest,
+        }
     }
 }
 
@@ -136,12 +196,22 @@ mod tests {
 
     #[test]
     fn bilinear_between_centres_and_repeat() {
-        let b = Bitmap { width: 2, height: 1, texels: vec![[0.0; 3], [1.0; 3]], nearest: false };
+        let b = Bitmap {
+            width: 2,
+            height: 1,
+            texels: vec![[0.0; 3], [1.0; 3]],
+            nearest: false,
+        };
         assert_eq!(b.eval(Vec2::new(0.25, 0.5))[0], 0.0); // centre of texel 0
         assert_eq!(b.eval(Vec2::new(0.75, 0.5))[0], 1.0); // centre of texel 1
         assert!((b.eval(Vec2::new(0.5, 0.5))[0] - 0.5).abs() < 1e-6);
-        assert!((b.eval(Vec2::new(0.0, 0.5))[0] - 0.5).abs() < 1e-6, "wraps to the other edge");
+        assert!(
+            (b.eval(Vec2::new(0.0, 0.5))[0] - 0.5).abs() < 1e-6,
+            "wraps to the other edge"
+        );
         assert!((b.eval(Vec2::new(1.25, 0.5))[0]).abs() < 1e-6, "repeats");
-        assert!((srgb_to_linear(1.0) - 1.0).abs() < 1e-6 && (srgb_to_linear(0.5) - 0.214).abs() < 1e-3);
+        assert!(
+            (srgb_to_linear(1.0) - 1.0).abs() < 1e-6 && (srgb_to_linear(0.5) - 0.214).abs() < 1e-3
+        );
     }
 }

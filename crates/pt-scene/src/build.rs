@@ -3,8 +3,8 @@
 
 use crate::error::{Result, SceneError};
 use crate::ir::*;
-use crate::props::{Child, ObjectView};
 use crate::obj::{self, ObjOptions};
+use crate::props::{Child, ObjectView};
 use crate::shapes;
 use crate::transform::is_affine;
 use crate::xml::{resolve_file, Document, Element};
@@ -201,7 +201,9 @@ impl<'e> Builder<'e> {
                 "bsdf" => drop(self.bsdf_desc(el)?),
                 // Validated now; shapes use it through <ref name="interior" id="..."/>.
                 "medium" => drop(medium(el)?),
-                "emitter" if el.attr("type") == Some("area") => return Err(self.top_level_emitter(el)),
+                "emitter" if el.attr("type") == Some("area") => {
+                    return Err(self.top_level_emitter(el))
+                }
                 "emitter" => lights.push(self.light(el)?),
                 "film" | "sampler" => {
                     return Err(SceneError::at(
@@ -268,60 +270,109 @@ impl<'e> Builder<'e> {
         // Direction of travel: `direction`, or the +z axis of `to_world`.
         let direction = |v: &ObjectView<'e>, to_world: Option<Mat4>| -> Result<Vec3> {
             let d = match (v.vec3("direction")?, to_world) {
-                (Some(_), Some(_)) => return Err(v.prop_error("direction", "give either direction or to_world, not both")),
+                (Some(_), Some(_)) => {
+                    return Err(
+                        v.prop_error("direction", "give either direction or to_world, not both")
+                    )
+                }
                 (Some(d), None) => d,
                 (None, Some(m)) => m.transform_vector3(Vec3::Z),
                 (None, None) => Vec3::Z,
             };
-            d.try_normalize().ok_or_else(|| v.prop_error("direction", "direction must not be zero"))
+            d.try_normalize()
+                .ok_or_else(|| v.prop_error("direction", "direction must not be zero"))
         };
         let kind = match v.plugin.as_str() {
             "point" => {
                 let position = match (v.vec3("position")?, to_world) {
-                    (Some(_), Some(_)) => return Err(v.prop_error("position", "give either position or to_world, not both")),
+                    (Some(_), Some(_)) => {
+                        return Err(
+                            v.prop_error("position", "give either position or to_world, not both")
+                        )
+                    }
                     (Some(p), None) => p,
                     (None, Some(m)) => m.transform_point3(Vec3::ZERO),
                     (None, None) => Vec3::ZERO,
                 };
-                LightKind::Point { position, intensity: spectrum("intensity")? }
+                LightKind::Point {
+                    position,
+                    intensity: spectrum("intensity")?,
+                }
             }
             "spot" => {
                 let cutoff_deg = v.float("cutoff_angle")?.unwrap_or(20.0);
                 if !(cutoff_deg > 0.0 && cutoff_deg <= 180.0) {
-                    return Err(v.prop_error("cutoff_angle", "cutoff_angle must be in (0, 180] degrees"));
+                    return Err(
+                        v.prop_error("cutoff_angle", "cutoff_angle must be in (0, 180] degrees")
+                    );
                 }
                 let beam_width_deg = v.float("beam_width")?.unwrap_or(cutoff_deg * 0.75);
                 if !(beam_width_deg >= 0.0 && beam_width_deg <= cutoff_deg) {
-                    return Err(v.prop_error("beam_width", "beam_width must be in [0, cutoff_angle] degrees"));
+                    return Err(v.prop_error(
+                        "beam_width",
+                        "beam_width must be in [0, cutoff_angle] degrees",
+                    ));
                 }
-                LightKind::Spot { to_world: to_world.unwrap_or(Mat4::IDENTITY), intensity: spectrum("intensity")?, cutoff_deg, beam_width_deg }
+                LightKind::Spot {
+                    to_world: to_world.unwrap_or(Mat4::IDENTITY),
+                    intensity: spectrum("intensity")?,
+                    cutoff_deg,
+                    beam_width_deg,
+                }
             }
-            "directional" => LightKind::Directional { direction: direction(&v, to_world)?, irradiance: spectrum("irradiance")? },
+            "directional" => LightKind::Directional {
+                direction: direction(&v, to_world)?,
+                irradiance: spectrum("irradiance")?,
+            },
             "sun" => {
                 let angular_diameter_deg = v.float("angular_diameter")?.unwrap_or(0.5338);
                 if !(angular_diameter_deg > 0.0 && angular_diameter_deg < 180.0) {
-                    return Err(v.prop_error("angular_diameter", "angular_diameter must be in (0, 180) degrees"));
+                    return Err(v.prop_error(
+                        "angular_diameter",
+                        "angular_diameter must be in (0, 180) degrees",
+                    ));
                 }
-                LightKind::Sun { direction: direction(&v, to_world)?, irradiance: spectrum("irradiance")?, angular_diameter_deg }
+                LightKind::Sun {
+                    direction: direction(&v, to_world)?,
+                    irradiance: spectrum("irradiance")?,
+                    angular_diameter_deg,
+                }
             }
-            "constant" => LightKind::Constant { radiance: spectrum("radiance")? },
+            "constant" => LightKind::Constant {
+                radiance: spectrum("radiance")?,
+            },
             "envmap" => {
-                let name = v.string("filename")?.ok_or_else(|| SceneError::at(&el.loc, "envmap needs a filename"))?;
+                let name = v
+                    .string("filename")?
+                    .ok_or_else(|| SceneError::at(&el.loc, "envmap needs a filename"))?;
                 let path = resolve_file(&name, &v.el.dir, &[self.base_dir], self.search_paths);
                 if !path.is_file() {
-                    return Err(v.prop_error("filename", format!("cannot open environment map '{name}' (looked for {})", path.display())));
+                    return Err(v.prop_error(
+                        "filename",
+                        format!(
+                            "cannot open environment map '{name}' (looked for {})",
+                            path.display()
+                        ),
+                    ));
                 }
                 let scale = v.float("scale")?.unwrap_or(1.0);
                 if scale < 0.0 {
                     return Err(v.prop_error("scale", "scale must not be negative"));
                 }
-                LightKind::EnvMap { filename: path, to_world: to_world.unwrap_or(Mat4::IDENTITY), scale }
+                LightKind::EnvMap {
+                    filename: path,
+                    to_world: to_world.unwrap_or(Mat4::IDENTITY),
+                    scale,
+                }
             }
             _ => return Err(plugin_error(el)),
         };
         no_children(&v)?;
         v.finish()?;
-        Ok(LightDesc { loc: el.loc.clone(), kind })
+        Ok(LightDesc {
+            loc: el.loc.clone(),
+            kind,
+        })
     }
 
     /// `area`: `radiance` (rgb, spectrum or float; Mitsuba's default 1), or a nested
@@ -351,12 +402,21 @@ impl<'e> Builder<'e> {
             if t.tag != "texture" || t.attr("name") != Some("radiance") || texture.is_some() {
                 return Err(misplaced(child, t, &v, "one <texture name=\"radiance\">"));
             }
-            texture = Some(if t.attr("type") == Some("d65") { self.d65_bitmap(t)? } else { self.bitmap(t)? });
+            texture = Some(if t.attr("type") == Some("d65") {
+                self.d65_bitmap(t)?
+            } else {
+                self.bitmap(t)?
+            });
         }
         if texture.is_some() && v.has("radiance") {
-            return Err(v.prop_error("radiance", "give either a radiance value or a radiance texture"));
+            return Err(v.prop_error(
+                "radiance",
+                "give either a radiance value or a radiance texture",
+            ));
         }
-        let radiance = v.spectrum("radiance")?.unwrap_or(SpectrumDesc::Constant(1.0));
+        let radiance = v
+            .spectrum("radiance")?
+            .unwrap_or(SpectrumDesc::Constant(1.0));
         let names = ["primary_r", "primary_g", "primary_b"];
         let primaries = match names.map(|n| v.spectrum(n)) {
             [Ok(None), Ok(None), Ok(None)] => None,
@@ -375,12 +435,22 @@ impl<'e> Builder<'e> {
                 r?;
                 g?;
                 b?;
-                let missing = names.iter().zip([v.has(names[0]), v.has(names[1]), v.has(names[2])]).find(|(_, h)| !h).map_or("", |(n, _)| *n);
+                let missing = names
+                    .iter()
+                    .zip([v.has(names[0]), v.has(names[1]), v.has(names[2])])
+                    .find(|(_, h)| !h)
+                    .map_or("", |(n, _)| *n);
                 return Err(SceneError::at(&el.loc, format!("display primaries need all three of primary_r, primary_g, primary_b ({missing} is missing)")));
             }
         };
         v.finish()?;
-        Ok(AreaEmitterDesc { loc: el.loc.clone(), radiance, texture, primaries, uv_texture: None })
+        Ok(AreaEmitterDesc {
+            loc: el.loc.clone(),
+            radiance,
+            texture,
+            primaries,
+            uv_texture: None,
+        })
     }
 
     /// `<texture type="d65">` around one `<texture type="bitmap">` (see [`Builder::area_emitter`]).
@@ -404,24 +474,44 @@ impl<'e> Builder<'e> {
         if v.plugin != "bitmap" {
             return Err(plugin_error(el));
         }
-        let name = v.string("filename")?.ok_or_else(|| SceneError::at(&el.loc, "bitmap needs a filename"))?;
+        let name = v
+            .string("filename")?
+            .ok_or_else(|| SceneError::at(&el.loc, "bitmap needs a filename"))?;
         let path = resolve_file(&name, &v.el.dir, &[self.base_dir], self.search_paths);
         if !path.is_file() {
-            return Err(v.prop_error("filename", format!("cannot open image '{name}' (looked for {})", path.display())));
+            return Err(v.prop_error(
+                "filename",
+                format!("cannot open image '{name}' (looked for {})", path.display()),
+            ));
         }
         let raw = v.boolean("raw")?.unwrap_or(false);
-        let filter = v.string("filter_type")?.unwrap_or_else(|| "bilinear".into());
+        let filter = v
+            .string("filter_type")?
+            .unwrap_or_else(|| "bilinear".into());
         if filter != "bilinear" && filter != "nearest" {
-            return Err(v.prop_error("filter_type", format!("filter_type must be bilinear or nearest, got '{filter}'")));
+            return Err(v.prop_error(
+                "filter_type",
+                format!("filter_type must be bilinear or nearest, got '{filter}'"),
+            ));
         }
         if let Some(w) = v.string("wrap_mode")? {
             if w != "repeat" {
-                return Err(v.prop_error("wrap_mode", format!("wrap_mode '{w}' is not yet supported (not yet implemented; only repeat)")));
+                return Err(v.prop_error(
+                    "wrap_mode",
+                    format!(
+                        "wrap_mode '{w}' is not yet supported (not yet implemented; only repeat)"
+                    ),
+                ));
             }
         }
         no_children(&v)?;
         v.finish()?;
-        Ok(BitmapDesc { loc: el.loc.clone(), filename: path, raw, filter })
+        Ok(BitmapDesc {
+            loc: el.loc.clone(),
+            filename: path,
+            raw,
+            filter,
+        })
     }
 
     // -----------------------------------------------------------------------------------------
@@ -513,13 +603,19 @@ impl<'e> Builder<'e> {
         let v = ObjectView::parse(el)?;
         let desc = match v.plugin.as_str() {
             "path" => path_integrator(&v)?,
-            "volpath" => IntegratorDesc { kind: IntegratorKind::VolPath, ..path_integrator(&v)? },
+            "volpath" => IntegratorDesc {
+                kind: IntegratorKind::VolPath,
+                ..path_integrator(&v)?
+            },
             "direct" => direct_integrator(&v)?,
             "moment" => self.moment(&v)?,
             "radiosity" => radiosity_integrator(&v)?,
             _ => return Err(plugin_error(el)),
         };
-        let desc = IntegratorDesc { loc: el.loc.clone(), ..desc };
+        let desc = IntegratorDesc {
+            loc: el.loc.clone(),
+            ..desc
+        };
         if v.plugin != "moment" {
             if let Some(child) = v.children.first() {
                 let target = self.resolve(child)?;
@@ -632,12 +728,23 @@ impl<'e> Builder<'e> {
     /// materials, cameras and lights are not used. `filename` is resolved as for `obj`.
     fn gltf(&self, v: &ObjectView<'_>, m: &Mat4, flip: bool) -> Result<Geometry> {
         let err = |msg: String| SceneError::at(&v.el.loc, msg);
-        let name = v.string("filename")?.ok_or_else(|| err("missing <string name=\"filename\" .../>".into()))?;
+        let name = v
+            .string("filename")?
+            .ok_or_else(|| err("missing <string name=\"filename\" .../>".into()))?;
         let path = resolve_file(&name, &v.el.dir, &[self.base_dir], self.search_paths);
-        let reader = crate::gltf_mesh_reader().ok_or_else(|| err("glTF shapes need the glTF reader, which this program did not install".into()))?;
+        let reader = crate::gltf_mesh_reader().ok_or_else(|| {
+            err("glTF shapes need the glTF reader, which this program did not install".into())
+        })?;
         let mesh = reader(&path).map_err(err)?;
-        let local = shapes::LocalMesh { positions: mesh.positions, normals: mesh.normals, uvs: mesh.uvs, indices: mesh.indices };
-        shapes::to_world(local, m, flip).map(Geometry::Mesh).map_err(|e| err(format!("mesh '{name}': {e}")))
+        let local = shapes::LocalMesh {
+            positions: mesh.positions,
+            normals: mesh.normals,
+            uvs: mesh.uvs,
+            indices: mesh.indices,
+        };
+        shapes::to_world(local, m, flip)
+            .map(Geometry::Mesh)
+            .map_err(|e| err(format!("mesh '{name}': {e}")))
     }
 
     /// A shape's nested BSDF (or `<ref>` to one), area emitter and interior medium, at most one
@@ -772,7 +879,8 @@ impl<'e> Builder<'e> {
                 no_children(&v)?;
                 crate::materials::bsdf_kind(&v)?
             }
-            "orennayar" | "minnaert" | "dielectric" | "thindielectric" | "roughdielectric" | "conductor" | "roughconductor" | "thinfilm" | "roughthinfilm" | "roughplastic" => {
+            "orennayar" | "minnaert" | "dielectric" | "thindielectric" | "roughdielectric"
+            | "conductor" | "roughconductor" | "thinfilm" | "roughthinfilm" | "roughplastic" => {
                 no_children(&v)?;
                 crate::materials::bsdf_kind(&v)?
             }
@@ -797,11 +905,19 @@ impl<'e> Builder<'e> {
                 return Err(misplaced(child, target, v, "bsdf"));
             }
             if inner.is_some() {
-                return Err(SceneError::at(&child.written().loc, format!("{what} takes one nested <bsdf>")));
+                return Err(SceneError::at(
+                    &child.written().loc,
+                    format!("{what} takes one nested <bsdf>"),
+                ));
             }
             inner = Some(self.bsdf_desc(target)?);
         }
-        inner.ok_or_else(|| SceneError::at(&v.el.loc, format!("{what} needs one nested <bsdf> or <ref>")))
+        inner.ok_or_else(|| {
+            SceneError::at(
+                &v.el.loc,
+                format!("{what} needs one nested <bsdf> or <ref>"),
+            )
+        })
     }
 
     /// `mask`: `opacity` a float in [0, 1] (0.5) or `<texture type="bitmap" name="opacity">`
@@ -813,22 +929,56 @@ impl<'e> Builder<'e> {
             let target = self.resolve(child)?;
             match (target.tag.as_str(), target.attr("name")) {
                 ("bsdf", _) if inner.is_none() => inner = Some(self.bsdf_desc(target)?),
-                ("bsdf", _) => return Err(SceneError::at(&child.written().loc, "mask takes one nested <bsdf>")),
-                ("texture", Some("opacity")) if texture.is_none() => texture = Some(self.bitmap(target)?),
-                _ => return Err(misplaced(child, target, v, "one nested <bsdf> and at most one <texture name=\"opacity\">")),
+                ("bsdf", _) => {
+                    return Err(SceneError::at(
+                        &child.written().loc,
+                        "mask takes one nested <bsdf>",
+                    ))
+                }
+                ("texture", Some("opacity")) if texture.is_none() => {
+                    texture = Some(self.bitmap(target)?)
+                }
+                _ => {
+                    return Err(misplaced(
+                        child,
+                        target,
+                        v,
+                        "one nested <bsdf> and at most one <texture name=\"opacity\">",
+                    ))
+                }
             }
         }
-        let inner = Box::new(inner.ok_or_else(|| SceneError::at(&v.el.loc, "mask needs one nested <bsdf> or <ref>"))?);
+        let inner =
+            Box::new(inner.ok_or_else(|| {
+                SceneError::at(&v.el.loc, "mask needs one nested <bsdf> or <ref>")
+            })?);
         if let Some(b) = texture {
             if v.has("opacity") {
-                return Err(v.prop_error("opacity", "give either an opacity value or an opacity texture"));
+                return Err(v.prop_error(
+                    "opacity",
+                    "give either an opacity value or an opacity texture",
+                ));
             }
-            let texture = Box::new(UvTexture { source: ImageSource::File(b.filename), srgb: !b.raw, nearest: b.filter == "nearest", transform: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0] });
-            return Ok(BsdfKind::OpacityTexture { texture, channel: TextureChannel::Luminance, factor: 1.0, cutoff: None, inner });
+            let texture = Box::new(UvTexture {
+                source: ImageSource::File(b.filename),
+                srgb: !b.raw,
+                nearest: b.filter == "nearest",
+                transform: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+            });
+            return Ok(BsdfKind::OpacityTexture {
+                texture,
+                channel: TextureChannel::Luminance,
+                factor: 1.0,
+                cutoff: None,
+                inner,
+            });
         }
         let opacity = v.float("opacity")?.unwrap_or(0.5);
         if !(0.0..=1.0).contains(&opacity) {
-            return Err(v.prop_error("opacity", format!("opacity must be in [0, 1], got {opacity}")));
+            return Err(v.prop_error(
+                "opacity",
+                format!("opacity must be in [0, 1], got {opacity}"),
+            ));
         }
         Ok(BsdfKind::Mask { opacity, inner })
     }
@@ -840,12 +990,23 @@ impl<'e> Builder<'e> {
         for child in &v.children {
             let target = self.resolve(child)?;
             if target.tag != "bsdf" || inner.len() == 2 {
-                return Err(misplaced(child, target, v, "exactly two nested <bsdf> (a textured weight is not yet supported)"));
+                return Err(misplaced(
+                    child,
+                    target,
+                    v,
+                    "exactly two nested <bsdf> (a textured weight is not yet supported)",
+                ));
             }
             inner.push(self.bsdf_desc(target)?);
         }
         if inner.len() != 2 {
-            return Err(SceneError::at(&v.el.loc, format!("blendbsdf needs exactly two nested BSDFs, got {}", inner.len())));
+            return Err(SceneError::at(
+                &v.el.loc,
+                format!(
+                    "blendbsdf needs exactly two nested BSDFs, got {}",
+                    inner.len()
+                ),
+            ));
         }
         let weight = v.float("weight")?.unwrap_or(0.5);
         if !(0.0..=1.0).contains(&weight) {
@@ -853,7 +1014,12 @@ impl<'e> Builder<'e> {
         }
         let second = Box::new(inner.pop().expect("two"));
         let first = Box::new(inner.pop().expect("two"));
-        Ok(BsdfKind::Blend { weight, weight_texture: None, first, second })
+        Ok(BsdfKind::Blend {
+            weight,
+            weight_texture: None,
+            first,
+            second,
+        })
     }
 
     /// `normalmap`: one nested BSDF and `<texture type="bitmap" name="normalmap">` whose RGB
@@ -865,14 +1031,40 @@ impl<'e> Builder<'e> {
             let target = self.resolve(child)?;
             match (target.tag.as_str(), target.attr("name")) {
                 ("bsdf", _) if inner.is_none() => inner = Some(self.bsdf_desc(target)?),
-                ("texture", Some("normalmap")) if texture.is_none() => texture = Some(self.bitmap(target)?),
-                _ => return Err(misplaced(child, target, v, "one nested <bsdf> and one <texture name=\"normalmap\">")),
+                ("texture", Some("normalmap")) if texture.is_none() => {
+                    texture = Some(self.bitmap(target)?)
+                }
+                _ => {
+                    return Err(misplaced(
+                        child,
+                        target,
+                        v,
+                        "one nested <bsdf> and one <texture name=\"normalmap\">",
+                    ))
+                }
             }
         }
-        let inner = inner.ok_or_else(|| SceneError::at(&v.el.loc, "normalmap needs one nested <bsdf> or <ref>"))?;
-        let b = texture.ok_or_else(|| SceneError::at(&v.el.loc, "normalmap needs <texture type=\"bitmap\" name=\"normalmap\">"))?;
-        let texture = Box::new(UvTexture { source: ImageSource::File(b.filename), srgb: !b.raw, nearest: b.filter == "nearest", transform: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0] });
-        Ok(BsdfKind::NormalMap { texture, scale: 1.0, gltf: false, inner: Box::new(inner) })
+        let inner = inner.ok_or_else(|| {
+            SceneError::at(&v.el.loc, "normalmap needs one nested <bsdf> or <ref>")
+        })?;
+        let b = texture.ok_or_else(|| {
+            SceneError::at(
+                &v.el.loc,
+                "normalmap needs <texture type=\"bitmap\" name=\"normalmap\">",
+            )
+        })?;
+        let texture = Box::new(UvTexture {
+            source: ImageSource::File(b.filename),
+            srgb: !b.raw,
+            nearest: b.filter == "nearest",
+            transform: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0],
+        });
+        Ok(BsdfKind::NormalMap {
+            texture,
+            scale: 1.0,
+            gltf: false,
+            inner: Box::new(inner),
+        })
     }
 
     fn twosided_inner(&mut self, v: &ObjectView<'e>) -> Result<BsdfDesc> {
@@ -1059,12 +1251,21 @@ fn medium(el: &Element) -> Result<MediumDesc> {
             "a phase function or nested object in a medium is not yet supported (not yet implemented): media here only absorb",
         ));
     }
-    let sigma_t = v.spectrum("sigma_t")?.unwrap_or(SpectrumDesc::Constant(1.0));
+    let sigma_t = v
+        .spectrum("sigma_t")?
+        .unwrap_or(SpectrumDesc::Constant(1.0));
     let scale = v.float("scale")?.unwrap_or(1.0);
     if !(scale.is_finite() && scale >= 0.0) {
-        return Err(v.prop_error("scale", format!("scale must be finite and >= 0, got {scale}")));
+        return Err(v.prop_error(
+            "scale",
+            format!("scale must be finite and >= 0, got {scale}"),
+        ));
     }
-    if sigma_t.values().iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
+    if sigma_t
+        .values()
+        .iter()
+        .any(|x| !(x.is_finite() && *x >= 0.0))
+    {
         return Err(v.prop_error("sigma_t", "sigma_t must be finite and >= 0"));
     }
     let albedo = v.spectrum("albedo")?;
@@ -1086,12 +1287,20 @@ fn medium(el: &Element) -> Result<MediumDesc> {
     let sigma_t = match sigma_t {
         SpectrumDesc::Constant(c) => SpectrumDesc::Constant(c * scale),
         SpectrumDesc::Rgb(c) => SpectrumDesc::Rgb(c.map(|x| x * scale)),
-        SpectrumDesc::Tabulated(p) => SpectrumDesc::Tabulated(std::sync::Arc::new(p.iter().map(|&(w, x)| (w, x * scale)).collect())),
+        SpectrumDesc::Tabulated(p) => SpectrumDesc::Tabulated(std::sync::Arc::new(
+            p.iter().map(|&(w, x)| (w, x * scale)).collect(),
+        )),
         s @ (SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. }) => {
-            return Err(v.prop_error("sigma_t", format!("sigma_t cannot be an emission spectrum ({})", s.form_name())));
+            return Err(v.prop_error(
+                "sigma_t",
+                format!("sigma_t cannot be an emission spectrum ({})", s.form_name()),
+            ));
         }
     };
-    Ok(MediumDesc { loc: el.loc.clone(), sigma_t })
+    Ok(MediumDesc {
+        loc: el.loc.clone(),
+        sigma_t,
+    })
 }
 
 /// `radiosity` (project extension): `patch_size` (float, scene units), `rays_per_patch`,

@@ -25,7 +25,14 @@ pub struct SourceLoc {
 
 impl fmt::Display for SourceLoc {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}:{}:{}: <{}>", self.file.display(), self.line, self.col, self.element)
+        write!(
+            f,
+            "{}:{}:{}: <{}>",
+            self.file.display(),
+            self.line,
+            self.col,
+            self.element
+        )
     }
 }
 
@@ -383,7 +390,12 @@ pub enum SpectrumDesc {
 impl SpectrumDesc {
     /// Whether the value depends on wavelength in a way RGB cannot represent exactly.
     pub fn is_spectral(&self) -> bool {
-        matches!(self, SpectrumDesc::Tabulated(_) | SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. })
+        matches!(
+            self,
+            SpectrumDesc::Tabulated(_)
+                | SpectrumDesc::Blackbody { .. }
+                | SpectrumDesc::Illuminant { .. }
+        )
     }
 
     /// How `pt info` names a wavelength-dependent form: `tabulated`, `blackbody`, `CIE F11`, ...
@@ -400,7 +412,10 @@ impl SpectrumDesc {
     /// Whether this is an emission-only form (blackbody, named illuminant), which makes no
     /// sense as a reflectance.
     pub fn is_emission_only(&self) -> bool {
-        matches!(self, SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. })
+        matches!(
+            self,
+            SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. }
+        )
     }
 
     /// Every number in it (channels, tabulated values, an illuminant's scale; none for a
@@ -422,39 +437,86 @@ impl SceneDesc {
     pub fn spectral_reason(&self) -> Option<String> {
         fn bsdf_spectra(k: &BsdfKind) -> Vec<&SpectrumDesc> {
             match k {
-                BsdfKind::Diffuse { reflectance } | BsdfKind::OrenNayar { reflectance, .. } | BsdfKind::Minnaert { reflectance, .. } => vec![reflectance],
-                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } | BsdfKind::OpacityTexture { inner, .. } => bsdf_spectra(&inner.kind),
-                BsdfKind::Conductor { eta, k, specular_reflectance } | BsdfKind::RoughConductor { eta, k, specular_reflectance, .. } => {
+                BsdfKind::Diffuse { reflectance }
+                | BsdfKind::OrenNayar { reflectance, .. }
+                | BsdfKind::Minnaert { reflectance, .. } => vec![reflectance],
+                BsdfKind::TwoSided { inner }
+                | BsdfKind::Mask { inner, .. }
+                | BsdfKind::NormalMap { inner, .. }
+                | BsdfKind::FilmThicknessTexture { inner, .. }
+                | BsdfKind::OpacityTexture { inner, .. } => bsdf_spectra(&inner.kind),
+                BsdfKind::Conductor {
+                    eta,
+                    k,
+                    specular_reflectance,
+                }
+                | BsdfKind::RoughConductor {
+                    eta,
+                    k,
+                    specular_reflectance,
+                    ..
+                } => {
                     vec![eta, k, specular_reflectance]
                 }
-                BsdfKind::Dielectric { .. } | BsdfKind::ThinDielectric { .. } | BsdfKind::RoughDielectric { .. } => vec![],
-                BsdfKind::ThinFilm { eta, k, .. } | BsdfKind::RoughThinFilm { eta, k, .. } => vec![eta, k],
+                BsdfKind::Dielectric { .. }
+                | BsdfKind::ThinDielectric { .. }
+                | BsdfKind::RoughDielectric { .. } => vec![],
+                BsdfKind::ThinFilm { eta, k, .. } | BsdfKind::RoughThinFilm { eta, k, .. } => {
+                    vec![eta, k]
+                }
                 BsdfKind::GltfPbr { base_color, .. } => vec![base_color],
-                BsdfKind::RoughPlastic { diffuse_reflectance, specular_reflectance, .. } => vec![diffuse_reflectance, specular_reflectance],
-                BsdfKind::Fluorescent { reflectance, absorption, emission, .. } => vec![reflectance, absorption, emission],
-                BsdfKind::Blend { first, second, .. } => bsdf_spectra(&first.kind).into_iter().chain(bsdf_spectra(&second.kind)).collect(),
+                BsdfKind::RoughPlastic {
+                    diffuse_reflectance,
+                    specular_reflectance,
+                    ..
+                } => vec![diffuse_reflectance, specular_reflectance],
+                BsdfKind::Fluorescent {
+                    reflectance,
+                    absorption,
+                    emission,
+                    ..
+                } => vec![reflectance, absorption, emission],
+                BsdfKind::Blend { first, second, .. } => bsdf_spectra(&first.kind)
+                    .into_iter()
+                    .chain(bsdf_spectra(&second.kind))
+                    .collect(),
                 BsdfKind::Phosphorescent { reflectance, .. } => vec![reflectance],
             }
         }
         fn has_thin_film(k: &BsdfKind) -> bool {
             match k {
                 BsdfKind::ThinFilm { .. } | BsdfKind::RoughThinFilm { .. } => true,
-                BsdfKind::Blend { first, second, .. } => has_thin_film(&first.kind) || has_thin_film(&second.kind),
-                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } | BsdfKind::OpacityTexture { inner, .. } => has_thin_film(&inner.kind),
+                BsdfKind::Blend { first, second, .. } => {
+                    has_thin_film(&first.kind) || has_thin_film(&second.kind)
+                }
+                BsdfKind::TwoSided { inner }
+                | BsdfKind::Mask { inner, .. }
+                | BsdfKind::NormalMap { inner, .. }
+                | BsdfKind::FilmThicknessTexture { inner, .. }
+                | BsdfKind::OpacityTexture { inner, .. } => has_thin_film(&inner.kind),
                 _ => false,
             }
         }
         fn is_fluorescent(k: &BsdfKind) -> bool {
             match k {
                 BsdfKind::Fluorescent { .. } => true,
-                BsdfKind::Blend { first, second, .. } => is_fluorescent(&first.kind) || is_fluorescent(&second.kind),
-                BsdfKind::TwoSided { inner } | BsdfKind::Mask { inner, .. } | BsdfKind::NormalMap { inner, .. } | BsdfKind::FilmThicknessTexture { inner, .. } | BsdfKind::OpacityTexture { inner, .. } => is_fluorescent(&inner.kind),
+                BsdfKind::Blend { first, second, .. } => {
+                    is_fluorescent(&first.kind) || is_fluorescent(&second.kind)
+                }
+                BsdfKind::TwoSided { inner }
+                | BsdfKind::Mask { inner, .. }
+                | BsdfKind::NormalMap { inner, .. }
+                | BsdfKind::FilmThicknessTexture { inner, .. }
+                | BsdfKind::OpacityTexture { inner, .. } => is_fluorescent(&inner.kind),
                 _ => false,
             }
         }
         for b in &self.bsdfs {
             if is_fluorescent(&b.kind) {
-                return Some(format!("{}: fluorescence moves light between wavelengths (RGB mode cannot express it)", b.loc));
+                return Some(format!(
+                    "{}: fluorescence moves light between wavelengths (RGB mode cannot express it)",
+                    b.loc
+                ));
             }
         }
         for b in &self.bsdfs {
@@ -470,17 +532,28 @@ impl SceneDesc {
         for s in &self.shapes {
             if let Some(e) = &s.emitter {
                 if e.radiance.is_spectral() {
-                    return Some(format!("{}: {} emission spectrum", e.loc, e.radiance.form_name()));
+                    return Some(format!(
+                        "{}: {} emission spectrum",
+                        e.loc,
+                        e.radiance.form_name()
+                    ));
                 }
                 if e.primaries.is_some() {
-                    return Some(format!("{}: display primaries (spectra driven by the radiance texture)", e.loc));
+                    return Some(format!(
+                        "{}: display primaries (spectra driven by the radiance texture)",
+                        e.loc
+                    ));
                 }
             }
         }
         for l in &self.lights {
             let spectrum = match &l.kind {
-                LightKind::Point { intensity, .. } | LightKind::Spot { intensity, .. } => Some(intensity),
-                LightKind::Directional { irradiance, .. } | LightKind::Sun { irradiance, .. } => Some(irradiance),
+                LightKind::Point { intensity, .. } | LightKind::Spot { intensity, .. } => {
+                    Some(intensity)
+                }
+                LightKind::Directional { irradiance, .. } | LightKind::Sun { irradiance, .. } => {
+                    Some(irradiance)
+                }
                 LightKind::Constant { radiance } => Some(radiance),
                 LightKind::EnvMap { .. } => None,
             };
@@ -781,7 +854,9 @@ impl std::fmt::Debug for ImageSource {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             ImageSource::File(p) => write!(f, "File({p:?})"),
-            ImageSource::Embedded { name, bytes } => write!(f, "Embedded({name}, {} bytes)", bytes.len()),
+            ImageSource::Embedded { name, bytes } => {
+                write!(f, "Embedded({name}, {} bytes)", bytes.len())
+            }
         }
     }
 }

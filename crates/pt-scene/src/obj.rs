@@ -166,7 +166,10 @@ impl Builder {
         let mut key = [NONE; 3];
         let lists = [
             (["vertex", "vertices"], self.positions.len()),
-            (["texture coordinate", "texture coordinates"], self.uvs.len()),
+            (
+                ["texture coordinate", "texture coordinates"],
+                self.uvs.len(),
+            ),
             (["normal", "normals"], self.normals.len()),
         ];
         for (n, (slot, (what, count))) in key.iter_mut().zip(lists).enumerate() {
@@ -178,7 +181,10 @@ impl Builder {
             }
         }
         if parts.next().is_some() {
-            return Err(format!("face corner '{}' has more than three indices", String::from_utf8_lossy(word)));
+            return Err(format!(
+                "face corner '{}' has more than three indices",
+                String::from_utf8_lossy(word)
+            ));
         }
         Ok(key)
     }
@@ -209,8 +215,14 @@ impl Builder {
         }
         self.vt_vn.push([vt, vn]);
         self.mesh.positions.push(self.positions[v as usize]);
-        keep_while_present(&mut self.mesh.uvs, (vt != NONE).then(|| self.uvs[vt as usize]));
-        keep_while_present(&mut self.mesh.normals, (vn != NONE).then(|| self.normals[vn as usize]));
+        keep_while_present(
+            &mut self.mesh.uvs,
+            (vt != NONE).then(|| self.uvs[vt as usize]),
+        );
+        keep_while_present(
+            &mut self.mesh.normals,
+            (vn != NONE).then(|| self.normals[vn as usize]),
+        );
         Ok(id)
     }
 }
@@ -227,34 +239,58 @@ fn keep_while_present<T>(list: &mut Option<Vec<T>>, value: Option<T>) {
 /// A face index as a 0-based position in a list of `count` entries: 1-based from the start, or
 /// negative from the end (-1 is the last entry read so far).
 /// `what` names the list, singular and plural; `corner` is the whole corner, for messages.
-fn index(text: &[u8], count: usize, what: [&str; 2], corner: &[u8]) -> std::result::Result<u32, String> {
+fn index(
+    text: &[u8],
+    count: usize,
+    what: [&str; 2],
+    corner: &[u8],
+) -> std::result::Result<u32, String> {
     let corner = || String::from_utf8_lossy(corner);
-    let parsed = std::str::from_utf8(text).ok().and_then(|t| t.parse::<i64>().ok());
+    let parsed = std::str::from_utf8(text)
+        .ok()
+        .and_then(|t| t.parse::<i64>().ok());
     let Some(i) = parsed else {
-        return Err(format!("face corner '{}': '{}' is not an index", corner(), String::from_utf8_lossy(text)));
+        return Err(format!(
+            "face corner '{}': '{}' is not an index",
+            corner(),
+            String::from_utf8_lossy(text)
+        ));
     };
     let count = count as i64;
     let resolved = if i > 0 { i - 1 } else { count + i };
     if i == 0 || !(0..count).contains(&resolved) {
         return Err(format!(
             "face corner '{}' refers to {} {i}, but {count} {} are defined before it",
-            corner(), what[0], what[1]
+            corner(),
+            what[0],
+            what[1]
         ));
     }
     // `count` came from a Vec of at most as many entries as mesh vertices allow.
-    u32::try_from(resolved).map_err(|_| format!("face corner '{}': {} index too large", corner(), what[0]))
+    u32::try_from(resolved)
+        .map_err(|_| format!("face corner '{}': {} index too large", corner(), what[0]))
 }
 
 /// A finite number, or an error naming the statement and the quantity.
 fn number(word: Option<&[u8]>, statement: &str, what: &str) -> std::result::Result<f32, String> {
     let Some(word) = word else {
-        return Err(format!("'{statement}' has too few numbers (a {what} is missing)"));
+        return Err(format!(
+            "'{statement}' has too few numbers (a {what} is missing)"
+        ));
     };
-    let value = std::str::from_utf8(word).ok().and_then(|t| t.parse::<f32>().ok());
+    let value = std::str::from_utf8(word)
+        .ok()
+        .and_then(|t| t.parse::<f32>().ok());
     match value {
         Some(x) if x.is_finite() => Ok(x),
-        Some(_) => Err(format!("{what} '{}' is not finite", String::from_utf8_lossy(word))),
-        None => Err(format!("{what} '{}' is not a number", String::from_utf8_lossy(word))),
+        Some(_) => Err(format!(
+            "{what} '{}' is not finite",
+            String::from_utf8_lossy(word)
+        )),
+        None => Err(format!(
+            "{what} '{}' is not a number",
+            String::from_utf8_lossy(word)
+        )),
     }
 }
 
@@ -276,7 +312,10 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    const SMOOTH: ObjOptions = ObjOptions { face_normals: false, flip_tex_coords: true };
+    const SMOOTH: ObjOptions = ObjOptions {
+        face_normals: false,
+        flip_tex_coords: true,
+    };
 
     fn read(text: &str, opts: &ObjOptions) -> std::result::Result<LocalMesh, ObjError> {
         read_obj(text.as_bytes(), opts)
@@ -293,16 +332,49 @@ mod tests {
     /// The same file through tobj (single-index mode, fans, one object) and merged the way this
     /// loader used to merge tobj's output: the mesh the old loader produced.
     fn read_with_tobj(text: &str, opts: &ObjOptions) -> Option<LocalMesh> {
-        let options = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true, ..Default::default() };
-        let (models, _) = tobj::load_obj_buf(&mut text.as_bytes(), &options, |_| Ok((Vec::new(), Default::default()))).ok()?;
+        let options = tobj::LoadOptions {
+            single_index: true,
+            triangulate: true,
+            ignore_points: true,
+            ignore_lines: true,
+            ..Default::default()
+        };
+        let (models, _) = tobj::load_obj_buf(&mut text.as_bytes(), &options, |_| {
+            Ok((Vec::new(), Default::default()))
+        })
+        .ok()?;
         let mut out = LocalMesh::default();
         let (mut uvs, mut normals) = (Vec::new(), Vec::new());
         for m in &models {
             let base = out.positions.len() as u32;
-            out.positions.extend(m.mesh.positions.chunks(3).map(|p| Vec3::new(p[0], p[1], p[2])));
-            uvs.extend(m.mesh.texcoords.chunks(2).map(|t| Vec2::new(t[0], if opts.flip_tex_coords { 1.0 - t[1] } else { t[1] })));
-            normals.extend(m.mesh.normals.chunks(3).map(|n| Vec3::new(n[0], n[1], n[2])));
-            out.indices.extend(m.mesh.indices.chunks(3).map(|t| [t[0] + base, t[1] + base, t[2] + base]));
+            out.positions.extend(
+                m.mesh
+                    .positions
+                    .chunks(3)
+                    .map(|p| Vec3::new(p[0], p[1], p[2])),
+            );
+            uvs.extend(m.mesh.texcoords.chunks(2).map(|t| {
+                Vec2::new(
+                    t[0],
+                    if opts.flip_tex_coords {
+                        1.0 - t[1]
+                    } else {
+                        t[1]
+                    },
+                )
+            }));
+            normals.extend(
+                m.mesh
+                    .normals
+                    .chunks(3)
+                    .map(|n| Vec3::new(n[0], n[1], n[2])),
+            );
+            out.indices.extend(
+                m.mesh
+                    .indices
+                    .chunks(3)
+                    .map(|t| [t[0] + base, t[1] + base, t[2] + base]),
+            );
         }
         let n = out.positions.len();
         out.uvs = (n > 0 && uvs.len() == n).then_some(uvs);
@@ -311,28 +383,61 @@ mod tests {
     }
 
     fn same(a: &LocalMesh, b: &LocalMesh) -> bool {
-        a.positions == b.positions && a.indices == b.indices && a.uvs == b.uvs && a.normals == b.normals
+        a.positions == b.positions
+            && a.indices == b.indices
+            && a.uvs == b.uvs
+            && a.normals == b.normals
     }
 
     #[test]
     fn corners_become_vertices_in_order_of_first_use() {
         // Positions used out of file order, an unused position, a quad as a fan, a corner
         // repeated with another uv (a seam: a second vertex), negative indices.
-        let m = read("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 5 5 5\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
-                      f 3/3 1/1 2/2\nf -5/-4 -2/-2 -1/-1\n", &SMOOTH).unwrap();
-        assert_eq!(m.positions, [Vec3::new(1.0, 1.0, 0.0), Vec3::ZERO, Vec3::X, Vec3::new(0.0, 1.0, 0.0), Vec3::new(5.0, 5.0, 5.0)]);
+        let m = read(
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 5 5 5\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n\
+                      f 3/3 1/1 2/2\nf -5/-4 -2/-2 -1/-1\n",
+            &SMOOTH,
+        )
+        .unwrap();
+        assert_eq!(
+            m.positions,
+            [
+                Vec3::new(1.0, 1.0, 0.0),
+                Vec3::ZERO,
+                Vec3::X,
+                Vec3::new(0.0, 1.0, 0.0),
+                Vec3::new(5.0, 5.0, 5.0)
+            ]
+        );
         assert_eq!(m.indices, [[0, 1, 2], [1, 3, 4]]);
         // flip_tex_coords: v' = 1 - v.
-        assert_eq!(m.uvs.unwrap(), [Vec2::new(1.0, 0.0), Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 0.0)]);
+        assert_eq!(
+            m.uvs.unwrap(),
+            [
+                Vec2::new(1.0, 0.0),
+                Vec2::new(0.0, 1.0),
+                Vec2::new(1.0, 1.0),
+                Vec2::new(1.0, 0.0),
+                Vec2::new(0.0, 0.0)
+            ]
+        );
         assert_eq!(m.normals, None);
-        let quad = read("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 2 0\nf 1 2 3 4 5\n", &SMOOTH).unwrap();
+        let quad = read(
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 2 0\nf 1 2 3 4 5\n",
+            &SMOOTH,
+        )
+        .unwrap();
         assert_eq!(quad.indices, [[0, 1, 2], [0, 2, 3], [0, 3, 4]]);
     }
 
     #[test]
     fn objects_and_groups_share_vertices() {
         // Two groups sharing an edge: one mesh of four vertices (tobj gave six, with a seam).
-        let m = read("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\no a\nf 1 2 3\ng b\nusemtl x\ns 1\nf 1 3 4\n", &SMOOTH).unwrap();
+        let m = read(
+            "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\no a\nf 1 2 3\ng b\nusemtl x\ns 1\nf 1 3 4\n",
+            &SMOOTH,
+        )
+        .unwrap();
         assert_eq!(m.positions.len(), 4);
         assert_eq!(m.indices, [[0, 1, 2], [0, 2, 3]]);
     }
@@ -342,13 +447,32 @@ mod tests {
         let text = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvt 0 0\nf 1//1 2//1 3//1\n";
         assert_eq!(read(text, &SMOOTH).unwrap().normals.unwrap(), [Vec3::Z; 3]);
         assert_eq!(read(text, &SMOOTH).unwrap().uvs, None);
-        assert_eq!(read(text, &ObjOptions { face_normals: true, ..SMOOTH }).unwrap().normals, None);
-        let partial = read("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3\n", &SMOOTH).unwrap();
+        assert_eq!(
+            read(
+                text,
+                &ObjOptions {
+                    face_normals: true,
+                    ..SMOOTH
+                }
+            )
+            .unwrap()
+            .normals,
+            None
+        );
+        let partial = read(
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3\n",
+            &SMOOTH,
+        )
+        .unwrap();
         assert_eq!((partial.normals, partial.positions.len()), (None, 3));
         let empty = read("# nothing\n\n", &SMOOTH).unwrap();
         assert!(empty.positions.is_empty() && empty.uvs.is_none() && empty.normals.is_none());
         // `vt u` alone: v = 0, flipped to 1; `v` with a weight and colours: the weight ignored.
-        let m = read("v 0 0 0 2\nv 1 0 0 0.5 0.5 0.5\nv 0 1 0\nvt 0.25\nf 1/1 2/1 3/1\n", &SMOOTH).unwrap();
+        let m = read(
+            "v 0 0 0 2\nv 1 0 0 0.5 0.5 0.5\nv 0 1 0\nvt 0.25\nf 1/1 2/1 3/1\n",
+            &SMOOTH,
+        )
+        .unwrap();
         assert_eq!(m.uvs.unwrap()[0], Vec2::new(0.25, 1.0));
         assert_eq!(m.positions[1], Vec3::X);
     }
@@ -357,7 +481,9 @@ mod tests {
     fn bad_lines_are_refused_with_their_number() {
         let tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
         assert_eq!(refused(&format!("{tri}f 1 2 4\n")).0, 4);
-        assert!(refused(&format!("{tri}f 1 2 4\n")).1.contains("vertex 4, but 3 vertices"));
+        assert!(refused(&format!("{tri}f 1 2 4\n"))
+            .1
+            .contains("vertex 4, but 3 vertices"));
         assert_eq!(refused(&format!("{tri}f 1 2 -4\n")).0, 4);
         assert_eq!(refused(&format!("{tri}f 0 1 2\n")).0, 4);
         assert_eq!(refused(&format!("{tri}f 1/1 2 3\n")).0, 4); // no vt defined
@@ -374,7 +500,11 @@ mod tests {
         // A vertex may not be used before its line (the file is read in one pass).
         assert_eq!(refused("f 1 2 3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n").0, 1);
         // Invalid UTF-8 outside numbers (a comment, a group name) is harmless.
-        assert!(read_obj(&b"# caf\xe9\ng \xff\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"[..], &SMOOTH).is_ok());
+        assert!(read_obj(
+            &b"# caf\xe9\ng \xff\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"[..],
+            &SMOOTH
+        )
+        .is_ok());
     }
 
     #[test]
@@ -387,13 +517,26 @@ mod tests {
     }
 
     /// A corner referring to earlier entries: 1-based or negative, in any of the four forms.
-    fn corner(counts: (usize, usize, usize), pick: (usize, usize, usize), form: u8, negative: bool) -> String {
-        let at = |count: usize, k: usize| if negative { format!("-{}", k % count + 1) } else { format!("{}", k % count + 1) };
+    fn corner(
+        counts: (usize, usize, usize),
+        pick: (usize, usize, usize),
+        form: u8,
+        negative: bool,
+    ) -> String {
+        let at = |count: usize, k: usize| {
+            if negative {
+                format!("-{}", k % count + 1)
+            } else {
+                format!("{}", k % count + 1)
+            }
+        };
         let v = at(counts.0, pick.0);
         match form {
             1 if counts.1 > 0 => format!("{v}/{}", at(counts.1, pick.1)),
             2 if counts.2 > 0 => format!("{v}//{}", at(counts.2, pick.2)),
-            3 if counts.1 > 0 && counts.2 > 0 => format!("{v}/{}/{}", at(counts.1, pick.1), at(counts.2, pick.2)),
+            3 if counts.1 > 0 && counts.2 > 0 => {
+                format!("{v}/{}/{}", at(counts.1, pick.1), at(counts.2, pick.2))
+            }
             _ => v,
         }
     }

@@ -289,7 +289,9 @@ impl<'e> ObjectView<'e> {
         match prop.value {
             Value::Rgb(c) => Ok(Some(SpectrumDesc::Rgb(c))),
             Value::Spectrum(v) => Ok(Some(SpectrumDesc::Constant(v))),
-            Value::SpectrumPairs(ref pairs) => Ok(Some(SpectrumDesc::Tabulated(std::sync::Arc::new(pairs.clone())))),
+            Value::SpectrumPairs(ref pairs) => Ok(Some(SpectrumDesc::Tabulated(
+                std::sync::Arc::new(pairs.clone()),
+            ))),
             Value::SpectrumPlugin(ref s) => Ok(Some(s.clone())),
             Value::Float(v) => Ok(Some(SpectrumDesc::Constant(v as f32))),
             Value::Integer(v) => Ok(Some(SpectrumDesc::Constant(v as f32))),
@@ -411,7 +413,10 @@ fn parse_spectrum(el: &Element) -> Result<Value> {
     el.check_attrs(&["name", "value", "filename"], &["name"])?;
     if let Some(name) = el.attr("filename") {
         if el.attr("value").is_some() {
-            return Err(SceneError::at(&el.loc, "give either 'value' or 'filename', not both"));
+            return Err(SceneError::at(
+                &el.loc,
+                "give either 'value' or 'filename', not both",
+            ));
         }
         return read_spectrum_file(el, name).map(Value::SpectrumPairs);
     }
@@ -419,7 +424,9 @@ fn parse_spectrum(el: &Element) -> Result<Value> {
         .attr("value")
         .ok_or_else(|| SceneError::at(&el.loc, "missing attribute 'value'"))?;
     if text.contains(':') {
-        return parse_pairs(text).map(Value::SpectrumPairs).map_err(|m| SceneError::at(&el.loc, m));
+        return parse_pairs(text)
+            .map(Value::SpectrumPairs)
+            .map_err(|m| SceneError::at(&el.loc, m));
     }
     match parse_floats(text).map_err(|m| SceneError::at(&el.loc, m))?[..] {
         [v] => Ok(Value::Spectrum(v)),
@@ -438,7 +445,13 @@ fn parse_spectrum(el: &Element) -> Result<Value> {
 fn read_spectrum_file(el: &Element, name: &str) -> Result<Vec<(f32, f32)>> {
     let path = crate::xml::resolve_file(name, &el.dir, &[], &[]);
     let text = std::fs::read_to_string(&path).map_err(|e| {
-        SceneError::at(&el.loc, format!("cannot read spectrum file '{name}' ({}): {e}", path.display()))
+        SceneError::at(
+            &el.loc,
+            format!(
+                "cannot read spectrum file '{name}' ({}): {e}",
+                path.display()
+            ),
+        )
     })?;
     let mut pairs: Vec<(f32, f32)> = Vec::new();
     for (i, line) in text.lines().enumerate() {
@@ -446,7 +459,12 @@ fn read_spectrum_file(el: &Element, name: &str) -> Result<Vec<(f32, f32)>> {
         if data.is_empty() {
             continue;
         }
-        let at = |m: String| SceneError::at(&el.loc, format!("spectrum file '{}', line {}: {m}", path.display(), i + 1));
+        let at = |m: String| {
+            SceneError::at(
+                &el.loc,
+                format!("spectrum file '{}', line {}: {m}", path.display(), i + 1),
+            )
+        };
         let nums = parse_floats(data).map_err(at)?;
         let [l, v] = nums[..] else {
             return Err(at(format!("expected 'wavelength value', got '{data}'")));
@@ -456,7 +474,9 @@ fn read_spectrum_file(el: &Element, name: &str) -> Result<Vec<(f32, f32)>> {
         }
         if let Some(&(prev, _)) = pairs.last() {
             if l <= prev {
-                return Err(at(format!("wavelengths must increase: {l} nm after {prev} nm")));
+                return Err(at(format!(
+                    "wavelengths must increase: {l} nm after {prev} nm"
+                )));
             }
         }
         pairs.push((l, v));
@@ -464,7 +484,11 @@ fn read_spectrum_file(el: &Element, name: &str) -> Result<Vec<(f32, f32)>> {
     if pairs.len() < 2 {
         return Err(SceneError::at(
             &el.loc,
-            format!("spectrum file '{}' has {} wavelength/value pairs; at least two are needed", path.display(), pairs.len()),
+            format!(
+                "spectrum file '{}' has {} wavelength/value pairs; at least two are needed",
+                path.display(),
+                pairs.len()
+            ),
         ));
     }
     Ok(pairs)
@@ -489,32 +513,59 @@ fn parse_spectrum_plugin(el: &Element) -> Result<SpectrumDesc> {
         let slot = match (plugin.as_str(), pname) {
             ("blackbody", "temperature") => &mut temperature,
             (p, "scale") if p != "blackbody" => &mut scale,
-            _ => {
-                return Err(SceneError::at(
-                    &c.loc,
-                    format!("unused property '{pname}': spectrum \"{plugin}\" does not have this parameter"),
-                ))
-            }
+            _ => return Err(SceneError::at(
+                &c.loc,
+                format!(
+                    "unused property '{pname}': spectrum \"{plugin}\" does not have this parameter"
+                ),
+            )),
         };
         if c.tag != "float" && c.tag != "integer" {
-            return Err(SceneError::at(&c.loc, format!("property '{pname}' must be a float, not {}", c.tag)));
+            return Err(SceneError::at(
+                &c.loc,
+                format!("property '{pname}' must be a float, not {}", c.tag),
+            ));
         }
         if slot.is_some() {
-            return Err(SceneError::at(&c.loc, format!("property '{pname}' is given twice")));
+            return Err(SceneError::at(
+                &c.loc,
+                format!("property '{pname}' is given twice"),
+            ));
         }
-        *slot = Some(parse_f32(c.attr("value").unwrap_or_default()).map_err(|m| SceneError::at(&c.loc, m))?);
+        *slot = Some(
+            parse_f32(c.attr("value").unwrap_or_default())
+                .map_err(|m| SceneError::at(&c.loc, m))?,
+        );
     }
     match plugin.as_str() {
         "blackbody" => {
-            let t = temperature.ok_or_else(|| SceneError::at(&el.loc, "spectrum \"blackbody\" needs <float name=\"temperature\"> (K)"))?;
+            let t = temperature.ok_or_else(|| {
+                SceneError::at(
+                    &el.loc,
+                    "spectrum \"blackbody\" needs <float name=\"temperature\"> (K)",
+                )
+            })?;
             if !(t > 0.0) {
-                return Err(SceneError::at(&el.loc, format!("blackbody temperature must be positive, got {t} K")));
+                return Err(SceneError::at(
+                    &el.loc,
+                    format!("blackbody temperature must be positive, got {t} K"),
+                ));
             }
             Ok(SpectrumDesc::Blackbody { temperature: t })
         }
-        "d65" | "a" => Ok(SpectrumDesc::Illuminant { name: plugin, scale: checked_scale(el, scale)? }),
-        p if p.strip_prefix('f').and_then(|k| k.parse::<u8>().ok()).is_some_and(|k| (1..=12).contains(&k) && p == format!("f{k}")) => {
-            Ok(SpectrumDesc::Illuminant { name: plugin, scale: checked_scale(el, scale)? })
+        "d65" | "a" => Ok(SpectrumDesc::Illuminant {
+            name: plugin,
+            scale: checked_scale(el, scale)?,
+        }),
+        p if p
+            .strip_prefix('f')
+            .and_then(|k| k.parse::<u8>().ok())
+            .is_some_and(|k| (1..=12).contains(&k) && p == format!("f{k}")) =>
+        {
+            Ok(SpectrumDesc::Illuminant {
+                name: plugin,
+                scale: checked_scale(el, scale)?,
+            })
         }
         _ => Err(SceneError::at(
             &el.loc,
@@ -527,7 +578,10 @@ fn parse_spectrum_plugin(el: &Element) -> Result<SpectrumDesc> {
 fn checked_scale(el: &Element, scale: Option<f32>) -> Result<f32> {
     let s = scale.unwrap_or(1.0);
     if !(s >= 0.0) {
-        return Err(SceneError::at(&el.loc, format!("illuminant scale must not be negative, got {s}")));
+        return Err(SceneError::at(
+            &el.loc,
+            format!("illuminant scale must not be negative, got {s}"),
+        ));
     }
     Ok(s)
 }
@@ -537,7 +591,9 @@ fn checked_scale(el: &Element, scale: Option<f32>) -> Result<f32> {
 fn parse_pairs(text: &str) -> std::result::Result<Vec<(f32, f32)>, String> {
     let mut pairs = Vec::new();
     for item in text.split(',').map(str::trim).filter(|t| !t.is_empty()) {
-        let (l, v) = item.split_once(':').ok_or_else(|| format!("expected wavelength:value, got '{item}'"))?;
+        let (l, v) = item
+            .split_once(':')
+            .ok_or_else(|| format!("expected wavelength:value, got '{item}'"))?;
         let (l, v) = (parse_f32(l)?, parse_f32(v)?);
         if !(l > 0.0) {
             return Err(format!("wavelength {l} nm must be positive"));
@@ -550,7 +606,9 @@ fn parse_pairs(text: &str) -> std::result::Result<Vec<(f32, f32)>, String> {
         pairs.push((l, v));
     }
     if pairs.len() < 2 {
-        return Err(format!("a tabulated spectrum needs at least two wavelength:value pairs, got '{text}'"));
+        return Err(format!(
+            "a tabulated spectrum needs at least two wavelength:value pairs, got '{text}'"
+        ));
     }
     Ok(pairs)
 }

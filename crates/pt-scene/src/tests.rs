@@ -432,10 +432,17 @@ fn spectrum_pairs_are_tabulated_spectra() {
         "<shape type=\"cube\"><bsdf type=\"diffuse\">\n<spectrum name=\"reflectance\" value=\"400:0.1, 700:0.5\"/>\n</bsdf></shape>",
     ))
     .unwrap();
-    assert!(matches!(&s.bsdfs[0].kind, BsdfKind::Diffuse { reflectance: SpectrumDesc::Tabulated(p) } if p.as_slice() == [(400.0, 0.1), (700.0, 0.5)]));
+    assert!(
+        matches!(&s.bsdfs[0].kind, BsdfKind::Diffuse { reflectance: SpectrumDesc::Tabulated(p) } if p.as_slice() == [(400.0, 0.1), (700.0, 0.5)])
+    );
     assert!(s.spectral_reason().unwrap().contains("tabulated spectrum"));
     // Malformed pairs name the element.
-    for bad in ["400:0.1", "500:0.1, 400:0.2", "400:x, 500:1", "400:0.1; 500:0.2"] {
+    for bad in [
+        "400:0.1",
+        "500:0.1, 400:0.2",
+        "400:x, 500:1",
+        "400:0.1; 500:0.2",
+    ] {
         let e = fail(&scene(&format!(
             "<shape type=\"cube\"><bsdf type=\"diffuse\">\n<spectrum name=\"reflectance\" value=\"{bad}\"/>\n</bsdf></shape>"
         )));
@@ -454,16 +461,29 @@ fn spectrum_pairs_are_tabulated_spectra() {
 fn spectrum_files_blackbody_and_named_illuminants() {
     // A file of pairs, relative to the XML file, with comments, blank lines and commas.
     let dir = temp_dir("spectrum-file");
-    std::fs::write(dir.join("refl.spd"), "# wavelength value\n400 0.25\n\n550, 0.5  # mid\n700\t0.75\n").unwrap();
+    std::fs::write(
+        dir.join("refl.spd"),
+        "# wavelength value\n400 0.25\n\n550, 0.5  # mid\n700\t0.75\n",
+    )
+    .unwrap();
     std::fs::write(dir.join("bad.spd"), "400 0.1\n380 0.2\n").unwrap();
     std::fs::write(dir.join("one.spd"), "400 0.1\n").unwrap();
     std::fs::write(dir.join("text.spd"), "400 0.1\n500 x\n").unwrap();
-    let body = |f: &str| scene(&format!("<shape type=\"cube\"><bsdf type=\"diffuse\">\n<spectrum name=\"reflectance\" filename=\"{f}\"/>\n</bsdf></shape>"));
+    let body = |f: &str| {
+        scene(&format!("<shape type=\"cube\"><bsdf type=\"diffuse\">\n<spectrum name=\"reflectance\" filename=\"{f}\"/>\n</bsdf></shape>"))
+    };
     std::fs::write(dir.join("ok.xml"), body("refl.spd")).unwrap();
     let s = load_file(&dir.join("ok.xml"), &[]).unwrap();
-    assert!(matches!(&s.bsdfs[0].kind, BsdfKind::Diffuse { reflectance: SpectrumDesc::Tabulated(p) } if p.as_slice() == [(400.0, 0.25), (550.0, 0.5), (700.0, 0.75)]));
+    assert!(
+        matches!(&s.bsdfs[0].kind, BsdfKind::Diffuse { reflectance: SpectrumDesc::Tabulated(p) } if p.as_slice() == [(400.0, 0.25), (550.0, 0.5), (700.0, 0.75)])
+    );
     // Bad files: the error names the XML element (line 3) and the data file's line.
-    for (f, text) in [("bad.spd", "line 2: wavelengths must increase"), ("one.spd", "at least two"), ("text.spd", "line 2: cannot parse 'x'"), ("missing.spd", "cannot read spectrum file")] {
+    for (f, text) in [
+        ("bad.spd", "line 2: wavelengths must increase"),
+        ("one.spd", "at least two"),
+        ("text.spd", "line 2: cannot parse 'x'"),
+        ("missing.spd", "cannot read spectrum file"),
+    ] {
         std::fs::write(dir.join("bad.xml"), body(f)).unwrap();
         let e = load_file(&dir.join("bad.xml"), &[]).expect_err(f);
         assert_eq!(e.loc.as_ref().unwrap().line, 3, "{f}: {e}");
@@ -471,19 +491,62 @@ fn spectrum_files_blackbody_and_named_illuminants() {
     }
 
     // Blackbody and named illuminants as emitter radiance.
-    let emitter = |spec: &str| scene(&format!("<shape type=\"rectangle\"><emitter type=\"area\">\n{spec}\n</emitter></shape>"));
+    let emitter = |spec: &str| {
+        scene(&format!(
+            "<shape type=\"rectangle\"><emitter type=\"area\">\n{spec}\n</emitter></shape>"
+        ))
+    };
     let radiance = |s: &SceneDesc| s.shapes[0].emitter.as_ref().unwrap().radiance.clone();
     let s = load(&emitter("<spectrum type=\"blackbody\" name=\"radiance\"><float name=\"temperature\" value=\"2500\"/></spectrum>")).unwrap();
-    assert_eq!(radiance(&s), SpectrumDesc::Blackbody { temperature: 2500.0 });
-    assert!(s.spectral_reason().unwrap().contains("blackbody (2500 K) emission spectrum"), "{:?}", s.spectral_reason());
-    let s = load(&emitter("<spectrum type=\"d65\" name=\"radiance\"><float name=\"scale\" value=\"3\"/></spectrum>")).unwrap();
-    assert_eq!(radiance(&s), SpectrumDesc::Illuminant { name: "d65".into(), scale: 3.0 });
+    assert_eq!(
+        radiance(&s),
+        SpectrumDesc::Blackbody {
+            temperature: 2500.0
+        }
+    );
+    assert!(
+        s.spectral_reason()
+            .unwrap()
+            .contains("blackbody (2500 K) emission spectrum"),
+        "{:?}",
+        s.spectral_reason()
+    );
+    let s = load(&emitter(
+        "<spectrum type=\"d65\" name=\"radiance\"><float name=\"scale\" value=\"3\"/></spectrum>",
+    ))
+    .unwrap();
+    assert_eq!(
+        radiance(&s),
+        SpectrumDesc::Illuminant {
+            name: "d65".into(),
+            scale: 3.0
+        }
+    );
     let s = load(&emitter("<spectrum type=\"d65\" name=\"radiance\"/>")).unwrap();
-    assert_eq!(radiance(&s), SpectrumDesc::Illuminant { name: "d65".into(), scale: 1.0 });
+    assert_eq!(
+        radiance(&s),
+        SpectrumDesc::Illuminant {
+            name: "d65".into(),
+            scale: 1.0
+        }
+    );
     for (t, name) in [("A", "a"), ("f1", "f1"), ("F11", "f11"), ("f12", "f12")] {
-        let s = load(&emitter(&format!("<spectrum type=\"{t}\" name=\"radiance\"/>"))).unwrap();
-        assert_eq!(radiance(&s), SpectrumDesc::Illuminant { name: name.into(), scale: 1.0 }, "{t}");
-        assert!(s.spectral_reason().unwrap().contains(&format!("CIE {}", name.to_uppercase())));
+        let s = load(&emitter(&format!(
+            "<spectrum type=\"{t}\" name=\"radiance\"/>"
+        )))
+        .unwrap();
+        assert_eq!(
+            radiance(&s),
+            SpectrumDesc::Illuminant {
+                name: name.into(),
+                scale: 1.0
+            },
+            "{t}"
+        );
+        assert!(s
+            .spectral_reason()
+            .unwrap()
+            .contains(&format!("CIE {}", name.to_uppercase())));
     }
     // Errors at the element at fault (line 3 is the <spectrum>, line 4 its child).
     for (spec, line, text) in [
@@ -560,8 +623,16 @@ fn malformed_obj_is_an_error_at_the_shape() {
             "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n",
             "line 4: face corner '9' refers to vertex 9, but 3 vertices are defined before it",
         ),
-        ("nan.obj", "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n", "line 2: position 'nan' is not finite"),
-        ("junk.obj", "v 0 zero 0\nf 1 2 3\n", "line 1: position 'zero' is not a number"),
+        (
+            "nan.obj",
+            "v 0 0 0\nv 1 nan 0\nv 0 1 0\nf 1 2 3\n",
+            "line 2: position 'nan' is not finite",
+        ),
+        (
+            "junk.obj",
+            "v 0 zero 0\nf 1 2 3\n",
+            "line 1: position 'zero' is not a number",
+        ),
         (
             "huge.obj",
             "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/9999999999999999999 2/1 3/1\n",
@@ -712,7 +783,9 @@ fn emitters_without_bsdf_get_a_black_default() {
     assert_eq!(s.bsdfs.len(), 2);
     assert_eq!(s.shapes[0].bsdf, s.shapes[2].bsdf);
     let r = |i: usize| match s.bsdfs[s.shapes[i].bsdf].kind {
-        BsdfKind::Diffuse { reflectance: SpectrumDesc::Constant(r) } => r,
+        BsdfKind::Diffuse {
+            reflectance: SpectrumDesc::Constant(r),
+        } => r,
         ref k => panic!("unexpected {k:?}"),
     };
     assert_eq!((r(0), r(1)), (0.0, 0.5));
@@ -1065,16 +1138,36 @@ fn emitters_outside_shapes() {
     )
     .unwrap();
     assert_eq!(s.lights.len(), 5);
-    assert!(matches!(s.lights[0].kind, LightKind::Point { position, .. } if position == Vec3::new(1.0, 2.0, 3.0)));
-    assert!(matches!(s.lights[1].kind, LightKind::Spot { cutoff_deg, beam_width_deg, .. } if cutoff_deg == 30.0 && beam_width_deg == 22.5));
-    assert!(matches!(s.lights[2].kind, LightKind::Directional { direction, .. } if direction == Vec3::new(0.0, -1.0, 0.0)));
-    assert!(matches!(s.lights[3].kind, LightKind::Sun { angular_diameter_deg, .. } if angular_diameter_deg == 0.5338));
+    assert!(
+        matches!(s.lights[0].kind, LightKind::Point { position, .. } if position == Vec3::new(1.0, 2.0, 3.0))
+    );
+    assert!(
+        matches!(s.lights[1].kind, LightKind::Spot { cutoff_deg, beam_width_deg, .. } if cutoff_deg == 30.0 && beam_width_deg == 22.5)
+    );
+    assert!(
+        matches!(s.lights[2].kind, LightKind::Directional { direction, .. } if direction == Vec3::new(0.0, -1.0, 0.0))
+    );
+    assert!(
+        matches!(s.lights[3].kind, LightKind::Sun { angular_diameter_deg, .. } if angular_diameter_deg == 0.5338)
+    );
     // Bad values name the property.
     for (body, what) in [
-        (r#"<emitter type="spot"><float name="beam_width" value="30"/></emitter>"#, "beam_width"),
-        (r#"<emitter type="point"><rgb name="intensity" value="-1"/></emitter>"#, "intensity"),
-        (r#"<emitter type="envmap"><string name="filename" value="nope.exr"/></emitter>"#, "nope.exr"),
-        (r#"<emitter type="directional"><vector name="direction" value="0, 0, 0"/></emitter>"#, "direction"),
+        (
+            r#"<emitter type="spot"><float name="beam_width" value="30"/></emitter>"#,
+            "beam_width",
+        ),
+        (
+            r#"<emitter type="point"><rgb name="intensity" value="-1"/></emitter>"#,
+            "intensity",
+        ),
+        (
+            r#"<emitter type="envmap"><string name="filename" value="nope.exr"/></emitter>"#,
+            "nope.exr",
+        ),
+        (
+            r#"<emitter type="directional"><vector name="direction" value="0, 0, 0"/></emitter>"#,
+            "direction",
+        ),
     ] {
         let e = fail(&scene(body));
         assert!(e.to_string().contains(what), "{body}: {e}");
@@ -1092,18 +1185,43 @@ fn physical_bsdfs_with_mitsuba_defaults_and_names() {
 <shape type="cube"><ref id="on"/></shape>"#,
     ))
     .unwrap();
-    assert!(matches!(s.bsdfs[0].kind, BsdfKind::Dielectric { int_ior, ext_ior } if int_ior == 1.333 && ext_ior == 1.000277));
-    assert!(matches!(&s.bsdfs[1].kind, BsdfKind::RoughConductor { distribution, alpha_u, alpha_v, .. }
-        if distribution == "beckmann" && *alpha_u == 0.1 && *alpha_v == 0.3));
+    assert!(
+        matches!(s.bsdfs[0].kind, BsdfKind::Dielectric { int_ior, ext_ior } if int_ior == 1.333 && ext_ior == 1.000277)
+    );
+    assert!(
+        matches!(&s.bsdfs[1].kind, BsdfKind::RoughConductor { distribution, alpha_u, alpha_v, .. }
+        if distribution == "beckmann" && *alpha_u == 0.1 && *alpha_v == 0.3)
+    );
     assert!(matches!(&s.bsdfs[2].kind, BsdfKind::OrenNayar { variant, .. } if variant == "eon"));
     for (body, what) in [
-        (r#"<shape type="cube"><bsdf type="conductor"><string name="material" value="Unobtainium"/></bsdf></shape>"#, "Unobtainium"),
-        (r#"<shape type="cube"><bsdf type="dielectric"><string name="int_ior" value="glas"/></bsdf></shape>"#, "glas"),
-        (r#"<shape type="cube"><bsdf type="roughconductor"><float name="alpha" value="0"/></bsdf></shape>"#, "roughness"),
-        (r#"<shape type="cube"><bsdf type="roughconductor"><string name="distribution" value="phong"/></bsdf></shape>"#, "phong"),
-        (r#"<shape type="cube"><bsdf type="orennayar"><string name="variant" value="nope"/></bsdf></shape>"#, "nope"),
-        (r#"<shape type="cube"><bsdf type="minnaert"><float name="k" value="-1"/></bsdf></shape>"#, "k must be positive"),
-        (r#"<shape type="cube"><bsdf type="orennayar"><float name="reflectance" value="1.5"/></bsdf></shape>"#, "in [0, 1]"),
+        (
+            r#"<shape type="cube"><bsdf type="conductor"><string name="material" value="Unobtainium"/></bsdf></shape>"#,
+            "Unobtainium",
+        ),
+        (
+            r#"<shape type="cube"><bsdf type="dielectric"><string name="int_ior" value="glas"/></bsdf></shape>"#,
+            "glas",
+        ),
+        (
+            r#"<shape type="cube"><bsdf type="roughconductor"><float name="alpha" value="0"/></bsdf></shape>"#,
+            "roughness",
+        ),
+        (
+            r#"<shape type="cube"><bsdf type="roughconductor"><string name="distribution" value="phong"/></bsdf></shape>"#,
+            "phong",
+        ),
+        (
+            r#"<shape type="cube"><bsdf type="orennayar"><string name="variant" value="nope"/></bsdf></shape>"#,
+            "nope",
+        ),
+        (
+            r#"<shape type="cube"><bsdf type="minnaert"><float name="k" value="-1"/></bsdf></shape>"#,
+            "k must be positive",
+        ),
+        (
+            r#"<shape type="cube"><bsdf type="orennayar"><float name="reflectance" value="1.5"/></bsdf></shape>"#,
+            "in [0, 1]",
+        ),
     ] {
         let e = fail(&scene(body));
         assert!(e.to_string().contains(what), "{body}: {e}");
@@ -1122,25 +1240,52 @@ fn interior_medium_inline_and_by_reference_with_scale() {
 <shape type="sphere"/>"#))
     .unwrap();
     assert_eq!(s.integrator.kind, IntegratorKind::VolPath);
-    assert_eq!(s.shapes[0].interior.as_ref().unwrap().sigma_t, SpectrumDesc::Rgb([1.0, 0.5, 2.0]));
-    assert_eq!(s.shapes[1].interior.as_ref().unwrap().sigma_t, SpectrumDesc::Constant(3.0));
+    assert_eq!(
+        s.shapes[0].interior.as_ref().unwrap().sigma_t,
+        SpectrumDesc::Rgb([1.0, 0.5, 2.0])
+    );
+    assert_eq!(
+        s.shapes[1].interior.as_ref().unwrap().sigma_t,
+        SpectrumDesc::Constant(3.0)
+    );
     assert!(s.shapes[2].interior.is_none());
 }
 
 #[test]
 fn scattering_exterior_and_nameless_media_are_clear_errors() {
-    let e = fail(&scene(r#"<shape type="sphere"><medium type="homogeneous" name="interior"/></shape>"#));
-    assert_error(&e, 2, "medium type=\"homogeneous\"", "without 'albedo' scatters");
-    let e = fail(&scene(r#"<shape type="sphere"><medium type="homogeneous" name="interior"><float name="albedo" value="0.5"/></medium></shape>"#));
+    let e = fail(&scene(
+        r#"<shape type="sphere"><medium type="homogeneous" name="interior"/></shape>"#,
+    ));
+    assert_error(
+        &e,
+        2,
+        "medium type=\"homogeneous\"",
+        "without 'albedo' scatters",
+    );
+    let e = fail(&scene(
+        r#"<shape type="sphere"><medium type="homogeneous" name="interior"><float name="albedo" value="0.5"/></medium></shape>"#,
+    ));
     assert_error(&e, 2, "float name=\"albedo\"", "scattering media");
-    let e = fail(&scene(r#"<shape type="sphere"><medium type="homogeneous" name="exterior"><float name="albedo" value="0"/></medium></shape>"#));
+    let e = fail(&scene(
+        r#"<shape type="sphere"><medium type="homogeneous" name="exterior"><float name="albedo" value="0"/></medium></shape>"#,
+    ));
     assert!(e.message.contains("exterior media"), "{e}");
-    let e = fail(&scene(r#"<shape type="sphere"><medium type="homogeneous"><float name="albedo" value="0"/></medium></shape>"#));
+    let e = fail(&scene(
+        r#"<shape type="sphere"><medium type="homogeneous"><float name="albedo" value="0"/></medium></shape>"#,
+    ));
     assert!(e.message.contains("name=\"interior\""), "{e}");
-    let e = fail(&scene(r#"<shape type="sphere"><medium type="homogeneous" name="interior"><float name="albedo" value="0"/><float name="sigma_t" value="-1"/></medium></shape>"#));
+    let e = fail(&scene(
+        r#"<shape type="sphere"><medium type="homogeneous" name="interior"><float name="albedo" value="0"/><float name="sigma_t" value="-1"/></medium></shape>"#,
+    ));
     assert!(e.message.contains("sigma_t"), "{e}");
-    let e = fail(&scene(r#"<shape type="sphere"><medium type="heterogeneous" name="interior"/></shape>"#));
-    assert!(e.message.contains("unsupported plugin medium \"heterogeneous\""), "{e}");
+    let e = fail(&scene(
+        r#"<shape type="sphere"><medium type="heterogeneous" name="interior"/></shape>"#,
+    ));
+    assert!(
+        e.message
+            .contains("unsupported plugin medium \"heterogeneous\""),
+        "{e}"
+    );
 }
 
 #[test]
@@ -1153,9 +1298,13 @@ fn mask_wraps_one_bsdf_with_opacity_in_unit_range() {
         }
         k => panic!("expected a mask, got {k:?}"),
     }
-    let e = fail(&scene(r#"<shape type="sphere"><bsdf type="mask"><float name="opacity" value="1.5"/><bsdf type="diffuse"/></bsdf></shape>"#));
+    let e = fail(&scene(
+        r#"<shape type="sphere"><bsdf type="mask"><float name="opacity" value="1.5"/><bsdf type="diffuse"/></bsdf></shape>"#,
+    ));
     assert!(e.message.contains("opacity must be in [0, 1]"), "{e}");
-    let e = fail(&scene(r#"<shape type="sphere"><bsdf type="mask"/></shape>"#));
+    let e = fail(&scene(
+        r#"<shape type="sphere"><bsdf type="mask"/></shape>"#,
+    ));
     assert!(e.message.contains("mask needs one nested <bsdf>"), "{e}");
 }
 
@@ -1166,7 +1315,9 @@ fn emitter_bitmap_in_d65_and_display_primaries() {
     std::fs::write(dir.join("img.png"), b"not decoded here").unwrap();
     std::fs::write(dir.join("p.spd"), "400 0.1\n700 0.2\n").unwrap();
     let area = |inner: &str| {
-        scene(&format!("<shape type=\"rectangle\">\n<emitter type=\"area\">\n{inner}\n</emitter></shape>"))
+        scene(&format!(
+            "<shape type=\"rectangle\">\n<emitter type=\"area\">\n{inner}\n</emitter></shape>"
+        ))
     };
     let bitmap = r#"<texture type="bitmap" name="nested"><string name="filename" value="img.png"/></texture>"#;
     let load_in = |xml: String| {
@@ -1174,29 +1325,68 @@ fn emitter_bitmap_in_d65_and_display_primaries() {
         load_file(&dir.join("s.xml"), &[])
     };
     // Mitsuba's d65 texture around a bitmap: the same image, no primaries; RGB mode suffices.
-    let s = load_in(area(&format!(r#"<texture type="d65" name="radiance">{bitmap}</texture>"#))).unwrap();
+    let s = load_in(area(&format!(
+        r#"<texture type="d65" name="radiance">{bitmap}</texture>"#
+    )))
+    .unwrap();
     let em = s.shapes[0].emitter.as_ref().unwrap();
     assert!(em.texture.as_ref().unwrap().filename.ends_with("img.png") && em.primaries.is_none());
     assert!(s.spectral_reason().is_none());
     // Display primaries: three spectra, which make the scene spectral.
     let tex = r#"<texture type="bitmap" name="radiance"><string name="filename" value="img.png"/></texture>"#;
-    let prim = |names: &[&str]| names.iter().map(|n| format!(r#"<spectrum name="{n}" filename="p.spd"/>"#)).collect::<String>();
-    let s = load_in(area(&format!("{tex}{}", prim(&["primary_r", "primary_g", "primary_b"])))).unwrap();
-    let p = s.shapes[0].emitter.as_ref().unwrap().primaries.as_ref().expect("primaries");
-    assert!(p.iter().all(|s| matches!(s, SpectrumDesc::Tabulated(t) if t.as_slice() == [(400.0, 0.1), (700.0, 0.2)])));
-    assert!(s.spectral_reason().unwrap().contains("display primaries"), "{:?}", s.spectral_reason());
+    let prim = |names: &[&str]| {
+        names
+            .iter()
+            .map(|n| format!(r#"<spectrum name="{n}" filename="p.spd"/>"#))
+            .collect::<String>()
+    };
+    let s = load_in(area(&format!(
+        "{tex}{}",
+        prim(&["primary_r", "primary_g", "primary_b"])
+    )))
+    .unwrap();
+    let p = s.shapes[0]
+        .emitter
+        .as_ref()
+        .unwrap()
+        .primaries
+        .as_ref()
+        .expect("primaries");
+    assert!(p.iter().all(
+        |s| matches!(s, SpectrumDesc::Tabulated(t) if t.as_slice() == [(400.0, 0.1), (700.0, 0.2)])
+    ));
+    assert!(
+        s.spectral_reason().unwrap().contains("display primaries"),
+        "{:?}",
+        s.spectral_reason()
+    );
     // Errors: a missing primary, primaries without an image, an RGB primary, d65 without or
     // with two images, a d65 colour.
     let e = load_in(area(&format!("{tex}{}", prim(&["primary_r", "primary_b"])))).unwrap_err();
     assert!(e.message.contains("primary_g is missing"), "{e}");
     let e = load_in(area(&prim(&["primary_r", "primary_g", "primary_b"]))).unwrap_err();
     assert!(e.message.contains("need a radiance texture"), "{e}");
-    let e = load_in(area(&format!(r#"{tex}<rgb name="primary_r" value="1, 0, 0"/>{}"#, prim(&["primary_g", "primary_b"])))).unwrap_err();
+    let e = load_in(area(&format!(
+        r#"{tex}<rgb name="primary_r" value="1, 0, 0"/>{}"#,
+        prim(&["primary_g", "primary_b"])
+    )))
+    .unwrap_err();
     assert!(e.message.contains("primary_r must be a spectrum"), "{e}");
     let e = load_in(area(r#"<texture type="d65" name="radiance"/>"#)).unwrap_err();
-    assert!(e.message.contains("needs a nested <texture type=\"bitmap\">"), "{e}");
-    let e = load_in(area(&format!(r#"<texture type="d65" name="radiance">{bitmap}{bitmap}</texture>"#))).unwrap_err();
-    assert!(e.message.contains("texture \"bitmap\" is not yet supported in this position"), "{e}");
+    assert!(
+        e.message
+            .contains("needs a nested <texture type=\"bitmap\">"),
+        "{e}"
+    );
+    let e = load_in(area(&format!(
+        r#"<texture type="d65" name="radiance">{bitmap}{bitmap}</texture>"#
+    )))
+    .unwrap_err();
+    assert!(
+        e.message
+            .contains("texture \"bitmap\" is not yet supported in this position"),
+        "{e}"
+    );
     let e = load_in(area(&format!(r#"<texture type="d65" name="radiance"><rgb name="color" value="1, 1, 1"/>{bitmap}</texture>"#))).unwrap_err();
     assert!(e.message.contains("unused property 'color'"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
@@ -1209,20 +1399,51 @@ fn normalmap_mask_texture_and_blend() {
     std::fs::write(dir.join("n.png"), b"not read by the loader").unwrap();
     let xml = |body: &str| format!("<scene version=\"3.0.0\">\n{body}\n</scene>\n");
     let load_in = |x: &str| load_str(x, &dir.join("test.xml"), &dir, &[]);
-    let tex = |name: &str| format!("<texture type=\"bitmap\" name=\"{name}\"><string name=\"filename\" value=\"n.png\"/><boolean name=\"raw\" value=\"true\"/></texture>");
-    let d = load_in(&xml(&format!("<shape type=\"cube\"><bsdf type=\"normalmap\">{}<bsdf type=\"diffuse\"/></bsdf></shape>", tex("normalmap")))).unwrap();
+    let tex = |name: &str| {
+        format!("<texture type=\"bitmap\" name=\"{name}\"><string name=\"filename\" value=\"n.png\"/><boolean name=\"raw\" value=\"true\"/></texture>")
+    };
+    let d = load_in(&xml(&format!(
+        "<shape type=\"cube\"><bsdf type=\"normalmap\">{}<bsdf type=\"diffuse\"/></bsdf></shape>",
+        tex("normalmap")
+    )))
+    .unwrap();
     match &d.bsdfs[0].kind {
-        BsdfKind::NormalMap { texture, scale, gltf, inner } => {
-            assert!(!texture.srgb && *scale == 1.0 && !gltf && matches!(inner.kind, BsdfKind::Diffuse { .. }));
+        BsdfKind::NormalMap {
+            texture,
+            scale,
+            gltf,
+            inner,
+        } => {
+            assert!(
+                !texture.srgb
+                    && *scale == 1.0
+                    && !gltf
+                    && matches!(inner.kind, BsdfKind::Diffuse { .. })
+            );
         }
         k => panic!("{k:?}"),
     }
-    let d = load_in(&xml(&format!("<shape type=\"cube\"><bsdf type=\"mask\">{}<bsdf type=\"diffuse\"/></bsdf></shape>", tex("opacity")))).unwrap();
-    assert!(matches!(&d.bsdfs[0].kind, BsdfKind::OpacityTexture { channel: TextureChannel::Luminance, factor, cutoff: None, .. } if *factor == 1.0));
+    let d = load_in(&xml(&format!(
+        "<shape type=\"cube\"><bsdf type=\"mask\">{}<bsdf type=\"diffuse\"/></bsdf></shape>",
+        tex("opacity")
+    )))
+    .unwrap();
+    assert!(
+        matches!(&d.bsdfs[0].kind, BsdfKind::OpacityTexture { channel: TextureChannel::Luminance, factor, cutoff: None, .. } if *factor == 1.0)
+    );
     let d = load_in(&xml("<shape type=\"cube\"><bsdf type=\"blendbsdf\"><float name=\"weight\" value=\"0.3\"/><bsdf type=\"diffuse\"/><bsdf type=\"conductor\"/></bsdf></shape>")).unwrap();
     match &d.bsdfs[0].kind {
-        BsdfKind::Blend { weight, first, second, .. } => {
-            assert!(*weight == 0.3 && matches!(first.kind, BsdfKind::Diffuse { .. }) && matches!(second.kind, BsdfKind::Conductor { .. }));
+        BsdfKind::Blend {
+            weight,
+            first,
+            second,
+            ..
+        } => {
+            assert!(
+                *weight == 0.3
+                    && matches!(first.kind, BsdfKind::Diffuse { .. })
+                    && matches!(second.kind, BsdfKind::Conductor { .. })
+            );
         }
         k => panic!("{k:?}"),
     }

@@ -34,12 +34,54 @@ const SCENE: &str = r#"<scene version="3.0.0">
 
 /// Pieces inserted by the mutation property: XML syntax, hostile numbers, references.
 const TOKENS: &[&str] = &[
-    "<", ">", "/>", "\"", "'", "=", "&", "&amp;", "<!--", "-->", "<![CDATA[", "</scene>", "</shape>", "<shape type=\"obj\">",
-    "<shape type=\"sphere\"/>", "<transform name=\"to_world\">", "<ref id=\"gold\"/>", "<ref id=\"nothere\"/>", "nan", "NaN",
-    "inf", "-inf", "1e39", "-1e39", "1e-45", "0", "-0", "-1", "4294967296", "99999999999999999999", "$r", "$", "$$",
-    " ", ",", ",,", "0x10", "\u{0}", "\u{feff}", "é", "<include filename=\"scene.xml\"/>", "<default name=\"r\" value=\"$r\"/>",
-    "<lookat origin=\"0,0,0\" target=\"0,0,0\"/>", "<scale value=\"0\"/>", "<matrix value=\"1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 0\"/>",
-    "type=\"obj\"", "name=\"filename\" value=\"mesh.obj\"", "<float name=\"radius\" value=\"-1\"/>",
+    "<",
+    ">",
+    "/>",
+    "\"",
+    "'",
+    "=",
+    "&",
+    "&amp;",
+    "<!--",
+    "-->",
+    "<![CDATA[",
+    "</scene>",
+    "</shape>",
+    "<shape type=\"obj\">",
+    "<shape type=\"sphere\"/>",
+    "<transform name=\"to_world\">",
+    "<ref id=\"gold\"/>",
+    "<ref id=\"nothere\"/>",
+    "nan",
+    "NaN",
+    "inf",
+    "-inf",
+    "1e39",
+    "-1e39",
+    "1e-45",
+    "0",
+    "-0",
+    "-1",
+    "4294967296",
+    "99999999999999999999",
+    "$r",
+    "$",
+    "$$",
+    " ",
+    ",",
+    ",,",
+    "0x10",
+    "\u{0}",
+    "\u{feff}",
+    "é",
+    "<include filename=\"scene.xml\"/>",
+    "<default name=\"r\" value=\"$r\"/>",
+    "<lookat origin=\"0,0,0\" target=\"0,0,0\"/>",
+    "<scale value=\"0\"/>",
+    "<matrix value=\"1 0 0 0 0 1 0 0 0 0 1 0 0 0 0 0\"/>",
+    "type=\"obj\"",
+    "name=\"filename\" value=\"mesh.obj\"",
+    "<float name=\"radius\" value=\"-1\"/>",
 ];
 
 fn scratch(name: &str) -> PathBuf {
@@ -54,15 +96,26 @@ fn check_usable(desc: &SceneDesc) -> Result<(), String> {
         match &s.geometry {
             Geometry::Mesh(m) => {
                 let n = m.positions.len();
-                if let Some(t) = m.indices.iter().find(|t| t.iter().any(|&i| i as usize >= n)) {
+                if let Some(t) = m
+                    .indices
+                    .iter()
+                    .find(|t| t.iter().any(|&i| i as usize >= n))
+                {
                     return Err(format!("shape {k}: index {t:?} out of {n} vertices"));
                 }
                 if m.positions.iter().any(|p| !p.is_finite()) {
                     return Err(format!("shape {k}: non-finite position"));
                 }
                 if let Some(ns) = &m.normals {
-                    if ns.len() != n || ns.iter().any(|v| !v.is_finite() || (v.length() - 1.0).abs() > 1e-3) {
-                        return Err(format!("shape {k}: {} normals for {n} vertices, or a non-unit one", ns.len()));
+                    if ns.len() != n
+                        || ns
+                            .iter()
+                            .any(|v| !v.is_finite() || (v.length() - 1.0).abs() > 1e-3)
+                    {
+                        return Err(format!(
+                            "shape {k}: {} normals for {n} vertices, or a non-unit one",
+                            ns.len()
+                        ));
                     }
                 }
                 if let Some(uv) = &m.uvs {

@@ -159,7 +159,10 @@ mod tests {
     #[test]
     fn y_integral_matches_quadrature() {
         let q = integrate_visible(|l| cmf_y(l as f32) as f64);
-        assert!((q - CIE_Y_INTEGRAL as f64).abs() < 1e-3, "{q} vs {CIE_Y_INTEGRAL}");
+        assert!(
+            (q - CIE_Y_INTEGRAL as f64).abs() < 1e-3,
+            "{q} vs {CIE_Y_INTEGRAL}"
+        );
         // The 5 nm and 1 nm piecewise-linear integrals agree to 1e-4 relative.
         assert!((CIE_Y_INTEGRAL as f64 / t::CIE_Y_INTEGRAL - 1.0).abs() < 1e-4);
         // The three CMFs have equal integrals by construction of the 1931 observer (white E).

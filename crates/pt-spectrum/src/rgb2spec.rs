@@ -88,7 +88,9 @@ impl RgbSigmoid {
         let target = DVec3::new(rgb[0] as f64, rgb[1] as f64, rgb[2] as f64);
         let c = solve(target, c0, 50, 1e-9);
         // The tolerance is checked in f32, the precision the coefficients are kept in.
-        let s = RgbSigmoid { c: [c.x as f32, c.y as f32, c.z as f32] };
+        let s = RgbSigmoid {
+            c: [c.x as f32, c.y as f32, c.z as f32],
+        };
         let (back, _) = rgb_and_jacobian(DVec3::new(s.c[0] as f64, s.c[1] as f64, s.c[2] as f64));
         if (back - target).abs().max_element() < 1e-6 {
             s
@@ -369,7 +371,11 @@ mod tests {
         let colours: Vec<[f32; 3]> = (0..n)
             .map(|k| {
                 let t = k as f32 / n as f32;
-                [0.05 + 0.9 * t, 0.5 + 0.3 * (6.0 * t).sin(), 0.9 - 0.8 * t * t]
+                [
+                    0.05 + 0.9 * t,
+                    0.5 + 0.3 * (6.0 * t).sin(),
+                    0.9 - 0.8 * t * t,
+                ]
             })
             .collect();
         let t0 = std::time::Instant::now();
@@ -387,14 +393,27 @@ mod tests {
             std::hint::black_box(RgbSigmoid::fit(c));
         }
         let cold = t1.elapsed().as_secs_f64() / 20.0;
-        eprintln!("warm fit {:.3} ms (includes the check quadrature), cold fit {:.3} ms", warm * 1e3, cold * 1e3);
+        eprintln!(
+            "warm fit {:.3} ms (includes the check quadrature), cold fit {:.3} ms",
+            warm * 1e3,
+            cold * 1e3
+        );
         // A bad start (far colour, or garbage coefficients) still gives a correct fit.
-        for start in [RgbSigmoid::fit([0.9, 0.05, 0.05]), RgbSigmoid::from_coefficients([1e9, -3.0, f32::NAN])] {
+        for start in [
+            RgbSigmoid::fit([0.9, 0.05, 0.05]),
+            RgbSigmoid::from_coefficients([1e9, -3.0, f32::NAN]),
+        ] {
             let s = RgbSigmoid::fit_from([0.1, 0.8, 0.2], &start);
             let back = reflectance_rgb(|l| s.eval(l));
-            assert!((0..3).all(|i| (back[i] - [0.1, 0.8, 0.2][i]).abs() < 1e-3), "{back:?}");
+            assert!(
+                (0..3).all(|i| (back[i] - [0.1, 0.8, 0.2][i]).abs() < 1e-3),
+                "{back:?}"
+            );
         }
-        assert_eq!(RgbSigmoid::fit_from([0.3; 3], &prev), RgbSigmoid::constant(0.3));
+        assert_eq!(
+            RgbSigmoid::fit_from([0.3; 3], &prev),
+            RgbSigmoid::constant(0.3)
+        );
     }
 
     #[test]

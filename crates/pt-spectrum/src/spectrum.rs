@@ -605,7 +605,12 @@ mod tests {
         let d65 = Spectrum::illuminant(NamedIlluminant::D65, 1.0).eval(560.0);
         assert!((d65 / 1.01013 - 1.0).abs() < 2e-3, "{d65}");
         let bb = Spectrum::blackbody(5000.0).unwrap();
-        for (l, v) in [(400.0, 8743.57), (500.0, 12107.2), (600.0, 12762.4), (700.0, 11812.0)] {
+        for (l, v) in [
+            (400.0, 8743.57),
+            (500.0, 12107.2),
+            (600.0, 12762.4),
+            (700.0, 11812.0),
+        ] {
             assert!((bb.eval(l) / v - 1.0).abs() < 1e-3, "{l}: {}", bb.eval(l));
         }
     }

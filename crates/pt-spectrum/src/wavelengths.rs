@@ -114,7 +114,10 @@ impl SampledWavelengths {
     /// use the original value, not this one, for the film.
     #[inline]
     pub fn with_lambda(&self, lambda: Vec4) -> Self {
-        SampledWavelengths { lambda, pdf: self.pdf }
+        SampledWavelengths {
+            lambda,
+            pdf: self.pdf,
+        }
     }
 
     /// The hero wavelength (lane 0), nm.

@@ -50,7 +50,10 @@ pub struct Pcg32 {
 impl Pcg32 {
     /// A generator for `seed` on stream `stream`.
     pub fn new(seed: u64, stream: u64) -> Self {
-        let mut r = Pcg32 { state: 0, inc: (stream << 1) | 1 };
+        let mut r = Pcg32 {
+            state: 0,
+            inc: (stream << 1) | 1,
+        };
         r.next_u32();
         r.state = r.state.wrapping_add(seed);
         r.next_u32();
@@ -60,7 +63,9 @@ impl Pcg32 {
     /// Next 32 random bits.
     pub fn next_u32(&mut self) -> u32 {
         let old = self.state;
-        self.state = old.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(self.inc);
+        self.state = old
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(self.inc);
         let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
         let rot = (old >> 59) as u32;
         xorshifted.rotate_right(rot)
@@ -81,7 +86,11 @@ impl Pcg32 {
 #[inline]
 pub fn spherical(cos_theta: f64, phi: f64) -> Vec3 {
     let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
-    Vec3::new((sin_theta * phi.cos()) as f32, (sin_theta * phi.sin()) as f32, cos_theta as f32)
+    Vec3::new(
+        (sin_theta * phi.cos()) as f32,
+        (sin_theta * phi.sin()) as f32,
+        cos_theta as f32,
+    )
 }
 
 /// A unit direction at polar angle `theta_deg` degrees and azimuth `phi_deg` degrees.
@@ -112,7 +121,13 @@ pub struct Chi2Config {
 
 impl Default for Chi2Config {
     fn default() -> Self {
-        Chi2Config { samples: 200_000, res_cos: 32, res_phi: 64, min_expected: 20.0, seed: 7 }
+        Chi2Config {
+            samples: 200_000,
+            res_cos: 32,
+            res_phi: 64,
+            min_expected: 20.0,
+            seed: 7,
+        }
     }
 }
 
@@ -162,34 +177,62 @@ fn adaptive_simpson_2d(
         }
         s * (x1 - x0) * (y1 - y0) / 36.0
     }
-    fn rec(f: &dyn Fn(f64, f64) -> f64, r: (f64, f64, f64, f64), whole: f64, tol: f64, depth: u32) -> f64 {
+    fn rec(
+        f: &dyn Fn(f64, f64) -> f64,
+        r: (f64, f64, f64, f64),
+        whole: f64,
+        tol: f64,
+        depth: u32,
+    ) -> f64 {
         let (x0, x1, y0, y1) = r;
         let (xm, ym) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
-        let q = [(x0, xm, y0, ym), (xm, x1, y0, ym), (x0, xm, ym, y1), (xm, x1, ym, y1)];
+        let q = [
+            (x0, xm, y0, ym),
+            (xm, x1, y0, ym),
+            (x0, xm, ym, y1),
+            (xm, x1, ym, y1),
+        ];
         let parts = q.map(|(a, b, c, d)| simpson(f, a, b, c, d));
         let sum: f64 = parts.iter().sum();
         if depth == 0 || (sum - whole).abs() <= 15.0 * tol {
             return sum + (sum - whole) / 15.0;
         }
-        q.iter().zip(parts).map(|(&qr, p)| rec(f, qr, p, 0.5 * tol, depth - 1)).sum()
+        q.iter()
+            .zip(parts)
+            .map(|(&qr, p)| rec(f, qr, p, 0.5 * tol, depth - 1))
+            .sum()
     }
     let (dx, dy) = ((x1 - x0) / 4.0, (y1 - y0) / 4.0);
     let mut parts = Vec::with_capacity(16);
     for i in 0..4 {
         for j in 0..4 {
-            let r = (x0 + i as f64 * dx, x0 + (i + 1) as f64 * dx, y0 + j as f64 * dy, y0 + (j + 1) as f64 * dy);
+            let r = (
+                x0 + i as f64 * dx,
+                x0 + (i + 1) as f64 * dx,
+                y0 + j as f64 * dy,
+                y0 + (j + 1) as f64 * dy,
+            );
             parts.push((r, simpson(f, r.0, r.1, r.2, r.3)));
         }
     }
     let coarse: f64 = parts.iter().map(|p| p.1).sum();
     let tol = abs_tol.max(rel_tol * coarse.abs()) / 16.0;
-    parts.into_iter().map(|(r, whole)| rec(f, r, whole, tol, depth)).sum()
+    parts
+        .into_iter()
+        .map(|(r, whole)| rec(f, r, whole, tol, depth))
+        .sum()
 }
 
 /// Integral of `g(direction)` over each cell of a `res_cos x res_phi` grid in (cos theta, phi)
 /// over the sphere, row-major (cos theta outer). Each cell is integrated to an error of about
 /// `max(abs_tol, rel_tol * value)` (adaptive Simpson, see the source).
-pub fn integrate_cells(g: &dyn Fn(Vec3) -> f64, res_cos: usize, res_phi: usize, abs_tol: f64, rel_tol: f64) -> Vec<f64> {
+pub fn integrate_cells(
+    g: &dyn Fn(Vec3) -> f64,
+    res_cos: usize,
+    res_phi: usize,
+    abs_tol: f64,
+    rel_tol: f64,
+) -> Vec<f64> {
     // Inside a cell, integrate over (theta, phi) with the Jacobian sin(theta): a lobe at a
     // pole is ~1/(angular width) wider there than in cos(theta), so far easier to resolve.
     let f = |t: f64, p: f64| {
@@ -214,7 +257,13 @@ pub fn integrate_cells(g: &dyn Fn(Vec3) -> f64, res_cos: usize, res_phi: usize, 
         for j in 0..res_phi {
             let p0 = 2.0 * PI * j as f64 / res_phi as f64;
             let p1 = 2.0 * PI * (j + 1) as f64 / res_phi as f64;
-            out.push(adaptive_simpson_2d(&f, (t0, t1, p0, p1), abs_tol, rel_tol, 8));
+            out.push(adaptive_simpson_2d(
+                &f,
+                (t0, t1, p0, p1),
+                abs_tol,
+                rel_tol,
+                8,
+            ));
         }
     }
     out
@@ -234,7 +283,11 @@ fn cell_of(wi: Vec3, res_cos: usize, res_phi: usize) -> usize {
 /// Pearson's chi-square of `observed` against `expected` after pooling cells with expectation
 /// below `min_expected` (sorted by expectation, merged until each pooled cell reaches it;
 /// Mitsuba's `chi2.py` pools all of them into one). Returns (chi2, dof, hard failure).
-pub fn pooled_chi2(observed: &[f64], expected: &[f64], min_expected: f64) -> (f64, usize, Option<String>) {
+pub fn pooled_chi2(
+    observed: &[f64],
+    expected: &[f64],
+    min_expected: f64,
+) -> (f64, usize, Option<String>) {
     let mut idx: Vec<usize> = (0..expected.len()).collect();
     idx.sort_by(|&a, &b| expected[a].total_cmp(&expected[b]));
     let mut chi2 = 0.0;
@@ -243,7 +296,13 @@ pub fn pooled_chi2(observed: &[f64], expected: &[f64], min_expected: f64) -> (f6
     for &k in &idx {
         let (o, e) = (observed[k], expected[k]);
         if e <= 0.0 && o > 0.0 {
-            return (f64::INFINITY, 0, Some(format!("{o} samples in cell {k} where the pdf integrates to {e:e}")));
+            return (
+                f64::INFINITY,
+                0,
+                Some(format!(
+                    "{o} samples in cell {k} where the pdf integrates to {e:e}"
+                )),
+            );
         }
         if e < min_expected {
             pool_obs += o;
@@ -264,7 +323,11 @@ pub fn pooled_chi2(observed: &[f64], expected: &[f64], min_expected: f64) -> (f6
         chi2 += (pool_obs - pool_exp) * (pool_obs - pool_exp) / pool_exp;
         cells += 1;
     } else if pool_obs > 0.0 {
-        return (f64::INFINITY, 0, Some(format!("{pool_obs} samples where the pdf is 0")));
+        return (
+            f64::INFINITY,
+            0,
+            Some(format!("{pool_obs} samples where the pdf is 0")),
+        );
     }
     (chi2, cells.saturating_sub(1), None)
 }
@@ -294,11 +357,22 @@ pub fn chi2_sphere(
                     if !s.wi.is_finite() || (s.wi.length() - 1.0).abs() > 1e-3 {
                         hard_failure = Some(format!("non-unit direction {:?} for u = {u:?}", s.wi));
                     } else if s.delta {
-                        hard_failure = Some(format!("delta sample {:?} in a smooth-lobe test", s.wi));
-                    } else if !(s.pdf > 0.0) || !s.pdf.is_finite() || !s.weight.is_finite() || s.weight < 0.0 {
-                        hard_failure = Some(format!("sample pdf {} weight {} at wi = {:?}", s.pdf, s.weight, s.wi));
+                        hard_failure =
+                            Some(format!("delta sample {:?} in a smooth-lobe test", s.wi));
+                    } else if !(s.pdf > 0.0)
+                        || !s.pdf.is_finite()
+                        || !s.weight.is_finite()
+                        || s.weight < 0.0
+                    {
+                        hard_failure = Some(format!(
+                            "sample pdf {} weight {} at wi = {:?}",
+                            s.pdf, s.weight, s.wi
+                        ));
                     } else if (p - s.pdf).abs() > 1e-3 * s.pdf.max(p) + 1e-6 {
-                        hard_failure = Some(format!("sample pdf {} but pdf(wo, wi) = {p} at wi = {:?}", s.pdf, s.wi));
+                        hard_failure = Some(format!(
+                            "sample pdf {} but pdf(wo, wi) = {p} at wi = {:?}",
+                            s.pdf, s.wi
+                        ));
                     }
                 }
                 if s.wi.is_finite() {
@@ -340,8 +414,23 @@ pub fn chi2_sphere(
     if hard_failure.is_none() {
         hard_failure = pool_fail;
     }
-    let p_value = if dof == 0 { if chi2.is_finite() { 1.0 } else { 0.0 } } else { chi2_sf(chi2, dof as f64) };
-    Chi2Result { name: name.to_string(), chi2, dof, p_value, pdf_integral, hard_failure }
+    let p_value = if dof == 0 {
+        if chi2.is_finite() {
+            1.0
+        } else {
+            0.0
+        }
+    } else {
+        chi2_sf(chi2, dof as f64)
+    };
+    Chi2Result {
+        name: name.to_string(),
+        chi2,
+        dof,
+        p_value,
+        pdf_integral,
+        hard_failure,
+    }
 }
 
 /// A set of chi-square tests judged together.
@@ -361,7 +450,10 @@ impl Chi2Report {
     /// `1 - (1 - alpha)^(1/n)` per test over the `n` tests), plus every hard failure.
     pub fn failures(&self, alpha: f64) -> Vec<&Chi2Result> {
         let level = sidak_threshold(alpha, self.results.len());
-        self.results.iter().filter(|r| r.hard_failure.is_some() || !(r.p_value >= level)).collect()
+        self.results
+            .iter()
+            .filter(|r| r.hard_failure.is_some() || !(r.p_value >= level))
+            .collect()
     }
 
     /// Panics listing the failed tests at family-wise significance `alpha` (use 0.01, Mitsuba's).
@@ -369,7 +461,11 @@ impl Chi2Report {
         let fails = self.failures(alpha);
         if !fails.is_empty() {
             let level = sidak_threshold(alpha, self.results.len());
-            let mut msg = format!("{} of {} chi-square tests failed (per-test level {level:.3e}):\n", fails.len(), self.results.len());
+            let mut msg = format!(
+                "{} of {} chi-square tests failed (per-test level {level:.3e}):\n",
+                fails.len(),
+                self.results.len()
+            );
             for r in fails {
                 msg += &format!(
                     "  {}: chi2 = {:.1}, dof = {}, p = {:.3e}, pdf integral = {:.5}{}\n",
@@ -378,7 +474,10 @@ impl Chi2Report {
                     r.dof,
                     r.p_value,
                     r.pdf_integral,
-                    r.hard_failure.as_deref().map(|s| format!(", {s}")).unwrap_or_default()
+                    r.hard_failure
+                        .as_deref()
+                        .map(|s| format!(", {s}"))
+                        .unwrap_or_default()
                 );
             }
             panic!("{msg}");
@@ -388,12 +487,20 @@ impl Chi2Report {
 
 /// Monte Carlo directional albedo: mean and standard error of the sample weight over `n`
 /// samples (failed samples count as 0). With a white BSDF this is the white-furnace value.
-pub fn albedo_mc(wo: Vec3, sample: &dyn Fn(Vec3, Vec3) -> Option<Sample>, n: usize, seed: u64) -> (f64, f64) {
+pub fn albedo_mc(
+    wo: Vec3,
+    sample: &dyn Fn(Vec3, Vec3) -> Option<Sample>,
+    n: usize,
+    seed: u64,
+) -> (f64, f64) {
     let mut rng = Pcg32::new(seed, 0xa1be);
     let (mut s, mut s2) = (0.0f64, 0.0f64);
     for _ in 0..n {
         let w = sample(wo, rng.next_vec3()).map_or(0.0, |s| f64::from(s.weight));
-        assert!(w.is_finite() && w >= 0.0, "non-finite or negative weight {w} at wo = {wo:?}");
+        assert!(
+            w.is_finite() && w >= 0.0,
+            "non-finite or negative weight {w} at wo = {wo:?}"
+        );
         s += w;
         s2 += w * w;
     }
@@ -412,14 +519,22 @@ pub fn albedo_quadrature(wo: Vec3, f: &dyn Fn(Vec3, Vec3) -> f32, tol: f64) -> f
 
 /// Largest relative reciprocity error `|f(a,b) - f(b,a)| / max(f(a,b), f(b,a), floor)` over `n`
 /// random pairs of directions from `dirs(u)` (`u` uniform in [0,1)^2).
-pub fn reciprocity_error(f: &dyn Fn(Vec3, Vec3) -> f32, dirs: &dyn Fn(Vec2) -> Vec3, n: usize, floor: f32) -> f32 {
+pub fn reciprocity_error(
+    f: &dyn Fn(Vec3, Vec3) -> f32,
+    dirs: &dyn Fn(Vec2) -> Vec3,
+    n: usize,
+    floor: f32,
+) -> f32 {
     let mut rng = Pcg32::new(3, 0xec1);
     let mut worst = 0.0f32;
     for _ in 0..n {
         let a = dirs(Vec2::new(rng.next_f32(), rng.next_f32()));
         let b = dirs(Vec2::new(rng.next_f32(), rng.next_f32()));
         let (fab, fba) = (f(a, b), f(b, a));
-        assert!(fab.is_finite() && fba.is_finite(), "non-finite f at {a:?}, {b:?}");
+        assert!(
+            fab.is_finite() && fba.is_finite(),
+            "non-finite f at {a:?}, {b:?}"
+        );
         worst = worst.max((fab - fba).abs() / fab.max(fba).max(floor));
     }
     worst
@@ -447,7 +562,13 @@ pub struct DeltaLobe {
 /// 5 binomial standard deviations of its probability (a correct sampler fails that with
 /// probability below 1e-6 per lobe); no sample fails unless the probabilities sum below 1.
 /// Panics with a message naming `name` otherwise.
-pub fn check_delta(name: &str, wo: Vec3, sample: &dyn Fn(Vec3, Vec3) -> Option<Sample>, lobes: &[DeltaLobe], n: usize) {
+pub fn check_delta(
+    name: &str,
+    wo: Vec3,
+    sample: &dyn Fn(Vec3, Vec3) -> Option<Sample>,
+    lobes: &[DeltaLobe],
+    n: usize,
+) {
     let mut rng = Pcg32::new(11, 0xde17a);
     let mut counts = vec![0usize; lobes.len()];
     let mut failed = 0usize;
@@ -461,18 +582,44 @@ pub fn check_delta(name: &str, wo: Vec3, sample: &dyn Fn(Vec3, Vec3) -> Option<S
         let k = lobes
             .iter()
             .position(|l| (l.wi - s.wi).length() < 1e-4)
-            .unwrap_or_else(|| panic!("{name}: sample {:?} matches no expected lobe {lobes:?} (u = {u:?})", s.wi));
+            .unwrap_or_else(|| {
+                panic!(
+                    "{name}: sample {:?} matches no expected lobe {lobes:?} (u = {u:?})",
+                    s.wi
+                )
+            });
         let l = lobes[k];
-        assert!((s.pdf - l.prob).abs() <= 1e-4 * l.prob.max(1e-3), "{name}: pdf {} != {}", s.pdf, l.prob);
-        assert!((s.weight - l.weight).abs() <= 1e-4 * l.weight.max(1e-3), "{name}: weight {} != {}", s.weight, l.weight);
+        assert!(
+            (s.pdf - l.prob).abs() <= 1e-4 * l.prob.max(1e-3),
+            "{name}: pdf {} != {}",
+            s.pdf,
+            l.prob
+        );
+        assert!(
+            (s.weight - l.weight).abs() <= 1e-4 * l.weight.max(1e-3),
+            "{name}: weight {} != {}",
+            s.weight,
+            l.weight
+        );
         counts[k] += 1;
     }
     let total_p: f32 = lobes.iter().map(|l| l.prob).sum();
-    for (l, &c) in lobes.iter().zip(&counts).chain(std::iter::once((&DeltaLobe { wi: Vec3::ZERO, prob: 1.0 - total_p, weight: 0.0 }, &failed))) {
+    for (l, &c) in lobes.iter().zip(&counts).chain(std::iter::once((
+        &DeltaLobe {
+            wi: Vec3::ZERO,
+            prob: 1.0 - total_p,
+            weight: 0.0,
+        },
+        &failed,
+    ))) {
         let p = f64::from(l.prob).clamp(0.0, 1.0);
         let sd = (n as f64 * p * (1.0 - p)).sqrt();
         let dev = (c as f64 - n as f64 * p).abs();
-        assert!(dev <= 5.0 * sd + 1e-9, "{name}: lobe {:?} chosen {c} times of {n}, expected probability {p}", l.wi);
+        assert!(
+            dev <= 5.0 * sd + 1e-9,
+            "{name}: lobe {:?} chosen {c} times of {n}, expected probability {p}",
+            l.wi
+        );
     }
 }
 
@@ -485,7 +632,12 @@ mod tests {
         let r = u.y.sqrt();
         let phi = 2.0 * std::f32::consts::PI * u.z;
         let wi = Vec3::new(r * phi.cos(), r * phi.sin(), (1.0 - u.y).max(0.0).sqrt());
-        (wi.z > 0.0).then_some(Sample { wi, weight: 1.0, pdf: wi.z / std::f32::consts::PI, delta: false })
+        (wi.z > 0.0).then_some(Sample {
+            wi,
+            weight: 1.0,
+            pdf: wi.z / std::f32::consts::PI,
+            delta: false,
+        })
     }
     fn cosine_pdf(_wo: Vec3, wi: Vec3) -> f32 {
         if wi.z > 0.0 {
@@ -497,7 +649,13 @@ mod tests {
 
     #[test]
     fn passes_for_cosine_sampling_against_its_pdf() {
-        let r = chi2_sphere("cosine", Vec3::Z, &cosine_sample, &cosine_pdf, &Chi2Config::default());
+        let r = chi2_sphere(
+            "cosine",
+            Vec3::Z,
+            &cosine_sample,
+            &cosine_pdf,
+            &Chi2Config::default(),
+        );
         assert!(r.hard_failure.is_none(), "{r:?}");
         assert!((r.pdf_integral - 1.0).abs() < 1e-4, "{r:?}");
         // One test at 1%: a correct sampler with this fixed seed passes; a p-value this small
@@ -509,8 +667,19 @@ mod tests {
     fn fails_for_cosine_sampling_judged_against_uniform_pdf() {
         // The sampler reports the uniform-hemisphere pdf (so the per-sample pdf check passes)
         // but draws cosine-weighted directions: only the histogram can catch it.
-        let wrong = |wo: Vec3, u: Vec3| cosine_sample(wo, u).map(|s| Sample { pdf: 0.5 / std::f32::consts::PI, ..s });
-        let uniform = |_wo: Vec3, wi: Vec3| if wi.z > 0.0 { 0.5 / std::f32::consts::PI } else { 0.0 };
+        let wrong = |wo: Vec3, u: Vec3| {
+            cosine_sample(wo, u).map(|s| Sample {
+                pdf: 0.5 / std::f32::consts::PI,
+                ..s
+            })
+        };
+        let uniform = |_wo: Vec3, wi: Vec3| {
+            if wi.z > 0.0 {
+                0.5 / std::f32::consts::PI
+            } else {
+                0.0
+            }
+        };
         let r = chi2_sphere("wrong", Vec3::Z, &wrong, &uniform, &Chi2Config::default());
         assert!(r.hard_failure.is_none() && r.p_value < 1e-12, "{r:?}");
         let mut rep = Chi2Report::default();
@@ -522,22 +691,50 @@ mod tests {
     fn fails_for_slightly_wrong_pdf_and_for_lost_samples() {
         // A 5% tilt of the pdf (it still integrates to 1): cos/pi * (1 + 0.1 (x)).
         let tilted = |_wo: Vec3, wi: Vec3| cosine_pdf(Vec3::Z, wi) * (1.0 + 0.1 * wi.x);
-        let lenient = |wo: Vec3, u: Vec3| cosine_sample(wo, u).map(|s| Sample { pdf: tilted(wo, s.wi), ..s });
+        let lenient = |wo: Vec3, u: Vec3| {
+            cosine_sample(wo, u).map(|s| Sample {
+                pdf: tilted(wo, s.wi),
+                ..s
+            })
+        };
         let r = chi2_sphere("tilted", Vec3::Z, &lenient, &tilted, &Chi2Config::default());
         assert!(r.p_value < 1e-6, "{r:?}");
         // A sampler that silently drops 3% of its samples while its pdf integrates to 1.
-        let lossy = |wo: Vec3, u: Vec3| if u.x < 0.03 { None } else { cosine_sample(wo, u) };
-        let r = chi2_sphere("lossy", Vec3::Z, &lossy, &cosine_pdf, &Chi2Config::default());
+        let lossy = |wo: Vec3, u: Vec3| {
+            if u.x < 0.03 {
+                None
+            } else {
+                cosine_sample(wo, u)
+            }
+        };
+        let r = chi2_sphere(
+            "lossy",
+            Vec3::Z,
+            &lossy,
+            &cosine_pdf,
+            &Chi2Config::default(),
+        );
         assert!(r.p_value < 1e-6, "{r:?}");
         // The per-sample pdf check catches a sample pdf that disagrees with pdf().
-        let liar = |wo: Vec3, u: Vec3| cosine_sample(wo, u).map(|s| Sample { pdf: 2.0 * s.pdf, ..s });
+        let liar = |wo: Vec3, u: Vec3| {
+            cosine_sample(wo, u).map(|s| Sample {
+                pdf: 2.0 * s.pdf,
+                ..s
+            })
+        };
         let r = chi2_sphere("liar", Vec3::Z, &liar, &cosine_pdf, &Chi2Config::default());
         assert!(r.hard_failure.is_some());
     }
 
     #[test]
     fn quadrature_and_furnace_of_lambert() {
-        let f = |_wo: Vec3, wi: Vec3| if wi.z > 0.0 { 0.8 / std::f32::consts::PI } else { 0.0 };
+        let f = |_wo: Vec3, wi: Vec3| {
+            if wi.z > 0.0 {
+                0.8 / std::f32::consts::PI
+            } else {
+                0.0
+            }
+        };
         let a = albedo_quadrature(Vec3::Z, &f, 1e-7);
         assert!((a - 0.8).abs() < 1e-4, "{a}");
         let s = |wo: Vec3, u: Vec3| cosine_sample(wo, u).map(|s| Sample { weight: 0.8, ..s });
@@ -548,14 +745,51 @@ mod tests {
     #[test]
     fn delta_checker_accepts_a_mirror_and_rejects_a_wrong_probability() {
         let wo = dir_deg(30.0, 10.0);
-        let mirror = |wo: Vec3, _u: Vec3| Some(Sample { wi: Vec3::new(-wo.x, -wo.y, wo.z), weight: 0.9, pdf: 1.0, delta: true });
-        let refl = Vec3::new(-wo.x, -wo.y, wo.z);
-        check_delta("mirror", wo, &mirror, &[DeltaLobe { wi: refl, prob: 1.0, weight: 0.9 }], 1000);
-        let coin = |wo: Vec3, u: Vec3| {
-            let (wi, p) = if u.x < 0.7 { (Vec3::new(-wo.x, -wo.y, wo.z), 0.5) } else { (-wo, 0.5) };
-            Some(Sample { wi, weight: 1.0, pdf: p, delta: true })
+        let mirror = |wo: Vec3, _u: Vec3| {
+            Some(Sample {
+                wi: Vec3::new(-wo.x, -wo.y, wo.z),
+                weight: 0.9,
+                pdf: 1.0,
+                delta: true,
+            })
         };
-        let lobes = [DeltaLobe { wi: refl, prob: 0.5, weight: 1.0 }, DeltaLobe { wi: -wo, prob: 0.5, weight: 1.0 }];
+        let refl = Vec3::new(-wo.x, -wo.y, wo.z);
+        check_delta(
+            "mirror",
+            wo,
+            &mirror,
+            &[DeltaLobe {
+                wi: refl,
+                prob: 1.0,
+                weight: 0.9,
+            }],
+            1000,
+        );
+        let coin = |wo: Vec3, u: Vec3| {
+            let (wi, p) = if u.x < 0.7 {
+                (Vec3::new(-wo.x, -wo.y, wo.z), 0.5)
+            } else {
+                (-wo, 0.5)
+            };
+            Some(Sample {
+                wi,
+                weight: 1.0,
+                pdf: p,
+                delta: true,
+            })
+        };
+        let lobes = [
+            DeltaLobe {
+                wi: refl,
+                prob: 0.5,
+                weight: 1.0,
+            },
+            DeltaLobe {
+                wi: -wo,
+                prob: 0.5,
+                weight: 1.0,
+            },
+        ];
         let r = std::panic::catch_unwind(|| check_delta("coin", wo, &coin, &lobes, 10_000));
         assert!(r.is_err(), "a 70/30 choice passed as 50/50");
     }

@@ -8,16 +8,24 @@ use pt_testkit::{chi2_sphere, Chi2Config, Chi2Result, Sample};
 /// `sample(wo, u)` of a model as the testkit wants it.
 pub fn sampler(b: Bsdf) -> impl Fn(Vec3, Vec3) -> Option<Sample> {
     move |wo, u| {
-        b.sample(wo, u.x, Vec2::new(u.y, u.z))
-            .map(|s| Sample { wi: s.wi, weight: s.weight.0.x, pdf: s.pdf, delta: s.delta })
+        b.sample(wo, u.x, Vec2::new(u.y, u.z)).map(|s| Sample {
+            wi: s.wi,
+            weight: s.weight.0.x,
+            pdf: s.pdf,
+            delta: s.delta,
+        })
     }
 }
 
 /// Same for a surface BSDF.
 pub fn surface_sampler(b: SurfaceBsdf) -> impl Fn(Vec3, Vec3) -> Option<Sample> {
     move |wo, u| {
-        b.sample(wo, u.x, Vec2::new(u.y, u.z))
-            .map(|s| Sample { wi: s.wi, weight: s.weight.0.x, pdf: s.pdf, delta: s.delta })
+        b.sample(wo, u.x, Vec2::new(u.y, u.z)).map(|s| Sample {
+            wi: s.wi,
+            weight: s.weight.0.x,
+            pdf: s.pdf,
+            delta: s.delta,
+        })
     }
 }
 
@@ -40,31 +48,64 @@ pub fn chi2(name: &str, b: Bsdf, wo: Vec3) -> Chi2Result {
 /// stream, whose first 200k are the same samples, p = 0.17, and other seeds give 0.1-0.7: a
 /// systematic mismatch would grow with the sample count, so that was a chance fluctuation.)
 pub fn chi2_n(name: &str, b: Bsdf, wo: Vec3, full: bool) -> Chi2Result {
-    let cfg = Chi2Config { samples: if full { 1_000_000 } else { 200_000 }, ..Chi2Config::default() };
+    let cfg = Chi2Config {
+        samples: if full { 1_000_000 } else { 200_000 },
+        ..Chi2Config::default()
+    };
     chi2_sphere(name, wo, &sampler(b), &pdf_fn(b), &cfg)
 }
 
 /// eval, pdf and sample are finite (and non-negative) for directions at the pole, on and just
 /// off the horizon, below it, and random ones; sample weights match f |cos| / pdf.
 pub fn assert_finite_everywhere(name: &str, b: Bsdf) {
-    let mut dirs = vec![Vec3::Z, -Vec3::Z, Vec3::X, -Vec3::Y, Vec3::new(1.0, 0.0, 1e-7).normalize(), Vec3::new(0.0, 1.0, -1e-7).normalize()];
+    let mut dirs = vec![
+        Vec3::Z,
+        -Vec3::Z,
+        Vec3::X,
+        -Vec3::Y,
+        Vec3::new(1.0, 0.0, 1e-7).normalize(),
+        Vec3::new(0.0, 1.0, -1e-7).normalize(),
+    ];
     let mut rng = pt_testkit::Pcg32::new(77, 3);
     for _ in 0..200 {
-        dirs.push(pt_math::warp::square_to_uniform_sphere(Vec2::new(rng.next_f32(), rng.next_f32())));
+        dirs.push(pt_math::warp::square_to_uniform_sphere(Vec2::new(
+            rng.next_f32(),
+            rng.next_f32(),
+        )));
     }
     for &wo in &dirs {
         for &wi in &dirs {
             let f = b.eval(wo, wi);
             let p = b.pdf(wo, wi);
-            assert!(f.is_finite() && f.0.min_element() >= 0.0, "{name}: f({wo:?}, {wi:?}) = {f:?}");
-            assert!(p.is_finite() && p >= 0.0, "{name}: pdf({wo:?}, {wi:?}) = {p}");
+            assert!(
+                f.is_finite() && f.0.min_element() >= 0.0,
+                "{name}: f({wo:?}, {wi:?}) = {f:?}"
+            );
+            assert!(
+                p.is_finite() && p >= 0.0,
+                "{name}: pdf({wo:?}, {wi:?}) = {p}"
+            );
         }
         for _ in 0..50 {
             let u = Vec2::new(rng.next_f32(), rng.next_f32());
-            for (ul, uu) in [(rng.next_f32(), u), (0.0, Vec2::ZERO), (0.999_999_9, Vec2::splat(0.999_999_9))] {
+            for (ul, uu) in [
+                (rng.next_f32(), u),
+                (0.0, Vec2::ZERO),
+                (0.999_999_9, Vec2::splat(0.999_999_9)),
+            ] {
                 if let Some(s) = b.sample(wo, ul, uu) {
-                    assert!(s.weight.is_finite() && s.weight.0.min_element() >= 0.0, "{name}: weight {s:?} at wo {wo:?}");
-                    assert!(s.pdf.is_finite() && s.pdf > 0.0 && s.wi.is_finite() && s.eta.is_finite() && s.eta > 0.0, "{name}: {s:?}");
+                    assert!(
+                        s.weight.is_finite() && s.weight.0.min_element() >= 0.0,
+                        "{name}: weight {s:?} at wo {wo:?}"
+                    );
+                    assert!(
+                        s.pdf.is_finite()
+                            && s.pdf > 0.0
+                            && s.wi.is_finite()
+                            && s.eta.is_finite()
+                            && s.eta > 0.0,
+                        "{name}: {s:?}"
+                    );
                     assert!((s.wi.length() - 1.0).abs() < 1e-4, "{name}: {s:?}");
                 }
             }
