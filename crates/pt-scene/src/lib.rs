@@ -52,8 +52,8 @@
 
 mod build;
 mod error;
+pub mod gltf;
 pub mod ir;
-mod materials;
 mod obj;
 mod props;
 mod shapes;
@@ -67,26 +67,6 @@ pub use error::SceneError;
 pub use ir::*;
 
 use std::path::Path;
-use std::sync::OnceLock;
-
-/// Reads the triangles of a glTF 2.0 file (`.gltf` / `.glb`) as one mesh, in the file's space
-/// (its node transforms applied), or a message saying what is wrong with the file. The glTF
-/// reader (crate `pt-gltf`) depends on this crate for the IR, so it is handed in at start-up
-/// ([`set_gltf_mesh_reader`]) instead of being a dependency.
-pub type GltfMeshReader = fn(&Path) -> Result<TriangleMesh, String>;
-
-static GLTF_MESH_READER: OnceLock<GltfMeshReader> = OnceLock::new();
-
-/// Installs the reader behind `<shape type="gltf">` (the `pt` binary installs pt-gltf's).
-/// The first call wins.
-pub fn set_gltf_mesh_reader(reader: GltfMeshReader) {
-    let _ = GLTF_MESH_READER.set(reader);
-}
-
-/// The installed glTF mesh reader, if any.
-pub(crate) fn gltf_mesh_reader() -> Option<GltfMeshReader> {
-    GLTF_MESH_READER.get().copied()
-}
 
 /// Loads a Mitsuba 3 XML scene file.
 ///

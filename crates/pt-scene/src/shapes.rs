@@ -12,7 +12,7 @@
 //! Meshes carry no vertex normals unless the shape is smooth (OBJ), so the renderer shades
 //! them flat with the geometric normal `(p1 - p0) x (p2 - p0)`.
 
-use crate::ir::{Geometry, TriangleMesh};
+use crate::ir::{Geometry, MeshAttribute, TriangleMesh};
 use crate::transform::is_affine;
 use glam::{Mat3, Mat4, Vec2, Vec3};
 
@@ -26,6 +26,7 @@ pub(crate) struct LocalMesh {
     pub normals: Option<Vec<Vec3>>,
     pub uvs: Option<Vec<Vec2>>,
     pub indices: Vec<[u32; 3]>,
+    pub attributes: Vec<MeshAttribute>,
 }
 
 /// Mitsuba's `rectangle`: [-1, 1]^2 in the z = 0 plane, facing +z.
@@ -45,6 +46,7 @@ pub(crate) fn rectangle() -> LocalMesh {
             Vec2::new(0.0, 1.0),
         ]),
         indices: vec![[0, 1, 2], [0, 2, 3]],
+        attributes: Vec::new(),
     }
 }
 
@@ -108,6 +110,7 @@ pub(crate) fn disk() -> LocalMesh {
         normals: None,
         uvs: None,
         indices,
+        attributes: Vec::new(),
     }
 }
 
@@ -146,6 +149,7 @@ pub(crate) fn to_world(
         uvs: local.uvs,
         tangents: None,
         indices,
+        attributes: local.attributes,
     })
 }
 
@@ -194,10 +198,15 @@ pub(crate) fn sphere(
             "sphere has an invalid centre {center} or radius {radius}"
         ));
     }
+    // The object-to-world rotation, for texture coordinates and dp/du. A mirroring to_world
+    // turns the sphere inside out, as in Mitsuba.
+    let frame = Mat3::from_mat4(*m) * (1.0 / scale);
+    let mirrored = frame.determinant() < 0.0;
     Ok(Geometry::Sphere {
         center,
         radius,
-        flip_normals: flip,
+        flip_normals: flip != mirrored,
+        frame,
     })
 }
 

@@ -1,0 +1,216 @@
+//! Emitters: `area` on shapes, and the lights on their own.
+
+use super::*;
+
+impl<'e> Builder<'e> {
+    pub(super) fn top_level_emitter(&self, el: &Element) -> SceneError {
+        if el.attr("type") == Some("area") {
+            SceneError::at(
+                &el.loc,
+                "an area emitter must be nested in the <shape> that emits",
+            )
+        } else {
+            plugin_error(el)
+        }
+    }
+
+    /// Emitters outside shapes: `point` (`intensity` 1, `position` or `to_world`), `spot`
+    /// (`intensity` 1, `cutoff_angle` 20, `beam_width` 3/4 of the cutoff, `to_world`),
+    /// `directional` (`irradiance` 1, `direction` or `to_world` +z), `sun` (project extension:
+    /// `irradiance` 1, `direction`, `angular_diameter` 0.5338 degrees), `constant` (`radiance` 1),
+    /// `envmap` (`filename`, `scale` 1, `to_world`).
+    pub(super) fn light(&mut self, el: &'e Element) -> Result<LightDesc> {
+        let v = ObjectView::parse(el)?;
+        let to_world = v.transform("to_world")?;
+        let spectrum = |name: &str| -> Result<SpectrumDesc> {
+            let s = v.spectrum(name)?.unwrap_or(SpectrumDesc::Constant(1.0));
+            let vals = s.values();
+            if vals.iter().any(|&x| x < 0.0) {
+                return Err(v.prop_error(name, format!("{name} must not be negative")));
+            }
+            Ok(s)
+        };
+        // Direction of travel: `direction`, or the +z axis of `to_world`.
+        let direction = |v: &ObjectView<'e>, to_world: Option<Mat4>| -> Result<Vec3> {
+            let d = match (v.vec3("direction")?, to_world) {
+                (Some(_), Some(_)) => {
+                    return Err(
+                        v.prop_error("direction", "give either direction or to_world, not both")
+                    )
+                }
+                (Some(d), None) => d,
+                (None, Some(m)) => m.transform_vector3(Vec3::Z),
+                (None, None) => Vec3::Z,
+            };
+            d.try_normalize()
+                .ok_or_else(|| v.prop_error("direction", "direction must not be zero"))
+        };
+        let kind = match v.plugin.as_str() {
+            "point" => {
+                let position = match (v.vec3("position")?, to_world) {
+                    (Some(_), Some(_)) => {
+                        return Err(
+                            v.prop_error("position", "give either position or to_world, not both")
+                        )
+                    }
+                    (Some(p), None) => p,
+                    (None, Some(m)) => m.transform_point3(Vec3::ZERO),
+                    (None, None) => Vec3::ZERO,
+                };
+                LightKind::Point {
+                    position,
+                    intensity: spectrum("intensity")?,
+                }
+            }
+            "spot" => {
+                let cutoff_deg = v.float("cutoff_angle")?.unwrap_or(20.0);
+                if !(cutoff_deg > 0.0 && cutoff_deg <= 180.0) {
+                    return Err(
+                        v.prop_error("cutoff_angle", "cutoff_angle must be in (0, 180] degrees")
+                    );
+                }
+                let beam_width_deg = v.float("beam_width")?.unwrap_or(cutoff_deg * 0.75);
+                if !(beam_width_deg >= 0.0 && beam_width_deg <= cutoff_deg) {
+                    return Err(v.prop_error(
+                        "beam_width",
+                        "beam_width must be in [0, cutoff_angle] degrees",
+                    ));
+                }
+                LightKind::Spot {
+                    to_world: to_world.unwrap_or(Mat4::IDENTITY),
+                    intensity: spectrum("intensity")?,
+                    cutoff_deg,
+                    beam_width_deg,
+                }
+            }
+            "directional" => LightKind::Directional {
+                direction: direction(&v, to_world)?,
+                irradiance: spectrum("irradiance")?,
+            },
+            "sun" => {
+                let angular_diameter_deg = v.float("angular_diameter")?.unwrap_or(0.5338);
+                if !(angular_diameter_deg > 0.0 && angular_diameter_deg < 180.0) {
+                    return Err(v.prop_error(
+                        "angular_diameter",
+                        "angular_diameter must be in (0, 180) degrees",
+                    ));
+                }
+                LightKind::Sun {
+                    direction: direction(&v, to_world)?,
+                    irradiance: spectrum("irradiance")?,
+                    angular_diameter_deg,
+                }
+            }
+            "constant" => LightKind::Constant {
+                radiance: spectrum("radiance")?,
+            },
+            "envmap" => {
+                let name = v
+                    .string("filename")?
+                    .ok_or_else(|| SceneError::at(&el.loc, "envmap needs a filename"))?;
+                let path = resolve_file(&name, &v.el.dir, &[self.base_dir], self.search_paths);
+                if !path.is_file() {
+                    return Err(v.prop_error(
+                        "filename",
+                        format!(
+                            "cannot open environment map '{name}' (looked for {})",
+                            path.display()
+                        ),
+                    ));
+                }
+                let scale = v.float("scale")?.unwrap_or(1.0);
+                if scale < 0.0 {
+                    return Err(v.prop_error("scale", "scale must not be negative"));
+                }
+                LightKind::EnvMap {
+                    filename: path,
+                    to_world: to_world.unwrap_or(Mat4::IDENTITY),
+                    scale,
+                }
+            }
+            _ => return Err(plugin_error(el)),
+        };
+        no_children(&v)?;
+        v.finish()?;
+        Ok(LightDesc {
+            loc: el.loc.clone(),
+            kind,
+        })
+    }
+
+    /// `area`: `radiance` (rgb, spectrum or float; Mitsuba's default 1), or a nested
+    /// `<texture name="radiance">` (any texture; for an image-emitting surface such as a
+    /// monitor, a bitmap), optionally wrapped in Mitsuba's `<texture type="d65">` (see
+    /// [`Builder::emission_texture`]).
+    ///
+    /// Display primaries (pt extension, with a radiance bitmap only): three spectra
+    /// `<spectrum name="primary_r" filename="lcd-r.spd"/>`, `primary_g`, `primary_b` (any
+    /// spectral form: pairs, a file, blackbody, a named illuminant). In spectral mode a texel of
+    /// linear RGB (r, g, b) then emits `r k_r P_r + g k_g P_g + b k_b P_b`, the weights `k`
+    /// chosen so that (1, 1, 1) emits the CIE XYZ of D65 at luminance 1 (`spectral_texture.rs`
+    /// in pt-render). Mitsuba has no such parameter and rejects these scenes.
+    pub(super) fn area_emitter(&mut self, el: &'e Element) -> Result<AreaEmitterDesc> {
+        let v = ObjectView::parse(el)?;
+        if v.plugin != "area" {
+            return Err(plugin_error(el));
+        }
+        let mut texture = None;
+        for child in &v.children {
+            let t = self.resolve(child)?;
+            let name = child.written().attr("name").or_else(|| t.attr("name"));
+            if t.tag != "texture" || name != Some("radiance") || texture.is_some() {
+                return Err(misplaced(child, t, &v, "one <texture name=\"radiance\">"));
+            }
+            texture = Some(self.emission_texture(t)?);
+        }
+        if texture.is_some() && v.has("radiance") {
+            return Err(v.prop_error(
+                "radiance",
+                "give either a radiance value or a radiance texture",
+            ));
+        }
+        let radiance = match texture {
+            Some(t) => t,
+            None => {
+                let s = v.spectrum("radiance")?.unwrap_or(SpectrumDesc::Constant(1.0));
+                if s.values().iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
+                    return Err(v.prop_error("radiance", "radiance must be finite and non-negative"));
+                }
+                TextureDesc::Constant(s)
+            }
+        };
+        let bitmap = matches!(radiance, TextureDesc::Bitmap(_));
+        let names = ["primary_r", "primary_g", "primary_b"];
+        let primaries = match names.map(|n| v.spectrum(n)) {
+            [Ok(None), Ok(None), Ok(None)] => None,
+            [Ok(Some(r)), Ok(Some(g)), Ok(Some(b))] => {
+                if !bitmap {
+                    return Err(v.prop_error("primary_r", "display primaries need a radiance bitmap (an image whose texels drive them)"));
+                }
+                for (s, n) in [&r, &g, &b].into_iter().zip(names) {
+                    if !s.is_spectral() {
+                        return Err(v.prop_error(n, format!("{n} must be a spectrum (wavelength:value pairs, a file, blackbody or a named illuminant), not an RGB value or a constant")));
+                    }
+                }
+                Some(Box::new([r, g, b]))
+            }
+            [r, g, b] => {
+                r?;
+                g?;
+                b?;
+                let missing = names
+                    .iter()
+                    .zip([v.has(names[0]), v.has(names[1]), v.has(names[2])])
+                    .find(|(_, h)| !h)
+                    .map_or("", |(n, _)| *n);
+                return Err(SceneError::at(&el.loc, format!("display primaries need all three of primary_r, primary_g, primary_b ({missing} is missing)")));
+            }
+        };
+        v.finish()?;
+        Ok(AreaEmitterDesc {
+            loc: el.loc.clone(),
+            radiance,
+            primaries,
+        })
+    }
+}

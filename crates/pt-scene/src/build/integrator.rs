@@ -1,0 +1,142 @@
+//! Integrators.
+
+use super::*;
+
+impl<'e> Builder<'e> {
+    /// `path` (`max_depth` -1, `rr_depth` 5, `hide_emitters` false), `direct` (path with
+    /// max_depth 2; one emitter and one BSDF sample) and `moment` (wraps one integrator).
+    pub(super) fn integrator(&mut self, el: &'e Element) -> Result<IntegratorDesc> {
+        let v = ObjectView::parse(el)?;
+        let desc = match v.plugin.as_str() {
+            "path" => path_integrator(&v)?,
+            "volpath" => IntegratorDesc {
+                kind: IntegratorKind::VolPath,
+                ..path_integrator(&v)?
+            },
+            "direct" => direct_integrator(&v)?,
+            "moment" => self.moment(&v)?,
+            "radiosity" => radiosity_integrator(&v)?,
+            _ => return Err(plugin_error(el)),
+        };
+        let desc = IntegratorDesc {
+            loc: el.loc.clone(),
+            ..desc
+        };
+        if v.plugin != "moment" {
+            if let Some(child) = v.children.first() {
+                let target = self.resolve(child)?;
+                return Err(misplaced(child, target, &v, "no nested objects"));
+            }
+        }
+        v.finish()?;
+        Ok(desc)
+    }
+
+    pub(super) fn moment(&mut self, v: &ObjectView<'e>) -> Result<IntegratorDesc> {
+        let mut inner = None;
+        for child in &v.children {
+            let target = self.resolve(child)?;
+            if target.tag != "integrator" {
+                return Err(misplaced(child, target, v, "integrator"));
+            }
+            if inner.is_some() {
+                return Err(SceneError::at(
+                    &child.written().loc,
+                    "moment with more than one integrator is not yet supported (not yet implemented)",
+                ));
+            }
+            inner = Some(self.integrator(target)?);
+        }
+        let mut inner = inner
+            .ok_or_else(|| SceneError::at(&v.el.loc, "moment needs one nested <integrator>"))?;
+        inner.moment = true;
+        Ok(inner)
+    }
+}
+
+pub(super) fn path_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
+    Ok(IntegratorDesc {
+        kind: IntegratorKind::Path,
+        max_depth: int_in(v, "max_depth", -1, -1, i32::MAX as i64)? as i32,
+        rr_depth: int_in(v, "rr_depth", 5, 1, u32::MAX as i64)? as u32,
+        hide_emitters: v.boolean("hide_emitters")?.unwrap_or(false),
+        moment: false,
+        radiosity: RadiosityOptions::default(),
+        loc: SourceLoc::default(),
+    })
+}
+
+/// `radiosity` (project extension): `patch_size` (float, scene units), `rays_per_patch`,
+/// `tolerance`, `max_iterations`, `solver`, `display`, `reciprocity` (strings; checked by the
+/// radiosity crate). Renders diffuse scenes by finite elements; see crates/pt-radiosity.
+pub(super) fn radiosity_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
+    let count = |name: &str| -> Result<Option<u32>> {
+        match v.integer(name)? {
+            None => Ok(None),
+            Some(n) if n >= 1 && n <= u32::MAX as i64 => Ok(Some(n as u32)),
+            Some(n) => Err(v.prop_error(name, format!("{name} must be at least 1, got {n}"))),
+        }
+    };
+    let radiosity = RadiosityOptions {
+        patch_size: v.float("patch_size")?,
+        rays_per_patch: count("rays_per_patch")?,
+        tolerance: v.float("tolerance")?,
+        max_iterations: count("max_iterations")?,
+        solver: parsed(v, "solver")?,
+        display: parsed(v, "display")?,
+        reciprocity: parsed(v, "reciprocity")?,
+    };
+    Ok(IntegratorDesc {
+        kind: IntegratorKind::Radiosity,
+        max_depth: -1,
+        rr_depth: 5,
+        hide_emitters: false,
+        moment: false,
+        radiosity,
+        loc: SourceLoc::default(),
+    })
+}
+
+/// Mitsuba's `direct` takes several emitter and BSDF samples per hit; this renderer draws one
+/// of each (the defaults), which is `path` with `max_depth` 2.
+pub(super) fn direct_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
+    for name in ["shading_samples", "emitter_samples", "bsdf_samples"] {
+        if let Some(n) = v.integer(name)? {
+            if n != 1 {
+                return Err(v.prop_error(
+                    name,
+                    format!("{name}={n} is not yet supported (not yet implemented; only 1)"),
+                ));
+            }
+        }
+    }
+    Ok(IntegratorDesc {
+        kind: IntegratorKind::Direct,
+        max_depth: 2,
+        rr_depth: 5,
+        hide_emitters: v.boolean("hide_emitters")?.unwrap_or(false),
+        moment: false,
+        radiosity: RadiosityOptions::default(),
+        loc: SourceLoc::default(),
+    })
+}
+
+pub(super) fn default_integrator() -> IntegratorDesc {
+    IntegratorDesc {
+        radiosity: RadiosityOptions::default(),
+        loc: SourceLoc::default(),
+        kind: IntegratorKind::Path,
+        max_depth: -1,
+        rr_depth: 5,
+        hide_emitters: false,
+        moment: false,
+    }
+}
+
+/// A string property parsed into one of the named options of `T`, the error at the property.
+fn parsed<T: std::str::FromStr<Err = String>>(v: &ObjectView<'_>, name: &str) -> Result<Option<T>> {
+    match v.string(name)? {
+        None => Ok(None),
+        Some(s) => s.parse().map(Some).map_err(|e| v.prop_error(name, e)),
+    }
+}

@@ -1,0 +1,345 @@
+//! Turning the preprocessed element tree into the IR: one function per plugin family, each
+//! reading its parameters with Mitsuba 3's names and defaults and rejecting everything else.
+
+mod bsdf;
+mod emitter;
+mod integrator;
+mod materials;
+mod sensor;
+mod shape;
+mod texture;
+
+use integrator::default_integrator;
+use sensor::{default_camera, DEFAULT_FILTER};
+use shape::medium;
+use texture::Nested;
+
+use crate::error::{Result, SceneError};
+use crate::ir::*;
+use crate::obj::{self, ObjOptions};
+use crate::props::{Child, ObjectView};
+use crate::shapes;
+use crate::transform::is_affine;
+use crate::xml::{resolve_file, Document, Element};
+use glam::{Mat3, Mat4, Vec3};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// Plugins per object tag: (tag, supported, known to Mitsuba 3 but not implemented here).
+#[rustfmt::skip]
+const PLUGINS: &[(&str, &[&str], &[&str])] = &[
+    ("sensor", &["perspective"], &[
+        "orthographic", "thinlens", "radiancemeter", "irradiancemeter", "distant", "batch",
+    ]),
+    ("film", &["hdrfilm"], &["specfilm"]),
+    ("sampler", &["independent", "stratified"], &["multijitter", "orthogonal", "ldsampler"]),
+    ("rfilter", &["box", "tent", "gaussian"], &["mitchell", "catmullrom", "lanczos"]),
+    ("integrator", &["path", "volpath", "direct", "moment", "radiosity"], &[
+        "volpathmis", "aov", "prb", "prb_basic", "prb_projective", "direct_projective",
+        "ptracer", "depth", "stokes", "prbvolpath",
+    ]),
+    ("shape", &["obj", "gltf", "rectangle", "cube", "sphere", "disk"], &[
+        "ply", "serialized", "cylinder", "shapegroup", "instance", "bsplinecurve", "linearcurve",
+        "sdfgrid", "ellipsoids", "ellipsoidsmesh",
+    ]),
+    ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "roughplastic"], &[
+        "plastic", "bumpmap", "null",
+        "polarizer", "retarder", "circular", "measured", "pplastic", "principled",
+        "principledthin", "hair",
+    ]),
+    ("emitter", &["area", "point", "spot", "directional", "sun", "constant", "envmap"], &[
+        "projector", "directionalarea", "sunsky",
+    ]),
+    ("texture", &["bitmap", "checkerboard", "mesh_attribute", "rawconstant", "d65"], &["volume"]),
+    ("medium", &["homogeneous"], &["heterogeneous"]),
+    ("phase", &[], &["isotropic", "hg", "rayleigh", "sggx", "tabphase", "blendphase"]),
+    ("volume", &[], &["constvolume", "gridvolume"]),
+];
+
+/// The error for a plugin this loader does not build: "unsupported" for Mitsuba plugins not
+/// implemented yet, "unknown" for names Mitsuba does not have either (probably typos).
+fn plugin_error(el: &Element) -> SceneError {
+    let tag = el.tag.as_str();
+    let plugin = el.attr("type").unwrap_or_default();
+    let (supported, known) = PLUGINS
+        .iter()
+        .find(|(t, _, _)| *t == tag)
+        .map_or((&[][..], &[][..]), |(_, s, k)| (*s, *k));
+    let list = if supported.is_empty() {
+        "none yet".to_string()
+    } else {
+        supported.join(", ")
+    };
+    let message = if supported.contains(&plugin) {
+        format!("{tag} \"{plugin}\" is not yet supported in this position (not yet implemented; it is read only where the docs list it)")
+    } else if known.contains(&plugin) {
+        format!("unsupported plugin {tag} \"{plugin}\" (not yet implemented; supported: {list})")
+    } else {
+        format!("unknown {tag} plugin \"{plugin}\" (supported: {list})")
+    };
+    SceneError::at(&el.loc, message)
+}
+
+/// The error for an object nested where it has no meaning. Textures, media and the like are
+/// reported as unsupported plugins: they would be meaningful, just not implemented yet.
+fn misplaced(
+    child: &Child<'_>,
+    target: &Element,
+    parent: &ObjectView<'_>,
+    expected: &str,
+) -> SceneError {
+    if matches!(
+        target.tag.as_str(),
+        "texture" | "medium" | "phase" | "volume"
+    ) {
+        return plugin_error(target);
+    }
+    SceneError::at(
+        &child.written().loc,
+        format!(
+            "<{}> cannot be nested in {} (expected {expected})",
+            target.tag,
+            parent.what()
+        ),
+    )
+}
+
+/// Builds a [`SceneDesc`] from a preprocessed document.
+pub(crate) fn build(doc: &Document, source: &Path, base_dir: &Path) -> Result<SceneDesc> {
+    let mut ids = HashMap::new();
+    collect_ids(&doc.root, &mut ids)?;
+    let mut builder = Builder {
+        ids,
+        search_paths: &doc.search_paths,
+        base_dir,
+        bsdfs: Vec::new(),
+        bsdf_index: HashMap::new(),
+        bsdf_memo: HashMap::new(),
+        texture_memo: HashMap::new(),
+        visiting: Vec::new(),
+        default_bsdf: [None, None],
+    };
+    builder.scene(&doc.root, source)
+}
+
+/// Registers every object that has an `id`; ids are global to the scene, like Mitsuba's.
+fn collect_ids<'e>(el: &'e Element, ids: &mut HashMap<&'e str, &'e Element>) -> Result<()> {
+    for child in &el.children {
+        if child.is_object() {
+            if let Some(id) = child.attr("id") {
+                if id.is_empty() {
+                    return Err(SceneError::at(&child.loc, "empty 'id'"));
+                }
+                if let Some(first) = ids.insert(id, child) {
+                    let l = &first.loc;
+                    return Err(SceneError::at(
+                        &child.loc,
+                        format!(
+                            "duplicate id \"{id}\" (first used at {}:{}:{})",
+                            l.file.display(),
+                            l.line,
+                            l.col
+                        ),
+                    ));
+                }
+            }
+        }
+        collect_ids(child, ids)?;
+    }
+    Ok(())
+}
+
+struct Builder<'e> {
+    ids: HashMap<&'e str, &'e Element>,
+    search_paths: &'e [PathBuf],
+    base_dir: &'e Path,
+    /// BSDFs used by shapes; `ShapeDesc::bsdf` indexes this.
+    bsdfs: Vec<BsdfDesc>,
+    /// Index in `bsdfs` of each shared (id-carrying) BSDF already used by a shape.
+    bsdf_index: HashMap<String, usize>,
+    /// Built BSDFs by id, so that each is built (and validated) once.
+    bsdf_memo: HashMap<String, BsdfDesc>,
+    /// Built textures by id, so that each is built once and shared images stay shared.
+    texture_memo: HashMap<String, TextureDesc>,
+    /// Ids of BSDFs and textures being built, to report reference cycles instead of
+    /// recursing forever.
+    visiting: Vec<String>,
+    /// Indices of the implicit diffuse BSDFs shared by all shapes without one: [0] for shapes
+    /// without an emitter (reflectance 0.5), [1] for emitting shapes (reflectance 0).
+    default_bsdf: [Option<usize>; 2],
+}
+
+impl<'e> Builder<'e> {
+    /// The object a nested child stands for (following `<ref>`).
+    pub(super) fn resolve(&self, child: &Child<'e>) -> Result<&'e Element> {
+        match *child {
+            Child::Object(el) => Ok(el),
+            Child::Ref(r) => {
+                let id = r.attr("id").unwrap_or_default();
+                self.ids
+                    .get(id)
+                    .copied()
+                    .ok_or_else(|| SceneError::at(&r.loc, format!("unknown id \"{id}\"")))
+            }
+        }
+    }
+
+    pub(super) fn scene(&mut self, root: &'e Element, source: &Path) -> Result<SceneDesc> {
+        let view = ObjectView::parse_scene(root)?;
+        view.finish()?;
+        let mut sensor: Option<(CameraDesc, FilmDesc, SamplerDesc)> = None;
+        let mut integrator = None;
+        let mut shapes = Vec::new();
+        let mut lights = Vec::new();
+        for child in &view.children {
+            let Child::Object(el) = *child else {
+                return Err(SceneError::at(
+                    &child.written().loc,
+                    "a <ref> directly inside <scene> is not supported",
+                ));
+            };
+            match el.tag.as_str() {
+                "sensor" if sensor.is_some() => {
+                    return Err(SceneError::at(&el.loc, "only one <sensor> is supported"))
+                }
+                "sensor" => sensor = Some(self.sensor(el)?),
+                "integrator" if integrator.is_some() => {
+                    return Err(SceneError::at(
+                        &el.loc,
+                        "only one <integrator> can be specified",
+                    ))
+                }
+                "integrator" => integrator = Some(self.integrator(el)?),
+                "shape" => shapes.push(self.shape(el)?),
+                // Validated now; it enters `bsdfs` when a shape uses it.
+                "bsdf" => drop(self.bsdf_desc(el)?),
+                // Validated now; shapes use it through <ref name="interior" id="..."/>.
+                "medium" => drop(medium(el)?),
+                "emitter" if el.attr("type") == Some("area") => {
+                    return Err(self.top_level_emitter(el))
+                }
+                "emitter" => lights.push(self.light(el)?),
+                "film" | "sampler" => {
+                    return Err(SceneError::at(
+                        &el.loc,
+                        format!("<{}> must be nested in a <sensor>", el.tag),
+                    ))
+                }
+                "rfilter" => {
+                    return Err(SceneError::at(
+                        &el.loc,
+                        "<rfilter> must be nested in a <film>",
+                    ))
+                }
+                _ => return Err(plugin_error(el)),
+            }
+        }
+        let (camera, film, sampler) = match sensor {
+            Some(s) => s,
+            None => (
+                default_camera(root, &shapes),
+                default_film(),
+                default_sampler(),
+            ),
+        };
+        Ok(SceneDesc {
+            source: source.to_path_buf(),
+            camera,
+            film,
+            sampler,
+            integrator: integrator.unwrap_or_else(default_integrator),
+            shapes,
+            bsdfs: std::mem::take(&mut self.bsdfs),
+            lights,
+        })
+    }
+}
+
+/// Mitsuba's film when a scene has no sensor: 768 x 576 pixels, its default Gaussian filter.
+pub(super) fn default_film() -> FilmDesc {
+    FilmDesc {
+        width: 768,
+        height: 576,
+        filter: DEFAULT_FILTER,
+    }
+}
+
+pub(super) fn default_sampler() -> SamplerDesc {
+    SamplerDesc {
+        sample_count: 4,
+        seed: 0,
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Parameter helpers
+
+/// An integer parameter with a default, checked to lie in `min..=max`.
+pub(super) fn int_in(v: &ObjectView<'_>, name: &str, default: i64, min: i64, max: i64) -> Result<i64> {
+    let value = v.integer(name)?.unwrap_or(default);
+    if value < min || value > max {
+        let range = if max >= i32::MAX as i64 {
+            format!("at least {min}")
+        } else {
+            format!("between {min} and {max}")
+        };
+        return Err(v.prop_error(name, format!("'{name}' must be {range}, got {value}")));
+    }
+    Ok(value)
+}
+
+/// A float parameter with a default, checked to be positive.
+pub(super) fn positive(v: &ObjectView<'_>, name: &str, default: f32) -> Result<f32> {
+    let value = v.float(name)?.unwrap_or(default);
+    if value > 0.0 {
+        Ok(value)
+    } else {
+        Err(v.prop_error(name, format!("'{name}' must be positive, got {value}")))
+    }
+}
+
+/// Accepts a string parameter only if it is one of `allowed` (case-insensitive).
+pub(super) fn one_of(v: &ObjectView<'_>, name: &str, allowed: &[&str]) -> Result<()> {
+    match v.string(name)? {
+        Some(s) if !allowed.contains(&s.to_ascii_lowercase().as_str()) => Err(v.prop_error(
+            name,
+            format!(
+                "'{name}' must be one of {}, not \"{s}\"",
+                allowed.join(", ")
+            ),
+        )),
+        _ => Ok(()),
+    }
+}
+
+/// Crop parameters are accepted only when they select the whole image.
+pub(super) fn no_op_crop(v: &ObjectView<'_>, width: u32, height: u32) -> Result<()> {
+    let checks = [
+        ("crop_offset_x", 0),
+        ("crop_offset_y", 0),
+        ("crop_width", width),
+        ("crop_height", height),
+    ];
+    for (name, whole) in checks {
+        if let Some(value) = v.integer(name)? {
+            if value != whole as i64 {
+                return Err(v.prop_error(
+                    name,
+                    format!("cropping ({name}={value}) is not yet supported (not yet implemented)"),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Errors if a plugin without nested objects has one.
+pub(super) fn no_children(v: &ObjectView<'_>) -> Result<()> {
+    match v.children.first() {
+        Some(child) => Err(SceneError::at(
+            &child.written().loc,
+            format!("<{}> cannot be nested in {}", child.written().tag, v.what()),
+        )),
+        None => Ok(()),
+    }
+}

@@ -1,0 +1,261 @@
+//! Sensor, film, reconstruction filter and sampler.
+
+use super::*;
+
+impl<'e> Builder<'e> {
+    /// `perspective` (see [`perspective`] for its parameters) with its film and sampler.
+    pub(super) fn sensor(&mut self, el: &'e Element) -> Result<(CameraDesc, FilmDesc, SamplerDesc)> {
+        let v = ObjectView::parse(el)?;
+        if v.plugin != "perspective" {
+            return Err(plugin_error(el));
+        }
+        let camera = perspective(&v)?;
+        let (mut film, mut sampler) = (None, None);
+        for child in &v.children {
+            let target = self.resolve(child)?;
+            match target.tag.as_str() {
+                "film" if film.is_none() => film = Some(self.film(target)?),
+                "sampler" if sampler.is_none() => sampler = Some(sampler_desc(target)?),
+                "film" | "sampler" => {
+                    return Err(SceneError::at(
+                        &child.written().loc,
+                        format!("a sensor takes only one <{}>", target.tag),
+                    ))
+                }
+                _ => return Err(misplaced(child, target, &v, "film or sampler")),
+            }
+        }
+        v.finish()?;
+        Ok((
+            camera,
+            film.unwrap_or_else(default_film),
+            sampler.unwrap_or_else(default_sampler),
+        ))
+    }
+
+    /// `hdrfilm`: `width` (768), `height` (576), nested `rfilter` (gaussian). Output-format
+    /// options are accepted when valid and ignored (pt writes its own formats); cropping and
+    /// `sample_border` are accepted only at their no-op values.
+    pub(super) fn film(&mut self, el: &'e Element) -> Result<FilmDesc> {
+        let v = ObjectView::parse(el)?;
+        if v.plugin != "hdrfilm" {
+            return Err(plugin_error(el));
+        }
+        let width = int_in(&v, "width", 768, 1, 1 << 16)? as u32;
+        let height = int_in(&v, "height", 576, 1, 1 << 16)? as u32;
+        one_of(
+            &v,
+            "pixel_format",
+            &["luminance", "luminance_alpha", "rgb", "rgba", "xyz", "xyza"],
+        )?;
+        one_of(&v, "component_format", &["float16", "float32", "uint32"])?;
+        one_of(&v, "file_format", &["openexr", "exr", "rgbe", "pfm"])?;
+        v.boolean("banner")?;
+        no_op_crop(&v, width, height)?;
+        if v.boolean("sample_border")? == Some(true) {
+            return Err(v.prop_error(
+                "sample_border",
+                "sample_border=true is not yet supported (not yet implemented)",
+            ));
+        }
+        let mut filter = None;
+        for child in &v.children {
+            let target = self.resolve(child)?;
+            match target.tag.as_str() {
+                "rfilter" if filter.is_none() => filter = Some(rfilter(target)?),
+                "rfilter" => {
+                    return Err(SceneError::at(
+                        &child.written().loc,
+                        "a film takes only one <rfilter>",
+                    ))
+                }
+                _ => return Err(misplaced(child, target, &v, "rfilter")),
+            }
+        }
+        v.finish()?;
+        Ok(FilmDesc {
+            width,
+            height,
+            filter: filter.unwrap_or(DEFAULT_FILTER),
+        })
+    }
+}
+
+/// `perspective`: `fov` (degrees, along `fov_axis`: x, y, diagonal, smaller or larger; default
+/// x) or `focal_length` ("50mm" style, on a 36 x 24 mm film's diagonal; default 50mm),
+/// `near_clip` (1e-2), `far_clip` (1e4), `to_world` (rotation and translation only, as in
+/// Mitsuba; a mirroring `scale x="-1"` is allowed), `focus_distance` (accepted, no effect on a
+/// pinhole).
+pub(super) fn perspective(v: &ObjectView<'_>) -> Result<CameraDesc> {
+    let projection = projection(v)?;
+    let near_clip = positive(v, "near_clip", 1e-2)?;
+    let far_clip = positive(v, "far_clip", 1e4)?;
+    if near_clip >= far_clip {
+        return Err(v.prop_error("near_clip", "near_clip must be smaller than far_clip"));
+    }
+    v.float("focus_distance")?;
+    let to_world = v.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+    if !is_affine(&to_world) || has_scale(&to_world) {
+        return Err(v.prop_error(
+            "to_world",
+            "the camera's to_world may only rotate, mirror and translate (Mitsuba rejects scale)",
+        ));
+    }
+    Ok(CameraDesc {
+        loc: v.el.loc.clone(),
+        projection,
+        to_world,
+        near_clip,
+        far_clip,
+    })
+}
+
+/// Mitsuba's `has_scale`: some axis changes length.
+pub(super) fn has_scale(m: &Mat4) -> bool {
+    let l = Mat3::from_mat4(*m);
+    [l.x_axis, l.y_axis, l.z_axis]
+        .iter()
+        .any(|c| (c.length_squared() - 1.0).abs() > 1e-3)
+}
+
+pub(super) fn projection(v: &ObjectView<'_>) -> Result<Projection> {
+    if v.has("fov") && v.has("focal_length") {
+        return Err(v.prop_error(
+            "focal_length",
+            "give either 'fov' or 'focal_length', not both",
+        ));
+    }
+    if let Some(fov) = v.float("fov")? {
+        if !(fov > 0.0 && fov < 180.0) {
+            return Err(v.prop_error(
+                "fov",
+                format!("fov must be between 0 and 180 degrees, got {fov}"),
+            ));
+        }
+        let axis = match v
+            .string("fov_axis")?
+            .map(|s| s.to_ascii_lowercase())
+            .as_deref()
+        {
+            None | Some("x") => FovAxis::X,
+            Some("y") => FovAxis::Y,
+            Some("diagonal") => FovAxis::Diagonal,
+            Some("smaller") => FovAxis::Smaller,
+            Some("larger") => FovAxis::Larger,
+            Some(other) => {
+                return Err(v.prop_error(
+                    "fov_axis",
+                    format!("fov_axis must be x, y, diagonal, smaller or larger, not \"{other}\""),
+                ))
+            }
+        };
+        return Ok(Projection::Perspective {
+            fov_deg: fov,
+            fov_axis: axis,
+        });
+    }
+    let text = v.string("focal_length")?.unwrap_or_else(|| "50mm".into());
+    let mm = text.trim().strip_suffix("mm").unwrap_or(text.trim());
+    let f = crate::props::parse_f32(mm)
+        .ok()
+        .filter(|f| *f > 0.0)
+        .ok_or_else(|| {
+            v.prop_error(
+                "focal_length",
+                format!("cannot read focal length \"{text}\" (expected e.g. 50mm)"),
+            )
+        })?;
+    // A 35 mm film is 36 x 24 mm; Mitsuba measures the focal length's view on its diagonal.
+    let diagonal = (36.0f32 * 36.0 + 24.0 * 24.0).sqrt();
+    let fov_deg = (2.0 * (diagonal / (2.0 * f)).atan()).to_degrees();
+    Ok(Projection::Perspective {
+        fov_deg,
+        fov_axis: FovAxis::Diagonal,
+    })
+}
+
+/// Mitsuba's default filter: Gaussian, stddev 0.5 pixel.
+pub(super) const DEFAULT_FILTER: FilterDesc = FilterDesc::Gaussian { stddev: 0.5 };
+
+/// `box` (no parameters: radius 0.5), `tent` (`radius`, 1), `gaussian` (`stddev`, 0.5).
+pub(super) fn rfilter(el: &Element) -> Result<FilterDesc> {
+    let v = ObjectView::parse(el)?;
+    let filter = match v.plugin.as_str() {
+        "box" => FilterDesc::Box { radius: 0.5 },
+        "tent" => FilterDesc::Tent {
+            radius: positive(&v, "radius", 1.0)?,
+        },
+        "gaussian" => FilterDesc::Gaussian {
+            stddev: positive(&v, "stddev", 0.5)?,
+        },
+        _ => return Err(plugin_error(el)),
+    };
+    no_children(&v)?;
+    v.finish()?;
+    Ok(filter)
+}
+
+/// `independent` and `stratified` (`sample_count` 4, `seed` 0; stratified also `jitter`).
+/// Stratified rounds the sample count up to a square, as Mitsuba does; the IR has no sampler
+/// kind, so the renderer samples it independently with that count.
+pub(super) fn sampler_desc(el: &Element) -> Result<SamplerDesc> {
+    let v = ObjectView::parse(el)?;
+    if !matches!(v.plugin.as_str(), "independent" | "stratified") {
+        return Err(plugin_error(el));
+    }
+    let mut sample_count = int_in(&v, "sample_count", 4, 1, u32::MAX as i64)? as u32;
+    let seed = int_in(&v, "seed", 0, 0, i64::MAX)? as u64;
+    if v.plugin == "stratified" {
+        v.boolean("jitter")?;
+        let side = (1u64..).find(|s| s * s >= sample_count as u64).unwrap_or(1);
+        sample_count = u32::try_from(side * side).unwrap_or(u32::MAX);
+    }
+    no_children(&v)?;
+    v.finish()?;
+    Ok(SamplerDesc { sample_count, seed })
+}
+
+/// Mitsuba's camera for scenes without a sensor: 45 degrees on x, looking along +z from in
+/// front of the scene's bounding box, far enough to see all of it.
+pub(super) fn default_camera(root: &Element, shapes: &[ShapeDesc]) -> CameraDesc {
+    let mut camera = CameraDesc {
+        loc: root.loc.clone(),
+        projection: Projection::Perspective {
+            fov_deg: 45.0,
+            fov_axis: FovAxis::X,
+        },
+        to_world: Mat4::IDENTITY,
+        near_clip: 1e-2,
+        far_clip: 1e4,
+    };
+    if let Some((min, max)) = bounds(shapes) {
+        let extent = (max - min).max_element();
+        let distance = extent / (2.0 * (22.5f32).to_radians().tan());
+        if distance > 0.0 && distance.is_finite() {
+            let center = (min + max) * 0.5;
+            camera.to_world =
+                Mat4::from_translation(Vec3::new(center.x, center.y, min.z - distance));
+            camera.near_clip = distance / 100.0;
+            camera.far_clip = extent * 5.0 + distance;
+        }
+    }
+    camera
+}
+
+/// World-space bounding box of all shapes, if there is any geometry.
+pub(super) fn bounds(shapes: &[ShapeDesc]) -> Option<(Vec3, Vec3)> {
+    let mut acc: Option<(Vec3, Vec3)> = None;
+    let mut add = |p: Vec3| {
+        acc = Some(acc.map_or((p, p), |(lo, hi)| (lo.min(p), hi.max(p))));
+    };
+    for shape in shapes {
+        match &shape.geometry {
+            Geometry::Mesh(m) => m.positions.iter().for_each(|&p| add(p)),
+            Geometry::Sphere { center, radius, .. } => {
+                add(*center - *radius);
+                add(*center + *radius);
+            }
+        }
+    }
+    acc
+}

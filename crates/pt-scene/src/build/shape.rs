@@ -1,0 +1,216 @@
+//! Shapes and their interior media.
+
+use super::*;
+
+impl<'e> Builder<'e> {
+    /// A shape with its geometry (see [`crate::shapes`]), BSDF and optional area emitter.
+    pub(super) fn shape(&mut self, el: &'e Element) -> Result<ShapeDesc> {
+        let v = ObjectView::parse(el)?;
+        let to_world = v.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+        let flip = v.boolean("flip_normals")?.unwrap_or(false);
+        let geometry = match v.plugin.as_str() {
+            "rectangle" => self.mesh(&v, shapes::rectangle(), &to_world, flip)?,
+            "disk" => self.mesh(&v, shapes::disk(), &to_world, flip)?,
+            "cube" => {
+                // Mitsuba's cube is a mesh and takes the mesh option; flat faces either way.
+                v.boolean("face_normals")?;
+                self.mesh(&v, shapes::cube(), &to_world, flip)?
+            }
+            "sphere" => {
+                let center = v.vec3("center")?.unwrap_or(Vec3::ZERO);
+                let radius = positive(&v, "radius", 1.0)?;
+                shapes::sphere(center, radius, &to_world, flip)
+                    .map_err(|m| SceneError::at(&el.loc, m))?
+            }
+            "obj" => self.obj(&v, &to_world, flip)?,
+            "gltf" => self.gltf(&v, &to_world, flip)?,
+            _ => return Err(plugin_error(el)),
+        };
+        let (bsdf, emitter, interior) = self.shape_children(&v)?;
+        v.finish()?;
+        let bsdf = match bsdf {
+            Some(b) => b,
+            None => self.default_bsdf(el, emitter.is_some()),
+        };
+        Ok(ShapeDesc {
+            loc: el.loc.clone(),
+            plugin: v.plugin.clone(),
+            id: el.attr("id").map(str::to_string),
+            geometry,
+            bsdf,
+            emitter,
+            interior,
+        })
+    }
+
+    pub(super) fn mesh(
+        &self,
+        v: &ObjectView<'_>,
+        local: shapes::LocalMesh,
+        m: &Mat4,
+        flip: bool,
+    ) -> Result<Geometry> {
+        shapes::to_world(local, m, flip)
+            .map(Geometry::Mesh)
+            .map_err(|msg| SceneError::at(&v.el.loc, msg))
+    }
+
+    /// `obj`: `filename` (relative to the file naming it, then the main scene's folder, then
+    /// `<path>` folders), `face_normals` (false), `flip_tex_coords` (true).
+    pub(super) fn obj(&self, v: &ObjectView<'_>, m: &Mat4, flip: bool) -> Result<Geometry> {
+        let err = |msg: String| SceneError::at(&v.el.loc, msg);
+        let name = v
+            .string("filename")?
+            .ok_or_else(|| err("missing <string name=\"filename\" .../>".into()))?;
+        let opts = ObjOptions {
+            face_normals: v.boolean("face_normals")?.unwrap_or(false),
+            flip_tex_coords: v.boolean("flip_tex_coords")?.unwrap_or(true),
+        };
+        let path = resolve_file(&name, &v.el.dir, &[self.base_dir], self.search_paths);
+        let local = obj::load_obj(&path, &name, &opts).map_err(err)?;
+        let mut mesh =
+            shapes::to_world(local, m, flip).map_err(|e| err(format!("mesh '{name}': {e}")))?;
+        if mesh.normals.is_none() && !opts.face_normals {
+            mesh.normals = Some(shapes::vertex_normals(&mesh.positions, &mesh.indices));
+        }
+        Ok(Geometry::Mesh(mesh))
+    }
+
+    /// `gltf` (project extension): every triangle primitive of a glTF 2.0 file's scene as one
+    /// mesh (node transforms applied, then `to_world`), with this shape's BSDF; the file's
+    /// materials, cameras and lights are not used. `filename` is resolved as for `obj`.
+    pub(super) fn gltf(&self, v: &ObjectView<'_>, m: &Mat4, flip: bool) -> Result<Geometry> {
+        let err = |msg: String| SceneError::at(&v.el.loc, msg);
+        let name = v
+            .string("filename")?
+            .ok_or_else(|| err("missing <string name=\"filename\" .../>".into()))?;
+        let path = resolve_file(&name, &v.el.dir, &[self.base_dir], self.search_paths);
+        let mesh = crate::gltf::load_mesh(&path).map_err(err)?;
+        let local = shapes::LocalMesh {
+            positions: mesh.positions,
+            normals: mesh.normals,
+            uvs: mesh.uvs,
+            indices: mesh.indices,
+            attributes: mesh.attributes,
+        };
+        shapes::to_world(local, m, flip)
+            .map(Geometry::Mesh)
+            .map_err(|e| err(format!("mesh '{name}': {e}")))
+    }
+
+    /// A shape's nested BSDF (or `<ref>` to one), area emitter and interior medium, at most one
+    /// of each.
+    pub(super) fn shape_children(
+        &mut self,
+        v: &ObjectView<'e>,
+    ) -> Result<(Option<usize>, Option<AreaEmitterDesc>, Option<MediumDesc>)> {
+        let (mut bsdf, mut emitter, mut interior) = (None, None, None);
+        for child in &v.children {
+            let target = self.resolve(child)?;
+            let once = |what: &str| {
+                SceneError::at(
+                    &child.written().loc,
+                    format!("a shape takes only one {what}"),
+                )
+            };
+            match target.tag.as_str() {
+                "bsdf" if bsdf.is_some() => return Err(once("BSDF")),
+                "bsdf" => bsdf = Some(self.bsdf_for_shape(target)?),
+                "emitter" if emitter.is_some() => return Err(once("emitter")),
+                "emitter" => emitter = Some(self.area_emitter(target)?),
+                "medium" => {
+                    let written = child.written();
+                    match written.attr("name") {
+                        Some("interior") if interior.is_some() => return Err(once("interior medium")),
+                        Some("interior") => interior = Some(medium(target)?),
+                        Some("exterior") => {
+                            return Err(SceneError::at(
+                                &written.loc,
+                                "exterior media are not yet supported (not yet implemented): the space outside all shapes is vacuum; give the medium to the shape that encloses it as name=\"interior\"",
+                            ))
+                        }
+                        other => {
+                            return Err(SceneError::at(
+                                &written.loc,
+                                format!(
+                                    "a shape's <medium> needs name=\"interior\" or name=\"exterior\", got {}",
+                                    other.map_or("none".to_string(), |n| format!("\"{n}\""))
+                                ),
+                            ))
+                        }
+                    }
+                }
+                _ => return Err(misplaced(child, target, v, "bsdf, emitter or medium")),
+            }
+        }
+        Ok((bsdf, emitter, interior))
+    }
+}
+
+/// `homogeneous` medium, purely absorbing: `sigma_t` (extinction per scene unit: float, rgb or
+/// spectrum; default 1), `scale` (multiplies sigma_t; default 1), `albedo` (must be 0: scattering
+/// media are not implemented, and Mitsuba's default albedo is 0.75, so it must be written),
+/// `sample_emitters` and `has_spectral_extinction` (accepted; no effect on an absorbing medium).
+pub(super) fn medium(el: &Element) -> Result<MediumDesc> {
+    let v = ObjectView::parse(el)?;
+    if v.plugin != "homogeneous" {
+        return Err(plugin_error(el));
+    }
+    if let Some(child) = v.children.first() {
+        let what = child.written();
+        return Err(SceneError::at(
+            &what.loc,
+            "a phase function or nested object in a medium is not yet supported (not yet implemented): media here only absorb",
+        ));
+    }
+    let sigma_t = v
+        .spectrum("sigma_t")?
+        .unwrap_or(SpectrumDesc::Constant(1.0));
+    let scale = v.float("scale")?.unwrap_or(1.0);
+    if !(scale.is_finite() && scale >= 0.0) {
+        return Err(v.prop_error(
+            "scale",
+            format!("scale must be finite and >= 0, got {scale}"),
+        ));
+    }
+    if sigma_t
+        .values()
+        .iter()
+        .any(|x| !(x.is_finite() && *x >= 0.0))
+    {
+        return Err(v.prop_error("sigma_t", "sigma_t must be finite and >= 0"));
+    }
+    let albedo = v.spectrum("albedo")?;
+    let absorbing = matches!(&albedo, Some(a) if a.values().iter().all(|x| *x == 0.0));
+    if !absorbing {
+        let message = if albedo.is_none() {
+            "a medium without 'albedo' scatters (Mitsuba's default albedo is 0.75); scattering media are not yet supported (not yet implemented): write <float name=\"albedo\" value=\"0\"/> for an absorbing medium"
+        } else {
+            "scattering media (albedo > 0) are not yet supported (not yet implemented): only albedo 0 (pure absorption, Beer-Lambert)"
+        };
+        return Err(match albedo {
+            Some(_) => v.prop_error("albedo", message),
+            None => SceneError::at(&el.loc, message),
+        });
+    }
+    v.boolean("sample_emitters")?;
+    v.boolean("has_spectral_extinction")?;
+    v.finish()?;
+    let sigma_t = match sigma_t {
+        SpectrumDesc::Constant(c) => SpectrumDesc::Constant(c * scale),
+        SpectrumDesc::Rgb(c) => SpectrumDesc::Rgb(c.map(|x| x * scale)),
+        SpectrumDesc::Tabulated(p) => SpectrumDesc::Tabulated(std::sync::Arc::new(
+            p.iter().map(|&(w, x)| (w, x * scale)).collect(),
+        )),
+        s @ (SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. }) => {
+            return Err(v.prop_error(
+                "sigma_t",
+                format!("sigma_t cannot be an emission spectrum ({})", s.form_name()),
+            ));
+        }
+    };
+    Ok(MediumDesc {
+        loc: el.loc.clone(),
+        sigma_t,
+    })
+}

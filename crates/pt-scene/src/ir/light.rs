@@ -1,0 +1,88 @@
+//! Emitters: area emitters attached to shapes, and lights on their own (point, spot,
+//! directional, sun, constant, environment map).
+
+use super::{SourceLoc, SpectrumDesc, TextureDesc};
+use glam::{Mat4, Vec3};
+use std::path::PathBuf;
+
+/// An area emitter attached to a shape: emits `radiance` from the shape's front side only
+/// (the side its normal points to), as Mitsuba's `area` emitter does.
+#[derive(Clone, Debug)]
+pub struct AreaEmitterDesc {
+    /// Where it was defined.
+    pub loc: SourceLoc,
+    /// Emitted radiance, W sr^-1 m^-2: a constant or a texture over the shape's texture
+    /// coordinates (a screen, a monitor; glTF `emissiveFactor` times `emissiveTexture`).
+    /// RGB values are emission colours: in spectral mode they are upsampled and multiplied by
+    /// D65 (Mitsuba's `d65` texture, which may also be written around the bitmap).
+    pub radiance: TextureDesc,
+    /// pt extension: spectra of the display's red, green and blue primaries, which the
+    /// radiance bitmap's linear RGB drive in spectral mode (see the loader's `area_emitter`).
+    pub primaries: Option<Box<[SpectrumDesc; 3]>>,
+}
+
+/// An emitter that is not attached to a shape, with where it was defined.
+#[derive(Clone, Debug)]
+pub struct LightDesc {
+    /// Where it was defined.
+    pub loc: SourceLoc,
+    /// Its type and parameters.
+    pub kind: LightKind,
+}
+
+/// Emitters not attached to shapes. Directions are unit vectors in world space.
+#[derive(Clone, Debug)]
+pub enum LightKind {
+    /// Isotropic point light (Mitsuba `point`): `intensity` in W/sr, inverse-square falloff.
+    Point {
+        /// Position, world space.
+        position: Vec3,
+        /// Radiant intensity, W/sr.
+        intensity: SpectrumDesc,
+    },
+    /// Spot light (Mitsuba `spot`): intensity `intensity` (W/sr) on its axis (local +z of
+    /// `to_world`), full until `beam_width_deg` off axis, falling linearly in angle to 0 at
+    /// `cutoff_deg`.
+    Spot {
+        /// Light-to-world transform; the light sits at its origin and points along its +z.
+        to_world: Mat4,
+        /// Radiant intensity on the axis, W/sr.
+        intensity: SpectrumDesc,
+        /// Angle from the axis beyond which no light leaves, degrees.
+        cutoff_deg: f32,
+        /// Angle from the axis within which the intensity is full, degrees.
+        beam_width_deg: f32,
+    },
+    /// A distant light from one direction (Mitsuba `directional`).
+    Directional {
+        /// Direction the light travels in (from the light towards the scene), unit, world.
+        direction: Vec3,
+        /// Irradiance on a surface facing the light, W/m^2.
+        irradiance: SpectrumDesc,
+    },
+    /// A sun: a distant light of finite angular diameter, uniform radiance over its disk, so that
+    /// shadows get a penumbra (project extension `sun`).
+    Sun {
+        /// Direction the light travels in (from the sun towards the scene), unit, world.
+        direction: Vec3,
+        /// Irradiance on a surface facing the sun, W/m^2.
+        irradiance: SpectrumDesc,
+        /// Full angular diameter of the disk, degrees (the Sun's mean is 0.5338).
+        angular_diameter_deg: f32,
+    },
+    /// Uniform radiance from every direction (Mitsuba `constant`).
+    Constant {
+        /// Radiance, W sr^-1 m^-2.
+        radiance: SpectrumDesc,
+    },
+    /// Environment map (Mitsuba `envmap`): a latitude-longitude image of incident radiance.
+    EnvMap {
+        /// The image file (EXR), resolved.
+        filename: PathBuf,
+        /// Map-to-world transform (rotation).
+        to_world: Mat4,
+        /// Factor applied to the image's values.
+        scale: f32,
+    },
+}
+

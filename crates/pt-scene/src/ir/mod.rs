@@ -1,0 +1,150 @@
+//! The scene description IR: what a loader produces and the renderer consumes.
+//!
+//! Everything here is in **world space** unless said otherwise, lengths in the scene's units
+//! (metres by convention), angles in degrees where the Mitsuba format uses degrees (camera fov).
+//! Colours are linear Rec.709 RGB. Every element remembers where it came from ([`SourceLoc`]) so
+//! that errors found later (in the renderer) can still name the file, line and element.
+
+mod bsdf;
+mod light;
+mod sensor;
+mod shape;
+mod spectrum;
+mod texture;
+
+pub use bsdf::*;
+pub use light::*;
+pub use sensor::*;
+pub use shape::*;
+pub use spectrum::*;
+pub use texture::*;
+
+use std::fmt;
+use std::path::PathBuf;
+
+/// A position in a scene file: file path, 1-based line and column, and the element's name
+/// (for example `shape type="obj"`).
+#[derive(Clone, Debug, PartialEq, Eq, Default)]
+pub struct SourceLoc {
+    /// The file the element was read from (or `<built-in>` for embedded scenes).
+    pub file: PathBuf,
+    /// 1-based line number.
+    pub line: u32,
+    /// 1-based column number.
+    pub col: u32,
+    /// The element as written, e.g. `shape type="rectangle"` or `float name="fov"`.
+    pub element: String,
+}
+
+impl fmt::Display for SourceLoc {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{}:{}:{}: <{}>",
+            self.file.display(),
+            self.line,
+            self.col,
+            self.element
+        )
+    }
+}
+
+/// A complete scene: camera, film, sampler, integrator settings, shapes and their materials.
+#[derive(Clone, Debug)]
+pub struct SceneDesc {
+    /// The scene file (or `<built-in>`).
+    pub source: PathBuf,
+    /// The (only) camera.
+    pub camera: CameraDesc,
+    /// Image size and reconstruction filter.
+    pub film: FilmDesc,
+    /// Sample count and seed.
+    pub sampler: SamplerDesc,
+    /// Light transport settings.
+    pub integrator: IntegratorDesc,
+    /// All shapes, in file order.
+    pub shapes: Vec<ShapeDesc>,
+    /// All BSDFs referenced by shapes (shared ones appear once). `ShapeDesc::bsdf` indexes this.
+    pub bsdfs: Vec<BsdfDesc>,
+    /// Emitters that are not attached to a shape (point, spot, directional, sun, environment).
+    pub lights: Vec<LightDesc>,
+}
+
+
+impl SceneDesc {
+    /// Why the scene needs spectral transport (the first wavelength-dependent input found, with
+    /// its location), or `None` when RGB is exact for it.
+    pub fn spectral_reason(&self) -> Option<String> {
+        /// Every BSDF in `b`, `b` first, then the nested ones depth first.
+        fn all(b: &BsdfDesc) -> Vec<&BsdfDesc> {
+            let mut v = vec![b];
+            for inner in b.kind.nested() {
+                v.extend(all(inner));
+            }
+            v
+        }
+        let models: Vec<&BsdfDesc> = self.bsdfs.iter().flat_map(all).collect();
+        if let Some(b) = models
+            .iter()
+            .find(|b| matches!(b.kind, BsdfKind::Fluorescent { .. }))
+        {
+            return Some(format!(
+                "{}: fluorescence moves light between wavelengths (RGB mode cannot express it)",
+                b.loc
+            ));
+        }
+        if let Some(b) = models.iter().find(|b| {
+            matches!(
+                b.kind,
+                BsdfKind::ThinFilm { .. } | BsdfKind::RoughThinFilm { .. }
+            )
+        }) {
+            return Some(format!(
+                "{}: thin-film interference depends on wavelength (RGB mode can only approximate it, with Belcour & Barla 2017)",
+                b.loc
+            ));
+        }
+        for b in &models {
+            let textured = b.kind.textures().into_iter().flat_map(|(_, t)| t.spectra());
+            if let Some(s) = textured
+                .chain(b.kind.fixed_spectra())
+                .find(|s| s.is_spectral())
+            {
+                return Some(format!("{}: {} spectrum in a BSDF", b.loc, s.form_name()));
+            }
+        }
+        for s in &self.shapes {
+            if let Some(e) = &s.emitter {
+                if let Some(sp) = e.radiance.spectra().into_iter().find(|s| s.is_spectral()) {
+                    return Some(format!(
+                        "{}: {} emission spectrum",
+                        e.loc,
+                        sp.form_name()
+                    ));
+                }
+                if e.primaries.is_some() {
+                    return Some(format!(
+                        "{}: display primaries (spectra driven by the radiance texture)",
+                        e.loc
+                    ));
+                }
+            }
+        }
+        for l in &self.lights {
+            let spectrum = match &l.kind {
+                LightKind::Point { intensity, .. } | LightKind::Spot { intensity, .. } => {
+                    Some(intensity)
+                }
+                LightKind::Directional { irradiance, .. } | LightKind::Sun { irradiance, .. } => {
+                    Some(irradiance)
+                }
+                LightKind::Constant { radiance } => Some(radiance),
+                LightKind::EnvMap { .. } => None,
+            };
+            if let Some(s) = spectrum.filter(|s| s.is_spectral()) {
+                return Some(format!("{}: {} emission spectrum", l.loc, s.form_name()));
+            }
+        }
+        None
+    }
+}

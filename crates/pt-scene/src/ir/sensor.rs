@@ -1,0 +1,212 @@
+//! Sensor (camera, film, sampler) and integrator settings.
+
+use super::SourceLoc;
+use glam::Mat4;
+
+/// Which image axis the field of view spans (Mitsuba's `fov_axis`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FovAxis {
+    /// Horizontal (the default).
+    X,
+    /// Vertical.
+    Y,
+    /// The image diagonal.
+    Diagonal,
+    /// The smaller of the two image axes.
+    Smaller,
+    /// The larger of the two image axes.
+    Larger,
+}
+
+/// Camera projection.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// Pinhole perspective camera with the full field of view in degrees along `fov_axis`.
+    Perspective {
+        /// Full field of view in degrees.
+        fov_deg: f32,
+        /// Which image axis `fov_deg` spans.
+        fov_axis: FovAxis,
+    },
+}
+
+/// A camera. Camera space follows Mitsuba: it looks along +z, +y is up, +x is *left* in the image
+/// (so image x grows towards camera -x). `to_world` maps camera space to world space.
+#[derive(Clone, Debug)]
+pub struct CameraDesc {
+    /// Where it was defined (for errors).
+    pub loc: SourceLoc,
+    /// Projection and its parameters.
+    pub projection: Projection,
+    /// Camera-to-world transform (may contain scale, e.g. a mirroring `scale x=-1`).
+    pub to_world: Mat4,
+    /// Near clip distance along the ray, scene units.
+    pub near_clip: f32,
+    /// Far clip distance along the ray, scene units.
+    pub far_clip: f32,
+}
+
+/// Pixel reconstruction filter (Mitsuba's `rfilter`). Radii in pixels.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FilterDesc {
+    /// Box of the given radius (Mitsuba default radius 0.5: one pixel).
+    Box {
+        /// Half-width in pixels.
+        radius: f32,
+    },
+    /// Tent (triangle) of the given radius (Mitsuba default 1.0).
+    Tent {
+        /// Half-width in pixels.
+        radius: f32,
+    },
+    /// Gaussian with standard deviation `stddev` (Mitsuba default 0.5), truncated at 4 stddev.
+    Gaussian {
+        /// Standard deviation in pixels.
+        stddev: f32,
+    },
+}
+
+/// Film: image size and reconstruction filter.
+#[derive(Clone, Debug)]
+pub struct FilmDesc {
+    /// Image width in pixels.
+    pub width: u32,
+    /// Image height in pixels.
+    pub height: u32,
+    /// Reconstruction filter (Mitsuba's default is a Gaussian with stddev 0.5).
+    pub filter: FilterDesc,
+}
+
+/// Sampler settings.
+#[derive(Clone, Debug)]
+pub struct SamplerDesc {
+    /// Samples per pixel.
+    pub sample_count: u32,
+    /// Seed of the random streams (Mitsuba default 0).
+    pub seed: u64,
+}
+
+/// Which integrator the scene asks for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IntegratorKind {
+    /// Unidirectional path tracing with NEE and MIS (Mitsuba `path`).
+    Path,
+    /// Path tracing through media (Mitsuba `volpath`): as `Path`, and rays inside a shape with an
+    /// interior medium are attenuated by it. (`Path` ignores media, as Mitsuba's does.)
+    VolPath,
+    /// Direct illumination only (Mitsuba `direct`): equivalent to `path` with max_depth 2.
+    Direct,
+    /// Radiosity (project extension `radiosity`): finite elements for diffuse scenes.
+    Radiosity,
+}
+
+/// Which radiosity solver to use (`solver`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum RadiositySolver {
+    /// Jacobi iteration (parallel).
+    Jacobi,
+    /// Gauss-Seidel iteration (sequential, in place), the default.
+    #[default]
+    GaussSeidel,
+    /// Progressive refinement by shooting (Cohen et al. 1988).
+    Progressive,
+}
+
+/// How a radiosity solution is turned into an image (`display`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum RadiosityDisplay {
+    /// Piecewise constant: one value per patch.
+    Constant,
+    /// Vertex-smoothed, interpolated barycentrically (the default).
+    #[default]
+    Smoothed,
+    /// One diffuse bounce from the visible point, reading the patch radiosities (final gather).
+    FinalGather,
+}
+
+/// How estimated form factors are made reciprocal (`reciprocity`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Reciprocity {
+    /// Keep the raw ray-cast estimates (row sums exact, reciprocity only in expectation).
+    None,
+    /// Average `A_i F_ij` and `A_j F_ji` (reciprocity exact, row sums off by the estimates' noise).
+    Average,
+    /// Average, then rescale symmetrically so that row sums equal the measured hit fractions
+    /// (the default): reciprocity exact and row sums to 1e-6.
+    #[default]
+    Balanced,
+}
+
+/// Parses the names used in `<integrator type="radiosity">` and on the command line
+/// (case-insensitive, `-` and `_` interchangeable); the error lists the accepted names.
+macro_rules! named {
+    ($ty:ty, $what:literal, $($name:literal => $v:expr),+ $(,)?) => {
+        impl std::str::FromStr for $ty {
+            type Err = String;
+            fn from_str(s: &str) -> Result<Self, Self::Err> {
+                match s.to_ascii_lowercase().replace('-', "_").as_str() {
+                    $($name => Ok($v),)+
+                    _ => Err(format!(
+                        concat!("unknown ", $what, " '{}' (expected one of: {})"),
+                        s,
+                        [$($name),+].join(", ")
+                    )),
+                }
+            }
+        }
+    };
+}
+
+named!(RadiositySolver, "solver",
+    "jacobi" => RadiositySolver::Jacobi,
+    "gauss_seidel" => RadiositySolver::GaussSeidel,
+    "progressive" => RadiositySolver::Progressive);
+named!(RadiosityDisplay, "display",
+    "constant" => RadiosityDisplay::Constant,
+    "smoothed" => RadiosityDisplay::Smoothed,
+    "final_gather" => RadiosityDisplay::FinalGather);
+named!(Reciprocity, "reciprocity",
+    "none" => Reciprocity::None,
+    "average" => Reciprocity::Average,
+    "balanced" => Reciprocity::Balanced);
+
+/// Options of `<integrator type="radiosity">`, as written (ranges are validated by the
+/// radiosity crate, which reports errors at the integrator's location). `None` means the
+/// solver's default.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RadiosityOptions {
+    /// Longest patch edge, scene units.
+    pub patch_size: Option<f32>,
+    /// Form-factor rays per patch.
+    pub rays_per_patch: Option<u32>,
+    /// Relative residual at which the solver stops.
+    pub tolerance: Option<f32>,
+    /// Iteration cap.
+    pub max_iterations: Option<u32>,
+    /// The solver.
+    pub solver: Option<RadiositySolver>,
+    /// How the solution is displayed.
+    pub display: Option<RadiosityDisplay>,
+    /// How form factors are made reciprocal.
+    pub reciprocity: Option<Reciprocity>,
+}
+
+/// Integrator settings with Mitsuba semantics.
+#[derive(Clone, Debug)]
+pub struct IntegratorDesc {
+    /// Which integrator.
+    pub kind: IntegratorKind,
+    /// Longest path in segments: 1 = emitters seen directly, 2 = direct light, -1 = unlimited.
+    pub max_depth: i32,
+    /// Depth at which Russian roulette starts (Mitsuba default 5).
+    pub rr_depth: u32,
+    /// Whether directly visible emitters are hidden (black).
+    pub hide_emitters: bool,
+    /// Whether the scene wrapped the integrator in `moment` (asks for a variance output).
+    pub moment: bool,
+    /// Radiosity options (with `IntegratorKind::Radiosity`).
+    pub radiosity: RadiosityOptions,
+    /// Where the integrator was defined (default location if the scene has none).
+    pub loc: SourceLoc,
+}
+

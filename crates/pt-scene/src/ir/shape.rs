@@ -1,0 +1,117 @@
+//! Shapes in world space: triangle meshes (with their vertex and face attributes) and
+//! analytic spheres, with their material, emitter and interior medium.
+
+use super::{AreaEmitterDesc, SourceLoc, SpectrumDesc};
+use glam::{Mat3, Vec2, Vec3};
+
+/// A triangle mesh in world space.
+#[derive(Clone, Debug, Default)]
+pub struct TriangleMesh {
+    /// Vertex positions, world space.
+    pub positions: Vec<Vec3>,
+    /// Per-vertex shading normals (unit length, world space), if the mesh has them and
+    /// `face_normals` is off. Flipped already when `flip_normals` is set.
+    pub normals: Option<Vec<Vec3>>,
+    /// Per-vertex texture coordinates.
+    pub uvs: Option<Vec<Vec2>>,
+    /// Per-vertex tangents for normal maps (glTF `TANGENT`, or generated from the uvs): xyz the
+    /// direction of increasing u, world space; w = +1 or -1, the handedness: the bitangent is
+    /// `w (n x t)` (glTF's convention).
+    pub tangents: Option<Vec<glam::Vec4>>,
+    /// Triangles as vertex index triples, counter-clockwise seen from the front side
+    /// (the side the geometric normal `(p1-p0) x (p2-p0)` points to). `flip_normals` has already
+    /// reversed the winding where asked.
+    pub indices: Vec<[u32; 3]>,
+    /// Named per-vertex or per-face values (Mitsuba's mesh attributes, read by the
+    /// `mesh_attribute` texture): `vertex_color` from a PLY file's colours, `COLOR_0` of a
+    /// glTF primitive, ...
+    pub attributes: Vec<MeshAttribute>,
+}
+
+/// Whether a mesh attribute has a value per vertex or per triangle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AttributeKind {
+    /// One value per vertex, interpolated barycentrically (name prefix `vertex_`).
+    Vertex,
+    /// One value per triangle (name prefix `face_`).
+    Face,
+}
+
+/// A named mesh attribute: `dims` (1 or 3) numbers per vertex or per triangle.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshAttribute {
+    /// The full name, with its `vertex_` or `face_` prefix (as `mesh_attribute` names it).
+    pub name: String,
+    /// Per vertex or per triangle.
+    pub kind: AttributeKind,
+    /// Numbers per element: 1 (a scalar) or 3 (a colour or vector).
+    pub dims: u32,
+    /// `dims` numbers per vertex (or triangle), in order; colours are linear.
+    pub values: Vec<f32>,
+}
+
+impl MeshAttribute {
+    /// The kind an attribute's name implies (`vertex_...` or `face_...`), if either.
+    pub fn kind_of(name: &str) -> Option<AttributeKind> {
+        if name.starts_with("vertex_") {
+            Some(AttributeKind::Vertex)
+        } else if name.starts_with("face_") {
+            Some(AttributeKind::Face)
+        } else {
+            None
+        }
+    }
+}
+
+/// Geometry of a shape, in world space.
+#[derive(Clone, Debug)]
+pub enum Geometry {
+    /// Triangles (obj, rectangle, cube, disk are all turned into this).
+    Mesh(TriangleMesh),
+    /// An analytic sphere. `flip_normals` makes its normal point inwards.
+    Sphere {
+        /// Centre, world space.
+        center: Vec3,
+        /// Radius, scene units.
+        radius: f32,
+        /// Whether the normal points inwards.
+        flip_normals: bool,
+        /// The rotation (orthonormal columns) from the sphere's object space to world space:
+        /// texture coordinates and the tangent dp/du follow the object-space z axis, as in
+        /// Mitsuba (u = azimuth about z / 2 pi, v = polar angle from +z / pi).
+        frame: Mat3,
+    },
+}
+
+/// A shape with its material and optional emitter.
+#[derive(Clone, Debug)]
+pub struct ShapeDesc {
+    /// Where it was defined.
+    pub loc: SourceLoc,
+    /// The plugin name (`obj`, `rectangle`, `cube`, `sphere`, `disk`), for `pt info`.
+    pub plugin: String,
+    /// The `id` attribute, if any.
+    pub id: Option<String>,
+    /// World-space geometry.
+    pub geometry: Geometry,
+    /// Index into `SceneDesc::bsdfs`. A shape without a BSDF gets Mitsuba's default
+    /// (diffuse, reflectance 0.5), which the loader inserts explicitly.
+    pub bsdf: usize,
+    /// The area emitter, if the shape emits.
+    pub emitter: Option<AreaEmitterDesc>,
+    /// The medium inside the shape (Mitsuba `<medium name="interior">`), if any. Rays that
+    /// refract into the shape are attenuated by it until they leave.
+    pub interior: Option<MediumDesc>,
+}
+
+/// A homogeneous, purely absorbing medium (Mitsuba `homogeneous` with `albedo` 0): radiance
+/// travelling a distance d through it is multiplied by exp(-sigma_t d) (Beer-Lambert).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MediumDesc {
+    /// Where it was defined.
+    pub loc: SourceLoc,
+    /// Extinction coefficient per scene unit of length, Mitsuba's `sigma_t` already multiplied by
+    /// its `scale`. Linear RGB, a constant or a tabulated spectrum, each value >= 0.
+    pub sigma_t: SpectrumDesc,
+}
+

@@ -1,0 +1,464 @@
+//! BSDFs, textures, spectra and emitters.
+
+use super::*;
+
+#[test]
+fn spectrum_pairs_are_tabulated_spectra() {
+    let s = load(&scene(
+        "<shape type=\"cube\"><bsdf type=\"diffuse\">\n<spectrum name=\"reflectance\" value=\"400:0.1, 700:0.5\"/>\n</bsdf></shape>",
+    ))
+    .unwrap();
+    assert!(
+        matches!(&s.bsdfs[0].kind, BsdfKind::Diffuse { reflectance: TextureDesc::Constant(SpectrumDesc::Tabulated(p)) } if p.as_slice() == [(400.0, 0.1), (700.0, 0.5)])
+    );
+    assert!(s.spectral_reason().unwrap().contains("tabulated spectrum"));
+    // Malformed pairs name the element.
+    for bad in [
+        "400:0.1",
+        "500:0.1, 400:0.2",
+        "400:x, 500:1",
+        "400:0.1; 500:0.2",
+    ] {
+        let e = fail(&scene(&format!(
+            "<shape type=\"cube\"><bsdf type=\"diffuse\">\n<spectrum name=\"reflectance\" value=\"{bad}\"/>\n</bsdf></shape>"
+        )));
+        assert_eq!(e.loc.as_ref().unwrap().line, 3, "{bad}: {e}");
+    }
+    let s = load(&scene(
+        "<shape type=\"cube\"><bsdf type=\"diffuse\"><spectrum name=\"reflectance\" value=\"0.3\"/></bsdf></shape>",
+    ))
+    .unwrap();
+    assert!(
+        matches!(s.bsdfs[0].kind, BsdfKind::Diffuse { reflectance: TextureDesc::Constant(SpectrumDesc::Constant(r)) } if r == 0.3)
+    );
+}
+
+#[test]
+fn spectrum_files_blackbody_and_named_illuminants() {
+    // A file of pairs, relative to the XML file, with comments, blank lines and commas.
+    let dir = temp_dir("spectrum-file");
+    std::fs::write(
+        dir.join("refl.spd"),
+        "# wavelength value\n400 0.25\n\n550, 0.5  # mid\n700\t0.75\n",
+    )
+    .unwrap();
+    std::fs::write(dir.join("bad.spd"), "400 0.1\n380 0.2\n").unwrap();
+    std::fs::write(dir.join("one.spd"), "400 0.1\n").unwrap();
+    std::fs::write(dir.join("text.spd"), "400 0.1\n500 x\n").unwrap();
+    let body = |f: &str| {
+        scene(&format!("<shape type=\"cube\"><bsdf type=\"diffuse\">\n<spectrum name=\"reflectance\" filename=\"{f}\"/>\n</bsdf></shape>"))
+    };
+    std::fs::write(dir.join("ok.xml"), body("refl.spd")).unwrap();
+    let s = load_file(&dir.join("ok.xml"), &[]).unwrap();
+    assert!(
+        matches!(&s.bsdfs[0].kind, BsdfKind::Diffuse { reflectance: TextureDesc::Constant(SpectrumDesc::Tabulated(p)) } if p.as_slice() == [(400.0, 0.25), (550.0, 0.5), (700.0, 0.75)])
+    );
+    // Bad files: the error names the XML element (line 3) and the data file's line.
+    for (f, text) in [
+        ("bad.spd", "line 2: wavelengths must increase"),
+        ("one.spd", "at least two"),
+        ("text.spd", "line 2: cannot parse 'x'"),
+        ("missing.spd", "cannot read spectrum file"),
+    ] {
+        std::fs::write(dir.join("bad.xml"), body(f)).unwrap();
+        let e = load_file(&dir.join("bad.xml"), &[]).expect_err(f);
+        assert_eq!(e.loc.as_ref().unwrap().line, 3, "{f}: {e}");
+        assert!(e.message.contains(text), "{f}: {e}");
+    }
+
+    // Blackbody and named illuminants as emitter radiance.
+    let emitter = |spec: &str| {
+        scene(&format!(
+            "<shape type=\"rectangle\"><emitter type=\"area\">\n{spec}\n</emitter></shape>"
+        ))
+    };
+    let radiance = |s: &SceneDesc| s.shapes[0].emitter.as_ref().unwrap().radiance.clone();
+    let s = load(&emitter("<spectrum type=\"blackbody\" name=\"radiance\"><float name=\"temperature\" value=\"2500\"/></spectrum>")).unwrap();
+    assert_eq!(
+        radiance(&s),
+        TextureDesc::Constant(SpectrumDesc::Blackbody {
+            temperature: 2500.0
+        })
+    );
+    assert!(
+        s.spectral_reason()
+            .unwrap()
+            .contains("blackbody (2500 K) emission spectrum"),
+        "{:?}",
+        s.spectral_reason()
+    );
+    let s = load(&emitter(
+        "<spectrum type=\"d65\" name=\"radiance\"><float name=\"scale\" value=\"3\"/></spectrum>",
+    ))
+    .unwrap();
+    assert_eq!(
+        radiance(&s),
+        TextureDesc::Constant(SpectrumDesc::Illuminant {
+            name: "d65".into(),
+            scale: 3.0
+        })
+    );
+    let s = load(&emitter("<spectrum type=\"d65\" name=\"radiance\"/>")).unwrap();
+    assert_eq!(
+        radiance(&s),
+        TextureDesc::Constant(SpectrumDesc::Illuminant {
+            name: "d65".into(),
+            scale: 1.0
+        })
+    );
+    for (t, name) in [("A", "a"), ("f1", "f1"), ("F11", "f11"), ("f12", "f12")] {
+        let s = load(&emitter(&format!(
+            "<spectrum type=\"{t}\" name=\"radiance\"/>"
+        )))
+        .unwrap();
+        assert_eq!(
+            radiance(&s),
+            TextureDesc::Constant(SpectrumDesc::Illuminant {
+                name: name.into(),
+                scale: 1.0
+            }),
+            "{t}"
+        );
+        assert!(s
+            .spectral_reason()
+            .unwrap()
+            .contains(&format!("CIE {}", name.to_uppercase())));
+    }
+    // Errors at the element at fault (line 3 is the <spectrum>, line 4 its child).
+    for (spec, line, text) in [
+        ("<spectrum type=\"blackbody\" name=\"radiance\"/>", 3, "needs <float name=\"temperature\">"),
+        ("<spectrum type=\"blackbody\" name=\"radiance\">\n<float name=\"temperature\" value=\"-5\"/></spectrum>", 3, "must be positive"),
+        ("<spectrum type=\"blackbody\" name=\"radiance\">\n<float name=\"scale\" value=\"2\"/></spectrum>", 4, "unused property 'scale'"),
+        ("<spectrum type=\"d65\" name=\"radiance\">\n<float name=\"scale\" value=\"-1\"/></spectrum>", 3, "must not be negative"),
+        ("<spectrum type=\"d65\" name=\"radiance\">\n<rgb name=\"scale\" value=\"1\"/></spectrum>", 4, "must be a float"),
+        ("<spectrum type=\"f13\" name=\"radiance\"/>", 3, "unknown spectrum type 'f13'"),
+        ("<spectrum type=\"f01\" name=\"radiance\"/>", 3, "unknown spectrum type"),
+        ("<spectrum name=\"radiance\" value=\"1\" filename=\"x.spd\"/>", 3, "either 'value' or 'filename'"),
+    ] {
+        let e = fail(&emitter(spec));
+        assert_eq!(e.loc.as_ref().unwrap().line, line, "{spec}: {e}");
+        assert!(e.message.contains(text), "{spec}: {e}");
+    }
+    // An emission spectrum is no reflectance.
+    let e = fail(&scene("<shape type=\"cube\"><bsdf type=\"orennayar\">\n<spectrum type=\"d65\" name=\"reflectance\"/>\n</bsdf></shape>"));
+    assert!(e.message.contains("not an emission spectrum"), "{e}");
+}
+
+#[test]
+fn twosided_wraps_one_bsdf() {
+    let s = load(&scene(
+        r#"<bsdf type="diffuse" id="red"><rgb name="reflectance" value="0.8, 0.1, 0.1"/></bsdf>
+<bsdf type="twosided" id="both"><ref id="red"/></bsdf>
+<shape type="rectangle"><ref id="both"/></shape>
+<shape type="rectangle"><ref id="both"/></shape>
+<shape type="cube"><bsdf type="twosided"><bsdf type="diffuse"/></bsdf></shape>"#,
+    ))
+    .unwrap();
+    assert_eq!(s.bsdfs.len(), 2);
+    match &s.bsdfs[0].kind {
+        BsdfKind::TwoSided { inner } => assert!(matches!(
+            inner.kind,
+            BsdfKind::Diffuse { reflectance: TextureDesc::Constant(SpectrumDesc::Rgb([r, _, _])) } if r == 0.8
+        )),
+        k => panic!("unexpected {k:?}"),
+    }
+    let e = fail(&scene(
+        "<bsdf type=\"twosided\">\n<bsdf type=\"diffuse\"/>\n<bsdf type=\"diffuse\"/>\n</bsdf>",
+    ));
+    assert_error(&e, 4, "bsdf type=\"diffuse\"", "not yet implemented");
+    let e = fail(&scene("<bsdf type=\"twosided\"/>"));
+    assert_error(&e, 2, "bsdf type=\"twosided\"", "needs one nested");
+}
+
+// -------------------------------------------------------------------------------------------
+// Sensor, film, sampler, integrator
+
+#[test]
+fn emitters_outside_shapes() {
+    let s = load_str(
+        &scene(
+            r#"<emitter type="point"><point name="position" value="1, 2, 3"/><rgb name="intensity" value="4"/></emitter>
+<emitter type="spot"><float name="cutoff_angle" value="30"/></emitter>
+<emitter type="directional"><vector name="direction" value="0, -2, 0"/></emitter>
+<emitter type="sun"><vector name="direction" value="0, -1, 0"/></emitter>
+<emitter type="constant"><rgb name="radiance" value="0.5"/></emitter>"#,
+        ),
+        Path::new("t.xml"),
+        Path::new("."),
+        &[],
+    )
+    .unwrap();
+    assert_eq!(s.lights.len(), 5);
+    assert!(
+        matches!(s.lights[0].kind, LightKind::Point { position, .. } if position == Vec3::new(1.0, 2.0, 3.0))
+    );
+    assert!(
+        matches!(s.lights[1].kind, LightKind::Spot { cutoff_deg, beam_width_deg, .. } if cutoff_deg == 30.0 && beam_width_deg == 22.5)
+    );
+    assert!(
+        matches!(s.lights[2].kind, LightKind::Directional { direction, .. } if direction == Vec3::new(0.0, -1.0, 0.0))
+    );
+    assert!(
+        matches!(s.lights[3].kind, LightKind::Sun { angular_diameter_deg, .. } if angular_diameter_deg == 0.5338)
+    );
+    // Bad values name the property.
+    for (body, what) in [
+        (
+            r#"<emitter type="spot"><float name="beam_width" value="30"/></emitter>"#,
+            "beam_width",
+        ),
+        (
+            r#"<emitter type="point"><rgb name="intensity" value="-1"/></emitter>"#,
+            "intensity",
+        ),
+        (
+            r#"<emitter type="envmap"><string name="filename" value="nope.exr"/></emitter>"#,
+            "nope.exr",
+        ),
+        (
+            r#"<emitter type="directional"><vector name="direction" value="0, 0, 0"/></emitter>"#,
+            "direction",
+        ),
+    ] {
+        let e = fail(&scene(body));
+        assert!(e.to_string().contains(what), "{body}: {e}");
+    }
+}
+
+#[test]
+fn physical_bsdfs_with_mitsuba_defaults_and_names() {
+    let s = load(&scene(
+        r#"<bsdf type="dielectric" id="glass"><string name="int_ior" value="water"/></bsdf>
+<bsdf type="roughconductor" id="gold"><string name="material" value="Au"/><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/></bsdf>
+<bsdf type="orennayar" id="on"><float name="sigma" value="0.3"/><string name="variant" value="EON"/></bsdf>
+<shape type="cube"><ref id="glass"/></shape>
+<shape type="cube"><ref id="gold"/></shape>
+<shape type="cube"><ref id="on"/></shape>"#,
+    ))
+    .unwrap();
+    assert!(
+        matches!(s.bsdfs[0].kind, BsdfKind::Dielectric { int_ior, ext_ior, .. } if int_ior == 1.333 && ext_ior == 1.000277)
+    );
+    assert!(
+        matches!(&s.bsdfs[1].kind, BsdfKind::RoughConductor { microfacet, .. }
+        if microfacet.distribution == MicrofacetDistribution::Beckmann
+            && microfacet.alpha_u == TextureDesc::constant(0.1)
+            && microfacet.alpha_v == TextureDesc::constant(0.3))
+    );
+    assert!(matches!(&s.bsdfs[2].kind, BsdfKind::OrenNayar { variant, .. } if *variant == OrenNayarVariant::Eon));
+    for (body, what) in [
+        (
+            r#"<shape type="cube"><bsdf type="conductor"><string name="material" value="Unobtainium"/></bsdf></shape>"#,
+            "Unobtainium",
+        ),
+        (
+            r#"<shape type="cube"><bsdf type="dielectric"><string name="int_ior" value="glas"/></bsdf></shape>"#,
+            "glas",
+        ),
+        (
+            r#"<shape type="cube"><bsdf type="roughconductor"><float name="alpha" value="0"/></bsdf></shape>"#,
+            "roughness",
+        ),
+        (
+            r#"<shape type="cube"><bsdf type="roughconductor"><string name="distribution" value="phong"/></bsdf></shape>"#,
+            "phong",
+        ),
+        (
+            r#"<shape type="cube"><bsdf type="orennayar"><string name="variant" value="nope"/></bsdf></shape>"#,
+            "nope",
+        ),
+        (
+            r#"<shape type="cube"><bsdf type="minnaert"><float name="k" value="-1"/></bsdf></shape>"#,
+            "k must be positive",
+        ),
+        (
+            r#"<shape type="cube"><bsdf type="orennayar"><float name="reflectance" value="1.5"/></bsdf></shape>"#,
+            "in [0, 1]",
+        ),
+    ] {
+        let e = fail(&scene(body));
+        assert!(e.to_string().contains(what), "{body}: {e}");
+    }
+}
+
+// -------------------------------------------------------------------------------------------
+// Media and masks
+
+#[test]
+fn mask_wraps_one_bsdf_with_opacity_in_unit_range() {
+    let s = load(&scene(r#"<shape type="sphere"><bsdf type="mask"><float name="opacity" value="0.25"/><bsdf type="twosided"><bsdf type="diffuse"/></bsdf></bsdf></shape>"#)).unwrap();
+    match &s.bsdfs[s.shapes[0].bsdf].kind {
+        BsdfKind::Mask {
+            opacity,
+            cutoff: None,
+            inner,
+        } => {
+            assert_eq!(*opacity, TextureDesc::constant(0.25));
+            assert!(matches!(inner.kind, BsdfKind::TwoSided { .. }));
+        }
+        k => panic!("expected a mask, got {k:?}"),
+    }
+    let e = fail(&scene(
+        r#"<shape type="sphere"><bsdf type="mask"><float name="opacity" value="1.5"/><bsdf type="diffuse"/></bsdf></shape>"#,
+    ));
+    assert!(e.message.contains("opacity must be in [0, 1]"), "{e}");
+    let e = fail(&scene(
+        r#"<shape type="sphere"><bsdf type="mask"/></shape>"#,
+    ));
+    assert!(e.message.contains("needs one nested BSDF"), "{e}");
+}
+
+#[test]
+fn emitter_bitmap_in_d65_and_display_primaries() {
+    // The loader only needs the image to exist (pt-render decodes it).
+    let dir = temp_dir("emitter-texture");
+    std::fs::write(dir.join("img.png"), b"not decoded here").unwrap();
+    std::fs::write(dir.join("p.spd"), "400 0.1\n700 0.2\n").unwrap();
+    let area = |inner: &str| {
+        scene(&format!(
+            "<shape type=\"rectangle\">\n<emitter type=\"area\">\n{inner}\n</emitter></shape>"
+        ))
+    };
+    let bitmap = r#"<texture type="bitmap" name="nested"><string name="filename" value="img.png"/></texture>"#;
+    let load_in = |xml: String| {
+        std::fs::write(dir.join("s.xml"), xml).unwrap();
+        load_file(&dir.join("s.xml"), &[])
+    };
+    // Mitsuba's d65 texture around a bitmap: the same image, no primaries; RGB mode suffices.
+    let s = load_in(area(&format!(
+        r#"<texture type="d65" name="radiance">{bitmap}</texture>"#
+    )))
+    .unwrap();
+    let em = s.shapes[0].emitter.as_ref().unwrap();
+    assert!(
+        matches!(&em.radiance, TextureDesc::Bitmap(b) if b.source == ImageSource::File(dir.join("img.png")))
+            && em.primaries.is_none()
+    );
+    assert!(s.spectral_reason().is_none());
+    // Display primaries: three spectra, which make the scene spectral.
+    let tex = r#"<texture type="bitmap" name="radiance"><string name="filename" value="img.png"/></texture>"#;
+    let prim = |names: &[&str]| {
+        names
+            .iter()
+            .map(|n| format!(r#"<spectrum name="{n}" filename="p.spd"/>"#))
+            .collect::<String>()
+    };
+    let s = load_in(area(&format!(
+        "{tex}{}",
+        prim(&["primary_r", "primary_g", "primary_b"])
+    )))
+    .unwrap();
+    let p = s.shapes[0]
+        .emitter
+        .as_ref()
+        .unwrap()
+        .primaries
+        .as_ref()
+        .expect("primaries");
+    assert!(p.iter().all(
+        |s| matches!(s, SpectrumDesc::Tabulated(t) if t.as_slice() == [(400.0, 0.1), (700.0, 0.2)])
+    ));
+    assert!(
+        s.spectral_reason().unwrap().contains("display primaries"),
+        "{:?}",
+        s.spectral_reason()
+    );
+    // Errors: a missing primary, primaries without an image, an RGB primary, d65 without or
+    // with two images, a d65 colour.
+    let e = load_in(area(&format!("{tex}{}", prim(&["primary_r", "primary_b"])))).unwrap_err();
+    assert!(e.message.contains("primary_g is missing"), "{e}");
+    let e = load_in(area(&prim(&["primary_r", "primary_g", "primary_b"]))).unwrap_err();
+    assert!(e.message.contains("need a radiance bitmap"), "{e}");
+    let e = load_in(area(&format!(
+        r#"{tex}<rgb name="primary_r" value="1, 0, 0"/>{}"#,
+        prim(&["primary_g", "primary_b"])
+    )))
+    .unwrap_err();
+    assert!(e.message.contains("primary_r must be a spectrum"), "{e}");
+    let e = load_in(area(r#"<texture type="d65" name="radiance"/>"#)).unwrap_err();
+    assert!(
+        e.message
+            .contains("needs a nested <texture>"),
+        "{e}"
+    );
+    let e = load_in(area(&format!(
+        r#"<texture type="d65" name="radiance">{bitmap}{bitmap}</texture>"#
+    )))
+    .unwrap_err();
+    assert!(
+        e.message
+            .contains("one nested <texture>"),
+        "{e}"
+    );
+    let e = load_in(area(&format!(r#"<texture type="d65" name="radiance"><rgb name="color" value="1, 1, 1"/>{bitmap}</texture>"#))).unwrap_err();
+    assert!(e.message.contains("unused property 'color'"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `normalmap`, textured `mask` and `blendbsdf` read into the IR; their mistakes are located.
+#[test]
+fn normalmap_mask_texture_and_blend() {
+    let dir = temp_dir("surftex");
+    std::fs::write(dir.join("n.png"), b"not read by the loader").unwrap();
+    let xml = |body: &str| format!("<scene version=\"3.0.0\">\n{body}\n</scene>\n");
+    let load_in = |x: &str| load_str(x, &dir.join("test.xml"), &dir, &[]);
+    let tex = |name: &str| {
+        format!("<texture type=\"bitmap\" name=\"{name}\"><string name=\"filename\" value=\"n.png\"/><boolean name=\"raw\" value=\"true\"/></texture>")
+    };
+    let d = load_in(&xml(&format!(
+        "<shape type=\"cube\"><bsdf type=\"normalmap\">{}<bsdf type=\"diffuse\"/></bsdf></shape>",
+        tex("normalmap")
+    )))
+    .unwrap();
+    match &d.bsdfs[0].kind {
+        BsdfKind::NormalMap {
+            texture,
+            scale,
+            gltf,
+            inner,
+        } => {
+            assert!(
+                matches!(texture, TextureDesc::Bitmap(b) if b.raw)
+                    && *scale == 1.0
+                    && !gltf
+                    && matches!(inner.kind, BsdfKind::Diffuse { .. })
+            );
+        }
+        k => panic!("{k:?}"),
+    }
+    let d = load_in(&xml(&format!(
+        "<shape type=\"cube\"><bsdf type=\"mask\">{}<bsdf type=\"diffuse\"/></bsdf></shape>",
+        tex("opacity")
+    )))
+    .unwrap();
+    assert!(
+        matches!(&d.bsdfs[0].kind, BsdfKind::Mask { opacity: TextureDesc::Bitmap(_), cutoff: None, .. })
+    );
+    let d = load_in(&xml("<shape type=\"cube\"><bsdf type=\"blendbsdf\"><float name=\"weight\" value=\"0.3\"/><bsdf type=\"diffuse\"/><bsdf type=\"conductor\"/></bsdf></shape>")).unwrap();
+    match &d.bsdfs[0].kind {
+        BsdfKind::Blend {
+            weight,
+            first,
+            second,
+            ..
+        } => {
+            assert!(
+                *weight == TextureDesc::constant(0.3)
+                    && matches!(first.kind, BsdfKind::Diffuse { .. })
+                    && matches!(second.kind, BsdfKind::Conductor { .. })
+            );
+        }
+        k => panic!("{k:?}"),
+    }
+    for (body, text) in [
+        ("<shape type=\"cube\"><bsdf type=\"normalmap\"><bsdf type=\"diffuse\"/></bsdf></shape>".to_string(), "normalmap needs <texture"),
+        (format!("<shape type=\"cube\"><bsdf type=\"normalmap\">{}</bsdf></shape>", tex("normalmap")), "needs one nested BSDF"),
+        (format!("<shape type=\"cube\"><bsdf type=\"mask\"><float name=\"opacity\" value=\"0.5\"/>{}<bsdf type=\"diffuse\"/></bsdf></shape>", tex("opacity")), "'opacity' is given both as a value and as a texture"),
+        ("<shape type=\"cube\"><bsdf type=\"blendbsdf\"><bsdf type=\"diffuse\"/></bsdf></shape>".to_string(), "needs 2 nested BSDFs (<bsdf> or <ref>), got 1"),
+        ("<shape type=\"cube\"><bsdf type=\"blendbsdf\"><float name=\"weight\" value=\"1.5\"/><bsdf type=\"diffuse\"/><bsdf type=\"diffuse\"/></bsdf></shape>".to_string(), "weight must be in [0, 1]"),
+    ] {
+        let e = load_in(&xml(&body)).unwrap_err();
+        assert!(e.message.contains(text), "{body}: {e}");
+        assert_eq!(e.loc.as_ref().unwrap().line, 2, "{body}: {e}");
+    }
+}

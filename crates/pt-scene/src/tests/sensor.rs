@@ -1,0 +1,169 @@
+//! Sensor, film, sampler and integrators.
+
+use super::*;
+
+#[test]
+fn missing_sensor_and_integrator_use_mitsuba_defaults() {
+    let s = load(&scene("<shape type=\"cube\"/>")).unwrap();
+    assert_eq!(
+        s.camera.projection,
+        Projection::Perspective {
+            fov_deg: 45.0,
+            fov_axis: FovAxis::X
+        }
+    );
+    assert_eq!((s.film.width, s.film.height), (768, 576));
+    assert_eq!(s.film.filter, FilterDesc::Gaussian { stddev: 0.5 });
+    assert_eq!((s.sampler.sample_count, s.sampler.seed), (4, 0));
+    assert_eq!(s.integrator.kind, IntegratorKind::Path);
+    assert_eq!(
+        (
+            s.integrator.max_depth,
+            s.integrator.rr_depth,
+            s.integrator.hide_emitters
+        ),
+        (-1, 5, false)
+    );
+    // The camera backs off along -z until the whole [-1, 1]^3 cube fits in 45 degrees.
+    let eye = s.camera.to_world.transform_point3(Vec3::ZERO);
+    let distance = 2.0 / (2.0 * 22.5f32.to_radians().tan());
+    assert!(close(eye, Vec3::new(0.0, 0.0, -1.0 - distance)), "{eye}");
+
+    let empty = load(&scene("")).unwrap();
+    assert_eq!(empty.camera.to_world, glam::Mat4::IDENTITY);
+    assert!(empty.shapes.is_empty());
+}
+
+#[test]
+fn sensor_parameters() {
+    let s = load(&scene(
+        r#"<sensor type="perspective">
+    <string name="focal_length" value="35mm"/>
+    <float name="near_clip" value="0.5"/>
+    <sampler type="stratified"><integer name="sample_count" value="10"/><integer name="seed" value="7"/><boolean name="jitter" value="false"/></sampler>
+    <film type="hdrfilm">
+        <integer name="height" value="100"/>
+        <string name="pixel_format" value="RGBA"/>
+        <string name="component_format" value="float32"/>
+        <boolean name="banner" value="false"/>
+        <boolean name="sample_border" value="false"/>
+        <integer name="crop_offset_x" value="0"/>
+        <integer name="crop_height" value="100"/>
+        <rfilter type="tent"><float name="radius" value="1.5"/></rfilter>
+    </film>
+</sensor>"#,
+    ))
+    .unwrap();
+    let fov = 2.0 * (43.266_615f32 / 70.0).atan().to_degrees();
+    match s.camera.projection {
+        Projection::Perspective { fov_deg, fov_axis } => {
+            assert!((fov_deg - fov).abs() < 1e-3, "{fov_deg} vs {fov}");
+            assert_eq!(fov_axis, FovAxis::Diagonal);
+        }
+    }
+    assert_eq!(s.camera.near_clip, 0.5);
+    assert_eq!(
+        (s.sampler.sample_count, s.sampler.seed),
+        (16, 7),
+        "stratified rounds up to a square"
+    );
+    assert_eq!((s.film.width, s.film.height), (768, 100));
+    assert_eq!(s.film.filter, FilterDesc::Tent { radius: 1.5 });
+}
+
+#[test]
+fn sensor_errors() {
+    let sensor = |inner: &str| {
+        scene(&format!(
+            "<sensor type=\"perspective\">\n{inner}\n</sensor>"
+        ))
+    };
+    let cases = [
+        ("<string name=\"fov_axis\" value=\"z\"/>\n<float name=\"fov\" value=\"30\"/>", 3, "fov_axis must be"),
+        ("<float name=\"fov\" value=\"180\"/>", 3, "between 0 and 180"),
+        ("<float name=\"near_clip\" value=\"10\"/><float name=\"far_clip\" value=\"1\"/>", 3, "smaller than far_clip"),
+        ("<float name=\"fov\" value=\"30\"/><string name=\"focal_length\" value=\"50mm\"/>", 3, "not both"),
+        ("<string name=\"focal_length\" value=\"long\"/>", 3, "focal length"),
+        ("<transform name=\"to_world\"><scale value=\"2\"/></transform>", 3, "may only rotate"),
+        ("<film type=\"hdrfilm\"><integer name=\"width\" value=\"0\"/></film>", 3, "between 1 and"),
+        ("<film type=\"hdrfilm\"><integer name=\"crop_width\" value=\"10\"/></film>", 3, "cropping"),
+        ("<film type=\"hdrfilm\"><boolean name=\"sample_border\" value=\"true\"/></film>", 3, "sample_border"),
+        ("<film type=\"hdrfilm\"><string name=\"pixel_format\" value=\"cmyk\"/></film>", 3, "pixel_format"),
+        ("<film type=\"hdrfilm\"><rfilter type=\"box\"><float name=\"radius\" value=\"1\"/></rfilter></film>", 3, "unused property 'radius'"),
+        ("<sampler type=\"independent\"><integer name=\"sample_count\" value=\"0\"/></sampler>", 3, "at least 1"),
+        ("<film type=\"hdrfilm\"/>\n<film type=\"hdrfilm\"/>", 4, "only one <film>"),
+        ("<string name=\"fov_axis\" value=\"y\"/>", 3, "unused property 'fov_axis'"),
+    ];
+    for (inner, line, text) in cases {
+        let e = fail(&sensor(inner));
+        assert_eq!(e.loc.as_ref().map(|l| l.line), Some(line), "{inner}: {e}");
+        assert!(
+            e.message.contains(text),
+            "{inner}: expected '{text}' in {e}"
+        );
+    }
+    assert!(fail(&scene(
+        "<sensor type=\"perspective\"/>\n<sensor type=\"perspective\"/>"
+    ))
+    .message
+    .contains("only one <sensor>"));
+}
+
+#[test]
+fn integrators() {
+    let integrator = |xml: &str| load(&scene(xml)).map(|s| s.integrator);
+    let i = integrator("<integrator type=\"path\"><integer name=\"max_depth\" value=\"0\"/><boolean name=\"hide_emitters\" value=\"true\"/></integrator>").unwrap();
+    assert_eq!((i.max_depth, i.hide_emitters), (0, true));
+    let i = integrator(
+        "<integrator type=\"direct\"><integer name=\"emitter_samples\" value=\"1\"/></integrator>",
+    )
+    .unwrap();
+    assert_eq!((i.kind, i.max_depth), (IntegratorKind::Direct, 2));
+    let i = integrator("<integrator type=\"moment\"><integrator type=\"path\"><integer name=\"max_depth\" value=\"3\"/></integrator></integrator>").unwrap();
+    assert_eq!(
+        (i.kind, i.max_depth, i.moment),
+        (IntegratorKind::Path, 3, true)
+    );
+
+    let cases = [
+        (
+            "<integer name=\"max_depth\" value=\"-2\"/>",
+            "path",
+            "at least -1",
+        ),
+        (
+            "<integer name=\"rr_depth\" value=\"0\"/>",
+            "path",
+            "at least 1",
+        ),
+        (
+            "<integer name=\"bsdf_samples\" value=\"4\"/>",
+            "direct",
+            "not yet supported",
+        ),
+        (
+            "<integer name=\"max_depth\" value=\"3\"/>",
+            "direct",
+            "unused property 'max_depth'",
+        ),
+        ("", "moment", "needs one nested"),
+        ("<shape type=\"cube\"/>", "path", "cannot be nested"),
+    ];
+    for (inner, plugin, text) in cases {
+        let e = fail(&scene(&format!(
+            "<integrator type=\"{plugin}\">\n{inner}\n</integrator>"
+        )));
+        assert!(
+            e.message.contains(text),
+            "{inner}: expected '{text}' in {e}"
+        );
+    }
+    assert!(fail(&scene(
+        "<integrator type=\"path\"/><integrator type=\"path\"/>"
+    ))
+    .message
+    .contains("only one"));
+}
+
+// -------------------------------------------------------------------------------------------
+// Transforms through whole scenes, and old scenes
