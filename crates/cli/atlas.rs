@@ -37,9 +37,8 @@ use clap::{Args, ValueEnum};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use pt_image::fireflies::luminance;
-use pt_render::{
-    BvhKind, LightSelection, RenderOutput, RenderSettings, RenderState, Scene, Strategy,
-};
+use pt_integrators::{RenderSettings, RenderState, Strategy};
+use pt_render::{BvhKind, LightSelection, RenderOutput, Scene};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -186,7 +185,7 @@ pub(crate) fn render_within(
     let mut state = RenderState::new(settings);
     match budget {
         Budget::Spp(n) => {
-            pt_render::render_passes(
+            pt_integrators::render_passes(
                 scene,
                 &RenderSettings {
                     spp: n.max(1),
@@ -201,7 +200,7 @@ pub(crate) fn render_within(
             let budget = t.as_secs_f64();
             let mut target = 1u32;
             loop {
-                pt_render::render_passes(
+                pt_integrators::render_passes(
                     scene,
                     &RenderSettings {
                         spp: target,
@@ -312,7 +311,7 @@ pub(crate) fn reference(
     }
     let s = RenderSettings {
         seed: FALLBACK_SEED,
-        path: pt_render::PathSettings {
+        path: pt_integrators::PathSettings {
             strategy: Strategy::Mis,
             ..settings.path
         },
@@ -424,7 +423,7 @@ fn load(
 fn with_strategy(base: &RenderSettings, strategy: Strategy) -> RenderSettings {
     RenderSettings {
         seed: SEED,
-        path: pt_render::PathSettings {
+        path: pt_integrators::PathSettings {
             strategy,
             ..base.path
         },

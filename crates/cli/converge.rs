@@ -54,7 +54,8 @@ use clap::{Args, ValueEnum};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use pt_image::{ExrMeta, Image};
-use pt_render::{BvhKind, LightSelection, RenderSettings, Scene, Strategy};
+use pt_integrators::{RenderSettings, Strategy};
+use pt_render::{BvhKind, LightSelection, Scene};
 use std::fmt::Write as _;
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
@@ -339,7 +340,7 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
         };
         // Untimed warm-up (page faults, thread start-up), as Mitsuba gets one.
         pool.install(|| {
-            pt_render::render(
+            pt_integrators::render(
                 scene,
                 &RenderSettings {
                     spp: 1,
@@ -361,13 +362,13 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
             for &n in &spp {
                 let s = RenderSettings {
                     spp: n,
-                    path: pt_render::PathSettings {
+                    path: pt_integrators::PathSettings {
                         strategy: strategy.strategy(),
                         ..settings.path
                     },
                     ..settings.clone()
                 };
-                let out = pool.install(|| pt_render::render(scene, &s, &|_| {}));
+                let out = pool.install(|| pt_integrators::render(scene, &s, &|_| {}));
                 let image = Image {
                     width: out.width,
                     height: out.height,

@@ -14,7 +14,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use pt_image::fireflies::{count_fireflies, luminance, FireflyParams};
 use pt_image::Image;
-use pt_render::{BvhKind, LightSelection, RenderSettings, Scene};
+use pt_integrators::RenderSettings;
+use pt_render::{BvhKind, LightSelection, Scene};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -95,7 +96,7 @@ pub(crate) fn clamp_bias_study() -> Result<ClampStudy> {
     let mut rows = Vec::new();
     let mut reference: Option<(f64, Vec<f64>)> = None;
     for clamp in CLAMPS {
-        let out = pt_render::render(
+        let out = pt_integrators::render(
             &scene,
             &RenderSettings {
                 clamp,

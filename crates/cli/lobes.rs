@@ -319,6 +319,8 @@ pub(crate) struct Model {
     /// A one-sphere scene whose only material is the model (the way to reach `pt_render`'s
     /// material construction from a description).
     scene: Scene,
+    /// The model's BSDF (its parameters are constants: one BSDF everywhere).
+    bsdf: pt_bsdf::SurfaceBsdf,
     delta: bool,
     transmissive: bool,
 }
@@ -342,11 +344,14 @@ impl Model {
             Some(pt_spectrum::ColorMode::Rgb),
         )
         .map_err(|e| anyhow!("{label}: {}", e.message))?;
-        let m = &scene.materials[0];
-        let (delta, transmissive) = (!m.has_smooth_lobe(), m.bsdf.is_transmissive());
+        let bsdf = scene.materials[0]
+            .fixed
+            .ok_or_else(|| anyhow!("{label}: the model's parameters must be constants"))?;
+        let (delta, transmissive) = (!bsdf.has_smooth_lobe(), bsdf.bsdf.is_transmissive());
         Ok(Model {
             label,
             scene,
+            bsdf,
             delta,
             transmissive,
         })
@@ -354,16 +359,16 @@ impl Model {
 
     /// Luminance of f(wo, wi), without the cosine.
     fn f(&self, wo: Vec3, wi: Vec3) -> f32 {
-        self.scene.materials[0].eval(wo, wi).luminance_rgb()
+        self.bsdf.eval(wo, wi).luminance_rgb()
     }
 
     /// Solid-angle pdf of sampling `wi` given `wo`.
     fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        self.scene.materials[0].pdf(wo, wi)
+        self.bsdf.pdf(wo, wi)
     }
 
     fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<Sampled> {
-        self.scene.materials[0]
+        self.bsdf
             .sample(wo, u_lobe, u)
             .map(|s| Sampled {
                 wi: s.wi,

@@ -472,10 +472,10 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
         Some(path) => {
             let bytes = std::fs::read(path)
                 .with_context(|| format!("cannot read render state {}", path.display()))?;
-            pt_render::RenderState::from_bytes(&bytes, key, &settings)
+            pt_integrators::RenderState::from_bytes(&bytes, key, &settings)
                 .map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))?
         }
-        None => pt_render::RenderState::new(&settings),
+        None => pt_integrators::RenderState::new(&settings),
     };
     if state.spp_done > settings.spp {
         bail!(
@@ -486,7 +486,7 @@ fn cmd_render(args: RenderArgs) -> Result<ExitCode> {
     }
     bar.inc(settings.width as u64 * settings.height as u64 * u64::from(state.spp_done));
     let complete = pool.install(|| {
-        pt_render::render_passes(&scene, &settings, &mut state, &cancel, &|n| bar.inc(n))
+        pt_integrators::render_passes(&scene, &settings, &mut state, &cancel, &|n| bar.inc(n))
     });
     let out = state.output();
     bar.finish_and_clear();

@@ -30,17 +30,7 @@ use std::f32::consts::FRAC_1_PI;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-/// How the solution is turned into an image.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Display {
-    /// Piecewise constant: one value per patch.
-    Constant,
-    /// Vertex-smoothed, interpolated barycentrically (default).
-    #[default]
-    Smoothed,
-    /// One diffuse bounce from the visible point, reading the patch radiosities (final gather).
-    FinalGather,
-}
+pub use pt_scene::RadiosityDisplay as Display;
 
 /// Cosine of the largest angle between patch normals that are averaged at a vertex (25 deg).
 const SMOOTH_COS: f32 = 0.906;

@@ -38,18 +38,7 @@ use pt_render::sampler::Sampler;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-/// How estimated form factors are made reciprocal.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Reciprocity {
-    /// Keep the raw ray-cast estimates (row sums exact, reciprocity only in expectation).
-    None,
-    /// Average `A_i F_ij` and `A_j F_ji` (reciprocity exact, row sums off by the estimates' noise).
-    Average,
-    /// Average, then rescale symmetrically so that row sums equal the measured hit fractions
-    /// (default): reciprocity exact and row sums to 1e-6.
-    #[default]
-    Balanced,
-}
+pub use pt_scene::Reciprocity;
 
 /// Sparse form-factor matrix in compressed-sparse-row form: row `i` holds `F_ij` for the patches
 /// `j` that patch `i` sees, with columns in increasing order.

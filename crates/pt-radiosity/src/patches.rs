@@ -87,7 +87,7 @@ const ICO_INRADIUS: f32 = 0.794_654_5;
 /// RGB of a spectral input (tabulated spectra are projected through the CIE observer: the
 /// solver works per RGB channel).
 fn rgb(s: &SpectrumDesc) -> [f32; 3] {
-    pt_render::scene::rgb_of(s)
+    pt_render::texture::rgb_of(s)
 }
 
 /// Diffuse reflectance and two-sidedness of a material. Models radiosity cannot represent are
@@ -96,6 +96,13 @@ fn material(b: &BsdfDesc, warnings: &mut Vec<String>) -> Result<([f32; 3], bool)
     #[allow(unreachable_patterns)] // other BSDF models will be added to the loader
     match &b.kind {
         BsdfKind::Diffuse { reflectance } => {
+            let Some(reflectance) = reflectance.as_constant() else {
+                warnings.push(format!(
+                    "{}: radiosity gives each patch one reflectance; this textured reflectance is treated as 0.5 (not yet implemented: per-patch texture means)",
+                    b.loc
+                ));
+                return Ok(([0.5; 3], false));
+            };
             let r = rgb(reflectance);
             if !r.iter().all(|v| v.is_finite() && *v >= 0.0) {
                 return Err(RadiosityError::scene(
@@ -285,7 +292,15 @@ impl PatchMesh {
             let (reflectance, two_sided) = material(bsdf, &mut mesh.warnings)?;
             let emission = match &s.emitter {
                 Some(em) => {
-                    let le = rgb(&em.radiance);
+                    let le = match em.radiance.as_constant() {
+                        Some(s) => rgb(s),
+                        None => {
+                            return Err(RadiosityError::scene(
+                                &em.loc,
+                                "radiosity needs a constant radiance (textured emitters are not yet supported by radiosity)",
+                            ))
+                        }
+                    };
                     if !le.iter().all(|v| v.is_finite() && *v >= 0.0) {
                         return Err(RadiosityError::scene(
                             &em.loc,
@@ -353,6 +368,7 @@ impl PatchMesh {
                     center,
                     radius,
                     flip_normals,
+                    ..
                 } => {
                     let (v, faces) = icosahedron();
                     let k = sphere_subdivisions(radius, h);

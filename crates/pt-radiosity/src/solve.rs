@@ -22,17 +22,7 @@ use crate::form_factor::FormFactors;
 use crate::patches::Patch;
 use rayon::prelude::*;
 
-/// Which solver to use.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum Solver {
-    /// Jacobi iteration (parallel).
-    Jacobi,
-    /// Gauss-Seidel iteration (sequential, in place).
-    #[default]
-    GaussSeidel,
-    /// Progressive refinement by shooting (Cohen et al. 1988).
-    Progressive,
-}
+pub use pt_scene::RadiositySolver as Solver;
 
 /// A solution of the radiosity system.
 #[derive(Clone, Debug, Default)]

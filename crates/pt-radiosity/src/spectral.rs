@@ -4,7 +4,7 @@
 //! The form factors are geometric and shared by every wavelength. The visible range 360-830 nm
 //! is cut into [`BINS`] equal bins; each patch's reflectance and emission are averaged over each
 //! bin (inputs turned into spectra exactly as the path tracer's spectral mode does:
-//! `pt_render::scene::spectrum_for`), the existing 3-channel solver and display run once per
+//! `pt_render::texture::spectrum_for_role`), the existing 3-channel solver and display run once per
 //! group of three bins, and each pixel's bin radiances `L_b` are turned into colour as the
 //! spectral film does: `XYZ = sum_b L_b int_bin cmf / int y-bar`, then linear sRGB. Piecewise-
 //! constant spectra per bin are the method's spectral discretisation error (bins of 19.6 nm;
@@ -16,6 +16,7 @@ use crate::patches::PatchMesh;
 use crate::{solve, RadiosityError, RadiosityParams, Simulation};
 use pt_render::camera::Camera;
 use pt_render::RenderOutput;
+use pt_render::texture::Role;
 use pt_scene::{BsdfKind, SceneDesc};
 use pt_spectrum::{cie, xyz_to_srgb, Spectrum};
 
@@ -62,7 +63,10 @@ fn film_weights() -> [[f64; 3]; BINS] {
 /// grey 0.5, as in the RGB solve, which has already warned about them).
 fn reflectance(kind: &BsdfKind) -> Spectrum {
     match kind {
-        BsdfKind::Diffuse { reflectance } => pt_render::scene::spectrum_for(reflectance, false),
+        BsdfKind::Diffuse { reflectance } => match reflectance.as_constant() {
+            Some(r) => pt_render::texture::spectrum_for_role(r, Role::Albedo),
+            None => Spectrum::constant(0.5),
+        },
         BsdfKind::TwoSided { inner } => reflectance(&inner.kind),
         _ => Spectrum::constant(0.5),
     }
@@ -85,7 +89,10 @@ pub fn render(
             .get(shape.bsdf)
             .map_or([0.0; BINS], |b| bin_means(&reflectance(&b.kind)));
         let emit = shape.emitter.as_ref().map_or([0.0; BINS], |e| {
-            bin_means(&pt_render::scene::spectrum_for(&e.radiance, true))
+            let s = e.radiance.as_constant().map_or(Spectrum::constant(0.0), |r| {
+                pt_render::texture::spectrum_for_role(r, Role::Emission)
+            });
+            bin_means(&s)
                 .map(|v| v * std::f32::consts::PI)
         });
         shape_bins.push((refl, emit));

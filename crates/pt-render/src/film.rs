@@ -145,3 +145,22 @@ mod tests {
         assert!((p.variance_of_mean()[2] - 4.0 * 5.0 / 12.0).abs() < 1e-5);
     }
 }
+
+/// The rendered image with its per-pixel variance.
+#[derive(Clone, Debug)]
+pub struct RenderOutput {
+    /// Width in pixels.
+    pub width: u32,
+    /// Height in pixels.
+    pub height: u32,
+    /// Pixel means, linear RGB radiance, row-major from the top.
+    pub mean: Vec<[f32; 3]>,
+    /// Variance of each pixel mean (sample variance / spp).
+    pub variance: Vec<[f32; 3]>,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Wall-clock time of the sampling loop.
+    pub time: std::time::Duration,
+    /// Samples whose radiance was NaN or infinite (excluded from the means).
+    pub nonfinite_samples: u64,
+}

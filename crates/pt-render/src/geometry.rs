@@ -222,7 +222,7 @@ pub fn intersect_sphere(
 }
 
 /// What the integrator needs to know about a hit, world space.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, Default)]
 pub struct Interaction {
     /// Hit point.
     pub p: Vec3,
@@ -242,6 +242,11 @@ pub struct Interaction {
     pub t: f32,
     /// Index of the shape this primitive belongs to.
     pub shape: u32,
+    /// Index of the hit primitive in the acceleration structure (for mesh attributes).
+    pub prim: u32,
+    /// Barycentric coordinates (b1, b2) of the hit on the primitive, as the intersection found
+    /// them (a parallelogram's range to 1 over its two triangles).
+    pub b: Vec2,
 }
 
 #[cfg(test)]

@@ -60,7 +60,7 @@ mod wavelengths;
 pub use color::{
     spectrum_to_srgb, spectrum_to_xyz, srgb_to_xyz, xyz_to_srgb, SRGB_TO_XYZ, XYZ_TO_SRGB,
 };
-pub use rgb2spec::RgbSigmoid;
+pub use rgb2spec::{srgb_to_sigmoid, RgbSigmoid, RgbToSpectrumTable};
 pub use spectrum::{planck, NamedIlluminant, Outside, Spectrum, SpectrumError, Tabulated};
 pub use wavelengths::{sample_visible_wavelength, visible_wavelength_pdf, SampledWavelengths};
 

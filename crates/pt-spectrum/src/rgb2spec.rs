@@ -7,14 +7,17 @@
 //! (the paper's optimiser does the same for conditioning); [`RgbSigmoid::coefficients_nm`]
 //! gives the coefficients in nanometres as pbrt-v4 and Mitsuba 3 store them.
 //!
-//! The paper precomputes a 64^3 coefficient table by Gauss-Newton. This crate instead solves
-//! the same least-squares problem exactly for each colour at scene-load time (a scene has few
-//! RGB materials; one fit takes well under a millisecond): find `c` such that the reflectance,
-//! lit by D65 and observed by the CIE 1931 2-degree observer, has the target linear sRGB
-//! (`rgb = XYZ_TO_SRGB * int R D65 cmf / int D65 y-bar`). The solver is Gauss-Newton with
-//! Levenberg-Marquardt damping and a homotopy from the grey of the same mean, warm-starting
-//! each step as the paper's table construction does along its brightness axis. Residuals are
-//! in linear sRGB (the paper uses CIELAB); at convergence both are zero.
+//! Two ways to get the coefficients of a colour, built on one solver:
+//! - [`RgbSigmoid::fit`] solves the least-squares problem exactly for that colour: find `c`
+//!   such that the reflectance, lit by D65 and observed by the CIE 1931 2-degree observer, has
+//!   the target linear sRGB (`rgb = XYZ_TO_SRGB * int R D65 cmf / int D65 y-bar`). The solver
+//!   is Gauss-Newton with Levenberg-Marquardt damping and a homotopy from the grey of the same
+//!   mean, warm-starting each step as the paper's table construction does along its brightness
+//!   axis. Residuals are in linear sRGB (the paper uses CIELAB); at convergence both are zero.
+//!   About 0.1-0.2 ms per colour; [`RgbSigmoid::fit_from`] warm-starts from a nearby colour.
+//! - [`RgbToSpectrumTable`] / [`srgb_to_sigmoid`] look the coefficients up in the paper's
+//!   precomputed 3 x 64^3 table (trilinear interpolation, well under a microsecond), built
+//!   with the same solver at first use and cached on disk.
 //!
 //! Colours that no reflectance can reach (a channel at exactly 0 or 1 with the others
 //! different) are approached as closely as the sigmoid allows; greys are special-cased to the
@@ -23,6 +26,13 @@ use crate::cie::{self, LAMBDA_MAX, LAMBDA_MIN};
 use crate::color::XYZ_TO_SRGB;
 use glam::{DMat3, DVec3, Vec4};
 use std::sync::OnceLock;
+
+mod table;
+pub use table::{srgb_to_sigmoid, RgbToSpectrumTable};
+
+/// Initial Levenberg-Marquardt damping (relative to the diagonal of `J^T J`) of
+/// [`RgbSigmoid::fit`] and [`RgbSigmoid::fit_from`].
+const FIT_DAMPING: f64 = 1e-3;
 
 /// Width of the visible range, nm.
 const RANGE: f32 = LAMBDA_MAX - LAMBDA_MIN;
@@ -81,22 +91,16 @@ impl RgbSigmoid {
         if rgb[0] == rgb[1] && rgb[1] == rgb[2] {
             return Self::constant(rgb[0]);
         }
-        let c0 = DVec3::new(start.c[0] as f64, start.c[1] as f64, start.c[2] as f64);
+        let c0 = start.coefficients_f64();
         if !c0.is_finite() || c0.abs().max_element() > 1e4 {
             return Self::fit(rgb);
         }
-        let target = DVec3::new(rgb[0] as f64, rgb[1] as f64, rgb[2] as f64);
-        let c = solve(target, c0, 50, 1e-9);
-        // The tolerance is checked in f32, the precision the coefficients are kept in.
-        let s = RgbSigmoid {
-            c: [c.x as f32, c.y as f32, c.z as f32],
-        };
-        let (back, _) = rgb_and_jacobian(DVec3::new(s.c[0] as f64, s.c[1] as f64, s.c[2] as f64));
-        if (back - target).abs().max_element() < 1e-6 {
-            s
-        } else {
-            Self::fit(rgb)
-        }
+        fit_warm(rgb, c0, FIT_DAMPING).unwrap_or_else(|| Self::fit(rgb))
+    }
+
+    /// The coefficients in f64, the solver's precision.
+    fn coefficients_f64(&self) -> DVec3 {
+        DVec3::new(self.c[0] as f64, self.c[1] as f64, self.c[2] as f64)
     }
 
     /// Coefficients in the normalised wavelength `t = (l - 360 nm) / 470 nm`.
@@ -131,6 +135,20 @@ impl RgbSigmoid {
             .clamp(Vec4::splat(-1e6), Vec4::splat(1e6));
         Vec4::splat(0.5) + 0.5 * x / (Vec4::ONE + x * x).sqrt()
     }
+}
+
+/// The warm-started solve shared by [`RgbSigmoid::fit_from`] and the table builder: damped
+/// Gauss-Newton from `start` straight to `rgb` (in [0, 1], not grey), initial damping `mu0`.
+/// `Some` if the coefficients, rounded to f32 (the precision they are kept in), reproduce
+/// `rgb` within 1e-6 in every channel; `None` otherwise (the caller falls back to a cold fit).
+fn fit_warm(rgb: [f32; 3], start: DVec3, mu0: f64) -> Option<RgbSigmoid> {
+    let target = DVec3::new(rgb[0] as f64, rgb[1] as f64, rgb[2] as f64);
+    let c = solve(target, start, 50, 1e-9, mu0);
+    let s = RgbSigmoid {
+        c: [c.x as f32, c.y as f32, c.z as f32],
+    };
+    let (back, _) = rgb_and_jacobian(s.coefficients_f64());
+    ((back - target).abs().max_element() < 1e-6).then_some(s)
 }
 
 /// Quadrature nodes (normalised t) and RGB weights: `rgb(c) = sum_k w_k S(x_k(c))`, with
@@ -172,28 +190,45 @@ fn quadrature() -> &'static Quadrature {
 
 /// Linear sRGB of the reflectance with coefficients `c` under D65, and its Jacobian
 /// (columns: derivatives with respect to c0, c1, c2).
+///
+/// Two passes per block of nodes: the sigmoids and their derivatives first (independent per
+/// node, so the square roots and divisions pipeline), then the sums in node order (the same
+/// operations in the same order as a single loop, so the result is bit-identical to it). This
+/// halves the cost of the 64^3 table build, which is dominated by this function.
 fn rgb_and_jacobian(c: DVec3) -> (DVec3, DMat3) {
+    const BLOCK: usize = 64;
     let q = quadrature();
     let mut rgb = DVec3::ZERO;
     let (mut j0, mut j1, mut j2) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
-    for (&t, &w) in q.t.iter().zip(&q.w) {
-        let x = (c.x * t + c.y) * t + c.z;
-        let r = 1.0 / (1.0 + x * x).sqrt();
-        rgb += w * (0.5 + 0.5 * x * r);
-        // dS/dx = 1 / (2 (1 + x^2)^(3/2)).
-        let ds = w * (0.5 * r * r * r);
-        j0 += ds * (t * t);
-        j1 += ds * t;
-        j2 += ds;
+    let (mut s, mut d) = ([0.0f64; BLOCK], [0.0f64; BLOCK]);
+    for (t, w) in q.t.chunks(BLOCK).zip(q.w.chunks(BLOCK)) {
+        for ((&t, s), d) in t.iter().zip(&mut s).zip(&mut d) {
+            let x = (c.x * t + c.y) * t + c.z;
+            let r = 1.0 / (1.0 + x * x).sqrt();
+            *s = 0.5 + 0.5 * x * r;
+            // dS/dx = 1 / (2 (1 + x^2)^(3/2)).
+            *d = 0.5 * r * r * r;
+        }
+        for (((&t, &w), &s), &d) in t.iter().zip(w).zip(&s).zip(&d) {
+            rgb += w * s;
+            let ds = w * d;
+            j0 += ds * (t * t);
+            j1 += ds * t;
+            j2 += ds;
+        }
     }
     (rgb, DMat3::from_cols(j0, j1, j2))
 }
 
-/// Levenberg-Marquardt iterations towards `target` from `c`; returns the best coefficients.
-fn solve(target: DVec3, mut c: DVec3, iterations: usize, tol: f64) -> DVec3 {
+/// Levenberg-Marquardt iterations towards `target` from `c`, stopping when the residual (linear
+/// sRGB, Euclidean) is below `tol`; returns the best coefficients. `mu0` is the initial damping
+/// relative to the diagonal of `J^T J` (multiplied by 0.3, down to 1e-12, after each accepted
+/// step and by 10 after a rejected one): a tiny value gives Gauss-Newton's quadratic convergence
+/// from a good start, a larger one a more cautious descent from a poor one.
+fn solve(target: DVec3, mut c: DVec3, iterations: usize, tol: f64, mu0: f64) -> DVec3 {
     let (mut rgb, mut jac) = rgb_and_jacobian(c);
     let mut r = rgb - target;
-    let mut mu = 1e-3;
+    let mut mu = mu0;
     for _ in 0..iterations {
         if r.length() < tol {
             break;
@@ -245,6 +280,7 @@ fn fit_coefficients(target: DVec3) -> DVec3 {
             c,
             if last { 200 } else { 30 },
             if last { 1e-9 } else { 1e-7 },
+            FIT_DAMPING,
         );
     }
     c

@@ -210,3 +210,19 @@ pub struct IntegratorDesc {
     pub loc: SourceLoc,
 }
 
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Radiosity option names parse case-insensitively with `-` or `_`; an unknown name's
+    /// error lists the accepted ones.
+    #[test]
+    fn radiosity_option_names_parse() {
+        assert_eq!("gauss-seidel".parse::<RadiositySolver>(), Ok(RadiositySolver::GaussSeidel));
+        assert_eq!("Final_Gather".parse::<RadiosityDisplay>(), Ok(RadiosityDisplay::FinalGather));
+        assert_eq!("balanced".parse::<Reciprocity>(), Ok(Reciprocity::Balanced));
+        let e = "sor".parse::<RadiositySolver>().unwrap_err();
+        assert!(e.contains("jacobi, gauss_seidel, progressive"), "{e}");
+    }
+}

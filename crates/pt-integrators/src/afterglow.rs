@@ -51,12 +51,14 @@
 //! `pt render scene.xml --time 10` renders the scene 10 s after the lights went out: every
 //! light and emitter is off and each phosphorescent triangle emits its afterglow.
 
-use crate::integrator::{li, PathSettings};
-use crate::sampler::Sampler;
-use crate::scene::{spectrum_for, BuildError, Scene};
-use crate::{BvhKind, LightSelection};
+use crate::path::{li, PathSettings};
+use pt_render::sampler::Sampler;
+use pt_render::texture::{spectrum_for_role, Role};
+use pt_render::{BuildError, BvhKind, LightSelection, Scene};
 use pt_math::{offset_ray_origin, warp::square_to_cosine_hemisphere, Frame, Ray, Vec2, Vec3};
-use pt_scene::{AreaEmitterDesc, BsdfKind, Geometry, SceneDesc, SpectrumDesc, TriangleMesh};
+use pt_scene::{
+    AreaEmitterDesc, BsdfKind, Geometry, SceneDesc, SpectrumDesc, TextureDesc, TriangleMesh,
+};
 use pt_spectrum::cie::{integrate_visible, LAMBDA_MAX, LAMBDA_MIN};
 use pt_spectrum::{ColorMode, SampledWavelengths, Spectrum};
 use std::sync::Arc;
@@ -136,8 +138,8 @@ pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, 
             out.shapes.push(dark);
             continue;
         };
-        let a = spectrum_for(absorption, false);
-        let e = spectrum_for(emission, false);
+        let a = spectrum_for_role(absorption, Role::Albedo);
+        let e = spectrum_for_role(emission, Role::Albedo);
         let area = integrate_visible(|l| e.eval(l as f32) as f64);
         if !(area > 0.0) {
             return Err(BuildError {
@@ -161,10 +163,8 @@ pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, 
                 .collect();
             Some(AreaEmitterDesc {
                 loc: shape.loc.clone(),
-                radiance: SpectrumDesc::Tabulated(Arc::new(pairs)),
-                texture: None,
+                radiance: TextureDesc::Constant(SpectrumDesc::Tabulated(Arc::new(pairs))),
                 primaries: None,
-                uv_texture: None,
             })
         };
         let mut sampler_index = 0u64;
@@ -203,6 +203,12 @@ pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, 
                             .as_ref()
                             .map(|ts| idx.map(|i| ts[i as usize]).to_vec()),
                         indices: vec![[0, 1, 2]],
+                        // A face attribute of triangle t is the one attribute value of `tri`.
+                        attributes: m
+                            .attributes
+                            .iter()
+                            .map(|a| one_triangle(a, idx, t))
+                            .collect(),
                     });
                     tri.emitter = emitter(phi);
                     tri.id = shape.id.as_ref().map(|id| format!("{id}#{t}"));
@@ -213,6 +219,7 @@ pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, 
                 center,
                 radius,
                 flip_normals,
+                ..
             } => {
                 let mut s = next();
                 let phi = absorbed(&lit, &a, &mut s, &settings, |u| {
@@ -251,7 +258,7 @@ fn absorbed(
             if let Some(ls) = scene.lights[i].sample(p, u_sel, u, &lambda) {
                 let cos = ls.wi.dot(n);
                 if cos > 0.0 && !ls.radiance.is_black() && unoccluded(scene, origin, &ls) {
-                    e += ls.radiance * scene.emission(i, &lambda) * (cos / (pmf * ls.pdf));
+                    e += ls.radiance * (cos / (pmf * ls.pdf));
                 }
             }
         } else {
@@ -269,7 +276,7 @@ fn absorbed(
 }
 
 /// Whether nothing blocks the segment from `origin` to the light sample.
-fn unoccluded(scene: &Scene, origin: Vec3, ls: &crate::light::LightSample) -> bool {
+fn unoccluded(scene: &Scene, origin: Vec3, ls: &pt_render::light::LightSample) -> bool {
     if ls.dist.is_infinite() {
         return !scene.occluded(&Ray::new(origin, ls.wi));
     }
@@ -287,4 +294,18 @@ fn unoccluded(scene: &Scene, origin: Vec3, ls: &crate::light::LightSample) -> bo
             tmin: 0.0,
             tmax: dist * (1.0 - 1e-5),
         })
+}
+
+/// The values of a mesh attribute for one triangle `t` of the mesh, as the attribute of a
+/// mesh of that triangle alone (vertices in the order `idx`).
+fn one_triangle(a: &pt_scene::MeshAttribute, idx: &[u32; 3], t: usize) -> pt_scene::MeshAttribute {
+    let d = a.dims as usize;
+    let values = match a.kind {
+        pt_scene::AttributeKind::Vertex => idx
+            .iter()
+            .flat_map(|&i| a.values[i as usize * d..][..d].iter().copied())
+            .collect(),
+        pt_scene::AttributeKind::Face => a.values[t * d..][..d].to_vec(),
+    };
+    pt_scene::MeshAttribute { values, ..a.clone() }
 }

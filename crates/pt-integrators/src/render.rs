@@ -1,10 +1,10 @@
 //! The render loop: passes over the image, rayon over tiles, one independent random stream per
 //! sample; a render can be cancelled between passes and resumed from its saved sums.
 
-use crate::film::{sample_filter, PixelStats};
-use crate::integrator::{trace_paths, PathSettings, PathStart, PathState};
-use crate::sampler::Sampler;
-use crate::scene::Scene;
+use crate::path::{trace_paths, PathSettings, PathStart, PathState};
+use pt_render::film::{sample_filter, PixelStats};
+use pt_render::sampler::Sampler;
+use pt_render::{RenderOutput, Scene};
 use pt_math::Vec2;
 use pt_scene::FilterDesc;
 use pt_spectrum::{spectrum_to_srgb, ColorMode, SampledWavelengths};
@@ -35,23 +35,31 @@ pub struct RenderSettings {
     pub clamp: Option<f32>,
 }
 
-/// The rendered image with its per-pixel variance.
-#[derive(Clone, Debug)]
-pub struct RenderOutput {
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-    /// Pixel means, linear RGB radiance, row-major from the top.
-    pub mean: Vec<[f32; 3]>,
-    /// Variance of each pixel mean (sample variance / spp).
-    pub variance: Vec<[f32; 3]>,
-    /// Samples per pixel.
-    pub spp: u32,
-    /// Wall-clock time of the sampling loop.
-    pub time: Duration,
-    /// Samples whose radiance was NaN or infinite (excluded from the means).
-    pub nonfinite_samples: u64,
+impl RenderSettings {
+    /// The settings a scene file asks for: film size and filter, spp, seed, and the path
+    /// tracer's depth from its integrator (`direct`: 2; `volpath`: with media).
+    pub fn from_desc(desc: &pt_scene::SceneDesc) -> Self {
+        let i = &desc.integrator;
+        let max_depth = match i.kind {
+            pt_scene::IntegratorKind::Direct => 2,
+            _ => i.max_depth,
+        };
+        RenderSettings {
+            width: desc.film.width,
+            height: desc.film.height,
+            spp: desc.sampler.sample_count,
+            seed: desc.sampler.seed,
+            filter: desc.film.filter,
+            path: PathSettings {
+                max_depth,
+                rr_depth: i.rr_depth,
+                hide_emitters: i.hide_emitters,
+                strategy: crate::path::Strategy::Mis,
+                media: i.kind == pt_scene::IntegratorKind::VolPath,
+            },
+            clamp: None,
+        }
+    }
 }
 
 /// Tile width and largest band height in pixels (see [`render_passes`]): small enough to
@@ -462,91 +470,7 @@ fn render_row_samples(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{BvhKind, LightSelection};
-
-    /// The vectorised Lambert shading (`integrator::scatter_lanes`) must give exactly what the
-    /// general code gives: every bit of every pixel sum, with it and with it switched off. The
-    /// scenes use it for every hit (Cornell box), for some (Lambert next to glass), and with
-    /// what it must get right: two-sided surfaces seen from behind, one-sided ones seen from
-    /// behind (black), two lights chosen by power, one of them facing away. 70 samples per
-    /// pixel cross a `SAMPLE_CHUNK` boundary. A transposed operation, a wrong side or a random
-    /// number drawn out of order changes bits here.
-    #[test]
-    fn lane_shading_matches_the_general_code_bit_for_bit() {
-        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
-        let inline = r#"<scene version="3.0.0">
-            <integrator type="path"><integer name="max_depth" value="7"/></integrator>
-            <sensor type="perspective"><float name="fov" value="60"/>
-                <transform name="to_world"><lookat origin="0.3, 1.2, 3.5" target="0, 0, 0" up="0, 1, 0"/></transform>
-                <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="32"/></film>
-            </sensor>
-            <bsdf type="twosided" id="two"><bsdf type="diffuse"><rgb name="reflectance" value="0.7, 0.5, 0.3"/></bsdf></bsdf>
-            <bsdf type="diffuse" id="one"><rgb name="reflectance" value="0.4, 0.6, 0.8"/></bsdf>
-            <shape type="rectangle"><transform name="to_world"><scale value="2"/><rotate x="1" angle="-90"/><translate value="0, -1, 0"/></transform><ref id="one"/></shape>
-            <shape type="rectangle"><transform name="to_world"><rotate y="1" angle="200"/><translate value="-0.5, 0, -0.5"/></transform><ref id="two"/></shape>
-            <shape type="rectangle"><transform name="to_world"><rotate y="1" angle="160"/><translate value="0.8, 0, 0"/></transform><ref id="one"/></shape>
-            <shape type="cube"><transform name="to_world"><scale value="0.3"/><translate value="0.2, -0.7, 0.5"/></transform><ref id="two"/></shape>
-            <shape type="rectangle"><transform name="to_world"><scale value="0.5"/><rotate x="1" angle="90"/><translate value="0, 1.5, 0"/></transform>
-                <emitter type="area"><rgb name="radiance" value="6, 5, 4"/></emitter></shape>
-            <shape type="rectangle"><transform name="to_world"><scale value="0.3"/><rotate y="1" angle="-60"/><translate value="-1.2, 0.2, 0.5"/></transform>
-                <emitter type="area"><rgb name="radiance" value="1, 3, 2"/></emitter></shape>
-        </scene>"#;
-        let descs = [
-            (
-                "cornell-box.xml",
-                pt_scene::load_file(&dir.join("cornell-box.xml"), &[]).expect("cornell-box"),
-            ),
-            (
-                "cornell-glass.xml",
-                pt_scene::load_file(&dir.join("cornell-glass.xml"), &[]).expect("cornell-glass"),
-            ),
-            (
-                "inline",
-                pt_scene::load_str(inline, std::path::Path::new("inline.xml"), &dir, &[])
-                    .expect("inline scene"),
-            ),
-        ];
-        for (name, desc) in descs {
-            let mut scene = Scene::build(&desc, BvhKind::Auto, LightSelection::Power)
-                .unwrap_or_else(|e| panic!("{name}: {e}"));
-            assert!(
-                scene.lane_shading().is_some(),
-                "{name}: the vectorised shading is not used, the test checks nothing"
-            );
-            let settings = RenderSettings::from_desc(&desc);
-            let (x0, y0) = (settings.width / 2 - 8, settings.height / 2 - 8);
-            let tile = Tile {
-                x0,
-                y0,
-                x1: x0 + 16,
-                y1: y0 + 16,
-                samples: 0..70,
-            };
-            let mut lanes = vec![PixelStats::default(); (settings.width * 16) as usize];
-            render_tile(&scene, &settings, &mut lanes, &tile);
-            scene.disable_lane_shading();
-            let mut general = vec![PixelStats::default(); (settings.width * 16) as usize];
-            render_tile(&scene, &settings, &mut general, &tile);
-            let bits = |v: &[PixelStats]| {
-                v.iter()
-                    .flat_map(|p| {
-                        p.sum
-                            .iter()
-                            .chain(&p.sum_sq)
-                            .map(|x| x.to_bits())
-                            .chain([u64::from(p.n), u64::from(p.nonfinite)])
-                    })
-                    .collect::<Vec<u64>>()
-            };
-            let (a, b) = (bits(&lanes), bits(&general));
-            let differ = a.iter().zip(&b).filter(|(x, y)| x != y).count();
-            assert_eq!(differ, 0, "{name}: {differ} of {} pixel-sum values differ between the vectorised shading and the general code", a.len());
-            assert!(
-                lanes.iter().any(|p| p.sum.iter().any(|&s| s > 0.0)),
-                "{name}: the tile is black, the test checks nothing"
-            );
-        }
-    }
+    use pt_render::{BvhKind, LightSelection};
 
     /// The x86-64-v3 variant of the render loop must give exactly the portable variant's pixel
     /// sums (the same arithmetic compiled with other instructions), on scenes that together use

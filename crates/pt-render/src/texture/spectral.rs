@@ -42,14 +42,13 @@
 //! In RGB mode the same emission is represented exactly (colorimetrically) by the matrix
 //! `rgb -> sum_i k_i rgb_i srgb(P_i)` ([`DisplayPrimaries::to_srgb_matrix`]).
 
-use crate::texture::Bitmap;
+use super::bitmap::{Bitmap, Lookup};
 use pt_math::Vec2;
 use pt_spectrum::{
     xyz_to_srgb, NamedIlluminant, RgbSigmoid, SampledSpectrum, SampledWavelengths, Spectrum,
 };
 use rayon::prelude::*;
 use std::collections::HashMap;
-use std::sync::Arc;
 
 /// One texel's spectrum, `scale * S(lambda)` (dimensionless reflectance or relative radiance).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -139,24 +138,20 @@ pub fn upsample_texels(texels: &[[f32; 3]], width: usize, form: Upsampling) -> V
 const FIT_CHUNK: usize = 256;
 
 /// A bitmap whose texels are spectra (spectral mode): the spectral form of a [`Bitmap`], with
-/// the same lookup geometry.
+/// the same lookup.
 #[derive(Clone, Debug)]
 pub struct SpectralBitmap {
-    width: usize,
-    height: usize,
-    nearest: bool,
+    /// How it is looked up (the RGB bitmap's).
+    pub lookup: Lookup,
     texels: Vec<TexelSpectrum>,
 }
 
 impl SpectralBitmap {
-    /// Upsamples an image as reflectances ([`Upsampling::Reflectance`]).
-    pub fn new(bitmap: &Bitmap) -> Self {
-        let (width, height) = bitmap.size();
+    /// Upsamples an image's texels in the given form.
+    pub fn new(bitmap: &Bitmap, form: Upsampling) -> Self {
         SpectralBitmap {
-            width,
-            height,
-            nearest: bitmap.is_nearest(),
-            texels: upsample_texels(bitmap.texels(), width, Upsampling::Reflectance),
+            lookup: bitmap.lookup,
+            texels: upsample_texels(&bitmap.texels, bitmap.lookup.width, form),
         }
     }
 
@@ -165,20 +160,13 @@ impl SpectralBitmap {
     /// weights of [`Bitmap::eval`].
     #[inline]
     pub fn eval(&self, uv: Vec2, lambda: &SampledWavelengths) -> SampledSpectrum {
-        let (w, h) = (self.width as i64, self.height as i64);
-        let x = uv.x * self.width as f32 - 0.5;
-        let y = uv.y * self.height as f32 - 0.5;
-        let at = |xi: i64, yi: i64| {
-            self.texels[(yi.rem_euclid(h) * w + xi.rem_euclid(w)) as usize].eval(lambda)
-        };
-        if self.nearest {
-            return at(x.round() as i64, y.round() as i64);
+        let f = self.lookup.footprint(uv);
+        if f.weights[0] == 1.0 {
+            return self.texels[f.texels[0]].eval(lambda);
         }
-        let (x0, y0) = (x.floor(), y.floor());
-        let (fx, fy) = (x - x0, y - y0);
-        let (xi, yi) = (x0 as i64, y0 as i64);
-        (at(xi, yi) * (1.0 - fx) + at(xi + 1, yi) * fx) * (1.0 - fy)
-            + (at(xi, yi + 1) * (1.0 - fx) + at(xi + 1, yi + 1) * fx) * fy
+        let t = f.texels.map(|i| self.texels[i].eval(lambda));
+        let w = f.weights;
+        (t[0] * w[0] + t[1] * w[1]) + (t[2] * w[2] + t[3] * w[3])
     }
 }
 
@@ -273,32 +261,6 @@ impl DisplayPrimaries {
     }
 }
 
-/// The spectral emission of a textured area light (spectral mode), before the scene's
-/// emission factor (D65 for upsampled images, 1 for display primaries).
-#[derive(Clone, Debug)]
-pub enum SpectralEmission {
-    /// Upsampled texels ([`SpectralBitmap`]).
-    Upsampled(SpectralBitmap),
-    /// The image's linear RGB, bilinearly interpolated, as drive values of display primaries.
-    Primaries {
-        /// The image (linear RGB).
-        image: Arc<Bitmap>,
-        /// The display.
-        display: DisplayPrimaries,
-    },
-}
-
-impl SpectralEmission {
-    /// Relative spectral radiance at texture coordinates `uv` and the path's wavelengths.
-    #[inline]
-    pub fn eval(&self, uv: Vec2, lambda: &SampledWavelengths) -> SampledSpectrum {
-        match self {
-            SpectralEmission::Upsampled(b) => b.eval(uv, lambda),
-            SpectralEmission::Primaries { image, display } => display.eval(image.eval(uv), lambda),
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -372,15 +334,23 @@ mod tests {
         }
         img.save(&path).unwrap();
         let lambda = SampledWavelengths::sample_visible(0.3);
-        for filter in ["bilinear", "nearest"] {
-            let desc = pt_scene::BitmapDesc {
-                loc: pt_scene::SourceLoc::default(),
-                filename: path.clone(),
-                raw: false,
-                filter: filter.into(),
+        let image = super::super::bitmap::Image::load(&pt_scene::ImageSource::File(path.clone()), false).unwrap();
+        for (filter, wrap) in [
+            (pt_scene::BitmapFilter::Bilinear, pt_scene::WrapMode::Repeat),
+            (pt_scene::BitmapFilter::Nearest, pt_scene::WrapMode::Mirror),
+            (pt_scene::BitmapFilter::Bilinear, pt_scene::WrapMode::Clamp),
+        ] {
+            let b = Bitmap {
+                lookup: Lookup {
+                    width: image.width,
+                    height: image.height,
+                    filter,
+                    wrap,
+                    to_uv: [1.3, 0.2, 0.1, -0.1, 0.9, 0.05],
+                },
+                texels: image.texels.clone(),
             };
-            let b = Bitmap::load(&desc).unwrap();
-            let s = SpectralBitmap::new(&b);
+            let s = SpectralBitmap::new(&b, Upsampling::Reflectance);
             for k in 0..200 {
                 let uv = Vec2::new(
                     -0.3 + 1.7 * ((k * 37 % 200) as f32 / 200.0),
@@ -390,7 +360,7 @@ mod tests {
                 let v = s.eval(uv, &lambda).0;
                 assert!(
                     (v - pt_math::Vec4::splat(rgb)).abs().max_element() < 1e-5,
-                    "{filter} {uv}: {v} vs {rgb}"
+                    "{filter:?} {wrap:?} {uv}: {v} vs {rgb}"
                 );
             }
         }
@@ -405,9 +375,13 @@ mod tests {
         let texels = [[0.9f32, 0.1, 0.1], [0.1, 0.1, 0.9]];
         let up = upsample_texels(&texels, 2, Upsampling::Reflectance);
         let b = SpectralBitmap {
-            width: 2,
-            height: 1,
-            nearest: false,
+            lookup: Lookup {
+                width: 2,
+                height: 1,
+                filter: pt_scene::BitmapFilter::Bilinear,
+                wrap: pt_scene::WrapMode::Repeat,
+                to_uv: pt_scene::UV_IDENTITY,
+            },
             texels: up.clone(),
         };
         for u in [0.1f32, 0.37, 0.8] {

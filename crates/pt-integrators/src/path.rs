@@ -6,14 +6,12 @@
 //! unlimited); Russian roulette starts once `rr_depth` segments have been traced, continuing with
 //! probability min(max throughput, 0.95). Emitters are one-sided.
 
-use crate::geometry::Interaction;
-use crate::light::LightSample;
-use crate::sampler::Sampler;
-use crate::scene::LaneShading;
-use crate::scene::Scene;
-use pt_math::{offset_coordinate, offset_ray_origin, power_heuristic, Frame, Ray, Vec3, Vec4};
+use pt_math::{offset_ray_origin, power_heuristic, Frame, Ray, Vec3};
+use pt_render::geometry::Interaction;
+use pt_render::light::LightSample;
+use pt_render::sampler::Sampler;
+use pt_render::Scene;
 use pt_spectrum::{ColorMode, SampledSpectrum, SampledWavelengths};
-use std::f32::consts::FRAC_1_PI;
 
 /// Which strategies estimate direct light (for method comparisons; MIS is the default).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -164,12 +162,11 @@ pub const MAX_PATHS: usize = 8;
 /// `finish`, in the order they finish (not the order they started).
 ///
 /// Up to [`MAX_PATHS`] paths are in flight, and a path that ends makes room for the next at
-/// once, so that the vectorised shading's lanes stay full. The paths advance together, one
-/// segment at a time, in two passes over them: the shadow rays left by the previous scattering
-/// and the closest hits of the new segments, then the scattering at each hit (emission, light
-/// sample, BSDF sample, Russian roulette), at Lambert hits for all paths at once in SIMD lanes
-/// (`scatter_lanes`). The queries of one pass do not depend on each other, so the processor
-/// overlaps them, where one path alone is a chain of dependent steps. Each path draws its random
+/// once. The paths advance together, one segment at a time, in two passes over them: the
+/// shadow rays left by the previous scattering and the closest hits of the new segments, then
+/// the scattering at each hit (emission, light sample, BSDF sample, Russian roulette). The
+/// queries of one pass do not depend on each other, so the processor overlaps them, where one
+/// path alone is a chain of dependent steps. Each path draws its random
 /// numbers and adds its terms in the same order as it would alone, so each result is
 /// bit-identical to tracing the path alone.
 #[inline(always)]
@@ -208,30 +205,15 @@ pub fn trace_paths(
         if !any {
             break;
         }
-        // Hits that the vectorised shading can take wait in `lanes` for one call.
-        let lane_shading = scene.lane_shading().filter(|_| s.strategy == Strategy::Mis);
-        let mut lanes = [None; MAX_PATHS];
-        for ((slot, hit), lane) in slots.iter_mut().zip(&hits).zip(lanes.iter_mut()) {
+        for (slot, hit) in slots.iter_mut().zip(&hits) {
             let Some(PathStart { path, sampler, .. }) = slot else {
                 continue;
             };
             if !arrive(scene, s, path, hit) {
                 continue;
             }
-            let Some(hit) = hit else { continue };
-            // The vectorised shading builds the frame from the normal alone, as the general
-            // code does when there is no dp/du.
-            match lane_shading
-                .filter(|_| hit.dpdu == Vec3::ZERO)
-                .and_then(|ls| scene.lane_lambert(ls, hit.shape))
-            {
-                Some(m) => *lane = Some(m),
-                None => scatter_at(scene, s, path, hit, sampler),
-            }
-        }
-        if let Some(ls) = lane_shading {
-            if lanes.iter().any(Option::is_some) {
-                scatter_lanes(scene, s, ls, &mut slots, &hits, &lanes);
+            if let Some(hit) = hit {
+                scatter_at(scene, s, path, hit, sampler);
             }
         }
     }
@@ -270,7 +252,7 @@ fn arrive(
         // The ray left the scene: environment and sun.
         for &i in &scene.infinite_lights {
             let light = &scene.lights[i];
-            let le = light.escaped_radiance(ray.dir, lambda) * scene.emission(i, lambda);
+            let le = light.escaped_radiance(ray.dir, lambda);
             if !le.is_black() {
                 let w = emission_weight(s, depth_now, prev_delta_now, prev_pdf_now, || {
                     scene.light_pmf(i) * light.escaped_pdf(ray.dir)
@@ -299,7 +281,7 @@ fn arrive(
 
     // Emission found by the ray just traced.
     if let Some((li_idx, light)) = scene.shape_light(hit.shape) {
-        let le = light.emitted(hit.ns, wo_world, hit.uv, lambda) * scene.emission(li_idx, lambda);
+        let le = light.emitted(hit.ns, wo_world, hit.uv, lambda);
         if !le.is_black() {
             let prev = *prev_p;
             let w = emission_weight(s, depth_now, prev_delta_now, prev_pdf_now, || {
@@ -343,11 +325,13 @@ fn scatter_at(
         ..
     } = path;
     let wo_world = -ray.dir;
-    let bsdf = scene.material_at_hit(hit, lambda);
+    let bsdf = scene.bsdf(hit, lambda);
     // Fluorescence: the BSDF holds each lane's total albedo at its emitted wavelength; now
     // some lanes move to an excitation wavelength, used by NEE and the rest of the path.
-    if scene.is_fluorescent(hit.shape) {
-        *lambda = scene.fluoresce(hit.shape, lambda, sampler.next_1d());
+    if scene.material(hit.shape).fluorescent().is_some() {
+        if let Some(l) = scene.fluoresce(hit.shape, lambda, sampler.next_1d()) {
+            *lambda = l;
+        }
     }
     let frame = Frame::from_normal_tangent(hit.ns, hit.dpdu);
     let wo = frame.to_local(wo_world);
@@ -380,7 +364,6 @@ fn scatter_at(
                             *throughput
                                 * f
                                 * ls.radiance
-                                * scene.emission(li_idx, lambda)
                                 * (wi.z.abs() * w / light_pdf),
                         ));
                     }
@@ -420,248 +403,6 @@ fn scatter_at(
             return;
         }
         *throughput *= 1.0 / q;
-    }
-}
-
-/// The scattering at Lambert hits (see [`LaneShading`]) of the paths marked in `lanes` (with
-/// their albedo and two-sidedness), all at once: the same computation as [`scatter_at`], with
-/// the same operations in the same order, written over arrays of one lane per path so that the
-/// compiler runs it in SIMD lanes (AVX2 in the x86-64-v3 render loop). Each path draws its
-/// random numbers in the same order as in [`scatter_at`], so the results are bit-identical.
-#[inline(always)]
-fn scatter_lanes(
-    scene: &Scene,
-    s: &PathSettings,
-    ls: &LaneShading,
-    slots: &mut [Option<PathStart>; MAX_PATHS],
-    hits: &[Option<Interaction>; MAX_PATHS],
-    lanes: &[Option<([f32; 4], bool)>; MAX_PATHS],
-) {
-    const N: usize = MAX_PATHS;
-    // Inputs, gathered one lane per path. Unused lanes keep harmless values and are ignored.
-    let mut p = [[0.0f32; N]; 3];
-    let mut ng = [[0.0f32; N]; 3];
-    let mut ns = [[0.0f32; N], [0.0; N], [1.0; N]];
-    let mut dir = [[0.0f32; N], [0.0; N], [-1.0; N]];
-    let mut albedo = [[0.0f32; N]; 4];
-    let mut two_sided = [false; N];
-    let mut thr = [[0.0f32; N]; 4];
-    let mut pmf = [1.0f32; N];
-    let (mut u_light, mut u_bsdf) = ([[0.5f32; N]; 2], [[0.5f32; N]; 2]);
-    let (mut lv0, mut le1, mut le2, mut ln) = (
-        [[0.0f32; N]; 3],
-        [[0.0f32; N]; 3],
-        [[0.0f32; N]; 3],
-        [[0.0f32; N]; 3],
-    );
-    let mut larea = [1.0f32; N];
-    let mut lrad = [[0.0f32; N]; 4];
-    for k in 0..N {
-        let (Some(h), Some((alb, two)), Some(PathStart { path, sampler, .. })) =
-            (&hits[k], lanes[k], &mut slots[k])
-        else {
-            continue;
-        };
-        // The draws of `scatter_at`: light choice, light point, lobe (unused by Lambert),
-        // direction; Russian roulette's comes after, as there.
-        let (li, pm, _) = scene
-            .sample_light(sampler.next_1d())
-            .expect("LaneShading requires a light to choose");
-        let ul = sampler.next_2d();
-        let _u_lobe = sampler.next_1d();
-        let ub = sampler.next_2d();
-        let light = &ls.lights[li];
-        for a in 0..3 {
-            p[a][k] = h.p[a];
-            ng[a][k] = h.ng[a];
-            ns[a][k] = h.ns[a];
-            dir[a][k] = path.ray.dir[a];
-            lv0[a][k] = light.v0[a];
-            le1[a][k] = light.e1[a];
-            le2[a][k] = light.e2[a];
-            ln[a][k] = light.n[a];
-        }
-        for c in 0..4 {
-            albedo[c][k] = alb[c];
-            thr[c][k] = path.throughput.0[c];
-            lrad[c][k] = light.radiance[c];
-        }
-        two_sided[k] = two;
-        pmf[k] = pm;
-        (u_light[0][k], u_light[1][k], u_bsdf[0][k], u_bsdf[1][k]) = (ul.x, ul.y, ub.x, ub.y);
-        larea[k] = light.area;
-    }
-
-    // Outputs: the shadow ray and its contribution, the next segment.
-    let mut shadow_ok = [false; N];
-    let (mut sh_o, mut sh_d, mut sh_tmax, mut sh_c) = (
-        [[0.0f32; N]; 3],
-        [[0.0f32; N]; 3],
-        [0.0f32; N],
-        [[0.0f32; N]; 4],
-    );
-    let mut next_ok = [false; N];
-    let (mut nx_o, mut nx_d, mut nx_pdf) = ([[0.0f32; N]; 3], [[0.0f32; N]; 3], [0.0f32; N]);
-    let dot = |a: [f32; 3], b: [f32; 3]| (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2];
-    for k in 0..N {
-        let get = |v: &[[f32; N]; 3]| [v[0][k], v[1][k], v[2][k]];
-        let (x, n_g, n) = (get(&p), get(&ng), get(&ns));
-        // Frame::from_normal (Duff et al. 2017).
-        let sign = 1.0f32.copysign(n[2]);
-        let a = -1.0 / (sign + n[2]);
-        let b = n[0] * n[1] * a;
-        let fs = [1.0 + sign * n[0] * n[0] * a, sign * b, -sign * n[0]];
-        let ft = [b, sign + n[1] * n[1] * a, -n[1]];
-        let to_local = |v: [f32; 3]| [dot(v, fs), dot(v, ft), dot(v, n)];
-        let d = get(&dir);
-        let wo = to_local([-d[0], -d[1], -d[2]]);
-        // SpawnPoint: the side the path came from, offset there; the other side on demand.
-        let flip = -dot(n_g, d).signum();
-        let n_out = [n_g[0] * flip, n_g[1] * flip, n_g[2] * flip];
-        let out = [
-            offset_coordinate(x[0], n_out[0]),
-            offset_coordinate(x[1], n_out[1]),
-            offset_coordinate(x[2], n_out[2]),
-        ];
-        let origin = |w: [f32; 3]| {
-            if dot(n_out, w) >= 0.0 {
-                out
-            } else {
-                [
-                    offset_coordinate(x[0], -n_out[0]),
-                    offset_coordinate(x[1], -n_out[1]),
-                    offset_coordinate(x[2], -n_out[2]),
-                ]
-            }
-        };
-        // Two-sided Lambert seen from behind is mirrored (SurfaceBsdf::side).
-        let side = if two_sided[k] && wo[2] < 0.0 {
-            -1.0
-        } else {
-            1.0
-        };
-        let wo_z = wo[2] * side;
-
-        // Light sample: a point of the parallelogram by area (AreaLight::sample).
-        let (ux, uy) = (u_light[0][k], u_light[1][k]);
-        let (v0, e1, e2, l_n) = (get(&lv0), get(&le1), get(&le2), get(&ln));
-        let lp = [
-            v0[0] + e1[0] * ux + e2[0] * uy,
-            v0[1] + e1[1] * ux + e2[1] * uy,
-            v0[2] + e1[2] * ux + e2[2] * uy,
-        ];
-        let to = [lp[0] - x[0], lp[1] - x[1], lp[2] - x[2]];
-        let dist2 = dot(to, to);
-        let dist = dist2.sqrt();
-        let wi = [to[0] / dist, to[1] / dist, to[2] / dist];
-        let cos_l = dot(l_n, [-wi[0], -wi[1], -wi[2]]);
-        let l_pdf = dist2 / (cos_l.abs() * larea[k]);
-        let sampled = (dist > 0.0) & l_pdf.is_finite();
-        let lit = cos_l > 0.0;
-        let wi_l = to_local(wi);
-        // Lambert eval and pdf (sides mirrored as in SurfaceBsdf; opacity 1).
-        let wi_z = wi_l[2] * side;
-        let front = (wo_z > 0.0) & (wi_z > 0.0);
-        let mut f = [0.0f32; 4];
-        let mut le = [0.0f32; 4];
-        for c in 0..4 {
-            f[c] = if front { albedo[c][k] * FRAC_1_PI } else { 0.0 };
-            le[c] = if lit { lrad[c][k] } else { 0.0 };
-        }
-        let black = |v: &[f32; 4]| (v[0] == 0.0) & (v[1] == 0.0) & (v[2] == 0.0) & (v[3] == 0.0);
-        // The shadow ray (shadow_ray): to the light point offset off the light's surface.
-        let o = origin(wi);
-        let tn_sign = cos_l.signum();
-        let target = [
-            offset_coordinate(lp[0], l_n[0] * tn_sign),
-            offset_coordinate(lp[1], l_n[1] * tn_sign),
-            offset_coordinate(lp[2], l_n[2] * tn_sign),
-        ];
-        let seg = [target[0] - o[0], target[1] - o[1], target[2] - o[2]];
-        let seg_len = dot(seg, seg).sqrt();
-        let light_pdf = pmf[k] * l_pdf;
-        let bsdf_pdf = if wo_z > 0.0 && wi_z > 0.0 {
-            wi_z * FRAC_1_PI
-        } else {
-            0.0
-        };
-        let w = power_heuristic(light_pdf, bsdf_pdf);
-        let scale = wi_l[2].abs() * w / light_pdf;
-        shadow_ok[k] = sampled & !black(&le) & !black(&f) & (seg_len > 0.0);
-        for a in 0..3 {
-            sh_o[a][k] = o[a];
-            sh_d[a][k] = seg[a] / seg_len;
-        }
-        sh_tmax[k] = seg_len * SHADOW_RAY_SHORTEN;
-        for c in 0..4 {
-            sh_c[c][k] = thr[c][k] * f[c] * le[c] * scale;
-        }
-
-        // BSDF sample: the cosine-weighted hemisphere by the concentric map (warp.rs, the same
-        // operations).
-        let (ox, oy) = (2.0 * u_bsdf[0][k] - 1.0, 2.0 * u_bsdf[1][k] - 1.0);
-        let x_wedge = ox.abs() > oy.abs();
-        let (r, num) = if x_wedge { (ox, oy) } else { (oy, ox) };
-        let ratio = (num / r).max(-1.0);
-        let (sn, cs) = pt_math::warp::sin_cos_quarter(std::f32::consts::FRAC_PI_4 * ratio);
-        let (cos_t, sin_t) = if x_wedge { (cs, sn) } else { (sn, cs) };
-        let (dx, dy) = (r * cos_t, r * sin_t);
-        let z = (1.0 - (dx * dx + dy * dy)).max(0.0).sqrt();
-        let pdf = if z > 0.0 { z * FRAC_1_PI } else { 0.0 };
-        next_ok[k] = !(wo_z <= 0.0) & !(pdf <= 0.0);
-        let wz = z * side;
-        let wi_world = [
-            fs[0] * dx + ft[0] * dy + n[0] * wz,
-            fs[1] * dx + ft[1] * dy + n[1] * wz,
-            fs[2] * dx + ft[2] * dy + n[2] * wz,
-        ];
-        let no = origin(wi_world);
-        for a in 0..3 {
-            nx_o[a][k] = no[a];
-            nx_d[a][k] = wi_world[a];
-        }
-        nx_pdf[k] = pdf;
-    }
-
-    // Results back to the paths, then Russian roulette as in `scatter_at`.
-    for k in 0..N {
-        let (Some(h), Some((alb, _)), Some(PathStart { path, sampler, .. })) =
-            (&hits[k], lanes[k], &mut slots[k])
-        else {
-            continue;
-        };
-        let col = |v: &[[f32; N]; 3]| Vec3::new(v[0][k], v[1][k], v[2][k]);
-        if shadow_ok[k] {
-            let ray = Ray {
-                origin: col(&sh_o),
-                dir: col(&sh_d),
-                tmin: 0.0,
-                tmax: sh_tmax[k],
-            };
-            path.shadow = Some((
-                ray,
-                SampledSpectrum(Vec4::new(sh_c[0][k], sh_c[1][k], sh_c[2][k], sh_c[3][k])),
-            ));
-        }
-        let weight = SampledSpectrum(Vec4::from_array(alb));
-        if !next_ok[k] || weight.is_black() {
-            path.alive = false;
-            continue;
-        }
-        path.throughput *= weight;
-        path.prev_p = h.p;
-        path.prev_pdf = nx_pdf[k];
-        path.prev_delta = false;
-        path.ray = Ray::new(col(&nx_o), col(&nx_d));
-        path.depth += 1;
-        if path.depth >= s.rr_depth {
-            let q = (path.throughput.max_value() * path.eta_scale * path.eta_scale).min(0.95);
-            if !(sampler.next_1d() < q) {
-                path.alive = false;
-                continue;
-            }
-            path.throughput *= 1.0 / q;
-        }
     }
 }
 

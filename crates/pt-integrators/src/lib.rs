@@ -1,0 +1,401 @@
+//! Light transport methods as peers behind one interface: a closed [`Integrator`] enum, each
+//! variant configured once from the scene description's `<integrator>` (and the command line's
+//! [`Overrides`]), each rendering a [`Job`] into an image with its per-pixel variance.
+//!
+//! | variant | Mitsuba plugin | method |
+//! |---|---|---|
+//! | [`Integrator::Path`] | `path`, `volpath` | unidirectional path tracing, NEE + MIS ([`path`]); `volpath` adds absorption by interior media |
+//! | [`Integrator::Direct`] | `direct` | the path tracer with `max_depth` 2 (one emitter and one BSDF sample) |
+//! | [`Integrator::Radiosity`] | `radiosity` (pt) | finite-element radiosity (crate `pt-radiosity`) |
+//! | [`Integrator::Afterglow`] | (pt, `--time`) | phosphorescent afterglow: a first pass with the lights on, then the path tracer in the dark ([`afterglow`]) |
+//!
+//! ```no_run
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! use pt_integrators::{Integrator, Job, Overrides, Run};
+//! let desc = pt_scene::load_file("scenes/cornell-box.xml".as_ref(), &[])?;
+//! let integrator = Integrator::from_desc(&desc.integrator, &Overrides::default())?;
+//! let job = Job::new(&desc);
+//! let rendered = integrator.render(&job, Run::default())?;
+//! assert_eq!(rendered.output.spp, desc.sampler.sample_count);
+//! # Ok(()) }
+//! ```
+#![warn(missing_docs)]
+// One exception, allowed where it is: calling the render loop's x86-64-v3 variant after the
+// processor was checked for those features (render.rs, `render_tile`).
+#![deny(unsafe_code)]
+
+pub mod afterglow;
+pub mod path;
+pub mod render;
+
+pub use path::{PathSettings, Strategy};
+pub use render::{render, render_passes, RenderSettings, RenderState};
+
+use pt_radiosity::RadiosityParams;
+use pt_render::{BuildError, BvhKind, LightSelection, RenderOutput, Scene};
+use pt_scene::{IntegratorDesc, IntegratorKind, RadiosityOptions, SceneDesc};
+use pt_spectrum::ColorMode;
+use std::sync::atomic::AtomicBool;
+use std::time::{Duration, Instant};
+
+/// Errors of an integrator: bad settings, a scene it cannot render, a bad saved state.
+#[derive(Debug, thiserror::Error)]
+pub enum IntegratorError {
+    /// The scene could not be built (names the element).
+    #[error(transparent)]
+    Build(#[from] BuildError),
+    /// Radiosity refused the scene or its parameters.
+    #[error(transparent)]
+    Radiosity(#[from] pt_radiosity::RadiosityError),
+    /// A setting out of range or one that does not apply to the chosen method.
+    #[error("{0}")]
+    Settings(String),
+}
+
+/// Settings given on the command line that override the scene's `<integrator>`: each applies
+/// to the methods that have it, and is an error for the others.
+#[derive(Clone, Debug, Default)]
+pub struct Overrides {
+    /// Another method than the scene's.
+    pub kind: Option<IntegratorKind>,
+    /// Longest path in segments (path tracers).
+    pub max_depth: Option<i32>,
+    /// Direct-light strategy (path tracers).
+    pub strategy: Option<Strategy>,
+    /// Clamp of each sample's radiance (path tracers; adds bias).
+    pub clamp: Option<f32>,
+    /// Seconds since the lights went out: the afterglow of phosphorescent materials.
+    pub afterglow: Option<f32>,
+    /// Radiosity options, each overriding the scene's of the same name.
+    pub radiosity: RadiosityOptions,
+}
+
+/// The path tracer's settings: the estimator and the optional sample clamp.
+#[derive(Clone, Copy, Debug)]
+pub struct PathTracer {
+    /// Depth, Russian roulette, strategy, media.
+    pub settings: PathSettings,
+    /// Clamp of each sample's radiance (largest RGB channel; off by default, adds bias).
+    pub clamp: Option<f32>,
+}
+
+/// A light transport method with its settings.
+#[derive(Clone, Debug)]
+pub enum Integrator {
+    /// Path tracing (Mitsuba `path`, and `volpath` with absorbing media).
+    Path(PathTracer),
+    /// Direct illumination (Mitsuba `direct`): the path tracer with `max_depth` 2.
+    Direct(PathTracer),
+    /// Radiosity (project extension).
+    Radiosity(RadiosityParams),
+    /// The afterglow of phosphorescent materials `time` seconds after the lights went out,
+    /// rendered by the path tracer.
+    Afterglow {
+        /// Seconds since the lights went out (>= 0).
+        time: f32,
+        /// The path tracer of both passes.
+        path: PathTracer,
+    },
+}
+
+/// What to render: the scene, its film and sampler settings, and how the scene is built.
+#[derive(Clone, Debug)]
+pub struct Job<'a> {
+    /// The scene description (its film gives the image size and filter).
+    pub desc: &'a SceneDesc,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Seed of the random streams.
+    pub seed: u64,
+    /// Acceleration structure (path tracers).
+    pub bvh: BvhKind,
+    /// How next-event estimation picks lights (path tracers).
+    pub selection: LightSelection,
+    /// The colour mode, or `None` for the scene's own (spectral when it needs it).
+    pub mode: Option<ColorMode>,
+}
+
+impl<'a> Job<'a> {
+    /// The scene as its file describes it: its spp and seed, default build options.
+    pub fn new(desc: &'a SceneDesc) -> Self {
+        Job {
+            desc,
+            spp: desc.sampler.sample_count,
+            seed: desc.sampler.seed,
+            bvh: BvhKind::Auto,
+            selection: LightSelection::Power,
+            mode: None,
+        }
+    }
+}
+
+/// Progress reports of a render (called from worker threads).
+pub trait Progress: Sync {
+    /// The sampling starts: `total` samples in all, `done` of them already taken (resumed).
+    fn start_samples(&self, total: u64, done: u64);
+    /// `n` more samples taken.
+    fn samples(&self, n: u64);
+    /// A method with stages (radiosity): the stage's name and how far the whole run is (0-1).
+    fn stage(&self, name: &str, fraction: f32);
+}
+
+/// Reports nothing.
+struct Silent;
+
+impl Progress for Silent {
+    fn start_samples(&self, _: u64, _: u64) {}
+    fn samples(&self, _: u64) {}
+    fn stage(&self, _: &str, _: f32) {}
+}
+
+/// How a render runs: progress, cancellation and a saved state to continue.
+pub struct Run<'a> {
+    /// Where progress goes.
+    pub progress: &'a dyn Progress,
+    /// Set to stop after the current pass (the image so far is returned).
+    pub cancel: &'a AtomicBool,
+    /// A saved render to continue (path tracers only; see [`RenderState`]).
+    pub resume: Option<RenderState>,
+}
+
+impl Default for Run<'_> {
+    fn default() -> Self {
+        static NEVER: AtomicBool = AtomicBool::new(false);
+        Run {
+            progress: &Silent,
+            cancel: &NEVER,
+            resume: None,
+        }
+    }
+}
+
+/// A finished (or cancelled) render.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    /// The image and its variance.
+    pub output: RenderOutput,
+    /// The colour mode it was rendered in.
+    pub mode: ColorMode,
+    /// Settings worth recording in the image's header (name, value).
+    pub header: Vec<(String, String)>,
+    /// One line saying what was done and what it cost, for the log.
+    pub summary: String,
+    /// Warnings for the user (settings ignored, approximations).
+    pub warnings: Vec<String>,
+    /// Path tracers: the accumulated sums, for `--save-state`.
+    pub state: Option<RenderState>,
+    /// Whether all samples were taken (false after a cancel).
+    pub complete: bool,
+    /// Time to build the scene (BVH, materials, lights), before sampling.
+    pub build_time: Duration,
+}
+
+impl Integrator {
+    /// The method the scene's `<integrator>` asks for (or `o.kind`), with its settings read
+    /// from the description once and the command line's overrides applied. An override that
+    /// does not apply to the method is an error.
+    pub fn from_desc(d: &IntegratorDesc, o: &Overrides) -> Result<Integrator, IntegratorError> {
+        let bad = |m: String| Err(IntegratorError::Settings(m));
+        if let Some(depth) = o.max_depth {
+            if depth < -1 {
+                return bad(format!("--max-depth must be -1 (unlimited) or >= 0, got {depth}"));
+            }
+        }
+        if let Some(c) = o.clamp {
+            if !(c > 0.0 && c.is_finite()) {
+                return bad(format!("--clamp must be a positive finite radiance, got {c}"));
+            }
+        }
+        let kind = o.kind.unwrap_or(d.kind);
+        let radiosity_options = o.radiosity != RadiosityOptions::default();
+        if kind != IntegratorKind::Radiosity && radiosity_options {
+            return bad("radiosity options apply to --integrator radiosity only".into());
+        }
+        let path = |max_depth: i32| PathTracer {
+            settings: PathSettings {
+                max_depth: o.max_depth.unwrap_or(max_depth),
+                rr_depth: d.rr_depth,
+                hide_emitters: d.hide_emitters,
+                strategy: o.strategy.unwrap_or_default(),
+                media: kind == IntegratorKind::VolPath,
+            },
+            clamp: o.clamp,
+        };
+        if let Some(time) = o.afterglow {
+            if kind == IntegratorKind::Radiosity {
+                return bad("--time (afterglow) is rendered by the path tracer, not radiosity".into());
+            }
+            if !(time >= 0.0 && time.is_finite()) {
+                return bad(format!("--time must be a non-negative number of seconds, got {time}"));
+            }
+            return Ok(Integrator::Afterglow { time, path: path(d.max_depth) });
+        }
+        Ok(match kind {
+            // A radiosity scene rendered by the path tracer keeps its max_depth.
+            IntegratorKind::Path | IntegratorKind::VolPath => Integrator::Path(path(d.max_depth)),
+            IntegratorKind::Direct => Integrator::Direct(path(2)),
+            IntegratorKind::Radiosity => {
+                if o.max_depth.is_some() || o.clamp.is_some() || o.strategy.is_some() {
+                    return bad("--max-depth, --clamp and --strategy apply to the path tracer, not to radiosity".into());
+                }
+                Integrator::Radiosity(radiosity_params(&d.radiosity, &o.radiosity))
+            }
+        })
+    }
+
+    /// The method's name, as in `<integrator type="...">`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Integrator::Path(p) if p.settings.media => "volpath",
+            Integrator::Path(_) => "path",
+            Integrator::Direct(_) => "direct",
+            Integrator::Radiosity(_) => "radiosity",
+            Integrator::Afterglow { .. } => "afterglow",
+        }
+    }
+
+    /// Renders the job. Path tracers honour `run.cancel` between passes and continue
+    /// `run.resume`; radiosity runs to the end.
+    pub fn render(&self, job: &Job, run: Run) -> Result<Rendered, IntegratorError> {
+        match self {
+            Integrator::Path(p) | Integrator::Direct(p) => render_path(self.name(), p, job.desc, job, run),
+            Integrator::Afterglow { time, path } => {
+                let start = Instant::now();
+                let dark = afterglow::afterglow(job.desc, *time, job.seed)?;
+                let mut r = render_path("afterglow", path, &dark, job, run)?;
+                r.build_time += start.elapsed();
+                r.header.push(("afterglow_time_s".into(), time.to_string()));
+                Ok(r)
+            }
+            Integrator::Radiosity(params) => render_radiosity(params, job, run),
+        }
+    }
+}
+
+/// The radiosity parameters: the scene's options, each overridden by the command line's.
+fn radiosity_params(scene: &RadiosityOptions, cli: &RadiosityOptions) -> RadiosityParams {
+    let d = RadiosityParams::default();
+    RadiosityParams {
+        patch_size: cli.patch_size.or(scene.patch_size).or(d.patch_size),
+        rays_per_patch: cli.rays_per_patch.or(scene.rays_per_patch).unwrap_or(d.rays_per_patch),
+        tolerance: cli.tolerance.or(scene.tolerance).unwrap_or(d.tolerance),
+        max_iterations: cli.max_iterations.or(scene.max_iterations).unwrap_or(d.max_iterations),
+        solver: cli.solver.or(scene.solver).unwrap_or(d.solver),
+        display: cli.display.or(scene.display).unwrap_or(d.display),
+        reciprocity: cli.reciprocity.or(scene.reciprocity).unwrap_or(d.reciprocity),
+        ..d
+    }
+}
+
+/// The path tracer over the image in passes (see [`render_passes`]).
+fn render_path(name: &str, p: &PathTracer, desc: &SceneDesc, job: &Job, run: Run) -> Result<Rendered, IntegratorError> {
+    let build_start = Instant::now();
+    let scene = Scene::build_with_mode(desc, job.bvh, job.selection, job.mode)?;
+    let build_time = build_start.elapsed();
+    let settings = RenderSettings {
+        width: desc.film.width,
+        height: desc.film.height,
+        spp: job.spp,
+        seed: job.seed,
+        filter: desc.film.filter,
+        path: p.settings,
+        clamp: p.clamp,
+    };
+    let mut state = match run.resume {
+        Some(s) => s,
+        None => RenderState::new(&settings),
+    };
+    if state.spp_done > settings.spp {
+        return Err(IntegratorError::Settings(format!(
+            "the saved render already has {} spp, more than --spp {}",
+            state.spp_done, settings.spp
+        )));
+    }
+    let pixels = u64::from(settings.width) * u64::from(settings.height);
+    run.progress.start_samples(pixels * u64::from(settings.spp), pixels * u64::from(state.spp_done));
+    let complete = render_passes(&scene, &settings, &mut state, run.cancel, &|n| run.progress.samples(n));
+    let output = state.output();
+    let secs = output.time.as_secs_f64();
+    let summary = format!(
+        "{name}: {}x{} at {} spp in {:.2} s ({:.2} M samples/s, scene build {:.2} s)",
+        output.width,
+        output.height,
+        output.spp,
+        secs,
+        (pixels * u64::from(output.spp)) as f64 / secs.max(1e-9) / 1e6,
+        build_time.as_secs_f64()
+    );
+    let mut warnings = Vec::new();
+    if output.nonfinite_samples > 0 {
+        warnings.push(format!(
+            "{} samples were NaN or infinite and were left out of their pixels",
+            output.nonfinite_samples
+        ));
+    }
+    let mut header = vec![
+        ("integrator".to_string(), name.to_string()),
+        ("max_depth".to_string(), p.settings.max_depth.to_string()),
+        ("strategy".to_string(), format!("{:?}", p.settings.strategy).to_lowercase()),
+    ];
+    if let Some(c) = p.clamp {
+        header.push(("clamp".into(), c.to_string()));
+    }
+    Ok(Rendered {
+        output,
+        mode: scene.mode,
+        header,
+        summary,
+        warnings,
+        state: Some(state),
+        complete,
+        build_time,
+    })
+}
+
+/// Radiosity: meshing, form factors, solve, display (crate `pt-radiosity`).
+fn render_radiosity(params: &RadiosityParams, job: &Job, run: Run) -> Result<Rendered, IntegratorError> {
+    if run.resume.is_some() {
+        return Err(IntegratorError::Settings("--resume applies to the path tracer, not to radiosity".into()));
+    }
+    if job.mode.is_some() || job.selection != LightSelection::Power || job.bvh != BvhKind::Auto {
+        return Err(IntegratorError::Settings(
+            "--mode, --light-selection and --bvh apply to the path tracer, not to radiosity".into(),
+        ));
+    }
+    let p = RadiosityParams { spp: job.spp, seed: job.seed, ..params.clone() };
+    let (output, stats) = pt_radiosity::render(job.desc, &p, &|stage, f| run.progress.stage(stage, f))?;
+    let summary = format!(
+        "radiosity: {} patches (size {:.4}), {} form factors ({:.1} MB), form factors {:.2} s, solve {:.2} s in {} iterations, total {:.2} s",
+        stats.patches,
+        stats.patch_size,
+        stats.nnz,
+        stats.memory_bytes as f64 / 1e6,
+        stats.form_factor_time.as_secs_f64(),
+        stats.solve_time.as_secs_f64(),
+        stats.iterations,
+        output.time.as_secs_f64(),
+    );
+    let header = vec![
+        ("integrator".into(), "radiosity".into()),
+        ("patches".into(), stats.patches.to_string()),
+        ("rays_per_patch".into(), p.rays_per_patch.to_string()),
+        ("solver".into(), format!("{:?}", p.solver).to_lowercase()),
+        ("display".into(), format!("{:?}", p.display).to_lowercase()),
+        ("iterations".into(), stats.iterations.to_string()),
+    ];
+    let mode = if job.desc.spectral_reason().is_some() {
+        ColorMode::Spectral
+    } else {
+        ColorMode::Rgb
+    };
+    Ok(Rendered {
+        output,
+        mode,
+        header,
+        summary,
+        warnings: stats.warnings.clone(),
+        state: None,
+        complete: true,
+        build_time: Duration::ZERO,
+    })
+}

@@ -1,0 +1,302 @@
+//! Area lights: emitting meshes, parallelograms and spheres.
+
+use super::LightSample;
+use crate::texture::{Texture, TexturePoint};
+use pt_math::warp::{square_to_uniform_sphere, square_to_uniform_triangle, uniform_cone_pdf};
+use pt_math::{Distribution1D, Frame, Mat3, Vec2, Vec3};
+use pt_spectrum::{SampledSpectrum, SampledWavelengths};
+use std::f32::consts::PI;
+
+/// Shape data a mesh light samples from (world space).
+#[derive(Clone, Debug)]
+pub struct LightTriangle {
+    /// Vertices.
+    pub p: [Vec3; 3],
+    /// Per-vertex shading normals, or the geometric normal three times.
+    pub n: [Vec3; 3],
+    /// Per-vertex texture coordinates (for textured emission).
+    pub uv: [Vec2; 3],
+}
+
+/// The geometry of an area light.
+#[derive(Clone, Debug)]
+pub enum LightShape {
+    /// Triangles with an area distribution.
+    Mesh {
+        /// The emitting triangles (zero-area ones removed).
+        tris: Vec<LightTriangle>,
+        /// Triangle choice proportional to area.
+        distr: Distribution1D,
+    },
+    /// A parallelogram `v0 + a e1 + b e2`, `a, b` in [0, 1] (a `rectangle` emitter, or any
+    /// emissive mesh of one triangle pair tested as a parallelogram): sampled by area directly,
+    /// with no triangle choice and no square root.
+    Parallelogram {
+        /// Corner.
+        v0: Vec3,
+        /// First edge.
+        e1: Vec3,
+        /// Second edge.
+        e2: Vec3,
+        /// Unit normal of the emitting (front) side.
+        n: Vec3,
+        /// Texture coordinates at `v0`, and their change along `e1` and along `e2`.
+        uv: [Vec2; 3],
+    },
+    /// A sphere (normal inwards when `flip`).
+    Sphere {
+        /// Centre.
+        center: Vec3,
+        /// Radius.
+        radius: f32,
+        /// Whether the front side faces inwards.
+        flip: bool,
+        /// Object-to-world rotation, for the texture coordinates of a textured emitter.
+        frame: Mat3,
+    },
+}
+
+/// An area light attached to one shape.
+#[derive(Clone, Debug)]
+pub struct AreaLight {
+    /// Emitted radiance (W sr^-1 m^-2) over the shape's texture coordinates: a constant, or
+    /// an image (a monitor), built for the emission role (spectral mode: times D65).
+    pub radiance: Texture,
+    /// The emitting geometry.
+    pub shape: LightShape,
+    /// Total surface area, scene units squared.
+    pub area: f32,
+}
+
+impl AreaLight {
+    /// Total emitted power estimate (for light selection): pi * area * luminance.
+    pub fn power(&self) -> f32 {
+        PI * self.area * crate::texture::luminance(self.radiance.mean_rgb()).max(0.0)
+    }
+
+    /// The emitted radiance at texture coordinates `uv` (front side), before the one-sided test,
+    /// at the path's wavelengths `lambda` (used only by spectral textures).
+    #[inline(always)]
+    fn radiance_at(&self, uv: Vec2, lambda: &SampledWavelengths) -> SampledSpectrum {
+        self.radiance.eval(&TexturePoint::uv(uv), lambda)
+    }
+
+    /// Samples a point uniformly by area and converts to solid angle as seen from `x`.
+    /// Returns `None` when the pdf is not finite (the point coincides with `x` or is seen
+    /// exactly edge-on). `lambda`: the path's wavelengths (spectral textures).
+    #[inline(always)]
+    pub fn sample(
+        &self,
+        x: Vec3,
+        u_sel: f32,
+        u: Vec2,
+        lambda: &SampledWavelengths,
+    ) -> Option<LightSample> {
+        if let LightShape::Sphere {
+            center,
+            radius,
+            flip,
+            frame,
+        } = &self.shape
+        {
+            if let Some(cone) = SphereCone::new(*center, *radius, x) {
+                return cone.sample(u, *flip, x, |p| {
+                    self.radiance_at(sphere_uv(*frame, (p - *center) / *radius), lambda)
+                });
+            }
+        }
+        let (p, n, uv) = match &self.shape {
+            LightShape::Mesh { tris, distr } => {
+                let (i, _, _) = distr.sample(u_sel);
+                let t = &tris[i];
+                let b = square_to_uniform_triangle(u);
+                let b0 = 1.0 - b.x - b.y;
+                let p = t.p[0] * b0 + t.p[1] * b.x + t.p[2] * b.y;
+                let n = (t.n[0] * b0 + t.n[1] * b.x + t.n[2] * b.y).normalize_or_zero();
+                (p, n, t.uv[0] * b0 + t.uv[1] * b.x + t.uv[2] * b.y)
+            }
+            &LightShape::Parallelogram { v0, e1, e2, n, uv } => (
+                v0 + e1 * u.x + e2 * u.y,
+                n,
+                uv[0] + uv[1] * u.x + uv[2] * u.y,
+            ),
+            LightShape::Sphere {
+                center,
+                radius,
+                flip,
+                frame,
+            } => {
+                let d = square_to_uniform_sphere(u);
+                (
+                    *center + d * *radius,
+                    if *flip { -d } else { d },
+                    sphere_uv(*frame, d),
+                )
+            }
+        };
+        let to = p - x;
+        let dist2 = to.length_squared();
+        let dist = dist2.sqrt();
+        if !(dist > 0.0) {
+            return None;
+        }
+        let wi = to / dist;
+        let cos_l = n.dot(-wi);
+        let pdf = dist2 / (cos_l.abs() * self.area);
+        if !pdf.is_finite() {
+            return None;
+        }
+        let radiance = if cos_l > 0.0 {
+            self.radiance_at(uv, lambda)
+        } else {
+            SampledSpectrum::ZERO
+        };
+        Some(LightSample {
+            p,
+            n,
+            wi,
+            dist,
+            radiance,
+            pdf,
+            delta: false,
+        })
+    }
+
+    /// Solid-angle pdf, from `x`, of having sampled the point `p` with normal `n` on this light
+    /// (for MIS when a BSDF-sampled ray hits the light).
+    #[inline]
+    pub fn pdf(&self, x: Vec3, p: Vec3, n: Vec3) -> f32 {
+        if let LightShape::Sphere { center, radius, .. } = &self.shape {
+            if let Some(cone) = SphereCone::new(*center, *radius, x) {
+                return uniform_cone_pdf(cone.one_minus_cos_max);
+            }
+        }
+        let to = p - x;
+        let dist2 = to.length_squared();
+        let cos_l = n.dot(to).abs() / dist2.sqrt();
+        let pdf = dist2 / (cos_l * self.area);
+        if pdf.is_finite() {
+            pdf
+        } else {
+            0.0
+        }
+    }
+
+    /// Radiance leaving the light at a point with normal `n` towards direction `w` (unit,
+    /// pointing away from the light), at the path's wavelengths `lambda` (spectral textures).
+    #[inline]
+    pub fn emitted(
+        &self,
+        n: Vec3,
+        w: Vec3,
+        uv: Vec2,
+        lambda: &SampledWavelengths,
+    ) -> SampledSpectrum {
+        if n.dot(w) > 0.0 {
+            self.radiance_at(uv, lambda)
+        } else {
+            SampledSpectrum::ZERO
+        }
+    }
+}
+
+/// Solid-angle sampling of a sphere seen from an outside point `x` (pbrt-v4 section 6.2.4,
+/// "Sampling Spheres"): directions uniform in the cone the sphere subtends, pdf
+/// 1 / (2 pi (1 - cos theta_max)), mapped to the visible point through the angle alpha at the
+/// centre, `cos alpha = sin^2 theta / sin theta_max + cos theta sqrt(1 - sin^2 theta /
+/// sin^2 theta_max)`, which needs no ray-sphere intersection and so never misses at the rim.
+/// Much lower variance than area sampling for small or distant spheres, whose far half area
+/// sampling wastes.
+struct SphereCone {
+    center: Vec3,
+    radius: f32,
+    /// Frame whose normal points from the centre towards `x`.
+    frame: Frame,
+    sin2_max: f32,
+    one_minus_cos_max: f32,
+}
+
+impl SphereCone {
+    /// `None` when `x` is inside (or on) the sphere: then area sampling is used.
+    fn new(center: Vec3, radius: f32, x: Vec3) -> Option<Self> {
+        let d = x - center;
+        let d2 = d.length_squared();
+        let r2 = radius * radius;
+        // Margin: on the surface itself (NEE from a point of the emitter) keep area sampling.
+        if !(d2 > r2 * 1.0001) {
+            return None;
+        }
+        let sin2_max = r2 / d2;
+        // 1 - sqrt(1 - s) computed as s / (1 + sqrt(1 - s)): no cancellation for small s.
+        let one_minus_cos_max = sin2_max / (1.0 + (1.0 - sin2_max).sqrt());
+        Some(SphereCone {
+            center,
+            radius,
+            frame: Frame::from_normal(d / d2.sqrt()),
+            sin2_max,
+            one_minus_cos_max,
+        })
+    }
+
+    /// A point of the visible cap for the uniform numbers `u`, its emitted radiance given by
+    /// `radiance(point)` on the front side.
+    fn sample(
+        &self,
+        u: Vec2,
+        flip: bool,
+        x: Vec3,
+        radiance: impl FnOnce(Vec3) -> SampledSpectrum,
+    ) -> Option<LightSample> {
+        let omc = u.x * self.one_minus_cos_max; // 1 - cos(theta), uniform in cos(theta)
+        let cos_t = 1.0 - omc;
+        let sin2_t = omc * (2.0 - omc);
+        let cos_alpha =
+            sin2_t / self.sin2_max.sqrt() + cos_t * (1.0 - sin2_t / self.sin2_max).max(0.0).sqrt();
+        let sin_alpha = (1.0 - cos_alpha * cos_alpha).max(0.0).sqrt();
+        let phi = 2.0 * PI * u.y;
+        // The point's outward normal, measured from the axis towards x.
+        let n_out = self
+            .frame
+            .to_world(Vec3::new(
+                sin_alpha * phi.cos(),
+                sin_alpha * phi.sin(),
+                cos_alpha,
+            ))
+            .normalize();
+        let p = self.center + n_out * self.radius;
+        let to = p - x;
+        let dist = to.length();
+        if !(dist > 0.0) {
+            return None;
+        }
+        let wi = to / dist;
+        let n = if flip { -n_out } else { n_out };
+        let radiance = if n.dot(-wi) > 0.0 {
+            radiance(p)
+        } else {
+            SampledSpectrum::ZERO
+        };
+        Some(LightSample {
+            p,
+            n,
+            wi,
+            dist,
+            radiance,
+            pdf: uniform_cone_pdf(self.one_minus_cos_max),
+            delta: false,
+        })
+    }
+}
+
+
+/// Mitsuba's sphere texture coordinates of a unit vector `d` from the centre (world space):
+/// in the sphere's object frame, u = azimuth about z / 2 pi in [0, 1), v = polar angle from +z / pi.
+#[inline]
+pub fn sphere_uv(frame: Mat3, d: Vec3) -> Vec2 {
+    let local = frame.transpose() * d;
+    let mut u = local.y.atan2(local.x) * (0.5 / PI);
+    if u < 0.0 {
+        u += 1.0;
+    }
+    Vec2::new(u, local.z.clamp(-1.0, 1.0).acos() / PI)
+}

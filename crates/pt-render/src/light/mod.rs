@@ -1,0 +1,324 @@
+//! Lights: area lights on shapes, point and spot lights, distant lights (directional, sun),
+//! and environment lights (constant, environment map).
+//!
+//! Every light offers `sample` (a direction towards it from a reference point, with the
+//! radiance arriving along it and the solid-angle pdf, or a `delta` flag for lights that cannot be
+//! hit by a ray) and, for lights a BSDF-sampled ray can find, `pdf` for MIS.
+//!
+//! Area lights:
+//! An area emitter radiates `radiance` from its front side only (the side its shading normal
+//! faces), as Mitsuba's `area` emitter. Points are sampled uniformly by area over the whole
+//! shape (triangles chosen by area, then uniform barycentrics; spheres uniformly over their
+//! surface), so `pdf_area = 1 / total area`, and the solid-angle pdf seen from a point `x` is
+//! `pdf_area * |x - y|^2 / |cos theta_y|` (pbrt-v4 eq. 4.15; Veach 1997 eq. 8.10).
+
+mod area;
+mod build;
+mod envmap;
+#[cfg(test)]
+mod tests;
+
+pub use area::{sphere_uv, AreaLight, LightShape, LightTriangle};
+pub use build::build_light;
+pub use envmap::EnvMap;
+
+use crate::texture::ConstantSpectrum;
+use pt_math::warp::{square_to_uniform_cone, square_to_uniform_sphere, uniform_cone_pdf};
+use pt_math::{Frame, Vec2, Vec3};
+use pt_spectrum::{SampledSpectrum, SampledWavelengths};
+use std::f32::consts::PI;
+
+/// A point sampled on a light, as seen from a reference point.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample {
+    /// The point on the light, world space (for distant lights: unused).
+    pub p: Vec3,
+    /// The light's surface normal there (zero for point-like and distant lights: the shadow ray
+    /// then needs no offset at the light's end).
+    pub n: Vec3,
+    /// Unit direction from the reference point towards the light.
+    pub wi: Vec3,
+    /// Distance to `p` (infinite for distant lights).
+    pub dist: f32,
+    /// Radiance arriving along `-wi` (for delta lights: the irradiance-like quantity
+    /// `I / d^2` or `E`, to be divided by `pdf` = 1).
+    pub radiance: SampledSpectrum,
+    /// Solid-angle pdf of `wi` for this light alone (not including light selection); 1 for
+    /// delta lights.
+    pub pdf: f32,
+    /// Whether the light is a delta light (point, spot, directional): no MIS, never hit.
+    pub delta: bool,
+}
+
+
+/// Spot light falloff: 1 inside `beam_width`, 0 beyond `cutoff`, linear in angle between
+/// (Mitsuba 3 `spot`).
+#[derive(Clone, Copy, Debug)]
+pub struct SpotCone {
+    /// cos of the cutoff angle.
+    pub cos_cutoff: f32,
+    /// Cutoff angle, radians.
+    pub cutoff: f32,
+    /// Full-intensity half-angle, radians.
+    pub beam_width: f32,
+}
+
+impl SpotCone {
+    /// Falloff factor for a direction making cos(theta) = `cos_t` with the axis.
+    #[inline]
+    pub fn falloff(&self, cos_t: f32) -> f32 {
+        if cos_t <= self.cos_cutoff {
+            return 0.0;
+        }
+        let angle = cos_t.clamp(-1.0, 1.0).acos();
+        if angle <= self.beam_width {
+            1.0
+        } else {
+            ((self.cutoff - angle) / (self.cutoff - self.beam_width)).clamp(0.0, 1.0)
+        }
+    }
+}
+
+/// Any light of the scene.
+#[derive(Clone, Debug)]
+pub enum Light {
+    /// An emitting shape.
+    Area(AreaLight),
+    /// Isotropic point light with intensity `intensity` (W/sr).
+    Point {
+        /// Position, world.
+        position: Vec3,
+        /// Radiant intensity, W/sr.
+        intensity: ConstantSpectrum,
+    },
+    /// Spot light at `position` pointing along `frame.n`.
+    Spot {
+        /// Position, world.
+        position: Vec3,
+        /// Frame whose normal is the spot axis.
+        frame: Frame,
+        /// Intensity on the axis, W/sr.
+        intensity: ConstantSpectrum,
+        /// Angular falloff.
+        cone: SpotCone,
+    },
+    /// Directional light: irradiance `irradiance` arriving from direction `to_light`.
+    Directional {
+        /// Unit direction from the scene towards the light, world.
+        to_light: Vec3,
+        /// Irradiance on a surface facing the light, W/m^2.
+        irradiance: ConstantSpectrum,
+    },
+    /// A disk of uniform radiance at infinity (the sun), sampled uniformly over its cone.
+    Sun {
+        /// Frame whose normal points from the scene towards the sun's centre.
+        frame: Frame,
+        /// Irradiance on a surface facing the sun, W/m^2.
+        irradiance: ConstantSpectrum,
+        /// 1 / (pi sin^2(alpha)), alpha the angular radius: the disk's radiance over the
+        /// irradiance.
+        to_radiance: f32,
+        /// 1 - cos(alpha), computed without cancellation.
+        one_minus_cos: f32,
+    },
+    /// Uniform radiance from every direction.
+    Constant {
+        /// Radiance, W sr^-1 m^-2.
+        radiance: ConstantSpectrum,
+    },
+    /// Environment map.
+    EnvMap(EnvMap),
+}
+
+impl Light {
+    /// Whether rays escaping the scene can see this light (environment and sun).
+    pub fn is_infinite(&self) -> bool {
+        matches!(
+            self,
+            Light::Sun { .. } | Light::Constant { .. } | Light::EnvMap(_)
+        )
+    }
+
+    /// Power estimate for light selection, W (luminance). Distant lights use the scene's
+    /// bounding sphere radius `r`: the power they deliver into it (pbrt-v4 `Phi`).
+    pub fn power(&self, scene_radius: f32) -> f32 {
+        let disk = PI * scene_radius * scene_radius;
+        let p = match self {
+            Light::Area(a) => a.power(),
+            Light::Point { intensity, .. } => 4.0 * PI * intensity.luminance(),
+            Light::Spot {
+                intensity, cone, ..
+            } => {
+                // Full cone up to the mid-falloff angle: exact for a hard cutoff.
+                let mid = 0.5 * (cone.cutoff + cone.beam_width);
+                2.0 * PI * (1.0 - mid.cos()) * intensity.luminance()
+            }
+            Light::Directional { irradiance, .. } => disk * irradiance.luminance(),
+            Light::Sun { irradiance, .. } => disk * irradiance.luminance(),
+            Light::Constant { radiance } => 4.0 * PI * disk * radiance.luminance(),
+            Light::EnvMap(e) => 4.0 * PI * disk * e.mean_luminance(),
+        };
+        p.max(0.0)
+    }
+
+    /// Samples a direction towards the light from `x`; `lambda` are the path's wavelengths
+    /// (spectral textures and environment maps).
+    #[inline(always)]
+    pub fn sample(
+        &self,
+        x: Vec3,
+        u_sel: f32,
+        u: Vec2,
+        lambda: &SampledWavelengths,
+    ) -> Option<LightSample> {
+        match self {
+            Light::Area(a) => a.sample(x, u_sel, u, lambda),
+            Light::Point {
+                position,
+                intensity,
+            } => {
+                let to = *position - x;
+                let d2 = to.length_squared();
+                let dist = d2.sqrt();
+                if !(dist > 0.0) {
+                    return None;
+                }
+                let radiance = intensity.at(lambda) * (1.0 / d2);
+                radiance.is_finite().then_some(LightSample {
+                    p: *position,
+                    n: Vec3::ZERO,
+                    wi: to / dist,
+                    dist,
+                    radiance,
+                    pdf: 1.0,
+                    delta: true,
+                })
+            }
+            Light::Spot {
+                position,
+                frame,
+                intensity,
+                cone,
+            } => {
+                let to = *position - x;
+                let d2 = to.length_squared();
+                let dist = d2.sqrt();
+                if !(dist > 0.0) {
+                    return None;
+                }
+                let wi = to / dist;
+                let fall = cone.falloff(frame.n.dot(-wi));
+                let radiance = intensity.at(lambda) * (fall / d2);
+                radiance.is_finite().then_some(LightSample {
+                    p: *position,
+                    n: Vec3::ZERO,
+                    wi,
+                    dist,
+                    radiance,
+                    pdf: 1.0,
+                    delta: true,
+                })
+            }
+            Light::Directional {
+                to_light,
+                irradiance,
+            } => Some(LightSample {
+                p: x,
+                n: Vec3::ZERO,
+                wi: *to_light,
+                dist: f32::INFINITY,
+                radiance: irradiance.at(lambda),
+                pdf: 1.0,
+                delta: true,
+            }),
+            Light::Sun {
+                frame,
+                irradiance,
+                to_radiance,
+                one_minus_cos,
+            } => {
+                let wi = frame
+                    .to_world(square_to_uniform_cone(u, *one_minus_cos))
+                    .normalize();
+                Some(LightSample {
+                    p: x,
+                    n: Vec3::ZERO,
+                    wi,
+                    dist: f32::INFINITY,
+                    radiance: irradiance.at(lambda) * *to_radiance,
+                    pdf: uniform_cone_pdf(*one_minus_cos),
+                    delta: false,
+                })
+            }
+            Light::Constant { radiance } => {
+                let wi = square_to_uniform_sphere(u);
+                Some(LightSample {
+                    p: x,
+                    n: Vec3::ZERO,
+                    wi,
+                    dist: f32::INFINITY,
+                    radiance: radiance.at(lambda),
+                    pdf: pt_math::warp::UNIFORM_SPHERE_PDF,
+                    delta: false,
+                })
+            }
+            Light::EnvMap(e) => {
+                let (wi, radiance, pdf) = e.sample(u, lambda)?;
+                Some(LightSample {
+                    p: x,
+                    n: Vec3::ZERO,
+                    wi,
+                    dist: f32::INFINITY,
+                    radiance,
+                    pdf,
+                    delta: false,
+                })
+            }
+        }
+    }
+
+    /// Radiance seen along a ray that left the scene in direction `dir` (infinite lights only),
+    /// at the path's wavelengths `lambda` (spectral environment maps).
+    pub fn escaped_radiance(&self, dir: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
+        match self {
+            Light::Sun {
+                frame,
+                irradiance,
+                to_radiance,
+                one_minus_cos,
+            } => {
+                // Inside the cone: 1 - cos(theta) < 1 - cos(alpha), compared without cancellation
+                // as |dir - n|^2 / 2 = 1 - cos(theta).
+                if 0.5 * (dir - frame.n).length_squared() < *one_minus_cos {
+                    irradiance.at(lambda) * *to_radiance
+                } else {
+                    SampledSpectrum::ZERO
+                }
+            }
+            Light::Constant { radiance } => radiance.at(lambda),
+            Light::EnvMap(e) => e.radiance(dir, lambda),
+            _ => SampledSpectrum::ZERO,
+        }
+    }
+
+    /// Solid-angle pdf that `sample` produces direction `dir` (infinite lights only).
+    pub fn escaped_pdf(&self, dir: Vec3) -> f32 {
+        match self {
+            Light::Sun {
+                frame,
+                one_minus_cos,
+                ..
+            } => {
+                if 0.5 * (dir - frame.n).length_squared() < *one_minus_cos {
+                    uniform_cone_pdf(*one_minus_cos)
+                } else {
+                    0.0
+                }
+            }
+            Light::Constant { .. } => pt_math::warp::UNIFORM_SPHERE_PDF,
+            Light::EnvMap(e) => e.pdf(dir),
+            _ => 0.0,
+        }
+    }
+}
+

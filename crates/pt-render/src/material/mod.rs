@@ -1,0 +1,548 @@
+//! The material layer: what a surface is made of, built once from the scene description
+//! ([`build`]), and turned into a BSDF by value at each hit (pbrt-v4's `Material::GetBxDF`):
+//! every texturable parameter is a [`Texture`] evaluated at the hit's texture point and the
+//! path's wavelengths.
+//!
+//! A [`Material`] is one model with its (textured) parameters; a [`SurfaceMaterial`] adds what
+//! wraps a model in the scene description (Mitsuba's `twosided`, `mask`, `normalmap`,
+//! `blendbsdf`), as pt-bsdf's [`SurfaceBsdf`] does for BSDFs. In RGB mode, a surface whose
+//! parameters are all constant keeps its BSDF, evaluated once at build.
+
+mod build;
+
+pub use build::build_material;
+
+use crate::fluorescence::Fluorescent;
+use crate::geometry::Interaction;
+use crate::texture::{Texture, TexturePoint};
+use pt_bsdf::{
+    Bsdf, CoatingTable, Conductor, Dielectric, Distribution, FilmBase, GltfPbr, Lambert,
+    Microfacet, Minnaert, OrenNayar, OrenNayarVariant, RoughConductor, RoughDielectric,
+    RoughPlastic, RoughThinFilm, SurfaceBsdf, ThinDielectric, ThinFilm,
+};
+use pt_math::{Frame, Vec3};
+use pt_spectrum::{ColorMode, SampledWavelengths};
+
+/// The roughness of a rough model: distribution and the two roughness textures (scalars).
+#[derive(Clone, Debug)]
+pub struct Roughness {
+    /// The normal distribution.
+    pub distribution: Distribution,
+    /// Roughness along dp/du.
+    pub alpha_u: Texture,
+    /// Roughness along the bitangent.
+    pub alpha_v: Texture,
+}
+
+impl Roughness {
+    /// The microfacet distribution at a point.
+    #[inline]
+    fn at(&self, at: &TexturePoint) -> Microfacet {
+        Microfacet::new(self.distribution, self.alpha_u.eval_1(at), self.alpha_v.eval_1(at))
+    }
+}
+
+/// What a thin film lies on.
+#[derive(Clone, Debug)]
+pub enum FilmBaseMaterial {
+    /// A dielectric of absolute index `ior`.
+    Dielectric {
+        /// Index of refraction of the base.
+        ior: f32,
+    },
+    /// A conductor of complex index `eta + i k` (unbounded textures).
+    Conductor {
+        /// Real part.
+        eta: Texture,
+        /// Imaginary part.
+        k: Texture,
+    },
+}
+
+/// A thin film's parameters (project extension `thinfilm`, `roughthinfilm`).
+#[derive(Clone, Debug)]
+pub struct Film {
+    /// Thickness, nm (scalar texture).
+    pub thickness: Texture,
+    /// Index of the film.
+    pub film_ior: f32,
+    /// Index outside.
+    pub ext_ior: f32,
+    /// What the film lies on.
+    pub base: FilmBaseMaterial,
+}
+
+impl Film {
+    /// The smooth film at a point: exact Airy reflectance at the path's wavelengths in spectral
+    /// mode, Belcour & Barla 2017 in RGB mode.
+    #[inline]
+    fn at(&self, at: &TexturePoint, lambda: &SampledWavelengths, mode: ColorMode) -> ThinFilm {
+        let base = match &self.base {
+            FilmBaseMaterial::Dielectric { ior } => FilmBase::Dielectric { ior: *ior },
+            FilmBaseMaterial::Conductor { eta, k } => FilmBase::Conductor {
+                eta: eta.eval(at, lambda),
+                k: k.eval(at, lambda),
+            },
+        };
+        let d = self.thickness.eval_1(at).max(0.0);
+        match mode {
+            ColorMode::Spectral => ThinFilm::spectral(d, self.film_ior, self.ext_ior, base, lambda.lambda()),
+            ColorMode::Rgb => ThinFilm::rgb(d, self.film_ior, self.ext_ior, base),
+        }
+    }
+}
+
+/// One BSDF model with its parameters as textures.
+#[derive(Clone, Debug)]
+pub enum Material {
+    /// RGB mode, nothing varies: the BSDF itself.
+    Fixed(Bsdf),
+    /// Mitsuba `diffuse`.
+    Diffuse {
+        /// Albedo.
+        reflectance: Texture,
+    },
+    /// Project extension `orennayar`.
+    OrenNayar {
+        /// Facet albedo.
+        reflectance: Texture,
+        /// Facet slope standard deviation, radians (scalar).
+        sigma: Texture,
+        /// Formulation.
+        variant: OrenNayarVariant,
+    },
+    /// Project extension `minnaert`.
+    Minnaert {
+        /// Albedo scale.
+        reflectance: Texture,
+        /// Exponent (scalar).
+        k: Texture,
+    },
+    /// Mitsuba `dielectric`.
+    Dielectric {
+        /// Relative index inside / outside.
+        eta: f32,
+        /// Factor on reflection.
+        specular_reflectance: Texture,
+        /// Factor on transmission.
+        specular_transmittance: Texture,
+    },
+    /// Mitsuba `thindielectric`.
+    ThinDielectric {
+        /// Relative index.
+        eta: f32,
+        /// Factor on reflection.
+        specular_reflectance: Texture,
+        /// Factor on transmission.
+        specular_transmittance: Texture,
+    },
+    /// Mitsuba `roughdielectric`.
+    RoughDielectric {
+        /// Relative index.
+        eta: f32,
+        /// Distribution and roughness.
+        roughness: Roughness,
+        /// Factor on reflection.
+        specular_reflectance: Texture,
+        /// Factor on transmission.
+        specular_transmittance: Texture,
+    },
+    /// Mitsuba `conductor`.
+    Conductor {
+        /// Real part of the complex index.
+        eta: Texture,
+        /// Imaginary part.
+        k: Texture,
+        /// Factor on reflection.
+        specular_reflectance: Texture,
+    },
+    /// Mitsuba `roughconductor`.
+    RoughConductor {
+        /// Real part of the complex index.
+        eta: Texture,
+        /// Imaginary part.
+        k: Texture,
+        /// Factor on reflection.
+        specular_reflectance: Texture,
+        /// Distribution and roughness.
+        roughness: Roughness,
+    },
+    /// Mitsuba `roughplastic`.
+    RoughPlastic {
+        /// Albedo of the base.
+        diffuse_reflectance: Texture,
+        /// Factor on the coating's reflection.
+        specular_reflectance: Texture,
+        /// Relative index of the coating.
+        eta: f32,
+        /// Coating roughness (not texturable, as in Mitsuba).
+        microfacet: Microfacet,
+        /// Mitsuba's `nonlinear`.
+        nonlinear: bool,
+        /// Share of specular samples, from the textures' means (Mitsuba).
+        specular_sampling_weight: f32,
+        /// Transmittance table of the coating.
+        table: &'static CoatingTable,
+    },
+    /// Project extension `thinfilm`.
+    ThinFilm(Box<Film>),
+    /// Project extension `roughthinfilm`.
+    RoughThinFilm(Box<(Film, Roughness)>),
+    /// glTF metallic-roughness.
+    GltfPbr {
+        /// Base colour.
+        base_color: Texture,
+        /// Metalness (scalar).
+        metallic: Texture,
+        /// Perceptual roughness (scalar).
+        roughness: Texture,
+        /// Index of the dielectric part.
+        ior: f32,
+    },
+    /// Project extension `fluorescent` in spectral mode: a Lambertian of the total albedo at
+    /// each lane's wavelength (the re-emission moves wavelengths: [`SurfaceMaterial::fluorescent`]).
+    Fluorescent(Box<Fluorescent>),
+}
+
+impl Material {
+    /// The BSDF at a texture point and the path's wavelengths.
+    #[inline(always)]
+    pub fn bsdf(&self, at: &TexturePoint, lambda: &SampledWavelengths, mode: ColorMode) -> Bsdf {
+        match self {
+            Material::Fixed(b) => *b,
+            Material::Diffuse { reflectance } => Bsdf::Lambert(Lambert::new(reflectance.eval(at, lambda))),
+            Material::OrenNayar {
+                reflectance,
+                sigma,
+                variant,
+            } => Bsdf::OrenNayar(OrenNayar::new(
+                reflectance.eval(at, lambda),
+                sigma.eval_1(at),
+                *variant,
+            )),
+            Material::Minnaert { reflectance, k } => {
+                Bsdf::Minnaert(Minnaert::new(reflectance.eval(at, lambda), k.eval_1(at)))
+            }
+            Material::Dielectric {
+                eta,
+                specular_reflectance,
+                specular_transmittance,
+            } => {
+                let mut d = Dielectric::new(*eta);
+                d.specular_reflectance = specular_reflectance.eval(at, lambda);
+                d.specular_transmittance = specular_transmittance.eval(at, lambda);
+                Bsdf::Dielectric(d)
+            }
+            Material::ThinDielectric {
+                eta,
+                specular_reflectance,
+                specular_transmittance,
+            } => {
+                let mut d = ThinDielectric::new(*eta);
+                d.specular_reflectance = specular_reflectance.eval(at, lambda);
+                d.specular_transmittance = specular_transmittance.eval(at, lambda);
+                Bsdf::ThinDielectric(d)
+            }
+            Material::RoughDielectric {
+                eta,
+                roughness,
+                specular_reflectance,
+                specular_transmittance,
+            } => {
+                let mut d = RoughDielectric::new(*eta, roughness.at(at));
+                d.specular_reflectance = specular_reflectance.eval(at, lambda);
+                d.specular_transmittance = specular_transmittance.eval(at, lambda);
+                Bsdf::RoughDielectric(d)
+            }
+            Material::Conductor {
+                eta,
+                k,
+                specular_reflectance,
+            } => Bsdf::Conductor(Conductor::new(
+                eta.eval(at, lambda),
+                k.eval(at, lambda),
+                specular_reflectance.eval(at, lambda),
+            )),
+            Material::RoughConductor {
+                eta,
+                k,
+                specular_reflectance,
+                roughness,
+            } => Bsdf::RoughConductor(RoughConductor::new(
+                eta.eval(at, lambda),
+                k.eval(at, lambda),
+                specular_reflectance.eval(at, lambda),
+                roughness.at(at),
+            )),
+            Material::RoughPlastic {
+                diffuse_reflectance,
+                specular_reflectance,
+                eta,
+                microfacet,
+                nonlinear,
+                specular_sampling_weight,
+                table,
+            } => Bsdf::RoughPlastic(RoughPlastic::new(
+                diffuse_reflectance.eval(at, lambda),
+                specular_reflectance.eval(at, lambda),
+                *eta,
+                *microfacet,
+                *nonlinear,
+                *specular_sampling_weight,
+                table,
+            )),
+            Material::ThinFilm(f) => Bsdf::ThinFilm(f.at(at, lambda, mode)),
+            Material::RoughThinFilm(b) => {
+                Bsdf::RoughThinFilm(RoughThinFilm::new(b.0.at(at, lambda, mode), b.1.at(at)))
+            }
+            Material::GltfPbr {
+                base_color,
+                metallic,
+                roughness,
+                ior,
+            } => Bsdf::GltfPbr(GltfPbr::new(
+                base_color.eval(at, lambda),
+                metallic.eval_1(at),
+                roughness.eval_1(at),
+                *ior,
+            )),
+            Material::Fluorescent(f) => Bsdf::Lambert(Lambert::new(f.albedo(lambda))),
+        }
+    }
+}
+
+/// A normal map (Mitsuba `normalmap`, glTF `normalTexture`; pt-bsdf `normal_map`).
+#[derive(Clone, Debug)]
+pub struct NormalMap {
+    /// RGB data: the texel c decodes to n = 2 c - 1.
+    pub texture: Texture,
+    /// glTF `scale` on the decoded x and y (1 for Mitsuba).
+    pub scale: f32,
+    /// glTF tangent space (mesh tangents and handedness) rather than Mitsuba's (dp/du).
+    pub gltf: bool,
+}
+
+impl NormalMap {
+    /// The mapped normal at a hit, in the integrator's local shading frame
+    /// `Frame::from_normal_tangent(hit.ns, hit.dpdu)` (pt-bsdf `normal_map` builds the frame
+    /// from it), in the tangent space (s, t, n): Mitsuba: s along dp/du, t = n x s; glTF: s
+    /// along the mesh tangent, t = w (n x s).
+    #[inline]
+    fn normal(&self, hit: &Interaction, at: &TexturePoint) -> Vec3 {
+        let c = self.texture.eval_rgb(at);
+        let n = Vec3::new(2.0 * c[0] - 1.0, 2.0 * c[1] - 1.0, 2.0 * c[2] - 1.0);
+        if !self.gltf {
+            return n;
+        }
+        let n = Vec3::new(n.x * self.scale, n.y * self.scale, n.z);
+        let local = Frame::from_normal_tangent(hit.ns, hit.dpdu);
+        // Tangent frame of the mesh; without tangents, dp/du with w = +1.
+        let (t, w) = if hit.tangent.truncate() != Vec3::ZERO {
+            (hit.tangent.truncate(), hit.tangent.w)
+        } else {
+            (hit.dpdu, 1.0)
+        };
+        let tf = Frame::from_normal_tangent(hit.ns, t);
+        let world = tf.s * n.x + tf.t * (w * n.y) + tf.n * n.z;
+        local.to_local(world)
+    }
+}
+
+/// Opacity of a `mask` (scalar texture, clamped to [0, 1]) and glTF's alpha cutoff.
+#[derive(Clone, Debug)]
+pub struct Opacity {
+    /// The opacity.
+    pub texture: Texture,
+    /// glTF `alphaMode` MASK: opacity 1 where the texture is at least this, else 0.
+    pub cutoff: Option<f32>,
+}
+
+/// A surface's material with its wrappers: the per-hit form of a BSDF description.
+#[derive(Clone, Debug)]
+pub struct SurfaceMaterial {
+    /// The model.
+    pub material: Material,
+    /// `blendbsdf`: the weight of `second` (scalar texture, clamped) and `second`.
+    pub blend: Option<(Texture, Material)>,
+    /// `twosided`.
+    pub two_sided: bool,
+    /// `mask`.
+    pub opacity: Option<Opacity>,
+    /// `normalmap`.
+    pub normal_map: Option<NormalMap>,
+    /// RGB mode with nothing textured: the whole surface BSDF, evaluated once.
+    pub fixed: Option<SurfaceBsdf>,
+    /// Colour mode the textures were built for.
+    pub mode: ColorMode,
+}
+
+impl SurfaceMaterial {
+    /// The surface's BSDF at a hit, at the path's wavelengths, by value.
+    #[inline(always)]
+    pub fn bsdf(&self, hit: &Interaction, at: &TexturePoint, lambda: &SampledWavelengths) -> SurfaceBsdf {
+        if let Some(b) = self.fixed {
+            return b;
+        }
+        let opacity = match &self.opacity {
+            None => 1.0,
+            Some(o) => {
+                let v = o.texture.eval_1(at);
+                match o.cutoff {
+                    Some(c) => f32::from(u8::from(v >= c)),
+                    None => v.clamp(0.0, 1.0),
+                }
+            }
+        };
+        SurfaceBsdf {
+            bsdf: self.material.bsdf(at, lambda, self.mode),
+            two_sided: self.two_sided,
+            opacity,
+            normal: self.normal_map.as_ref().map(|n| n.normal(hit, at)),
+            blend: self
+                .blend
+                .as_ref()
+                .map(|(w, m)| (w.eval_1(at).clamp(0.0, 1.0), m.bsdf(at, lambda, self.mode))),
+        }
+    }
+
+    /// The fluorescence model, if the surface is `fluorescent` (spectral mode).
+    #[inline]
+    pub fn fluorescent(&self) -> Option<&Fluorescent> {
+        match &self.material {
+            Material::Fluorescent(f) => Some(f),
+            _ => None,
+        }
+    }
+
+    /// Whether the BSDF may depend on the azimuth (anisotropic models, normal maps, textures):
+    /// hits then need texture coordinates and dp/du. Isotropic untextured surfaces give the
+    /// same values and sampling distribution in any tangent frame, so their hits skip the uv
+    /// interpolation and the dp/du solve (4% of the Cornell box's render time).
+    pub fn uses_uv(&self) -> bool {
+        let textured = |t: &Texture| !t.is_constant();
+        self.normal_map.is_some()
+            || self.opacity.as_ref().is_some_and(|o| textured(&o.texture))
+            || !self.material.is_isotropic_untextured()
+            || self
+                .blend
+                .as_ref()
+                .is_some_and(|(w, m)| textured(w) || !m.is_isotropic_untextured())
+    }
+}
+
+impl Material {
+    /// Every texture of the model.
+    pub fn textures(&self) -> Vec<&Texture> {
+        fn film(f: &Film) -> Vec<&Texture> {
+            let mut v: Vec<&Texture> = vec![&f.thickness];
+            if let FilmBaseMaterial::Conductor { eta, k } = &f.base {
+                v.extend([eta, k]);
+            }
+            v
+        }
+        match self {
+            Material::Fixed(_) | Material::Fluorescent(_) => Vec::new(),
+            Material::Diffuse { reflectance } => vec![reflectance],
+            Material::OrenNayar {
+                reflectance, sigma, ..
+            } => vec![reflectance, sigma],
+            Material::Minnaert { reflectance, k } => vec![reflectance, k],
+            Material::Dielectric {
+                specular_reflectance,
+                specular_transmittance,
+                ..
+            }
+            | Material::ThinDielectric {
+                specular_reflectance,
+                specular_transmittance,
+                ..
+            } => vec![specular_reflectance, specular_transmittance],
+            Material::RoughDielectric {
+                roughness,
+                specular_reflectance,
+                specular_transmittance,
+                ..
+            } => vec![
+                &roughness.alpha_u,
+                &roughness.alpha_v,
+                specular_reflectance,
+                specular_transmittance,
+            ],
+            Material::Conductor {
+                eta,
+                k,
+                specular_reflectance,
+            } => vec![eta, k, specular_reflectance],
+            Material::RoughConductor {
+                eta,
+                k,
+                specular_reflectance,
+                roughness,
+            } => vec![eta, k, specular_reflectance, &roughness.alpha_u, &roughness.alpha_v],
+            Material::RoughPlastic {
+                diffuse_reflectance,
+                specular_reflectance,
+                ..
+            } => vec![diffuse_reflectance, specular_reflectance],
+            Material::ThinFilm(f) => film(f),
+            Material::RoughThinFilm(b) => {
+                let mut v = film(&b.0);
+                v.extend([&b.1.alpha_u, &b.1.alpha_v]);
+                v
+            }
+            Material::GltfPbr {
+                base_color,
+                metallic,
+                roughness,
+                ..
+            } => vec![base_color, metallic, roughness],
+        }
+    }
+
+    /// Whether the model is the same in every tangent frame and none of its parameters varies.
+    fn is_isotropic_untextured(&self) -> bool {
+        let isotropic_model = match self {
+            Material::Fixed(b) => isotropic(b),
+            Material::RoughDielectric { .. }
+            | Material::RoughConductor { .. }
+            | Material::RoughPlastic { .. }
+            | Material::RoughThinFilm(_)
+            | Material::GltfPbr { .. } => false,
+            _ => true,
+        };
+        isotropic_model && self.textures().iter().all(|t| t.is_constant())
+    }
+}
+
+impl SurfaceMaterial {
+    /// Every texture of the surface: its model's, the blend's, the mask's, the normal map's.
+    pub fn textures(&self) -> Vec<&Texture> {
+        let mut v = self.material.textures();
+        if let Some((w, m)) = &self.blend {
+            v.push(w);
+            v.extend(m.textures());
+        }
+        v.extend(self.opacity.as_ref().map(|o| &o.texture));
+        v.extend(self.normal_map.as_ref().map(|n| &n.texture));
+        v
+    }
+
+    /// Whether some texture of the surface reads mesh attribute `slot`.
+    pub fn reads_attribute(&self, slot: u32) -> bool {
+        self.textures().iter().any(|t| t.reads_attribute(slot))
+    }
+}
+
+/// Whether a BSDF is the same in every tangent frame.
+fn isotropic(b: &Bsdf) -> bool {
+    matches!(
+        b,
+        Bsdf::Lambert(_)
+            | Bsdf::OrenNayar(_)
+            | Bsdf::Minnaert(_)
+            | Bsdf::Conductor(_)
+            | Bsdf::Dielectric(_)
+            | Bsdf::ThinDielectric(_)
+            | Bsdf::ThinFilm(_)
+    )
+}

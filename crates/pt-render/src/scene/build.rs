@@ -1,0 +1,303 @@
+//! Building a [`Scene`] from the description: materials and their textures once, meshes into
+//! the BVH, lights (area lights in shape order, then the others), the light-selection
+//! distribution and the camera.
+
+use super::mesh::{add_mesh, bounding_sphere, parallelogram_light, primitive_of, PrimRef};
+use super::{BuildError, LightSelection, Scene, SceneStats, ShapeData};
+use crate::accel::{Accel, BvhKind};
+use crate::camera::Camera;
+use crate::geometry::Primitive;
+use crate::light::{build_light, AreaLight, Light, LightShape};
+use crate::material::{build_material, SurfaceMaterial};
+use crate::texture::{
+    constant_spectrum, spectrum_for_role, DisplayPrimaries, Role, Texture, TextureBuilder,
+};
+use pt_math::Distribution1D;
+use pt_scene::{AreaEmitterDesc, Geometry, SceneDesc, ShapeDesc, TextureDesc};
+use pt_spectrum::ColorMode;
+use std::sync::Arc;
+
+impl Scene {
+    /// Builds the BVH and lights in the colour mode the scene needs (spectral when it has
+    /// wavelength-dependent inputs, see [`SceneDesc::spectral_reason`]). `selection` chooses how
+    /// NEE picks lights.
+    pub fn build(desc: &SceneDesc, bvh: BvhKind, selection: LightSelection) -> Result<Scene, BuildError> {
+        Scene::build_with_mode(desc, bvh, selection, None)
+    }
+
+    /// [`Scene::build`] with the colour mode forced (`--mode`); `None` chooses automatically.
+    pub fn build_with_mode(
+        desc: &SceneDesc,
+        bvh: BvhKind,
+        selection: LightSelection,
+        mode: Option<ColorMode>,
+    ) -> Result<Scene, BuildError> {
+        let mode = mode.unwrap_or(if desc.spectral_reason().is_some() {
+            ColorMode::Spectral
+        } else {
+            ColorMode::Rgb
+        });
+        let mut textures = TextureBuilder::new(mode);
+        let materials: Vec<SurfaceMaterial> = desc
+            .bsdfs
+            .iter()
+            .map(|b| build_material(b, &mut textures))
+            .collect::<Result<_, _>>()?;
+        let mut prims = Vec::new();
+        let mut refs = Vec::new();
+        let mut shapes = Vec::new();
+        let mut lights = Vec::new();
+        let mut stats = SceneStats::default();
+        let mut media = Vec::new();
+        for (si, shape) in desc.shapes.iter().enumerate() {
+            if shape.bsdf >= materials.len() {
+                return Err(BuildError {
+                    loc: shape.loc.clone(),
+                    message: format!("BSDF index {} out of range", shape.bsdf),
+                });
+            }
+            let mut data = ShapeData {
+                material: shape.bsdf as u32,
+                light: None,
+                interior: None,
+                normals: None,
+                uvs: None,
+                tangents: None,
+                indices: Vec::new(),
+                attributes: Vec::new(),
+                frame: None,
+            };
+            let light_shape = geometry(shape, si as u32, &mut prims, &mut refs, &mut stats, &mut data)?;
+            if let Some(m) = &shape.interior {
+                let sigma = constant_spectrum(&m.sigma_t, Role::Unbounded, ColorMode::Rgb);
+                let rgb = sigma.at(&pt_spectrum::SampledWavelengths::sample_visible(0.5));
+                if !rgb.is_finite() || rgb.0.min_element() < 0.0 {
+                    return Err(BuildError {
+                        loc: m.loc.clone(),
+                        message: "sigma_t must be finite and non-negative".into(),
+                    });
+                }
+                data.interior = Some(media.len() as u32);
+                media.push(constant_spectrum(&m.sigma_t, Role::Unbounded, mode));
+            }
+            if let Some(em) = &shape.emitter {
+                let radiance = emission_texture(em, &mut textures)?;
+                match light_shape {
+                    Some((geometry, area)) if area > 0.0 => {
+                        data.light = Some(lights.len() as u32);
+                        lights.push(Light::Area(AreaLight {
+                            radiance,
+                            shape: geometry,
+                            area,
+                        }));
+                    }
+                    _ => {
+                        return Err(BuildError {
+                            loc: em.loc.clone(),
+                            message: "area emitter on a shape with zero area".into(),
+                        })
+                    }
+                }
+            }
+            shapes.push(data);
+        }
+
+        let bounds = bounding_sphere(&prims);
+        // The primitives are made again from the description after the BVH build (less memory).
+        let accel = Accel::build_compact(prims, bvh, |i| primitive_of(desc, refs[i]));
+        // Into the BVH's order in place (a second array of these was 12 MB per million
+        // primitives at the memory peak).
+        let mut prim_refs = refs;
+        crate::accel::permute_in_place(&mut prim_refs, &accel.original_index);
+        // Vertex data for shading, copied after the BVH build (whose temporaries are the memory
+        // peak) rather than before.
+        for (si, (data, shape)) in shapes.iter_mut().zip(&desc.shapes).enumerate() {
+            if let Geometry::Mesh(mesh) = &shape.geometry {
+                let material = &materials[data.material as usize];
+                let light = data.light.map(|i| &lights[i as usize]);
+                shading_data(data, mesh, material, light, &textures, mode).map_err(|message| BuildError {
+                    loc: desc.shapes[si].loc.clone(),
+                    message,
+                })?;
+            }
+        }
+        for l in &desc.lights {
+            lights.push(build_light(l, mode)?);
+        }
+        let infinite_lights = (0..lights.len()).filter(|&i| lights[i].is_infinite()).collect();
+        let weights: Vec<f32> = match selection {
+            LightSelection::Power => lights.iter().map(|l| l.power(bounds.1)).collect(),
+            LightSelection::Uniform => vec![1.0; lights.len()],
+        };
+        let light_distr = Distribution1D::new(&weights);
+        let camera = Camera::new(&desc.camera, desc.film.width, desc.film.height);
+        Ok(Scene {
+            accel,
+            prim_refs,
+            shapes,
+            materials,
+            media,
+            lights,
+            infinite_lights,
+            light_distr,
+            bounds,
+            camera,
+            mode,
+            stats,
+        })
+    }
+}
+
+/// Adds a shape's primitives to the BVH list; returns the geometry an emitter on it samples
+/// and its area.
+fn geometry(
+    shape: &ShapeDesc,
+    si: u32,
+    prims: &mut Vec<Primitive>,
+    refs: &mut Vec<PrimRef>,
+    stats: &mut SceneStats,
+    data: &mut ShapeData,
+) -> Result<Option<(LightShape, f32)>, BuildError> {
+    Ok(match &shape.geometry {
+        Geometry::Mesh(mesh) => {
+            let tris = add_mesh(mesh, si, shape.emitter.is_some(), prims, refs, stats, &shape.loc)?;
+            if let Some(ts) = &mesh.tangents {
+                if ts.len() != mesh.positions.len() {
+                    return Err(BuildError {
+                        loc: shape.loc.clone(),
+                        message: format!(
+                            "mesh has {} tangents for {} vertices",
+                            ts.len(),
+                            mesh.positions.len()
+                        ),
+                    });
+                }
+            }
+            // An emitter that is one parallelogram (a rectangle light) samples it as one.
+            let single = match (prims.last(), refs.last(), &tris) {
+                (Some(&prim), Some(r), Some((t, _))) if r.shape == si && t.len() == 2 => {
+                    parallelogram_light(mesh, prim, *r)
+                }
+                _ => None,
+            };
+            single.or_else(|| {
+                tris.map(|(tris, areas)| {
+                    (
+                        LightShape::Mesh {
+                            distr: Distribution1D::new(&areas).expect("non-empty"),
+                            tris,
+                        },
+                        areas.iter().sum::<f32>(),
+                    )
+                })
+            })
+        }
+        &Geometry::Sphere {
+            center,
+            radius,
+            flip_normals,
+            frame,
+        } => {
+            if !(radius > 0.0 && radius.is_finite() && center.is_finite()) {
+                return Err(BuildError {
+                    loc: shape.loc.clone(),
+                    message: format!("sphere radius must be positive and finite, got {radius}"),
+                });
+            }
+            prims.push(Primitive::Sphere {
+                center: center.into(),
+                radius,
+                flip: flip_normals,
+            });
+            refs.push(PrimRef::single(si, 0));
+            stats.spheres += 1;
+            data.frame = Some(frame);
+            Some((
+                LightShape::Sphere {
+                    center,
+                    radius,
+                    flip: flip_normals,
+                    frame,
+                },
+                4.0 * std::f32::consts::PI * radius * radius,
+            ))
+        }
+    })
+}
+
+/// A mesh's shading data: normals, texture coordinates (only where something reads them),
+/// tangents and mesh attributes; every attribute the material reads must exist.
+fn shading_data(
+    data: &mut ShapeData,
+    mesh: &pt_scene::TriangleMesh,
+    material: &SurfaceMaterial,
+    light: Option<&Light>,
+    textures: &TextureBuilder,
+    mode: ColorMode,
+) -> Result<(), String> {
+    data.normals = mesh.normals.clone();
+    let textured_light = matches!(light, Some(Light::Area(a)) if !a.radiance.is_constant());
+    if material.uses_uv() || textured_light {
+        data.uvs = mesh.uvs.clone();
+    }
+    data.tangents = mesh.tangents.clone();
+    if !textures.slots.names.is_empty() {
+        data.attributes = textures.slots.of_mesh(&mesh.attributes, mode);
+        for (slot, a) in data.attributes.iter().enumerate() {
+            let name = &textures.slots.names[slot];
+            if a.is_none() && material.reads_attribute(slot as u32) {
+                return Err(format!(
+                    "the material reads mesh attribute '{name}', which this mesh does not have (it has: {})",
+                    if mesh.attributes.is_empty() {
+                        "none".to_string()
+                    } else {
+                        mesh.attributes.iter().map(|a| a.name.as_str()).collect::<Vec<_>>().join(", ")
+                    }
+                ));
+            }
+        }
+        if data.attributes.iter().all(Option::is_none) {
+            data.attributes.clear();
+        }
+    }
+    // Indices serve only to interpolate normals, uvs, tangents and attributes: without them,
+    // no copy.
+    if data.normals.is_some() || data.uvs.is_some() || data.tangents.is_some() || !data.attributes.is_empty() {
+        data.indices = mesh.indices.clone();
+    }
+    Ok(())
+}
+
+/// An area emitter's radiance texture in the scene's mode. With display primaries (pt
+/// extension), RGB mode shows the image's colours through the display's matrix
+/// ([`DisplayPrimaries::to_srgb_matrix`]), and spectral mode drives the primaries with it.
+fn emission_texture(em: &AreaEmitterDesc, textures: &mut TextureBuilder) -> Result<Texture, BuildError> {
+    let err = |message: String| BuildError { loc: em.loc.clone(), message };
+    let Some(p) = &em.primaries else {
+        let t = textures.build(&em.radiance, Role::Emission).map_err(|m| err(format!("radiance: {m}")))?;
+        if let Some(s) = em.radiance.as_constant() {
+            let rgb = crate::texture::rgb_of(s);
+            if rgb.iter().any(|c| !(c.is_finite() && *c >= 0.0)) {
+                return Err(err("radiance must be finite and non-negative".into()));
+            }
+        }
+        return Ok(t);
+    };
+    let TextureDesc::Bitmap(b) = &em.radiance else {
+        return Err(err("display primaries need a radiance bitmap".into()));
+    };
+    let image = textures.rgb_bitmap(b).map_err(err)?;
+    let spectra = [0, 1, 2].map(|i| spectrum_for_role(&p[i], Role::Unbounded));
+    let display = DisplayPrimaries::new(spectra).map_err(|m| err(format!("display primaries: {m}")))?;
+    Ok(match textures.mode() {
+        ColorMode::Spectral => Texture::Primaries(Arc::new((image, display))),
+        // The colours the display shows, in linear sRGB: exact for the film by linearity;
+        // saturated primaries give components below 0 (outside the sRGB gamut), kept so.
+        ColorMode::Rgb => {
+            let m = display.to_srgb_matrix();
+            Texture::Bitmap(Arc::new(image.map_texels(|t| {
+                std::array::from_fn(|r| m[r][0] * t[0] + m[r][1] * t[1] + m[r][2] * t[2])
+            })))
+        }
+    })
+}

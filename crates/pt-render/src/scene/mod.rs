@@ -1,0 +1,273 @@
+//! A renderable scene built from the loader's description: BVH, materials, lights, camera.
+//! Built once ([`Scene::build`], in `build.rs`), immutable and shared by all render threads.
+
+mod build;
+mod mesh;
+
+use crate::accel::{Accel, AccelHit};
+use crate::camera::Camera;
+use crate::geometry::{Interaction, Primitive};
+use crate::light::{AreaLight, Light};
+use crate::material::SurfaceMaterial;
+use crate::texture::{Attribute, ConstantSpectrum, TexturePoint};
+use mesh::PrimRef;
+use pt_bsdf::SurfaceBsdf;
+use pt_math::{Distribution1D, Mat3, Ray, Vec2, Vec3};
+use pt_scene::SourceLoc;
+use pt_spectrum::{ColorMode, SampledSpectrum, SampledWavelengths};
+
+/// Errors found while building a scene (after parsing): each names the element at fault.
+#[derive(Debug, thiserror::Error)]
+#[error("{loc}: {message}")]
+pub struct BuildError {
+    /// The offending element.
+    pub loc: SourceLoc,
+    /// What is wrong.
+    pub message: String,
+}
+
+/// How lights are chosen for next-event estimation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum LightSelection {
+    /// Proportional to emitted power (default).
+    #[default]
+    Power,
+    /// Uniform over lights (Mitsuba 3's choice), for comparison.
+    Uniform,
+}
+
+/// Per-shape data needed after a hit.
+struct ShapeData {
+    material: u32,
+    light: Option<u32>,
+    /// Index into `Scene::media` of the shape's interior medium.
+    interior: Option<u32>,
+    /// Vertex normals and uvs of meshes, indexed through `indices`.
+    normals: Option<Vec<Vec3>>,
+    uvs: Option<Vec<Vec2>>,
+    /// Vertex tangents (xyz, handedness w) of meshes that have them (normal maps).
+    tangents: Option<Vec<pt_math::Vec4>>,
+    indices: Vec<[u32; 3]>,
+    /// Mesh attributes by slot (`texture::AttributeSlots`), for `mesh_attribute` textures.
+    attributes: Vec<Option<Attribute>>,
+    /// Spheres: the object-to-world rotation (uv and dp/du follow its z axis).
+    frame: Option<Mat3>,
+}
+
+/// Counts for `pt info` and logs.
+#[derive(Clone, Debug, Default)]
+pub struct SceneStats {
+    /// Triangles in the BVH, counting those merged into parallelograms.
+    pub triangles: usize,
+    /// Pairs of mesh triangles tested as one parallelogram (rectangles, cube faces, quads).
+    pub parallelograms: usize,
+    /// Analytic spheres in the BVH.
+    pub spheres: usize,
+    /// Zero-area triangles left out of the BVH (they can neither be hit nor emit).
+    pub degenerate_triangles: usize,
+}
+
+/// A scene ready for rendering. Immutable and shared by all render threads.
+pub struct Scene {
+    accel: Accel,
+    prim_refs: Vec<PrimRef>,
+    shapes: Vec<ShapeData>,
+    /// One material per BSDF of the description (`ShapeDesc::bsdf` indexes it).
+    pub materials: Vec<SurfaceMaterial>,
+    /// Interior media (absorbing only): extinction per scene unit.
+    media: Vec<ConstantSpectrum>,
+    /// All lights: area lights first (in shape order), then the others in file order.
+    pub lights: Vec<Light>,
+    /// Indices into `lights` of lights that rays leaving the scene can see.
+    pub infinite_lights: Vec<usize>,
+    light_distr: Option<Distribution1D>,
+    /// Centre and radius of the scene's bounding sphere.
+    pub bounds: (Vec3, f32),
+    /// The camera.
+    pub camera: Camera,
+    /// Colour mode the scene is rendered in.
+    pub mode: ColorMode,
+    /// Counts.
+    pub stats: SceneStats,
+}
+
+impl Scene {
+    /// Closest hit along `ray`, with its surface data.
+    #[inline(always)]
+    pub fn intersect(&self, ray: &Ray) -> Option<Interaction> {
+        let AccelHit { index: id, t, b1, b2 } = self.accel.intersect(ray)?;
+        let r = self.prim_refs[id];
+        let shape = &self.shapes[r.shape as usize];
+        match self.accel.prims[id] {
+            Primitive::Triangle { v0, e1, e2 } | Primitive::Parallelogram { v0, e1, e2 } => {
+                let b0 = 1.0 - b1 - b2;
+                let p = Vec3::from(v0 + e1 * b1 + e2 * b2);
+                let ng = match self.accel.unit_normals.get(id) {
+                    Some(&n) => n,
+                    None => Vec3::from(e1.cross(e2)).normalize(),
+                };
+                let idx = r.vertices(&shape.indices);
+                let ns = match &shape.normals {
+                    Some(n) => {
+                        let v = n[idx[0] as usize] * b0
+                            + n[idx[1] as usize] * b1
+                            + n[idx[2] as usize] * b2;
+                        v.try_normalize().unwrap_or(ng)
+                    }
+                    None => ng,
+                };
+                let (uv, dpdu) = match &shape.uvs {
+                    Some(uv) => {
+                        let (t0, t1, t2) =
+                            (uv[idx[0] as usize], uv[idx[1] as usize], uv[idx[2] as usize]);
+                        // dp/du from the uv differentials (pbrt-v4 eq. 6.7): solve
+                        // [e1 e2] = [dpdu dpdv] [du1 du2; dv1 dv2].
+                        let (d1, d2) = (t1 - t0, t2 - t0);
+                        let det = d1.x * d2.y - d1.y * d2.x;
+                        let dpdu = if det != 0.0 {
+                            (Vec3::from(e1) * d2.y - Vec3::from(e2) * d1.y) / det
+                        } else {
+                            Vec3::ZERO
+                        };
+                        (
+                            t0 * b0 + t1 * b1 + t2 * b2,
+                            if dpdu.is_finite() { dpdu } else { Vec3::ZERO },
+                        )
+                    }
+                    None => (Vec2::new(b1, b2), Vec3::ZERO),
+                };
+                let tangent = match &shape.tangents {
+                    Some(ts) => {
+                        let (a, b, c) = (ts[idx[0] as usize], ts[idx[1] as usize], ts[idx[2] as usize]);
+                        // Handedness is constant over a triangle in well-formed data; take vertex 0's.
+                        (a * b0 + b * b1 + c * b2)
+                            .truncate()
+                            .extend(if a.w < 0.0 { -1.0 } else { 1.0 })
+                    }
+                    None => pt_math::Vec4::ZERO,
+                };
+                Some(Interaction {
+                    p,
+                    ng,
+                    ns,
+                    uv,
+                    dpdu,
+                    tangent,
+                    t,
+                    shape: r.shape,
+                    prim: id as u32,
+                    b: Vec2::new(b1, b2),
+                })
+            }
+            Primitive::Sphere { center, radius, flip } => {
+                let c = Vec3::from(center);
+                let local = (ray.at(t) - c).normalize();
+                // Re-project onto the surface: removes the error of o + t d (pbrt-v4 6.8.5).
+                let p = c + local * radius;
+                let n = if flip { -local } else { local };
+                // Mitsuba's sphere: u = azimuth about the object's z axis / 2 pi, v = polar
+                // angle / pi; dp/du = 2 pi r R (-y, x, 0) in object coordinates (R the
+                // rotation), whose direction orients anisotropic BSDFs.
+                let frame = shape.frame.unwrap_or(Mat3::IDENTITY);
+                let uv = crate::light::sphere_uv(frame, local);
+                let o = frame.transpose() * local;
+                let dpdu = frame * Vec3::new(-o.y, o.x, 0.0) * (std::f32::consts::TAU * radius);
+                Some(Interaction {
+                    p,
+                    ng: n,
+                    ns: n,
+                    uv,
+                    dpdu,
+                    tangent: pt_math::Vec4::ZERO,
+                    t,
+                    shape: r.shape,
+                    prim: id as u32,
+                    b: Vec2::ZERO,
+                })
+            }
+        }
+    }
+
+    /// Whether the segment `ray` (tmin..tmax) is blocked.
+    #[inline(always)]
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        self.accel.occluded(ray)
+    }
+
+    /// The primitives the BVH holds (world space, in BVH order): triangles, parallelograms
+    /// merged from triangle pairs, spheres. For benchmarks and tools.
+    pub fn primitives(&self) -> &[Primitive] {
+        &self.accel.prims
+    }
+
+    /// The material of a hit shape.
+    #[inline(always)]
+    pub fn material(&self, shape: u32) -> &SurfaceMaterial {
+        &self.materials[self.shapes[shape as usize].material as usize]
+    }
+
+    /// Where textures are evaluated at a hit: its texture coordinates and, on meshes with
+    /// attributes, the hit's triangle and barycentric weights.
+    #[inline(always)]
+    pub fn texture_point(&self, hit: &Interaction) -> TexturePoint<'_> {
+        let shape = &self.shapes[hit.shape as usize];
+        if shape.attributes.is_empty() {
+            return TexturePoint::uv(hit.uv);
+        }
+        let r = self.prim_refs[hit.prim as usize];
+        let (b1, b2) = (hit.b.x, hit.b.y);
+        TexturePoint {
+            uv: hit.uv,
+            attributes: &shape.attributes,
+            vertices: r.vertices(&shape.indices),
+            weights: [1.0 - b1 - b2, b1, b2],
+            face: r.local,
+        }
+    }
+
+    /// The BSDF at a hit, at the path's wavelengths ([`SurfaceMaterial::bsdf`]).
+    #[inline(always)]
+    pub fn bsdf(&self, hit: &Interaction, lambda: &SampledWavelengths) -> SurfaceBsdf {
+        self.material(hit.shape).bsdf(hit, &self.texture_point(hit), lambda)
+    }
+
+    /// At a fluorescent hit, the wavelengths at which each lane continues (some lanes move to
+    /// an excitation wavelength, see `fluorescence.rs`); `None` for other materials. `u` is
+    /// uniform.
+    #[inline]
+    pub fn fluoresce(&self, shape: u32, lambda: &SampledWavelengths, u: f32) -> Option<SampledWavelengths> {
+        self.material(shape).fluorescent().map(|f| f.scatter(lambda, u))
+    }
+
+    /// Transmittance exp(-sigma_t d) of the interior medium of `shape` over `distance` scene
+    /// units, at the path's wavelengths (spectral mode) or per RGB channel; `None` if it has no
+    /// medium.
+    #[inline]
+    pub fn interior_transmittance(&self, shape: u32, distance: f32, lambda: &SampledWavelengths) -> Option<SampledSpectrum> {
+        let sigma = self.media[self.shapes[shape as usize].interior? as usize].at(lambda);
+        let e = sigma.0 * -distance;
+        Some(SampledSpectrum(pt_math::Vec4::new(e.x.exp(), e.y.exp(), e.z.exp(), e.w.exp())))
+    }
+
+    /// The light attached to a shape, if it emits: `(light index, light)`.
+    #[inline]
+    pub fn shape_light(&self, shape: u32) -> Option<(usize, &AreaLight)> {
+        let i = self.shapes[shape as usize].light? as usize;
+        match &self.lights[i] {
+            Light::Area(a) => Some((i, a)),
+            _ => None,
+        }
+    }
+
+    /// Chooses a light for NEE: `(index, probability, u rescaled)`.
+    #[inline(always)]
+    pub fn sample_light(&self, u: f32) -> Option<(usize, f32, f32)> {
+        self.light_distr.as_ref().map(|d| d.sample(u))
+    }
+
+    /// Probability that NEE chooses light `i`.
+    #[inline]
+    pub fn light_pmf(&self, i: usize) -> f32 {
+        self.light_distr.as_ref().map_or(0.0, |d| d.pmf(i))
+    }
+}
