@@ -1,6 +1,7 @@
 //! Scene description for the path tracer: the IR the renderer consumes ([`SceneDesc`] and
-//! friends, in world space) and a loader for the subset of Mitsuba 3's XML scene format that
-//! the renderer supports, so that one scene file drives both renderers.
+//! friends, in world space), a loader for the subset of Mitsuba 3's XML scene format that
+//! the renderer supports, so that one scene file drives both renderers, and a glTF 2.0 reader
+//! ([`gltf`]).
 //!
 //! ```
 //! use pt_scene::{load_str, Geometry, IntegratorKind};
@@ -39,7 +40,7 @@
 //! | `transform` | `translate`, `rotate`, `scale`, `matrix`, `lookat` |
 //! | `sensor` | `perspective` with `film` `hdrfilm` (`rfilter` box, tent, gaussian) and `sampler` independent, stratified |
 //! | `integrator` | `path`, `direct`, `moment` |
-//! | `shape` | `obj`, `rectangle`, `cube`, `disk`, `sphere`, with nested `bsdf` and `emitter` `area` |
+//! | `shape` | `obj`, `gltf` (the file's triangles, read by [`gltf::load_mesh`]), `rectangle`, `cube`, `disk`, `sphere`, with nested `bsdf` and `emitter` `area` |
 //! | `bsdf` | `diffuse`, `twosided`, `dielectric`, `thindielectric`, `roughdielectric`, `conductor`, `roughconductor` (named materials as in Mitsuba's RGB mode), and the extensions `orennayar`, `minnaert` |
 //!
 //! Everything else is an error naming the file, line, column and element: unknown elements and
