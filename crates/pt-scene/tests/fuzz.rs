@@ -1,15 +1,19 @@
-//! Property tests (proptest) of the loaders on hostile input: the XML loader and the OBJ
-//! loader must return `Ok` or `Err`, never panic, whatever the bytes; and what they accept must
-//! be usable: every mesh index within its vertex list, every position, normal and sphere
-//! finite, every normal unit length. A crasher found would be kept here as a plain regression
-//! test (proptest also records failing seeds in `tests/fuzz.proptest-regressions`); none has
-//! been found so far: the OBJ reader checks every index against the lists read before it and
-//! every number for finiteness, and the XML loader validates every number it reads.
+//! Property tests (proptest) of the loaders on hostile input: the XML loader, the OBJ
+//! loader and the glTF reader must return `Ok` or `Err`, never panic, whatever the bytes; and
+//! what they accept must be usable: every mesh index within its vertex list, every position,
+//! normal and sphere finite, every normal unit length, every per-vertex array as long as the
+//! vertex list. A crasher found would be kept here as a plain regression
+//! test (proptest also records failing seeds in `tests/fuzz.proptest-regressions`). None has
+//! been found in the XML and OBJ loaders: the OBJ reader checks every index against the lists
+//! read before it and every number for finiteness, and the XML loader validates every number
+//! it reads. The glTF properties found two panics inside the gltf crate, which the reader now
+//! checks for first (the regression tests at the end).
 //!
 //! Case counts are proptest's default (256 per property), a few seconds in the test profile.
 
 use proptest::prelude::*;
 use pt_scene::{Geometry, SceneDesc};
+use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 
 /// A valid scene exercising most elements, mutated by the properties below.
@@ -123,6 +127,25 @@ fn check_usable(desc: &SceneDesc) -> Result<(), String> {
                         return Err(format!("shape {k}: {} uvs for {n} vertices", uv.len()));
                     }
                 }
+                if let Some(t) = &m.tangents {
+                    if t.len() != n || t.iter().any(|t| !t.is_finite()) {
+                        return Err(format!(
+                            "shape {k}: {} tangents for {n} vertices, or a non-finite one",
+                            t.len()
+                        ));
+                    }
+                }
+                for a in &m.attributes {
+                    if a.values.len() != a.dims as usize * n
+                        || a.values.iter().any(|x| !x.is_finite())
+                    {
+                        return Err(format!(
+                            "shape {k}: attribute {} has {} values for {n} vertices",
+                            a.name,
+                            a.values.len()
+                        ));
+                    }
+                }
             }
             Geometry::Sphere { center, radius, .. } => {
                 if !center.is_finite() || !radius.is_finite() || *radius <= 0.0 {
@@ -171,6 +194,136 @@ fn obj_line() -> impl Strategy<Value = String> {
             .prop_map(String::from),
         1 => "[ -~]{0,12}",
     ]
+}
+
+fn gltf_asset(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../scenes/gltf")
+        .join(name)
+}
+
+/// The glTF documents the mutation property starts from: two of the repository's assets, and
+/// one of them with every material feature and vertex attribute the reader maps.
+fn gltf_bases() -> Vec<Value> {
+    let read = |name: &str| -> Value {
+        serde_json::from_slice(&std::fs::read(gltf_asset(name)).unwrap()).unwrap()
+    };
+    let mut rich = read("textures.gltf");
+    let m = &mut rich["materials"][0];
+    m["normalTexture"] = json!({"index": 1, "scale": 0.5});
+    m["alphaMode"] = json!("MASK");
+    m["emissiveFactor"] = json!([1, 1, 1]);
+    m["emissiveTexture"] =
+        json!({"index": 0, "extensions": {"KHR_texture_transform": {"offset": [0.5, 0]}}});
+    m["extensions"] = json!({
+        "KHR_materials_iridescence": {"iridescenceFactor": 0.5, "iridescenceTexture": {"index": 0},
+                                      "iridescenceThicknessTexture": {"index": 1}},
+        "KHR_materials_transmission": {"transmissionFactor": 0.5},
+        "KHR_materials_volume": {"thicknessFactor": 1, "attenuationDistance": 1,
+                                 "attenuationColor": [0.5, 0.5, 0.5]}
+    });
+    rich["samplers"][0]["wrapS"] = json!(33071);
+    rich["meshes"][0]["primitives"][0]["attributes"]["COLOR_0"] = json!(1);
+    vec![read("textures.gltf"), read("lights.gltf"), rich]
+}
+
+/// Values the glTF mutation property writes into documents: indices in and out of range,
+/// component and element types glTF allows elsewhere, hostile numbers, other JSON types.
+fn hostile_json() -> Vec<Value> {
+    vec![
+        json!(-1),
+        json!(0),
+        json!(1),
+        json!(2),
+        json!(3),
+        json!(7),
+        json!(5120),
+        json!(5121),
+        json!(5123),
+        json!(5125),
+        json!(5126),
+        json!(33648),
+        json!(4294967295u64),
+        json!(1e39),
+        json!(-0.5),
+        json!(null),
+        json!(true),
+        json!("VEC2"),
+        json!("VEC4"),
+        json!("SCALAR"),
+        json!("MAT4"),
+        json!("data:,"),
+        json!([]),
+        json!({}),
+        json!([0, 0]),
+    ]
+}
+
+/// The number of leaves of a JSON value (scalars, empty arrays and objects).
+fn leaves(v: &Value) -> usize {
+    match v {
+        Value::Object(m) if !m.is_empty() => m.values().map(leaves).sum(),
+        Value::Array(a) if !a.is_empty() => a.iter().map(leaves).sum(),
+        _ => 1,
+    }
+}
+
+/// Replaces the `k`-th leaf (depth first) of `v` by `new`, or removes it from its object or
+/// array; true once done.
+fn edit_leaf(v: &mut Value, k: &mut usize, new: &Value, remove: bool) -> bool {
+    let is_leaf = |c: &Value| match c {
+        Value::Object(m) => m.is_empty(),
+        Value::Array(a) => a.is_empty(),
+        _ => true,
+    };
+    match v {
+        Value::Object(m) => {
+            let keys: Vec<String> = m.keys().cloned().collect();
+            for key in keys {
+                if is_leaf(&m[&key]) {
+                    if *k == 0 {
+                        if remove {
+                            m.remove(&key);
+                        } else {
+                            m[&key] = new.clone();
+                        }
+                        return true;
+                    }
+                    *k -= 1;
+                } else if edit_leaf(m.get_mut(&key).unwrap(), k, new, remove) {
+                    return true;
+                }
+            }
+            false
+        }
+        Value::Array(a) => {
+            for i in 0..a.len() {
+                if is_leaf(&a[i]) {
+                    if *k == 0 {
+                        if remove {
+                            a.remove(i);
+                        } else {
+                            a[i] = new.clone();
+                        }
+                        return true;
+                    }
+                    *k -= 1;
+                } else if edit_leaf(&mut a[i], k, new, remove) {
+                    return true;
+                }
+            }
+            false
+        }
+        _ => false,
+    }
+}
+
+/// Reads glTF bytes: Ok or Err, and what is accepted is usable.
+fn load_gltf(bytes: &[u8], dir: &Path) -> Result<(), String> {
+    match pt_scene::gltf::load_slice(bytes, &dir.join("m.gltf"), &Default::default()) {
+        Ok(g) => check_usable(&g.desc),
+        Err(_) => Ok(()),
+    }
 }
 
 proptest! {
@@ -229,4 +382,62 @@ proptest! {
         let xml = r#"<scene version="3.0.0"><shape type="obj"><string name="filename" value="m.obj"/></shape></scene>"#;
         prop_assert_eq!(load(xml, &dir), Ok(()));
     }
+
+    /// glTF documents with leaves replaced by hostile values or removed (indices, component
+    /// types, counts, offsets, factors, URIs): the reader returns Ok or Err, never panics, and
+    /// what it accepts is usable.
+    #[test]
+    fn gltf_reader_never_panics_on_mutated_documents(base in 0usize..3, edits in prop::collection::vec((any::<usize>(), 0usize..25, 0u8..4), 1..6)) {
+        let dir = scratch("fuzz_gltf_json");
+        let mut doc = gltf_bases().swap_remove(base);
+        let hostile = hostile_json();
+        for (leaf, value, op) in edits {
+            let mut k = leaf % leaves(&doc);
+            edit_leaf(&mut doc, &mut k, &hostile[value % hostile.len()], op == 0);
+        }
+        prop_assert_eq!(load_gltf(&serde_json::to_vec(&doc).unwrap(), &dir), Ok(()));
+    }
+
+    /// A GLB file with random bytes overwritten (header, JSON chunk, binary chunk).
+    #[test]
+    fn gltf_reader_never_panics_on_mutated_glb(edits in prop::collection::vec((any::<usize>(), any::<u8>()), 1..8)) {
+        let dir = scratch("fuzz_gltf_glb");
+        let mut bytes = std::fs::read(gltf_asset("glass-block.glb")).unwrap();
+        for (pos, b) in edits {
+            let n = bytes.len();
+            bytes[pos % n] = b;
+        }
+        prop_assert_eq!(load_gltf(&bytes, &dir), Ok(()));
+    }
+}
+
+/// Crasher found by `gltf_reader_never_panics_on_mutated_documents`: an image with neither
+/// `uri` nor `bufferView` (the gltf crate's `Image::source` unwraps the uri).
+#[test]
+fn gltf_image_without_uri_is_an_error() {
+    let mut doc = gltf_bases().swap_remove(0);
+    doc["images"][0].as_object_mut().unwrap().remove("uri");
+    let bytes = serde_json::to_vec(&doc).unwrap();
+    let e =
+        pt_scene::gltf::load_slice(&bytes, Path::new("m.gltf"), &Default::default()).unwrap_err();
+    assert!(
+        e.message.contains("images[0]: needs a uri or a bufferView"),
+        "{e}"
+    );
+}
+
+/// Crasher found by both glTF properties: a `POSITION` naming an accessor that does not
+/// exist (the gltf crate's own validation indexes the accessor list with it).
+#[test]
+fn gltf_position_out_of_range_is_an_error() {
+    let mut doc = gltf_bases().swap_remove(0);
+    doc["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = json!(7);
+    let bytes = serde_json::to_vec(&doc).unwrap();
+    let e =
+        pt_scene::gltf::load_slice(&bytes, Path::new("m.gltf"), &Default::default()).unwrap_err();
+    assert!(
+        e.message
+            .contains("POSITION is accessors[7], which does not exist"),
+        "{e}"
+    );
 }

@@ -313,6 +313,7 @@ fn parse(cx: &mut Ctx, bytes: &[u8]) -> Result<gltf::Gltf, GltfError> {
         ));
     }
     let root = doc.as_json();
+    check_positions(cx, root)?;
     let mut errors = Vec::new();
     root.validate(
         root,
@@ -326,7 +327,26 @@ fn parse(cx: &mut Ctx, bytes: &[u8]) -> Result<gltf::Gltf, GltfError> {
     if !errors.is_empty() {
         return Err(cx.err(format!("invalid glTF: {}", errors.join("; "))));
     }
+    texture::check_images(cx, root)?;
     Ok(gltf)
+}
+
+/// Checks that every primitive's `POSITION` names an existing accessor, which the gltf crate's
+/// validation assumes (it indexes the accessor list with it unchecked).
+fn check_positions(cx: &Ctx, root: &gltf::json::Root) -> Result<(), GltfError> {
+    let position = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let index = prim.attributes.get(&position).map(|i| i.value());
+            if let Some(i) = index.filter(|i| *i >= root.accessors.len()) {
+                return Err(cx.err(format!(
+                    "meshes[{m}].primitives[{p}]: POSITION is accessors[{i}], which does not exist ({} accessors)",
+                    root.accessors.len()
+                )));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// The scene before the file's contents: default camera, film, sampler and integrator (see

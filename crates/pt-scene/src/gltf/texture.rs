@@ -189,6 +189,22 @@ fn wrap_mode(cx: &mut Ctx, sampler: &gltf::texture::Sampler, elem: &str) -> Wrap
     }
 }
 
+/// Checks what the gltf crate's `Image::source` unwraps: every image has a `uri` or a
+/// `bufferView`, and one in a buffer view its `mimeType`.
+pub(super) fn check_images(cx: &Ctx, root: &gltf::json::Root) -> Result<(), GltfError> {
+    for (i, img) in root.images.iter().enumerate() {
+        if img.buffer_view.is_none() && img.uri.is_none() {
+            return Err(cx.err(format!("images[{i}]: needs a uri or a bufferView")));
+        }
+        if img.buffer_view.is_some() && img.mime_type.is_none() {
+            return Err(cx.err(format!(
+                "images[{i}]: an image in a bufferView needs a mimeType"
+            )));
+        }
+    }
+    Ok(())
+}
+
 /// The encoded image: bytes of a buffer view or a `data:` URI (embedded), or a file beside the
 /// glTF. Each image is read once per file and shared by the textures that use it.
 fn image_source(
