@@ -1,6 +1,6 @@
 //! Fluorescence against closed forms (model: crates/pt-render/src/fluorescence.rs).
 //!
-//! Both tests trace camera paths with the real integrator (`pt_render::integrator::li`) at
+//! Both tests trace camera paths with the real integrator (`pt_integrators::path::li`) at
 //! fixed wavelengths, so they check the spectrum lane by lane, not only its colour: a lane that
 //! forgot to change wavelength, NEE evaluated at the emitted instead of the exciting wavelength,
 //! a missing li/lo energy factor (10-20% here), a missing Stokes cut or a wrong quantum yield
@@ -14,7 +14,7 @@
 //! relative for these piecewise-linear spectra (well inside the noise).
 
 use pt_math::{Ray, Vec3};
-use pt_render::integrator::{li, PathSettings};
+use pt_integrators::path::{li, PathSettings};
 use pt_render::sampler::Sampler;
 use pt_render::{BvhKind, LightSelection, Scene};
 use pt_spectrum::{SampledWavelengths, Spectrum};

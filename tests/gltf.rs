@@ -170,7 +170,7 @@ fn check_light(which: &str) {
 /// transmission with a volume maps to a smooth dielectric of the KHR_materials_ior index.
 #[test]
 fn volume_maps_to_beer_lambert_sigma_t() {
-    let g = pt_gltf::load(&asset("glass-block.glb"), &Default::default())
+    let g = pt_scene::gltf::load(&asset("glass-block.glb"), &Default::default())
         .expect("load glass-block.glb");
     let s = &g.desc.shapes[0];
     let m = s
@@ -189,7 +189,7 @@ fn volume_maps_to_beer_lambert_sigma_t() {
         );
     }
     assert!(
-        matches!(g.desc.bsdfs[s.bsdf].kind, pt_scene::BsdfKind::Dielectric { int_ior, ext_ior } if int_ior == 1.5 && ext_ior == 1.0)
+        matches!(g.desc.bsdfs[s.bsdf].kind, pt_scene::BsdfKind::Dielectric { int_ior, ext_ior, .. } if int_ior == 1.5 && ext_ior == 1.0)
     );
     assert!(
         g.warnings.iter().any(|w| w.contains("default environment")),

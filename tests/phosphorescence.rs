@@ -12,7 +12,7 @@
 //! t = 3 s, tau = 2 s is 0.22) or a light left on is off by far more.
 
 use pt_math::{Ray, Vec3};
-use pt_render::integrator::{li, PathSettings};
+use pt_integrators::path::{li, PathSettings};
 use pt_render::sampler::Sampler;
 use pt_render::{BvhKind, LightSelection, Scene};
 use pt_spectrum::{SampledWavelengths, Spectrum};
@@ -65,7 +65,7 @@ fn phosphorescent_plane_decays_as_the_closed_form() {
     let settings = PathSettings::default();
     let mut previous: Option<f64> = None;
     for t in [0.0f32, 3.0] {
-        let glow = pt_render::phosphorescence::afterglow(&desc, t, 5).expect("afterglow scene");
+        let glow = pt_integrators::afterglow::afterglow(&desc, t, 5).expect("afterglow scene");
         assert!(glow.lights.is_empty());
         let scene = Scene::build(&glow, BvhKind::default(), LightSelection::Power).expect("builds");
         let w = SampledWavelengths::sample_uniform(0.0).with_lambda(lam.into());
@@ -107,9 +107,9 @@ fn phosphorescent_plane_decays_as_the_closed_form() {
         &[],
     )
     .unwrap();
-    let e = pt_render::phosphorescence::afterglow(&plain, 1.0, 5)
+    let e = pt_integrators::afterglow::afterglow(&plain, 1.0, 5)
         .err()
         .expect("error");
     assert!(e.message.contains("phosphorescent"), "{e}");
-    assert!(pt_render::phosphorescence::afterglow(&desc, -1.0, 5).is_err());
+    assert!(pt_integrators::afterglow::afterglow(&desc, -1.0, 5).is_err());
 }

@@ -103,7 +103,7 @@ fn constant_tilt_matches_closed_form() {
 fn shading_normal(scene: &Scene, x: f32, y: f32) -> Option<Vec3> {
     let ray = Ray::new(Vec3::new(x, y, 5.0), Vec3::NEG_Z);
     let hit = scene.intersect(&ray)?;
-    let b = scene.material_at_hit(&hit, &SampledWavelengths::sample_visible(0.5));
+    let b = scene.bsdf(&hit, &SampledWavelengths::sample_visible(0.5));
     let local = Frame::from_normal_tangent(hit.ns, hit.dpdu);
     let n = b.normal.expect("normal-mapped material");
     Some(local.to_world(pt_bsdf::normal_map::frame(n, local.to_local(-ray.dir)).n))
@@ -176,7 +176,6 @@ fn quad_gltf_with(
 
 #[test]
 fn gltf_normal_texture_matches_xml_normalmap() {
-    pt_scene::set_gltf_mesh_reader(pt_gltf::load_mesh);
     for with_tangents in [true, false] {
         let dir = scratch(&format!("normal_map_gltf_{with_tangents}"));
         std::fs::copy(
@@ -199,7 +198,7 @@ fn gltf_normal_texture_matches_xml_normalmap() {
 </scene>"#;
         std::fs::write(dir.join("scene.xml"), xml).unwrap();
         let xml_desc = pt_scene::load_file(&dir.join("scene.xml"), &[]).expect("XML scene loads");
-        let gltf = pt_gltf::load(&dir.join("quad.gltf"), &pt_gltf::LoadOptions::default())
+        let gltf = pt_scene::gltf::load(&dir.join("quad.gltf"), &pt_scene::gltf::LoadOptions::default())
             .expect("glTF loads");
         assert!(
             !gltf.warnings.iter().any(|w| w.contains("normalTexture")),
@@ -237,7 +236,7 @@ fn bsdf_values(scene: &Scene, x: f32, y: f32, lambda: &SampledWavelengths) -> Ve
     let hit = scene
         .intersect(&Ray::new(Vec3::new(x, y, 5.0), Vec3::NEG_Z))
         .expect("hit");
-    let b = scene.material_at_hit(&hit, lambda);
+    let b = scene.bsdf(&hit, lambda);
     let dirs = [
         Vec3::new(0.3, 0.1, 0.9),
         Vec3::new(-0.2, 0.3, 0.9),
@@ -262,7 +261,6 @@ fn bsdf_values(scene: &Scene, x: f32, y: f32, lambda: &SampledWavelengths) -> Ve
 /// same computation up to rounding.
 #[test]
 fn iridescence_thickness_texture_gives_constant_films_per_texel() {
-    pt_scene::set_gltf_mesh_reader(pt_gltf::load_mesh);
     let dir = scratch("iridescence_thickness_texture");
     image::RgbImage::from_fn(2, 1, |x, _| {
         image::Rgb([128, if x == 0 { 0 } else { 255 }, 30])
@@ -292,9 +290,9 @@ fn iridescence_thickness_texture_gives_constant_films_per_texel() {
         );
         std::fs::write(dir.join(format!("{name}.gltf")), json).unwrap();
         std::fs::write(dir.join("quad.bin"), bin).unwrap();
-        let g = pt_gltf::load(
+        let g = pt_scene::gltf::load(
             &dir.join(format!("{name}.gltf")),
-            &pt_gltf::LoadOptions::default(),
+            &pt_scene::gltf::LoadOptions::default(),
         )
         .expect("glTF loads");
         assert!(
@@ -442,7 +440,7 @@ fn gltf_base_colour_alpha_is_opacity_per_texel() {
         );
         std::fs::write(dir.join("quad.gltf"), json).unwrap();
         std::fs::write(dir.join("quad.bin"), bin).unwrap();
-        let g = pt_gltf::load(&dir.join("quad.gltf"), &pt_gltf::LoadOptions::default())
+        let g = pt_scene::gltf::load(&dir.join("quad.gltf"), &pt_scene::gltf::LoadOptions::default())
             .expect("glTF loads");
         assert!(
             !g.warnings.iter().any(|w| w.contains("alpha")),
@@ -452,7 +450,7 @@ fn gltf_base_colour_alpha_is_opacity_per_texel() {
         let scene = Scene::build(&g.desc, BvhKind::default(), LightSelection::Power).unwrap();
         let lambda = SampledWavelengths::sample_visible(0.5);
         let at = |x: f32| {
-            scene.material_at_hit(
+            scene.bsdf(
                 &scene
                     .intersect(&Ray::new(Vec3::new(x, 0.3, 5.0), Vec3::NEG_Z))
                     .unwrap(),
@@ -513,7 +511,7 @@ fn gltf_partial_factors_are_blends() {
         );
         std::fs::write(dir.join("quad.gltf"), json).unwrap();
         std::fs::write(dir.join("quad.bin"), bin).unwrap();
-        let g = pt_gltf::load(&dir.join("quad.gltf"), &pt_gltf::LoadOptions::default())
+        let g = pt_scene::gltf::load(&dir.join("quad.gltf"), &pt_scene::gltf::LoadOptions::default())
             .expect("glTF loads");
         let scene = Scene::build_with_mode(
             &g.desc,
@@ -522,7 +520,7 @@ fn gltf_partial_factors_are_blends() {
             Some(pt_spectrum::ColorMode::Rgb),
         )
         .unwrap();
-        let b = scene.material_at_hit(
+        let b = scene.bsdf(
             &scene
                 .intersect(&Ray::new(Vec3::new(0.1, 0.2, 5.0), Vec3::NEG_Z))
                 .unwrap(),
@@ -582,7 +580,7 @@ fn gltf_iridescence_texture_scales_the_blend_weight_per_texel() {
     );
     std::fs::write(dir.join("quad.gltf"), json).unwrap();
     std::fs::write(dir.join("quad.bin"), bin).unwrap();
-    let g = pt_gltf::load(&dir.join("quad.gltf"), &pt_gltf::LoadOptions::default())
+    let g = pt_scene::gltf::load(&dir.join("quad.gltf"), &pt_scene::gltf::LoadOptions::default())
         .expect("glTF loads");
     assert!(
         !g.warnings.iter().any(|w| w.contains("iridescence")),
@@ -592,7 +590,7 @@ fn gltf_iridescence_texture_scales_the_blend_weight_per_texel() {
     let scene = Scene::build(&g.desc, BvhKind::default(), LightSelection::Power).unwrap();
     let lambda = SampledWavelengths::sample_visible(0.5);
     for (x, want) in [(-0.5f32, 0.0f32), (0.5, 0.8)] {
-        let b = scene.material_at_hit(
+        let b = scene.bsdf(
             &scene
                 .intersect(&Ray::new(Vec3::new(x, -0.2, 5.0), Vec3::NEG_Z))
                 .unwrap(),
@@ -617,11 +615,11 @@ fn info_describes_wrapper_materials() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(
-        out.contains("normalmap(bumps-normal.png, Mitsuba tangent space, scale 1, Diffuse"),
+        out.contains("normalmap(bitmap(bumps-normal.png, raw), Mitsuba tangent space, scale 1, Diffuse"),
         "{out}"
     );
     assert!(
-        out.contains("normalmap(bumps-normal.png, Mitsuba tangent space, scale 1, RoughConductor"),
+        out.contains("normalmap(bitmap(bumps-normal.png, raw), Mitsuba tangent space, scale 1, RoughConductor"),
         "{out}"
     );
     assert!(!out.contains("SourceLoc"), "{out}");
@@ -631,7 +629,7 @@ fn info_describes_wrapper_materials() {
     ]);
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(
-        out.contains("mask(opacity 1 x ") && out.contains("Luminance"),
+        out.contains("mask(opacity bitmap("),
         "{out}"
     );
     assert!(!out.contains("SourceLoc"), "{out}");

@@ -316,9 +316,6 @@ fn xml_escape(s: &str) -> String {
 /// A model built by the renderer's material code, read through luminance.
 pub(crate) struct Model {
     label: String,
-    /// A one-sphere scene whose only material is the model (the way to reach `pt_render`'s
-    /// material construction from a description).
-    scene: Scene,
     /// The model's BSDF (its parameters are constants: one BSDF everywhere).
     bsdf: pt_bsdf::SurfaceBsdf,
     delta: bool,
@@ -350,7 +347,6 @@ impl Model {
         let (delta, transmissive) = (!bsdf.has_smooth_lobe(), bsdf.bsdf.is_transmissive());
         Ok(Model {
             label,
-            scene,
             bsdf,
             delta,
             transmissive,

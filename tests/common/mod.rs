@@ -116,7 +116,7 @@ pub fn d65_normalised(scene: &str) -> bool {
         .shapes
         .iter()
         .filter_map(|s| s.emitter.as_ref())
-        .all(|e| e.primaries.is_none() && white(&e.radiance));
+        .all(|e| e.primaries.is_none() && e.radiance.spectra().into_iter().all(white));
     let lights = desc.lights.iter().all(|l| match &l.kind {
         LightKind::Point { intensity, .. } | LightKind::Spot { intensity, .. } => white(intensity),
         LightKind::Directional { irradiance, .. } | LightKind::Sun { irradiance, .. } => {

@@ -329,7 +329,7 @@ struct Tile {
 /// project's machine, gave only +6%).
 fn render_tile(scene: &Scene, settings: &RenderSettings, band: &mut [PixelStats], tile: &Tile) {
     #[cfg(target_arch = "x86_64")]
-    if has_x86_64_v3() {
+    if pt_render::has_x86_64_v3() {
         // SAFETY: the processor supports every feature `render_tile_v3` is compiled for.
         #[allow(unsafe_code)]
         return unsafe { render_tile_v3(scene, settings, band, tile) };
@@ -337,22 +337,8 @@ fn render_tile(scene: &Scene, settings: &RenderSettings, band: &mut [PixelStats]
     render_tile_portable(scene, settings, band, tile)
 }
 
-/// Whether this processor has the x86-64-v3 features `render_tile_v3` is compiled for
-/// (detected once by std and cached). Public for benchmarks that compile their loops the same way.
-#[cfg(target_arch = "x86_64")]
-#[inline]
-pub fn has_x86_64_v3() -> bool {
-    std::is_x86_feature_detected!("avx2")
-        && std::is_x86_feature_detected!("fma")
-        && std::is_x86_feature_detected!("bmi1")
-        && std::is_x86_feature_detected!("bmi2")
-        && std::is_x86_feature_detected!("lzcnt")
-        && std::is_x86_feature_detected!("popcnt")
-        && std::is_x86_feature_detected!("movbe")
-}
-
 /// [`render_tile_portable`] compiled for x86-64-v3 (AVX2, FMA, BMI1/2, LZCNT, POPCNT, MOVBE).
-/// Callers must check [`has_x86_64_v3`] first (calling it is `unsafe` for that reason).
+/// Callers must check [`pt_render::has_x86_64_v3`] first (calling it is `unsafe` for that reason).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe")]
 fn render_tile_v3(scene: &Scene, settings: &RenderSettings, band: &mut [PixelStats], tile: &Tile) {
@@ -479,7 +465,7 @@ mod tests {
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn v3_variant_matches_portable_bit_for_bit() {
-        if !has_x86_64_v3() {
+        if !pt_render::has_x86_64_v3() {
             eprintln!(
                 "skipped: this processor lacks x86-64-v3 (the portable variant is the only one)"
             );

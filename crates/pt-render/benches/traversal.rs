@@ -262,7 +262,7 @@ fn occluded_count_dispatch(accel: &Accel, rays: &[Ray]) -> usize {
 /// Whether the processor has the x86-64-v3 features (false when `PT_BENCH_BASELINE` is set).
 #[cfg(target_arch = "x86_64")]
 fn has_v3() -> bool {
-    std::env::var_os("PT_BENCH_BASELINE").is_none() && pt_render::render::has_x86_64_v3()
+    std::env::var_os("PT_BENCH_BASELINE").is_none() && pt_render::has_x86_64_v3()
 }
 
 fn bench_traversal(c: &mut Criterion, case: &Case) {

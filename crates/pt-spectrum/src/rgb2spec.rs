@@ -193,8 +193,9 @@ fn quadrature() -> &'static Quadrature {
 ///
 /// Two passes per block of nodes: the sigmoids and their derivatives first (independent per
 /// node, so the square roots and divisions pipeline), then the sums in node order (the same
-/// operations in the same order as a single loop, so the result is bit-identical to it). This
-/// halves the cost of the 64^3 table build, which is dominated by this function.
+/// operations in the same order as a single loop, so the result is bit-identical to it). That
+/// takes a third off each call (10.8 to 6.9 us on the 2-core test machine), and so off the
+/// 64^3 table build, which is dominated by this function.
 fn rgb_and_jacobian(c: DVec3) -> (DVec3, DMat3) {
     const BLOCK: usize = 64;
     let q = quadrature();

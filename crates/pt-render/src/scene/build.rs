@@ -275,11 +275,10 @@ fn emission_texture(em: &AreaEmitterDesc, textures: &mut TextureBuilder) -> Resu
     let err = |message: String| BuildError { loc: em.loc.clone(), message };
     let Some(p) = &em.primaries else {
         let t = textures.build(&em.radiance, Role::Emission).map_err(|m| err(format!("radiance: {m}")))?;
-        if let Some(s) = em.radiance.as_constant() {
-            let rgb = crate::texture::rgb_of(s);
-            if rgb.iter().any(|c| !(c.is_finite() && *c >= 0.0)) {
-                return Err(err("radiance must be finite and non-negative".into()));
-            }
+        // (RGB projections of spectra may leave the gamut: check the values as given.)
+        let negative = em.radiance.spectra().into_iter().any(|s| s.values().iter().any(|x| !(x.is_finite() && *x >= 0.0)));
+        if negative {
+            return Err(err("radiance must be finite and non-negative".into()));
         }
         return Ok(t);
     };

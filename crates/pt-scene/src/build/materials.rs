@@ -402,7 +402,11 @@ pub(super) fn bsdf_kind<'e>(
     n: &Nested<'e>,
 ) -> Result<BsdfKind> {
     Ok(match v.plugin.as_str() {
-        "diffuse" => BsdfKind::Diffuse { reflectance: b.albedo(v, n, "reflectance")? },
+        // Not range-checked, as Mitsuba's `uniform` is not: radiosity rejects albedos above 1
+        // itself, and a path tracer renders them (gaining energy).
+        "diffuse" => BsdfKind::Diffuse {
+            reflectance: b.texture_param(v, n, "reflectance")?.unwrap_or(TextureDesc::constant(0.5)),
+        },
         "orennayar" => {
             let sigma = b.texture_param(v, n, "sigma")?;
             let sigma = scalar_in(v, "sigma", sigma, 0.0, 0.0..=f32::MAX)?;

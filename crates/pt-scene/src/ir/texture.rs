@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 /// A texturable parameter.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, PartialEq)]
 pub enum TextureDesc {
     /// The same value at every point: `<rgb>`, `<float>` or `<spectrum>` (Mitsuba's `srgb`,
     /// `uniform` and spectrum plugins).
@@ -72,7 +72,23 @@ impl TextureDesc {
     pub fn describe(&self) -> String {
         match self {
             TextureDesc::Constant(s) => format!("{s:?}"),
-            TextureDesc::Bitmap(b) => format!("bitmap({})", b.source.short_name()),
+            TextureDesc::Bitmap(b) => {
+                let mut opts = Vec::new();
+                if b.raw {
+                    opts.push("raw".to_string());
+                }
+                if b.filter != BitmapFilter::Bilinear {
+                    opts.push(format!("{:?}", b.filter).to_lowercase());
+                }
+                if b.wrap != WrapMode::Repeat {
+                    opts.push(format!("{:?}", b.wrap).to_lowercase());
+                }
+                if b.to_uv != UV_IDENTITY {
+                    opts.push(format!("to_uv {:?}", b.to_uv));
+                }
+                let opts: String = opts.iter().map(|o| format!(", {o}")).collect();
+                format!("bitmap({}{opts})", b.source.short_name())
+            }
             TextureDesc::Checkerboard(c) => format!(
                 "checkerboard({} | {})",
                 c.color0.describe(),
@@ -85,6 +101,13 @@ impl TextureDesc {
                 format!("{:?} x {}{ch} + {}", s.scale, s.inner.describe(), s.offset)
             }
         }
+    }
+}
+
+/// Prints [`TextureDesc::describe`] (`pt info` prints materials with `{:?}`).
+impl std::fmt::Debug for TextureDesc {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.describe())
     }
 }
 

@@ -35,8 +35,17 @@
 //! its own so that a caller inside rayon tasks cannot deadlock on the first use), each row
 //! serially, so the table does not depend on the thread count. Two kinds of node have no finite
 //! fit: `k = 0` is black (the entry copies `k = 1`, whose brightness `scale[1]` is 1.7e-6), and
-//! the white corner (the constant of brightness `scale[res - 2]` instead of the infinite
-//! coefficient of the constant 1). About 10-20 s on two cores, once per machine.
+//! the white corner `(k, j, i) = (res - 1, res - 1, res - 1)`, whose constant 1 has an infinite
+//! coefficient (the entry is the mean of its neighbours on the faces `x = 1` and `y = 1`; it is
+//! only reached by colours with a channel within 1.7e-6 of 1). About 12 s on two idle cores,
+//! once per machine.
+//!
+//! # Accuracy
+//! The colour of a looked-up spectrum (under D65, as [`RgbSigmoid::fit`] inverts it) differs
+//! from the colour looked up by the interpolation error: over uniform random colours about
+//! 2e-4 per channel on average, 6e-4 at the 99th percentile, 1.6e-3 at worst (the exact fit:
+//! below 1e-6). Near white the coefficients grow like `1 / sqrt(1 - v)` and the error does too:
+//! up to 1.3e-2 in [0.98, 1]^3 (mean 4e-3). Greys are exact (the constant), as with `fit`.
 //!
 //! # Disk cache
 //! The table is built at first use ([`RgbToSpectrumTable::get`]) and cached in a file, so
@@ -56,8 +65,8 @@
 //!
 //! Changing the solver or the walk without changing the colorimetry must bump `FORMAT_VERSION`.
 use super::{fit_warm, quadrature, RgbSigmoid};
-use glam::DVec3;
 use rayon::prelude::*;
+use std::ffi::OsString;
 use std::fmt;
 use std::fs;
 use std::io::{self, Write};
@@ -73,18 +82,26 @@ const MAGIC: [u8; 8] = *b"PTRGB2SP";
 const HEADER_LEN: usize = 8 + 4 + 4 + 8 + 8 + 8;
 /// Initial damping of the table's warm-started solves: Gauss-Newton (the damping only grows if
 /// a step fails to reduce the residual), as `rgb2spec_opt`, instead of [`super::FIT_DAMPING`],
-/// which costs about two more iterations per entry.
+/// which costs two to three more evaluations per entry (measured at res 32).
 const TABLE_DAMPING: f64 = 1e-12;
 
 /// The Jakob and Hanika 2019 coefficient table for linear sRGB reflectances (3 x 64^3 cells);
 /// [`lookup`](Self::lookup) turns a colour into an [`RgbSigmoid`] in well under a microsecond.
 ///
+/// Layout and lookup are those of the paper's `rgb2spec`: the largest channel picks one of
+/// three sub-tables, the other two divided by it are `x` and `y` on a uniform 64 x 64 grid, the
+/// largest is looked up on the brightness axis `smoothstep(smoothstep(k / 63))`, and the
+/// coefficients (in the normalised wavelength of [`RgbSigmoid::from_coefficients`]) are
+/// interpolated trilinearly. Greys return the exact constant. The interpolation error is about
+/// 2e-4 per channel on average and below 2e-3 over random colours, up to about 1.3e-2 near
+/// white (the exact [`RgbSigmoid::fit`] is within 1e-6).
+///
 /// The shared table ([`get`](Self::get)) is built at first use with the solver of
-/// [`RgbSigmoid::fit`] (10-20 s on two cores) and cached on disk, in `$PT_CACHE_DIR`, else
-/// `$XDG_CACHE_HOME/pt`, else `$HOME/.cache/pt` (file `rgb2spec-srgb-64-v1.bin`, about 9 MB,
-/// checksummed and written atomically). A missing, damaged or outdated file is rebuilt; an
-/// unwritable folder only means the table is kept in memory. See the module source for the
-/// layout.
+/// [`RgbSigmoid::fit`] (about 12 s on two cores) and cached on disk, in `$PT_CACHE_DIR`, else
+/// `$XDG_CACHE_HOME/pt`, else `$HOME/.cache/pt` (file `rgb2spec-srgb-64-v1.bin`, 9.4 MB,
+/// checksummed and written atomically; loading it takes a few tens of milliseconds). A
+/// missing, damaged or outdated file is rebuilt silently; an unwritable folder only means the
+/// table is kept in memory for the process. Deleting the file is always safe.
 pub struct RgbToSpectrumTable {
     /// Cells per axis.
     res: usize,
@@ -106,7 +123,8 @@ impl fmt::Debug for RgbToSpectrumTable {
 /// ([`RgbToSpectrumTable::get`]; the first call may build it). Components are clamped to
 /// [0, 1] (NaN to 0) as [`RgbSigmoid::fit`] does; greys give the exact constant, so black is 0
 /// and (1, 1, 1) is 1 at every wavelength. Its colour under D65 is `rgb` to within the table's
-/// interpolation error (below 2e-4 per channel on average, see the tests).
+/// interpolation error: about 2e-4 per channel on average, below 2e-3 over random colours, up to
+/// about 1.3e-2 near white (see [`RgbToSpectrumTable`]; [`RgbSigmoid::fit`] is exact to 1e-6).
 pub fn srgb_to_sigmoid(rgb: [f32; 3]) -> RgbSigmoid {
     RgbToSpectrumTable::get().lookup(rgb)
 }
@@ -429,7 +447,7 @@ fn walk_step(
         return RgbSigmoid::constant(rgb[0]);
     }
     let c1 = prev.0.coefficients_f64();
-    // Linear extrapolation along the brightness axis saves about one iteration per entry.
+    // Linear extrapolation along the brightness axis saves about half an iteration per entry.
     let start = match prev2 {
         Some((s2, b2)) => {
             let c2 = s2.coefficients_f64();
@@ -448,17 +466,25 @@ fn walk_step(
 
 /// The cache folder: `$PT_CACHE_DIR`, else `$XDG_CACHE_HOME/pt`, else `$HOME/.cache/pt`.
 fn cache_dir() -> Option<PathBuf> {
-    let var = |k: &str| std::env::var_os(k).filter(|v| !v.is_empty());
-    if let Some(d) = var("PT_CACHE_DIR") {
-        return Some(PathBuf::from(d));
+    let var = std::env::var_os;
+    cache_dir_from(var("PT_CACHE_DIR"), var("XDG_CACHE_HOME"), var("HOME"))
+}
+
+/// [`cache_dir`] from the values of the three variables; empty values count as unset.
+fn cache_dir_from(
+    pt_cache_dir: Option<OsString>,
+    xdg_cache_home: Option<OsString>,
+    home: Option<OsString>,
+) -> Option<PathBuf> {
+    let set = |v: Option<OsString>| v.filter(|v| !v.is_empty()).map(PathBuf::from);
+    if let Some(d) = set(pt_cache_dir) {
+        return Some(d);
     }
     // The XDG base directory specification ignores relative paths.
-    if let Some(d) = var("XDG_CACHE_HOME").map(PathBuf::from) {
-        if d.is_absolute() {
-            return Some(d.join("pt"));
-        }
+    if let Some(d) = set(xdg_cache_home).filter(|d| d.is_absolute()) {
+        return Some(d.join("pt"));
     }
-    var("HOME").map(|h| PathBuf::from(h).join(".cache").join("pt"))
+    set(home).map(|h| h.join(".cache").join("pt"))
 }
 
 /// The cache file name for resolution `res`.
@@ -542,10 +568,8 @@ mod tests {
 
     /// A fresh, empty folder for one test (removed again by the test).
     fn temp_dir(name: &str) -> PathBuf {
-        let dir = std::env::temp_dir().join(format!(
-            "pt-rgb2spec-test-{}-{name}",
-            std::process::id()
-        ));
+        let dir =
+            std::env::temp_dir().join(format!("pt-rgb2spec-test-{}-{name}", std::process::id()));
         let _ = fs::remove_dir_all(&dir);
         fs::create_dir_all(&dir).unwrap();
         dir
@@ -569,13 +593,18 @@ mod tests {
         (mean, errors[n * 99 / 100], errors[n - 1])
     }
 
-    /// Round-trip error of the table and of the exact fit over `colours`.
-    fn round_trip(table: &RgbToSpectrumTable, colours: &[[f32; 3]]) -> [(f64, f32, f32); 2] {
+    /// Round-trip error of the table over `colours` and of the exact fit over the first
+    /// `fits` of them (a fit costs a fraction of a millisecond, a lookup under a microsecond).
+    fn round_trip(
+        table: &RgbToSpectrumTable,
+        colours: &[[f32; 3]],
+        fits: usize,
+    ) -> [(f64, f32, f32); 2] {
         let mut t: Vec<f32> = colours
             .par_iter()
             .map(|&c| max_diff(observed_rgb(&table.lookup(c)), c))
             .collect();
-        let mut f: Vec<f32> = colours
+        let mut f: Vec<f32> = colours[..fits]
             .par_iter()
             .map(|&c| max_diff(observed_rgb(&RgbSigmoid::fit(c)), c))
             .collect();
@@ -587,20 +616,25 @@ mod tests {
         // What the table is for: a looked-up spectrum, seen as a reflectance under D65 (the
         // colorimetry `fit` inverts), has the colour that was looked up. Measured over these
         // 4000 colours: table mean 2.1e-4, p99 5.9e-4, max 1.6e-3 (the interpolation error;
-        // largest where a channel nears 1); exact fit max 9e-7 (its 1e-6 tolerance). The bounds
-        // have a margin of about 1.5 over the table's figures and fail on real lookup bugs,
-        // each tried by breaking the code: the wrong sub-table (mean 0.27), a linear brightness
-        // axis (mean 1.2e-2), x and y swapped (mean 0.21), a half-cell shift in x (mean 3.9e-3,
-        // max 1.4e-2) or in brightness (mean 1.5e-3).
+        // largest where a channel nears 1); exact fit (first 1000) mean 1.3e-7, max 7e-7 (its
+        // 1e-6 tolerance). The bounds have a margin of about 1.5 over the table's figures and
+        // fail on real lookup bugs, each tried by breaking the code: the next sub-table (mean
+        // 0.50), a linear brightness axis (mean 0.11), x and y swapped (mean 0.25), a half-cell
+        // shift in x (mean 5.9e-3, max 9.0e-3) or in brightness (mean 1.2e-2).
         let table = RgbToSpectrumTable::get();
         let colours = random_colours(4000, 0x5eed_cafe_f00d_0001);
-        let [(mean, p99, max), (fit_mean, fit_p99, fit_max)] = round_trip(table, &colours);
+        let fits = 1000;
+        let [(mean, p99, max), (fit_mean, fit_p99, fit_max)] = round_trip(table, &colours, fits);
         eprintln!(
             "round trip |rgb error| over {} colours: table mean {mean:.2e} p99 {p99:.2e} max \
-             {max:.2e}; exact fit mean {fit_mean:.2e} p99 {fit_p99:.2e} max {fit_max:.2e}",
+             {max:.2e}; exact fit (first {fits}) mean {fit_mean:.2e} p99 {fit_p99:.2e} max \
+             {fit_max:.2e}",
             colours.len()
         );
-        assert!(mean < 3e-4 && p99 < 1e-3 && max < 2.5e-3, "{mean} {p99} {max}");
+        assert!(
+            mean < 3e-4 && p99 < 1e-3 && max < 2.5e-3,
+            "{mean} {p99} {max}"
+        );
         // The exact fit is three orders of magnitude better: the error above is the table's.
         assert!(fit_max < 1.5e-6, "{fit_max}");
     }
@@ -618,15 +652,279 @@ mod tests {
             .map(|c| c.map(|v| 0.98 + 0.02 * v))
             .collect();
         let face: Vec<[f32; 3]> = cube.iter().map(|c| [1.0, c[1], c[2]]).collect();
-        let [(cube_mean, _, cube_max), (_, _, cube_fit)] = round_trip(table, &cube);
-        let [(face_mean, _, face_max), (_, _, face_fit)] = round_trip(table, &face);
+        let [(cube_mean, _, cube_max), (_, _, cube_fit)] = round_trip(table, &cube, 100);
+        let [(face_mean, _, face_max), (_, _, face_fit)] = round_trip(table, &face, 100);
         eprintln!(
             "near white: [0.98, 1]^3 mean {cube_mean:.2e} max {cube_max:.2e} (fit max \
              {cube_fit:.1e}); 1 x [0.98, 1]^2 mean {face_mean:.2e} max {face_max:.2e} (fit max \
              {face_fit:.1e})"
         );
-        assert!(cube_mean < 5.5e-3 && cube_max < 1.7e-2, "{cube_mean} {cube_max}");
-        assert!(face_mean < 5.5e-3 && face_max < 1e-2, "{face_mean} {face_max}");
+        assert!(
+            cube_mean < 5.5e-3 && cube_max < 1.7e-2,
+            "{cube_mean} {cube_max}"
+        );
+        assert!(
+            face_mean < 5.5e-3 && face_max < 1e-2,
+            "{face_mean} {face_max}"
+        );
         assert!(cube_fit < 1.5e-6 && face_fit < 1.5e-6);
+    }
+
+    /// The colour of node `(l, k, j, i)` of `table`, as the builder computes it.
+    fn node_colour(table: &RgbToSpectrumTable, l: usize, k: usize, j: usize, i: usize) -> [f32; 3] {
+        let (b, last) = (table.scale[k], (table.res - 1) as f64);
+        let mut rgb = [0.0f32; 3];
+        rgb[l] = b;
+        rgb[(l + 1) % 3] = (i as f64 / last * b as f64) as f32;
+        rgb[(l + 2) % 3] = (j as f64 / last * b as f64) as f32;
+        rgb
+    }
+
+    #[test]
+    fn grid_nodes_are_the_solvers_fits() {
+        // Each entry is the solver's fit of its node's colour: it reproduces that colour at
+        // least as well as a cold `RgbSigmoid::fit` (both to the solver's 1e-6, plus 1e-7 for
+        // the f32 evaluation here; greys to their exact constant, whose colour is off by up to
+        // 9.5e-5 because the D65 table's white is not the matrix's), and where the problem is
+        // well conditioned it has the fit's coefficients (measured: relative difference below
+        // 1e-4 from k = 3 up, bound 1e-3). At k = 1 and 2 (brightness 1.7e-6 and 2.6e-5) the
+        // 1e-6 tolerance is most of the colour, so different coefficients are equally good
+        // (measured up to 36% apart); only their colours are compared there. A lookup at a node
+        // returns the entry (up to the f32 rounding of the interpolation weights).
+        let table = RgbToSpectrumTable::get();
+        let res = table.res;
+        let grid = [0, 1, 18, 31, 45, 62, 63];
+        let mut nodes = Vec::new();
+        for l in 0..3 {
+            for k in [1, 2, 3, 6, 11, 12, 13, 25, 40, 55, 61, 62, 63] {
+                for j in grid {
+                    for i in grid {
+                        if !(k == res - 1 && i == res - 1 && j == res - 1) {
+                            nodes.push((l, k, j, i));
+                        }
+                    }
+                }
+            }
+        }
+        nodes.par_iter().for_each(|&(l, k, j, i)| {
+            let rgb = node_colour(table, l, k, j, i);
+            let entry = table.entry(l, k, j, i);
+            let fit = RgbSigmoid::fit(rgb);
+            let (e, f) = (
+                max_diff(observed_rgb(&entry), rgb),
+                max_diff(observed_rgb(&fit), rgb),
+            );
+            assert!(
+                e <= f.max(1e-6) + 1e-7,
+                "node {l} {k} {j} {i} {rgb:?}: entry {entry:?} error {e:e}, fit {fit:?} {f:e}"
+            );
+            let size = fit.c.iter().fold(1.0f32, |a, v| a.max(v.abs()));
+            let rel = |a: &RgbSigmoid, b: &RgbSigmoid| {
+                (0..3).map(|q| (a.c[q] - b.c[q]).abs()).fold(0.0, f32::max) / size
+            };
+            if k >= 3 {
+                assert!(
+                    rel(&entry, &fit) < 1e-3,
+                    "node {l} {k} {j} {i}: {entry:?} vs {fit:?}"
+                );
+            }
+            // On the faces x = 1 or y = 1 ties send the lookup to another sub-table.
+            if i < res - 1 && j < res - 1 {
+                let found = table.lookup(rgb);
+                assert!(rel(&found, &entry) < 1e-5, "{found:?} vs {entry:?}");
+            }
+        });
+        // The two kinds of node without a finite fit: black (k = 0) copies k = 1, and the white
+        // corner is the mean of its neighbours on the faces x = 1 and y = 1.
+        let n = res - 1;
+        for l in 0..3 {
+            for (j, i) in [(0, 0), (5, 40), (n, n)] {
+                assert_eq!(table.entry(l, 0, j, i), table.entry(l, 1, j, i));
+            }
+            let (a, b) = (table.entry(l, n, n - 1, n).c, table.entry(l, n, n, n - 1).c);
+            let corner = table.entry(l, n, n, n).c;
+            assert_eq!(corner, [0, 1, 2].map(|q| 0.5 * (a[q] + b[q])));
+        }
+    }
+
+    #[test]
+    fn greys_are_exact_and_inputs_are_clamped() {
+        // Greys bypass the table and give exactly what `fit` gives (the constant), so black is
+        // 0 and white 1 at every wavelength; out-of-range input is clamped as `fit` clamps it.
+        let table = RgbToSpectrumTable::get();
+        let mut greys = vec![0.0f32, 1e-7, 1.7e-6, 0.02, 0.25, 0.5, 0.75, 0.999_999, 1.0];
+        greys.extend(random_colours(100, 3).iter().map(|c| c[0]));
+        for v in greys {
+            assert_eq!(table.lookup([v; 3]), RgbSigmoid::constant(v), "{v}");
+            assert_eq!(table.lookup([v; 3]), RgbSigmoid::fit([v; 3]), "{v}");
+        }
+        for l in [360.0f32, 555.0, 830.0] {
+            assert_eq!(srgb_to_sigmoid([0.0; 3]).eval(l), 0.0);
+            assert_eq!(srgb_to_sigmoid([1.0; 3]).eval(l), 1.0);
+        }
+        assert_eq!(table.lookup([2.0, 1.5, 7.0]), RgbSigmoid::constant(1.0));
+        assert_eq!(
+            table.lookup([-1.0, f32::NAN, 0.0]),
+            RgbSigmoid::constant(0.0)
+        );
+        assert_eq!(
+            table.lookup([1.5, -0.2, f32::NAN]),
+            table.lookup([1.0, 0.0, 0.0])
+        );
+        assert_eq!(
+            srgb_to_sigmoid([0.3, 0.6, 0.1]),
+            table.lookup([0.3, 0.6, 0.1])
+        );
+        // The largest channel picks the sub-table; ties go to the later channel, whose table
+        // holds the same colour: both sides of a tie agree.
+        let a = table.lookup([0.5, 0.5, 0.2]);
+        let b = table.lookup([0.5, 0.5 - 1e-7, 0.2]);
+        assert!(
+            max_diff(observed_rgb(&a), observed_rgb(&b)) < 1e-5,
+            "{a:?} {b:?}"
+        );
+    }
+
+    #[test]
+    fn cache_file_round_trip_and_damage() {
+        // The file written for the full table reads back identically; any damage (a flipped
+        // payload or header byte, a truncated or extended file, another resolution) is
+        // rejected, so the caller rebuilds.
+        let table = RgbToSpectrumTable::get();
+        let dir = temp_dir("round-trip");
+        table.store(&dir).unwrap();
+        let path = dir.join(file_name(table.res));
+        let bytes = fs::read(&path).unwrap();
+        assert_eq!(bytes.len(), HEADER_LEN + 12 * 3 * table.res.pow(3));
+        assert_eq!(bytes, table.to_bytes());
+        let back = RgbToSpectrumTable::load(&dir, table.res).expect("a valid file");
+        assert_eq!(
+            (back.res, &back.scale, &back.coeffs),
+            (table.res, &table.scale, &table.coeffs)
+        );
+        // Only the final file is left (the temporary one was renamed).
+        assert_eq!(fs::read_dir(&dir).unwrap().count(), 1);
+
+        let res = table.res;
+        let flipped = |at: usize| {
+            let mut b = bytes.clone();
+            b[at] ^= 0x10;
+            b
+        };
+        for (what, damaged) in [
+            ("payload byte", flipped(HEADER_LEN + 4_000_001)),
+            ("last byte", flipped(bytes.len() - 1)),
+            ("magic", flipped(0)),
+            ("version", flipped(8)),
+            ("resolution", flipped(12)),
+            ("cell count", flipped(16)),
+            ("fingerprint", flipped(24)),
+            ("checksum", flipped(32)),
+            ("truncated", bytes[..bytes.len() - 1].to_vec()),
+            ("header only", bytes[..HEADER_LEN].to_vec()),
+            ("empty", Vec::new()),
+            ("extended", [&bytes[..], &[0]].concat()),
+        ] {
+            assert!(
+                RgbToSpectrumTable::from_bytes(&damaged, res).is_none(),
+                "{what}"
+            );
+        }
+        assert!(RgbToSpectrumTable::from_bytes(&bytes, 32).is_none());
+        // Through the file as well.
+        fs::write(&path, flipped(HEADER_LEN + 123)).unwrap();
+        assert!(RgbToSpectrumTable::load(&dir, res).is_none());
+        fs::remove_dir_all(&dir).unwrap();
+        assert!(RgbToSpectrumTable::load(&dir, res).is_none());
+    }
+
+    #[test]
+    fn damaged_or_missing_cache_is_rebuilt() {
+        // A small table (res 5, a few hundredths of a second) stands in for the full one: a
+        // missing file is
+        // built and written, a valid one is loaded, a damaged or truncated one is rebuilt and
+        // rewritten, all silently.
+        let res = 5;
+        let dir = temp_dir("rebuild");
+        let path = dir.join(file_name(res));
+        let fresh = RgbToSpectrumTable::load_or_build(Some(&dir), res);
+        let bytes = fs::read(&path).expect("written on first use");
+        assert_eq!(bytes, fresh.to_bytes());
+        // A valid file is what is loaded: mark it (a different but valid table) to tell.
+        let mut marked = RgbToSpectrumTable {
+            res,
+            scale: fresh.scale.clone(),
+            coeffs: fresh.coeffs.clone(),
+        };
+        marked.coeffs[5] = [1.0, 2.0, 3.0];
+        marked.store(&dir).unwrap();
+        assert_eq!(
+            RgbToSpectrumTable::load_or_build(Some(&dir), res).coeffs[5],
+            [1.0, 2.0, 3.0]
+        );
+        for damage in [
+            |b: &mut Vec<u8>| b[HEADER_LEN + 100] ^= 1,
+            |b: &mut Vec<u8>| b.truncate(b.len() / 2),
+        ] {
+            let mut b = bytes.clone();
+            damage(&mut b);
+            fs::write(&path, &b).unwrap();
+            let t = RgbToSpectrumTable::load_or_build(Some(&dir), res);
+            assert_eq!(t.coeffs, fresh.coeffs);
+            assert_eq!(fs::read(&path).unwrap(), bytes, "rewritten");
+        }
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn unusable_cache_folder_keeps_the_table_in_memory() {
+        // A folder that cannot be created (its parent is a file; permissions do not stop root)
+        // or no folder at all: the table is still built, without error or panic.
+        let res = 5;
+        let dir = temp_dir("unwritable");
+        let file = dir.join("not-a-folder");
+        fs::write(&file, b"x").unwrap();
+        let cache = file.join("pt");
+        assert!(RgbToSpectrumTable::load(&cache, res).is_none());
+        let a = RgbToSpectrumTable::load_or_build(Some(&cache), res);
+        assert!(a.store(&cache).is_err());
+        let b = RgbToSpectrumTable::load_or_build(None, res);
+        assert_eq!(a.coeffs, b.coeffs);
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn build_does_not_depend_on_the_thread_count() {
+        // Rows are solved independently and each serially, so one thread, three threads and
+        // the serial builder give the same bytes (res 6 keeps this fast).
+        let res = 6;
+        let build = |threads: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| RgbToSpectrumTable::build(res))
+                .to_bytes()
+        };
+        let one = build(1);
+        assert_eq!(one, build(3));
+        assert_eq!(one, RgbToSpectrumTable::build_serial(res).to_bytes());
+        assert_eq!(one, RgbToSpectrumTable::build_isolated(res).to_bytes());
+    }
+
+    #[test]
+    fn cache_folder_precedence() {
+        // $PT_CACHE_DIR, else $XDG_CACHE_HOME/pt (absolute only), else $HOME/.cache/pt; empty
+        // variables count as unset. Tested on the pure function: the environment is shared by
+        // the test threads.
+        let s = |v: &str| Some(std::ffi::OsString::from(v));
+        let p = |v: &str| Some(PathBuf::from(v));
+        assert_eq!(cache_dir_from(s("/c"), s("/x"), s("/h")), p("/c"));
+        assert_eq!(cache_dir_from(s(""), s("/x"), s("/h")), p("/x/pt"));
+        assert_eq!(cache_dir_from(None, s("rel"), s("/h")), p("/h/.cache/pt"));
+        assert_eq!(cache_dir_from(None, s(""), s("/h")), p("/h/.cache/pt"));
+        assert_eq!(cache_dir_from(None, None, None), None);
+        assert_eq!(cache_dir_from(None, None, s("")), None);
+        assert_eq!(file_name(64), "rgb2spec-srgb-64-v1.bin");
     }
 }

@@ -1,0 +1,198 @@
+//! `pt compare`: error metrics of an image against a reference, and the z-test when both
+//! have variance images.
+
+use crate::variance_path;
+use anyhow::{bail, Result};
+use clap::Args;
+use pt_image::ExrMeta;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+#[derive(Args)]
+pub(crate) struct CompareArgs {
+    /// The image to judge (EXR from pt or Mitsuba).
+    image: PathBuf,
+    /// The reference (EXR).
+    reference: PathBuf,
+    /// Variance of the reference's pixel means [default: REFERENCE_var.exr if it exists].
+    #[arg(long, value_name = "REF_VAR.exr")]
+    variance: Option<PathBuf>,
+    /// Variance of the image's pixel means [default: IMAGE_var.exr if it exists].
+    #[arg(long, value_name = "IMG_VAR.exr")]
+    image_variance: Option<PathBuf>,
+    /// Block size of the z-test, pixels.
+    #[arg(long, default_value_t = 16)]
+    block: u32,
+    /// Family-wise significance of the z-test (Sidak-corrected over blocks).
+    #[arg(long, default_value_t = 0.01)]
+    alpha: f64,
+    /// Write a false-colour relative error image (EXR or PNG).
+    #[arg(long, value_name = "OUT")]
+    error_image: Option<PathBuf>,
+    /// Exposure (stops) of the tone mapping both images get before FLIP (scale by 2^stops, clamp, sRGB).
+    #[arg(long, default_value_t = 0.0)]
+    flip_exposure: f32,
+    /// Write FLIP's per-pixel error (0 to 1, viridis) as a false-colour image (EXR or PNG).
+    #[arg(long, value_name = "OUT")]
+    flip_image: Option<PathBuf>,
+}
+
+/// `a.exr` -> `a_var.exr` if that file exists.
+fn sibling_variance(path: &Path) -> Option<PathBuf> {
+    let v = variance_path(path);
+    v.is_file().then_some(v)
+}
+
+pub(crate) fn run(args: CompareArgs) -> Result<ExitCode> {
+    // Output names are checked before any work, so a bad one fails fast with nothing written.
+    for (flag, out) in [
+        ("--error-image", &args.error_image),
+        ("--flip-image", &args.flip_image),
+    ] {
+        if let Some(out) = out {
+            if !matches!(
+                out.extension()
+                    .and_then(|e| e.to_str())
+                    .map(str::to_ascii_lowercase)
+                    .as_deref(),
+                Some("png" | "exr")
+            ) {
+                bail!("{flag} '{}' must end in .png or .exr", out.display());
+            }
+        }
+    }
+    let (img, _) = pt_image::read_exr(&args.image)?;
+    let (reference, _) = pt_image::read_exr(&args.reference)?;
+    if (img.width, img.height) != (reference.width, reference.height) {
+        bail!(
+            "'{}' is {}x{} but '{}' is {}x{}",
+            args.image.display(),
+            img.width,
+            img.height,
+            args.reference.display(),
+            reference.width,
+            reference.height
+        );
+    }
+    let m = pt_image::metrics::compare(&img, &reference)?;
+    let ch = |v: [f64; 3]| format!("{:>12.6e} {:>12.6e} {:>12.6e}", v[0], v[1], v[2]);
+    out!("{:<22} {:>12} {:>12} {:>12}", "metric", "R", "G", "B");
+    out!(
+        "{:<22} {}   (all: {:.6e})",
+        "relMSE",
+        ch(m.relmse),
+        m.relmse_all
+    );
+    out!("{:<22} {}", "RMSE", ch(m.rmse));
+    out!("{:<22} {}", "MAE", ch(m.mae));
+    out!("{:<22} {}", "mean ratio", ch(m.mean_ratio));
+    out!(
+        "{:<22} {} / {}",
+        "non-finite pixels",
+        img.nonfinite_pixels(),
+        reference.nonfinite_pixels()
+    );
+    let flip = pt_image::flip::flip(&img, &reference, args.flip_exposure)?;
+    out!(
+        "{:<22} {:>12.6}   (mean, tone-mapped at {:+} stops, {} px/degree)",
+        "FLIP",
+        flip.mean,
+        args.flip_exposure,
+        pt_image::flip::DEFAULT_PIXELS_PER_DEGREE
+    );
+    let ff = pt_image::fireflies::FireflyParams::default();
+    out!(
+        "{:<22} {} / {}   (image / reference: luminance > median + {} MAD-sigma of the {}x{} neighbourhood)",
+        "fireflies",
+        pt_image::fireflies::count_fireflies(&img, ff),
+        pt_image::fireflies::count_fireflies(&reference, ff),
+        ff.k,
+        2 * ff.radius + 1,
+        2 * ff.radius + 1
+    );
+    let img_var = args
+        .image_variance
+        .clone()
+        .or_else(|| sibling_variance(&args.image));
+    let ref_var = args
+        .variance
+        .clone()
+        .or_else(|| sibling_variance(&args.reference));
+    let mut agree = img.nonfinite_pixels() == 0;
+    match (img_var, ref_var) {
+        (Some(iv), Some(rv)) => {
+            let (iv, _) = pt_image::read_exr(&iv)?;
+            let (rv, _) = pt_image::read_exr(&rv)?;
+            let z =
+                pt_image::stats::block_ztest(&img, &iv, &reference, &rv, args.block, args.alpha)?;
+            out!(
+                "block z-test ({}x{} px, alpha {}): max |z| {:.2}, {} of {} block-channels fail (per-test p < {:.2e}), chi2 {:.1} on {} dof (p {:.3}): {}",
+                args.block,
+                args.block,
+                args.alpha,
+                z.max_abs_z,
+                z.failed,
+                z.tests,
+                z.p_threshold,
+                z.chi2,
+                z.tests,
+                z.chi2_p,
+                if z.pass { "PASS" } else { "FAIL" }
+            );
+            let pz = pt_image::stats::pixel_ztest(&img, &iv, &reference, &rv, args.alpha)?;
+            out!(
+                "pixel z-test: {:.3}% of pixel-channels fail at p < {}",
+                100.0 * pz.fraction_failed,
+                args.alpha
+            );
+            agree &= z.pass;
+        }
+        _ => {
+            out!("no variance images: z-test skipped (give --variance and --image-variance, or put NAME_var.exr beside each)");
+        }
+    }
+    if let Some(out) = &args.error_image {
+        let err = pt_image::colormap::relative_error_image(&img, &reference)?;
+        let e = pt_image::colormap::false_colour(&err, img.width, img.height, 0.0, 0.2, false);
+        match out
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref()
+        {
+            Some("png") => pt_image::write_png_preview(out, &e, 0.0)?,
+            Some("exr") => pt_image::write_exr(out, &e, &ExrMeta::default())?,
+            _ => bail!("--error-image '{}' must end in .png or .exr", out.display()),
+        }
+        out!(
+            "relative error image (0 to 20%, viridis) -> {}",
+            out.display()
+        );
+    }
+    if let Some(out) = &args.flip_image {
+        let e = pt_image::colormap::false_colour(
+            &flip.error_map,
+            img.width,
+            img.height,
+            0.0,
+            1.0,
+            false,
+        );
+        match out
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .as_deref()
+        {
+            Some("png") => pt_image::write_png_preview(out, &e, 0.0)?,
+            Some("exr") => pt_image::write_exr(out, &e, &ExrMeta::default())?,
+            _ => bail!("--flip-image '{}' must end in .png or .exr", out.display()),
+        }
+        out!("FLIP error image (0 to 1, viridis) -> {}", out.display());
+    }
+    Ok(if agree {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
+}

@@ -1,0 +1,172 @@
+//! `pt info`: what a scene contains, how the renderer reads it, and its colour mode.
+
+use crate::{load_scene_with_summary, SceneArgs};
+use anyhow::Result;
+use clap::Args;
+use pt_render::{BvhKind, LightSelection, Scene};
+use pt_scene::Geometry;
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Args)]
+pub(crate) struct InfoArgs {
+    /// Mitsuba 3 XML scene or glTF 2.0 file (.gltf / .glb) [default: the built-in Cornell box].
+    scene: Option<PathBuf>,
+    #[command(flatten)]
+    scene_args: SceneArgs,
+}
+
+/// One line describing a material for `pt info`: wrappers (twosided, mask, normalmap, blend)
+/// as `name(parameters, inner)`, models by their parameters, textures by their plugin and
+/// file.
+fn describe_bsdf(kind: &pt_scene::BsdfKind) -> String {
+    use pt_scene::BsdfKind as K;
+    match kind {
+        K::TwoSided { inner } => format!("twosided({})", describe_bsdf(&inner.kind)),
+        K::Mask {
+            opacity,
+            cutoff,
+            inner,
+        } => {
+            let cut = cutoff.map(|c| format!(", cutoff {c}")).unwrap_or_default();
+            format!("mask(opacity {opacity:?}{cut}, {})", describe_bsdf(&inner.kind))
+        }
+        K::NormalMap {
+            texture,
+            scale,
+            gltf,
+            inner,
+        } => format!(
+            "normalmap({texture:?}, {} tangent space, scale {scale}, {})",
+            if *gltf { "glTF" } else { "Mitsuba" },
+            describe_bsdf(&inner.kind)
+        ),
+        K::Blend {
+            weight,
+            first,
+            second,
+        } => format!(
+            "blend(weight {weight:?}, {} | {})",
+            describe_bsdf(&first.kind),
+            describe_bsdf(&second.kind)
+        ),
+        other => format!("{other:?}"),
+    }
+}
+
+pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
+    let (desc, gltf_summary) = load_scene_with_summary(args.scene.as_deref(), &args.scene_args)?;
+    let scene = Scene::build(&desc, BvhKind::Auto, LightSelection::Power)?;
+    out!("scene       {}", desc.source.display());
+    out!(
+        "film        {}x{}, filter {:?}",
+        desc.film.width,
+        desc.film.height,
+        desc.film.filter
+    );
+    out!(
+        "sampler     {} spp, seed {}",
+        desc.sampler.sample_count,
+        desc.sampler.seed
+    );
+    let i = &desc.integrator;
+    out!(
+        "integrator  {:?}, max_depth {}, rr_depth {}, hide_emitters {}{}",
+        i.kind,
+        i.max_depth,
+        i.rr_depth,
+        i.hide_emitters,
+        if i.moment {
+            " (moment: variance requested)"
+        } else {
+            ""
+        }
+    );
+    let c = &desc.camera;
+    let pos = c.to_world.transform_point3(pt_math::Vec3::ZERO);
+    let dir = c.to_world.transform_vector3(pt_math::Vec3::Z).normalize();
+    out!(
+        "camera      {:?}, at ({:.3}, {:.3}, {:.3}) looking ({:.3}, {:.3}, {:.3})",
+        c.projection,
+        pos.x,
+        pos.y,
+        pos.z,
+        dir.x,
+        dir.y,
+        dir.z
+    );
+    out!(
+        "geometry    {} shapes, {} triangles{}, {} spheres{}",
+        desc.shapes.len(),
+        scene.stats.triangles,
+        if scene.stats.parallelograms > 0 {
+            format!(
+                " ({} pairs tested as parallelograms)",
+                scene.stats.parallelograms
+            )
+        } else {
+            String::new()
+        },
+        scene.stats.spheres,
+        if scene.stats.degenerate_triangles > 0 {
+            format!(
+                " ({} zero-area triangles skipped)",
+                scene.stats.degenerate_triangles
+            )
+        } else {
+            String::new()
+        }
+    );
+    for (k, s) in desc.shapes.iter().enumerate() {
+        let geo = match &s.geometry {
+            Geometry::Mesh(m) => format!("{} triangles", m.indices.len()),
+            Geometry::Sphere { radius, .. } => format!("sphere r={radius}"),
+        };
+        let bsdf = &desc.bsdfs[s.bsdf];
+        out!(
+            "  shape {k:<3} {:<10} {:<16} bsdf {:<12} {}{}",
+            s.plugin,
+            geo,
+            bsdf.id.as_deref().unwrap_or("-"),
+            s.emitter
+                .as_ref()
+                .map(|e| format!(
+                    "emits {:?}{}",
+                    e.radiance,
+                    if e.primaries.is_some() {
+                        " through display primaries"
+                    } else {
+                        ""
+                    }
+                ))
+                .unwrap_or_default()
+                + &s.interior
+                    .as_ref()
+                    .map(|m| format!(" interior medium sigma_t {:?}", m.sigma_t))
+                    .unwrap_or_default(),
+            s.id.as_deref()
+                .map(|id| format!(" id={id}"))
+                .unwrap_or_default(),
+        );
+    }
+    out!("materials   {}", desc.bsdfs.len());
+    for b in &desc.bsdfs {
+        out!(
+            "  {:<12} {}",
+            b.id.as_deref().unwrap_or("-"),
+            describe_bsdf(&b.kind)
+        );
+    }
+    out!("lights      {} area light(s)", scene.lights.len());
+    if !gltf_summary.is_empty() {
+        out!("glTF        (how the file maps onto the renderer; see pt-gltf's documentation)");
+        for line in &gltf_summary {
+            out!("  {line}");
+        }
+    }
+    match desc.spectral_reason() {
+        Some(why) => out!("mode        spectral, because {why}"),
+        None => out!("mode        rgb (every input is RGB and no material depends on wavelength: RGB is exact)"),
+    }
+    Ok(ExitCode::SUCCESS)
+}

@@ -1,0 +1,441 @@
+//! `pt render`: one scene, one integrator, an EXR (with variance and a PNG preview when
+//! asked), written atomically; Ctrl-C finishes the pass and writes what was rendered.
+
+use crate::{load_scene, thread_pool, variance_path, SceneArgs};
+use anyhow::{bail, Context, Result};
+use clap::{Args, ValueEnum};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use pt_image::{ExrMeta, Image};
+use pt_integrators::{Integrator, Job, Overrides, Progress, RenderState, Rendered, Run, Strategy};
+use pt_render::{BvhKind, LightSelection};
+use pt_scene::{IntegratorKind, RadiosityOptions, SceneDesc};
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+#[derive(Args)]
+pub(crate) struct RenderArgs {
+    /// Mitsuba 3 XML scene, or a glTF 2.0 file (.gltf / .glb). Without it, the built-in Cornell
+    /// box is rendered.
+    scene: Option<PathBuf>,
+    /// Save the accumulated per-pixel sums here when the render ends or is interrupted (Ctrl-C),
+    /// so that `--resume` can continue it.
+    #[arg(long, value_name = "STATE")]
+    save_state: Option<PathBuf>,
+    /// Continue the render saved in STATE (same scene, options and seed) up to --spp samples per
+    /// pixel; the result is bit-identical to an uninterrupted render.
+    #[arg(long, value_name = "STATE")]
+    resume: Option<PathBuf>,
+    /// Output EXR path [default: the scene's file name with .exr, in the current folder].
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Samples per pixel [default: the scene's sampler sample_count].
+    #[arg(long)]
+    spp: Option<u32>,
+    /// Seed of the random streams [default: the scene's sampler seed].
+    #[arg(long)]
+    seed: Option<u64>,
+    /// Seconds since the lights went out: render the afterglow of phosphorescent materials
+    /// (every light and emitter off; see crates/pt-integrators/src/afterglow.rs).
+    #[arg(long, value_name = "SECONDS")]
+    time: Option<f32>,
+    /// Worker threads [default: all cores]. The image does not depend on it.
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Longest path in segments (1: emitters only, 2: direct light, -1: unlimited)
+    /// [default: the scene's integrator max_depth].
+    #[arg(long, allow_hyphen_values = true)]
+    max_depth: Option<i32>,
+    /// Image width in pixels [default: the scene's film].
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height in pixels [default: the scene's film].
+    #[arg(long)]
+    height: Option<u32>,
+    /// Also write the per-pixel variance of the mean to OUT_var.exr.
+    #[arg(long)]
+    variance: bool,
+    /// Also write a tone-mapped sRGB PNG preview to this path.
+    #[arg(long, value_name = "PNG")]
+    png: Option<PathBuf>,
+    /// Exposure of the PNG preview, in stops.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    exposure: f32,
+    /// Direct-light strategy: MIS of light and BSDF sampling, or one of them alone
+    /// [default: mis].
+    #[arg(long, value_enum)]
+    strategy: Option<StrategyArg>,
+    /// Clamp each sample's radiance to at most this value (largest RGB channel; hue kept).
+    /// Off by default: it removes fireflies but adds bias (darkens caustics and highlights of
+    /// small lights); `pt stability` measures how much on a test scene.
+    #[arg(long, value_name = "X")]
+    clamp: Option<f32>,
+    /// How next-event estimation picks a light.
+    #[arg(long, value_enum, default_value_t = SelectionArg::Power)]
+    light_selection: SelectionArg,
+    /// Acceleration structure: `auto` tests scenes of at most 32 primitives without a tree
+    /// (SIMD, faster at that size) and builds a CWBVH for larger ones; `cwbvh` and `bvh2` are
+    /// obvhs's layouts; `flat` tests every primitive for every ray (small scenes only).
+    #[arg(long, value_enum, default_value_t = BvhArg::Auto)]
+    bvh: BvhArg,
+    /// Colour transport [default: spectral when the scene has wavelength-dependent inputs
+    /// (`pt info` says which), RGB otherwise]. Forcing rgb on a spectral scene projects its
+    /// spectra to RGB (an approximation).
+    #[arg(long, value_enum)]
+    mode: Option<ModeArg>,
+    /// Light transport method [default: the scene's integrator]. `radiosity` solves for
+    /// diffuse patch radiosities and displays them (see the radiosity options below);
+    /// `direct` is the path tracer with max_depth 2; `volpath` adds absorbing media.
+    #[arg(long, value_enum)]
+    integrator: Option<IntegratorArg>,
+    #[command(flatten)]
+    radiosity: RadiosityArgs,
+    /// No progress bar or summary on stderr.
+    #[arg(short, long)]
+    quiet: bool,
+    #[command(flatten)]
+    scene_args: SceneArgs,
+}
+
+/// Options of the radiosity integrator; each overrides the scene's `<integrator type="radiosity">`
+/// property of the same name.
+#[derive(Args)]
+struct RadiosityArgs {
+    /// Radiosity: longest patch edge in scene units [default: 1/32 of the scene's diagonal].
+    #[arg(long)]
+    patch_size: Option<f32>,
+    /// Radiosity: form-factor rays per patch [default: 1024].
+    #[arg(long)]
+    rays_per_patch: Option<u32>,
+    /// Radiosity: jacobi, gauss_seidel or progressive [default: gauss_seidel].
+    #[arg(long)]
+    radiosity_solver: Option<pt_scene::RadiositySolver>,
+    /// Radiosity: constant, smoothed or final_gather [default: smoothed].
+    #[arg(long)]
+    radiosity_display: Option<pt_scene::RadiosityDisplay>,
+    /// Radiosity: none, average or balanced form-factor reciprocity [default: balanced].
+    #[arg(long)]
+    reciprocity: Option<pt_scene::Reciprocity>,
+    /// Radiosity: relative residual at which the solver stops [default: 1e-4].
+    #[arg(long)]
+    tolerance: Option<f32>,
+    /// Radiosity: iteration cap [default: 1000].
+    #[arg(long)]
+    max_iterations: Option<u32>,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum ModeArg {
+    Rgb,
+    Spectral,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+enum IntegratorArg {
+    Path,
+    Volpath,
+    Direct,
+    Radiosity,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum StrategyArg {
+    Mis,
+    Bsdf,
+    Light,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum SelectionArg {
+    Power,
+    Uniform,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum BvhArg {
+    Auto,
+    Cwbvh,
+    Bvh2,
+    Flat,
+}
+
+impl RenderArgs {
+    /// The command line's changes to the scene's integrator.
+    fn overrides(&self) -> Overrides {
+        let r = &self.radiosity;
+        Overrides {
+            kind: self.integrator.map(|i| match i {
+                IntegratorArg::Path => IntegratorKind::Path,
+                IntegratorArg::Volpath => IntegratorKind::VolPath,
+                IntegratorArg::Direct => IntegratorKind::Direct,
+                IntegratorArg::Radiosity => IntegratorKind::Radiosity,
+            }),
+            max_depth: self.max_depth,
+            strategy: self.strategy.map(|s| match s {
+                StrategyArg::Mis => Strategy::Mis,
+                StrategyArg::Bsdf => Strategy::Bsdf,
+                StrategyArg::Light => Strategy::Light,
+            }),
+            clamp: self.clamp,
+            afterglow: self.time,
+            radiosity: RadiosityOptions {
+                patch_size: r.patch_size,
+                rays_per_patch: r.rays_per_patch,
+                tolerance: r.tolerance,
+                max_iterations: r.max_iterations,
+                solver: r.radiosity_solver,
+                display: r.radiosity_display,
+                reciprocity: r.reciprocity,
+            },
+        }
+    }
+
+    /// The scene with the command line's film size.
+    fn scene(&self) -> Result<SceneDesc> {
+        let mut desc = load_scene(self.scene.as_deref(), &self.scene_args)?;
+        if let Some(w) = self.width {
+            desc.film.width = w;
+        }
+        if let Some(h) = self.height {
+            desc.film.height = h;
+        }
+        if desc.film.width == 0 || desc.film.height == 0 {
+            bail!(
+                "image size must be at least 1x1, got {}x{}",
+                desc.film.width,
+                desc.film.height
+            );
+        }
+        Ok(desc)
+    }
+}
+
+/// The progress bar on stderr (hidden when not a terminal or with `--quiet`).
+struct Bar(ProgressBar);
+
+impl Bar {
+    fn new(show: bool) -> Bar {
+        let bar = if show {
+            ProgressBar::with_draw_target(Some(1), ProgressDrawTarget::stderr())
+        } else {
+            ProgressBar::hidden()
+        };
+        Bar(bar)
+    }
+}
+
+impl Progress for Bar {
+    fn start_samples(&self, total: u64, done: u64) {
+        self.0.set_length(total);
+        self.0.set_style(
+            ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% {msps} M samples/s, ETA {eta}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .with_key("msps", |state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+                let _ = write!(w, "{:.2}", state.per_sec() / 1e6);
+            }),
+        );
+        self.0.set_position(done);
+    }
+
+    fn samples(&self, n: u64) {
+        self.0.inc(n);
+    }
+
+    fn stage(&self, name: &str, fraction: f32) {
+        if self.0.length() != Some(1000) {
+            self.0.set_length(1000);
+            self.0.set_style(
+                ProgressStyle::with_template("{spinner} [{elapsed_precise}] {msg:<14} {wide_bar} {percent:>3}%")
+                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            );
+        }
+        self.0.set_message(name.to_string());
+        self.0.set_position((fraction.clamp(0.0, 1.0) * 1000.0) as u64);
+    }
+}
+
+pub(crate) fn run(args: RenderArgs) -> Result<ExitCode> {
+    let desc = args.scene()?;
+    let integrator = Integrator::from_desc(&desc.integrator, &args.overrides())?;
+    if args.spp == Some(0) {
+        bail!("--spp must be at least 1");
+    }
+    let job = Job {
+        spp: args.spp.unwrap_or(desc.sampler.sample_count),
+        seed: args.seed.unwrap_or(desc.sampler.seed),
+        bvh: match args.bvh {
+            BvhArg::Auto => BvhKind::Auto,
+            BvhArg::Cwbvh => BvhKind::CwBvh,
+            BvhArg::Bvh2 => BvhKind::Bvh2,
+            BvhArg::Flat => BvhKind::Flat,
+        },
+        selection: match args.light_selection {
+            SelectionArg::Power => LightSelection::Power,
+            SelectionArg::Uniform => LightSelection::Uniform,
+        },
+        mode: args.mode.map(|m| match m {
+            ModeArg::Rgb => pt_spectrum::ColorMode::Rgb,
+            ModeArg::Spectral => pt_spectrum::ColorMode::Spectral,
+        }),
+        ..Job::new(&desc)
+    };
+    let output = args
+        .output
+        .clone()
+        .unwrap_or_else(|| default_output(args.scene.as_deref()));
+    check_output_path(&output)?;
+    let pool = thread_pool(args.threads)?;
+    let key = state_key(&args, &desc, &job, &integrator);
+    let resume = match &args.resume {
+        Some(path) => {
+            let bytes = std::fs::read(path)
+                .with_context(|| format!("cannot read render state {}", path.display()))?;
+            let settings = pt_integrators::RenderSettings {
+                width: desc.film.width,
+                height: desc.film.height,
+                spp: job.spp,
+                seed: job.seed,
+                ..pt_integrators::RenderSettings::from_desc(&desc)
+            };
+            Some(
+                RenderState::from_bytes(&bytes, key, &settings)
+                    .map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))?,
+            )
+        }
+        None => None,
+    };
+    // Ctrl-C: finish the current pass, then write what was accumulated (image and, with
+    // --save-state, the sums) and exit with code 130.
+    let cancel = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    {
+        let cancel = cancel.clone();
+        // Failing to install the handler (one is already installed) only loses Ctrl-C handling.
+        let _ = ctrlc::set_handler(move || cancel.store(true, std::sync::atomic::Ordering::Relaxed));
+    }
+    let bar = Bar::new(!args.quiet && std::io::stderr().is_terminal());
+    let run = Run {
+        progress: &bar,
+        cancel: &cancel,
+        resume,
+    };
+    let rendered = pool.install(|| integrator.render(&job, run))?;
+    bar.0.finish_and_clear();
+    if let (Some(path), Some(state)) = (&args.save_state, &rendered.state) {
+        pt_image::write_bytes_atomically(path, &state.to_bytes(key))?;
+    } else if args.save_state.is_some() {
+        bail!("--save-state applies to the path tracer, not to {}", integrator.name());
+    }
+    write_outputs(&args, &desc, &job, &rendered, &output)?;
+    for w in &rendered.warnings {
+        eprintln!("warning: {w}");
+    }
+    if !args.quiet {
+        eprintln!("{} -> {}", rendered.summary, output.display());
+    }
+    if !rendered.complete {
+        eprintln!(
+            "interrupted: wrote the image of the {} of {} samples per pixel taken so far{}",
+            rendered.output.spp,
+            job.spp,
+            if args.save_state.is_some() {
+                " and the state to continue it with --resume"
+            } else {
+                " (add --save-state to be able to resume)"
+            }
+        );
+        return Ok(ExitCode::from(130));
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Identifies the scene and every option that changes the samples, so that `--resume` refuses a
+/// state made with anything else (FNV-1a over the scene file's bytes and the settings).
+fn state_key(args: &RenderArgs, desc: &SceneDesc, job: &Job, integrator: &Integrator) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    let mut eat = |bytes: &[u8]| {
+        for &b in bytes {
+            h ^= u64::from(b);
+            h = h.wrapping_mul(0x0100_0000_01b3);
+        }
+    };
+    match std::fs::read(&desc.source) {
+        Ok(b) => eat(&b),
+        Err(_) => eat(desc.source.to_string_lossy().as_bytes()),
+    }
+    let text = format!(
+        "{:?}|{:?}|{integrator:?}|{:?}|{:?}|{:?}",
+        args.scene_args.defines, desc.film.filter, job.mode, job.selection, args.scene_args.camera
+    );
+    eat(text.as_bytes());
+    h
+}
+
+/// Writes the EXR (and variance and PNG preview when asked), each atomically.
+fn write_outputs(args: &RenderArgs, desc: &SceneDesc, job: &Job, r: &Rendered, output: &Path) -> Result<()> {
+    let out = &r.output;
+    let image = Image {
+        width: out.width,
+        height: out.height,
+        data: out.mean.clone(),
+    };
+    let mut extra = vec![
+        ("pt_version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
+        ("scene".to_string(), desc.source.display().to_string()),
+        ("seed".to_string(), job.seed.to_string()),
+    ];
+    extra.extend(r.header.iter().cloned());
+    let meta = ExrMeta {
+        spp: Some(out.spp),
+        mode: Some(r.mode.name().to_string()),
+        render_time_s: Some(out.time.as_secs_f64()),
+        extra,
+    };
+    pt_image::write_exr(output, &image, &meta)?;
+    if args.variance {
+        let var = Image {
+            width: out.width,
+            height: out.height,
+            data: out.variance.clone(),
+        };
+        pt_image::write_exr(&variance_path(output), &var, &meta)?;
+    }
+    if let Some(png) = &args.png {
+        pt_image::write_png_preview(png, &image, args.exposure)?;
+    }
+    Ok(())
+}
+
+/// `scene.xml` -> `scene.exr` in the current folder; the built-in box -> `cornell-box.exr`.
+fn default_output(scene: Option<&Path>) -> PathBuf {
+    let stem = scene
+        .and_then(|p| p.file_stem())
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "cornell-box".into());
+    PathBuf::from(format!("{stem}.exr"))
+}
+
+/// Fails early (before rendering) when the output cannot be written.
+fn check_output_path(output: &Path) -> Result<()> {
+    if output
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(|e| e.eq_ignore_ascii_case("exr"))
+        != Some(true)
+    {
+        bail!("output '{}' must end in .exr", output.display());
+    }
+    let dir = output
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    if !dir.is_dir() {
+        bail!(
+            "cannot write '{}': folder '{}' does not exist",
+            output.display(),
+            dir.display()
+        );
+    }
+    Ok(())
+}
