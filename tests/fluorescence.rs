@@ -13,8 +13,8 @@
 //! continuous model; the renderer tabulates a(l) l on 1 nm bins, a difference below 1e-4
 //! relative for these piecewise-linear spectra (well inside the noise).
 
-use pt_math::{Ray, Vec3};
 use pt_integrators::path::{li, PathSettings};
+use pt_math::{Ray, Vec3};
 use pt_render::sampler::Sampler;
 use pt_render::{BvhKind, LightSelection, Scene};
 use pt_spectrum::{SampledWavelengths, Spectrum};

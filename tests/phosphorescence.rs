@@ -11,8 +11,8 @@
 //! 0.5% tolerance: a missing 1/lo, 1/pi, cos or yield factor, a wrong decay (e^{-t/tau} at
 //! t = 3 s, tau = 2 s is 0.22) or a light left on is off by far more.
 
-use pt_math::{Ray, Vec3};
 use pt_integrators::path::{li, PathSettings};
+use pt_math::{Ray, Vec3};
 use pt_render::sampler::Sampler;
 use pt_render::{BvhKind, LightSelection, Scene};
 use pt_spectrum::{SampledWavelengths, Spectrum};

@@ -82,15 +82,30 @@ fn radiosity_integrator_from_the_scene_file_and_bad_options() {
     ]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("--radiosity-solver") && stderr.contains("jacobi, gauss_seidel, progressive"), "{stderr}");
+    assert!(
+        stderr.contains("--radiosity-solver")
+            && stderr.contains("jacobi, gauss_seidel, progressive"),
+        "{stderr}"
+    );
     assert!(!out2.exists());
-    let bad = xml.replace(r#"<string name="display" value="constant"/>"#, r#"<string name="solver" value="newton"/>"#);
+    let bad = xml.replace(
+        r#"<string name="display" value="constant"/>"#,
+        r#"<string name="solver" value="newton"/>"#,
+    );
     let bad_path = dir.join("bad.xml");
     std::fs::write(&bad_path, bad).unwrap();
-    let o = pt(&["render", bad_path.to_str().unwrap(), "-o", out2.to_str().unwrap()]);
+    let o = pt(&[
+        "render",
+        bad_path.to_str().unwrap(),
+        "-o",
+        out2.to_str().unwrap(),
+    ]);
     let stderr = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{stderr}");
-    assert!(stderr.contains("string name=\"solver\"") && stderr.contains("unknown solver 'newton'"), "{stderr}");
+    assert!(
+        stderr.contains("string name=\"solver\"") && stderr.contains("unknown solver 'newton'"),
+        "{stderr}"
+    );
     assert!(!out2.exists());
 }
 

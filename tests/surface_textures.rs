@@ -198,8 +198,11 @@ fn gltf_normal_texture_matches_xml_normalmap() {
 </scene>"#;
         std::fs::write(dir.join("scene.xml"), xml).unwrap();
         let xml_desc = pt_scene::load_file(&dir.join("scene.xml"), &[]).expect("XML scene loads");
-        let gltf = pt_scene::gltf::load(&dir.join("quad.gltf"), &pt_scene::gltf::LoadOptions::default())
-            .expect("glTF loads");
+        let gltf = pt_scene::gltf::load(
+            &dir.join("quad.gltf"),
+            &pt_scene::gltf::LoadOptions::default(),
+        )
+        .expect("glTF loads");
         assert!(
             !gltf.warnings.iter().any(|w| w.contains("normalTexture")),
             "{:?}",
@@ -440,8 +443,11 @@ fn gltf_base_colour_alpha_is_opacity_per_texel() {
         );
         std::fs::write(dir.join("quad.gltf"), json).unwrap();
         std::fs::write(dir.join("quad.bin"), bin).unwrap();
-        let g = pt_scene::gltf::load(&dir.join("quad.gltf"), &pt_scene::gltf::LoadOptions::default())
-            .expect("glTF loads");
+        let g = pt_scene::gltf::load(
+            &dir.join("quad.gltf"),
+            &pt_scene::gltf::LoadOptions::default(),
+        )
+        .expect("glTF loads");
         assert!(
             !g.warnings.iter().any(|w| w.contains("alpha")),
             "{:?}",
@@ -511,8 +517,11 @@ fn gltf_partial_factors_are_blends() {
         );
         std::fs::write(dir.join("quad.gltf"), json).unwrap();
         std::fs::write(dir.join("quad.bin"), bin).unwrap();
-        let g = pt_scene::gltf::load(&dir.join("quad.gltf"), &pt_scene::gltf::LoadOptions::default())
-            .expect("glTF loads");
+        let g = pt_scene::gltf::load(
+            &dir.join("quad.gltf"),
+            &pt_scene::gltf::LoadOptions::default(),
+        )
+        .expect("glTF loads");
         let scene = Scene::build_with_mode(
             &g.desc,
             BvhKind::default(),
@@ -580,8 +589,11 @@ fn gltf_iridescence_texture_scales_the_blend_weight_per_texel() {
     );
     std::fs::write(dir.join("quad.gltf"), json).unwrap();
     std::fs::write(dir.join("quad.bin"), bin).unwrap();
-    let g = pt_scene::gltf::load(&dir.join("quad.gltf"), &pt_scene::gltf::LoadOptions::default())
-        .expect("glTF loads");
+    let g = pt_scene::gltf::load(
+        &dir.join("quad.gltf"),
+        &pt_scene::gltf::LoadOptions::default(),
+    )
+    .expect("glTF loads");
     assert!(
         !g.warnings.iter().any(|w| w.contains("iridescence")),
         "{:?}",
@@ -615,7 +627,9 @@ fn info_describes_wrapper_materials() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let out = String::from_utf8_lossy(&o.stdout);
     assert!(
-        out.contains("normalmap(bitmap(bumps-normal.png, raw), Mitsuba tangent space, scale 1, Diffuse"),
+        out.contains(
+            "normalmap(bitmap(bumps-normal.png, raw), Mitsuba tangent space, scale 1, Diffuse"
+        ),
         "{out}"
     );
     assert!(
@@ -628,9 +642,6 @@ fn info_describes_wrapper_materials() {
         repo().join("scenes/mask-texture.xml").to_str().unwrap(),
     ]);
     let out = String::from_utf8_lossy(&o.stdout);
-    assert!(
-        out.contains("mask(opacity bitmap("),
-        "{out}"
-    );
+    assert!(out.contains("mask(opacity bitmap("), "{out}");
     assert!(!out.contains("SourceLoc"), "{out}");
 }

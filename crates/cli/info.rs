@@ -29,7 +29,10 @@ fn describe_bsdf(kind: &pt_scene::BsdfKind) -> String {
             inner,
         } => {
             let cut = cutoff.map(|c| format!(", cutoff {c}")).unwrap_or_default();
-            format!("mask(opacity {opacity:?}{cut}, {})", describe_bsdf(&inner.kind))
+            format!(
+                "mask(opacity {opacity:?}{cut}, {})",
+                describe_bsdf(&inner.kind)
+            )
         }
         K::NormalMap {
             texture,

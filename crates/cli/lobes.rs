@@ -364,12 +364,10 @@ impl Model {
     }
 
     fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<Sampled> {
-        self.bsdf
-            .sample(wo, u_lobe, u)
-            .map(|s| Sampled {
-                wi: s.wi,
-                weight: s.weight.luminance_rgb(),
-            })
+        self.bsdf.sample(wo, u_lobe, u).map(|s| Sampled {
+            wi: s.wi,
+            weight: s.weight.luminance_rgb(),
+        })
     }
 }
 

@@ -188,7 +188,6 @@ pub(crate) fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
     b.build().context("cannot start worker threads")
 }
 
-
 /// `out.exr` -> `out_var.exr`.
 pub(crate) fn variance_path(output: &Path) -> PathBuf {
     let stem = output

@@ -247,12 +247,15 @@ impl Progress for Bar {
         if self.0.length() != Some(1000) {
             self.0.set_length(1000);
             self.0.set_style(
-                ProgressStyle::with_template("{spinner} [{elapsed_precise}] {msg:<14} {wide_bar} {percent:>3}%")
-                    .unwrap_or_else(|_| ProgressStyle::default_bar()),
+                ProgressStyle::with_template(
+                    "{spinner} [{elapsed_precise}] {msg:<14} {wide_bar} {percent:>3}%",
+                )
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
             );
         }
         self.0.set_message(name.to_string());
-        self.0.set_position((fraction.clamp(0.0, 1.0) * 1000.0) as u64);
+        self.0
+            .set_position((fraction.clamp(0.0, 1.0) * 1000.0) as u64);
     }
 }
 
@@ -312,7 +315,8 @@ pub(crate) fn run(args: RenderArgs) -> Result<ExitCode> {
     {
         let cancel = cancel.clone();
         // Failing to install the handler (one is already installed) only loses Ctrl-C handling.
-        let _ = ctrlc::set_handler(move || cancel.store(true, std::sync::atomic::Ordering::Relaxed));
+        let _ =
+            ctrlc::set_handler(move || cancel.store(true, std::sync::atomic::Ordering::Relaxed));
     }
     let bar = Bar::new(!args.quiet && std::io::stderr().is_terminal());
     let run = Run {
@@ -325,7 +329,10 @@ pub(crate) fn run(args: RenderArgs) -> Result<ExitCode> {
     if let (Some(path), Some(state)) = (&args.save_state, &rendered.state) {
         pt_image::write_bytes_atomically(path, &state.to_bytes(key))?;
     } else if args.save_state.is_some() {
-        bail!("--save-state applies to the path tracer, not to {}", integrator.name());
+        bail!(
+            "--save-state applies to the path tracer, not to {}",
+            integrator.name()
+        );
     }
     write_outputs(&args, &desc, &job, &rendered, &output)?;
     for w in &rendered.warnings {
@@ -373,7 +380,13 @@ fn state_key(args: &RenderArgs, desc: &SceneDesc, job: &Job, integrator: &Integr
 }
 
 /// Writes the EXR (and variance and PNG preview when asked), each atomically.
-fn write_outputs(args: &RenderArgs, desc: &SceneDesc, job: &Job, r: &Rendered, output: &Path) -> Result<()> {
+fn write_outputs(
+    args: &RenderArgs,
+    desc: &SceneDesc,
+    job: &Job,
+    r: &Rendered,
+    output: &Path,
+) -> Result<()> {
     let out = &r.output;
     let image = Image {
         width: out.width,
@@ -381,7 +394,10 @@ fn write_outputs(args: &RenderArgs, desc: &SceneDesc, job: &Job, r: &Rendered, o
         data: out.mean.clone(),
     };
     let mut extra = vec![
-        ("pt_version".to_string(), env!("CARGO_PKG_VERSION").to_string()),
+        (
+            "pt_version".to_string(),
+            env!("CARGO_PKG_VERSION").to_string(),
+        ),
         ("scene".to_string(), desc.source.display().to_string()),
         ("seed".to_string(), job.seed.to_string()),
     ];

@@ -236,10 +236,22 @@ impl SurfaceBsdf {
     /// transmissive models, whose back side is their inside).
     #[inline(always)]
     fn side(&self, bsdf: &Bsdf, wo: Vec3) -> f32 {
-        if self.two_sided && wo.z < 0.0 && !bsdf.is_transmissive() {
-            -1.0
-        } else {
-            1.0
+        mirror_side(self.two_sided, bsdf.is_transmissive(), wo.z)
+    }
+
+    /// The albedo of a plain Lambertian surface (no normal map, no blend, fully opaque) and
+    /// whether it is two-sided, which the path tracer shades for all its paths at once with
+    /// [`Lambert`]'s lane kernels (the same arithmetic as [`SurfaceBsdf::eval`], `pdf` and
+    /// `sample` of such a surface); `None` for every other surface.
+    #[inline(always)]
+    pub fn plain_lambert(&self) -> Option<(SampledSpectrum, bool)> {
+        match self.bsdf {
+            Bsdf::Lambert(l)
+                if self.normal.is_none() && self.blend.is_none() && self.opacity == 1.0 =>
+            {
+                Some((l.reflectance, self.two_sided))
+            }
+            _ => None,
         }
     }
 
@@ -344,6 +356,18 @@ impl SurfaceBsdf {
     #[inline(always)]
     pub fn has_smooth_lobe(&self) -> bool {
         self.bsdf.has_smooth_lobe() || self.blend.is_some_and(|(_, b)| b.has_smooth_lobe())
+    }
+}
+
+/// The side a two-sided surface is seen from: -1 (mirror the local frame's z) when it is
+/// two-sided, seen from behind (`wo_z < 0`) and not transmissive (transmissive models handle
+/// both sides themselves), else 1.
+#[inline(always)]
+pub fn mirror_side(two_sided: bool, transmissive: bool, wo_z: f32) -> f32 {
+    if two_sided && wo_z < 0.0 && !transmissive {
+        -1.0
+    } else {
+        1.0
     }
 }
 

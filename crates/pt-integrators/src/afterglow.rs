@@ -52,10 +52,10 @@
 //! light and emitter is off and each phosphorescent triangle emits its afterglow.
 
 use crate::path::{li, PathSettings};
+use pt_math::{offset_ray_origin, warp::square_to_cosine_hemisphere, Frame, Ray, Vec2, Vec3};
 use pt_render::sampler::Sampler;
 use pt_render::texture::{spectrum_for_role, Role};
 use pt_render::{BuildError, BvhKind, LightSelection, Scene};
-use pt_math::{offset_ray_origin, warp::square_to_cosine_hemisphere, Frame, Ray, Vec2, Vec3};
 use pt_scene::{
     AreaEmitterDesc, BsdfKind, Geometry, SceneDesc, SpectrumDesc, TextureDesc, TriangleMesh,
 };
@@ -307,5 +307,8 @@ fn one_triangle(a: &pt_scene::MeshAttribute, idx: &[u32; 3], t: usize) -> pt_sce
             .collect(),
         pt_scene::AttributeKind::Face => a.values[t * d..][..d].to_vec(),
     };
-    pt_scene::MeshAttribute { values, ..a.clone() }
+    pt_scene::MeshAttribute {
+        values,
+        ..a.clone()
+    }
 }

@@ -27,6 +27,7 @@
 pub mod afterglow;
 pub mod path;
 pub mod render;
+mod scatter;
 
 pub use path::{PathSettings, Strategy};
 pub use render::{render, render_passes, RenderSettings, RenderState};
@@ -198,12 +199,16 @@ impl Integrator {
         let bad = |m: String| Err(IntegratorError::Settings(m));
         if let Some(depth) = o.max_depth {
             if depth < -1 {
-                return bad(format!("--max-depth must be -1 (unlimited) or >= 0, got {depth}"));
+                return bad(format!(
+                    "--max-depth must be -1 (unlimited) or >= 0, got {depth}"
+                ));
             }
         }
         if let Some(c) = o.clamp {
             if !(c > 0.0 && c.is_finite()) {
-                return bad(format!("--clamp must be a positive finite radiance, got {c}"));
+                return bad(format!(
+                    "--clamp must be a positive finite radiance, got {c}"
+                ));
             }
         }
         let kind = o.kind.unwrap_or(d.kind);
@@ -223,12 +228,19 @@ impl Integrator {
         };
         if let Some(time) = o.afterglow {
             if kind == IntegratorKind::Radiosity {
-                return bad("--time (afterglow) is rendered by the path tracer, not radiosity".into());
+                return bad(
+                    "--time (afterglow) is rendered by the path tracer, not radiosity".into(),
+                );
             }
             if !(time >= 0.0 && time.is_finite()) {
-                return bad(format!("--time must be a non-negative number of seconds, got {time}"));
+                return bad(format!(
+                    "--time must be a non-negative number of seconds, got {time}"
+                ));
             }
-            return Ok(Integrator::Afterglow { time, path: path(d.max_depth) });
+            return Ok(Integrator::Afterglow {
+                time,
+                path: path(d.max_depth),
+            });
         }
         Ok(match kind {
             // A radiosity scene rendered by the path tracer keeps its max_depth.
@@ -258,7 +270,9 @@ impl Integrator {
     /// `run.resume`; radiosity runs to the end.
     pub fn render(&self, job: &Job, run: Run) -> Result<Rendered, IntegratorError> {
         match self {
-            Integrator::Path(p) | Integrator::Direct(p) => render_path(self.name(), p, job.desc, job, run),
+            Integrator::Path(p) | Integrator::Direct(p) => {
+                render_path(self.name(), p, job.desc, job, run)
+            }
             Integrator::Afterglow { time, path } => {
                 let start = Instant::now();
                 let dark = afterglow::afterglow(job.desc, *time, job.seed)?;
@@ -277,18 +291,33 @@ fn radiosity_params(scene: &RadiosityOptions, cli: &RadiosityOptions) -> Radiosi
     let d = RadiosityParams::default();
     RadiosityParams {
         patch_size: cli.patch_size.or(scene.patch_size).or(d.patch_size),
-        rays_per_patch: cli.rays_per_patch.or(scene.rays_per_patch).unwrap_or(d.rays_per_patch),
+        rays_per_patch: cli
+            .rays_per_patch
+            .or(scene.rays_per_patch)
+            .unwrap_or(d.rays_per_patch),
         tolerance: cli.tolerance.or(scene.tolerance).unwrap_or(d.tolerance),
-        max_iterations: cli.max_iterations.or(scene.max_iterations).unwrap_or(d.max_iterations),
+        max_iterations: cli
+            .max_iterations
+            .or(scene.max_iterations)
+            .unwrap_or(d.max_iterations),
         solver: cli.solver.or(scene.solver).unwrap_or(d.solver),
         display: cli.display.or(scene.display).unwrap_or(d.display),
-        reciprocity: cli.reciprocity.or(scene.reciprocity).unwrap_or(d.reciprocity),
+        reciprocity: cli
+            .reciprocity
+            .or(scene.reciprocity)
+            .unwrap_or(d.reciprocity),
         ..d
     }
 }
 
 /// The path tracer over the image in passes (see [`render_passes`]).
-fn render_path(name: &str, p: &PathTracer, desc: &SceneDesc, job: &Job, run: Run) -> Result<Rendered, IntegratorError> {
+fn render_path(
+    name: &str,
+    p: &PathTracer,
+    desc: &SceneDesc,
+    job: &Job,
+    run: Run,
+) -> Result<Rendered, IntegratorError> {
     let build_start = Instant::now();
     let scene = Scene::build_with_mode(desc, job.bvh, job.selection, job.mode)?;
     let build_time = build_start.elapsed();
@@ -312,8 +341,13 @@ fn render_path(name: &str, p: &PathTracer, desc: &SceneDesc, job: &Job, run: Run
         )));
     }
     let pixels = u64::from(settings.width) * u64::from(settings.height);
-    run.progress.start_samples(pixels * u64::from(settings.spp), pixels * u64::from(state.spp_done));
-    let complete = render_passes(&scene, &settings, &mut state, run.cancel, &|n| run.progress.samples(n));
+    run.progress.start_samples(
+        pixels * u64::from(settings.spp),
+        pixels * u64::from(state.spp_done),
+    );
+    let complete = render_passes(&scene, &settings, &mut state, run.cancel, &|n| {
+        run.progress.samples(n)
+    });
     let output = state.output();
     let secs = output.time.as_secs_f64();
     let summary = format!(
@@ -335,7 +369,10 @@ fn render_path(name: &str, p: &PathTracer, desc: &SceneDesc, job: &Job, run: Run
     let mut header = vec![
         ("integrator".to_string(), name.to_string()),
         ("max_depth".to_string(), p.settings.max_depth.to_string()),
-        ("strategy".to_string(), format!("{:?}", p.settings.strategy).to_lowercase()),
+        (
+            "strategy".to_string(),
+            format!("{:?}", p.settings.strategy).to_lowercase(),
+        ),
     ];
     if let Some(c) = p.clamp {
         header.push(("clamp".into(), c.to_string()));
@@ -353,17 +390,28 @@ fn render_path(name: &str, p: &PathTracer, desc: &SceneDesc, job: &Job, run: Run
 }
 
 /// Radiosity: meshing, form factors, solve, display (crate `pt-radiosity`).
-fn render_radiosity(params: &RadiosityParams, job: &Job, run: Run) -> Result<Rendered, IntegratorError> {
+fn render_radiosity(
+    params: &RadiosityParams,
+    job: &Job,
+    run: Run,
+) -> Result<Rendered, IntegratorError> {
     if run.resume.is_some() {
-        return Err(IntegratorError::Settings("--resume applies to the path tracer, not to radiosity".into()));
+        return Err(IntegratorError::Settings(
+            "--resume applies to the path tracer, not to radiosity".into(),
+        ));
     }
     if job.mode.is_some() || job.selection != LightSelection::Power || job.bvh != BvhKind::Auto {
         return Err(IntegratorError::Settings(
             "--mode, --light-selection and --bvh apply to the path tracer, not to radiosity".into(),
         ));
     }
-    let p = RadiosityParams { spp: job.spp, seed: job.seed, ..params.clone() };
-    let (output, stats) = pt_radiosity::render(job.desc, &p, &|stage, f| run.progress.stage(stage, f))?;
+    let p = RadiosityParams {
+        spp: job.spp,
+        seed: job.seed,
+        ..params.clone()
+    };
+    let (output, stats) =
+        pt_radiosity::render(job.desc, &p, &|stage, f| run.progress.stage(stage, f))?;
     let summary = format!(
         "radiosity: {} patches (size {:.4}), {} form factors ({:.1} MB), form factors {:.2} s, solve {:.2} s in {} iterations, total {:.2} s",
         stats.patches,

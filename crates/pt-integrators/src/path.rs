@@ -6,9 +6,8 @@
 //! unlimited); Russian roulette starts once `rr_depth` segments have been traced, continuing with
 //! probability min(max throughput, 0.95). Emitters are one-sided.
 
-use pt_math::{offset_ray_origin, power_heuristic, Frame, Ray, Vec3};
+use pt_math::{power_heuristic, Ray, Vec3};
 use pt_render::geometry::Interaction;
-use pt_render::light::LightSample;
 use pt_render::sampler::Sampler;
 use pt_render::Scene;
 use pt_spectrum::{ColorMode, SampledSpectrum, SampledWavelengths};
@@ -53,10 +52,6 @@ impl Default for PathSettings {
         }
     }
 }
-
-/// Shadow rays stop this fraction short of the light point, whose origin is already offset: a
-/// relative guard against rounding at the far end, not an absolute epsilon.
-const SHADOW_RAY_SHORTEN: f32 = 1.0 - 1e-5;
 
 /// Radiance arriving along `ray` (the camera ray), estimated with one path, at the path's
 /// wavelengths `lambda` (spectral mode; ignored in RGB mode, whose lanes are R, G, B).
@@ -107,27 +102,27 @@ pub struct PathStart {
 #[derive(Clone, Copy)]
 pub struct PathState {
     /// The next segment to trace (world space).
-    ray: Ray,
+    pub(crate) ray: Ray,
     /// The path's wavelengths (lanes may change at fluorescent vertices).
-    lambda: SampledWavelengths,
+    pub(crate) lambda: SampledWavelengths,
     /// Radiance gathered so far.
     pub radiance: SampledSpectrum,
     /// Product of the sample weights so far.
-    throughput: SampledSpectrum,
+    pub(crate) throughput: SampledSpectrum,
     /// The previous scattering event, for MIS on emitters hit by BSDF sampling.
-    prev_p: Vec3,
-    prev_pdf: f32,
-    prev_delta: bool,
+    pub(crate) prev_p: Vec3,
+    pub(crate) prev_pdf: f32,
+    pub(crate) prev_delta: bool,
     /// Segments traced so far.
-    depth: u32,
+    pub(crate) depth: u32,
     /// Product of the relative indices of refraction crossed so far: radiance carries 1/eta^2
     /// per refraction, which Russian roulette undoes when judging the path's worth (Mitsuba).
-    eta_scale: f32,
+    pub(crate) eta_scale: f32,
     /// Whether the path goes on (`ray` is its next segment).
-    alive: bool,
+    pub(crate) alive: bool,
     /// A light sample's shadow ray waiting for its visibility test, and what it adds to
     /// `radiance` if nothing blocks it.
-    shadow: Option<(Ray, SampledSpectrum)>,
+    pub(crate) shadow: Option<(Ray, SampledSpectrum)>,
 }
 
 impl PathState {
@@ -164,9 +159,10 @@ pub const MAX_PATHS: usize = 8;
 /// Up to [`MAX_PATHS`] paths are in flight, and a path that ends makes room for the next at
 /// once. The paths advance together, one segment at a time, in two passes over them: the
 /// shadow rays left by the previous scattering and the closest hits of the new segments, then
-/// the scattering at each hit (emission, light sample, BSDF sample, Russian roulette). The
-/// queries of one pass do not depend on each other, so the processor overlaps them, where one
-/// path alone is a chain of dependent steps. Each path draws its random
+/// the emission each new segment finds and the scattering at every hit, for all paths at once
+/// (light sample, BSDF sample, Russian roulette; `scatter.rs`). The queries of one pass do not
+/// depend on each other, so the processor overlaps them, where one path alone is a chain of
+/// dependent steps. Each path draws its random
 /// numbers and adds its terms in the same order as it would alone, so each result is
 /// bit-identical to tracing the path alone.
 #[inline(always)]
@@ -205,16 +201,15 @@ pub fn trace_paths(
         if !any {
             break;
         }
-        for (slot, hit) in slots.iter_mut().zip(&hits) {
-            let Some(PathStart { path, sampler, .. }) = slot else {
-                continue;
-            };
-            if !arrive(scene, s, path, hit) {
-                continue;
+        // Emission found by the new segments; the paths that go on scatter together.
+        let mut todo = [false; MAX_PATHS];
+        for ((slot, hit), t) in slots.iter_mut().zip(&hits).zip(todo.iter_mut()) {
+            if let Some(PathStart { path, .. }) = slot {
+                *t = arrive(scene, s, path, hit) && hit.is_some();
             }
-            if let Some(hit) = hit {
-                scatter_at(scene, s, path, hit, sampler);
-            }
+        }
+        if todo.iter().any(|&t| t) {
+            crate::scatter::scatter(scene, s, &mut slots, &hits, &todo);
         }
     }
 }
@@ -297,176 +292,6 @@ fn arrive(
         return false;
     }
     true
-}
-
-/// The scattering of a path at `hit` (after [`arrive`]): the light sample, whose shadow ray it
-/// leaves in `path.shadow`, the BSDF sample that makes the next segment, and Russian roulette.
-/// Ends the path (`alive = false`) where Mitsuba's `path` integrator stops.
-#[inline(always)]
-fn scatter_at(
-    scene: &Scene,
-    s: &PathSettings,
-    path: &mut PathState,
-    hit: &Interaction,
-    sampler: &mut Sampler,
-) {
-    let use_light = s.strategy != Strategy::Bsdf;
-    let PathState {
-        ray,
-        lambda,
-        throughput,
-        prev_p,
-        prev_pdf,
-        prev_delta,
-        depth,
-        eta_scale,
-        alive,
-        shadow,
-        ..
-    } = path;
-    let wo_world = -ray.dir;
-    let bsdf = scene.bsdf(hit, lambda);
-    // Fluorescence: the BSDF holds each lane's total albedo at its emitted wavelength; now
-    // some lanes move to an excitation wavelength, used by NEE and the rest of the path.
-    if scene.material(hit.shape).fluorescent().is_some() {
-        if let Some(l) = scene.fluoresce(hit.shape, lambda, sampler.next_1d()) {
-            *lambda = l;
-        }
-    }
-    let frame = Frame::from_normal_tangent(hit.ns, hit.dpdu);
-    let wo = frame.to_local(wo_world);
-
-    // Rays leave the hit offset to one side of the surface; the shadow ray and the next
-    // segment of a reflection leave on the side the path came from.
-    let spawn = SpawnPoint::new(hit, ray.dir);
-
-    // Next-event estimation: the light sample's contribution, added once its shadow ray is
-    // found unblocked.
-    if use_light && bsdf.has_smooth_lobe() {
-        if let Some((li_idx, pmf, u_sel)) = scene.sample_light(sampler.next_1d()) {
-            let u = sampler.next_2d();
-            let light = &scene.lights[li_idx];
-            if let Some(ls) = light.sample(hit.p, u_sel, u, lambda) {
-                let wi = frame.to_local(ls.wi);
-                let f = bsdf.eval(wo, wi);
-                if !ls.radiance.is_black() && !f.is_black() {
-                    if let Some(shadow_ray) = shadow_ray(spawn.origin(ls.wi), &ls) {
-                        let light_pdf = pmf * ls.pdf;
-                        // Delta lights cannot be hit by BSDF sampling: light sampling is the
-                        // only strategy, weight 1.
-                        let w = if s.strategy != Strategy::Light && !ls.delta {
-                            power_heuristic(light_pdf, bsdf.pdf(wo, wi))
-                        } else {
-                            1.0
-                        };
-                        *shadow = Some((
-                            shadow_ray,
-                            *throughput
-                                * f
-                                * ls.radiance
-                                * (wi.z.abs() * w / light_pdf),
-                        ));
-                    }
-                }
-            }
-        } else {
-            // Keep the random number sequence aligned whether or not there are lights.
-            let _ = sampler.next_2d();
-        }
-    }
-
-    // BSDF sampling.
-    let u_lobe = sampler.next_1d();
-    let Some(bs) = bsdf.sample(wo, u_lobe, sampler.next_2d()) else {
-        *alive = false;
-        return;
-    };
-    if bs.weight.is_black() {
-        *alive = false;
-        return;
-    }
-    *throughput *= bs.weight;
-    *eta_scale *= bs.eta;
-    let wi_world = frame.to_world(bs.wi);
-    *prev_p = hit.p;
-    *prev_pdf = bs.pdf;
-    *prev_delta = bs.delta;
-    *ray = Ray::new(spawn.origin(wi_world), wi_world);
-    *depth += 1;
-
-    // Russian roulette (Mitsuba: after rr_depth segments, keep with probability
-    // min(max(T) eta^2, 0.95)).
-    if *depth >= s.rr_depth {
-        let q = (throughput.max_value() * *eta_scale * *eta_scale).min(0.95);
-        if !(sampler.next_1d() < q) {
-            *alive = false;
-            return;
-        }
-        *throughput *= 1.0 / q;
-    }
-}
-
-/// Origins of rays leaving a hit: the hit point offset off its surface (Wächter & Binder 2019,
-/// see [`offset_ray_origin`]) to the side a ray's direction points to. The side the path
-/// arrived from is computed once, since the shadow ray and the next segment of a reflection
-/// both leave there.
-struct SpawnPoint {
-    /// Hit point, world space.
-    p: Vec3,
-    /// Unit geometric normal flipped to the side the path arrived from, world space.
-    n_out: Vec3,
-    /// `p` offset towards `n_out`.
-    out: Vec3,
-}
-
-impl SpawnPoint {
-    /// Spawn point of `hit`, reached by a ray travelling in direction `ray_dir` (world space).
-    #[inline(always)]
-    fn new(hit: &Interaction, ray_dir: Vec3) -> Self {
-        let n_out = hit.ng * -hit.ng.dot(ray_dir).signum();
-        SpawnPoint {
-            p: hit.p,
-            n_out,
-            out: offset_ray_origin(hit.p, n_out),
-        }
-    }
-
-    /// Origin for a ray leaving in direction `dir` (world space).
-    #[inline(always)]
-    fn origin(&self, dir: Vec3) -> Vec3 {
-        if self.n_out.dot(dir) >= 0.0 {
-            self.out
-        } else {
-            offset_ray_origin(self.p, -self.n_out)
-        }
-    }
-}
-
-/// The shadow ray from `origin` (the hit, offset off its surface towards the light) to the
-/// light sample, whose end is offset off its surface too (a light without a surface normal, or
-/// a distant one, needs no offset there); `None` when the two points coincide (nothing can be
-/// seen).
-#[inline(always)]
-fn shadow_ray(origin: Vec3, ls: &LightSample) -> Option<Ray> {
-    if ls.dist.is_infinite() {
-        return Some(Ray::new(origin, ls.wi));
-    }
-    let target = if ls.n == pt_math::Vec3::ZERO {
-        ls.p
-    } else {
-        offset_ray_origin(ls.p, ls.n * ls.n.dot(-ls.wi).signum())
-    };
-    let seg = target - origin;
-    let dist = seg.length();
-    if !(dist > 0.0) {
-        return None;
-    }
-    Some(Ray {
-        origin,
-        dir: seg / dist,
-        tmin: 0.0,
-        tmax: dist * SHADOW_RAY_SHORTEN,
-    })
 }
 
 /// Weight of emission that the traced ray found (an emitter hit or an escaped ray), given the

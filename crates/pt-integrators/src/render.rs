@@ -2,10 +2,10 @@
 //! sample; a render can be cancelled between passes and resumed from its saved sums.
 
 use crate::path::{trace_paths, PathSettings, PathStart, PathState};
+use pt_math::Vec2;
 use pt_render::film::{sample_filter, PixelStats};
 use pt_render::sampler::Sampler;
 use pt_render::{RenderOutput, Scene};
-use pt_math::Vec2;
 use pt_scene::FilterDesc;
 use pt_spectrum::{spectrum_to_srgb, ColorMode, SampledWavelengths};
 use rayon::prelude::*;

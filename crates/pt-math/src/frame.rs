@@ -1,5 +1,6 @@
 //! Orthonormal frames: world <-> local shading frame (z = normal).
 
+use crate::lanes::{Frames, V3};
 use glam::Vec3;
 
 /// An orthonormal basis `(s, t, n)`. `to_local` maps world directions into the frame, in which
@@ -17,28 +18,19 @@ pub struct Frame {
 impl Frame {
     /// A frame around the unit normal `n`, with tangents from Duff et al. 2017, "Building an
     /// Orthonormal Basis, Revisited" (JCGT 6(1), listing 3): branch-free and continuous except
-    /// at n.z = 0 sign flips, exact to rounding.
+    /// at n.z = 0 sign flips, exact to rounding. (One lane of [`Frames::from_normal`].)
+    #[inline(always)]
     pub fn from_normal(n: Vec3) -> Self {
-        let sign = 1.0f32.copysign(n.z);
-        let a = -1.0 / (sign + n.z);
-        let b = n.x * n.y * a;
-        let s = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
-        let t = Vec3::new(b, sign + n.y * n.y * a, -n.y);
-        Frame { s, t, n }
+        Frames::<1>::from_normal(&V3::splat(n)).get(0)
     }
 
     /// A frame around the unit normal `n` whose first tangent follows `tangent` projected onto
     /// the tangent plane (Gram-Schmidt), as Mitsuba builds its shading frame from `dp_du`. Falls
-    /// back to [`Frame::from_normal`] when `tangent` is zero or parallel to `n`.
+    /// back to [`Frame::from_normal`] when `tangent` is zero or parallel to `n`. (One lane of
+    /// [`Frames::from_normal_tangent`].)
+    #[inline(always)]
     pub fn from_normal_tangent(n: Vec3, tangent: Vec3) -> Self {
-        match (tangent - n * n.dot(tangent)).try_normalize() {
-            Some(s) => Frame {
-                s,
-                t: n.cross(s),
-                n,
-            },
-            None => Frame::from_normal(n),
-        }
+        Frames::<1>::from_normal_tangent(&V3::splat(n), &V3::splat(tangent)).get(0)
     }
 
     /// World direction -> local frame.

@@ -7,42 +7,52 @@ use glam::{Vec2, Vec3};
 use std::f32::consts::{FRAC_1_PI, FRAC_PI_4, PI};
 
 /// Concentric map from the square to the unit disk (Shirley & Chiu 1997, "A Low Distortion Map
-/// Between Disk and Square"), uniform in area. pdf = 1/pi per unit area.
+/// Between Disk and Square"), uniform in area. pdf = 1/pi per unit area. (One lane of
+/// [`square_to_disk_concentric_lanes`].)
 #[inline(always)]
 pub fn square_to_disk_concentric(u: Vec2) -> Vec2 {
-    let o = 2.0 * u - Vec2::ONE;
-    // Without branches (the wedge is a coin flip per sample, so a branch on it is mispredicted
-    // half the time): in the wedges |x| > |y|, r = x and the angle is q = pi/4 (y / x); in the
-    // others r = y and the angle is pi/2 - q with q = pi/4 (x / y), whose cosine and sine are
-    // q's sine and cosine. q lies in [-pi/4, pi/4], where short polynomials are exact to float
-    // precision (see `sin_cos_quarter`).
-    let x_wedge = o.x.abs() > o.y.abs();
-    let (r, num) = select(x_wedge, (o.x, o.y), (o.y, o.x));
-    // At the centre (0, 0), 0/0 is NaN, which `max` replaces by -1; r = 0 maps it to (0, 0).
-    let ratio = (num / r).max(-1.0);
-    let (s, c) = sin_cos_quarter(FRAC_PI_4 * ratio);
-    let (cos_t, sin_t) = select(x_wedge, (c, s), (s, c));
-    Vec2::new(r * cos_t, r * sin_t)
+    let (x, y) = square_to_disk_concentric_lanes(&[u.x], &[u.y]);
+    Vec2::new(x[0], y[0])
 }
 
-/// `a` if `c`, else `b`, for two values at once, as a select of SSE lanes: written as `if`, or
-/// even with bit masks on `f32`, the compiler turned it into a branch, mispredicted on every
-/// other sample where `c` is a coin flip.
+/// [`square_to_disk_concentric`] in every lane, without branches (the wedge is a coin flip
+/// per sample, so a branch on it would be mispredicted half the time): in the wedges
+/// |x| > |y|, r = x and the angle is q = pi/4 (y / x); in the others r = y and the angle is
+/// pi/2 - q with q = pi/4 (x / y), whose cosine and sine are q's sine and cosine. q lies in
+/// [-pi/4, pi/4], where short polynomials are exact to float precision (see
+/// `sin_cos_quarter`).
 #[inline(always)]
-fn select(c: bool, a: (f32, f32), b: (f32, f32)) -> (f32, f32) {
-    let v = glam::Vec4::select(
-        glam::BVec4A::splat(c),
-        glam::Vec4::new(a.0, a.1, 0.0, 0.0),
-        glam::Vec4::new(b.0, b.1, 0.0, 0.0),
-    );
-    (v.x, v.y)
+pub fn square_to_disk_concentric_lanes<const N: usize>(
+    ux: &[f32; N],
+    uy: &[f32; N],
+) -> ([f32; N], [f32; N]) {
+    let (mut x, mut y) = ([0.0; N], [0.0; N]);
+    for k in 0..N {
+        let (ox, oy) = (2.0 * ux[k] - 1.0, 2.0 * uy[k] - 1.0);
+        let x_wedge = ox.abs() > oy.abs();
+        let (r, num) = (select(x_wedge, ox, oy), select(x_wedge, oy, ox));
+        // At the centre (0, 0), 0/0 is NaN, which `max` replaces by -1; r = 0 maps it to (0, 0).
+        let ratio = (num / r).max(-1.0);
+        let (s, c) = sin_cos_quarter(FRAC_PI_4 * ratio);
+        let (cos_t, sin_t) = (select(x_wedge, c, s), select(x_wedge, s, c));
+        (x[k], y[k]) = (r * cos_t, r * sin_t);
+    }
+    (x, y)
+}
+
+/// `a` if `c`, else `b`, through integer masks, which compile to blends or conditional moves
+/// rather than a branch (a branch on a coin flip is mispredicted on every other sample).
+#[inline(always)]
+fn select(c: bool, a: f32, b: f32) -> f32 {
+    let m = (c as u32).wrapping_neg();
+    f32::from_bits((a.to_bits() & m) | (b.to_bits() & !m))
 }
 
 /// `(sin q, cos q)` for `|q| <= pi/4`, by the Taylor polynomials to degree 9 and 10 (Horner's
 /// scheme): the first omitted terms, q^11/11! and q^12/12! at q = pi/4, are 1.7e-9 and
 /// 1.0e-10, below half an ulp of the results (the largest error over the range is 0.76 ulp
 /// relative to the result, from rounding; see the test).
-#[inline]
+#[inline(always)]
 pub fn sin_cos_quarter(q: f32) -> (f32, f32) {
     let q2 = q * q;
     // 1/3!, 1/5!, 1/7!, 1/9! and 1/2!, 1/4!, 1/6!, 1/8!, 1/10!.
@@ -57,13 +67,23 @@ pub fn sin_cos_quarter(q: f32) -> (f32, f32) {
 }
 
 /// Cosine-weighted hemisphere around +z (Malley's method: lift the uniform disk sample).
-/// pdf = cos(theta) / pi, see [`cosine_hemisphere_pdf`]. Always inlined, so that it runs in
-/// the render loop's instruction-set variant.
+/// pdf = cos(theta) / pi, see [`cosine_hemisphere_pdf`]. (One lane of
+/// [`square_to_cosine_hemisphere_lanes`].)
 #[inline(always)]
 pub fn square_to_cosine_hemisphere(u: Vec2) -> Vec3 {
-    let d = square_to_disk_concentric(u);
-    let z = (1.0 - d.length_squared()).max(0.0).sqrt();
-    Vec3::new(d.x, d.y, z)
+    let v = square_to_cosine_hemisphere_lanes(&[u.x], &[u.y]);
+    Vec3::new(v.x[0], v.y[0], v.z[0])
+}
+
+/// [`square_to_cosine_hemisphere`] in every lane.
+#[inline(always)]
+pub fn square_to_cosine_hemisphere_lanes<const N: usize>(
+    ux: &[f32; N],
+    uy: &[f32; N],
+) -> crate::lanes::V3<N> {
+    let (x, y) = square_to_disk_concentric_lanes(ux, uy);
+    let z = crate::lanes::lanes(|k| (1.0 - (x[k] * x[k] + y[k] * y[k])).max(0.0).sqrt());
+    crate::lanes::V3 { x, y, z }
 }
 
 /// Solid-angle pdf of [`square_to_cosine_hemisphere`]: cos(theta)/pi above the horizon, else 0.

@@ -15,8 +15,8 @@ use crate::display::{self, DisplayInput, ImageSettings};
 use crate::patches::PatchMesh;
 use crate::{solve, RadiosityError, RadiosityParams, Simulation};
 use pt_render::camera::Camera;
-use pt_render::RenderOutput;
 use pt_render::texture::Role;
+use pt_render::RenderOutput;
 use pt_scene::{BsdfKind, SceneDesc};
 use pt_spectrum::{cie, xyz_to_srgb, Spectrum};
 
@@ -89,11 +89,13 @@ pub fn render(
             .get(shape.bsdf)
             .map_or([0.0; BINS], |b| bin_means(&reflectance(&b.kind)));
         let emit = shape.emitter.as_ref().map_or([0.0; BINS], |e| {
-            let s = e.radiance.as_constant().map_or(Spectrum::constant(0.0), |r| {
-                pt_render::texture::spectrum_for_role(r, Role::Emission)
-            });
-            bin_means(&s)
-                .map(|v| v * std::f32::consts::PI)
+            let s = e
+                .radiance
+                .as_constant()
+                .map_or(Spectrum::constant(0.0), |r| {
+                    pt_render::texture::spectrum_for_role(r, Role::Emission)
+                });
+            bin_means(&s).map(|v| v * std::f32::consts::PI)
         });
         shape_bins.push((refl, emit));
     }

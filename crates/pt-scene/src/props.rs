@@ -513,12 +513,14 @@ fn parse_spectrum_plugin(el: &Element) -> Result<SpectrumDesc> {
         let slot = match (plugin.as_str(), pname) {
             ("blackbody", "temperature") => &mut temperature,
             (p, "scale") if p != "blackbody" => &mut scale,
-            _ => return Err(SceneError::at(
-                &c.loc,
-                format!(
+            _ => {
+                return Err(SceneError::at(
+                    &c.loc,
+                    format!(
                     "unused property '{pname}': spectrum \"{plugin}\" does not have this parameter"
                 ),
-            )),
+                ))
+            }
         };
         if c.tag != "float" && c.tag != "integer" {
             return Err(SceneError::at(

@@ -2,6 +2,7 @@
 
 use super::LightSample;
 use crate::texture::{Texture, TexturePoint};
+use pt_math::lanes::V3;
 use pt_math::warp::{square_to_uniform_sphere, square_to_uniform_triangle, uniform_cone_pdf};
 use pt_math::{Distribution1D, Frame, Mat3, Vec2, Vec3};
 use pt_spectrum::{SampledSpectrum, SampledWavelengths};
@@ -116,7 +117,14 @@ impl AreaLight {
                 (p, n, t.uv[0] * b0 + t.uv[1] * b.x + t.uv[2] * b.y)
             }
             &LightShape::Parallelogram { v0, e1, e2, n, uv } => (
-                v0 + e1 * u.x + e2 * u.y,
+                parallelogram_points(
+                    &V3::<1>::splat(v0),
+                    &V3::splat(e1),
+                    &V3::splat(e2),
+                    &[u.x],
+                    &[u.y],
+                )
+                .get(0),
                 n,
                 uv[0] + uv[1] * u.x + uv[2] * u.y,
             ),
@@ -134,19 +142,16 @@ impl AreaLight {
                 )
             }
         };
-        let to = p - x;
-        let dist2 = to.length_squared();
-        let dist = dist2.sqrt();
-        if !(dist > 0.0) {
+        let s = to_solid_angle(
+            &V3::<1>::splat(x),
+            &V3::splat(p),
+            &V3::splat(n),
+            &[self.area],
+        );
+        if !s.ok[0] {
             return None;
         }
-        let wi = to / dist;
-        let cos_l = n.dot(-wi);
-        let pdf = dist2 / (cos_l.abs() * self.area);
-        if !pdf.is_finite() {
-            return None;
-        }
-        let radiance = if cos_l > 0.0 {
+        let radiance = if s.front[0] {
             self.radiance_at(uv, lambda)
         } else {
             SampledSpectrum::ZERO
@@ -154,12 +159,19 @@ impl AreaLight {
         Some(LightSample {
             p,
             n,
-            wi,
-            dist,
+            wi: s.wi.get(0),
+            dist: s.dist[0],
             radiance,
-            pdf,
+            pdf: s.pdf[0],
             delta: false,
         })
+    }
+
+    /// The emitted radiance at texture coordinates `uv`, at the path's wavelengths (for the
+    /// path tracer's lanes, which sample parallelogram lights together).
+    #[inline(always)]
+    pub fn radiance_at_uv(&self, uv: Vec2, lambda: &SampledWavelengths) -> SampledSpectrum {
+        self.radiance_at(uv, lambda)
     }
 
     /// Solid-angle pdf, from `x`, of having sampled the point `p` with normal `n` on this light
@@ -288,7 +300,6 @@ impl SphereCone {
     }
 }
 
-
 /// Mitsuba's sphere texture coordinates of a unit vector `d` from the centre (world space):
 /// in the sphere's object frame, u = azimuth about z / 2 pi in [0, 1), v = polar angle from +z / pi.
 #[inline]
@@ -299,4 +310,68 @@ pub fn sphere_uv(frame: Mat3, d: Vec3) -> Vec2 {
         u += 1.0;
     }
     Vec2::new(u, local.z.clamp(-1.0, 1.0).acos() / PI)
+}
+
+/// Points of parallelograms, `v0 + e1 u + e2 v` per lane (uniform by area for uniform `u`,
+/// `v`; pdf 1 / area).
+#[inline(always)]
+pub fn parallelogram_points<const N: usize>(
+    v0: &V3<N>,
+    e1: &V3<N>,
+    e2: &V3<N>,
+    u: &[f32; N],
+    v: &[f32; N],
+) -> V3<N> {
+    let c = |o: &[f32; N], a: &[f32; N], b: &[f32; N]| -> [f32; N] {
+        pt_math::lanes::lanes(|k| o[k] + a[k] * u[k] + b[k] * v[k])
+    };
+    V3 {
+        x: c(&v0.x, &e1.x, &e2.x),
+        y: c(&v0.y, &e1.y, &e2.y),
+        z: c(&v0.z, &e1.z, &e2.z),
+    }
+}
+
+/// Points sampled uniformly by area on lights, seen from the reference points `x`: the unit
+/// directions towards them, their distances, and the solid-angle pdfs
+/// `pdf_area |x - p|^2 / |cos theta_p|` (pbrt-v4 eq. 4.15; Veach 1997 eq. 8.10).
+pub struct SolidAngle<const N: usize> {
+    /// Unit directions from `x` towards the points.
+    pub wi: V3<N>,
+    /// Distances.
+    pub dist: [f32; N],
+    /// Solid-angle pdfs.
+    pub pdf: [f32; N],
+    /// Whether `x` sees the light's front side (`cos theta_p > 0`).
+    pub front: [bool; N],
+    /// Whether the sample exists: a positive distance and a finite pdf (not coinciding with
+    /// `x`, not exactly edge-on).
+    pub ok: [bool; N],
+}
+
+/// [`SolidAngle`] of points `p` with normals `n` on lights of areas `area`, from points `x`.
+#[inline(always)]
+pub fn to_solid_angle<const N: usize>(
+    x: &V3<N>,
+    p: &V3<N>,
+    n: &V3<N>,
+    area: &[f32; N],
+) -> SolidAngle<N> {
+    let to = p.sub(x);
+    let dist2 = to.dot(&to);
+    let dist: [f32; N] = pt_math::lanes::lanes(|k| dist2[k].sqrt());
+    let wi = V3 {
+        x: pt_math::lanes::lanes(|k| to.x[k] / dist[k]),
+        y: pt_math::lanes::lanes(|k| to.y[k] / dist[k]),
+        z: pt_math::lanes::lanes(|k| to.z[k] / dist[k]),
+    };
+    let cos_l = n.dot(&wi.neg());
+    let pdf: [f32; N] = pt_math::lanes::lanes(|k| dist2[k] / (cos_l[k].abs() * area[k]));
+    SolidAngle {
+        wi,
+        dist,
+        pdf,
+        front: pt_math::lanes::lanes(|k| cos_l[k] > 0.0),
+        ok: pt_math::lanes::lanes(|k| dist[k] > 0.0 && pdf[k].is_finite()),
+    }
 }

@@ -10,14 +10,25 @@ use pt_spectrum::ColorMode;
 /// A light that is not attached to a shape, in the scene's colour mode (spectral mode: RGB
 /// emission upsampled and multiplied by D65; environment maps upsampled per texel).
 pub fn build_light(l: &LightDesc, mode: ColorMode) -> Result<Light, BuildError> {
-    let err = |m: String| BuildError { loc: l.loc.clone(), message: m };
+    let err = |m: String| BuildError {
+        loc: l.loc.clone(),
+        message: m,
+    };
     let emission = |s| constant_spectrum(s, Role::Emission, mode);
     Ok(match &l.kind {
-        LightKind::Point { position, intensity } => Light::Point {
+        LightKind::Point {
+            position,
+            intensity,
+        } => Light::Point {
             position: *position,
             intensity: emission(intensity),
         },
-        LightKind::Spot { to_world, intensity, cutoff_deg, beam_width_deg } => {
+        LightKind::Spot {
+            to_world,
+            intensity,
+            cutoff_deg,
+            beam_width_deg,
+        } => {
             let axis = to_world
                 .transform_vector3(Vec3::Z)
                 .try_normalize()
@@ -34,11 +45,18 @@ pub fn build_light(l: &LightDesc, mode: ColorMode) -> Result<Light, BuildError> 
                 },
             }
         }
-        LightKind::Directional { direction, irradiance } => Light::Directional {
+        LightKind::Directional {
+            direction,
+            irradiance,
+        } => Light::Directional {
             to_light: -*direction,
             irradiance: emission(irradiance),
         },
-        LightKind::Sun { direction, irradiance, angular_diameter_deg } => {
+        LightKind::Sun {
+            direction,
+            irradiance,
+            angular_diameter_deg,
+        } => {
             let alpha = 0.5 * angular_diameter_deg.to_radians();
             let half = (0.5 * alpha).sin();
             let one_minus_cos = 2.0 * half * half; // 1 - cos(alpha) without cancellation
@@ -50,10 +68,21 @@ pub fn build_light(l: &LightDesc, mode: ColorMode) -> Result<Light, BuildError> 
                 one_minus_cos,
             }
         }
-        LightKind::Constant { radiance } => Light::Constant { radiance: emission(radiance) },
-        LightKind::EnvMap { filename, to_world, scale } => {
-            let (img, _) = pt_image::read_exr(filename).map_err(|e| err(format!("environment map: {e}")))?;
-            if img.data.iter().any(|p| p.iter().any(|c| !c.is_finite() || *c < 0.0)) {
+        LightKind::Constant { radiance } => Light::Constant {
+            radiance: emission(radiance),
+        },
+        LightKind::EnvMap {
+            filename,
+            to_world,
+            scale,
+        } => {
+            let (img, _) =
+                pt_image::read_exr(filename).map_err(|e| err(format!("environment map: {e}")))?;
+            if img
+                .data
+                .iter()
+                .any(|p| p.iter().any(|c| !c.is_finite() || *c < 0.0))
+            {
                 return Err(err(format!(
                     "environment map '{}' has negative or non-finite pixels",
                     filename.display()

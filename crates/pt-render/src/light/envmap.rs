@@ -199,4 +199,3 @@ impl EnvMap {
         (acc / wsum.max(1e-30)) as f32
     }
 }
-

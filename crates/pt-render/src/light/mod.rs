@@ -18,7 +18,10 @@ mod envmap;
 #[cfg(test)]
 mod tests;
 
-pub use area::{sphere_uv, AreaLight, LightShape, LightTriangle};
+pub use area::{
+    parallelogram_points, sphere_uv, to_solid_angle, AreaLight, LightShape, LightTriangle,
+    SolidAngle,
+};
 pub use build::build_light;
 pub use envmap::EnvMap;
 
@@ -49,7 +52,6 @@ pub struct LightSample {
     /// Whether the light is a delta light (point, spot, directional): no MIS, never hit.
     pub delta: bool,
 }
-
 
 /// Spot light falloff: 1 inside `beam_width`, 0 beyond `cutoff`, linear in angle between
 /// (Mitsuba 3 `spot`).
@@ -321,4 +323,3 @@ impl Light {
         }
     }
 }
-

@@ -96,8 +96,8 @@ fn spectral_envmap_sampling_is_consistent_with_its_pdf() {
         for i in 0..2 * m {
             let u = (i as f32 + 0.5) / (2 * m) as f32;
             let (dir, sin_t) = e.uv_to_dir(Vec2::new(u, v));
-            quad += (e.radiance(dir, &lambda).0.x * 2.0 * PI * PI * sin_t) as f64
-                / (2 * m * m) as f64;
+            quad +=
+                (e.radiance(dir, &lambda).0.x * 2.0 * PI * PI * sin_t) as f64 / (2 * m * m) as f64;
         }
     }
     assert!(

@@ -7,18 +7,26 @@ use crate::scene::BuildError;
 use crate::texture::{Role, Texture, TextureBuilder};
 use pt_bsdf::{CoatingTable, Distribution, Microfacet, OrenNayarVariant, SurfaceBsdf};
 use pt_scene::{
-    BsdfDesc, BsdfKind, FilmBaseDesc, MicrofacetDesc, MicrofacetDistribution, OrenNayarVariant as OnDesc,
-    SourceLoc, TextureDesc,
+    BsdfDesc, BsdfKind, FilmBaseDesc, MicrofacetDesc, MicrofacetDistribution,
+    OrenNayarVariant as OnDesc, SourceLoc, TextureDesc,
 };
 use pt_spectrum::{ColorMode, SampledWavelengths};
 
 /// Builds the material of a BSDF description (textures decoded and upsampled once, through
 /// `textures`, which shares images between materials).
-pub fn build_material(desc: &BsdfDesc, textures: &mut TextureBuilder) -> Result<SurfaceMaterial, BuildError> {
+pub fn build_material(
+    desc: &BsdfDesc,
+    textures: &mut TextureBuilder,
+) -> Result<SurfaceMaterial, BuildError> {
     let mode = textures.mode();
-    let mut b = Builder { textures, loc: &desc.loc };
+    let mut b = Builder {
+        textures,
+        loc: &desc.loc,
+    };
     let mut surface = SurfaceMaterial {
-        material: Material::Fixed(pt_bsdf::Bsdf::Lambert(pt_bsdf::Lambert::new(pt_spectrum::SampledSpectrum::ZERO))),
+        material: Material::Fixed(pt_bsdf::Bsdf::Lambert(pt_bsdf::Lambert::new(
+            pt_spectrum::SampledSpectrum::ZERO,
+        ))),
         blend: None,
         two_sided: false,
         opacity: None,
@@ -38,7 +46,10 @@ fn fixed(s: &SurfaceMaterial) -> Option<SurfaceBsdf> {
     }
     let constant = |m: &Material| matches!(m, Material::Fixed(_));
     let opacity_fixed = s.opacity.as_ref().is_none_or(|o| o.texture.is_constant());
-    let blend_fixed = s.blend.as_ref().is_none_or(|(w, m)| w.is_constant() && constant(m));
+    let blend_fixed = s
+        .blend
+        .as_ref()
+        .is_none_or(|(w, m)| w.is_constant() && constant(m));
     if !(constant(&s.material) && opacity_fixed && blend_fixed) {
         return None;
     }
@@ -56,7 +67,10 @@ struct Builder<'a> {
 
 impl Builder<'_> {
     fn err(&self, message: impl Into<String>) -> BuildError {
-        BuildError { loc: self.loc.clone(), message: message.into() }
+        BuildError {
+            loc: self.loc.clone(),
+            message: message.into(),
+        }
     }
 
     /// A parameter's texture for a role, errors located at the BSDF.
@@ -70,36 +84,70 @@ impl Builder<'_> {
     /// The wrappers of `desc` into `s`, then its model.
     fn wrappers(&mut self, desc: &BsdfDesc, s: &mut SurfaceMaterial) -> Result<(), BuildError> {
         let loc = &desc.loc;
-        let mut b = Builder { textures: self.textures, loc };
+        let mut b = Builder {
+            textures: self.textures,
+            loc,
+        };
         match &desc.kind {
             BsdfKind::TwoSided { inner } => {
                 s.two_sided = true;
                 b.wrappers(inner, s)
             }
-            BsdfKind::Mask { opacity, cutoff, inner } => {
+            BsdfKind::Mask {
+                opacity,
+                cutoff,
+                inner,
+            } => {
                 if s.opacity.is_some() {
                     return Err(b.err("nested masks are not yet supported (not yet implemented)"));
                 }
-                s.opacity = Some(Opacity { texture: b.tex("opacity", opacity, Role::Scalar)?, cutoff: *cutoff });
+                s.opacity = Some(Opacity {
+                    texture: b.tex("opacity", opacity, Role::Scalar)?,
+                    cutoff: *cutoff,
+                });
                 b.wrappers(inner, s)
             }
-            BsdfKind::NormalMap { texture, scale, gltf, inner } => {
+            BsdfKind::NormalMap {
+                texture,
+                scale,
+                gltf,
+                inner,
+            } => {
                 if s.normal_map.is_some() {
                     return Err(b.err("nested normal maps are not supported (not yet implemented)"));
                 }
                 let texture = b.tex("normalmap", texture, Role::Data)?;
-                s.normal_map = Some(NormalMap { texture, scale: *scale, gltf: *gltf });
+                s.normal_map = Some(NormalMap {
+                    texture,
+                    scale: *scale,
+                    gltf: *gltf,
+                });
                 b.wrappers(inner, s)
             }
-            BsdfKind::Blend { weight, first, second } => {
+            BsdfKind::Blend {
+                weight,
+                first,
+                second,
+            } => {
                 let (a, a_two) = b.plain(first)?;
                 let (c, c_two) = b.plain(second)?;
                 // `two_sided` never mirrors a transmissive model, so it may differ there.
                 let transmissive = |d: &BsdfDesc| {
                     matches!(
                         plain_model(d).kind,
-                        BsdfKind::Dielectric { .. } | BsdfKind::RoughDielectric { .. } | BsdfKind::ThinDielectric { .. }
-                    ) || matches!(&plain_model(d).kind, BsdfKind::ThinFilm { base: FilmBaseDesc::Dielectric { .. }, .. } | BsdfKind::RoughThinFilm { base: FilmBaseDesc::Dielectric { .. }, .. })
+                        BsdfKind::Dielectric { .. }
+                            | BsdfKind::RoughDielectric { .. }
+                            | BsdfKind::ThinDielectric { .. }
+                    ) || matches!(
+                        &plain_model(d).kind,
+                        BsdfKind::ThinFilm {
+                            base: FilmBaseDesc::Dielectric { .. },
+                            ..
+                        } | BsdfKind::RoughThinFilm {
+                            base: FilmBaseDesc::Dielectric { .. },
+                            ..
+                        }
+                    )
                 };
                 if a_two != c_two && !transmissive(first) && !transmissive(second) {
                     return Err(b.err("blendbsdf of a one-sided and a two-sided BSDF is not yet supported (not yet implemented): put twosided around the blendbsdf"));
@@ -125,7 +173,10 @@ impl Builder<'_> {
     /// A BSDF inside a blend: a model, possibly two-sided (blends of masks, normal maps or
     /// blends are not supported).
     fn plain(&mut self, d: &BsdfDesc) -> Result<(Material, bool), BuildError> {
-        let mut b = Builder { textures: self.textures, loc: &d.loc };
+        let mut b = Builder {
+            textures: self.textures,
+            loc: &d.loc,
+        };
         match &d.kind {
             BsdfKind::TwoSided { inner } => Ok((b.plain(inner)?.0, true)),
             BsdfKind::Mask { .. } | BsdfKind::NormalMap { .. } | BsdfKind::Blend { .. } => Err(b.err(
@@ -143,13 +194,21 @@ impl Builder<'_> {
         })
     }
 
-    fn film(&mut self, thickness: &TextureDesc, film_ior: f32, ext_ior: f32, base: &FilmBaseDesc) -> Result<Film, BuildError> {
+    fn film(
+        &mut self,
+        thickness: &TextureDesc,
+        film_ior: f32,
+        ext_ior: f32,
+        base: &FilmBaseDesc,
+    ) -> Result<Film, BuildError> {
         Ok(Film {
             thickness: self.tex("thickness", thickness, Role::Scalar)?,
             film_ior,
             ext_ior,
             base: match base {
-                FilmBaseDesc::Dielectric { int_ior } => FilmBaseMaterial::Dielectric { ior: *int_ior },
+                FilmBaseDesc::Dielectric { int_ior } => {
+                    FilmBaseMaterial::Dielectric { ior: *int_ior }
+                }
                 FilmBaseDesc::Conductor { eta, k } => FilmBaseMaterial::Conductor {
                     eta: self.tex("eta", eta, Role::Unbounded)?,
                     k: self.tex("k", k, Role::Unbounded)?,
@@ -167,28 +226,50 @@ impl Builder<'_> {
     fn model_textured(&mut self, d: &BsdfDesc) -> Result<Material, BuildError> {
         let mode = self.textures.mode();
         Ok(match &d.kind {
-            BsdfKind::Diffuse { reflectance } => {
-                Material::Diffuse { reflectance: self.tex("reflectance", reflectance, Role::Albedo)? }
-            }
+            BsdfKind::Diffuse { reflectance } => Material::Diffuse {
+                reflectance: self.tex("reflectance", reflectance, Role::Albedo)?,
+            },
             // Lights on: the elastic part (the afterglow is rendered by `phosphorescence`).
             BsdfKind::Phosphorescent { reflectance, .. } => Material::Diffuse {
-                reflectance: self.tex("reflectance", &TextureDesc::Constant(reflectance.clone()), Role::Albedo)?,
+                reflectance: self.tex(
+                    "reflectance",
+                    &TextureDesc::Constant(reflectance.clone()),
+                    Role::Albedo,
+                )?,
             },
             // Spectral mode: a Lambertian of the total albedo with re-emission; RGB mode cannot
             // move light between wavelengths and keeps the elastic part only.
-            BsdfKind::Fluorescent { reflectance, absorption, emission, quantum_yield } => match mode {
+            BsdfKind::Fluorescent {
+                reflectance,
+                absorption,
+                emission,
+                quantum_yield,
+            } => match mode {
                 ColorMode::Spectral => {
                     use crate::texture::spectrum_for_role as sp;
                     Material::Fluorescent(Box::new(
-                        Fluorescent::new(sp(reflectance, Role::Albedo), &sp(absorption, Role::Albedo), &sp(emission, Role::Unbounded), *quantum_yield)
-                            .map_err(|m| self.err(m))?,
+                        Fluorescent::new(
+                            sp(reflectance, Role::Albedo),
+                            &sp(absorption, Role::Albedo),
+                            &sp(emission, Role::Unbounded),
+                            *quantum_yield,
+                        )
+                        .map_err(|m| self.err(m))?,
                     ))
                 }
                 ColorMode::Rgb => Material::Diffuse {
-                    reflectance: self.tex("reflectance", &TextureDesc::Constant(reflectance.clone()), Role::Albedo)?,
+                    reflectance: self.tex(
+                        "reflectance",
+                        &TextureDesc::Constant(reflectance.clone()),
+                        Role::Albedo,
+                    )?,
                 },
             },
-            BsdfKind::OrenNayar { reflectance, sigma, variant } => Material::OrenNayar {
+            BsdfKind::OrenNayar {
+                reflectance,
+                sigma,
+                variant,
+            } => Material::OrenNayar {
                 reflectance: self.tex("reflectance", reflectance, Role::Albedo)?,
                 sigma: self.tex("sigma", sigma, Role::Scalar)?,
                 variant: match variant {
@@ -202,43 +283,116 @@ impl Builder<'_> {
                 reflectance: self.tex("reflectance", reflectance, Role::Albedo)?,
                 k: self.tex("k", k, Role::Scalar)?,
             },
-            BsdfKind::Dielectric { int_ior, ext_ior, specular_reflectance, specular_transmittance } => Material::Dielectric {
+            BsdfKind::Dielectric {
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+            } => Material::Dielectric {
                 eta: int_ior / ext_ior,
-                specular_reflectance: self.tex("specular_reflectance", specular_reflectance, Role::Albedo)?,
-                specular_transmittance: self.tex("specular_transmittance", specular_transmittance, Role::Albedo)?,
+                specular_reflectance: self.tex(
+                    "specular_reflectance",
+                    specular_reflectance,
+                    Role::Albedo,
+                )?,
+                specular_transmittance: self.tex(
+                    "specular_transmittance",
+                    specular_transmittance,
+                    Role::Albedo,
+                )?,
             },
-            BsdfKind::ThinDielectric { int_ior, ext_ior, specular_reflectance, specular_transmittance } => Material::ThinDielectric {
+            BsdfKind::ThinDielectric {
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+            } => Material::ThinDielectric {
                 eta: int_ior / ext_ior,
-                specular_reflectance: self.tex("specular_reflectance", specular_reflectance, Role::Albedo)?,
-                specular_transmittance: self.tex("specular_transmittance", specular_transmittance, Role::Albedo)?,
+                specular_reflectance: self.tex(
+                    "specular_reflectance",
+                    specular_reflectance,
+                    Role::Albedo,
+                )?,
+                specular_transmittance: self.tex(
+                    "specular_transmittance",
+                    specular_transmittance,
+                    Role::Albedo,
+                )?,
             },
-            BsdfKind::RoughDielectric { int_ior, ext_ior, microfacet, specular_reflectance, specular_transmittance } => Material::RoughDielectric {
+            BsdfKind::RoughDielectric {
+                int_ior,
+                ext_ior,
+                microfacet,
+                specular_reflectance,
+                specular_transmittance,
+            } => Material::RoughDielectric {
                 eta: int_ior / ext_ior,
                 roughness: self.roughness(microfacet)?,
-                specular_reflectance: self.tex("specular_reflectance", specular_reflectance, Role::Albedo)?,
-                specular_transmittance: self.tex("specular_transmittance", specular_transmittance, Role::Albedo)?,
+                specular_reflectance: self.tex(
+                    "specular_reflectance",
+                    specular_reflectance,
+                    Role::Albedo,
+                )?,
+                specular_transmittance: self.tex(
+                    "specular_transmittance",
+                    specular_transmittance,
+                    Role::Albedo,
+                )?,
             },
-            BsdfKind::Conductor { eta, k, specular_reflectance } => Material::Conductor {
+            BsdfKind::Conductor {
+                eta,
+                k,
+                specular_reflectance,
+            } => Material::Conductor {
                 eta: self.tex("eta", eta, Role::Unbounded)?,
                 k: self.tex("k", k, Role::Unbounded)?,
-                specular_reflectance: self.tex("specular_reflectance", specular_reflectance, Role::Albedo)?,
+                specular_reflectance: self.tex(
+                    "specular_reflectance",
+                    specular_reflectance,
+                    Role::Albedo,
+                )?,
             },
-            BsdfKind::RoughConductor { eta, k, specular_reflectance, microfacet } => Material::RoughConductor {
+            BsdfKind::RoughConductor {
+                eta,
+                k,
+                specular_reflectance,
+                microfacet,
+            } => Material::RoughConductor {
                 eta: self.tex("eta", eta, Role::Unbounded)?,
                 k: self.tex("k", k, Role::Unbounded)?,
-                specular_reflectance: self.tex("specular_reflectance", specular_reflectance, Role::Albedo)?,
+                specular_reflectance: self.tex(
+                    "specular_reflectance",
+                    specular_reflectance,
+                    Role::Albedo,
+                )?,
                 roughness: self.roughness(microfacet)?,
             },
-            BsdfKind::RoughPlastic { diffuse_reflectance, specular_reflectance, int_ior, ext_ior, distribution: dist, alpha, nonlinear } => {
+            BsdfKind::RoughPlastic {
+                diffuse_reflectance,
+                specular_reflectance,
+                int_ior,
+                ext_ior,
+                distribution: dist,
+                alpha,
+                nonlinear,
+            } => {
                 let eta = int_ior / ext_ior;
                 let mf = Microfacet::new(distribution(*dist), *alpha, *alpha);
                 let rho = self.tex("diffuse_reflectance", diffuse_reflectance, Role::Albedo)?;
-                let ks = self.tex("specular_reflectance", specular_reflectance, Role::Unbounded)?;
+                let ks = self.tex(
+                    "specular_reflectance",
+                    specular_reflectance,
+                    Role::Unbounded,
+                )?;
                 // Mitsuba: the share of specular samples from the textures' means (RGB means, the
                 // same for every path; it changes the variance, not the expectation).
                 let mean = |t: &Texture| t.mean_rgb().iter().sum::<f32>() / 3.0;
                 let (d_mean, s_mean) = (mean(&rho), mean(&ks));
-                let weight = if d_mean + s_mean > 0.0 { s_mean / (d_mean + s_mean) } else { 0.5 };
+                let weight = if d_mean + s_mean > 0.0 {
+                    s_mean / (d_mean + s_mean)
+                } else {
+                    0.5
+                };
                 Material::RoughPlastic {
                     diffuse_reflectance: rho,
                     specular_reflectance: ks,
@@ -249,20 +403,37 @@ impl Builder<'_> {
                     table: CoatingTable::get(mf.dist, mf.alpha_u, eta),
                 }
             }
-            BsdfKind::ThinFilm { thickness, film_ior, ext_ior, base } => {
-                Material::ThinFilm(Box::new(self.film(thickness, *film_ior, *ext_ior, base)?))
-            }
-            BsdfKind::RoughThinFilm { thickness, film_ior, ext_ior, base, microfacet } => {
+            BsdfKind::ThinFilm {
+                thickness,
+                film_ior,
+                ext_ior,
+                base,
+            } => Material::ThinFilm(Box::new(self.film(thickness, *film_ior, *ext_ior, base)?)),
+            BsdfKind::RoughThinFilm {
+                thickness,
+                film_ior,
+                ext_ior,
+                base,
+                microfacet,
+            } => {
                 let film = self.film(thickness, *film_ior, *ext_ior, base)?;
                 Material::RoughThinFilm(Box::new((film, self.roughness(microfacet)?)))
             }
-            BsdfKind::GltfPbr { base_color, metallic, roughness, ior } => Material::GltfPbr {
+            BsdfKind::GltfPbr {
+                base_color,
+                metallic,
+                roughness,
+                ior,
+            } => Material::GltfPbr {
                 base_color: self.tex("base_color", base_color, Role::Albedo)?,
                 metallic: self.tex("metallic", metallic, Role::Scalar)?,
                 roughness: self.tex("roughness", roughness, Role::Scalar)?,
                 ior: *ior,
             },
-            BsdfKind::TwoSided { .. } | BsdfKind::Mask { .. } | BsdfKind::NormalMap { .. } | BsdfKind::Blend { .. } => {
+            BsdfKind::TwoSided { .. }
+            | BsdfKind::Mask { .. }
+            | BsdfKind::NormalMap { .. }
+            | BsdfKind::Blend { .. } => {
                 return Err(self.err("internal: a wrapper where a model was expected"))
             }
         })

@@ -38,7 +38,11 @@ impl Roughness {
     /// The microfacet distribution at a point.
     #[inline]
     fn at(&self, at: &TexturePoint) -> Microfacet {
-        Microfacet::new(self.distribution, self.alpha_u.eval_1(at), self.alpha_v.eval_1(at))
+        Microfacet::new(
+            self.distribution,
+            self.alpha_u.eval_1(at),
+            self.alpha_v.eval_1(at),
+        )
     }
 }
 
@@ -86,7 +90,9 @@ impl Film {
         };
         let d = self.thickness.eval_1(at).max(0.0);
         match mode {
-            ColorMode::Spectral => ThinFilm::spectral(d, self.film_ior, self.ext_ior, base, lambda.lambda()),
+            ColorMode::Spectral => {
+                ThinFilm::spectral(d, self.film_ior, self.ext_ior, base, lambda.lambda())
+            }
             ColorMode::Rgb => ThinFilm::rgb(d, self.film_ior, self.ext_ior, base),
         }
     }
@@ -210,7 +216,9 @@ impl Material {
     pub fn bsdf(&self, at: &TexturePoint, lambda: &SampledWavelengths, mode: ColorMode) -> Bsdf {
         match self {
             Material::Fixed(b) => *b,
-            Material::Diffuse { reflectance } => Bsdf::Lambert(Lambert::new(reflectance.eval(at, lambda))),
+            Material::Diffuse { reflectance } => {
+                Bsdf::Lambert(Lambert::new(reflectance.eval(at, lambda)))
+            }
             Material::OrenNayar {
                 reflectance,
                 sigma,
@@ -379,7 +387,12 @@ pub struct SurfaceMaterial {
 impl SurfaceMaterial {
     /// The surface's BSDF at a hit, at the path's wavelengths, by value.
     #[inline(always)]
-    pub fn bsdf(&self, hit: &Interaction, at: &TexturePoint, lambda: &SampledWavelengths) -> SurfaceBsdf {
+    pub fn bsdf(
+        &self,
+        hit: &Interaction,
+        at: &TexturePoint,
+        lambda: &SampledWavelengths,
+    ) -> SurfaceBsdf {
         if let Some(b) = self.fixed {
             return b;
         }
@@ -478,7 +491,13 @@ impl Material {
                 k,
                 specular_reflectance,
                 roughness,
-            } => vec![eta, k, specular_reflectance, &roughness.alpha_u, &roughness.alpha_v],
+            } => vec![
+                eta,
+                k,
+                specular_reflectance,
+                &roughness.alpha_u,
+                &roughness.alpha_v,
+            ],
             Material::RoughPlastic {
                 diffuse_reflectance,
                 specular_reflectance,

@@ -21,7 +21,11 @@ impl Scene {
     /// Builds the BVH and lights in the colour mode the scene needs (spectral when it has
     /// wavelength-dependent inputs, see [`SceneDesc::spectral_reason`]). `selection` chooses how
     /// NEE picks lights.
-    pub fn build(desc: &SceneDesc, bvh: BvhKind, selection: LightSelection) -> Result<Scene, BuildError> {
+    pub fn build(
+        desc: &SceneDesc,
+        bvh: BvhKind,
+        selection: LightSelection,
+    ) -> Result<Scene, BuildError> {
         Scene::build_with_mode(desc, bvh, selection, None)
     }
 
@@ -67,7 +71,9 @@ impl Scene {
                 attributes: Vec::new(),
                 frame: None,
             };
-            let light_shape = geometry(shape, si as u32, &mut prims, &mut refs, &mut stats, &mut data)?;
+            let light_shape = geometry(
+                shape, si as u32, &mut prims, &mut refs, &mut stats, &mut data,
+            )?;
             if let Some(m) = &shape.interior {
                 let sigma = constant_spectrum(&m.sigma_t, Role::Unbounded, ColorMode::Rgb);
                 let rgb = sigma.at(&pt_spectrum::SampledWavelengths::sample_visible(0.5));
@@ -115,16 +121,20 @@ impl Scene {
             if let Geometry::Mesh(mesh) = &shape.geometry {
                 let material = &materials[data.material as usize];
                 let light = data.light.map(|i| &lights[i as usize]);
-                shading_data(data, mesh, material, light, &textures, mode).map_err(|message| BuildError {
-                    loc: desc.shapes[si].loc.clone(),
-                    message,
+                shading_data(data, mesh, material, light, &textures, mode).map_err(|message| {
+                    BuildError {
+                        loc: desc.shapes[si].loc.clone(),
+                        message,
+                    }
                 })?;
             }
         }
         for l in &desc.lights {
             lights.push(build_light(l, mode)?);
         }
-        let infinite_lights = (0..lights.len()).filter(|&i| lights[i].is_infinite()).collect();
+        let infinite_lights = (0..lights.len())
+            .filter(|&i| lights[i].is_infinite())
+            .collect();
         let weights: Vec<f32> = match selection {
             LightSelection::Power => lights.iter().map(|l| l.power(bounds.1)).collect(),
             LightSelection::Uniform => vec![1.0; lights.len()],
@@ -160,7 +170,15 @@ fn geometry(
 ) -> Result<Option<(LightShape, f32)>, BuildError> {
     Ok(match &shape.geometry {
         Geometry::Mesh(mesh) => {
-            let tris = add_mesh(mesh, si, shape.emitter.is_some(), prims, refs, stats, &shape.loc)?;
+            let tris = add_mesh(
+                mesh,
+                si,
+                shape.emitter.is_some(),
+                prims,
+                refs,
+                stats,
+                &shape.loc,
+            )?;
             if let Some(ts) = &mesh.tangents {
                 if ts.len() != mesh.positions.len() {
                     return Err(BuildError {
@@ -262,7 +280,11 @@ fn shading_data(
     }
     // Indices serve only to interpolate normals, uvs, tangents and attributes: without them,
     // no copy.
-    if data.normals.is_some() || data.uvs.is_some() || data.tangents.is_some() || !data.attributes.is_empty() {
+    if data.normals.is_some()
+        || data.uvs.is_some()
+        || data.tangents.is_some()
+        || !data.attributes.is_empty()
+    {
         data.indices = mesh.indices.clone();
     }
     Ok(())
@@ -271,12 +293,24 @@ fn shading_data(
 /// An area emitter's radiance texture in the scene's mode. With display primaries (pt
 /// extension), RGB mode shows the image's colours through the display's matrix
 /// ([`DisplayPrimaries::to_srgb_matrix`]), and spectral mode drives the primaries with it.
-fn emission_texture(em: &AreaEmitterDesc, textures: &mut TextureBuilder) -> Result<Texture, BuildError> {
-    let err = |message: String| BuildError { loc: em.loc.clone(), message };
+fn emission_texture(
+    em: &AreaEmitterDesc,
+    textures: &mut TextureBuilder,
+) -> Result<Texture, BuildError> {
+    let err = |message: String| BuildError {
+        loc: em.loc.clone(),
+        message,
+    };
     let Some(p) = &em.primaries else {
-        let t = textures.build(&em.radiance, Role::Emission).map_err(|m| err(format!("radiance: {m}")))?;
+        let t = textures
+            .build(&em.radiance, Role::Emission)
+            .map_err(|m| err(format!("radiance: {m}")))?;
         // (RGB projections of spectra may leave the gamut: check the values as given.)
-        let negative = em.radiance.spectra().into_iter().any(|s| s.values().iter().any(|x| !(x.is_finite() && *x >= 0.0)));
+        let negative = em
+            .radiance
+            .spectra()
+            .into_iter()
+            .any(|s| s.values().iter().any(|x| !(x.is_finite() && *x >= 0.0)));
         if negative {
             return Err(err("radiance must be finite and non-negative".into()));
         }
@@ -287,7 +321,8 @@ fn emission_texture(em: &AreaEmitterDesc, textures: &mut TextureBuilder) -> Resu
     };
     let image = textures.rgb_bitmap(b).map_err(err)?;
     let spectra = [0, 1, 2].map(|i| spectrum_for_role(&p[i], Role::Unbounded));
-    let display = DisplayPrimaries::new(spectra).map_err(|m| err(format!("display primaries: {m}")))?;
+    let display =
+        DisplayPrimaries::new(spectra).map_err(|m| err(format!("display primaries: {m}")))?;
     Ok(match textures.mode() {
         ColorMode::Spectral => Texture::Primaries(Arc::new((image, display))),
         // The colours the display shows, in linear sRGB: exact for the film by linearity;

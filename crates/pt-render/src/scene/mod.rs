@@ -95,7 +95,12 @@ impl Scene {
     /// Closest hit along `ray`, with its surface data.
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray) -> Option<Interaction> {
-        let AccelHit { index: id, t, b1, b2 } = self.accel.intersect(ray)?;
+        let AccelHit {
+            index: id,
+            t,
+            b1,
+            b2,
+        } = self.accel.intersect(ray)?;
         let r = self.prim_refs[id];
         let shape = &self.shapes[r.shape as usize];
         match self.accel.prims[id] {
@@ -118,8 +123,11 @@ impl Scene {
                 };
                 let (uv, dpdu) = match &shape.uvs {
                     Some(uv) => {
-                        let (t0, t1, t2) =
-                            (uv[idx[0] as usize], uv[idx[1] as usize], uv[idx[2] as usize]);
+                        let (t0, t1, t2) = (
+                            uv[idx[0] as usize],
+                            uv[idx[1] as usize],
+                            uv[idx[2] as usize],
+                        );
                         // dp/du from the uv differentials (pbrt-v4 eq. 6.7): solve
                         // [e1 e2] = [dpdu dpdv] [du1 du2; dv1 dv2].
                         let (d1, d2) = (t1 - t0, t2 - t0);
@@ -138,11 +146,17 @@ impl Scene {
                 };
                 let tangent = match &shape.tangents {
                     Some(ts) => {
-                        let (a, b, c) = (ts[idx[0] as usize], ts[idx[1] as usize], ts[idx[2] as usize]);
+                        let (a, b, c) = (
+                            ts[idx[0] as usize],
+                            ts[idx[1] as usize],
+                            ts[idx[2] as usize],
+                        );
                         // Handedness is constant over a triangle in well-formed data; take vertex 0's.
-                        (a * b0 + b * b1 + c * b2)
-                            .truncate()
-                            .extend(if a.w < 0.0 { -1.0 } else { 1.0 })
+                        (a * b0 + b * b1 + c * b2).truncate().extend(if a.w < 0.0 {
+                            -1.0
+                        } else {
+                            1.0
+                        })
                     }
                     None => pt_math::Vec4::ZERO,
                 };
@@ -159,7 +173,11 @@ impl Scene {
                     b: Vec2::new(b1, b2),
                 })
             }
-            Primitive::Sphere { center, radius, flip } => {
+            Primitive::Sphere {
+                center,
+                radius,
+                flip,
+            } => {
                 let c = Vec3::from(center);
                 let local = (ray.at(t) - c).normalize();
                 // Re-project onto the surface: removes the error of o + t d (pbrt-v4 6.8.5).
@@ -228,25 +246,43 @@ impl Scene {
     /// The BSDF at a hit, at the path's wavelengths ([`SurfaceMaterial::bsdf`]).
     #[inline(always)]
     pub fn bsdf(&self, hit: &Interaction, lambda: &SampledWavelengths) -> SurfaceBsdf {
-        self.material(hit.shape).bsdf(hit, &self.texture_point(hit), lambda)
+        self.material(hit.shape)
+            .bsdf(hit, &self.texture_point(hit), lambda)
     }
 
     /// At a fluorescent hit, the wavelengths at which each lane continues (some lanes move to
     /// an excitation wavelength, see `fluorescence.rs`); `None` for other materials. `u` is
     /// uniform.
     #[inline]
-    pub fn fluoresce(&self, shape: u32, lambda: &SampledWavelengths, u: f32) -> Option<SampledWavelengths> {
-        self.material(shape).fluorescent().map(|f| f.scatter(lambda, u))
+    pub fn fluoresce(
+        &self,
+        shape: u32,
+        lambda: &SampledWavelengths,
+        u: f32,
+    ) -> Option<SampledWavelengths> {
+        self.material(shape)
+            .fluorescent()
+            .map(|f| f.scatter(lambda, u))
     }
 
     /// Transmittance exp(-sigma_t d) of the interior medium of `shape` over `distance` scene
     /// units, at the path's wavelengths (spectral mode) or per RGB channel; `None` if it has no
     /// medium.
     #[inline]
-    pub fn interior_transmittance(&self, shape: u32, distance: f32, lambda: &SampledWavelengths) -> Option<SampledSpectrum> {
+    pub fn interior_transmittance(
+        &self,
+        shape: u32,
+        distance: f32,
+        lambda: &SampledWavelengths,
+    ) -> Option<SampledSpectrum> {
         let sigma = self.media[self.shapes[shape as usize].interior? as usize].at(lambda);
         let e = sigma.0 * -distance;
-        Some(SampledSpectrum(pt_math::Vec4::new(e.x.exp(), e.y.exp(), e.z.exp(), e.w.exp())))
+        Some(SampledSpectrum(pt_math::Vec4::new(
+            e.x.exp(),
+            e.y.exp(),
+            e.z.exp(),
+            e.w.exp(),
+        )))
     }
 
     /// The light attached to a shape, if it emits: `(light index, light)`.

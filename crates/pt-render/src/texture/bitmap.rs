@@ -185,7 +185,12 @@ impl Lookup {
         let (fx, fy) = (x - x0, y - y0);
         let (xi, yi) = (x0 as i64, y0 as i64);
         Footprint {
-            texels: [at(xi, yi), at(xi + 1, yi), at(xi, yi + 1), at(xi + 1, yi + 1)],
+            texels: [
+                at(xi, yi),
+                at(xi + 1, yi),
+                at(xi, yi + 1),
+                at(xi + 1, yi + 1),
+            ],
             weights: [
                 (1.0 - fx) * (1.0 - fy),
                 fx * (1.0 - fy),
@@ -275,7 +280,9 @@ mod tests {
     #[test]
     fn wrap_modes_follow_mitsuba() {
         // Mitsuba's mirror for n = 4, i = -5..8: 3,3,2,1,0 | 0,1,2,3 | 3,2,1,0 | 0.
-        let mirror: Vec<usize> = (-5..9).map(|i| wrap_index(i, 4, WrapMode::Mirror)).collect();
+        let mirror: Vec<usize> = (-5..9)
+            .map(|i| wrap_index(i, 4, WrapMode::Mirror))
+            .collect();
         assert_eq!(mirror, [3, 3, 2, 1, 0, 0, 1, 2, 3, 3, 2, 1, 0, 0]);
         let clamp: Vec<usize> = (-2..6).map(|i| wrap_index(i, 4, WrapMode::Clamp)).collect();
         assert_eq!(clamp, [0, 0, 0, 1, 2, 3, 3, 3]);
@@ -294,7 +301,11 @@ mod tests {
 
     #[test]
     fn nearest_takes_the_texel_the_point_falls_in_and_to_uv_applies_first() {
-        let mut b = strip(&[0.1, 0.2, 0.3, 0.4], BitmapFilter::Nearest, WrapMode::Repeat);
+        let mut b = strip(
+            &[0.1, 0.2, 0.3, 0.4],
+            BitmapFilter::Nearest,
+            WrapMode::Repeat,
+        );
         assert_eq!(b.eval(Vec2::new(0.49, 0.5))[0], 0.2);
         assert_eq!(b.eval(Vec2::new(0.5, 0.5))[0], 0.3);
         // to_uv scales u by 2: u = 0.3 reads at 0.6.

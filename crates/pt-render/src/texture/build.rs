@@ -4,9 +4,7 @@
 use super::bitmap::{Bitmap, Image, Lookup};
 use super::spectral::{SpectralBitmap, Upsampling};
 use super::{Attribute, Checkerboard, ConstantSpectrum, Texture};
-use pt_scene::{
-    BitmapDesc, ImageSource, MeshAttribute, SpectrumDesc, TextureChannel, TextureDesc,
-};
+use pt_scene::{BitmapDesc, ImageSource, MeshAttribute, SpectrumDesc, TextureChannel, TextureDesc};
 use pt_spectrum::{xyz_to_srgb, ColorMode, NamedIlluminant, SampledSpectrum, Spectrum};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -61,7 +59,11 @@ impl AttributeSlots {
                         .chunks_exact(3)
                         .map(|c| [c[0], c[1], c[2]])
                         .collect();
-                    super::spectral::upsample_texels(&rgb, rgb.len().max(1), Upsampling::Reflectance)
+                    super::spectral::upsample_texels(
+                        &rgb,
+                        rgb.len().max(1),
+                        Upsampling::Reflectance,
+                    )
                 });
                 Some(Attribute {
                     kind: a.kind,
@@ -167,20 +169,35 @@ impl TextureBuilder {
         self.build_with(desc, role, &Affine::IDENTITY)
     }
 
-    fn build_with(&mut self, desc: &TextureDesc, role: Role, affine: &Affine) -> Result<Texture, String> {
+    fn build_with(
+        &mut self,
+        desc: &TextureDesc,
+        role: Role,
+        affine: &Affine,
+    ) -> Result<Texture, String> {
         match desc {
             TextureDesc::Constant(s) => self.constant(s, role, affine),
             TextureDesc::RawConstant(r) => {
-                if !r.scalar && self.mode == ColorMode::Spectral && role != Role::Scalar && role != Role::Data {
+                if !r.scalar
+                    && self.mode == ColorMode::Spectral
+                    && role != Role::Scalar
+                    && role != Role::Data
+                {
                     return Err("a three-valued rawconstant has no meaning in spectral mode (Mitsuba refuses it too): give one number".into());
                 }
                 let v = affine.apply(r.value, 1.0);
                 Ok(Texture::Constant {
                     value: match (self.mode, r.scalar || v[0] == v[1] && v[1] == v[2]) {
-                        (ColorMode::Spectral, _) => ConstantSpectrum::Spectrum(Spectrum::Constant(v[0])),
+                        (ColorMode::Spectral, _) => {
+                            ConstantSpectrum::Spectrum(Spectrum::Constant(v[0]))
+                        }
                         (ColorMode::Rgb, _) => ConstantSpectrum::Rgb(SampledSpectrum::from_rgb(v)),
                     },
-                    scalar: if r.scalar { v[0] } else { (v[0] + v[1] + v[2]) / 3.0 },
+                    scalar: if r.scalar {
+                        v[0]
+                    } else {
+                        (v[0] + v[1] + v[2]) / 3.0
+                    },
                 })
             }
             TextureDesc::Bitmap(b) => self.bitmap(b, role, affine),
@@ -193,9 +210,13 @@ impl TextureBuilder {
             }))),
             TextureDesc::MeshAttribute(m) => {
                 if role == Role::Emission {
-                    return Err("a mesh_attribute emitter is not yet supported (not yet implemented)".into());
+                    return Err(
+                        "a mesh_attribute emitter is not yet supported (not yet implemented)"
+                            .into(),
+                    );
                 }
-                let uniform = affine.scale[0] == affine.scale[1] && affine.scale[1] == affine.scale[2];
+                let uniform =
+                    affine.scale[0] == affine.scale[1] && affine.scale[1] == affine.scale[2];
                 if affine.channel.is_some() || affine.offset != 0.0 || !uniform {
                     return Err("a channel or offset of a mesh attribute is not supported".into());
                 }
@@ -223,7 +244,12 @@ impl TextureBuilder {
             match s {
                 SpectrumDesc::Constant(v) => SpectrumDesc::Rgb(affine.apply([*v; 3], 1.0)),
                 SpectrumDesc::Rgb(c) => SpectrumDesc::Rgb(affine.apply(*c, 1.0)),
-                _ => return Err(format!("a scaled {} spectrum is not supported", s.form_name())),
+                _ => {
+                    return Err(format!(
+                        "a scaled {} spectrum is not supported",
+                        s.form_name()
+                    ))
+                }
             }
         };
         let rgb = rgb_of(&s);
@@ -257,7 +283,12 @@ impl TextureBuilder {
 
     /// A bitmap texture: the image's texels (one channel, scaled, where glTF asks), looked up
     /// as the description says, upsampled for the role in spectral mode.
-    fn bitmap(&mut self, b: &Arc<BitmapDesc>, role: Role, affine: &Affine) -> Result<Texture, String> {
+    fn bitmap(
+        &mut self,
+        b: &Arc<BitmapDesc>,
+        role: Role,
+        affine: &Affine,
+    ) -> Result<Texture, String> {
         let affine_bits = [
             affine.channel.map_or(u32::MAX, |c| c as u32),
             affine.scale[0].to_bits(),
@@ -271,7 +302,10 @@ impl TextureBuilder {
         }
         let image = self.image(&b.source, b.raw)?;
         if image.texels.iter().any(|t| t.iter().any(|c| *c < 0.0)) && role != Role::Data {
-            return Err(format!("image {} has negative values", b.source.short_name()));
+            return Err(format!(
+                "image {} has negative values",
+                b.source.short_name()
+            ));
         }
         let texels = if affine.is_identity() {
             image.texels.clone()
@@ -347,12 +381,16 @@ pub fn rgb_of(s: &SpectrumDesc) -> [f32; 3] {
 /// emission c is D65 scaled to luminance c (Mitsuba's convention for emitters).
 pub fn spectrum_for_role(s: &SpectrumDesc, role: Role) -> Spectrum {
     match (s, role) {
-        (SpectrumDesc::Constant(v), Role::Emission) => Spectrum::illuminant(NamedIlluminant::D65, *v),
+        (SpectrumDesc::Constant(v), Role::Emission) => {
+            Spectrum::illuminant(NamedIlluminant::D65, *v)
+        }
         (SpectrumDesc::Constant(v), _) => Spectrum::constant(*v),
         (SpectrumDesc::Rgb(c), Role::Albedo) => Spectrum::rgb_albedo(*c),
         (SpectrumDesc::Rgb(c), Role::Emission) => Spectrum::rgb_illuminant(*c),
         (SpectrumDesc::Rgb(c), _) => Spectrum::rgb_unbounded(*c),
-        (SpectrumDesc::Tabulated(p), _) => Spectrum::tabulated(p).unwrap_or(Spectrum::constant(0.0)),
+        (SpectrumDesc::Tabulated(p), _) => {
+            Spectrum::tabulated(p).unwrap_or(Spectrum::constant(0.0))
+        }
         (SpectrumDesc::Blackbody { temperature }, _) => {
             Spectrum::blackbody(*temperature).unwrap_or(Spectrum::constant(0.0))
         }

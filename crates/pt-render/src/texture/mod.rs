@@ -21,7 +21,9 @@ mod build;
 pub mod spectral;
 
 pub use bitmap::{Bitmap, Image, Lookup};
-pub use build::{constant_spectrum, rgb_of, spectrum_for_role, AttributeSlots, Role, TextureBuilder};
+pub use build::{
+    constant_spectrum, rgb_of, spectrum_for_role, AttributeSlots, Role, TextureBuilder,
+};
 pub use spectral::{DisplayPrimaries, SpectralBitmap};
 
 use pt_math::Vec2;
@@ -92,8 +94,15 @@ impl Attribute {
     fn rgb(&self, at: &TexturePoint) -> [f32; 3] {
         let (idx, w) = self.footprint(at);
         let d = self.dims as usize;
-        let get = |e: usize, c: usize| self.values.get(e * d + c.min(d - 1)).copied().unwrap_or(0.0);
-        std::array::from_fn(|c| get(idx[0], c) * w[0] + get(idx[1], c) * w[1] + get(idx[2], c) * w[2])
+        let get = |e: usize, c: usize| {
+            self.values
+                .get(e * d + c.min(d - 1))
+                .copied()
+                .unwrap_or(0.0)
+        };
+        std::array::from_fn(|c| {
+            get(idx[0], c) * w[0] + get(idx[1], c) * w[1] + get(idx[2], c) * w[2]
+        })
     }
 
     /// The value at the path's wavelengths: spectra interpolated (spectral mode, colours) or
@@ -215,6 +224,17 @@ impl Texture {
     /// values in spectral mode.
     #[inline(always)]
     pub fn eval(&self, at: &TexturePoint, lambda: &SampledWavelengths) -> SampledSpectrum {
+        // Constants inline (the common case); the rest through a call, since the recursive
+        // variants cannot inline.
+        match self {
+            Texture::Constant { value, .. } => value.at(lambda),
+            _ => self.eval_varying(at, lambda),
+        }
+    }
+
+    /// [`Texture::eval`] of a texture that is not a constant.
+    #[inline(never)]
+    fn eval_varying(&self, at: &TexturePoint, lambda: &SampledWavelengths) -> SampledSpectrum {
         match self {
             Texture::Constant { value, .. } => value.at(lambda),
             Texture::Bitmap(b) => SampledSpectrum::from_rgb(b.eval(at.uv)),

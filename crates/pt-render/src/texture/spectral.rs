@@ -334,7 +334,9 @@ mod tests {
         }
         img.save(&path).unwrap();
         let lambda = SampledWavelengths::sample_visible(0.3);
-        let image = super::super::bitmap::Image::load(&pt_scene::ImageSource::File(path.clone()), false).unwrap();
+        let image =
+            super::super::bitmap::Image::load(&pt_scene::ImageSource::File(path.clone()), false)
+                .unwrap();
         for (filter, wrap) in [
             (pt_scene::BitmapFilter::Bilinear, pt_scene::WrapMode::Repeat),
             (pt_scene::BitmapFilter::Nearest, pt_scene::WrapMode::Mirror),

@@ -73,7 +73,11 @@ impl<'e> Builder<'e> {
                 let opacity = self.texture_param(&v, &nested, "opacity")?;
                 let opacity = scalar_in(&v, "opacity", opacity, 0.5, 0.0..=1.0)?;
                 let inner = Box::new(self.inner_bsdfs(&v, &nested, 1, 1)?.remove(0));
-                BsdfKind::Mask { opacity, cutoff: None, inner }
+                BsdfKind::Mask {
+                    opacity,
+                    cutoff: None,
+                    inner,
+                }
             }
             "blendbsdf" => {
                 let weight = self.texture_param(&v, &nested, "weight")?;
@@ -81,7 +85,11 @@ impl<'e> Builder<'e> {
                 let mut two = self.inner_bsdfs(&v, &nested, 2, 2)?;
                 let second = Box::new(two.pop().expect("two"));
                 let first = Box::new(two.pop().expect("two"));
-                BsdfKind::Blend { weight, first, second }
+                BsdfKind::Blend {
+                    weight,
+                    first,
+                    second,
+                }
             }
             "normalmap" => {
                 let texture = self.texture_param(&v, &nested, "normalmap")?;
@@ -95,7 +103,12 @@ impl<'e> Builder<'e> {
                     }
                 };
                 let inner = Box::new(self.inner_bsdfs(&v, &nested, 1, 1)?.remove(0));
-                BsdfKind::NormalMap { texture, scale: 1.0, gltf: false, inner }
+                BsdfKind::NormalMap {
+                    texture,
+                    scale: 1.0,
+                    gltf: false,
+                    inner,
+                }
             }
             _ => {
                 nested.no_others(&v)?;
@@ -136,10 +149,18 @@ impl<'e> Builder<'e> {
             inner.push(self.bsdf_desc(target)?);
         }
         if inner.len() < min {
-            let n = if min == 1 { "one nested BSDF".to_string() } else { format!("{min} nested BSDFs") };
+            let n = if min == 1 {
+                "one nested BSDF".to_string()
+            } else {
+                format!("{min} nested BSDFs")
+            };
             return Err(SceneError::at(
                 &v.el.loc,
-                format!("{} needs {n} (<bsdf> or <ref>), got {}", v.what(), inner.len()),
+                format!(
+                    "{} needs {n} (<bsdf> or <ref>), got {}",
+                    v.what(),
+                    inner.len()
+                ),
             ));
         }
         Ok(inner)
@@ -158,12 +179,19 @@ pub(super) fn scalar_in(
     let t = t.unwrap_or(TextureDesc::constant(default));
     for s in t.spectra() {
         if s.is_spectral() {
-            return Err(v.prop_error(name, format!("{name} is a number, not a spectrum ({})", s.form_name())));
+            return Err(v.prop_error(
+                name,
+                format!("{name} is a number, not a spectrum ({})", s.form_name()),
+            ));
         }
         if let Some(x) = s.values().into_iter().find(|x| !range.contains(x)) {
             return Err(v.prop_error(
                 name,
-                format!("{name} must be in [{}, {}], got {x}", range.start(), range.end()),
+                format!(
+                    "{name} must be in [{}, {}], got {x}",
+                    range.start(),
+                    range.end()
+                ),
             ));
         }
     }

@@ -172,9 +172,13 @@ impl<'e> Builder<'e> {
         let radiance = match texture {
             Some(t) => t,
             None => {
-                let s = v.spectrum("radiance")?.unwrap_or(SpectrumDesc::Constant(1.0));
+                let s = v
+                    .spectrum("radiance")?
+                    .unwrap_or(SpectrumDesc::Constant(1.0));
                 if s.values().iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
-                    return Err(v.prop_error("radiance", "radiance must be finite and non-negative"));
+                    return Err(
+                        v.prop_error("radiance", "radiance must be finite and non-negative")
+                    );
                 }
                 TextureDesc::Constant(s)
             }

@@ -220,7 +220,11 @@ impl<'e> Builder<'e> {
             let name = if v.has("alpha") { "alpha" } else { name };
             positive_scalar(v, name, a, "roughness")?;
         }
-        Ok(MicrofacetDesc { distribution, alpha_u, alpha_v })
+        Ok(MicrofacetDesc {
+            distribution,
+            alpha_u,
+            alpha_v,
+        })
     }
 
     /// Complex index of a conductor: `material` (a name, default "none": a perfect mirror) or
@@ -231,7 +235,10 @@ impl<'e> Builder<'e> {
         n: &Nested<'e>,
     ) -> Result<(TextureDesc, TextureDesc)> {
         let material = v.string("material")?;
-        let (eta, k) = (self.texture_param(v, n, "eta")?, self.texture_param(v, n, "k")?);
+        let (eta, k) = (
+            self.texture_param(v, n, "eta")?,
+            self.texture_param(v, n, "k")?,
+        );
         match (material, eta, k) {
             (Some(_), Some(_), _) | (Some(_), _, Some(_)) => {
                 Err(v.prop_error("material", "give either material or eta and k"))
@@ -263,7 +270,9 @@ impl<'e> Builder<'e> {
 
     /// An albedo-like parameter (default 0.5): a texture, or a constant in [0, 1].
     fn albedo(&mut self, v: &ObjectView<'e>, n: &Nested<'e>, name: &str) -> Result<TextureDesc> {
-        let t = self.texture_param(v, n, name)?.unwrap_or(TextureDesc::constant(0.5));
+        let t = self
+            .texture_param(v, n, name)?
+            .unwrap_or(TextureDesc::constant(0.5));
         for s in t.spectra() {
             check_albedo(v, name, s)?;
         }
@@ -272,10 +281,14 @@ impl<'e> Builder<'e> {
 
     /// A non-negative factor (`specular_reflectance`, `specular_transmittance`; default 1).
     fn factor(&mut self, v: &ObjectView<'e>, n: &Nested<'e>, name: &str) -> Result<TextureDesc> {
-        let t = self.texture_param(v, n, name)?.unwrap_or(TextureDesc::constant(1.0));
+        let t = self
+            .texture_param(v, n, name)?
+            .unwrap_or(TextureDesc::constant(1.0));
         for s in t.spectra() {
             if s.is_emission_only() || s.values().iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
-                return Err(v.prop_error(name, format!("{name} must be finite and >= 0, got {s:?}")));
+                return Err(
+                    v.prop_error(name, format!("{name} must be finite and >= 0, got {s:?}"))
+                );
             }
         }
         Ok(t)
@@ -298,10 +311,15 @@ impl<'e> Builder<'e> {
     /// `thinfilm` and `roughthinfilm`: `thickness` (nm, 500), `film_ior` (1.33), `ext_ior` (1),
     /// and `int_ior` (a dielectric base) or `material` / `eta` + `k` (a conductor base).
     fn thin_film(&mut self, v: &ObjectView<'e>, n: &Nested<'e>) -> Result<BsdfKind> {
-        let thickness = self.texture_param(v, n, "thickness")?.unwrap_or(TextureDesc::constant(500.0));
+        let thickness = self
+            .texture_param(v, n, "thickness")?
+            .unwrap_or(TextureDesc::constant(500.0));
         for s in thickness.spectra() {
             if s.is_spectral() || s.values().iter().any(|x| !(*x >= 0.0)) {
-                return Err(v.prop_error("thickness", format!("thickness (nm) must be >= 0, got {s:?}")));
+                return Err(v.prop_error(
+                    "thickness",
+                    format!("thickness (nm) must be >= 0, got {s:?}"),
+                ));
             }
         }
         let film_ior = ior(v, "film_ior", 1.33)?;
@@ -314,16 +332,29 @@ impl<'e> Builder<'e> {
             ));
         }
         let base = if dielectric {
-            FilmBaseDesc::Dielectric { int_ior: ior(v, "int_ior", 1.5)? }
+            FilmBaseDesc::Dielectric {
+                int_ior: ior(v, "int_ior", 1.5)?,
+            }
         } else {
             let (eta, k) = self.conductor_ior(v, n)?;
             FilmBaseDesc::Conductor { eta, k }
         };
         Ok(if v.plugin == "roughthinfilm" {
             let microfacet = self.microfacet(v, n)?;
-            BsdfKind::RoughThinFilm { thickness, film_ior, ext_ior, base, microfacet }
+            BsdfKind::RoughThinFilm {
+                thickness,
+                film_ior,
+                ext_ior,
+                base,
+                microfacet,
+            }
         } else {
-            BsdfKind::ThinFilm { thickness, film_ior, ext_ior, base }
+            BsdfKind::ThinFilm {
+                thickness,
+                film_ior,
+                ext_ior,
+                base,
+            }
         })
     }
 }
@@ -349,7 +380,10 @@ fn check_albedo(v: &ObjectView<'_>, name: &str, s: &SpectrumDesc) -> Result<()> 
 fn positive_scalar(v: &ObjectView<'_>, name: &str, t: &TextureDesc, what: &str) -> Result<()> {
     for s in t.spectra() {
         if s.is_spectral() {
-            return Err(v.prop_error(name, format!("{name} is a number, not a spectrum ({})", s.form_name())));
+            return Err(v.prop_error(
+                name,
+                format!("{name} is a number, not a spectrum ({})", s.form_name()),
+            ));
         }
         if let Some(x) = s.values().into_iter().find(|x| !(*x > 0.0)) {
             return Err(v.prop_error(name, format!("{what} must be positive, got {x}")));
@@ -405,7 +439,9 @@ pub(super) fn bsdf_kind<'e>(
         // Not range-checked, as Mitsuba's `uniform` is not: radiosity rejects albedos above 1
         // itself, and a path tracer renders them (gaining energy).
         "diffuse" => BsdfKind::Diffuse {
-            reflectance: b.texture_param(v, n, "reflectance")?.unwrap_or(TextureDesc::constant(0.5)),
+            reflectance: b
+                .texture_param(v, n, "reflectance")?
+                .unwrap_or(TextureDesc::constant(0.5)),
         },
         "orennayar" => {
             let sigma = b.texture_param(v, n, "sigma")?;
@@ -428,23 +464,45 @@ pub(super) fn bsdf_kind<'e>(
                     ))
                 }
             };
-            BsdfKind::OrenNayar { reflectance: b.albedo(v, n, "reflectance")?, sigma, variant }
+            BsdfKind::OrenNayar {
+                reflectance: b.albedo(v, n, "reflectance")?,
+                sigma,
+                variant,
+            }
         }
         "minnaert" => {
-            let k = b.texture_param(v, n, "k")?.unwrap_or(TextureDesc::constant(1.0));
+            let k = b
+                .texture_param(v, n, "k")?
+                .unwrap_or(TextureDesc::constant(1.0));
             positive_scalar(v, "k", &k, "k")?;
-            BsdfKind::Minnaert { reflectance: b.albedo(v, n, "reflectance")?, k }
+            BsdfKind::Minnaert {
+                reflectance: b.albedo(v, n, "reflectance")?,
+                k,
+            }
         }
         "dielectric" => {
-            let (int_ior, ext_ior, specular_reflectance, specular_transmittance) = b.dielectric(v, n)?;
-            BsdfKind::Dielectric { int_ior, ext_ior, specular_reflectance, specular_transmittance }
+            let (int_ior, ext_ior, specular_reflectance, specular_transmittance) =
+                b.dielectric(v, n)?;
+            BsdfKind::Dielectric {
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+            }
         }
         "thindielectric" => {
-            let (int_ior, ext_ior, specular_reflectance, specular_transmittance) = b.dielectric(v, n)?;
-            BsdfKind::ThinDielectric { int_ior, ext_ior, specular_reflectance, specular_transmittance }
+            let (int_ior, ext_ior, specular_reflectance, specular_transmittance) =
+                b.dielectric(v, n)?;
+            BsdfKind::ThinDielectric {
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+            }
         }
         "roughdielectric" => {
-            let (int_ior, ext_ior, specular_reflectance, specular_transmittance) = b.dielectric(v, n)?;
+            let (int_ior, ext_ior, specular_reflectance, specular_transmittance) =
+                b.dielectric(v, n)?;
             let microfacet = b.microfacet(v, n)?;
             BsdfKind::RoughDielectric {
                 int_ior,
@@ -466,13 +524,19 @@ pub(super) fn bsdf_kind<'e>(
             let distribution = distribution(v)?;
             if v.has("alpha_u") || v.has("alpha_v") {
                 return Err(v.prop_error(
-                    if v.has("alpha_u") { "alpha_u" } else { "alpha_v" },
+                    if v.has("alpha_u") {
+                        "alpha_u"
+                    } else {
+                        "alpha_v"
+                    },
                     "roughplastic is isotropic (as in Mitsuba): give one alpha",
                 ));
             }
             let alpha = v.float("alpha")?.unwrap_or(0.1);
             if !(alpha > 0.0) {
-                return Err(v.prop_error("alpha", format!("roughness must be positive, got {alpha}")));
+                return Err(
+                    v.prop_error("alpha", format!("roughness must be positive, got {alpha}"))
+                );
             }
             BsdfKind::RoughPlastic {
                 diffuse_reflectance: b.albedo(v, n, "diffuse_reflectance")?,
@@ -487,18 +551,32 @@ pub(super) fn bsdf_kind<'e>(
         "conductor" => {
             let (eta, k) = b.conductor_ior(v, n)?;
             let specular_reflectance = b.factor(v, n, "specular_reflectance")?;
-            BsdfKind::Conductor { eta, k, specular_reflectance }
+            BsdfKind::Conductor {
+                eta,
+                k,
+                specular_reflectance,
+            }
         }
         "roughconductor" => {
             let (eta, k) = b.conductor_ior(v, n)?;
             let specular_reflectance = b.factor(v, n, "specular_reflectance")?;
             let microfacet = b.microfacet(v, n)?;
-            BsdfKind::RoughConductor { eta, k, specular_reflectance, microfacet }
+            BsdfKind::RoughConductor {
+                eta,
+                k,
+                specular_reflectance,
+                microfacet,
+            }
         }
         "thinfilm" | "roughthinfilm" => b.thin_film(v, n)?,
         "fluorescent" => {
             let (reflectance, absorption, emission, quantum_yield) = luminescent(v)?;
-            BsdfKind::Fluorescent { reflectance, absorption, emission, quantum_yield }
+            BsdfKind::Fluorescent {
+                reflectance,
+                absorption,
+                emission,
+                quantum_yield,
+            }
         }
         "phosphorescent" => {
             let (reflectance, absorption, emission, quantum_yield) = luminescent(v)?;
@@ -514,7 +592,13 @@ pub(super) fn bsdf_kind<'e>(
                     format!("lifetime must be positive (seconds), got {lifetime}"),
                 ));
             }
-            BsdfKind::Phosphorescent { reflectance, absorption, emission, quantum_yield, lifetime }
+            BsdfKind::Phosphorescent {
+                reflectance,
+                absorption,
+                emission,
+                quantum_yield,
+                lifetime,
+            }
         }
         _ => return Err(super::plugin_error(v.el)),
     })

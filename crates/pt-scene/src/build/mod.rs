@@ -275,7 +275,13 @@ pub(super) fn default_sampler() -> SamplerDesc {
 // Parameter helpers
 
 /// An integer parameter with a default, checked to lie in `min..=max`.
-pub(super) fn int_in(v: &ObjectView<'_>, name: &str, default: i64, min: i64, max: i64) -> Result<i64> {
+pub(super) fn int_in(
+    v: &ObjectView<'_>,
+    name: &str,
+    default: i64,
+    min: i64,
+    max: i64,
+) -> Result<i64> {
     let value = v.integer(name)?.unwrap_or(default);
     if value < min || value > max {
         let range = if max >= i32::MAX as i64 {

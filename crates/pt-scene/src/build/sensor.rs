@@ -4,7 +4,10 @@ use super::*;
 
 impl<'e> Builder<'e> {
     /// `perspective` (see [`perspective`] for its parameters) with its film and sampler.
-    pub(super) fn sensor(&mut self, el: &'e Element) -> Result<(CameraDesc, FilmDesc, SamplerDesc)> {
+    pub(super) fn sensor(
+        &mut self,
+        el: &'e Element,
+    ) -> Result<(CameraDesc, FilmDesc, SamplerDesc)> {
         let v = ObjectView::parse(el)?;
         if v.plugin != "perspective" {
             return Err(plugin_error(el));

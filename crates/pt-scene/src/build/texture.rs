@@ -46,7 +46,12 @@ impl<'e> Nested<'e> {
     /// Errors if the plugin has nested objects other than textures.
     pub(super) fn no_others(&self, v: &ObjectView<'_>) -> Result<()> {
         match self.others.first() {
-            Some((child, target)) => Err(misplaced(child, target, v, "no nested objects but textures")),
+            Some((child, target)) => Err(misplaced(
+                child,
+                target,
+                v,
+                "no nested objects but textures",
+            )),
             None => Ok(()),
         }
     }
@@ -65,7 +70,10 @@ const IMAGE_EXTENSIONS: &[&str] = &["png", "jpg", "jpeg", "exr", "hdr", "rgbe", 
 impl<'e> Builder<'e> {
     /// Splits the nested objects of `v` into named textures and the rest.
     pub(super) fn nested(&self, v: &ObjectView<'e>) -> Result<Nested<'e>> {
-        let mut nested = Nested { textures: Vec::new(), others: Vec::new() };
+        let mut nested = Nested {
+            textures: Vec::new(),
+            others: Vec::new(),
+        };
         for child in &v.children {
             let target = self.resolve(child)?;
             let written = child.written();
@@ -134,7 +142,10 @@ impl<'e> Builder<'e> {
         }
         if let Some(id) = id {
             if self.visiting.iter().any(|v| v == id) {
-                return Err(SceneError::at(&el.loc, format!("texture \"{id}\" contains itself")));
+                return Err(SceneError::at(
+                    &el.loc,
+                    format!("texture \"{id}\" contains itself"),
+                ));
             }
             self.visiting.push(id.to_string());
         }
@@ -152,7 +163,10 @@ impl<'e> Builder<'e> {
     fn build_texture(&mut self, el: &'e Element) -> Result<TextureDesc> {
         let v = ObjectView::parse(el)?;
         let nested = self.nested(&v)?;
-        let to_uv = v.transform("to_uv")?.as_ref().map_or(UV_IDENTITY, uv_transform);
+        let to_uv = v
+            .transform("to_uv")?
+            .as_ref()
+            .map_or(UV_IDENTITY, uv_transform);
         let t = match v.plugin.as_str() {
             "bitmap" => TextureDesc::Bitmap(Arc::new(self.bitmap(&v, to_uv)?)),
             "checkerboard" => {
@@ -176,7 +190,11 @@ impl<'e> Builder<'e> {
                     ));
                 }
                 let scale = v.float("scale")?.unwrap_or(1.0);
-                TextureDesc::MeshAttribute(MeshAttributeDesc { loc: el.loc.clone(), name, scale })
+                TextureDesc::MeshAttribute(MeshAttributeDesc {
+                    loc: el.loc.clone(),
+                    name,
+                    scale,
+                })
             }
             "rawconstant" => {
                 let (value, scalar) = match (v.float("value"), v.vec3("value")) {
@@ -254,7 +272,11 @@ impl<'e> Builder<'e> {
                 ))
             }
         };
-        one_of(v, "format", &["auto", "variant", "fp16", "float16", "uint8"])?;
+        one_of(
+            v,
+            "format",
+            &["auto", "variant", "fp16", "float16", "uint8"],
+        )?;
         v.boolean("accel")?;
         Ok(BitmapDesc {
             loc: v.el.loc.clone(),
@@ -272,7 +294,9 @@ impl<'e> Builder<'e> {
     /// (DESIGN.md, Colour), so for pt the wrapper changes nothing; it makes Mitsuba agree.
     pub(super) fn emission_texture(&mut self, el: &'e Element) -> Result<TextureDesc> {
         if el.attr("type") != Some("d65") {
-            return self.texture(el).map(|t| t.expect("a texture element gives a texture"));
+            return self
+                .texture(el)
+                .map(|t| t.expect("a texture element gives a texture"));
         }
         let v = ObjectView::parse(el)?;
         let mut inner = None;

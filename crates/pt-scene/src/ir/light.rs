@@ -85,4 +85,3 @@ pub enum LightKind {
         scale: f32,
     },
 }
-

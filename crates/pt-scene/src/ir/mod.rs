@@ -70,7 +70,6 @@ pub struct SceneDesc {
     pub lights: Vec<LightDesc>,
 }
 
-
 impl SceneDesc {
     /// Why the scene needs spectral transport (the first wavelength-dependent input found, with
     /// its location), or `None` when RGB is exact for it.
@@ -116,11 +115,7 @@ impl SceneDesc {
         for s in &self.shapes {
             if let Some(e) = &s.emitter {
                 if let Some(sp) = e.radiance.spectra().into_iter().find(|s| s.is_spectral()) {
-                    return Some(format!(
-                        "{}: {} emission spectrum",
-                        e.loc,
-                        sp.form_name()
-                    ));
+                    return Some(format!("{}: {} emission spectrum", e.loc, sp.form_name()));
                 }
                 if e.primaries.is_some() {
                     return Some(format!(

@@ -210,7 +210,6 @@ pub struct IntegratorDesc {
     pub loc: SourceLoc,
 }
 
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -219,8 +218,14 @@ mod tests {
     /// error lists the accepted ones.
     #[test]
     fn radiosity_option_names_parse() {
-        assert_eq!("gauss-seidel".parse::<RadiositySolver>(), Ok(RadiositySolver::GaussSeidel));
-        assert_eq!("Final_Gather".parse::<RadiosityDisplay>(), Ok(RadiosityDisplay::FinalGather));
+        assert_eq!(
+            "gauss-seidel".parse::<RadiositySolver>(),
+            Ok(RadiositySolver::GaussSeidel)
+        );
+        assert_eq!(
+            "Final_Gather".parse::<RadiosityDisplay>(),
+            Ok(RadiosityDisplay::FinalGather)
+        );
         assert_eq!("balanced".parse::<Reciprocity>(), Ok(Reciprocity::Balanced));
         let e = "sor".parse::<RadiositySolver>().unwrap_err();
         assert!(e.contains("jacobi, gauss_seidel, progressive"), "{e}");

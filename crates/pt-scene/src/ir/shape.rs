@@ -114,4 +114,3 @@ pub struct MediumDesc {
     /// its `scale`. Linear RGB, a constant or a tabulated spectrum, each value >= 0.
     pub sigma_t: SpectrumDesc,
 }
-

@@ -57,9 +57,9 @@ impl TextureDesc {
                 v
             }
             TextureDesc::Scaled(s) => s.inner.spectra(),
-            TextureDesc::Bitmap(_) | TextureDesc::MeshAttribute(_) | TextureDesc::RawConstant(_) => {
-                Vec::new()
-            }
+            TextureDesc::Bitmap(_)
+            | TextureDesc::MeshAttribute(_)
+            | TextureDesc::RawConstant(_) => Vec::new(),
         }
     }
 

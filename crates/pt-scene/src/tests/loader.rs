@@ -51,7 +51,10 @@ fn cornell_box_loads() {
     let light = &s.shapes[7];
     assert!(close(face_normal(mesh(light), 0), -Vec3::Y));
     let emitter = light.emitter.as_ref().expect("light emits");
-    assert_eq!(emitter.radiance, TextureDesc::Constant(SpectrumDesc::Rgb([17.0, 12.0, 4.0])));
+    assert_eq!(
+        emitter.radiance,
+        TextureDesc::Constant(SpectrumDesc::Rgb([17.0, 12.0, 4.0]))
+    );
     assert_eq!(light.loc.file, cornell_path());
     assert_eq!(light.loc.element, "shape type=\"rectangle\"");
     assert!(s.shapes[..7].iter().all(|sh| sh.emitter.is_none()));
@@ -117,7 +120,10 @@ fn include_path_default_and_ref_work_together() {
     assert_eq!(s.shapes[0].bsdf, s.shapes[1].bsdf);
     // The main file's <default> came first, so it wins over the included one.
     match &s.bsdfs[0].kind {
-        BsdfKind::Diffuse { reflectance } => assert_eq!(*reflectance, TextureDesc::Constant(SpectrumDesc::Constant(0.25))),
+        BsdfKind::Diffuse { reflectance } => assert_eq!(
+            *reflectance,
+            TextureDesc::Constant(SpectrumDesc::Constant(0.25))
+        ),
         ref k => panic!("unexpected {k:?}"),
     }
     assert_eq!(s.bsdfs[0].loc.file, dir.join("parts/materials.xml"));

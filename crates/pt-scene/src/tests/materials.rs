@@ -245,7 +245,9 @@ fn physical_bsdfs_with_mitsuba_defaults_and_names() {
             && microfacet.alpha_u == TextureDesc::constant(0.1)
             && microfacet.alpha_v == TextureDesc::constant(0.3))
     );
-    assert!(matches!(&s.bsdfs[2].kind, BsdfKind::OrenNayar { variant, .. } if *variant == OrenNayarVariant::Eon));
+    assert!(
+        matches!(&s.bsdfs[2].kind, BsdfKind::OrenNayar { variant, .. } if *variant == OrenNayarVariant::Eon)
+    );
     for (body, what) in [
         (
             r#"<shape type="cube"><bsdf type="conductor"><string name="material" value="Unobtainium"/></bsdf></shape>"#,
@@ -376,20 +378,12 @@ fn emitter_bitmap_in_d65_and_display_primaries() {
     .unwrap_err();
     assert!(e.message.contains("primary_r must be a spectrum"), "{e}");
     let e = load_in(area(r#"<texture type="d65" name="radiance"/>"#)).unwrap_err();
-    assert!(
-        e.message
-            .contains("needs a nested <texture>"),
-        "{e}"
-    );
+    assert!(e.message.contains("needs a nested <texture>"), "{e}");
     let e = load_in(area(&format!(
         r#"<texture type="d65" name="radiance">{bitmap}{bitmap}</texture>"#
     )))
     .unwrap_err();
-    assert!(
-        e.message
-            .contains("one nested <texture>"),
-        "{e}"
-    );
+    assert!(e.message.contains("one nested <texture>"), "{e}");
     let e = load_in(area(&format!(r#"<texture type="d65" name="radiance"><rgb name="color" value="1, 1, 1"/>{bitmap}</texture>"#))).unwrap_err();
     assert!(e.message.contains("unused property 'color'"), "{e}");
     let _ = std::fs::remove_dir_all(&dir);
@@ -431,9 +425,14 @@ fn normalmap_mask_texture_and_blend() {
         tex("opacity")
     )))
     .unwrap();
-    assert!(
-        matches!(&d.bsdfs[0].kind, BsdfKind::Mask { opacity: TextureDesc::Bitmap(_), cutoff: None, .. })
-    );
+    assert!(matches!(
+        &d.bsdfs[0].kind,
+        BsdfKind::Mask {
+            opacity: TextureDesc::Bitmap(_),
+            cutoff: None,
+            ..
+        }
+    ));
     let d = load_in(&xml("<shape type=\"cube\"><bsdf type=\"blendbsdf\"><float name=\"weight\" value=\"0.3\"/><bsdf type=\"diffuse\"/><bsdf type=\"conductor\"/></bsdf></shape>")).unwrap();
     match &d.bsdfs[0].kind {
         BsdfKind::Blend {

@@ -151,7 +151,10 @@ fn sphere_takes_center_radius_and_uniform_scale() {
             frame,
             ..
         } => {
-            assert!((radius - 3.0).abs() < 1e-5 && flip_normals, "{radius} {flip_normals}");
+            assert!(
+                (radius - 3.0).abs() < 1e-5 && flip_normals,
+                "{radius} {flip_normals}"
+            );
             assert!(close(frame * Vec3::Z, Vec3::Y), "{frame}");
             assert!(close(frame * Vec3::X, -Vec3::X), "{frame}");
         }

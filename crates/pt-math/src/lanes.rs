@@ -1,0 +1,290 @@
+//! Several values at once, one per lane: arrays of `N` numbers on which every lane goes
+//! through the same operations, written as loops over the lanes so that the compiler keeps
+//! them in SIMD registers (eight lanes of AVX2 in the render loop's x86-64-v3 variant).
+//!
+//! The kernels of the shading step are written once over lanes (the shading frame here, the
+//! ray offset, warps, Lambert's BSDF, parallelogram lights): the path tracer runs them for
+//! all its paths in flight at once, and the single-value functions (`Frame::from_normal`,
+//! `Lambert::sample`, ...) are the same kernels with one lane. Every lane performs the
+//! single-value function's operations in the same order, so both give the same bits.
+
+use glam::Vec3;
+
+/// `[f(0), f(1), ..]` as a plain loop over the lanes (which the compiler vectorises reliably;
+/// `std::array::from_fn` it sometimes leaves as a call).
+#[inline(always)]
+pub fn lanes<T: Copy + Default, const N: usize>(f: impl Fn(usize) -> T) -> [T; N] {
+    let mut out = [T::default(); N];
+    for (k, o) in out.iter_mut().enumerate() {
+        *o = f(k);
+    }
+    out
+}
+
+/// `N` 3-vectors, one per lane, stored by component (structure of arrays).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct V3<const N: usize> {
+    /// x components.
+    pub x: [f32; N],
+    /// y components.
+    pub y: [f32; N],
+    /// z components.
+    pub z: [f32; N],
+}
+
+impl<const N: usize> Default for V3<N> {
+    fn default() -> Self {
+        V3::splat(Vec3::ZERO)
+    }
+}
+
+impl<const N: usize> V3<N> {
+    /// The same vector in every lane.
+    #[inline(always)]
+    pub fn splat(v: Vec3) -> Self {
+        V3 {
+            x: [v.x; N],
+            y: [v.y; N],
+            z: [v.z; N],
+        }
+    }
+
+    /// Lane `k`.
+    #[inline(always)]
+    pub fn get(&self, k: usize) -> Vec3 {
+        Vec3::new(self.x[k], self.y[k], self.z[k])
+    }
+
+    /// Sets lane `k`.
+    #[inline(always)]
+    pub fn set(&mut self, k: usize, v: Vec3) {
+        (self.x[k], self.y[k], self.z[k]) = (v.x, v.y, v.z);
+    }
+
+    /// `f(lane)` in every lane.
+    #[inline(always)]
+    pub fn from_fn(f: impl Fn(usize) -> Vec3) -> Self {
+        let mut v = V3::default();
+        for k in 0..N {
+            v.set(k, f(k));
+        }
+        v
+    }
+
+    /// Componentwise `a + b`.
+    #[inline(always)]
+    pub fn add(&self, b: &Self) -> Self {
+        V3 {
+            x: lanes(|k| self.x[k] + b.x[k]),
+            y: lanes(|k| self.y[k] + b.y[k]),
+            z: lanes(|k| self.z[k] + b.z[k]),
+        }
+    }
+
+    /// Componentwise `a - b`.
+    #[inline(always)]
+    pub fn sub(&self, b: &Self) -> Self {
+        V3 {
+            x: lanes(|k| self.x[k] - b.x[k]),
+            y: lanes(|k| self.y[k] - b.y[k]),
+            z: lanes(|k| self.z[k] - b.z[k]),
+        }
+    }
+
+    /// Each lane times its factor `s[lane]`.
+    #[inline(always)]
+    pub fn scale(&self, s: &[f32; N]) -> Self {
+        V3 {
+            x: lanes(|k| self.x[k] * s[k]),
+            y: lanes(|k| self.y[k] * s[k]),
+            z: lanes(|k| self.z[k] * s[k]),
+        }
+    }
+
+    /// `-a`.
+    #[inline(always)]
+    pub fn neg(&self) -> Self {
+        V3 {
+            x: lanes(|k| -self.x[k]),
+            y: lanes(|k| -self.y[k]),
+            z: lanes(|k| -self.z[k]),
+        }
+    }
+
+    /// The dot product per lane, `(x x' + y y') + z z'` (glam's order).
+    #[inline(always)]
+    pub fn dot(&self, b: &Self) -> [f32; N] {
+        lanes(|k| (self.x[k] * b.x[k]) + (self.y[k] * b.y[k]) + (self.z[k] * b.z[k]))
+    }
+
+    /// The cross product per lane (glam's order).
+    #[inline(always)]
+    pub fn cross(&self, b: &Self) -> Self {
+        V3 {
+            x: lanes(|k| self.y[k] * b.z[k] - b.y[k] * self.z[k]),
+            y: lanes(|k| self.z[k] * b.x[k] - b.z[k] * self.x[k]),
+            z: lanes(|k| self.x[k] * b.y[k] - b.x[k] * self.y[k]),
+        }
+    }
+
+    /// `a` where `c[lane]`, else `b`.
+    #[inline(always)]
+    pub fn select(c: &[bool; N], a: &Self, b: &Self) -> Self {
+        V3 {
+            x: lanes(|k| if c[k] { a.x[k] } else { b.x[k] }),
+            y: lanes(|k| if c[k] { a.y[k] } else { b.y[k] }),
+            z: lanes(|k| if c[k] { a.z[k] } else { b.z[k] }),
+        }
+    }
+}
+
+/// Orthonormal frames `(s, t, n)`, one per lane (see [`crate::Frame`], the one-lane form).
+#[derive(Clone, Copy, Debug)]
+pub struct Frames<const N: usize> {
+    /// First tangents.
+    pub s: V3<N>,
+    /// Second tangents (`n x s`).
+    pub t: V3<N>,
+    /// Normals (local +z).
+    pub n: V3<N>,
+}
+
+impl<const N: usize> Frames<N> {
+    /// Frames around the unit normals `n`, tangents by Duff et al. 2017, "Building an
+    /// Orthonormal Basis, Revisited" (JCGT 6(1), listing 3): branch-free and continuous except
+    /// at n.z = 0 sign flips, exact to rounding.
+    #[inline(always)]
+    pub fn from_normal(n: &V3<N>) -> Self {
+        let mut f = Frames {
+            s: V3::default(),
+            t: V3::default(),
+            n: *n,
+        };
+        for k in 0..N {
+            let (nx, ny, nz) = (n.x[k], n.y[k], n.z[k]);
+            let sign = 1.0f32.copysign(nz);
+            let a = -1.0 / (sign + nz);
+            let b = nx * ny * a;
+            (f.s.x[k], f.s.y[k], f.s.z[k]) = (1.0 + sign * nx * nx * a, sign * b, -sign * nx);
+            (f.t.x[k], f.t.y[k], f.t.z[k]) = (b, sign + ny * ny * a, -ny);
+        }
+        f
+    }
+
+    /// Frames around the unit normals `n` whose first tangent follows `tangent` projected onto
+    /// the tangent plane (Gram-Schmidt), as Mitsuba builds its shading frame from `dp_du`;
+    /// [`Frames::from_normal`] in lanes where `tangent` is zero or parallel to `n`.
+    #[inline(always)]
+    pub fn from_normal_tangent(n: &V3<N>, tangent: &V3<N>) -> Self {
+        let d = n.dot(tangent);
+        let along = tangent.sub(&n.scale(&d));
+        // glam's try_normalize: 1 / length, accepted when finite and positive.
+        let l2 = along.dot(&along);
+        let rcp: [f32; N] = lanes(|k| 1.0 / l2[k].sqrt());
+        let ok: [bool; N] = lanes(|k| rcp[k].is_finite() && rcp[k] > 0.0);
+        let s = along.scale(&rcp);
+        let duff = Frames::from_normal(n);
+        let s = V3::select(&ok, &s, &duff.s);
+        let t = V3::select(&ok, &n.cross(&s), &duff.t);
+        Frames { s, t, n: *n }
+    }
+
+    /// World directions -> local frames.
+    #[inline(always)]
+    pub fn to_local(&self, v: &V3<N>) -> V3<N> {
+        V3 {
+            x: v.dot(&self.s),
+            y: v.dot(&self.t),
+            z: v.dot(&self.n),
+        }
+    }
+
+    /// Local directions -> world, `s x + t y + n z` (left to right).
+    #[inline(always)]
+    pub fn to_world(&self, v: &V3<N>) -> V3<N> {
+        let c = |a: &[f32; N], b: &[f32; N], e: &[f32; N]| -> [f32; N] {
+            lanes(|k| a[k] * v.x[k] + b[k] * v.y[k] + e[k] * v.z[k])
+        };
+        V3 {
+            x: c(&self.s.x, &self.t.x, &self.n.x),
+            y: c(&self.s.y, &self.t.y, &self.n.y),
+            z: c(&self.s.z, &self.t.z, &self.n.z),
+        }
+    }
+
+    /// Lane `k`'s frame.
+    #[inline(always)]
+    pub fn get(&self, k: usize) -> crate::Frame {
+        crate::Frame {
+            s: self.s.get(k),
+            t: self.t.get(k),
+            n: self.n.get(k),
+        }
+    }
+}
+
+/// [`crate::offset_ray_origin`] in every lane: the points `p` moved off their surfaces along
+/// the normals `n` (Wächter & Binder 2019).
+#[inline(always)]
+pub fn offset_ray_origins<const N: usize>(p: &V3<N>, n: &V3<N>) -> V3<N> {
+    use crate::offset_coordinate as o;
+    V3 {
+        x: lanes(|k| o(p.x[k], n.x[k])),
+        y: lanes(|k| o(p.y[k], n.y[k])),
+        z: lanes(|k| o(p.z[k], n.z[k])),
+    }
+}
+
+/// [`crate::power_heuristic`] in every lane.
+#[inline(always)]
+pub fn power_heuristics<const N: usize>(a: &[f32; N], b: &[f32; N]) -> [f32; N] {
+    lanes(|k| crate::power_heuristic(a[k], b[k]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Frame;
+
+    /// The lanes give every lane the one-lane result, bit for bit (each lane runs the same
+    /// operations), for normals and tangents of every kind, including zero and parallel
+    /// tangents (Duff's fallback).
+    #[test]
+    fn eight_lanes_match_one_lane_bit_for_bit() {
+        let ns = [
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::new(0.3, -0.5, 0.8).normalize(),
+            Vec3::new(-0.3, 0.5, -0.8).normalize(),
+            Vec3::X,
+            Vec3::new(0.0, -1.0, 1e-8).normalize(),
+            Vec3::new(0.6, 0.0, -0.8),
+            Vec3::new(-0.48, 0.6, 0.64),
+        ];
+        let ts = [
+            Vec3::ZERO,
+            Vec3::new(0.3, 0.9, -0.2),
+            Vec3::new(0.3, -0.5, 0.8),
+            Vec3::X,
+            Vec3::new(1e-30, 0.0, 0.0),
+            Vec3::new(-2.0, 0.1, 0.3),
+            Vec3::new(0.0, 4.0, 0.0),
+            Vec3::new(f32::NAN, 0.0, 0.0),
+        ];
+        let f8 = Frames::<8>::from_normal_tangent(&V3::from_fn(|k| ns[k]), &V3::from_fn(|k| ts[k]));
+        let v = V3::<8>::from_fn(|k| Vec3::new(0.2 + k as f32, -0.7, 0.4));
+        let (l8, w8) = (f8.to_local(&v), f8.to_world(&v));
+        for k in 0..8 {
+            let f1 = Frame::from_normal_tangent(ns[k], ts[k]);
+            let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+            let g = f8.get(k);
+            assert_eq!(
+                [bits(g.s), bits(g.t), bits(g.n)],
+                [bits(f1.s), bits(f1.t), bits(f1.n)],
+                "lane {k}"
+            );
+            assert_eq!(bits(l8.get(k)), bits(f1.to_local(v.get(k))), "lane {k}");
+            assert_eq!(bits(w8.get(k)), bits(f1.to_world(v.get(k))), "lane {k}");
+        }
+    }
+}
