@@ -13,10 +13,10 @@
 
 use crate::path::{PathSettings, PathStart, PathState, Strategy, MAX_PATHS};
 use pt_bsdf::{mirror_side, BsdfSample, Lambert, SurfaceBsdf};
-use pt_math::lanes::{offset_ray_origins, power_heuristics, Frames, V3};
+use pt_math::lanes::{lanes, offset_ray_origins, power_heuristics, Frames, V3};
 use pt_math::{Ray, Vec2, Vec3};
 use pt_render::geometry::Interaction;
-use pt_render::light::{parallelogram_points, to_solid_angle, Light, LightShape};
+use pt_render::light::{parallelogram_points, to_solid_angle, Light, LightSample, LightShape};
 use pt_render::Scene;
 use pt_spectrum::SampledSpectrum;
 
@@ -48,6 +48,124 @@ struct LightLanes {
     delta: [bool; N],
 }
 
+impl LightLanes {
+    /// No light samples yet.
+    #[inline(always)]
+    fn empty() -> Self {
+        LightLanes {
+            have: [false; N],
+            wi: V3::splat(Vec3::Z),
+            p: V3::default(),
+            n: V3::default(),
+            dist: [1.0; N],
+            radiance: [SampledSpectrum::ZERO; N],
+            pdf: [1.0; N],
+            delta: [false; N],
+        }
+    }
+
+    /// Lane `k`'s sample `s` of a light chosen with probability `pmf`.
+    #[inline(always)]
+    fn set(&mut self, k: usize, s: &LightSample, pmf: f32) {
+        self.have[k] = true;
+        (self.wi.set(k, s.wi), self.p.set(k, s.p), self.n.set(k, s.n));
+        (self.dist[k], self.radiance[k], self.pdf[k], self.delta[k]) =
+            (s.dist, s.radiance, pmf * s.pdf, s.delta);
+    }
+}
+
+/// The hits' geometry, one lane per path: points, geometric normals, shading frames, the
+/// directions towards the viewer in those frames, and the spawn points on both sides.
+struct Geometry {
+    p: V3<N>,
+    /// Unit geometric normals flipped to the side each path arrived from.
+    n_out: V3<N>,
+    frames: Frames<N>,
+    /// Towards the viewer, local frames.
+    wo: V3<N>,
+    /// The hit points offset towards `n_out` (Wächter & Binder 2019).
+    out: V3<N>,
+    /// The hit points offset away from `n_out` (for transmission).
+    back: V3<N>,
+}
+
+impl Geometry {
+    /// Gathers the hits of the lanes in `todo` (unused lanes keep harmless values).
+    #[inline(always)]
+    fn gather(
+        slots: &[Option<PathStart>; N],
+        hits: &[Option<Interaction>; N],
+        todo: &[bool; N],
+    ) -> Self {
+        let (mut p, mut ng, mut ns, mut dpdu) = (
+            V3::<N>::default(),
+            V3::default(),
+            V3::splat(Vec3::Z),
+            V3::default(),
+        );
+        let mut dir = V3::splat(-Vec3::Z);
+        for k in 0..N {
+            if let (true, Some(h), Some(sl)) = (todo[k], &hits[k], &slots[k]) {
+                p.set(k, h.p);
+                ng.set(k, h.ng);
+                ns.set(k, h.ns);
+                dpdu.set(k, h.dpdu);
+                dir.set(k, sl.path.ray.dir);
+            }
+        }
+        let frames = Frames::from_normal_tangent(&ns, &dpdu);
+        let wo = frames.to_local(&dir.neg());
+        // Rays leave the hit offset to one side of the surface: the side the path came from,
+        // or the other one for transmission.
+        let ndd = ng.dot(&dir);
+        let n_out = ng.scale(&lanes(|k| -ndd[k].signum()));
+        let out = offset_ray_origins(&p, &n_out);
+        let back = offset_ray_origins(&p, &n_out.neg());
+        Geometry {
+            p,
+            n_out,
+            frames,
+            wo,
+            out,
+            back,
+        }
+    }
+
+    /// Origins for rays leaving in the world directions `dir`: the side each leaves to.
+    #[inline(always)]
+    fn origins(&self, dir: &V3<N>) -> V3<N> {
+        let d = self.n_out.dot(dir);
+        V3::select(&lanes(|k| d[k] >= 0.0), &self.out, &self.back)
+    }
+}
+
+/// What each path draws at its hit: its BSDF (the material's own when nothing varies over it,
+/// not copied; else evaluated), the uniform numbers of its BSDF sample, and its light choice.
+struct Draws<'a> {
+    fixed: [Option<&'a SurfaceBsdf>; N],
+    built: [Option<SurfaceBsdf>; N],
+    u_lobe: [f32; N],
+    ub: [Vec2; N],
+    /// Index of a parallelogram light chosen in the lane (sampled in lanes), or `usize::MAX`.
+    par: [usize; N],
+    /// Its corner, edges, area and uniform numbers.
+    v0: V3<N>,
+    e1: V3<N>,
+    e2: V3<N>,
+    area: [f32; N],
+    lu: [Vec2; N],
+    /// Light selection probabilities.
+    pmf: [f32; N],
+}
+
+impl Draws<'_> {
+    /// Lane `k`'s BSDF, if the lane scatters.
+    #[inline(always)]
+    fn bsdf(&self, k: usize) -> Option<&SurfaceBsdf> {
+        self.fixed[k].or(self.built[k].as_ref())
+    }
+}
+
 /// The scattering of the paths in `slots` that scatter at their hits (`todo`), all at once.
 #[inline(always)]
 pub(crate) fn scatter(
@@ -57,54 +175,88 @@ pub(crate) fn scatter(
     hits: &[Option<Interaction>; N],
     todo: &[bool; N],
 ) {
-    let use_light = s.strategy != Strategy::Bsdf;
-    // The hits' geometry, one lane per path (unused lanes keep harmless values).
-    let (mut p, mut ng, mut ns, mut dpdu) = (
-        V3::<N>::default(),
-        V3::default(),
-        V3::splat(Vec3::Z),
-        V3::default(),
-    );
-    let mut dir = V3::splat(-Vec3::Z);
+    let g = Geometry::gather(slots, hits, todo);
+    let mut l = LightLanes::empty();
+    let d = draw(scene, s, slots, hits, todo, &mut l);
+    sample_parallelograms(scene, slots, &g, &d, &mut l);
+    let wi = g.frames.to_local(&l.wi);
+    let (f, bsdf_pdf, bs) = bsdfs(s, &g, &d, &l, &wi);
+    // The shadow rays leave on the side of the hit the light is on; the next segments on the
+    // side each sampled direction leaves to.
+    let origin = g.origins(&l.wi);
+    let (seg, seg_len) = shadow_segments(&origin, &l);
+    let mis = power_heuristics(&l.pdf, &bsdf_pdf);
+    let next_dir = g
+        .frames
+        .to_world(&V3::from_fn(|k| bs[k].map_or(Vec3::Z, |b| b.wi)));
+    let next_origin = g.origins(&next_dir);
     for k in 0..N {
-        if let (true, Some(h), Some(sl)) = (todo[k], &hits[k], &slots[k]) {
-            p.set(k, h.p);
-            ng.set(k, h.ng);
-            ns.set(k, h.ns);
-            dpdu.set(k, h.dpdu);
-            dir.set(k, sl.path.ray.dir);
+        let (true, Some(h), Some(PathStart { path, sampler, .. })) =
+            (todo[k], &hits[k], &mut slots[k])
+        else {
+            continue;
+        };
+        if l.have[k] && !l.radiance[k].is_black() && !f[k].is_black() {
+            let ray = if l.dist[k].is_infinite() {
+                Some(Ray::new(origin.get(k), l.wi.get(k)))
+            } else {
+                (seg_len[k] > 0.0).then(|| Ray {
+                    origin: origin.get(k),
+                    dir: seg.get(k) / seg_len[k],
+                    tmin: 0.0,
+                    tmax: seg_len[k] * SHADOW_RAY_SHORTEN,
+                })
+            };
+            if let Some(ray) = ray {
+                // Delta lights cannot be hit by BSDF sampling: light sampling is the only
+                // strategy, weight 1.
+                let w = if s.strategy != Strategy::Light && !l.delta[k] {
+                    mis[k]
+                } else {
+                    1.0
+                };
+                let c = path.throughput * f[k] * l.radiance[k] * (wi.z[k].abs() * w / l.pdf[k]);
+                path.shadow = Some((ray, c));
+            }
         }
+        continue_path(
+            s,
+            path,
+            sampler,
+            h,
+            bs[k],
+            next_origin.get(k),
+            next_dir.get(k),
+        );
     }
-    let frames = Frames::from_normal_tangent(&ns, &dpdu);
-    let wo = frames.to_local(&dir.neg());
-    // Rays leave the hit offset to one side of the surface (Wächter & Binder 2019): the side
-    // the path came from (`n_out`), or the other one for transmission.
-    let ndd = ng.dot(&dir);
-    let side: [f32; N] = pt_math::lanes::lanes(|k| -ndd[k].signum());
-    let n_out = ng.scale(&side);
-    let out = offset_ray_origins(&p, &n_out);
-    let back = offset_ray_origins(&p, &n_out.neg());
+}
 
-    // Per path: its BSDF (the material's own when nothing varies over it, not copied; else
-    // evaluated), fluorescence, its random numbers, its light choice.
-    let mut fixed: [Option<&SurfaceBsdf>; N] = [None; N];
-    let mut built: [Option<SurfaceBsdf>; N] = [None; N];
-    // Lights: parallelogram area lights in lanes (below), the others on their own here.
-    let mut par = [usize::MAX; N];
-    let mut pmf = [1.0f32; N];
-    let mut l = LightLanes {
-        have: [false; N],
-        wi: V3::splat(Vec3::Z),
-        p: V3::default(),
-        n: V3::default(),
-        dist: [1.0; N],
-        radiance: [SampledSpectrum::ZERO; N],
-        pdf: [1.0; N],
-        delta: [false; N],
+/// Per path, in the order a path alone draws them: its BSDF, fluorescence, the light choice
+/// and the light's uniform numbers (lights other than parallelograms sampled here, into `l`),
+/// the BSDF sample's uniform numbers.
+#[inline(always)]
+fn draw<'a>(
+    scene: &'a Scene,
+    s: &PathSettings,
+    slots: &mut [Option<PathStart>; N],
+    hits: &[Option<Interaction>; N],
+    todo: &[bool; N],
+    l: &mut LightLanes,
+) -> Draws<'a> {
+    let use_light = s.strategy != Strategy::Bsdf;
+    let mut d = Draws {
+        fixed: [None; N],
+        built: [None; N],
+        u_lobe: [0.5; N],
+        ub: [Vec2::splat(0.5); N],
+        par: [usize::MAX; N],
+        v0: V3::default(),
+        e1: V3::default(),
+        e2: V3::default(),
+        area: [1.0; N],
+        lu: [Vec2::splat(0.5); N],
+        pmf: [1.0; N],
     };
-    let (mut u_lobe, mut ub) = ([0.5f32; N], [Vec2::splat(0.5); N]);
-    let (mut lv0, mut le1, mut le2) = (V3::<N>::default(), V3::default(), V3::default());
-    let (mut larea, mut lu) = ([1.0f32; N], [Vec2::splat(0.5); N]);
     for k in 0..N {
         let (true, Some(h), Some(PathStart { path, sampler, .. })) =
             (todo[k], &hits[k], &mut slots[k])
@@ -114,10 +266,10 @@ pub(crate) fn scatter(
         let material = scene.material(h.shape);
         let bsdf: &SurfaceBsdf = match &material.fixed {
             Some(b) => {
-                fixed[k] = Some(b);
+                d.fixed[k] = Some(b);
                 b
             }
-            None => built[k].insert(scene.bsdf(h, &path.lambda)),
+            None => d.built[k].insert(scene.bsdf(h, &path.lambda)),
         };
         // Fluorescence: the BSDF holds each lane's total albedo at its emitted wavelength; now
         // some lanes move to an excitation wavelength, used by NEE and the rest of the path.
@@ -126,29 +278,25 @@ pub(crate) fn scatter(
         }
         if use_light && bsdf.has_smooth_lobe() {
             match scene.sample_light(sampler.next_1d()) {
-                Some((li, p_sel, u_sel)) => {
+                Some((li, pmf, u_sel)) => {
                     let u = sampler.next_2d();
-                    pmf[k] = p_sel;
-                    let light = &scene.lights[li];
-                    match light {
+                    d.pmf[k] = pmf;
+                    match &scene.lights[li] {
                         Light::Area(a) if matches!(a.shape, LightShape::Parallelogram { .. }) => {
                             let LightShape::Parallelogram { v0, e1, e2, n, .. } = a.shape else {
                                 unreachable!()
                             };
                             (
-                                lv0.set(k, v0),
-                                le1.set(k, e1),
-                                le2.set(k, e2),
+                                d.v0.set(k, v0),
+                                d.e1.set(k, e1),
+                                d.e2.set(k, e2),
                                 l.n.set(k, n),
                             );
-                            (larea[k], lu[k], par[k]) = (a.area, u, li);
+                            (d.area[k], d.lu[k], d.par[k]) = (a.area, u, li);
                         }
-                        _ => {
+                        light => {
                             if let Some(s) = light.sample(h.p, u_sel, u, &path.lambda) {
-                                l.have[k] = true;
-                                (l.wi.set(k, s.wi), l.p.set(k, s.p), l.n.set(k, s.n));
-                                (l.dist[k], l.radiance[k], l.pdf[k], l.delta[k]) =
-                                    (s.dist, s.radiance, p_sel * s.pdf, s.delta);
+                                l.set(k, &s, pmf);
                             }
                         }
                     }
@@ -159,68 +307,85 @@ pub(crate) fn scatter(
                 }
             }
         }
-        u_lobe[k] = sampler.next_1d();
-        ub[k] = sampler.next_2d();
+        d.u_lobe[k] = sampler.next_1d();
+        d.ub[k] = sampler.next_2d();
     }
-    let bsdf_of = |k: usize| -> Option<&SurfaceBsdf> { fixed[k].or(built[k].as_ref()) };
+    d
+}
 
-    // Parallelogram lights, all lanes at once (the other lanes' results are not used).
-    let is_par: [bool; N] = pt_math::lanes::lanes(|k| par[k] != usize::MAX);
+/// The parallelogram lights drawn in `d`, sampled for all their lanes at once (by area, then
+/// to solid angle; the other lanes' results are not used), into `l`.
+#[inline(always)]
+fn sample_parallelograms(
+    scene: &Scene,
+    slots: &[Option<PathStart>; N],
+    g: &Geometry,
+    d: &Draws,
+    l: &mut LightLanes,
+) {
+    let is_par: [bool; N] = lanes(|k| d.par[k] != usize::MAX);
     let points = parallelogram_points(
-        &lv0,
-        &le1,
-        &le2,
-        &pt_math::lanes::lanes(|k| lu[k].x),
-        &pt_math::lanes::lanes(|k| lu[k].y),
+        &d.v0,
+        &d.e1,
+        &d.e2,
+        &lanes(|k| d.lu[k].x),
+        &lanes(|k| d.lu[k].y),
     );
-    let sa = to_solid_angle(&p, &points, &l.n, &larea);
+    let sa = to_solid_angle(&g.p, &points, &l.n, &d.area);
     l.wi = V3::select(&is_par, &sa.wi, &l.wi);
     l.p = V3::select(&is_par, &points, &l.p);
     for k in 0..N {
         if !(is_par[k] && sa.ok[k]) {
             continue;
         }
-        let Light::Area(a) = &scene.lights[par[k]] else {
+        let Light::Area(a) = &scene.lights[d.par[k]] else {
             unreachable!("drawn as an area light")
         };
         let LightShape::Parallelogram { uv, .. } = a.shape else {
             unreachable!("drawn as a parallelogram")
         };
         if sa.front[k] {
-            let u = lu[k];
+            let u = d.lu[k];
             let lambda = &slots[k].as_ref().expect("a scattering path").path.lambda;
             l.radiance[k] = a.radiance_at_uv(uv[0] + uv[1] * u.x + uv[2] * u.y, lambda);
         }
-        (l.have[k], l.dist[k], l.pdf[k]) = (true, sa.dist[k], pmf[k] * sa.pdf[k]);
+        (l.have[k], l.dist[k], l.pdf[k]) = (true, sa.dist[k], d.pmf[k] * sa.pdf[k]);
     }
-    let wi_world = l.wi;
-    let wi = frames.to_local(&wi_world);
+}
 
-    // The BSDFs: f and pdf towards the light sample, and the BSDF sample; plain Lambertian
-    // surfaces in lanes (their two-sided mirroring as `SurfaceBsdf` does it), others per path.
+/// Each lane's BSDF towards its light sample (`f`, and the pdf where MIS needs it) and its
+/// BSDF sample: plain Lambertian surfaces in lanes (with `SurfaceBsdf`'s two-sided mirroring),
+/// the others per path.
+#[inline(always)]
+#[allow(clippy::type_complexity)]
+fn bsdfs(
+    s: &PathSettings,
+    g: &Geometry,
+    d: &Draws,
+    l: &LightLanes,
+    wi: &V3<N>,
+) -> ([SampledSpectrum; N], [f32; N], [Option<BsdfSample>; N]) {
+    let wo = &g.wo;
     let mut albedo = [SampledSpectrum::ZERO; N];
     let mut lane_lambert = [false; N];
     let mut mirror = [1.0f32; N];
     for k in 0..N {
-        if let Some((r, two_sided)) = bsdf_of(k).and_then(|b| b.plain_lambert()) {
+        if let Some((r, two_sided)) = d.bsdf(k).and_then(|b| b.plain_lambert()) {
             (albedo[k], lane_lambert[k]) = (r, true);
             mirror[k] = mirror_side(two_sided, false, wo.z[k]);
         }
     }
-    let wo_z: [f32; N] = pt_math::lanes::lanes(|k| wo.z[k] * mirror[k]);
-    let wi_z: [f32; N] = pt_math::lanes::lanes(|k| wi.z[k] * mirror[k]);
+    let wo_z: [f32; N] = lanes(|k| wo.z[k] * mirror[k]);
+    let wi_z: [f32; N] = lanes(|k| wi.z[k] * mirror[k]);
     let lambert_f = Lambert::eval_lanes(&albedo, &wo_z, &wi_z);
     let lambert_pdf = Lambert::pdf_lanes(&wo_z, &wi_z);
-    let (lambert_wi, lambert_spdf, lambert_ok) = Lambert::sample_lanes(
-        &wo_z,
-        &pt_math::lanes::lanes(|k| ub[k].x),
-        &pt_math::lanes::lanes(|k| ub[k].y),
-    );
+    let (lambert_wi, lambert_spdf, lambert_ok) =
+        Lambert::sample_lanes(&wo_z, &lanes(|k| d.ub[k].x), &lanes(|k| d.ub[k].y));
     let mut f = [SampledSpectrum::ZERO; N];
     let mut bsdf_pdf = [0.0f32; N];
     let mut bs: [Option<BsdfSample>; N] = [None; N];
     for k in 0..N {
-        let Some(b) = bsdf_of(k) else { continue };
+        let Some(b) = d.bsdf(k) else { continue };
         if lane_lambert[k] {
             (f[k], bsdf_pdf[k]) = (lambert_f[k], lambert_pdf[k]);
             bs[k] = lambert_ok[k].then(|| BsdfSample {
@@ -248,72 +413,23 @@ pub(crate) fn scatter(
                 bsdf_pdf[k] = b.pdf(wo.get(k), w);
             }
         }
-        bs[k] = b.sample(wo.get(k), u_lobe[k], ub[k]);
+        bs[k] = b.sample(wo.get(k), d.u_lobe[k], d.ub[k]);
     }
+    (f, bsdf_pdf, bs)
+}
 
-    // Shadow rays and MIS weights, all lanes at once: from the side of the hit the light is
-    // on, to the light point offset off its own surface (a light without a surface normal, or
-    // a distant one, needs no offset there).
-    let nwi = n_out.dot(&wi_world);
-    let towards: [bool; N] = pt_math::lanes::lanes(|k| nwi[k] >= 0.0);
-    let origin = V3::select(&towards, &out, &back);
-    let nwd = l.n.dot(&wi_world.neg());
-    let facing: [f32; N] = pt_math::lanes::lanes(|k| nwd[k].signum());
-    let lifted = offset_ray_origins(&l.p, &l.n.scale(&facing));
-    let no_normal: [bool; N] = pt_math::lanes::lanes(|k| l.n.get(k) == Vec3::ZERO);
+/// The shadow rays' segments from `origin` to the light points offset off their own surfaces
+/// (a light without a surface normal, or a distant one, needs no offset there), and their
+/// lengths.
+#[inline(always)]
+fn shadow_segments(origin: &V3<N>, l: &LightLanes) -> (V3<N>, [f32; N]) {
+    let nwd = l.n.dot(&l.wi.neg());
+    let lifted = offset_ray_origins(&l.p, &l.n.scale(&lanes(|k| nwd[k].signum())));
+    let no_normal: [bool; N] = lanes(|k| l.n.get(k) == Vec3::ZERO);
     let target = V3::select(&no_normal, &l.p, &lifted);
-    let seg = target.sub(&origin);
+    let seg = target.sub(origin);
     let seg2 = seg.dot(&seg);
-    let seg_len: [f32; N] = pt_math::lanes::lanes(|k| seg2[k].sqrt());
-    let light_pdf = l.pdf;
-    let mis = power_heuristics(&light_pdf, &bsdf_pdf);
-    // The next segments' origins, on the side each sampled direction leaves to.
-    let next_dir = frames.to_world(&V3::from_fn(|k| bs[k].map_or(Vec3::Z, |b| b.wi)));
-    let nnd = n_out.dot(&next_dir);
-    let next_origin = V3::select(&pt_math::lanes::lanes(|k| nnd[k] >= 0.0), &out, &back);
-
-    for k in 0..N {
-        let (true, Some(h), Some(PathStart { path, sampler, .. })) =
-            (todo[k], &hits[k], &mut slots[k])
-        else {
-            continue;
-        };
-        if l.have[k] {
-            if !l.radiance[k].is_black() && !f[k].is_black() {
-                let ray = if l.dist[k].is_infinite() {
-                    Some(Ray::new(origin.get(k), wi_world.get(k)))
-                } else {
-                    (seg_len[k] > 0.0).then(|| Ray {
-                        origin: origin.get(k),
-                        dir: seg.get(k) / seg_len[k],
-                        tmin: 0.0,
-                        tmax: seg_len[k] * SHADOW_RAY_SHORTEN,
-                    })
-                };
-                if let Some(ray) = ray {
-                    // Delta lights cannot be hit by BSDF sampling: light sampling is the only
-                    // strategy, weight 1.
-                    let w = if s.strategy != Strategy::Light && !l.delta[k] {
-                        mis[k]
-                    } else {
-                        1.0
-                    };
-                    let c =
-                        path.throughput * f[k] * l.radiance[k] * (wi.z[k].abs() * w / light_pdf[k]);
-                    path.shadow = Some((ray, c));
-                }
-            }
-        }
-        continue_path(
-            s,
-            path,
-            sampler,
-            h,
-            bs[k],
-            next_origin.get(k),
-            next_dir.get(k),
-        );
-    }
+    (seg, lanes(|k| seg2[k].sqrt()))
 }
 
 /// The next segment of a path from its BSDF sample (or its end), and Russian roulette
