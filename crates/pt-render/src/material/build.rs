@@ -224,12 +224,11 @@ impl Builder<'_> {
     }
 
     fn model_textured(&mut self, d: &BsdfDesc) -> Result<Material, BuildError> {
-        let mode = self.textures.mode();
         Ok(match &d.kind {
             BsdfKind::Diffuse { reflectance } => Material::Diffuse {
                 reflectance: self.tex("reflectance", reflectance, Role::Albedo)?,
             },
-            // Lights on: the elastic part (the afterglow is rendered by `phosphorescence`).
+            // Lights on: the elastic part (the afterglow is rendered by `afterglow`).
             BsdfKind::Phosphorescent { reflectance, .. } => Material::Diffuse {
                 reflectance: self.tex(
                     "reflectance",
@@ -237,34 +236,7 @@ impl Builder<'_> {
                     Role::Albedo,
                 )?,
             },
-            // Spectral mode: a Lambertian of the total albedo with re-emission; RGB mode cannot
-            // move light between wavelengths and keeps the elastic part only.
-            BsdfKind::Fluorescent {
-                reflectance,
-                absorption,
-                emission,
-                quantum_yield,
-            } => match mode {
-                ColorMode::Spectral => {
-                    use crate::texture::spectrum_for_role as sp;
-                    Material::Fluorescent(Box::new(
-                        Fluorescent::new(
-                            sp(reflectance, Role::Albedo),
-                            &sp(absorption, Role::Albedo),
-                            &sp(emission, Role::Unbounded),
-                            *quantum_yield,
-                        )
-                        .map_err(|m| self.err(m))?,
-                    ))
-                }
-                ColorMode::Rgb => Material::Diffuse {
-                    reflectance: self.tex(
-                        "reflectance",
-                        &TextureDesc::Constant(reflectance.clone()),
-                        Role::Albedo,
-                    )?,
-                },
-            },
+            BsdfKind::Fluorescent { .. } => self.fluorescent(&d.kind)?,
             BsdfKind::OrenNayar {
                 reflectance,
                 sigma,
@@ -288,57 +260,45 @@ impl Builder<'_> {
                 ext_ior,
                 specular_reflectance,
                 specular_transmittance,
-            } => Material::Dielectric {
-                eta: int_ior / ext_ior,
-                specular_reflectance: self.tex(
-                    "specular_reflectance",
+            } => {
+                let (specular_reflectance, specular_transmittance) =
+                    self.factors(specular_reflectance, specular_transmittance)?;
+                Material::Dielectric {
+                    eta: int_ior / ext_ior,
                     specular_reflectance,
-                    Role::Albedo,
-                )?,
-                specular_transmittance: self.tex(
-                    "specular_transmittance",
                     specular_transmittance,
-                    Role::Albedo,
-                )?,
-            },
+                }
+            }
             BsdfKind::ThinDielectric {
                 int_ior,
                 ext_ior,
                 specular_reflectance,
                 specular_transmittance,
-            } => Material::ThinDielectric {
-                eta: int_ior / ext_ior,
-                specular_reflectance: self.tex(
-                    "specular_reflectance",
+            } => {
+                let (specular_reflectance, specular_transmittance) =
+                    self.factors(specular_reflectance, specular_transmittance)?;
+                Material::ThinDielectric {
+                    eta: int_ior / ext_ior,
                     specular_reflectance,
-                    Role::Albedo,
-                )?,
-                specular_transmittance: self.tex(
-                    "specular_transmittance",
                     specular_transmittance,
-                    Role::Albedo,
-                )?,
-            },
+                }
+            }
             BsdfKind::RoughDielectric {
                 int_ior,
                 ext_ior,
                 microfacet,
                 specular_reflectance,
                 specular_transmittance,
-            } => Material::RoughDielectric {
-                eta: int_ior / ext_ior,
-                roughness: self.roughness(microfacet)?,
-                specular_reflectance: self.tex(
-                    "specular_reflectance",
+            } => {
+                let (specular_reflectance, specular_transmittance) =
+                    self.factors(specular_reflectance, specular_transmittance)?;
+                Material::RoughDielectric {
+                    eta: int_ior / ext_ior,
+                    roughness: self.roughness(microfacet)?,
                     specular_reflectance,
-                    Role::Albedo,
-                )?,
-                specular_transmittance: self.tex(
-                    "specular_transmittance",
                     specular_transmittance,
-                    Role::Albedo,
-                )?,
-            },
+                }
+            }
             BsdfKind::Conductor {
                 eta,
                 k,
@@ -367,42 +327,7 @@ impl Builder<'_> {
                 )?,
                 roughness: self.roughness(microfacet)?,
             },
-            BsdfKind::RoughPlastic {
-                diffuse_reflectance,
-                specular_reflectance,
-                int_ior,
-                ext_ior,
-                distribution: dist,
-                alpha,
-                nonlinear,
-            } => {
-                let eta = int_ior / ext_ior;
-                let mf = Microfacet::new(distribution(*dist), *alpha, *alpha);
-                let rho = self.tex("diffuse_reflectance", diffuse_reflectance, Role::Albedo)?;
-                let ks = self.tex(
-                    "specular_reflectance",
-                    specular_reflectance,
-                    Role::Unbounded,
-                )?;
-                // Mitsuba: the share of specular samples from the textures' means (RGB means, the
-                // same for every path; it changes the variance, not the expectation).
-                let mean = |t: &Texture| t.mean_rgb().iter().sum::<f32>() / 3.0;
-                let (d_mean, s_mean) = (mean(&rho), mean(&ks));
-                let weight = if d_mean + s_mean > 0.0 {
-                    s_mean / (d_mean + s_mean)
-                } else {
-                    0.5
-                };
-                Material::RoughPlastic {
-                    diffuse_reflectance: rho,
-                    specular_reflectance: ks,
-                    eta,
-                    microfacet: mf,
-                    nonlinear: *nonlinear,
-                    specular_sampling_weight: weight,
-                    table: CoatingTable::get(mf.dist, mf.alpha_u, eta),
-                }
-            }
+            BsdfKind::RoughPlastic { .. } => self.rough_plastic(&d.kind)?,
             BsdfKind::ThinFilm {
                 thickness,
                 film_ior,
@@ -436,6 +361,94 @@ impl Builder<'_> {
             | BsdfKind::Blend { .. } => {
                 return Err(self.err("internal: a wrapper where a model was expected"))
             }
+        })
+    }
+
+    /// A dielectric's `specular_reflectance` and `specular_transmittance` factors.
+    fn factors(
+        &mut self,
+        r: &TextureDesc,
+        t: &TextureDesc,
+    ) -> Result<(Texture, Texture), BuildError> {
+        Ok((
+            self.tex("specular_reflectance", r, Role::Albedo)?,
+            self.tex("specular_transmittance", t, Role::Albedo)?,
+        ))
+    }
+
+    /// `fluorescent`: in spectral mode a Lambertian of the total albedo with re-emission; RGB
+    /// mode cannot move light between wavelengths and keeps the elastic part only.
+    fn fluorescent(&mut self, kind: &BsdfKind) -> Result<Material, BuildError> {
+        let BsdfKind::Fluorescent {
+            reflectance,
+            absorption,
+            emission,
+            quantum_yield,
+        } = kind
+        else {
+            return Err(self.err("internal: not a fluorescent BSDF"));
+        };
+        Ok(match self.textures.mode() {
+            ColorMode::Spectral => {
+                use crate::texture::spectrum_for_role as sp;
+                let f = Fluorescent::new(
+                    sp(reflectance, Role::Albedo),
+                    &sp(absorption, Role::Albedo),
+                    &sp(emission, Role::Unbounded),
+                    *quantum_yield,
+                )
+                .map_err(|m| self.err(m))?;
+                Material::Fluorescent(Box::new(f))
+            }
+            ColorMode::Rgb => Material::Diffuse {
+                reflectance: self.tex(
+                    "reflectance",
+                    &TextureDesc::Constant(reflectance.clone()),
+                    Role::Albedo,
+                )?,
+            },
+        })
+    }
+
+    /// `roughplastic`: its coating table, and the share of specular samples from the
+    /// textures' means (Mitsuba; RGB means, the same for every path: it changes the variance,
+    /// not the expectation).
+    fn rough_plastic(&mut self, kind: &BsdfKind) -> Result<Material, BuildError> {
+        let BsdfKind::RoughPlastic {
+            diffuse_reflectance,
+            specular_reflectance,
+            int_ior,
+            ext_ior,
+            distribution: dist,
+            alpha,
+            nonlinear,
+        } = kind
+        else {
+            return Err(self.err("internal: not a roughplastic BSDF"));
+        };
+        let eta = int_ior / ext_ior;
+        let mf = Microfacet::new(distribution(*dist), *alpha, *alpha);
+        let rho = self.tex("diffuse_reflectance", diffuse_reflectance, Role::Albedo)?;
+        let ks = self.tex(
+            "specular_reflectance",
+            specular_reflectance,
+            Role::Unbounded,
+        )?;
+        let mean = |t: &Texture| t.mean_rgb().iter().sum::<f32>() / 3.0;
+        let (d_mean, s_mean) = (mean(&rho), mean(&ks));
+        let weight = if d_mean + s_mean > 0.0 {
+            s_mean / (d_mean + s_mean)
+        } else {
+            0.5
+        };
+        Ok(Material::RoughPlastic {
+            diffuse_reflectance: rho,
+            specular_reflectance: ks,
+            eta,
+            microfacet: mf,
+            nonlinear: *nonlinear,
+            specular_sampling_weight: weight,
+            table: CoatingTable::get(mf.dist, mf.alpha_u, eta),
         })
     }
 }

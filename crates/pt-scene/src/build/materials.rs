@@ -446,28 +446,10 @@ pub(super) fn bsdf_kind<'e>(
         "orennayar" => {
             let sigma = b.texture_param(v, n, "sigma")?;
             let sigma = scalar_in(v, "sigma", sigma, 0.0, 0.0..=f32::MAX)?;
-            let variant = match v
-                .string("variant")?
-                .map(|s| s.to_ascii_lowercase())
-                .as_deref()
-            {
-                None | Some("qualitative") => OrenNayarVariant::Qualitative,
-                Some("full") => OrenNayarVariant::Full,
-                Some("fujii") => OrenNayarVariant::Fujii,
-                Some("eon") => OrenNayarVariant::Eon,
-                Some(other) => {
-                    return Err(v.prop_error(
-                        "variant",
-                        format!(
-                            "unknown Oren-Nayar variant '{other}' (qualitative, full, fujii, eon)"
-                        ),
-                    ))
-                }
-            };
             BsdfKind::OrenNayar {
                 reflectance: b.albedo(v, n, "reflectance")?,
                 sigma,
-                variant,
+                variant: oren_nayar_variant(v)?,
             }
         }
         "minnaert" => {
@@ -512,42 +494,7 @@ pub(super) fn bsdf_kind<'e>(
                 specular_transmittance,
             }
         }
-        "roughplastic" => {
-            let int_ior = ior(v, "int_ior", 1.49)?;
-            let ext_ior = ior(v, "ext_ior", 1.000277)?;
-            if int_ior == ext_ior {
-                return Err(v.prop_error(
-                    "int_ior",
-                    "int_ior and ext_ior must differ (the coating would be invisible)",
-                ));
-            }
-            let distribution = distribution(v)?;
-            if v.has("alpha_u") || v.has("alpha_v") {
-                return Err(v.prop_error(
-                    if v.has("alpha_u") {
-                        "alpha_u"
-                    } else {
-                        "alpha_v"
-                    },
-                    "roughplastic is isotropic (as in Mitsuba): give one alpha",
-                ));
-            }
-            let alpha = v.float("alpha")?.unwrap_or(0.1);
-            if !(alpha > 0.0) {
-                return Err(
-                    v.prop_error("alpha", format!("roughness must be positive, got {alpha}"))
-                );
-            }
-            BsdfKind::RoughPlastic {
-                diffuse_reflectance: b.albedo(v, n, "diffuse_reflectance")?,
-                specular_reflectance: b.factor(v, n, "specular_reflectance")?,
-                int_ior,
-                ext_ior,
-                distribution,
-                alpha,
-                nonlinear: v.boolean("nonlinear")?.unwrap_or(false),
-            }
-        }
+        "roughplastic" => b.rough_plastic(v, n)?,
         "conductor" => {
             let (eta, k) = b.conductor_ior(v, n)?;
             let specular_reflectance = b.factor(v, n, "specular_reflectance")?;
@@ -578,28 +525,89 @@ pub(super) fn bsdf_kind<'e>(
                 quantum_yield,
             }
         }
-        "phosphorescent" => {
-            let (reflectance, absorption, emission, quantum_yield) = luminescent(v)?;
-            let lifetime = v.float("lifetime")?.ok_or_else(|| {
-                v.prop_error(
-                    "lifetime",
-                    "phosphorescent needs <float name=\"lifetime\"> (seconds)",
-                )
-            })?;
-            if !(lifetime > 0.0) {
-                return Err(v.prop_error(
-                    "lifetime",
-                    format!("lifetime must be positive (seconds), got {lifetime}"),
-                ));
-            }
-            BsdfKind::Phosphorescent {
-                reflectance,
-                absorption,
-                emission,
-                quantum_yield,
-                lifetime,
-            }
-        }
+        "phosphorescent" => phosphorescent(v)?,
         _ => return Err(super::plugin_error(v.el)),
+    })
+}
+
+impl<'e> Builder<'e> {
+    /// `roughplastic`: `diffuse_reflectance` (0.5), `specular_reflectance` (1), `int_ior`
+    /// (polypropylene, 1.49), `ext_ior` (air), `distribution`, `alpha` (0.1, a float and
+    /// isotropic, as in Mitsuba), `nonlinear` (false).
+    fn rough_plastic(&mut self, v: &ObjectView<'e>, n: &Nested<'e>) -> Result<BsdfKind> {
+        let int_ior = ior(v, "int_ior", 1.49)?;
+        let ext_ior = ior(v, "ext_ior", 1.000277)?;
+        if int_ior == ext_ior {
+            return Err(v.prop_error(
+                "int_ior",
+                "int_ior and ext_ior must differ (the coating would be invisible)",
+            ));
+        }
+        let distribution = distribution(v)?;
+        if v.has("alpha_u") || v.has("alpha_v") {
+            return Err(v.prop_error(
+                if v.has("alpha_u") {
+                    "alpha_u"
+                } else {
+                    "alpha_v"
+                },
+                "roughplastic is isotropic (as in Mitsuba): give one alpha",
+            ));
+        }
+        let alpha = v.float("alpha")?.unwrap_or(0.1);
+        if !(alpha > 0.0) {
+            return Err(v.prop_error("alpha", format!("roughness must be positive, got {alpha}")));
+        }
+        Ok(BsdfKind::RoughPlastic {
+            diffuse_reflectance: self.albedo(v, n, "diffuse_reflectance")?,
+            specular_reflectance: self.factor(v, n, "specular_reflectance")?,
+            int_ior,
+            ext_ior,
+            distribution,
+            alpha,
+            nonlinear: v.boolean("nonlinear")?.unwrap_or(false),
+        })
+    }
+}
+
+/// The Oren-Nayar `variant` (qualitative by default).
+fn oren_nayar_variant(v: &ObjectView<'_>) -> Result<OrenNayarVariant> {
+    match v
+        .string("variant")?
+        .map(|s| s.to_ascii_lowercase())
+        .as_deref()
+    {
+        None | Some("qualitative") => Ok(OrenNayarVariant::Qualitative),
+        Some("full") => Ok(OrenNayarVariant::Full),
+        Some("fujii") => Ok(OrenNayarVariant::Fujii),
+        Some("eon") => Ok(OrenNayarVariant::Eon),
+        Some(other) => Err(v.prop_error(
+            "variant",
+            format!("unknown Oren-Nayar variant '{other}' (qualitative, full, fujii, eon)"),
+        )),
+    }
+}
+
+/// `phosphorescent`: the luminescent parameters and `lifetime` (seconds, required).
+fn phosphorescent(v: &ObjectView<'_>) -> Result<BsdfKind> {
+    let (reflectance, absorption, emission, quantum_yield) = luminescent(v)?;
+    let lifetime = v.float("lifetime")?.ok_or_else(|| {
+        v.prop_error(
+            "lifetime",
+            "phosphorescent needs <float name=\"lifetime\"> (seconds)",
+        )
+    })?;
+    if !(lifetime > 0.0) {
+        return Err(v.prop_error(
+            "lifetime",
+            format!("lifetime must be positive (seconds), got {lifetime}"),
+        ));
+    }
+    Ok(BsdfKind::Phosphorescent {
+        reflectance,
+        absorption,
+        emission,
+        quantum_yield,
+        lifetime,
     })
 }

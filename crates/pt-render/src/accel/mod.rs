@@ -1,0 +1,371 @@
+//! The acceleration structure: one obvhs BVH over all primitives, kept unaware of materials.
+//!
+//! Both obvhs layouts are available: the compressed 8-wide CWBVH (Ylitie et al. 2017) and the
+//! binary BVH2 built by PLOC. CWBVH is the default; `benches/traversal.rs` compares them. Scenes
+//! of at most [`FLAT_MAX`] primitives (a Cornell box has 18) get no tree by default: every
+//! triangle and parallelogram is tested, eight at a time in SIMD lanes ([`BvhKind::Flat`]),
+//! which is faster than any traversal at that size.
+
+use crate::geometry::Primitive;
+use obvhs::aabb::Aabb;
+use obvhs::bvh2::builder::build_bvh2;
+use obvhs::bvh2::reinsertion::ReinsertionOptimizer;
+use obvhs::bvh2::Bvh2;
+use obvhs::cwbvh::builder::build_cwbvh;
+use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
+use obvhs::cwbvh::node::CwBvhNode;
+use obvhs::cwbvh::CwBvh;
+use obvhs::faststack::StackStack;
+use obvhs::ploc::PlocBuilder;
+use obvhs::ray::{Ray as BvhRay, RayHit};
+use obvhs::{Boundable, BvhBuildParams};
+// The `traverse!` macro of obvhs names `UVec2` unqualified.
+use glam::UVec2;
+use pt_math::{Ray, Vec3A};
+use std::time::Duration;
+
+/// Which BVH layout to build.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum BvhKind {
+    /// [`BvhKind::Flat`] for scenes of at most [`FLAT_MAX`] primitives, [`BvhKind::CwBvh`] for
+    /// larger ones (default).
+    #[default]
+    Auto,
+    /// Compressed wide BVH8.
+    CwBvh,
+    /// Binary BVH.
+    Bvh2,
+    /// No tree: every primitive is tested for every ray, triangles and parallelograms eight at
+    /// a time in SIMD lanes. Only sensible for small scenes (cost grows with the primitive
+    /// count).
+    Flat,
+}
+
+/// Largest scene that [`BvhKind::Auto`] tests without a tree. Measured (`benches/traversal.rs`,
+/// incoherent closest-hit rays, one thread): see the README's Performance section.
+pub const FLAT_MAX: usize = 32;
+
+enum Tree {
+    Cw(CwBvh),
+    /// Large scenes: several CWBVHs over spatially separate groups of primitives (see
+    /// [`Accel::build_compact`]).
+    CwChunks(Vec<Chunk>),
+    Two(Bvh2),
+    /// No tree: `prims[..blocks.len() * LANES]` (at most) are the triangles and parallelograms,
+    /// also held in `blocks`; spheres follow them and are tested one by one.
+    Flat {
+        blocks: Vec<Block>,
+        spheres_from: usize,
+    },
+    Empty,
+}
+
+/// One CWBVH of a chunked tree: its primitives are `prims[base..]`, in its traversal order.
+struct Chunk {
+    bvh: CwBvh,
+    base: usize,
+    bounds: Aabb,
+}
+
+/// Largest number of primitives built as one CWBVH by [`Accel::build_compact`]: above it, the
+/// primitives are split into 2, 4 or 8 spatial groups built one after the other, because
+/// obvhs's CWBVH conversion holds 208 bytes per primitive of temporaries (binary nodes and cost
+/// table). 2^18 keeps those under 60 MB per group; traversal then tests each group's box first.
+const CHUNK_PRIMS: usize = 1 << 18;
+
+/// Most groups a chunked tree has (a fixed array orders them per ray); larger scenes make larger
+/// groups.
+const MAX_CHUNKS: usize = 8;
+
+/// A BVH over primitives stored in traversal order.
+pub struct Accel {
+    tree: Tree,
+    /// Whether every CWBVH here is shallow enough for [`SMALL_STACK`] (chosen at build time).
+    small_stack: bool,
+    /// Primitives reordered so that the BVH's primitive id indexes this directly.
+    pub prims: Vec<Primitive>,
+    /// For each entry of `prims`, its index in the order given to [`Accel::build`].
+    pub original_index: Vec<u32>,
+    /// Without a tree (at most [`FLAT_MAX`] primitives, or forced): each triangle's and
+    /// parallelogram's unit normal `normalize(e1 x e2)`, computed once instead of at every hit
+    /// (the same expression, so the same bits). Empty otherwise.
+    pub unit_normals: Vec<pt_math::Vec3>,
+}
+
+impl Accel {
+    /// Builds the BVH. Primitives are reordered; `original_index` maps back.
+    ///
+    /// Memory: the builder reads the primitives' boxes directly (no array of boxes), and the
+    /// primitives are permuted in place afterwards (no second copy).
+    pub fn build(mut prims: Vec<Primitive>, kind: BvhKind) -> Self {
+        if prims.is_empty() {
+            return Accel {
+                tree: Tree::Empty,
+                small_stack: true,
+                prims,
+                original_index: Vec::new(),
+                unit_normals: Vec::new(),
+            };
+        }
+        if use_flat(kind, prims.len()) {
+            return Accel::build_flat(prims);
+        }
+        let params = BvhBuildParams::medium_build();
+        let mut t = Duration::default();
+        let (tree, order) = match kind {
+            BvhKind::CwBvh | BvhKind::Auto | BvhKind::Flat => {
+                let bvh = build_cwbvh(&prims, params, &mut t);
+                let order = bvh.primitive_indices.clone();
+                (Tree::Cw(bvh), order)
+            }
+            BvhKind::Bvh2 => {
+                let bvh = build_bvh2(&prims, params, &mut t);
+                let order = bvh.primitive_indices.clone();
+                (Tree::Two(bvh), order)
+            }
+        };
+        permute_in_place(&mut prims, &order);
+        Accel {
+            small_stack: fits_small_stack(&tree),
+            tree,
+            prims,
+            original_index: order,
+            unit_normals: Vec::new(),
+        }
+    }
+
+    /// [`Accel::build`] with a lower memory peak, for large meshes: the primitives are dropped
+    /// while the tree is built and made again afterwards, in traversal order, by `remake(i)`,
+    /// which must return the primitive that was `prims[i]`. The tree and the resulting `prims`
+    /// and `original_index` are the same as [`Accel::build`]'s.
+    ///
+    /// Memory (1M triangles): the builder reads 24-byte boxes instead of the 64-byte primitives,
+    /// and frees them once the binary tree is built, before the CWBVH conversion, whose
+    /// temporaries (112 MB of cost table next to the 96 MB binary tree) are the peak. This is
+    /// obvhs's `build_cwbvh` (PLOC, reinsertion, conversion with the same parameters) written
+    /// out so that the boxes can be freed in between.
+    pub fn build_compact(
+        prims: Vec<Primitive>,
+        kind: BvhKind,
+        remake: impl Fn(usize) -> Primitive,
+    ) -> Self {
+        Self::build_compact_chunked(prims, kind, remake, CHUNK_PRIMS)
+    }
+
+    /// [`Accel::build_compact`] with CWBVH groups of at most `chunk_prims` primitives (as long
+    /// as that makes at most [`MAX_CHUNKS`] groups).
+    fn build_compact_chunked(
+        prims: Vec<Primitive>,
+        kind: BvhKind,
+        remake: impl Fn(usize) -> Primitive,
+        chunk_prims: usize,
+    ) -> Self {
+        if prims.is_empty() {
+            return Accel {
+                tree: Tree::Empty,
+                small_stack: true,
+                prims,
+                original_index: Vec::new(),
+                unit_normals: Vec::new(),
+            };
+        }
+        if use_flat(kind, prims.len()) {
+            return Accel::build_flat(prims);
+        }
+        let mut boxes: Vec<BuildBox> = Vec::with_capacity(prims.len());
+        boxes.extend(prims.iter().map(|p| BuildBox::from(p.aabb())));
+        drop(prims);
+        let params = BvhBuildParams::medium_build();
+        let (tree, order) = match kind {
+            BvhKind::CwBvh | BvhKind::Auto | BvhKind::Flat if boxes.len() <= chunk_prims => {
+                let bvh = build_cw_low_memory(boxes, &params);
+                let order = bvh.primitive_indices.clone();
+                (Tree::Cw(bvh), order)
+            }
+            BvhKind::CwBvh | BvhKind::Auto | BvhKind::Flat => {
+                let parts = boxes
+                    .len()
+                    .div_ceil(chunk_prims)
+                    .next_power_of_two()
+                    .min(MAX_CHUNKS);
+                let mut ids: Vec<u32> = (0..boxes.len() as u32).collect();
+                split_median(&mut ids, &boxes, parts);
+                let mut order = Vec::with_capacity(ids.len());
+                let mut chunks = Vec::with_capacity(parts);
+                let size = ids.len().div_ceil(parts);
+                for group in ids.chunks(size) {
+                    let group_boxes: Vec<BuildBox> =
+                        group.iter().map(|&i| boxes[i as usize]).collect();
+                    let bvh = build_cw_low_memory(group_boxes, &params);
+                    let base = order.len();
+                    order.extend(bvh.primitive_indices.iter().map(|&k| group[k as usize]));
+                    chunks.push(Chunk {
+                        bounds: bvh.total_aabb,
+                        bvh,
+                        base,
+                    });
+                }
+                drop(boxes);
+                (Tree::CwChunks(chunks), order)
+            }
+            BvhKind::Bvh2 => {
+                let bvh = build_bvh2(&boxes, params, &mut Duration::default());
+                drop(boxes);
+                let order = bvh.primitive_indices.clone();
+                (Tree::Two(bvh), order)
+            }
+        };
+        let mut prims = Vec::with_capacity(order.len());
+        prims.extend(order.iter().map(|&i| remake(i as usize)));
+        Accel {
+            small_stack: fits_small_stack(&tree),
+            tree,
+            prims,
+            original_index: order,
+            unit_normals: Vec::new(),
+        }
+    }
+
+    /// The flat "tree" ([`BvhKind::Flat`]): triangles and parallelograms first, in their given
+    /// order, copied into SIMD blocks; spheres after them.
+    fn build_flat(mut prims: Vec<Primitive>) -> Self {
+        let mut order: Vec<u32> = (0..prims.len() as u32).collect();
+        // Stable: the order within each kind is kept.
+        order.sort_by_key(|&i| matches!(prims[i as usize], Primitive::Sphere { .. }));
+        permute_in_place(&mut prims, &order);
+        let spheres_from = prims
+            .iter()
+            .position(|p| matches!(p, Primitive::Sphere { .. }))
+            .unwrap_or(prims.len());
+        let blocks = prims[..spheres_from]
+            .chunks(LANES)
+            .map(Block::new)
+            .collect();
+        let unit_normals = prims[..spheres_from]
+            .iter()
+            .map(|p| match *p {
+                Primitive::Triangle { e1, e2, .. } | Primitive::Parallelogram { e1, e2, .. } => {
+                    pt_math::Vec3::from(e1.cross(e2)).normalize()
+                }
+                Primitive::Sphere { .. } => pt_math::Vec3::ZERO,
+            })
+            .collect();
+        Accel {
+            tree: Tree::Flat {
+                blocks,
+                spheres_from,
+            },
+            small_stack: false,
+            prims,
+            original_index: order,
+            unit_normals,
+        }
+    }
+
+    /// Closest hit along the ray: which primitive, at what distance, with the edge coordinates
+    /// its test found (so the caller need not test it again).
+    #[inline(always)]
+    pub fn intersect(&self, ray: &Ray) -> Option<AccelHit> {
+        if let Tree::Flat {
+            blocks,
+            spheres_from,
+        } = &self.tree
+        {
+            return flat_closest(blocks, &self.prims[*spheres_from..], *spheres_from, ray);
+        }
+        let r = bvh_ray(ray);
+        let mut hit = RayHit::none();
+        let prims = &self.prims;
+        // obvhs and `cw_closest` accept a candidate exactly when its distance is below the
+        // current `tmax`, so the barycentrics of the last candidate below it are the hit's.
+        let mut bary = (0.0, 0.0);
+        let mut f = |r: &BvhRay, id: usize| {
+            let (t, b1, b2) = prims[id].intersect_bary(r.origin, r.direction, r.tmin, r.tmax);
+            if t < r.tmax {
+                bary = (b1, b2);
+            }
+            t
+        };
+        let found = match &self.tree {
+            Tree::Cw(b) if self.small_stack => cw_closest::<SMALL_STACK>(b, r, &mut hit, &mut f),
+            Tree::Cw(b) => cw_closest::<LARGE_STACK>(b, r, &mut hit, &mut f),
+            Tree::CwChunks(chunks) => chunks_closest(chunks, r, &mut hit, &mut f),
+            Tree::Two(b) => b.ray_traverse(r, &mut hit, &mut f),
+            Tree::Flat { .. } => unreachable!("handled above"),
+            Tree::Empty => false,
+        };
+        found.then_some(AccelHit {
+            index: hit.primitive_id as usize,
+            t: hit.t,
+            b1: bary.0,
+            b2: bary.1,
+        })
+    }
+
+    /// Whether anything blocks the ray within `(tmin, tmax)` (any-hit traversal, stops at the
+    /// first blocker).
+    #[inline(always)]
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        if let Tree::Flat {
+            blocks,
+            spheres_from,
+        } = &self.tree
+        {
+            return flat_any(blocks, &self.prims[*spheres_from..], ray);
+        }
+        let r = bvh_ray(ray);
+        let prims = &self.prims;
+        let f = |r: &BvhRay, id: usize| prims[id].intersect(r.origin, r.direction, r.tmin, r.tmax);
+        match &self.tree {
+            Tree::Cw(b) if self.small_stack => cw_any::<SMALL_STACK>(b, r, prims),
+            Tree::Cw(b) => cw_any::<LARGE_STACK>(b, r, prims),
+            Tree::CwChunks(chunks) => chunks.iter().any(|c| {
+                c.bounds.intersect_ray(&r) < r.tmax
+                    && cw_any::<LARGE_STACK>(&c.bvh, r, &prims[c.base..])
+            }),
+            Tree::Two(b) => !b.ray_traverse_miss(r, f),
+            Tree::Flat { .. } => unreachable!("handled above"),
+            Tree::Empty => false,
+        }
+    }
+}
+
+/// The closest hit [`Accel::intersect`] found.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AccelHit {
+    /// Index into [`Accel::prims`].
+    pub index: usize,
+    /// Distance along the ray (in units of the ray's direction vector).
+    pub t: f32,
+    /// Coordinate along the primitive's first edge: a triangle's barycentric weight of
+    /// `v0 + e1`, a parallelogram's fraction of `e1`; 0 for spheres.
+    pub b1: f32,
+    /// The same along the second edge (`v0 + e2`, `e2`).
+    pub b2: f32,
+}
+
+/// obvhs's ray for `ray`: the same values as its `Ray::new` (its `safe_inverse`: components of
+/// magnitude at most `f32::EPSILON` invert to `±1 / EPSILON`), computed on all three lanes at
+/// once instead of with a branch per component.
+#[inline(always)]
+fn bvh_ray(ray: &Ray) -> BvhRay {
+    let d = Vec3A::from(ray.dir);
+    let tiny = d.abs().cmple(Vec3A::splat(f32::EPSILON));
+    let inv_direction = Vec3A::select(tiny, d.signum() / f32::EPSILON, Vec3A::ONE / d);
+    BvhRay {
+        origin: Vec3A::from(ray.origin),
+        direction: d,
+        inv_direction,
+        tmin: ray.tmin,
+        tmax: ray.tmax,
+    }
+}
+
+mod cwbvh;
+mod flat;
+#[cfg(test)]
+mod tests;
+
+pub(crate) use cwbvh::permute_in_place;
+use cwbvh::*;
+use flat::*;
