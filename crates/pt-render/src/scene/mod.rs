@@ -307,3 +307,80 @@ impl Scene {
         self.light_distr.as_ref().map_or(0.0, |d| d.pmf(i))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{BvhKind, LightSelection};
+
+    /// A sphere turned by its `to_world` keeps Mitsuba's parameterisation in its own frame:
+    /// u = azimuth about the object's z axis / 2 pi, v = polar angle from +z / pi, and dp/du
+    /// along the object's azimuth direction carried to the world (the tangent that orients
+    /// anisotropic BSDFs; it was the world's azimuth before, which turned highlights by 90
+    /// degrees). Here the object's z axis is the world's +x (rotation about y by 90 degrees),
+    /// so a hit on the world's +y axis is at object (0, 1, 0): u = 1/4, v = 1/2, and dp/du
+    /// points along the object's -x, which is the world's +z (the world's azimuth about z
+    /// would give -x instead).
+    #[test]
+    fn rotated_sphere_follows_its_object_frame() {
+        let xml = r#"<scene version="3.0.0">
+            <shape type="sphere">
+                <float name="radius" value="2"/>
+                <transform name="to_world"><rotate y="1" angle="90"/><translate x="1"/></transform>
+            </shape>
+        </scene>"#;
+        let desc = pt_scene::load_str(
+            xml,
+            std::path::Path::new("t.xml"),
+            std::path::Path::new("."),
+            &[],
+        )
+        .unwrap();
+        let scene = Scene::build(&desc, BvhKind::Auto, LightSelection::Power).unwrap();
+        // Rotation about y by +90 degrees maps object x -> world -z, y -> y, z -> world +x.
+        let frame = Mat3::from_rotation_y(std::f32::consts::FRAC_PI_2);
+        let centre = Vec3::new(1.0, 0.0, 0.0);
+        for (origin, object_dir) in [
+            (Vec3::new(1.0, 5.0, 0.0), Vec3::Y),
+            (Vec3::new(1.0, 0.0, -5.0), Vec3::X),
+            (Vec3::new(5.0, 0.0, 0.0), Vec3::Z),
+            (Vec3::new(1.0, -5.0, 0.0), -Vec3::Y),
+        ] {
+            let world_dir = frame * object_dir;
+            let ray = Ray::new(origin, (centre + world_dir * 2.0 - origin).normalize());
+            let hit = scene.intersect(&ray).expect("the ray hits the sphere");
+            assert!(
+                (hit.p - (centre + world_dir * 2.0)).length() < 1e-4,
+                "{}",
+                hit.p
+            );
+            let o = object_dir;
+            let mut u = o.y.atan2(o.x) / std::f32::consts::TAU;
+            if u < 0.0 {
+                u += 1.0;
+            }
+            let v = o.z.clamp(-1.0, 1.0).acos() / std::f32::consts::PI;
+            // At the poles (object z) u is arbitrary and dp/du vanishes.
+            if o.z.abs() < 0.5 {
+                assert!(
+                    (hit.uv - Vec2::new(u, v)).abs().max_element() < 1e-5,
+                    "{} vs {u} {v}",
+                    hit.uv
+                );
+                let expected = frame * Vec3::new(-o.y, o.x, 0.0) * (std::f32::consts::TAU * 2.0);
+                assert!(
+                    (hit.dpdu - expected).length() < 1e-3 * expected.length(),
+                    "{} vs {expected}",
+                    hit.dpdu
+                );
+            } else {
+                assert!(
+                    (hit.uv.y - v).abs() < 1e-5 && hit.dpdu.length() < 1e-4,
+                    "{} {}",
+                    hit.uv,
+                    hit.dpdu
+                );
+            }
+        }
+    }
+}
