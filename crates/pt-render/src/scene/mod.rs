@@ -383,4 +383,96 @@ mod tests {
             }
         }
     }
+
+    /// `mesh_attribute` reads the hit shape's values: vertex values interpolated with the hit's
+    /// barycentric weights, face values constant per triangle; a mesh without the attribute
+    /// a material reads is a build error naming the shape.
+    #[test]
+    fn mesh_attributes_at_hits() {
+        let xml = r#"<scene version="3.0.0">
+            <shape type="rectangle"><bsdf type="diffuse">
+                <texture type="mesh_attribute" name="reflectance"><string name="name" value="vertex_color"/></texture>
+            </bsdf></shape>
+            <shape type="rectangle"><transform name="to_world"><translate z="-1"/></transform><bsdf type="diffuse">
+                <texture type="mesh_attribute" name="reflectance"><string name="name" value="face_tint"/><float name="scale" value="0.5"/></texture>
+            </bsdf></shape>
+        </scene>"#;
+        let mut desc = pt_scene::load_str(
+            xml,
+            std::path::Path::new("t.xml"),
+            std::path::Path::new("."),
+            &[],
+        )
+        .unwrap();
+        let e = Scene::build(&desc, BvhKind::Auto, LightSelection::Power)
+            .err()
+            .expect("no attributes yet");
+        assert!(
+            e.message.contains("mesh attribute 'vertex_color'") && e.loc.line == 2,
+            "{e}"
+        );
+        use pt_scene::{AttributeKind, Geometry, MeshAttribute};
+        // The rectangle's corners are (-1,-1), (1,-1), (1,1), (-1,1); triangles (0,1,2), (0,2,3).
+        let corners = [
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+            [1.0, 1.0, 1.0],
+        ];
+        let faces = [[0.2, 0.4, 0.6], [0.8, 0.6, 0.4]];
+        for (i, (name, kind, values)) in [
+            ("vertex_color", AttributeKind::Vertex, corners.concat()),
+            ("face_tint", AttributeKind::Face, faces.concat()),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let Geometry::Mesh(m) = &mut desc.shapes[i].geometry else {
+                panic!()
+            };
+            m.attributes.push(MeshAttribute {
+                name: name.into(),
+                kind,
+                dims: 3,
+                values,
+            });
+        }
+        let scene = Scene::build(&desc, BvhKind::Auto, LightSelection::Power).unwrap();
+        let lambda = pt_spectrum::SampledWavelengths::sample_visible(0.5);
+        let albedo = |x: f32, y: f32, z: f32| {
+            let hit = scene
+                .intersect(&Ray::new(Vec3::new(x, y, z), -Vec3::Z))
+                .expect("hit");
+            match scene.bsdf(&hit, &lambda).bsdf {
+                pt_bsdf::Bsdf::Lambert(l) => l.reflectance.rgb(),
+                b => panic!("{b:?}"),
+            }
+        };
+        let close = |a: [f32; 3], b: [f32; 3]| (0..3).all(|c| (a[c] - b[c]).abs() < 1e-5);
+        // At (0.5, -0.5) in triangle (0, 1, 2): weights 0.25, 0.5, 0.25.
+        let a = albedo(0.5, -0.5, 1.0);
+        assert!(close(a, [0.25, 0.5, 0.25]), "{a:?}");
+        // At (-0.5, 0.5) in triangle (0, 2, 3): weights 0.25, 0.25, 0.5.
+        let a = albedo(-0.5, 0.5, 1.0);
+        assert!(close(a, [0.75, 0.5, 0.75]), "{a:?}");
+        // Face values times the scale, the same anywhere in each triangle.
+        for (x, y, want) in [
+            (0.5, -0.5, [0.1, 0.2, 0.3]),
+            (0.9, -0.8, [0.1, 0.2, 0.3]),
+            (-0.5, 0.5, [0.4, 0.3, 0.2]),
+        ] {
+            let hit = scene
+                .intersect(&Ray::new(Vec3::new(x, y, -0.5), -Vec3::Z))
+                .expect("hit");
+            let b = scene.bsdf(&hit, &lambda).bsdf;
+            let pt_bsdf::Bsdf::Lambert(l) = b else {
+                panic!("{b:?}")
+            };
+            assert!(
+                close(l.reflectance.rgb(), want),
+                "({x}, {y}): {:?}",
+                l.reflectance.rgb()
+            );
+        }
+    }
 }

@@ -215,6 +215,8 @@ impl<'e> Builder<'e> {
                 "bsdf" => drop(self.bsdf_desc(el)?),
                 // Validated now; shapes use it through <ref name="interior" id="..."/>.
                 "medium" => drop(medium(el)?),
+                // Validated now; materials use it through <ref name="..." id="..."/>.
+                "texture" => drop(self.texture(el)?),
                 "emitter" if el.attr("type") == Some("area") => {
                     return Err(self.top_level_emitter(el))
                 }

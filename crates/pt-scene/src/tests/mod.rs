@@ -6,6 +6,7 @@ mod loader;
 mod materials;
 mod sensor;
 mod shapes;
+mod textures;
 
 use glam::{Vec2, Vec3};
 use std::path::{Path, PathBuf};
