@@ -50,42 +50,51 @@ pub(crate) fn rectangle() -> LocalMesh {
     }
 }
 
-/// Mitsuba's `cube`: [-1, 1]^3 with outward faces. Each face has its own four vertices so that
-/// every face gets the full (0,0)..(1,1) uv square.
+/// Mitsuba's `cube`: [-1, 1]^3 with outward faces, each with its own four vertices and the
+/// full (0,0)..(1,1) uv square laid out as Mitsuba 3's cube lays it (its vertex buffers: faces
+/// -y, +y, +x, +z, -x, -z; corners with uvs (0,1), (1,1), (1,0), (0,0); triangles (0,1,2) and
+/// (3,0,2)). The layout decides where a texture lands on each face and which way dp/du points,
+/// so anisotropic materials and normal maps on cubes match Mitsuba too.
 pub(crate) fn cube() -> LocalMesh {
+    /// Each face's corners in the order of `CORNER_UVS`.
+    const FACES: [[[f32; 3]; 4]; 6] = [
+        [
+            [1., -1., -1.],
+            [1., -1., 1.],
+            [-1., -1., 1.],
+            [-1., -1., -1.],
+        ],
+        [[1., 1., -1.], [-1., 1., -1.], [-1., 1., 1.], [1., 1., 1.]],
+        [[1., -1., -1.], [1., 1., -1.], [1., 1., 1.], [1., -1., 1.]],
+        [[1., -1., 1.], [1., 1., 1.], [-1., 1., 1.], [-1., -1., 1.]],
+        [
+            [-1., -1., 1.],
+            [-1., 1., 1.],
+            [-1., 1., -1.],
+            [-1., -1., -1.],
+        ],
+        [
+            [1., 1., -1.],
+            [1., -1., -1.],
+            [-1., -1., -1.],
+            [-1., 1., -1.],
+        ],
+    ];
+    const CORNER_UVS: [[f32; 2]; 4] = [[0., 1.], [1., 1.], [1., 0.], [0., 0.]];
     let mut mesh = LocalMesh {
         uvs: Some(Vec::new()),
         ..Default::default()
     };
-    for axis in 0..3 {
-        for sign in [-1.0f32, 1.0] {
-            let n = Vec3::from_array(std::array::from_fn(|i| if i == axis { sign } else { 0.0 }));
-            // (u, v, n) right-handed, so corners listed by increasing (u, v) wind around +n.
-            let u = Vec3::from_array(std::array::from_fn(|i| {
-                if i == (axis + 1) % 3 {
-                    1.0
-                } else {
-                    0.0
-                }
-            }));
-            let v = n.cross(u);
-            add_quad(&mut mesh, n, u, v);
+    for face in FACES {
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend(face.map(Vec3::from_array));
+        if let Some(uvs) = mesh.uvs.as_mut() {
+            uvs.extend(CORNER_UVS.map(Vec2::from_array));
         }
+        mesh.indices.push([base, base + 1, base + 2]);
+        mesh.indices.push([base + 3, base, base + 2]);
     }
     mesh
-}
-
-fn add_quad(mesh: &mut LocalMesh, n: Vec3, u: Vec3, v: Vec3) {
-    let base = mesh.positions.len() as u32;
-    let corners = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)];
-    for (a, b) in corners {
-        mesh.positions.push(n + u * a + v * b);
-        if let Some(uvs) = mesh.uvs.as_mut() {
-            uvs.push(Vec2::new((a + 1.0) * 0.5, (b + 1.0) * 0.5));
-        }
-    }
-    mesh.indices.push([base, base + 1, base + 2]);
-    mesh.indices.push([base, base + 2, base + 3]);
 }
 
 /// Mitsuba's `disk` (unit radius, z = 0, facing +z) as a fan of [`DISK_SEGMENTS`] triangles.
@@ -297,6 +306,35 @@ mod tests {
             );
         }
         assert!((area(&m) - 24.0).abs() < 1e-4);
+    }
+
+    /// Mitsuba 3.9.1's cube uvs as functions of the position on each face (read from its
+    /// vertex buffers): a texture on a pt cube lands where it lands in Mitsuba.
+    #[test]
+    fn cube_uvs_follow_mitsuba() {
+        let m = cube();
+        let uvs = m.uvs.as_ref().unwrap();
+        let half = |t: f32| (t + 1.0) * 0.5;
+        // Per face (its outward normal tells which), each corner's uv follows the face's rule.
+        let mesh = to_world(cube(), &Mat4::IDENTITY, false).unwrap();
+        for (f, quad) in m.positions.chunks(4).enumerate() {
+            let n = face_normal(&mesh, 2 * f);
+            let rule = |p: Vec3| {
+                let (x, y, z) = (p.x, p.y, p.z);
+                match (n.x.round() as i32, n.y.round() as i32, n.z.round() as i32) {
+                    (-1, 0, 0) => Vec2::new(half(y), half(z)),
+                    (1, 0, 0) => Vec2::new(half(y), half(-z)),
+                    (0, -1, 0) => Vec2::new(half(z), half(x)),
+                    (0, 1, 0) => Vec2::new(half(-x), half(-z)),
+                    (0, 0, -1) => Vec2::new(half(-y), half(x)),
+                    (0, 0, 1) => Vec2::new(half(y), half(x)),
+                    other => panic!("face {f}: normal {other:?} is not an axis"),
+                }
+            };
+            for (c, p) in quad.iter().enumerate() {
+                assert_eq!(uvs[4 * f + c], rule(*p), "face {f} corner {p}");
+            }
+        }
     }
 
     #[test]
