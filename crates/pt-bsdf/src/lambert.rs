@@ -98,7 +98,7 @@ impl Lambert {
     ) -> (V3<N>, [f32; N], [bool; N]) {
         let wi = square_to_cosine_hemisphere_lanes(ux, uy);
         let pdf: [f32; N] = pt_math::lanes::lanes(|k| cosine_hemisphere_pdf_z(wi.z[k]));
-        let ok = pt_math::lanes::lanes(|k| !(wo_z[k] <= 0.0) && !(pdf[k] <= 0.0));
+        let ok = pt_math::lanes::lanes(|k| !(wo_z[k] <= 0.0) & !(pdf[k] <= 0.0));
         (wi, pdf, ok)
     }
 }

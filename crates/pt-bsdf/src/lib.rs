@@ -364,7 +364,7 @@ impl SurfaceBsdf {
 /// both sides themselves), else 1.
 #[inline(always)]
 pub fn mirror_side(two_sided: bool, transmissive: bool, wo_z: f32) -> f32 {
-    if two_sided && wo_z < 0.0 && !transmissive {
+    if two_sided & (wo_z < 0.0) & !transmissive {
         -1.0
     } else {
         1.0

@@ -202,14 +202,14 @@ pub fn trace_paths(
             break;
         }
         // Emission found by the new segments; the paths that go on scatter together.
-        let mut todo = [false; MAX_PATHS];
-        for ((slot, hit), t) in slots.iter_mut().zip(&hits).zip(todo.iter_mut()) {
+        let mut todo: pt_math::lanes::Mask = 0;
+        for (k, (slot, hit)) in slots.iter_mut().zip(&hits).enumerate() {
             if let Some(PathStart { path, .. }) = slot {
-                *t = arrive(scene, s, path, hit) && hit.is_some();
+                todo |= u32::from(arrive(scene, s, path, hit) && hit.is_some()) << k;
             }
         }
-        if todo.iter().any(|&t| t) {
-            crate::scatter::scatter(scene, s, &mut slots, &hits, &todo);
+        if todo != 0 {
+            crate::scatter::scatter(scene, s, &mut slots, &hits, todo);
         }
     }
 }

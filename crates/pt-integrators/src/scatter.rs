@@ -10,11 +10,16 @@
 //! scenes). Those kernels are the models' only implementation (their single-value functions
 //! are the kernels with one lane), so lanes and single paths cannot drift apart. Each path
 //! draws its random numbers in the same order as it would alone.
+//!
+//! Three passes over the lanes do what cannot run in SIMD: the draws (gathering each hit,
+//! resolving its BSDF, drawing its random numbers and its light), the models without a lane
+//! kernel, and the results (shadow rays, next segments). Between them the lane kernels run
+//! for all lanes; a lane whose result is not used costs nothing extra in a SIMD register.
 
 use crate::path::{PathSettings, PathStart, PathState, Strategy, MAX_PATHS};
-use pt_bsdf::{mirror_side, BsdfSample, Lambert, SurfaceBsdf};
-use pt_math::lanes::{lanes, offset_ray_origins, power_heuristics, Frames, V3};
-use pt_math::{Ray, Vec2, Vec3};
+use pt_bsdf::{mirror_side, Lambert, SurfaceBsdf};
+use pt_math::lanes::{lanes, offset_ray_origins, set_lanes, Frames, Mask, V3};
+use pt_math::{offset_coordinate, power_heuristic, Frame, Ray, Vec2, Vec3};
 use pt_render::geometry::Interaction;
 use pt_render::light::{parallelogram_points, to_solid_angle, Light, LightSample, LightShape};
 use pt_render::Scene;
@@ -74,10 +79,83 @@ impl LightLanes {
     }
 }
 
-/// The hits' geometry, one lane per path: points, geometric normals, shading frames, the
-/// directions towards the viewer in those frames, and the spawn points on both sides.
-struct Geometry {
+/// What the first pass gathers and draws for each scattering lane: its hit, its BSDF (the
+/// material's own when nothing varies over it, not copied; else evaluated into the caller's
+/// storage), the uniform numbers of its BSDF sample, and its light choice.
+struct Draws<'a> {
+    /// Hit points, world space.
     p: V3<N>,
+    /// Geometric normals, world space.
+    ng: V3<N>,
+    /// Shading normals, world space.
+    ns: V3<N>,
+    /// dp/du, world space (zero without uvs), and the lanes where it is not zero.
+    dpdu: V3<N>,
+    tangent: Mask,
+    /// The arriving rays' directions, world space.
+    dir: V3<N>,
+    /// The lanes' BSDFs when they are their materials' own (nothing varies over them); the
+    /// others are in the BSDFs built at the hits.
+    fixed: [Option<&'a SurfaceBsdf>; N],
+    /// The lanes whose BSDF is a plain Lambertian one (run in lanes), with its albedo and
+    /// two-sidedness.
+    lambert: Mask,
+    albedo: [SampledSpectrum; N],
+    two_sided: [bool; N],
+    /// Uniform numbers of the BSDF sample: lobe choice, direction.
+    u_lobe: [f32; N],
+    ub: [Vec2; N],
+    /// The lanes that drew a parallelogram light (sampled in lanes); its index, corner,
+    /// edges, area and uniform numbers.
+    par: Mask,
+    par_light: [usize; N],
+    v0: V3<N>,
+    e1: V3<N>,
+    e2: V3<N>,
+    area: [f32; N],
+    lu: [Vec2; N],
+    /// The radiance of a parallelogram light that is the same all over it, and the lanes
+    /// whose light has a texture instead (evaluated once the point is known).
+    par_radiance: [SampledSpectrum; N],
+    par_textured: Mask,
+    /// Light selection probabilities.
+    pmf: [f32; N],
+}
+
+impl Draws<'_> {
+    /// Nothing drawn yet (harmless values in every lane).
+    #[inline(always)]
+    fn empty() -> Self {
+        Draws {
+            p: V3::default(),
+            ng: V3::default(),
+            ns: V3::splat(Vec3::Z),
+            dpdu: V3::default(),
+            tangent: 0,
+            dir: V3::splat(-Vec3::Z),
+            fixed: [None; N],
+            lambert: 0,
+            albedo: [SampledSpectrum::ZERO; N],
+            two_sided: [false; N],
+            u_lobe: [0.5; N],
+            ub: [Vec2::splat(0.5); N],
+            par: 0,
+            par_light: [0; N],
+            v0: V3::default(),
+            e1: V3::default(),
+            e2: V3::default(),
+            area: [1.0; N],
+            lu: [Vec2::splat(0.5); N],
+            par_radiance: [SampledSpectrum::ZERO; N],
+            par_textured: 0,
+            pmf: [1.0; N],
+        }
+    }
+}
+
+/// The hits' shading geometry, one lane per path: shading frames, the directions towards the
+/// viewer in those frames, and the spawn points on both sides.
+struct Geometry {
     /// Unit geometric normals flipped to the side each path arrived from.
     n_out: V3<N>,
     frames: Frames<N>,
@@ -90,187 +168,198 @@ struct Geometry {
 }
 
 impl Geometry {
-    /// Gathers the hits of the lanes in `todo` (unused lanes keep harmless values).
+    /// The geometry of the hits in `d`.
     #[inline(always)]
-    fn gather(
-        slots: &[Option<PathStart>; N],
-        hits: &[Option<Interaction>; N],
-        todo: &[bool; N],
-    ) -> Self {
-        let (mut p, mut ng, mut ns, mut dpdu) = (
-            V3::<N>::default(),
-            V3::default(),
-            V3::splat(Vec3::Z),
-            V3::default(),
-        );
-        let mut dir = V3::splat(-Vec3::Z);
+    fn new(d: &Draws) -> Self {
+        // Without dp/du in any lane (meshes without uvs), the frames from the normals alone:
+        // the same frames, without the projection of the tangents.
+        if d.tangent == 0 {
+            Geometry::with_frames(d, |k| Frame::from_normal(d.ns.get(k)))
+        } else {
+            Geometry::with_frames(d, |k| {
+                Frame::from_normal_tangent(d.ns.get(k), d.dpdu.get(k))
+            })
+        }
+    }
+
+    /// The geometry of the hits in `d` with the shading frames `frame(lane)`: one loop whose
+    /// body is a whole lane, which the compiler vectorises as one piece.
+    #[inline(always)]
+    fn with_frames(d: &Draws, frame: impl Fn(usize) -> Frame) -> Self {
+        let mut g = Geometry {
+            n_out: V3::default(),
+            frames: Frames::from_fn(|_| Frame::from_normal(Vec3::Z)),
+            wo: V3::default(),
+            out: V3::default(),
+            back: V3::default(),
+        };
         for k in 0..N {
-            if let (true, Some(h), Some(sl)) = (todo[k], &hits[k], &slots[k]) {
-                p.set(k, h.p);
-                ng.set(k, h.ng);
-                ns.set(k, h.ns);
-                dpdu.set(k, h.dpdu);
-                dir.set(k, sl.path.ray.dir);
-            }
+            let (ng, dir) = (d.ng.get(k), d.dir.get(k));
+            let f = frame(k);
+            // Rays leave the hit offset to one side of the surface: the side the path came
+            // from, or the other one for transmission.
+            let n_out = ng * -ng.dot(dir).signum();
+            g.frames.set(k, f);
+            g.wo.set(k, f.to_local(-dir));
+            g.n_out.set(k, n_out);
         }
-        let frames = Frames::from_normal_tangent(&ns, &dpdu);
-        let wo = frames.to_local(&dir.neg());
-        // Rays leave the hit offset to one side of the surface: the side the path came from,
-        // or the other one for transmission.
-        let ndd = ng.dot(&dir);
-        let n_out = ng.scale(&lanes(|k| -ndd[k].signum()));
-        let out = offset_ray_origins(&p, &n_out);
-        let back = offset_ray_origins(&p, &n_out.neg());
-        Geometry {
-            p,
-            n_out,
-            frames,
-            wo,
-            out,
-            back,
+        // Coordinate by coordinate in lanes (the single-point form packs one point's three
+        // coordinates into one SIMD register instead).
+        g.out = offset_ray_origins(&d.p, &g.n_out);
+        g.back = offset_ray_origins(&d.p, &g.n_out.neg());
+        g
+    }
+
+    /// Lane `k`'s origin for a ray leaving in the world direction `dir`: on the side it
+    /// leaves to.
+    #[inline(always)]
+    fn origin(&self, k: usize, dir: Vec3) -> Vec3 {
+        if self.n_out.get(k).dot(dir) >= 0.0 {
+            self.out.get(k)
+        } else {
+            self.back.get(k)
         }
     }
+}
 
-    /// Origins for rays leaving in the world directions `dir`: the side each leaves to.
+/// The lanes' BSDF values towards their light samples and their BSDF samples (structure of
+/// arrays; see `pt_bsdf::BsdfSample`).
+struct Scattering {
+    /// The BSDF towards the light sample (zero without one).
+    f: [SampledSpectrum; N],
+    /// Its pdf of the light sample's direction, where MIS needs it (else 0).
+    bsdf_pdf: [f32; N],
+    /// The lanes with a BSDF sample (the others are absorbed); the samples follow.
+    sampled: Mask,
+    /// Sampled directions, local frames.
+    wi: V3<N>,
+    /// Throughput multipliers.
+    weight: [SampledSpectrum; N],
+    /// Solid-angle pdfs (a delta lobe's: its discrete probability).
+    pdf: [f32; N],
+    /// Whether the sample came from a delta lobe.
+    delta: [bool; N],
+    /// Relative indices of refraction along the sampled directions.
+    eta: [f32; N],
+}
+
+impl Scattering {
+    /// Nothing evaluated yet.
     #[inline(always)]
-    fn origins(&self, dir: &V3<N>) -> V3<N> {
-        let d = self.n_out.dot(dir);
-        V3::select(&lanes(|k| d[k] >= 0.0), &self.out, &self.back)
+    fn empty() -> Self {
+        Scattering {
+            f: [SampledSpectrum::ZERO; N],
+            bsdf_pdf: [0.0; N],
+            sampled: 0,
+            wi: V3::splat(Vec3::Z),
+            weight: [SampledSpectrum::ZERO; N],
+            pdf: [0.0; N],
+            delta: [false; N],
+            eta: [1.0; N],
+        }
     }
 }
 
-/// What each path draws at its hit: its BSDF (the material's own when nothing varies over it,
-/// not copied; else evaluated), the uniform numbers of its BSDF sample, and its light choice.
-struct Draws<'a> {
-    fixed: [Option<&'a SurfaceBsdf>; N],
-    built: [Option<SurfaceBsdf>; N],
-    u_lobe: [f32; N],
-    ub: [Vec2; N],
-    /// Index of a parallelogram light chosen in the lane (sampled in lanes), or `usize::MAX`.
-    par: [usize; N],
-    /// Its corner, edges, area and uniform numbers.
-    v0: V3<N>,
-    e1: V3<N>,
-    e2: V3<N>,
-    area: [f32; N],
-    lu: [Vec2; N],
-    /// Light selection probabilities.
-    pmf: [f32; N],
+/// The lanes where `c` holds.
+#[inline(always)]
+fn mask_of(c: &[bool; N]) -> Mask {
+    (0..N).fold(0, |m, k| m | (Mask::from(c[k]) << k))
 }
 
-impl Draws<'_> {
-    /// Lane `k`'s BSDF, if the lane scatters.
-    #[inline(always)]
-    fn bsdf(&self, k: usize) -> Option<&SurfaceBsdf> {
-        self.fixed[k].or(self.built[k].as_ref())
-    }
-}
-
-/// The scattering of the paths in `slots` that scatter at their hits (`todo`), all at once.
+/// The scattering of the paths in `slots` that scatter at their hits (the lanes of `todo`),
+/// all at once.
 #[inline(always)]
 pub(crate) fn scatter(
     scene: &Scene,
     s: &PathSettings,
     slots: &mut [Option<PathStart>; N],
     hits: &[Option<Interaction>; N],
-    todo: &[bool; N],
+    todo: Mask,
 ) {
-    let g = Geometry::gather(slots, hits, todo);
+    // Filled in place, not returned: the BSDFs are large, and returned arrays of them are
+    // copied.
+    let mut built: [Option<SurfaceBsdf>; N] = [None; N];
+    let mut d = Draws::empty();
     let mut l = LightLanes::empty();
-    let d = draw(scene, s, slots, hits, todo, &mut l);
-    sample_parallelograms(scene, slots, &g, &d, &mut l);
+    draw(scene, s, slots, hits, todo, &mut built, &mut d, &mut l);
+    let g = Geometry::new(&d);
+    sample_parallelograms(scene, slots, &d, &mut l);
     let wi = g.frames.to_local(&l.wi);
-    let (f, bsdf_pdf, bs) = bsdfs(s, &g, &d, &l, &wi);
+    let mut sc = Scattering::empty();
+    lambert_lanes(&g, &d, &wi, &mut sc);
+    other_bsdfs(s, &g, &d, &built, &l, &wi, todo & !d.lambert, &mut sc);
     // The shadow rays leave on the side of the hit the light is on; the next segments on the
     // side each sampled direction leaves to.
-    let origin = g.origins(&l.wi);
-    let (seg, seg_len) = shadow_segments(&origin, &l);
-    let mis = power_heuristics(&l.pdf, &bsdf_pdf);
-    let next_dir = g
-        .frames
-        .to_world(&V3::from_fn(|k| bs[k].map_or(Vec3::Z, |b| b.wi)));
-    let next_origin = g.origins(&next_dir);
+    let shadow = ShadowRays::new(s, &g, &l, &sc, &wi);
+    let (mut next_dir, mut next_origin) = (V3::<N>::default(), V3::<N>::default());
     for k in 0..N {
-        let (true, Some(h), Some(PathStart { path, sampler, .. })) =
-            (todo[k], &hits[k], &mut slots[k])
-        else {
+        let dir = g.frames.get(k).to_world(sc.wi.get(k));
+        next_dir.set(k, dir);
+        next_origin.set(k, g.origin(k, dir));
+    }
+    for k in set_lanes(todo) {
+        let (Some(h), Some(PathStart { path, sampler, .. })) = (&hits[k], &mut slots[k]) else {
             continue;
         };
-        if l.have[k] && !l.radiance[k].is_black() && !f[k].is_black() {
-            let ray = if l.dist[k].is_infinite() {
-                Some(Ray::new(origin.get(k), l.wi.get(k)))
-            } else {
-                (seg_len[k] > 0.0).then(|| Ray {
-                    origin: origin.get(k),
-                    dir: seg.get(k) / seg_len[k],
-                    tmin: 0.0,
-                    tmax: seg_len[k] * SHADOW_RAY_SHORTEN,
-                })
+        if shadow.traced & (1 << k) != 0 {
+            let ray = Ray {
+                origin: shadow.origin.get(k),
+                dir: shadow.dir.get(k),
+                tmin: 0.0,
+                tmax: shadow.tmax[k],
             };
-            if let Some(ray) = ray {
-                // Delta lights cannot be hit by BSDF sampling: light sampling is the only
-                // strategy, weight 1.
-                let w = if s.strategy != Strategy::Light && !l.delta[k] {
-                    mis[k]
-                } else {
-                    1.0
-                };
-                let c = path.throughput * f[k] * l.radiance[k] * (wi.z[k].abs() * w / l.pdf[k]);
-                path.shadow = Some((ray, c));
-            }
+            path.shadow = Some((
+                ray,
+                path.throughput * sc.f[k] * l.radiance[k] * shadow.scale[k],
+            ));
         }
-        continue_path(
-            s,
-            path,
-            sampler,
-            h,
-            bs[k],
-            next_origin.get(k),
-            next_dir.get(k),
-        );
+        if sc.sampled & (1 << k) == 0 || sc.weight[k].is_black() {
+            path.alive = false;
+            continue;
+        }
+        path.throughput *= sc.weight[k];
+        path.eta_scale *= sc.eta[k];
+        path.prev_p = h.p;
+        path.prev_pdf = sc.pdf[k];
+        path.prev_delta = sc.delta[k];
+        path.ray = Ray::new(next_origin.get(k), next_dir.get(k));
+        path.depth += 1;
+        russian_roulette(s, path, sampler);
     }
 }
 
-/// Per path, in the order a path alone draws them: its BSDF, fluorescence, the light choice
-/// and the light's uniform numbers (lights other than parallelograms sampled here, into `l`),
-/// the BSDF sample's uniform numbers.
+/// The first pass, per path, in the order a path alone draws them: its hit, its BSDF,
+/// fluorescence, the light choice and the light's uniform numbers (lights other than
+/// parallelograms sampled here, into `l`), the BSDF sample's uniform numbers.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn draw<'a>(
     scene: &'a Scene,
     s: &PathSettings,
     slots: &mut [Option<PathStart>; N],
     hits: &[Option<Interaction>; N],
-    todo: &[bool; N],
+    todo: Mask,
+    built: &mut [Option<SurfaceBsdf>; N],
+    d: &mut Draws<'a>,
     l: &mut LightLanes,
-) -> Draws<'a> {
+) {
     let use_light = s.strategy != Strategy::Bsdf;
-    let mut d = Draws {
-        fixed: [None; N],
-        built: [None; N],
-        u_lobe: [0.5; N],
-        ub: [Vec2::splat(0.5); N],
-        par: [usize::MAX; N],
-        v0: V3::default(),
-        e1: V3::default(),
-        e2: V3::default(),
-        area: [1.0; N],
-        lu: [Vec2::splat(0.5); N],
-        pmf: [1.0; N],
-    };
-    for k in 0..N {
-        let (true, Some(h), Some(PathStart { path, sampler, .. })) =
-            (todo[k], &hits[k], &mut slots[k])
-        else {
+    for k in set_lanes(todo) {
+        let (Some(h), Some(PathStart { path, sampler, .. })) = (&hits[k], &mut slots[k]) else {
             continue;
         };
+        (d.p.set(k, h.p), d.ng.set(k, h.ng), d.ns.set(k, h.ns));
+        (d.dpdu.set(k, h.dpdu), d.dir.set(k, path.ray.dir));
+        d.tangent |= Mask::from(h.dpdu != Vec3::ZERO) << k;
         let material = scene.material(h.shape);
         let bsdf: &SurfaceBsdf = match &material.fixed {
-            Some(b) => {
-                d.fixed[k] = Some(b);
-                b
-            }
-            None => d.built[k].insert(scene.bsdf(h, &path.lambda)),
+            Some(b) => d.fixed[k].insert(b),
+            None => built[k].insert(scene.bsdf(h, &path.lambda)),
         };
+        if let Some((r, two_sided)) = bsdf.plain_lambert() {
+            (d.albedo[k], d.two_sided[k]) = (r, two_sided);
+            d.lambert |= 1 << k;
+        }
         // Fluorescence: the BSDF holds each lane's total albedo at its emitted wavelength; now
         // some lanes move to an excitation wavelength, used by NEE and the rest of the path.
         if let Some(f) = material.fluorescent() {
@@ -283,16 +372,17 @@ fn draw<'a>(
                     d.pmf[k] = pmf;
                     match &scene.lights[li] {
                         Light::Area(a) if matches!(a.shape, LightShape::Parallelogram { .. }) => {
-                            let LightShape::Parallelogram { v0, e1, e2, n, .. } = a.shape else {
+                            let LightShape::Parallelogram { v0, e1, e2, n, .. } = &a.shape else {
                                 unreachable!()
                             };
-                            (
-                                d.v0.set(k, v0),
-                                d.e1.set(k, e1),
-                                d.e2.set(k, e2),
-                                l.n.set(k, n),
-                            );
-                            (d.area[k], d.lu[k], d.par[k]) = (a.area, u, li);
+                            (d.v0.set(k, *v0), d.e1.set(k, *e1), d.e2.set(k, *e2));
+                            l.n.set(k, *n);
+                            (d.area[k], d.lu[k], d.par_light[k]) = (a.area, u, li);
+                            d.par |= 1 << k;
+                            match a.constant_radiance(&path.lambda) {
+                                Some(r) => d.par_radiance[k] = r,
+                                None => d.par_textured |= 1 << k,
+                            }
                         }
                         light => {
                             if let Some(s) = light.sample(h.p, u_sel, u, &path.lambda) {
@@ -310,20 +400,17 @@ fn draw<'a>(
         d.u_lobe[k] = sampler.next_1d();
         d.ub[k] = sampler.next_2d();
     }
-    d
 }
 
-/// The parallelogram lights drawn in `d`, sampled for all their lanes at once (by area, then
-/// to solid angle; the other lanes' results are not used), into `l`.
+/// The parallelogram lights drawn in `d`, sampled for all lanes at once (by area, then to
+/// solid angle; only the lanes of `d.par` take the results), into `l`.
 #[inline(always)]
 fn sample_parallelograms(
     scene: &Scene,
     slots: &[Option<PathStart>; N],
-    g: &Geometry,
     d: &Draws,
     l: &mut LightLanes,
 ) {
-    let is_par: [bool; N] = lanes(|k| d.par[k] != usize::MAX);
     let points = parallelogram_points(
         &d.v0,
         &d.e1,
@@ -331,130 +418,172 @@ fn sample_parallelograms(
         &lanes(|k| d.lu[k].x),
         &lanes(|k| d.lu[k].y),
     );
-    let sa = to_solid_angle(&g.p, &points, &l.n, &d.area);
+    let sa = to_solid_angle(&d.p, &points, &l.n, &d.area);
+    let is_par: [bool; N] = lanes(|k| d.par & (1 << k) != 0);
+    let taken: [bool; N] = lanes(|k| is_par[k] & sa.ok[k]);
     l.wi = V3::select(&is_par, &sa.wi, &l.wi);
     l.p = V3::select(&is_par, &points, &l.p);
     for k in 0..N {
-        if !(is_par[k] && sa.ok[k]) {
+        if taken[k] {
+            l.have[k] = true;
+            l.dist[k] = sa.dist[k];
+            l.pdf[k] = d.pmf[k] * sa.pdf[k];
+            // The back side emits nothing.
+            if sa.front[k] {
+                l.radiance[k] = d.par_radiance[k];
+            }
+        }
+    }
+    for k in set_lanes(d.par_textured) {
+        if !(taken[k] && sa.front[k]) {
             continue;
         }
-        let Light::Area(a) = &scene.lights[d.par[k]] else {
+        let Light::Area(a) = &scene.lights[d.par_light[k]] else {
             unreachable!("drawn as an area light")
         };
-        let LightShape::Parallelogram { uv, .. } = a.shape else {
+        let LightShape::Parallelogram { uv, .. } = &a.shape else {
             unreachable!("drawn as a parallelogram")
         };
-        if sa.front[k] {
-            let u = d.lu[k];
-            let lambda = &slots[k].as_ref().expect("a scattering path").path.lambda;
-            l.radiance[k] = a.radiance_at_uv(uv[0] + uv[1] * u.x + uv[2] * u.y, lambda);
-        }
-        (l.have[k], l.dist[k], l.pdf[k]) = (true, sa.dist[k], d.pmf[k] * sa.pdf[k]);
+        let u = d.lu[k];
+        let lambda = &slots[k].as_ref().expect("a scattering path").path.lambda;
+        l.radiance[k] = a.radiance_at_uv(uv[0] + uv[1] * u.x + uv[2] * u.y, lambda);
     }
 }
 
-/// Each lane's BSDF towards its light sample (`f`, and the pdf where MIS needs it) and its
-/// BSDF sample: plain Lambertian surfaces in lanes (with `SurfaceBsdf`'s two-sided mirroring),
-/// the others per path.
+/// Lambert's BSDF towards the light samples and its samples, for all lanes at once (with
+/// `SurfaceBsdf`'s two-sided mirroring), into `out`: the results count in the lanes of
+/// `d.lambert`; [`other_bsdfs`] then overwrites the others.
 #[inline(always)]
-#[allow(clippy::type_complexity)]
-fn bsdfs(
+fn lambert_lanes(g: &Geometry, d: &Draws, wi: &V3<N>, out: &mut Scattering) {
+    let mirror: [f32; N] = lanes(|k| mirror_side(d.two_sided[k], false, g.wo.z[k]));
+    let wo_z: [f32; N] = lanes(|k| g.wo.z[k] * mirror[k]);
+    let wi_z: [f32; N] = lanes(|k| wi.z[k] * mirror[k]);
+    out.f = Lambert::eval_lanes(&d.albedo, &wo_z, &wi_z);
+    out.bsdf_pdf = Lambert::pdf_lanes(&wo_z, &wi_z);
+    let (s_wi, s_pdf, s_ok) =
+        Lambert::sample_lanes(&wo_z, &lanes(|k| d.ub[k].x), &lanes(|k| d.ub[k].y));
+    out.wi = V3 {
+        z: lanes(|k| s_wi.z[k] * mirror[k]),
+        ..s_wi
+    };
+    (out.weight, out.pdf) = (d.albedo, s_pdf);
+    out.sampled = mask_of(&s_ok) & d.lambert;
+}
+
+/// The BSDFs without a lane kernel (the lanes of `todo`), one path at a time: the value
+/// towards the light sample (and the pdf where MIS needs it) and the BSDF sample, into `out`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn other_bsdfs(
     s: &PathSettings,
     g: &Geometry,
     d: &Draws,
+    built: &[Option<SurfaceBsdf>; N],
     l: &LightLanes,
     wi: &V3<N>,
-) -> ([SampledSpectrum; N], [f32; N], [Option<BsdfSample>; N]) {
-    let wo = &g.wo;
-    let mut albedo = [SampledSpectrum::ZERO; N];
-    let mut lane_lambert = [false; N];
-    let mut mirror = [1.0f32; N];
-    for k in 0..N {
-        if let Some((r, two_sided)) = d.bsdf(k).and_then(|b| b.plain_lambert()) {
-            (albedo[k], lane_lambert[k]) = (r, true);
-            mirror[k] = mirror_side(two_sided, false, wo.z[k]);
-        }
-    }
-    let wo_z: [f32; N] = lanes(|k| wo.z[k] * mirror[k]);
-    let wi_z: [f32; N] = lanes(|k| wi.z[k] * mirror[k]);
-    let lambert_f = Lambert::eval_lanes(&albedo, &wo_z, &wi_z);
-    let lambert_pdf = Lambert::pdf_lanes(&wo_z, &wi_z);
-    let (lambert_wi, lambert_spdf, lambert_ok) =
-        Lambert::sample_lanes(&wo_z, &lanes(|k| d.ub[k].x), &lanes(|k| d.ub[k].y));
-    let mut f = [SampledSpectrum::ZERO; N];
-    let mut bsdf_pdf = [0.0f32; N];
-    let mut bs: [Option<BsdfSample>; N] = [None; N];
-    for k in 0..N {
-        let Some(b) = d.bsdf(k) else { continue };
-        if lane_lambert[k] {
-            (f[k], bsdf_pdf[k]) = (lambert_f[k], lambert_pdf[k]);
-            bs[k] = lambert_ok[k].then(|| BsdfSample {
-                wi: Vec3::new(
-                    lambert_wi.x[k],
-                    lambert_wi.y[k],
-                    lambert_wi.z[k] * mirror[k],
-                ),
-                weight: albedo[k],
-                pdf: lambert_spdf[k],
-                delta: false,
-                eta: 1.0,
-            });
+    todo: Mask,
+    out: &mut Scattering,
+) {
+    for k in set_lanes(todo) {
+        let Some(b) = d.fixed[k].or(built[k].as_ref()) else {
             continue;
-        }
+        };
+        let wo = g.wo.get(k);
+        (out.f[k], out.bsdf_pdf[k]) = (SampledSpectrum::ZERO, 0.0);
         if l.have[k] {
             let w = wi.get(k);
-            f[k] = b.eval(wo.get(k), w);
+            out.f[k] = b.eval(wo, w);
             // Only MIS needs the BSDF's pdf of the light's direction.
             if s.strategy != Strategy::Light
                 && !l.delta[k]
                 && !l.radiance[k].is_black()
-                && !f[k].is_black()
+                && !out.f[k].is_black()
             {
-                bsdf_pdf[k] = b.pdf(wo.get(k), w);
+                out.bsdf_pdf[k] = b.pdf(wo, w);
             }
         }
-        bs[k] = b.sample(wo.get(k), d.u_lobe[k], d.ub[k]);
+        if let Some(bs) = b.sample(wo, d.u_lobe[k], d.ub[k]) {
+            out.wi.set(k, bs.wi);
+            (out.weight[k], out.pdf[k]) = (bs.weight, bs.pdf);
+            (out.delta[k], out.eta[k]) = (bs.delta, bs.eta);
+            out.sampled |= 1 << k;
+        }
     }
-    (f, bsdf_pdf, bs)
 }
 
-/// The shadow rays' segments from `origin` to the light points offset off their own surfaces
-/// (a light without a surface normal, or a distant one, needs no offset there), and their
-/// lengths.
-#[inline(always)]
-fn shadow_segments(origin: &V3<N>, l: &LightLanes) -> (V3<N>, [f32; N]) {
-    let nwd = l.n.dot(&l.wi.neg());
-    let lifted = offset_ray_origins(&l.p, &l.n.scale(&lanes(|k| nwd[k].signum())));
-    let no_normal: [bool; N] = lanes(|k| l.n.get(k) == Vec3::ZERO);
-    let target = V3::select(&no_normal, &l.p, &lifted);
-    let seg = target.sub(origin);
-    let seg2 = seg.dot(&seg);
-    (seg, lanes(|k| seg2[k].sqrt()))
+/// The lanes' shadow rays (the lanes of `traced`), and the factor of each one's contribution
+/// besides the throughput, the BSDF and the radiance: |cos theta_i| times the MIS weight over
+/// the light sample's pdf.
+struct ShadowRays {
+    traced: Mask,
+    origin: V3<N>,
+    dir: V3<N>,
+    tmax: [f32; N],
+    scale: [f32; N],
 }
 
-/// The next segment of a path from its BSDF sample (or its end), and Russian roulette
-/// (Mitsuba: after `rr_depth` segments, keep with probability min(max(T) eta^2, 0.95)).
+impl ShadowRays {
+    /// The shadow rays of the light samples `l`: from the hits, on the side the light is on,
+    /// to the light points offset off their own surfaces (a light without a surface normal,
+    /// or a distant one, needs no offset there), for the lanes where light arrives and the
+    /// BSDF passes it.
+    #[inline(always)]
+    fn new(s: &PathSettings, g: &Geometry, l: &LightLanes, sc: &Scattering, wi: &V3<N>) -> Self {
+        // Spectra are four-wide vectors of their own: tested first, so that the loop below is
+        // plain numbers, which the compiler vectorises across the lanes.
+        let passes: [bool; N] =
+            lanes(|k| l.have[k] & !l.radiance[k].is_black() & !sc.f[k].is_black());
+        let mis_used = s.strategy != Strategy::Light;
+        let mut r = ShadowRays {
+            traced: 0,
+            origin: V3::default(),
+            dir: V3::default(),
+            tmax: [0.0; N],
+            scale: [0.0; N],
+        };
+        let mut lit = [false; N];
+        for k in 0..N {
+            let (wi_world, p, n) = (l.wi.get(k), l.p.get(k), l.n.get(k));
+            let origin = g.origin(k, wi_world);
+            // Coordinate by coordinate, as the lanes vectorise it.
+            let away = n * n.dot(-wi_world).signum();
+            let lifted = Vec3::new(
+                offset_coordinate(p.x, away.x),
+                offset_coordinate(p.y, away.y),
+                offset_coordinate(p.z, away.z),
+            );
+            let no_normal = (n.x == 0.0) & (n.y == 0.0) & (n.z == 0.0);
+            let seg = if no_normal { p } else { lifted } - origin;
+            let len = seg.dot(seg).sqrt();
+            let distant = l.dist[k] == f32::INFINITY;
+            let dir = Vec3::new(seg.x / len, seg.y / len, seg.z / len);
+            r.origin.set(k, origin);
+            r.dir.set(k, if distant { wi_world } else { dir });
+            r.tmax[k] = if distant {
+                f32::INFINITY
+            } else {
+                len * SHADOW_RAY_SHORTEN
+            };
+            lit[k] = passes[k] & (distant | (len > 0.0));
+            // Delta lights cannot be hit by BSDF sampling: light sampling is the only
+            // strategy, weight 1.
+            let mis = power_heuristic(l.pdf[k], sc.bsdf_pdf[k]);
+            let w = if mis_used & !l.delta[k] { mis } else { 1.0 };
+            r.scale[k] = wi.z[k].abs() * w / l.pdf[k];
+        }
+        r.traced = mask_of(&lit);
+        r
+    }
+}
+
+/// Russian roulette (Mitsuba: after `rr_depth` segments, keep the path with probability
+/// min(max(T) eta^2, 0.95), and divide its throughput by that).
 #[inline(always)]
-fn continue_path(
+fn russian_roulette(
     s: &PathSettings,
     path: &mut PathState,
     sampler: &mut pt_render::sampler::Sampler,
-    hit: &Interaction,
-    bs: Option<BsdfSample>,
-    origin: Vec3,
-    dir: Vec3,
 ) {
-    let Some(bs) = bs.filter(|b| !b.weight.is_black()) else {
-        path.alive = false;
-        return;
-    };
-    path.throughput *= bs.weight;
-    path.eta_scale *= bs.eta;
-    path.prev_p = hit.p;
-    path.prev_pdf = bs.pdf;
-    path.prev_delta = bs.delta;
-    path.ray = Ray::new(origin, dir);
-    path.depth += 1;
     if path.depth >= s.rr_depth {
         let q = (path.throughput.max_value() * path.eta_scale * path.eta_scale).min(0.95);
         if !(sampler.next_1d() < q) {

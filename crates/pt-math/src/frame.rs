@@ -1,6 +1,5 @@
 //! Orthonormal frames: world <-> local shading frame (z = normal).
 
-use crate::lanes::{Frames, V3};
 use glam::Vec3;
 
 /// An orthonormal basis `(s, t, n)`. `to_local` maps world directions into the frame, in which
@@ -18,29 +17,49 @@ pub struct Frame {
 impl Frame {
     /// A frame around the unit normal `n`, with tangents from Duff et al. 2017, "Building an
     /// Orthonormal Basis, Revisited" (JCGT 6(1), listing 3): branch-free and continuous except
-    /// at n.z = 0 sign flips, exact to rounding. (One lane of [`Frames::from_normal`].)
+    /// at n.z = 0 sign flips, exact to rounding.
     #[inline(always)]
     pub fn from_normal(n: Vec3) -> Self {
-        Frames::<1>::from_normal(&V3::splat(n)).get(0)
+        let sign = 1.0f32.copysign(n.z);
+        let a = -1.0 / (sign + n.z);
+        let b = n.x * n.y * a;
+        Frame {
+            s: Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+            t: Vec3::new(b, sign + n.y * n.y * a, -n.y),
+            n,
+        }
     }
 
     /// A frame around the unit normal `n` whose first tangent follows `tangent` projected onto
     /// the tangent plane (Gram-Schmidt), as Mitsuba builds its shading frame from `dp_du`. Falls
-    /// back to [`Frame::from_normal`] when `tangent` is zero or parallel to `n`. (One lane of
-    /// [`Frames::from_normal_tangent`].)
+    /// back to [`Frame::from_normal`] when `tangent` is zero or parallel to `n`.
     #[inline(always)]
     pub fn from_normal_tangent(n: Vec3, tangent: Vec3) -> Self {
-        Frames::<1>::from_normal_tangent(&V3::splat(n), &V3::splat(tangent)).get(0)
+        let along = tangent - n * n.dot(tangent);
+        // glam's try_normalize: 1 / length, accepted when finite and positive (written as two
+        // comparisons, false for NaN, so that lanes of this run in SIMD registers).
+        let rcp = 1.0 / along.dot(along).sqrt();
+        let s = along * rcp;
+        let duff = Frame::from_normal(n);
+        if (rcp > 0.0) & (rcp < f32::INFINITY) {
+            Frame {
+                s,
+                t: n.cross(s),
+                n,
+            }
+        } else {
+            duff
+        }
     }
 
     /// World direction -> local frame.
-    #[inline]
+    #[inline(always)]
     pub fn to_local(&self, v: Vec3) -> Vec3 {
         Vec3::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
     }
 
     /// Local direction -> world.
-    #[inline]
+    #[inline(always)]
     pub fn to_world(&self, v: Vec3) -> Vec3 {
         self.s * v.x + self.t * v.y + self.n * v.z
     }

@@ -21,6 +21,21 @@ pub fn lanes<T: Copy + Default, const N: usize>(f: impl Fn(usize) -> T) -> [T; N
     out
 }
 
+/// A set of lanes as bits (bit `k`: lane `k`), for up to 32 lanes.
+pub type Mask = u32;
+
+/// The lanes in `mask`, in increasing order (skipping the others without testing each).
+#[inline(always)]
+pub fn set_lanes(mut mask: Mask) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        (mask != 0).then(|| {
+            let k = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            k
+        })
+    })
+}
+
 /// `N` 3-vectors, one per lane, stored by component (structure of arrays).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct V3<const N: usize> {
@@ -138,7 +153,11 @@ impl<const N: usize> V3<N> {
     }
 }
 
-/// Orthonormal frames `(s, t, n)`, one per lane (see [`crate::Frame`], the one-lane form).
+/// Orthonormal frames `(s, t, n)`, one per lane (structure of arrays of [`crate::Frame`]).
+///
+/// Each operation is one loop over the lanes whose body is the whole single-frame function:
+/// the compiler vectorises such a loop as one piece, and the single-frame function stays the
+/// only implementation.
 #[derive(Clone, Copy, Debug)]
 pub struct Frames<const N: usize> {
     /// First tangents.
@@ -150,66 +169,42 @@ pub struct Frames<const N: usize> {
 }
 
 impl<const N: usize> Frames<N> {
-    /// Frames around the unit normals `n`, tangents by Duff et al. 2017, "Building an
-    /// Orthonormal Basis, Revisited" (JCGT 6(1), listing 3): branch-free and continuous except
-    /// at n.z = 0 sign flips, exact to rounding.
+    /// `f(lane)` in every lane.
     #[inline(always)]
-    pub fn from_normal(n: &V3<N>) -> Self {
-        let mut f = Frames {
+    pub fn from_fn(f: impl Fn(usize) -> crate::Frame) -> Self {
+        let mut out = Frames {
             s: V3::default(),
             t: V3::default(),
-            n: *n,
+            n: V3::default(),
         };
         for k in 0..N {
-            let (nx, ny, nz) = (n.x[k], n.y[k], n.z[k]);
-            let sign = 1.0f32.copysign(nz);
-            let a = -1.0 / (sign + nz);
-            let b = nx * ny * a;
-            (f.s.x[k], f.s.y[k], f.s.z[k]) = (1.0 + sign * nx * nx * a, sign * b, -sign * nx);
-            (f.t.x[k], f.t.y[k], f.t.z[k]) = (b, sign + ny * ny * a, -ny);
+            out.set(k, f(k));
         }
-        f
+        out
     }
 
-    /// Frames around the unit normals `n` whose first tangent follows `tangent` projected onto
-    /// the tangent plane (Gram-Schmidt), as Mitsuba builds its shading frame from `dp_du`;
-    /// [`Frames::from_normal`] in lanes where `tangent` is zero or parallel to `n`.
+    /// [`crate::Frame::from_normal`] in every lane.
+    #[inline(always)]
+    pub fn from_normal(n: &V3<N>) -> Self {
+        Frames::from_fn(|k| crate::Frame::from_normal(n.get(k)))
+    }
+
+    /// [`crate::Frame::from_normal_tangent`] in every lane.
     #[inline(always)]
     pub fn from_normal_tangent(n: &V3<N>, tangent: &V3<N>) -> Self {
-        let d = n.dot(tangent);
-        let along = tangent.sub(&n.scale(&d));
-        // glam's try_normalize: 1 / length, accepted when finite and positive.
-        let l2 = along.dot(&along);
-        let rcp: [f32; N] = lanes(|k| 1.0 / l2[k].sqrt());
-        let ok: [bool; N] = lanes(|k| rcp[k].is_finite() && rcp[k] > 0.0);
-        let s = along.scale(&rcp);
-        let duff = Frames::from_normal(n);
-        let s = V3::select(&ok, &s, &duff.s);
-        let t = V3::select(&ok, &n.cross(&s), &duff.t);
-        Frames { s, t, n: *n }
+        Frames::from_fn(|k| crate::Frame::from_normal_tangent(n.get(k), tangent.get(k)))
     }
 
     /// World directions -> local frames.
     #[inline(always)]
     pub fn to_local(&self, v: &V3<N>) -> V3<N> {
-        V3 {
-            x: v.dot(&self.s),
-            y: v.dot(&self.t),
-            z: v.dot(&self.n),
-        }
+        V3::from_fn(|k| self.get(k).to_local(v.get(k)))
     }
 
-    /// Local directions -> world, `s x + t y + n z` (left to right).
+    /// Local directions -> world.
     #[inline(always)]
     pub fn to_world(&self, v: &V3<N>) -> V3<N> {
-        let c = |a: &[f32; N], b: &[f32; N], e: &[f32; N]| -> [f32; N] {
-            lanes(|k| a[k] * v.x[k] + b[k] * v.y[k] + e[k] * v.z[k])
-        };
-        V3 {
-            x: c(&self.s.x, &self.t.x, &self.n.x),
-            y: c(&self.s.y, &self.t.y, &self.n.y),
-            z: c(&self.s.z, &self.t.z, &self.n.z),
-        }
+        V3::from_fn(|k| self.get(k).to_world(v.get(k)))
     }
 
     /// Lane `k`'s frame.
@@ -221,6 +216,12 @@ impl<const N: usize> Frames<N> {
             n: self.n.get(k),
         }
     }
+
+    /// Sets lane `k`'s frame.
+    #[inline(always)]
+    pub fn set(&mut self, k: usize, f: crate::Frame) {
+        (self.s.set(k, f.s), self.t.set(k, f.t), self.n.set(k, f.n));
+    }
 }
 
 /// [`crate::offset_ray_origin`] in every lane: the points `p` moved off their surfaces along
@@ -228,11 +229,13 @@ impl<const N: usize> Frames<N> {
 #[inline(always)]
 pub fn offset_ray_origins<const N: usize>(p: &V3<N>, n: &V3<N>) -> V3<N> {
     use crate::offset_coordinate as o;
-    V3 {
-        x: lanes(|k| o(p.x[k], n.x[k])),
-        y: lanes(|k| o(p.y[k], n.y[k])),
-        z: lanes(|k| o(p.z[k], n.z[k])),
+    let mut out = V3::default();
+    for k in 0..N {
+        out.x[k] = o(p.x[k], n.x[k]);
+        out.y[k] = o(p.y[k], n.y[k]);
+        out.z[k] = o(p.z[k], n.z[k]);
     }
+    out
 }
 
 /// [`crate::power_heuristic`] in every lane.
@@ -245,6 +248,13 @@ pub fn power_heuristics<const N: usize>(a: &[f32; N], b: &[f32; N]) -> [f32; N] 
 mod tests {
     use super::*;
     use crate::Frame;
+
+    #[test]
+    fn set_lanes_lists_the_set_bits_in_order() {
+        assert_eq!(set_lanes(0).count(), 0);
+        assert_eq!(set_lanes(0b1010_0101).collect::<Vec<_>>(), [0, 2, 5, 7]);
+        assert_eq!(set_lanes(1 << 31).collect::<Vec<_>>(), [31]);
+    }
 
     /// The lanes give every lane the one-lane result, bit for bit (each lane runs the same
     /// operations), for normals and tangents of every kind, including zero and parallel

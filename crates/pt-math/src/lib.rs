@@ -55,12 +55,15 @@ impl Ray {
 #[inline]
 pub fn power_heuristic(a: f32, b: f32) -> f32 {
     let (a2, b2) = (a * a, b * b);
-    if a2 + b2 > 0.0 && a2.is_finite() {
-        a2 / (a2 + b2)
-    } else if a.is_infinite() {
-        1.0
+    // Branch-free: the quotient computed always and selected, with comparisons rather than
+    // `is_finite` / `is_infinite` (the same for every input, NaN included), so that lanes of
+    // this run in SIMD registers.
+    let w = a2 / (a2 + b2);
+    let fallback = if a.abs() == f32::INFINITY { 1.0 } else { 0.0 };
+    if (a2 + b2 > 0.0) & (a2 < f32::INFINITY) {
+        w
     } else {
-        0.0
+        fallback
     }
 }
 

@@ -174,6 +174,13 @@ impl AreaLight {
         self.radiance_at(uv, lambda)
     }
 
+    /// The emitted radiance (front side) at the path's wavelengths `lambda` if it is the same
+    /// all over the light (no texture).
+    #[inline(always)]
+    pub fn constant_radiance(&self, lambda: &SampledWavelengths) -> Option<SampledSpectrum> {
+        self.radiance.constant_at(lambda)
+    }
+
     /// Solid-angle pdf, from `x`, of having sampled the point `p` with normal `n` on this light
     /// (for MIS when a BSDF-sampled ray hits the light).
     #[inline]
@@ -322,14 +329,7 @@ pub fn parallelogram_points<const N: usize>(
     u: &[f32; N],
     v: &[f32; N],
 ) -> V3<N> {
-    let c = |o: &[f32; N], a: &[f32; N], b: &[f32; N]| -> [f32; N] {
-        pt_math::lanes::lanes(|k| o[k] + a[k] * u[k] + b[k] * v[k])
-    };
-    V3 {
-        x: c(&v0.x, &e1.x, &e2.x),
-        y: c(&v0.y, &e1.y, &e2.y),
-        z: c(&v0.z, &e1.z, &e2.z),
-    }
+    V3::from_fn(|k| v0.get(k) + e1.get(k) * u[k] + e2.get(k) * v[k])
 }
 
 /// Points sampled uniformly by area on lights, seen from the reference points `x`: the unit
@@ -350,6 +350,10 @@ pub struct SolidAngle<const N: usize> {
 }
 
 /// [`SolidAngle`] of points `p` with normals `n` on lights of areas `area`, from points `x`.
+///
+/// One loop over the lanes whose body is the whole computation of a lane: the compiler
+/// vectorises it as one, where a sequence of small lane operations left it packing and
+/// unpacking lanes between them.
 #[inline(always)]
 pub fn to_solid_angle<const N: usize>(
     x: &V3<N>,
@@ -357,21 +361,25 @@ pub fn to_solid_angle<const N: usize>(
     n: &V3<N>,
     area: &[f32; N],
 ) -> SolidAngle<N> {
-    let to = p.sub(x);
-    let dist2 = to.dot(&to);
-    let dist: [f32; N] = pt_math::lanes::lanes(|k| dist2[k].sqrt());
-    let wi = V3 {
-        x: pt_math::lanes::lanes(|k| to.x[k] / dist[k]),
-        y: pt_math::lanes::lanes(|k| to.y[k] / dist[k]),
-        z: pt_math::lanes::lanes(|k| to.z[k] / dist[k]),
+    let mut out = SolidAngle {
+        wi: V3::default(),
+        dist: [0.0; N],
+        pdf: [0.0; N],
+        front: [false; N],
+        ok: [false; N],
     };
-    let cos_l = n.dot(&wi.neg());
-    let pdf: [f32; N] = pt_math::lanes::lanes(|k| dist2[k] / (cos_l[k].abs() * area[k]));
-    SolidAngle {
-        wi,
-        dist,
-        pdf,
-        front: pt_math::lanes::lanes(|k| cos_l[k] > 0.0),
-        ok: pt_math::lanes::lanes(|k| dist[k] > 0.0 && pdf[k].is_finite()),
+    for k in 0..N {
+        let to = p.get(k) - x.get(k);
+        let dist2 = to.dot(to);
+        let dist = dist2.sqrt();
+        let wi = Vec3::new(to.x / dist, to.y / dist, to.z / dist);
+        let cos_l = n.get(k).dot(-wi);
+        let pdf = dist2 / (cos_l.abs() * area[k]);
+        out.wi.set(k, wi);
+        (out.dist[k], out.pdf[k]) = (dist, pdf);
+        out.front[k] = cos_l > 0.0;
+        // `pdf` finite as a comparison (false for NaN), which runs in SIMD lanes.
+        out.ok[k] = (dist > 0.0) & (pdf.abs() < f32::INFINITY);
     }
+    out
 }

@@ -289,6 +289,15 @@ impl Texture {
         }
     }
 
+    /// The value at the path's wavelengths `lambda` if it is the same everywhere.
+    #[inline(always)]
+    pub fn constant_at(&self, lambda: &SampledWavelengths) -> Option<SampledSpectrum> {
+        match self {
+            Texture::Constant { value, .. } => Some(value.at(lambda)),
+            _ => None,
+        }
+    }
+
     /// Whether it is the same everywhere.
     pub fn is_constant(&self) -> bool {
         matches!(self, Texture::Constant { .. })
