@@ -123,8 +123,7 @@ pub(crate) fn run(args: CompareArgs) -> Result<ExitCode> {
         (Some(iv), Some(rv)) => {
             let (iv, _) = pt_image::read_exr(&iv)?;
             let (rv, _) = pt_image::read_exr(&rv)?;
-            let z =
-                pt_image::stats::block_ztest(&img, &iv, &reference, &rv, args.block, args.alpha)?;
+            let z = pt_stats::block_ztest(&img, &iv, &reference, &rv, args.block, args.alpha)?;
             out!(
                 "block z-test ({}x{} px, alpha {}): max |z| {:.2}, {} of {} block-channels fail (per-test p < {:.2e}), chi2 {:.1} on {} dof (p {:.3}): {}",
                 args.block,
@@ -139,7 +138,7 @@ pub(crate) fn run(args: CompareArgs) -> Result<ExitCode> {
                 z.chi2_p,
                 if z.pass { "PASS" } else { "FAIL" }
             );
-            let pz = pt_image::stats::pixel_ztest(&img, &iv, &reference, &rv, args.alpha)?;
+            let pz = pt_stats::pixel_ztest(&img, &iv, &reference, &rv, args.alpha)?;
             out!(
                 "pixel z-test: {:.3}% of pixel-channels fail at p < {}",
                 100.0 * pz.fraction_failed,

@@ -707,7 +707,7 @@ pub(crate) fn sweep(
         })
         .collect();
     let tests = rows.iter().filter(|r| r.chi2_p.is_some()).count();
-    let level = pt_image::stats::sidak_threshold(CHI2_ALPHA, tests);
+    let level = pt_stats::sidak_threshold(CHI2_ALPHA, tests);
     for r in &mut rows {
         if let Some(p) = r.chi2_p {
             r.chi2_fail = r.chi2_hard.is_some() || !(p >= level);
