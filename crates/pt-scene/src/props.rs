@@ -73,6 +73,30 @@ pub enum PropValue {
     Boolean(bool),
 }
 
+impl From<f32> for PropValue {
+    fn from(x: f32) -> Self {
+        PropValue::Float(x)
+    }
+}
+
+impl From<[f32; 3]> for PropValue {
+    fn from(c: [f32; 3]) -> Self {
+        PropValue::Rgb(c)
+    }
+}
+
+impl From<&str> for PropValue {
+    fn from(s: &str) -> Self {
+        PropValue::String(s.to_string())
+    }
+}
+
+impl From<bool> for PropValue {
+    fn from(b: bool) -> Self {
+        PropValue::Boolean(b)
+    }
+}
+
 impl PropValue {
     /// The parsed value, checked as the parser checks written ones (finite numbers).
     fn value(&self) -> std::result::Result<Value, String> {
