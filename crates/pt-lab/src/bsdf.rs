@@ -329,7 +329,7 @@ fn parse_value(text: &str) -> PropValue {
 }
 
 /// A value as written in a label (numbers in Rust's shortest round-trip form).
-fn value_text(v: &PropValue) -> String {
+pub(crate) fn value_text(v: &PropValue) -> String {
     match v {
         PropValue::Float(x) => format!("{x}"),
         PropValue::Rgb([r, g, b]) => format!("{r},{g},{b}"),

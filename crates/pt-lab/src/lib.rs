@@ -21,6 +21,7 @@
 pub mod bsdf;
 pub mod chart;
 mod error;
+pub mod lobes;
 
 pub use error::{create_dir, LabError, Result};
 
