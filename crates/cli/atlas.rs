@@ -836,12 +836,12 @@ pub(crate) fn study_report(s: &Study) -> String {
 pub(crate) fn study_charts(s: &Study) -> Result<(String, Vec<u8>)> {
     let size: (u32, u32) = (1200, 110 + 80 * s.rows.len() as u32);
     Ok((
-        crate::converge::chart_svg(s, size, "the atlas")?,
-        crate::converge::chart_png(s, size, "the atlas")?,
+        pt_lab::chart::chart_svg(s, size, "the atlas")?,
+        pt_lab::chart::chart_png(s, size, "the atlas")?,
     ))
 }
 
-impl crate::converge::Chart for Study {
+impl pt_lab::chart::Chart for Study {
     fn draw_on<DB: DrawingBackend>(
         &self,
         root: &DrawingArea<DB, Shift>,
@@ -999,11 +999,11 @@ pub fn run(args: AtlasArgs) -> Result<ExitCode> {
             }),
         })?;
         let (svg, png) = study_charts(&study)?;
-        crate::converge::write_atomic(
+        pt_lab::write_atomic(
             &args.out.join(format!("atlas-{}.svg", study.key)),
             svg.as_bytes(),
         )?;
-        crate::converge::write_atomic(&args.out.join(format!("atlas-{}.png", study.key)), &png)?;
+        pt_lab::write_atomic(&args.out.join(format!("atlas-{}.png", study.key)), &png)?;
         md.push_str(&study_report(&study));
         if !args.quiet {
             eprintln!(
@@ -1012,7 +1012,7 @@ pub fn run(args: AtlasArgs) -> Result<ExitCode> {
             );
         }
     }
-    crate::converge::write_atomic(&args.out.join("report.md"), md.as_bytes())?;
+    pt_lab::write_atomic(&args.out.join("report.md"), md.as_bytes())?;
     if !args.quiet {
         eprintln!("atlas: wrote {}", args.out.join("report.md").display());
     }

@@ -180,12 +180,12 @@ pub(crate) fn clamp_report(s: &ClampStudy) -> String {
 pub(crate) fn clamp_charts(s: &ClampStudy) -> Result<(String, Vec<u8>)> {
     const SIZE: (u32, u32) = (1000, 420);
     Ok((
-        crate::converge::chart_svg(s, SIZE, "the clamp chart")?,
-        crate::converge::chart_png(s, SIZE, "the clamp chart")?,
+        pt_lab::chart::chart_svg(s, SIZE, "the clamp chart")?,
+        pt_lab::chart::chart_png(s, SIZE, "the clamp chart")?,
     ))
 }
 
-impl crate::converge::Chart for ClampStudy {
+impl pt_lab::chart::Chart for ClampStudy {
     fn draw_on<DB: DrawingBackend>(
         &self,
         root: &DrawingArea<DB, Shift>,

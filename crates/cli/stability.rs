@@ -32,7 +32,6 @@
 //! `report.md`, `albedo.svg`/`.png` and `clamp.svg`/`.png`. The method failure atlas is
 //! `pt atlas` (`atlas.rs`).
 
-use crate::converge::write_atomic;
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use plotters::coord::Shift;
@@ -43,6 +42,7 @@ use pt_bsdf::{
     OrenNayar, OrenNayarVariant, RoughConductor, RoughDielectric, RoughPlastic, RoughThinFilm,
     ThinDielectric, ThinFilm,
 };
+use pt_lab::write_atomic;
 use pt_math::{Vec2, Vec3, Vec4};
 use pt_spectrum::SampledSpectrum;
 use pt_testkit::{Chi2Config, Pcg32, Sample};
@@ -1020,8 +1020,8 @@ fn albedo_charts(cases: &[Case], rows: &[Row]) -> Result<(String, Vec<u8>)> {
     const SIZE: (u32, u32) = (1800, 1500);
     let chart = AlbedoChart { cases, rows };
     Ok((
-        crate::converge::chart_svg(&chart, SIZE, "the albedo chart")?,
-        crate::converge::chart_png(&chart, SIZE, "the albedo chart")?,
+        pt_lab::chart::chart_svg(&chart, SIZE, "the albedo chart")?,
+        pt_lab::chart::chart_png(&chart, SIZE, "the albedo chart")?,
     ))
 }
 
@@ -1031,7 +1031,7 @@ struct AlbedoChart<'a> {
     rows: &'a [Row],
 }
 
-impl crate::converge::Chart for AlbedoChart<'_> {
+impl pt_lab::chart::Chart for AlbedoChart<'_> {
     fn draw_on<DB: DrawingBackend>(
         &self,
         root: &DrawingArea<DB, Shift>,

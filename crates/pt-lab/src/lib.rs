@@ -20,6 +20,7 @@
 
 pub mod bsdf;
 pub mod chart;
+pub mod converge;
 mod error;
 pub mod lobes;
 
