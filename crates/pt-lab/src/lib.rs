@@ -22,7 +22,9 @@ pub mod bsdf;
 pub mod chart;
 pub mod converge;
 mod error;
+pub mod fireflies;
 pub mod lobes;
+pub mod stability;
 
 pub use error::{create_dir, LabError, Result};
 
