@@ -18,6 +18,7 @@
 #![warn(missing_docs)]
 #![forbid(unsafe_code)]
 
+pub mod atlas;
 pub mod bsdf;
 pub mod chart;
 pub mod converge;
