@@ -4,7 +4,7 @@
 use crate::variance_path;
 use anyhow::{bail, Result};
 use clap::Args;
-use pt_image::ExrMeta;
+use pt_image::{ExrMeta, Image};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -110,46 +110,9 @@ pub(crate) fn run(args: CompareArgs) -> Result<ExitCode> {
         2 * ff.radius + 1,
         2 * ff.radius + 1
     );
-    let img_var = args
-        .image_variance
-        .clone()
-        .or_else(|| sibling_variance(&args.image));
-    let ref_var = args
-        .variance
-        .clone()
-        .or_else(|| sibling_variance(&args.reference));
-    let mut agree = img.nonfinite_pixels() == 0;
-    match (img_var, ref_var) {
-        (Some(iv), Some(rv)) => {
-            let (iv, _) = pt_image::read_exr(&iv)?;
-            let (rv, _) = pt_image::read_exr(&rv)?;
-            let z = pt_stats::block_ztest(&img, &iv, &reference, &rv, args.block, args.alpha)?;
-            out!(
-                "block z-test ({}x{} px, alpha {}): max |z| {:.2}, {} of {} block-channels fail (per-test p < {:.2e}), chi2 {:.1} on {} dof (p {:.3}): {}",
-                args.block,
-                args.block,
-                args.alpha,
-                z.max_abs_z,
-                z.failed,
-                z.tests,
-                z.p_threshold,
-                z.chi2,
-                z.tests,
-                z.chi2_p,
-                if z.pass { "PASS" } else { "FAIL" }
-            );
-            let pz = pt_stats::pixel_ztest(&img, &iv, &reference, &rv, args.alpha)?;
-            out!(
-                "pixel z-test: {:.3}% of pixel-channels fail at p < {}",
-                100.0 * pz.fraction_failed,
-                args.alpha
-            );
-            agree &= z.pass;
-        }
-        _ => {
-            out!("no variance images: z-test skipped (give --variance and --image-variance, or put NAME_var.exr beside each)");
-        }
-    }
+    // The z-tests run (and print) whether or not the image has non-finite pixels.
+    let z_pass = ztests(&args, &img, &reference)?;
+    let agree = img.nonfinite_pixels() == 0 && z_pass;
     if let Some(out) = &args.error_image {
         let err = pt_image::colormap::relative_error_image(&img, &reference)?;
         let e = pt_image::colormap::false_colour(&err, img.width, img.height, 0.0, 0.2, false);
@@ -194,4 +157,49 @@ pub(crate) fn run(args: CompareArgs) -> Result<ExitCode> {
     } else {
         ExitCode::from(1)
     })
+}
+
+/// The block and pixel z-tests when both variance images exist (prints them); whether the
+/// block test passes (true without variances: nothing to judge).
+fn ztests(args: &CompareArgs, img: &Image, reference: &Image) -> Result<bool> {
+    let img_var = args
+        .image_variance
+        .clone()
+        .or_else(|| sibling_variance(&args.image));
+    let ref_var = args
+        .variance
+        .clone()
+        .or_else(|| sibling_variance(&args.reference));
+    match (img_var, ref_var) {
+        (Some(iv), Some(rv)) => {
+            let (iv, _) = pt_image::read_exr(&iv)?;
+            let (rv, _) = pt_image::read_exr(&rv)?;
+            let z = pt_stats::block_ztest(img, &iv, reference, &rv, args.block, args.alpha)?;
+            out!(
+                "block z-test ({}x{} px, alpha {}): max |z| {:.2}, {} of {} block-channels fail (per-test p < {:.2e}), chi2 {:.1} on {} dof (p {:.3}): {}",
+                args.block,
+                args.block,
+                args.alpha,
+                z.max_abs_z,
+                z.failed,
+                z.tests,
+                z.p_threshold,
+                z.chi2,
+                z.tests,
+                z.chi2_p,
+                if z.pass { "PASS" } else { "FAIL" }
+            );
+            let pz = pt_stats::pixel_ztest(img, &iv, reference, &rv, args.alpha)?;
+            out!(
+                "pixel z-test: {:.3}% of pixel-channels fail at p < {}",
+                100.0 * pz.fraction_failed,
+                args.alpha
+            );
+            Ok(z.pass)
+        }
+        _ => {
+            out!("no variance images: z-test skipped (give --variance and --image-variance, or put NAME_var.exr beside each)");
+            Ok(true)
+        }
+    }
 }

@@ -174,7 +174,7 @@ pub fn render_within(scene: &Scene, settings: &RenderSettings, budget: Budget) -
                 let used = state.time.as_secs_f64();
                 let per_spp = used / f64::from(state.spp_done);
                 let fit = ((budget - used) / per_spp).floor();
-                if !(fit >= 1.0) {
+                if fit.is_nan() || fit < 1.0 {
                     break;
                 }
                 target = state.spp_done + (fit as u32).min(4 * state.spp_done);

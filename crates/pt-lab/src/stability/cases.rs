@@ -376,9 +376,12 @@ fn plastics(g: &mut Grid) {
     }
 }
 
+/// A film base: its name in the detail column, the base, its scene-format parameters.
+type FilmBaseCase = (&'static str, FilmBase, &'static [(&'static str, f32)]);
+
 /// Film bases: a dielectric and a gold-like conductor (eta, k at about 550 nm); the scene
 /// format's parameters of each.
-fn film_bases() -> [(&'static str, FilmBase, &'static [(&'static str, f32)]); 2] {
+fn film_bases() -> [FilmBaseCase; 2] {
     [
         (
             "dielectric 1.5",
@@ -428,7 +431,7 @@ fn films(g: &mut Grid) {
         -10.0,
         f32::NAN,
     ] {
-        let ok = d >= 0.0 && d <= 2000.0;
+        let ok = (0.0..=2000.0).contains(&d);
         for (bname, base, params) in film_bases() {
             for nf in [1.33f32, 2.5] {
                 for (s, l) in lane_sets.iter().enumerate() {

@@ -345,7 +345,7 @@ pub fn sweep(
     let level = pt_stats::sidak_threshold(CHI2_ALPHA, tests);
     for r in &mut rows {
         if let Some(p) = r.chi2_p {
-            r.chi2_fail = r.chi2_hard.is_some() || !(p >= level);
+            r.chi2_fail = r.chi2_hard.is_some() || p.is_nan() || p < level;
         }
     }
     rows
