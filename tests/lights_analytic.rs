@@ -236,7 +236,7 @@ fn envmap_light_sampling_agrees_with_bsdf_sampling() {
         (&a, &va, &b, &vb, "light vs bsdf"),
         (&c, &vc, &b, &vb, "mis vs bsdf"),
     ] {
-        let z = pt_image::stats::block_ztest(x, vx, y, vy, 8, 0.01).unwrap();
+        let z = pt_stats::block_ztest(x, vx, y, vy, 8, 0.01).unwrap();
         assert!(
             z.pass,
             "{what}: max |z| {:.2}, {} of {} blocks fail, chi2 p {:.3}",

@@ -52,7 +52,7 @@
 mod common;
 
 use common::*;
-use pt_image::stats::{chi2_sf, normal_sf, sidak_threshold};
+use pt_stats::{chi2_sf, normal_sf, sidak_threshold};
 use pt_image::Image;
 
 const W: u32 = 64;

@@ -4,7 +4,7 @@
 use crate::variance_path;
 use anyhow::{bail, Result};
 use clap::Args;
-use pt_image::ExrMeta;
+use pt_image::{ExrMeta, Image};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -110,7 +110,9 @@ pub(crate) fn run(args: CompareArgs) -> Result<ExitCode> {
         2 * ff.radius + 1,
         2 * ff.radius + 1
     );
-    let agree = img.nonfinite_pixels() == 0 && ztest(&args, &img, &reference)?;
+    // The z-tests run (and print) whether or not the image has non-finite pixels.
+    let z_pass = ztests(&args, &img, &reference)?;
+    let agree = img.nonfinite_pixels() == 0 && z_pass;
     if let Some(out) = &args.error_image {
         let err = pt_image::colormap::relative_error_image(&img, &reference)?;
         let e = pt_image::colormap::false_colour(&err, img.width, img.height, 0.0, 0.2, false);
@@ -157,9 +159,9 @@ pub(crate) fn run(args: CompareArgs) -> Result<ExitCode> {
     })
 }
 
-/// The block and pixel z-tests when both images have variance images (given, or beside them
-/// as NAME_var.exr): whether the block test passes (true when it cannot run).
-fn ztest(args: &CompareArgs, img: &pt_image::Image, reference: &pt_image::Image) -> Result<bool> {
+/// The block and pixel z-tests when both variance images exist (prints them); whether the
+/// block test passes (true without variances: nothing to judge).
+fn ztests(args: &CompareArgs, img: &Image, reference: &Image) -> Result<bool> {
     let img_var = args
         .image_variance
         .clone()
@@ -172,7 +174,7 @@ fn ztest(args: &CompareArgs, img: &pt_image::Image, reference: &pt_image::Image)
         (Some(iv), Some(rv)) => {
             let (iv, _) = pt_image::read_exr(&iv)?;
             let (rv, _) = pt_image::read_exr(&rv)?;
-            let z = pt_image::stats::block_ztest(img, &iv, reference, &rv, args.block, args.alpha)?;
+            let z = pt_stats::block_ztest(img, &iv, reference, &rv, args.block, args.alpha)?;
             out!(
                 "block z-test ({}x{} px, alpha {}): max |z| {:.2}, {} of {} block-channels fail (per-test p < {:.2e}), chi2 {:.1} on {} dof (p {:.3}): {}",
                 args.block,
@@ -187,7 +189,7 @@ fn ztest(args: &CompareArgs, img: &pt_image::Image, reference: &pt_image::Image)
                 z.chi2_p,
                 if z.pass { "PASS" } else { "FAIL" }
             );
-            let pz = pt_image::stats::pixel_ztest(img, &iv, reference, &rv, args.alpha)?;
+            let pz = pt_stats::pixel_ztest(img, &iv, reference, &rv, args.alpha)?;
             out!(
                 "pixel z-test: {:.3}% of pixel-channels fail at p < {}",
                 100.0 * pz.fraction_failed,

@@ -16,7 +16,6 @@ macro_rules! out {
 mod atlas;
 mod compare;
 mod converge;
-mod fireflies;
 mod info;
 mod lobes;
 mod render;

@@ -155,7 +155,7 @@ pub fn reference(scene: &str) -> (Image, Image) {
 /// The outcome of comparing a render with its reference.
 pub struct Verdict {
     /// The block z-test.
-    pub z: pt_image::stats::ZTestReport,
+    pub z: pt_stats::ZTestReport,
     /// mean(render) / mean(reference) per channel.
     pub ratio: [f64; 3],
 }
@@ -178,7 +178,7 @@ impl Verdict {
 /// target/tmp/diag_<scene>_<label>/ and says where.
 pub fn judge_against_reference(img: &Image, var: &Image, scene: &str, label: &str) -> Verdict {
     let (rimg, rvar) = reference(scene);
-    let z = pt_image::stats::block_ztest(img, var, &rimg, &rvar, BLOCK, ALPHA)
+    let z = pt_stats::block_ztest(img, var, &rimg, &rvar, BLOCK, ALPHA)
         .expect("same size as the reference");
     let (m, mr) = (img.mean(), rimg.mean());
     let ratio = std::array::from_fn(|c| {
@@ -198,7 +198,7 @@ pub fn judge_against_reference(img: &Image, var: &Image, scene: &str, label: &st
     Verdict { z, ratio }
 }
 
-fn write_diagnostics(img: &Image, reference: &Image, z: &pt_image::stats::ZTestReport, name: &str) {
+fn write_diagnostics(img: &Image, reference: &Image, z: &pt_stats::ZTestReport, name: &str) {
     let dir = scratch(&format!("diag_{name}"));
     let Ok(err) = pt_image::colormap::relative_error_image(img, reference) else {
         return;

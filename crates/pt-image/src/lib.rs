@@ -1,7 +1,8 @@
 //! Images for the `pt` path tracer: a linear RGB float [`Image`], EXR input and output
 //! ([`write_exr`], [`read_exr`]), a tone-mapped PNG preview ([`write_png_preview`]), error
-//! metrics ([`metrics`]), the statistical tests that decide whether a render matches its
-//! reference ([`stats`]), and false-colour error images ([`colormap`]).
+//! metrics ([`metrics`]), FLIP ([`flip`]), firefly counts ([`fireflies`]) and false-colour error
+//! images ([`colormap`]). The statistical tests that decide whether a render matches its
+//! reference (z-tests) are in the `pt-stats` crate.
 //!
 //! Conventions: pixels hold linear Rec.709 radiance (no gamma, exposure or tone mapping), rows are
 //! stored top row first, and every function that touches a file writes it atomically (temporary
@@ -18,7 +19,6 @@ pub mod fireflies;
 pub mod flip;
 pub mod metrics;
 mod png;
-pub mod stats;
 
 pub use error::ImageError;
 pub use exr_io::{read_exr, write_exr, ExrMeta};
@@ -125,13 +125,9 @@ impl Image {
     }
 }
 
-/// Check that two images have the same size (and consistent pixel counts).
-pub(crate) fn check_same_size(
-    what: &str,
-    a: &Image,
-    b: &Image,
-    b_name: &str,
-) -> Result<(), ImageError> {
+/// Checks that two images have the same size and that each holds `width * height` pixels.
+/// `what` and `b_name` name the images in the error (e.g. "image", "reference").
+pub fn check_same_size(what: &str, a: &Image, b: &Image, b_name: &str) -> Result<(), ImageError> {
     for (img, name) in [(a, what), (b, b_name)] {
         if let Err(reason) = img.check_len() {
             return Err(ImageError::InvalidImage {

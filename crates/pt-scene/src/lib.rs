@@ -55,6 +55,7 @@ mod build;
 mod error;
 pub mod gltf;
 pub mod ir;
+pub mod named;
 mod obj;
 mod props;
 mod shapes;
@@ -66,6 +67,8 @@ mod tests;
 
 pub use error::SceneError;
 pub use ir::*;
+pub use named::{conductor_names, ior_names, named_conductor, named_ior, NamedConductor};
+pub use props::PropValue;
 
 use std::path::Path;
 
@@ -101,4 +104,28 @@ pub fn load_str(
 ) -> Result<SceneDesc, SceneError> {
     let doc = xml::read_document(xml, source_name, base_dir, defaults)?;
     build::build(&doc, source_name, base_dir)
+}
+
+/// Reads a BSDF model plugin (`diffuse`, `orennayar`, `roughconductor`, ...; not the wrappers
+/// `twosided`, `mask`, `blendbsdf`, `normalmap`) from properties given in code, exactly as the
+/// XML loader reads `<bsdf type="plugin">` with these properties: the same names, defaults,
+/// named materials, validation and messages (Mitsuba 3's). Errors are located at
+/// `<properties>:0:0` and name the plugin; an unknown plugin or a property the plugin does not
+/// have is an error, as in a file.
+///
+/// ```
+/// use pt_scene::{bsdf_from_properties, BsdfKind, OrenNayarVariant, PropValue};
+///
+/// let props = [("sigma".to_string(), PropValue::Float(0.3))];
+/// let desc = bsdf_from_properties("orennayar", &props)?;
+/// assert!(matches!(desc.kind, BsdfKind::OrenNayar { variant: OrenNayarVariant::Qualitative, .. }));
+/// let typo = [("sigmaa".to_string(), PropValue::Float(0.3))];
+/// assert!(bsdf_from_properties("orennayar", &typo).unwrap_err().message.contains("unused property 'sigmaa'"));
+/// # Ok::<(), pt_scene::SceneError>(())
+/// ```
+pub fn bsdf_from_properties(
+    plugin: &str,
+    props: &[(String, PropValue)],
+) -> Result<BsdfDesc, SceneError> {
+    build::bsdf_from_properties(plugin, props)
 }

@@ -59,6 +59,68 @@ impl Value {
     }
 }
 
+/// A property value given in code rather than read from a file: what a `<float>`, `<rgb>`,
+/// `<string>` or `<boolean>` element holds (see [`crate::bsdf_from_properties`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum PropValue {
+    /// A number (`<float>`); also read where a spectrum is expected, as in a file.
+    Float(f32),
+    /// A linear sRGB colour (`<rgb>`).
+    Rgb([f32; 3]),
+    /// A name (`<string>`): `variant="full"`, `material="Au"`, `int_ior="bk7"`, ...
+    String(String),
+    /// A flag (`<boolean>`).
+    Boolean(bool),
+}
+
+impl From<f32> for PropValue {
+    fn from(x: f32) -> Self {
+        PropValue::Float(x)
+    }
+}
+
+impl From<[f32; 3]> for PropValue {
+    fn from(c: [f32; 3]) -> Self {
+        PropValue::Rgb(c)
+    }
+}
+
+impl From<&str> for PropValue {
+    fn from(s: &str) -> Self {
+        PropValue::String(s.to_string())
+    }
+}
+
+impl From<bool> for PropValue {
+    fn from(b: bool) -> Self {
+        PropValue::Boolean(b)
+    }
+}
+
+impl PropValue {
+    /// The parsed value, checked as the parser checks written ones (finite numbers).
+    fn value(&self) -> std::result::Result<Value, String> {
+        let finite = |x: f32| {
+            if x.is_finite() {
+                Ok(f64::from(x))
+            } else {
+                Err(format!("number '{x}' is not finite"))
+            }
+        };
+        Ok(match self {
+            PropValue::Float(x) => Value::Float(finite(*x)?),
+            PropValue::Rgb(c) => {
+                for &x in c {
+                    finite(x)?;
+                }
+                Value::Rgb(*c)
+            }
+            PropValue::String(s) => Value::Str(s.clone()),
+            PropValue::Boolean(b) => Value::Boolean(*b),
+        })
+    }
+}
+
 /// One property of an object, remembering whether the plugin read it.
 struct Prop<'e> {
     name: String,
@@ -109,6 +171,31 @@ impl<'e> ObjectView<'e> {
         };
         for child in &el.children {
             view.add_child(child)?;
+        }
+        Ok(view)
+    }
+
+    /// An object given in code: `el` (no children) names the plugin and stands for the object
+    /// and each of its `props` in error messages. Names must be unique and numbers finite, as
+    /// in a file.
+    pub fn from_props(el: &'e Element, props: &[(String, PropValue)]) -> Result<Self> {
+        let mut view = ObjectView::parse(el)?;
+        for (name, value) in props {
+            if view.props.iter().any(|p| p.name == *name) {
+                return Err(SceneError::at(
+                    &el.loc,
+                    format!("property '{name}' is given twice"),
+                ));
+            }
+            let value = value
+                .value()
+                .map_err(|m| SceneError::at(&el.loc, format!("property '{name}': {m}")))?;
+            view.props.push(Prop {
+                name: name.clone(),
+                value,
+                el,
+                used: Cell::new(false),
+            });
         }
         Ok(view)
     }

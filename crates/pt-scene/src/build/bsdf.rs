@@ -1,6 +1,57 @@
 //! BSDFs.
 
 use super::*;
+use crate::props::PropValue;
+
+/// Plugins that wrap other BSDFs (read from nested `<bsdf>` elements only).
+const WRAPPERS: &[&str] = &["twosided", "mask", "blendbsdf", "normalmap"];
+
+/// Reads a BSDF model plugin from properties given in code (see [`crate::bsdf_from_properties`]).
+pub(crate) fn bsdf_from_properties(
+    plugin: &str,
+    props: &[(String, PropValue)],
+) -> Result<BsdfDesc> {
+    let loc = SourceLoc {
+        file: PathBuf::from("<properties>"),
+        line: 0,
+        col: 0,
+        element: format!("bsdf type=\"{plugin}\""),
+    };
+    let el = Element {
+        tag: "bsdf".into(),
+        attrs: vec![("type".into(), plugin.to_string())],
+        children: Vec::new(),
+        loc,
+        dir: PathBuf::from("."),
+    };
+    let v = ObjectView::from_props(&el, props)?;
+    if WRAPPERS.contains(&plugin) {
+        return Err(SceneError::at(
+            &el.loc,
+            format!(
+                "bsdf \"{plugin}\" wraps other BSDFs: build the inner one and wrap its description"
+            ),
+        ));
+    }
+    let mut b = Builder {
+        ids: HashMap::new(),
+        search_paths: &[],
+        base_dir: Path::new("."),
+        bsdfs: Vec::new(),
+        bsdf_index: HashMap::new(),
+        bsdf_memo: HashMap::new(),
+        texture_memo: HashMap::new(),
+        visiting: Vec::new(),
+        default_bsdf: [None, None],
+    };
+    let kind = materials::bsdf_kind(&mut b, &v, &Nested::none())?;
+    v.finish()?;
+    Ok(BsdfDesc {
+        loc: el.loc.clone(),
+        id: None,
+        kind,
+    })
+}
 
 impl<'e> Builder<'e> {
     /// Index in `bsdfs` of the BSDF `el`: shared (id-carrying) BSDFs are added once.

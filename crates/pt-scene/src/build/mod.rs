@@ -9,6 +9,7 @@ mod sensor;
 mod shape;
 mod texture;
 
+pub(crate) use bsdf::bsdf_from_properties;
 use integrator::default_integrator;
 use sensor::{default_camera, DEFAULT_FILTER};
 use shape::medium;

@@ -28,6 +28,14 @@ pub(super) struct Nested<'e> {
 }
 
 impl<'e> Nested<'e> {
+    /// No nested objects (an object given in code).
+    pub(super) fn none() -> Self {
+        Nested {
+            textures: Vec::new(),
+            others: Vec::new(),
+        }
+    }
+
     /// Errors on the first nested texture the plugin did not read.
     pub(super) fn finish(&self, v: &ObjectView<'_>) -> Result<()> {
         match self.textures.iter().find(|t| !t.used.get()) {

@@ -461,3 +461,82 @@ fn normalmap_mask_texture_and_blend() {
         assert_eq!(e.loc.as_ref().unwrap().line, 2, "{body}: {e}");
     }
 }
+
+/// `bsdf_from_properties` reads a model as the XML loader reads the same properties: the same
+/// description (compared through `Debug`, which prints every number exactly), and the same
+/// messages for bad values, unknown names and properties the plugin does not have.
+#[test]
+fn properties_given_in_code_read_like_xml() {
+    let f = |n: &str, x: f32| (n.to_string(), PropValue::Float(x));
+    let s = |n: &str, v: &str| (n.to_string(), PropValue::String(v.to_string()));
+    let cases: Vec<(&str, Vec<(String, PropValue)>, &str)> = vec![
+        ("diffuse", vec![], ""),
+        (
+            "orennayar",
+            vec![f("sigma", 0.3), s("variant", "full")],
+            r#"<float name="sigma" value="0.3"/><string name="variant" value="full"/>"#,
+        ),
+        (
+            "roughconductor",
+            vec![
+                s("material", "Au"),
+                f("alpha", 0.2),
+                s("distribution", "ggx"),
+            ],
+            r#"<string name="material" value="Au"/><float name="alpha" value="0.2"/><string name="distribution" value="ggx"/>"#,
+        ),
+        (
+            "roughdielectric",
+            vec![s("int_ior", "bk7"), f("alpha_u", 0.1), f("alpha_v", 0.3)],
+            r#"<string name="int_ior" value="bk7"/><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/>"#,
+        ),
+        (
+            "roughplastic",
+            vec![
+                (
+                    "diffuse_reflectance".into(),
+                    PropValue::Rgb([0.2, 0.4, 0.6]),
+                ),
+                ("nonlinear".into(), PropValue::Boolean(true)),
+            ],
+            r#"<rgb name="diffuse_reflectance" value="0.2, 0.4, 0.6"/><boolean name="nonlinear" value="true"/>"#,
+        ),
+        (
+            "thinfilm",
+            vec![f("thickness", 350.0), s("material", "Cu")],
+            r#"<float name="thickness" value="350"/><string name="material" value="Cu"/>"#,
+        ),
+    ];
+    for (plugin, props, xml) in cases {
+        let from_code = bsdf_from_properties(plugin, &props).unwrap();
+        let file = load(&scene(&format!(
+            "<shape type=\"cube\"><bsdf type=\"{plugin}\">{xml}</bsdf></shape>"
+        )))
+        .unwrap();
+        assert_eq!(
+            format!("{:?}", from_code.kind),
+            format!("{:?}", file.bsdfs[0].kind),
+            "{plugin}"
+        );
+    }
+    let err = |plugin: &str, props: Vec<(String, PropValue)>| {
+        bsdf_from_properties(plugin, &props)
+            .unwrap_err()
+            .to_string()
+    };
+    assert!(err("orennayar", vec![f("sigma", -1.0)]).contains("sigma must be in [0, "));
+    assert!(err("orennayar", vec![f("sigma", f32::NAN)])
+        .contains("property 'sigma': number 'NaN' is not finite"));
+    assert!(err("conductor", vec![s("material", "unobtainium")])
+        .contains("unknown conductor 'unobtainium'"));
+    assert!(err("diffuse", vec![f("sigma", 1.0)]).contains("unused property 'sigma'"));
+    assert!(err(
+        "diffuse",
+        vec![f("reflectance", 0.5), f("reflectance", 0.6)]
+    )
+    .contains("given twice"));
+    assert!(err("plastic", vec![]).contains("plastic"));
+    assert!(err("twosided", vec![]).contains("wraps other BSDFs"));
+    let e = bsdf_from_properties("minnaert", &[f("k", 0.0)]).unwrap_err();
+    assert_eq!(e.loc.unwrap().file, PathBuf::from("<properties>"));
+}

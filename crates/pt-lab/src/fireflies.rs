@@ -1,4 +1,4 @@
-//! The bias of `pt render --clamp X`, measured for the stability report.
+//! The bias of `pt render --clamp X`, measured for the stability report ([`crate::stability`]).
 //!
 //! Scene (embedded below): a glass sphere on a diffuse floor under a small spherical light,
 //! 64 x 48 pixels. Its caustic is reached only by BSDF-sampled paths that hit the small light
@@ -9,7 +9,8 @@
 //! which rare paths happened to be drawn). The firefly count ([`pt_image::fireflies`]) of each
 //! image shows what the clamp buys.
 
-use anyhow::Result;
+use crate::chart::{chart_both, Chart};
+use crate::Result;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use pt_image::fireflies::{count_fireflies, luminance, FireflyParams};
@@ -48,7 +49,7 @@ const CLAMPS: [Option<f32>; 7] = [
 
 /// One clamp value's outcome.
 #[derive(Clone, Debug)]
-pub(crate) struct ClampRow {
+pub struct ClampRow {
     /// The clamp (None: off).
     pub clamp: Option<f32>,
     /// Image mean luminance.
@@ -65,7 +66,7 @@ pub(crate) struct ClampRow {
 
 /// The study's result.
 #[derive(Clone, Debug)]
-pub(crate) struct ClampStudy {
+pub struct ClampStudy {
     /// Samples per pixel of each render.
     pub spp: u32,
     /// One row per clamp value, unclamped first.
@@ -89,7 +90,7 @@ fn block_means(img: &Image, b: u32) -> Vec<f64> {
 }
 
 /// Renders the scene at each clamp value (on the current rayon pool) and measures the bias.
-pub(crate) fn clamp_bias_study() -> Result<ClampStudy> {
+pub fn clamp_bias_study() -> Result<ClampStudy> {
     let desc = pt_scene::load_str(SCENE, Path::new("<clamp study scene>"), Path::new("."), &[])?;
     let scene = Scene::build(&desc, BvhKind::Auto, LightSelection::Power)?;
     let base = RenderSettings::from_desc(&desc);
@@ -142,15 +143,27 @@ pub(crate) fn clamp_bias_study() -> Result<ClampStudy> {
     })
 }
 
-/// The report section (Markdown).
-pub(crate) fn clamp_report(s: &ClampStudy) -> String {
+impl ClampStudy {
+    /// The report section (Markdown).
+    pub fn report(&self) -> String {
+        clamp_report(self)
+    }
+
+    /// Chart: bias (%) and firefly count against the clamp value (log scale), as SVG and PNG.
+    pub fn charts(&self) -> Result<(String, Vec<u8>)> {
+        const SIZE: (u32, u32) = (1000, 420);
+        chart_both(self, SIZE, "the clamp chart")
+    }
+}
+
+fn clamp_report(s: &ClampStudy) -> String {
     let mut md = String::new();
     let _ = writeln!(md, "## Firefly clamp: bias against fireflies\n");
     let _ = writeln!(
         md,
         "`pt render --clamp X` (off by default) scales each sample whose largest RGB channel exceeds X down to X. \
          Scene: a glass sphere on a diffuse floor under a small spherical light (radius 0.05, radiance 400), 64x48 px, \
-         {} spp, max_depth 8 (embedded in `crates/cli/fireflies.rs`). Every render uses the same seed, so each \
+         {} spp, max_depth 8 (embedded in `crates/pt-lab/src/fireflies.rs`). Every render uses the same seed, so each \
          row differs from the unclamped one only by what the clamp removed from the same samples: the bias column is \
          the clamp's bias (relative, image mean luminance), the worst block is the 8x8-pixel block that lost most \
          (the caustic). Fireflies: pixels whose luminance exceeds the median of their 5x5 neighbourhood by 10 \
@@ -176,16 +189,7 @@ pub(crate) fn clamp_report(s: &ClampStudy) -> String {
     md
 }
 
-/// Chart: bias (%) and firefly count against the clamp value (log scale), SVG and PNG.
-pub(crate) fn clamp_charts(s: &ClampStudy) -> Result<(String, Vec<u8>)> {
-    const SIZE: (u32, u32) = (1000, 420);
-    Ok((
-        crate::converge::chart_svg(s, SIZE, "the clamp chart")?,
-        crate::converge::chart_png(s, SIZE, "the clamp chart")?,
-    ))
-}
-
-impl crate::converge::Chart for ClampStudy {
+impl Chart for ClampStudy {
     fn draw_on<DB: DrawingBackend>(
         &self,
         root: &DrawingArea<DB, Shift>,
