@@ -6,7 +6,7 @@
 //!    the slab's total reflectance plus total transmittance (the geometric series of internal
 //!    reflections, e.g. Born & Wolf ch. 1.6 / any optics text), with R = ((n-1)/(n+1))^2 and the
 //!    single-pass transmittance tau = exp(-sigma d):
-//!      R_tot = R + (1-R)^2 R tau^2 / (1 - R^2 tau^2),   T_tot = (1-R)^2 tau / (1 - R^2 tau^2).
+//!    R_tot = R + (1-R)^2 R tau^2 / (1 - R^2 tau^2),   T_tot = (1-R)^2 tau / (1 - R^2 tau^2).
 //!    Off-axis rays (at most 1 degree outside, 0.67 degrees inside the glass) lengthen the path by
 //!    under 7e-5 relative: far below the tolerance.
 //! 2. `path` ignores the medium (as Mitsuba's does): the same slab gives exactly R_tot + T_tot at
@@ -84,8 +84,8 @@ fn slab_radiance(n: f64, tau: f64) -> f64 {
 
 #[test]
 fn absorbing_slab_matches_beer_lambert_series() {
-    let (sigma, d) = ([0.2, 0.5, 1.0], 2.0);
-    let want = sigma.map(|s| slab_radiance(1.5, (-s * d as f64).exp()));
+    let (sigma, d) = ([0.2, 0.5, 1.0], 2.0f64);
+    let want = sigma.map(|s| slab_radiance(1.5, (-s * d).exp()));
     check_mean("slab_volpath", &slab_scene("volpath", sigma, d), want);
 }
 

@@ -107,9 +107,7 @@ fn phosphorescent_plane_decays_as_the_closed_form() {
         &[],
     )
     .unwrap();
-    let e = pt_integrators::afterglow::afterglow(&plain, 1.0, 5)
-        .err()
-        .expect("error");
+    let e = pt_integrators::afterglow::afterglow(&plain, 1.0, 5).expect_err("error");
     assert!(e.message.contains("phosphorescent"), "{e}");
     assert!(pt_integrators::afterglow::afterglow(&desc, -1.0, 5).is_err());
 }

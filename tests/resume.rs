@@ -201,7 +201,7 @@ fn ctrl_c_writes_the_image_so_far_and_the_state_resumes() {
     assert_eq!(status.code(), Some(130));
     let (img, meta) = pt_image::read_exr(&out).expect("a valid image after Ctrl-C");
     let spp = meta.spp.expect("spp in the header");
-    assert!(spp >= 1 && spp < 1_000_000, "spp {spp}");
+    assert!((1..1_000_000).contains(&spp), "spp {spp}");
     assert!(img.data.iter().all(|p| p.iter().all(|c| c.is_finite())));
     let leftovers: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()

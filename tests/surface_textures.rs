@@ -7,8 +7,8 @@
 //!    directional light of irradiance E arriving at 60 degrees from the geometric normal in the
 //!    tilt plane, seen from straight above. Mitsuba 3.9.1's `normalmap` (pt-bsdf `normal_map`)
 //!    gives the radiance
-//!      L = rho / pi * E * cos(theta_l - a) * G,
-//!      G = 2 / (1 + sqrt(1 + min(tan^2 a / 8, 1) tan^2 theta_l))  (Conty Estevez et al. 2019),
+//!    L = rho / pi * E * cos(theta_l - a) * G,
+//!    G = 2 / (1 + sqrt(1 + min(tan^2 a / 8, 1) tan^2 theta_l))  (Conty Estevez et al. 2019),
 //!    here with `a` the tilt of the 8-bit texel actually stored (the PNG quantises the normal).
 //!    The plane is the only object and the light is a delta light found only by next-event
 //!    estimation, so the image is exactly this constant (no noise): the mean must match to 0.2%.

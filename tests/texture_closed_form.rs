@@ -52,8 +52,8 @@
 mod common;
 
 use common::*;
-use pt_stats::{chi2_sf, normal_sf, sidak_threshold};
 use pt_image::Image;
+use pt_stats::{chi2_sf, normal_sf, sidak_threshold};
 
 const W: u32 = 64;
 const H: u32 = 48;

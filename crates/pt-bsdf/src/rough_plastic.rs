@@ -97,7 +97,7 @@ impl CoatingTable {
             .get_or_init(Default::default)
             .lock()
             .unwrap_or_else(|e| e.into_inner());
-        *cache
+        cache
             .entry(key)
             .or_insert_with(|| Box::leak(Box::new(CoatingTable::compute(dist, alpha, eta))))
     }

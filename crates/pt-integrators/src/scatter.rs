@@ -73,7 +73,9 @@ impl LightLanes {
     #[inline(always)]
     fn set(&mut self, k: usize, s: &LightSample, pmf: f32) {
         self.have[k] = true;
-        (self.wi.set(k, s.wi), self.p.set(k, s.p), self.n.set(k, s.n));
+        self.wi.set(k, s.wi);
+        self.p.set(k, s.p);
+        self.n.set(k, s.n);
         (self.dist[k], self.radiance[k], self.pdf[k], self.delta[k]) =
             (s.dist, s.radiance, pmf * s.pdf, s.delta);
     }
@@ -348,8 +350,11 @@ fn draw<'a>(
         let (Some(h), Some(PathStart { path, sampler, .. })) = (&hits[k], &mut slots[k]) else {
             continue;
         };
-        (d.p.set(k, h.p), d.ng.set(k, h.ng), d.ns.set(k, h.ns));
-        (d.dpdu.set(k, h.dpdu), d.dir.set(k, path.ray.dir));
+        d.p.set(k, h.p);
+        d.ng.set(k, h.ng);
+        d.ns.set(k, h.ns);
+        d.dpdu.set(k, h.dpdu);
+        d.dir.set(k, path.ray.dir);
         d.tangent |= Mask::from(h.dpdu != Vec3::ZERO) << k;
         let material = scene.material(h.shape);
         let bsdf: &SurfaceBsdf = match &material.fixed {
@@ -375,7 +380,9 @@ fn draw<'a>(
                             let LightShape::Parallelogram { v0, e1, e2, n, .. } = &a.shape else {
                                 unreachable!()
                             };
-                            (d.v0.set(k, *v0), d.e1.set(k, *e1), d.e2.set(k, *e2));
+                            d.v0.set(k, *v0);
+                            d.e1.set(k, *e1);
+                            d.e2.set(k, *e2);
                             l.n.set(k, *n);
                             (d.area[k], d.lu[k], d.par_light[k]) = (a.area, u, li);
                             d.par |= 1 << k;

@@ -154,7 +154,7 @@ impl Distribution2D {
         }
         let rows: Vec<Distribution1D> = weights
             .chunks(width)
-            .map(|r| Distribution1D::new(r))
+            .map(Distribution1D::new)
             .collect::<Option<_>>()?;
         let row_sums: Vec<f32> = weights
             .chunks(width)

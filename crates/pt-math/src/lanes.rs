@@ -220,7 +220,9 @@ impl<const N: usize> Frames<N> {
     /// Sets lane `k`'s frame.
     #[inline(always)]
     pub fn set(&mut self, k: usize, f: crate::Frame) {
-        (self.s.set(k, f.s), self.t.set(k, f.t), self.n.set(k, f.n));
+        self.s.set(k, f.s);
+        self.t.set(k, f.t);
+        self.n.set(k, f.n);
     }
 }
 

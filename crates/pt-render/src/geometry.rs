@@ -174,7 +174,9 @@ fn moller_trumbore<const PARALLELOGRAM: bool>(
     } else {
         b1 + b2 <= 1.0
     };
-    // `&` rather than `&&`: evaluate every comparison, branch once.
+    // `&` rather than `&&` (or `contains`, which short-circuits): evaluate every comparison,
+    // branch once.
+    #[allow(clippy::manual_range_contains)]
     let hit =
         (det != 0.0) & (b1 >= 0.0) & (b1 <= 1.0) & (b2 >= 0.0) & inside & (t > tmin) & (t < tmax);
     hit.then_some((t, b1, b2))

@@ -32,7 +32,7 @@ impl Sampler {
         // One fixed stream constant: distinct states on one stream are independent sequences,
         // whereas nearby stream increments of PCG are known to be correlated.
         Sampler {
-            rng: Pcg32::new(state, 0xa02b_dbf7_bb3c_0a7),
+            rng: Pcg32::new(state, 0x0a02_bdbf_7bb3_c0a7),
         }
     }
 

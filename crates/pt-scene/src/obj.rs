@@ -337,7 +337,6 @@ mod tests {
             triangulate: true,
             ignore_points: true,
             ignore_lines: true,
-            ..Default::default()
         };
         let (models, _) = tobj::load_obj_buf(&mut text.as_bytes(), &options, |_| {
             Ok((Vec::new(), Default::default()))

@@ -202,7 +202,7 @@ pub(crate) fn sphere(
     )?;
     let center = m.transform_point3(center);
     let radius = radius * scale;
-    if !center.is_finite() || !(radius.is_finite() && radius > 0.0) {
+    if !(center.is_finite() && radius.is_finite() && radius > 0.0) {
         return Err(format!(
             "sphere has an invalid centre {center} or radius {radius}"
         ));

@@ -306,16 +306,13 @@ impl Light {
     /// Solid-angle pdf that `sample` produces direction `dir` (infinite lights only).
     pub fn escaped_pdf(&self, dir: Vec3) -> f32 {
         match self {
+            // Inside the sun's cone: |dir - n|^2 / 2 = 1 - cos.
             Light::Sun {
                 frame,
                 one_minus_cos,
                 ..
-            } => {
-                if 0.5 * (dir - frame.n).length_squared() < *one_minus_cos {
-                    uniform_cone_pdf(*one_minus_cos)
-                } else {
-                    0.0
-                }
+            } if 0.5 * (dir - frame.n).length_squared() < *one_minus_cos => {
+                uniform_cone_pdf(*one_minus_cos)
             }
             Light::Constant { .. } => pt_math::warp::UNIFORM_SPHERE_PDF,
             Light::EnvMap(e) => e.pdf(dir),

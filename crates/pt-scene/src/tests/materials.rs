@@ -469,7 +469,9 @@ fn normalmap_mask_texture_and_blend() {
 fn properties_given_in_code_read_like_xml() {
     let f = |n: &str, x: f32| (n.to_string(), PropValue::Float(x));
     let s = |n: &str, v: &str| (n.to_string(), PropValue::String(v.to_string()));
-    let cases: Vec<(&str, Vec<(String, PropValue)>, &str)> = vec![
+    // (plugin, properties, expected error fragment or "" for success)
+    type Case<'a> = (&'a str, Vec<(String, PropValue)>, &'a str);
+    let cases: Vec<Case> = vec![
         ("diffuse", vec![], ""),
         (
             "orennayar",
