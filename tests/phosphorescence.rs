@@ -1,4 +1,4 @@
-//! Phosphorescence against its closed form (model: crates/pt-render/src/phosphorescence.rs).
+//! Phosphorescence against its closed form (model: crates/pt-integrators/src/afterglow.rs).
 //!
 //! A phosphorescent plane (a rectangle, two triangles) lit by a narrow-band directional light
 //! (a 400-440 nm triangle of peak 10 W m^-2 nm^-1 at normal incidence) at cos = 0.8, nothing

@@ -91,9 +91,8 @@ struct Draws<'a> {
     ng: V3<N>,
     /// Shading normals, world space.
     ns: V3<N>,
-    /// dp/du, world space (zero without uvs), and the lanes where it is not zero.
+    /// dp/du, world space (zero without uvs).
     dpdu: V3<N>,
-    tangent: Mask,
     /// The arriving rays' directions, world space.
     dir: V3<N>,
     /// The lanes' BSDFs when they are their materials' own (nothing varies over them); the
@@ -133,7 +132,6 @@ impl Draws<'_> {
             ng: V3::default(),
             ns: V3::splat(Vec3::Z),
             dpdu: V3::default(),
-            tangent: 0,
             dir: V3::splat(-Vec3::Z),
             fixed: [None; N],
             lambert: 0,
@@ -175,7 +173,8 @@ impl Geometry {
     fn new(d: &Draws) -> Self {
         // Without dp/du in any lane (meshes without uvs), the frames from the normals alone:
         // the same frames, without the projection of the tangents.
-        if d.tangent == 0 {
+        let tangent = lanes(|k| (d.dpdu.x[k] != 0.0) | (d.dpdu.y[k] != 0.0) | (d.dpdu.z[k] != 0.0));
+        if mask_of(&tangent) == 0 {
             Geometry::with_frames(d, |k| Frame::from_normal(d.ns.get(k)))
         } else {
             Geometry::with_frames(d, |k| {
@@ -355,13 +354,15 @@ fn draw<'a>(
         d.ns.set(k, h.ns);
         d.dpdu.set(k, h.dpdu);
         d.dir.set(k, path.ray.dir);
-        d.tangent |= Mask::from(h.dpdu != Vec3::ZERO) << k;
         let material = scene.material(h.shape);
-        let bsdf: &SurfaceBsdf = match &material.fixed {
-            Some(b) => d.fixed[k].insert(b),
-            None => built[k].insert(scene.bsdf(h, &path.lambda)),
+        let (bsdf, lambert): (&SurfaceBsdf, _) = match &material.fixed {
+            Some(b) => (d.fixed[k].insert(b), material.fixed_lambert),
+            None => {
+                let b = built[k].insert(scene.bsdf(h, &path.lambda));
+                (b, b.plain_lambert())
+            }
         };
-        if let Some((r, two_sided)) = bsdf.plain_lambert() {
+        if let Some((r, two_sided)) = lambert {
             (d.albedo[k], d.two_sided[k]) = (r, two_sided);
             d.lambert |= 1 << k;
         }
@@ -430,16 +431,18 @@ fn sample_parallelograms(
     let taken: [bool; N] = lanes(|k| is_par[k] & sa.ok[k]);
     l.wi = V3::select(&is_par, &sa.wi, &l.wi);
     l.p = V3::select(&is_par, &points, &l.p);
+    // Selects, not branches: the lanes that took a parallelogram sample.
     for k in 0..N {
-        if taken[k] {
-            l.have[k] = true;
-            l.dist[k] = sa.dist[k];
-            l.pdf[k] = d.pmf[k] * sa.pdf[k];
-            // The back side emits nothing.
-            if sa.front[k] {
-                l.radiance[k] = d.par_radiance[k];
-            }
-        }
+        let t = taken[k];
+        l.have[k] |= t;
+        l.dist[k] = if t { sa.dist[k] } else { l.dist[k] };
+        l.pdf[k] = if t { d.pmf[k] * sa.pdf[k] } else { l.pdf[k] };
+        // The back side emits nothing.
+        l.radiance[k] = if t & sa.front[k] {
+            d.par_radiance[k]
+        } else {
+            l.radiance[k]
+        };
     }
     for k in set_lanes(d.par_textured) {
         if !(taken[k] && sa.front[k]) {

@@ -30,18 +30,9 @@
 //!
 //! # Supported XML
 //!
-//! | element | what is read |
-//! |---|---|
-//! | `scene` | `version` (scenes older than 2.0.0 get Mitsuba's camelCase -> snake_case upgrade) |
-//! | `default`, `$name` | parameters, overridden by the `defaults` argument (`-D name=value`) |
-//! | `include`, `path` | splice another file's scene; add a folder to the file search path |
-//! | `ref`, `id` | shared objects (BSDFs shared by several shapes appear once in `bsdfs`) |
-//! | properties | `float`, `integer`, `boolean`, `string`, `rgb`, `spectrum` (one number), `point`, `vector`, `transform` |
-//! | `transform` | `translate`, `rotate`, `scale`, `matrix`, `lookat` |
-//! | `sensor` | `perspective` with `film` `hdrfilm` (`rfilter` box, tent, gaussian) and `sampler` independent, stratified |
-//! | `integrator` | `path`, `direct`, `moment` |
-//! | `shape` | `obj`, `gltf` (the file's triangles, read by [`gltf::load_mesh`]), `rectangle`, `cube`, `disk`, `sphere`, with nested `bsdf` and `emitter` `area` |
-//! | `bsdf` | `diffuse`, `twosided`, `dielectric`, `thindielectric`, `roughdielectric`, `conductor`, `roughconductor` (named materials as in Mitsuba's RGB mode), and the extensions `orennayar`, `minnaert` |
+//! Every plugin and parameter this loader reads, Mitsuba's and the extensions, is listed with a
+//! snippet in `scenes/README.md` (a test loads each snippet, and checks that every plugin the
+//! loader accepts is documented there).
 //!
 //! Everything else is an error naming the file, line, column and element: unknown elements and
 //! plugins, Mitsuba plugins not implemented yet ("not yet implemented"), properties a plugin

@@ -32,10 +32,12 @@ pub fn build_material(
         opacity: None,
         normal_map: None,
         fixed: None,
+        fixed_lambert: None,
         mode,
     };
     b.wrappers(desc, &mut surface)?;
     surface.fixed = fixed(&surface);
+    surface.fixed_lambert = surface.fixed.and_then(|b| b.plain_lambert());
     Ok(surface)
 }
 

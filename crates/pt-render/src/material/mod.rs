@@ -21,7 +21,7 @@ use pt_bsdf::{
     RoughPlastic, RoughThinFilm, SurfaceBsdf, ThinDielectric, ThinFilm,
 };
 use pt_math::{Frame, Vec3};
-use pt_spectrum::{ColorMode, SampledWavelengths};
+use pt_spectrum::{ColorMode, SampledSpectrum, SampledWavelengths};
 
 /// The roughness of a rough model: distribution and the two roughness textures (scalars).
 #[derive(Clone, Debug)]
@@ -380,6 +380,9 @@ pub struct SurfaceMaterial {
     pub normal_map: Option<NormalMap>,
     /// RGB mode with nothing textured: the whole surface BSDF, evaluated once.
     pub fixed: Option<SurfaceBsdf>,
+    /// `fixed`'s [`SurfaceBsdf::plain_lambert`] (albedo, two-sided), looked up once: the
+    /// shading in lanes asks it at every hit.
+    pub fixed_lambert: Option<(SampledSpectrum, bool)>,
     /// Colour mode the textures were built for.
     pub mode: ColorMode,
 }

@@ -4,7 +4,7 @@
 //! `int_ior` for a dielectric base or `material` / `eta` + `k` for a conductor base), and
 //! `fluorescent` (`reflectance` 0.5, `absorption` 0.5, `emission` required, `yield` 1; see
 //! pt-render's `fluorescence.rs`), `phosphorescent` (the same plus `lifetime` in seconds,
-//! required; see pt-render's `phosphorescence.rs`). Defaults and named materials follow Mitsuba 3.9.
+//! required; see pt-integrators' `afterglow.rs`). Defaults and named materials follow Mitsuba 3.9.
 //!
 //! Texturable parameters (Mitsuba's `|spectrum| or |texture|` and `|float| or |texture|`) take
 //! a nested texture: reflectances, `specular_reflectance`/`specular_transmittance`, conductor

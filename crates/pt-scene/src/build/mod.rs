@@ -43,7 +43,7 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "ply", "serialized", "cylinder", "shapegroup", "instance", "bsplinecurve", "linearcurve",
         "sdfgrid", "ellipsoids", "ellipsoidsmesh",
     ]),
-    ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "roughplastic"], &[
+    ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "roughplastic", "fluorescent", "phosphorescent"], &[
         "plastic", "bumpmap", "null",
         "polarizer", "retarder", "circular", "measured", "pplastic", "principled",
         "principledthin", "hair",

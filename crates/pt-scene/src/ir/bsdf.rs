@@ -241,7 +241,7 @@ pub enum BsdfKind {
         quantum_yield: f32,
     },
     /// Phosphorescent Lambertian surface (project extension `phosphorescent`; model in
-    /// pt-render's `phosphorescence.rs`): renders as its elastic reflectance with the lights
+    /// pt-integrators' `afterglow.rs`): renders as its elastic reflectance with the lights
     /// on; with `pt render --time T` it glows with exponentially decaying afterglow.
     Phosphorescent {
         /// Elastic diffuse reflectance, in [0, 1].
