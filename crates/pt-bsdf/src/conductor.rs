@@ -38,21 +38,15 @@
 //! </bsdf>
 //! ```
 
-use crate::fresnel::fresnel_conductor;
+use crate::fresnel::fresnel_conductor4;
 use crate::microfacet::Microfacet;
 use crate::BsdfSample;
-use pt_math::{Vec2, Vec3, Vec4};
+use pt_math::{Vec2, Vec3};
 use pt_spectrum::SampledSpectrum;
 
 /// Per-lane conductor Fresnel at `cos_i`.
 fn fresnel_lanes(cos_i: f32, eta: SampledSpectrum, k: SampledSpectrum) -> SampledSpectrum {
-    let (e, k) = (eta.0, k.0);
-    SampledSpectrum(Vec4::new(
-        fresnel_conductor(cos_i, e.x, k.x),
-        fresnel_conductor(cos_i, e.y, k.y),
-        fresnel_conductor(cos_i, e.z, k.z),
-        fresnel_conductor(cos_i, e.w, k.w),
-    ))
+    SampledSpectrum(fresnel_conductor4(cos_i, eta.0, k.0))
 }
 
 /// Smooth conductor (perfect specular reflection weighted by the complex Fresnel term).

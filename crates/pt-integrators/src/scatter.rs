@@ -284,10 +284,15 @@ pub(crate) fn scatter(
     let mut l = LightLanes::empty();
     draw(scene, s, slots, hits, todo, &mut built, &mut d, &mut l);
     let g = Geometry::new(&d);
-    sample_parallelograms(scene, slots, &d, &mut l);
+    // The lane kernels run when some lane needs them (one well-predicted branch per scene).
+    if d.par != 0 {
+        sample_parallelograms(scene, slots, &d, &mut l);
+    }
     let wi = g.frames.to_local(&l.wi);
     let mut sc = Scattering::empty();
-    lambert_lanes(&g, &d, &wi, &mut sc);
+    if d.lambert != 0 {
+        lambert_lanes(&g, &d, &wi, &mut sc);
+    }
     other_bsdfs(s, &g, &d, &built, &l, &wi, todo & !d.lambert, &mut sc);
     // The shadow rays leave on the side of the hit the light is on; the next segments on the
     // side each sampled direction leaves to.
