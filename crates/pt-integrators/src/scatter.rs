@@ -103,9 +103,10 @@ struct Draws<'a> {
     lambert: Mask,
     albedo: [SampledSpectrum; N],
     two_sided: [bool; N],
-    /// Uniform numbers of the BSDF sample: lobe choice, direction.
+    /// Uniform numbers of the BSDF sample: lobe choice, direction (its two coordinates as
+    /// two lane arrays, the form the lane kernels read).
     u_lobe: [f32; N],
-    ub: [Vec2; N],
+    ub: [[f32; N]; 2],
     /// The lanes that drew a parallelogram light (sampled in lanes); its index, corner,
     /// edges, area and uniform numbers.
     par: Mask,
@@ -114,7 +115,7 @@ struct Draws<'a> {
     e1: V3<N>,
     e2: V3<N>,
     area: [f32; N],
-    lu: [Vec2; N],
+    lu: [[f32; N]; 2],
     /// The radiance of a parallelogram light that is the same all over it, and the lanes
     /// whose light has a texture instead (evaluated once the point is known).
     par_radiance: [SampledSpectrum; N],
@@ -138,14 +139,14 @@ impl Draws<'_> {
             albedo: [SampledSpectrum::ZERO; N],
             two_sided: [false; N],
             u_lobe: [0.5; N],
-            ub: [Vec2::splat(0.5); N],
+            ub: [[0.5; N]; 2],
             par: 0,
             par_light: [0; N],
             v0: V3::default(),
             e1: V3::default(),
             e2: V3::default(),
             area: [1.0; N],
-            lu: [Vec2::splat(0.5); N],
+            lu: [[0.5; N]; 2],
             par_radiance: [SampledSpectrum::ZERO; N],
             par_textured: 0,
             pmf: [1.0; N],
@@ -390,7 +391,8 @@ fn draw<'a>(
                             d.e1.set(k, *e1);
                             d.e2.set(k, *e2);
                             l.n.set(k, *n);
-                            (d.area[k], d.lu[k], d.par_light[k]) = (a.area, u, li);
+                            (d.area[k], d.par_light[k]) = (a.area, li);
+                            (d.lu[0][k], d.lu[1][k]) = (u.x, u.y);
                             d.par |= 1 << k;
                             match a.constant_radiance(&path.lambda) {
                                 Some(r) => d.par_radiance[k] = r,
@@ -411,7 +413,8 @@ fn draw<'a>(
             }
         }
         d.u_lobe[k] = sampler.next_1d();
-        d.ub[k] = sampler.next_2d();
+        let ub = sampler.next_2d();
+        (d.ub[0][k], d.ub[1][k]) = (ub.x, ub.y);
     }
 }
 
@@ -424,13 +427,7 @@ fn sample_parallelograms(
     d: &Draws,
     l: &mut LightLanes,
 ) {
-    let points = parallelogram_points(
-        &d.v0,
-        &d.e1,
-        &d.e2,
-        &lanes(|k| d.lu[k].x),
-        &lanes(|k| d.lu[k].y),
-    );
+    let points = parallelogram_points(&d.v0, &d.e1, &d.e2, &d.lu[0], &d.lu[1]);
     let sa = to_solid_angle(&d.p, &points, &l.n, &d.area);
     let is_par: [bool; N] = lanes(|k| d.par & (1 << k) != 0);
     let taken: [bool; N] = lanes(|k| is_par[k] & sa.ok[k]);
@@ -459,7 +456,7 @@ fn sample_parallelograms(
         let LightShape::Parallelogram { uv, .. } = &a.shape else {
             unreachable!("drawn as a parallelogram")
         };
-        let u = d.lu[k];
+        let u = Vec2::new(d.lu[0][k], d.lu[1][k]);
         let lambda = &slots[k].as_ref().expect("a scattering path").path.lambda;
         l.radiance[k] = a.radiance_at_uv(uv[0] + uv[1] * u.x + uv[2] * u.y, lambda);
     }
@@ -475,8 +472,7 @@ fn lambert_lanes(g: &Geometry, d: &Draws, wi: &V3<N>, out: &mut Scattering) {
     let wi_z: [f32; N] = lanes(|k| wi.z[k] * mirror[k]);
     out.f = Lambert::eval_lanes(&d.albedo, &wo_z, &wi_z);
     out.bsdf_pdf = Lambert::pdf_lanes(&wo_z, &wi_z);
-    let (s_wi, s_pdf, s_ok) =
-        Lambert::sample_lanes(&wo_z, &lanes(|k| d.ub[k].x), &lanes(|k| d.ub[k].y));
+    let (s_wi, s_pdf, s_ok) = Lambert::sample_lanes(&wo_z, &d.ub[0], &d.ub[1]);
     out.wi = V3 {
         z: lanes(|k| s_wi.z[k] * mirror[k]),
         ..s_wi
@@ -517,7 +513,7 @@ fn other_bsdfs(
                 out.bsdf_pdf[k] = b.pdf(wo, w);
             }
         }
-        if let Some(bs) = b.sample(wo, d.u_lobe[k], d.ub[k]) {
+        if let Some(bs) = b.sample(wo, d.u_lobe[k], Vec2::new(d.ub[0][k], d.ub[1][k])) {
             out.wi.set(k, bs.wi);
             (out.weight[k], out.pdf[k]) = (bs.weight, bs.pdf);
             (out.delta[k], out.eta[k]) = (bs.delta, bs.eta);
