@@ -212,15 +212,13 @@ impl Geometry {
         g
     }
 
-    /// Lane `k`'s origin for a ray leaving in the world direction `dir`: on the side it
-    /// leaves to.
+    /// The lanes' origins for rays leaving in the world directions `dir`: on the side each
+    /// leaves to. A select of whole lanes (a select per lane inside a loop became a choice of
+    /// addresses, which kept the loop out of SIMD registers).
     #[inline(always)]
-    fn origin(&self, k: usize, dir: Vec3) -> Vec3 {
-        if self.n_out.get(k).dot(dir) >= 0.0 {
-            self.out.get(k)
-        } else {
-            self.back.get(k)
-        }
+    fn origins(&self, dir: &V3<N>) -> V3<N> {
+        let front: [bool; N] = lanes(|k| self.n_out.get(k).dot(dir.get(k)) >= 0.0);
+        V3::select(&front, &self.out, &self.back)
     }
 }
 
@@ -298,12 +296,11 @@ pub(crate) fn scatter(
     // The shadow rays leave on the side of the hit the light is on; the next segments on the
     // side each sampled direction leaves to.
     let shadow = ShadowRays::new(s, &g, &l, &sc, &wi);
-    let (mut next_dir, mut next_origin) = (V3::<N>::default(), V3::<N>::default());
+    let mut next_dir = V3::<N>::default();
     for k in 0..N {
-        let dir = g.frames.get(k).to_world(sc.wi.get(k));
-        next_dir.set(k, dir);
-        next_origin.set(k, g.origin(k, dir));
+        next_dir.set(k, g.frames.get(k).to_world(sc.wi.get(k)));
     }
+    let next_origin = g.origins(&next_dir);
     for k in set_lanes(todo) {
         let (Some(h), Some(PathStart { path, sampler, .. })) = (&hits[k], &mut slots[k]) else {
             continue;
@@ -553,9 +550,10 @@ impl ShadowRays {
             scale: [0.0; N],
         };
         let mut lit = [false; N];
+        let origins = g.origins(&l.wi);
         for k in 0..N {
             let (wi_world, p, n) = (l.wi.get(k), l.p.get(k), l.n.get(k));
-            let origin = g.origin(k, wi_world);
+            let origin = origins.get(k);
             // Coordinate by coordinate, as the lanes vectorise it.
             let away = n * n.dot(-wi_world).signum();
             let lifted = Vec3::new(
