@@ -296,10 +296,7 @@ pub(crate) fn scatter(
     // The shadow rays leave on the side of the hit the light is on; the next segments on the
     // side each sampled direction leaves to.
     let shadow = ShadowRays::new(s, &g, &l, &sc, &wi);
-    let mut next_dir = V3::<N>::default();
-    for k in 0..N {
-        next_dir.set(k, g.frames.get(k).to_world(sc.wi.get(k)));
-    }
+    let next_dir = g.frames.to_world(&sc.wi);
     let next_origin = g.origins(&next_dir);
     for k in set_lanes(todo) {
         let (Some(h), Some(PathStart { path, sampler, .. })) = (&hits[k], &mut slots[k]) else {

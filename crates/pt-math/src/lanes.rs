@@ -86,36 +86,6 @@ impl<const N: usize> V3<N> {
         v
     }
 
-    /// Componentwise `a + b`.
-    #[inline(always)]
-    pub fn add(&self, b: &Self) -> Self {
-        V3 {
-            x: lanes(|k| self.x[k] + b.x[k]),
-            y: lanes(|k| self.y[k] + b.y[k]),
-            z: lanes(|k| self.z[k] + b.z[k]),
-        }
-    }
-
-    /// Componentwise `a - b`.
-    #[inline(always)]
-    pub fn sub(&self, b: &Self) -> Self {
-        V3 {
-            x: lanes(|k| self.x[k] - b.x[k]),
-            y: lanes(|k| self.y[k] - b.y[k]),
-            z: lanes(|k| self.z[k] - b.z[k]),
-        }
-    }
-
-    /// Each lane times its factor `s[lane]`.
-    #[inline(always)]
-    pub fn scale(&self, s: &[f32; N]) -> Self {
-        V3 {
-            x: lanes(|k| self.x[k] * s[k]),
-            y: lanes(|k| self.y[k] * s[k]),
-            z: lanes(|k| self.z[k] * s[k]),
-        }
-    }
-
     /// `-a`.
     #[inline(always)]
     pub fn neg(&self) -> Self {
@@ -123,22 +93,6 @@ impl<const N: usize> V3<N> {
             x: lanes(|k| -self.x[k]),
             y: lanes(|k| -self.y[k]),
             z: lanes(|k| -self.z[k]),
-        }
-    }
-
-    /// The dot product per lane, `(x x' + y y') + z z'` (glam's order).
-    #[inline(always)]
-    pub fn dot(&self, b: &Self) -> [f32; N] {
-        lanes(|k| (self.x[k] * b.x[k]) + (self.y[k] * b.y[k]) + (self.z[k] * b.z[k]))
-    }
-
-    /// The cross product per lane (glam's order).
-    #[inline(always)]
-    pub fn cross(&self, b: &Self) -> Self {
-        V3 {
-            x: lanes(|k| self.y[k] * b.z[k] - b.y[k] * self.z[k]),
-            y: lanes(|k| self.z[k] * b.x[k] - b.z[k] * self.x[k]),
-            z: lanes(|k| self.x[k] * b.y[k] - b.x[k] * self.y[k]),
         }
     }
 
@@ -181,18 +135,6 @@ impl<const N: usize> Frames<N> {
             out.set(k, f(k));
         }
         out
-    }
-
-    /// [`crate::Frame::from_normal`] in every lane.
-    #[inline(always)]
-    pub fn from_normal(n: &V3<N>) -> Self {
-        Frames::from_fn(|k| crate::Frame::from_normal(n.get(k)))
-    }
-
-    /// [`crate::Frame::from_normal_tangent`] in every lane.
-    #[inline(always)]
-    pub fn from_normal_tangent(n: &V3<N>, tangent: &V3<N>) -> Self {
-        Frames::from_fn(|k| crate::Frame::from_normal_tangent(n.get(k), tangent.get(k)))
     }
 
     /// World directions -> local frames.
@@ -240,12 +182,6 @@ pub fn offset_ray_origins<const N: usize>(p: &V3<N>, n: &V3<N>) -> V3<N> {
     out
 }
 
-/// [`crate::power_heuristic`] in every lane.
-#[inline(always)]
-pub fn power_heuristics<const N: usize>(a: &[f32; N], b: &[f32; N]) -> [f32; N] {
-    lanes(|k| crate::power_heuristic(a[k], b[k]))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -258,9 +194,10 @@ mod tests {
         assert_eq!(set_lanes(1 << 31).collect::<Vec<_>>(), [31]);
     }
 
-    /// The lanes give every lane the one-lane result, bit for bit (each lane runs the same
-    /// operations), for normals and tangents of every kind, including zero and parallel
-    /// tangents (Duff's fallback).
+    /// Frames in lanes hold and apply each lane's own frame, bit for bit (lane `k` is not
+    /// mixed up with another, and the vectorised loops compute what the single frame does),
+    /// for normals and tangents of every kind, including zero and parallel tangents (Duff's
+    /// fallback).
     #[test]
     fn eight_lanes_match_one_lane_bit_for_bit() {
         let ns = [
@@ -283,7 +220,7 @@ mod tests {
             Vec3::new(0.0, 4.0, 0.0),
             Vec3::new(f32::NAN, 0.0, 0.0),
         ];
-        let f8 = Frames::<8>::from_normal_tangent(&V3::from_fn(|k| ns[k]), &V3::from_fn(|k| ts[k]));
+        let f8 = Frames::<8>::from_fn(|k| Frame::from_normal_tangent(ns[k], ts[k]));
         let v = V3::<8>::from_fn(|k| Vec3::new(0.2 + k as f32, -0.7, 0.4));
         let (l8, w8) = (f8.to_local(&v), f8.to_world(&v));
         for k in 0..8 {

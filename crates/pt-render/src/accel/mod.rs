@@ -93,23 +93,33 @@ pub struct Accel {
 }
 
 impl Accel {
-    /// Builds the BVH. Primitives are reordered; `original_index` maps back.
-    ///
-    /// Memory: the builder reads the primitives' boxes directly (no array of boxes), and the
-    /// primitives are permuted in place afterwards (no second copy).
-    pub fn build(mut prims: Vec<Primitive>, kind: BvhKind) -> Self {
+    /// The structures that need no tree: nothing for no primitives, the flat SIMD blocks for
+    /// few (see `use_flat`). Gives the primitives back when they need a tree.
+    fn without_tree(prims: Vec<Primitive>, kind: BvhKind) -> Result<Self, Vec<Primitive>> {
         if prims.is_empty() {
-            return Accel {
+            Ok(Accel {
                 tree: Tree::Empty,
                 small_stack: true,
                 prims,
                 original_index: Vec::new(),
                 unit_normals: Vec::new(),
-            };
+            })
+        } else if use_flat(kind, prims.len()) {
+            Ok(Accel::build_flat(prims))
+        } else {
+            Err(prims)
         }
-        if use_flat(kind, prims.len()) {
-            return Accel::build_flat(prims);
-        }
+    }
+
+    /// Builds the BVH. Primitives are reordered; `original_index` maps back.
+    ///
+    /// Memory: the builder reads the primitives' boxes directly (no array of boxes), and the
+    /// primitives are permuted in place afterwards (no second copy).
+    pub fn build(prims: Vec<Primitive>, kind: BvhKind) -> Self {
+        let mut prims = match Accel::without_tree(prims, kind) {
+            Ok(accel) => return accel,
+            Err(prims) => prims,
+        };
         let params = BvhBuildParams::medium_build();
         let mut t = Duration::default();
         let (tree, order) = match kind {
@@ -160,18 +170,10 @@ impl Accel {
         remake: impl Fn(usize) -> Primitive,
         chunk_prims: usize,
     ) -> Self {
-        if prims.is_empty() {
-            return Accel {
-                tree: Tree::Empty,
-                small_stack: true,
-                prims,
-                original_index: Vec::new(),
-                unit_normals: Vec::new(),
-            };
-        }
-        if use_flat(kind, prims.len()) {
-            return Accel::build_flat(prims);
-        }
+        let prims = match Accel::without_tree(prims, kind) {
+            Ok(accel) => return accel,
+            Err(prims) => prims,
+        };
         let mut boxes: Vec<BuildBox> = Vec::with_capacity(prims.len());
         boxes.extend(prims.iter().map(|p| BuildBox::from(p.aabb())));
         drop(prims);
