@@ -35,6 +35,7 @@ pub mod microfacet;
 pub mod minnaert;
 pub mod normal_map;
 pub mod oren_nayar;
+pub mod plastic;
 pub mod rough_dielectric;
 pub mod rough_plastic;
 pub mod rough_thin_film;
@@ -48,6 +49,7 @@ pub use lambert::Lambert;
 pub use microfacet::{Distribution, Microfacet};
 pub use minnaert::Minnaert;
 pub use oren_nayar::{OrenNayar, OrenNayarVariant};
+pub use plastic::{fresnel_diffuse_reflectance, Plastic};
 use pt_math::{Vec2, Vec3, Vec4};
 use pt_spectrum::SampledSpectrum;
 pub use rough_dielectric::RoughDielectric;
@@ -105,6 +107,9 @@ pub enum Bsdf {
     ThinFilm(ThinFilm),
     /// glTF 2.0 metallic-roughness (GGX specular over a coupled diffuse base, and metal).
     GltfPbr(GltfPbr),
+    /// Smooth dielectric coating over a diffuse base (Mitsuba `plastic`; a delta lobe and a
+    /// diffuse one).
+    Plastic(Plastic),
     /// Rough dielectric coating over a diffuse base (Mitsuba `roughplastic`).
     RoughPlastic(RoughPlastic),
     /// Thin film on a rough conductor or dielectric base (handles both sides for a dielectric).
@@ -126,6 +131,7 @@ impl Bsdf {
             Bsdf::RoughDielectric(m) => m.eval(wo, wi),
             Bsdf::ThinFilm(m) => m.eval(wo, wi),
             Bsdf::GltfPbr(m) => m.eval(wo, wi),
+            Bsdf::Plastic(m) => m.eval(wo, wi),
             Bsdf::RoughPlastic(m) => m.eval(wo, wi),
             Bsdf::RoughThinFilm(m) => m.eval(wo, wi),
         }
@@ -145,6 +151,7 @@ impl Bsdf {
             Bsdf::RoughDielectric(m) => m.pdf(wo, wi),
             Bsdf::ThinFilm(m) => m.pdf(wo, wi),
             Bsdf::GltfPbr(m) => m.pdf(wo, wi),
+            Bsdf::Plastic(m) => m.pdf(wo, wi),
             Bsdf::RoughPlastic(m) => m.pdf(wo, wi),
             Bsdf::RoughThinFilm(m) => m.pdf(wo, wi),
         }
@@ -164,6 +171,7 @@ impl Bsdf {
             Bsdf::RoughDielectric(m) => m.sample(wo, u_lobe, u),
             Bsdf::ThinFilm(m) => m.sample(wo, u_lobe, u),
             Bsdf::GltfPbr(m) => m.sample(wo, u_lobe, u),
+            Bsdf::Plastic(m) => m.sample(wo, u_lobe, u),
             Bsdf::RoughPlastic(m) => m.sample(wo, u_lobe, u),
             Bsdf::RoughThinFilm(m) => m.sample(wo, u_lobe, u),
         }
@@ -190,6 +198,7 @@ impl Bsdf {
             | Bsdf::RoughConductor(_)
             | Bsdf::RoughDielectric(_)
             | Bsdf::GltfPbr(_)
+            | Bsdf::Plastic(_)
             | Bsdf::RoughPlastic(_)
             | Bsdf::RoughThinFilm(_) => true,
             Bsdf::Conductor(_)

@@ -107,6 +107,16 @@ pub const MODELS: &[ModelInfo] = &[
         ],
     },
     ModelInfo {
+        name: "plastic",
+        params: &[
+            "diffuse_reflectance",
+            "specular_reflectance",
+            "int_ior",
+            "ext_ior",
+            "nonlinear",
+        ],
+    },
+    ModelInfo {
         name: "roughplastic",
         params: &[
             "diffuse_reflectance",

@@ -49,6 +49,7 @@ pub mod ir;
 pub mod named;
 mod obj;
 mod props;
+mod serialized;
 mod shapes;
 mod transform;
 mod xml;

@@ -20,7 +20,7 @@ use glam::{Mat3, Mat4, Vec2, Vec3};
 pub(crate) const DISK_SEGMENTS: u32 = 256;
 
 /// A mesh in object space, before `to_world` and `flip_normals`.
-#[derive(Default)]
+#[derive(Debug, Default)]
 pub(crate) struct LocalMesh {
     pub positions: Vec<Vec3>,
     pub normals: Option<Vec<Vec3>>,

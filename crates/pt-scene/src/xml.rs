@@ -120,6 +120,7 @@ pub(crate) fn read_document(
     upgrade(&mut raw, version);
     let mut expander = Expander {
         params: params.to_vec(),
+        main_dir: dir.to_path_buf(),
         search_paths: Vec::new(),
         includes: 0,
     };
@@ -332,6 +333,8 @@ pub(crate) fn camel_to_snake(name: &str) -> String {
 struct Expander {
     /// Known parameters, first definition wins (command line first, then `<default>`s).
     params: Vec<(String, String)>,
+    /// The main scene file's folder: where Mitsuba's file resolver starts.
+    main_dir: PathBuf,
     /// Folders from `<path>`, most recent first.
     search_paths: Vec<PathBuf>,
     /// Current `<include>` nesting.
@@ -411,6 +414,9 @@ impl Expander {
         Ok(())
     }
 
+    /// `<path value="..."/>`: a folder put first on the resolver. A relative value is looked
+    /// up as a file name is (the naming file's folder, the main scene's folder, the `<path>`
+    /// folders so far), so a `<path>` in an included file works from where that file is.
     fn add_path(&mut self, el: &Element, depth: usize) -> Result<()> {
         el.check_attrs(&["value"], &["value"])?;
         if depth != 1 {
@@ -420,13 +426,23 @@ impl Expander {
             ));
         }
         let value = el.attr("value").unwrap_or_default();
-        let folder = el.dir.join(value);
-        if !folder.is_dir() {
+        let folder = resolve_in(
+            value,
+            &el.dir,
+            &[&self.main_dir],
+            &self.search_paths,
+            Path::is_dir,
+        );
+        let Some(folder) = folder else {
             return Err(SceneError::at(
                 &el.loc,
-                format!("folder '{}' not found", folder.display()),
+                format!(
+                    "folder '{value}' not found (looked in '{}', the scene's folder and the \
+                     <path> folders)",
+                    el.dir.display()
+                ),
             ));
-        }
+        };
         self.search_paths.insert(0, folder);
         Ok(())
     }
@@ -440,7 +456,7 @@ impl Expander {
             ));
         }
         let name = el.attr("filename").unwrap_or_default();
-        let path = resolve_file(name, &el.dir, &[], &self.search_paths);
+        let path = resolve_file(name, &el.dir, &[&self.main_dir], &self.search_paths);
         let text = std::fs::read_to_string(&path).map_err(|e| {
             SceneError::at(
                 &el.loc,
@@ -468,7 +484,8 @@ impl Expander {
 }
 
 /// Replaces each `$name` by its parameter value. Like Mitsuba, the longest defined name that
-/// follows the `$` wins (so `$spp` and `$spp_max` can coexist) and a `$` left over is an error.
+/// follows the `$` wins (so `$spp` and `$spp_max` can coexist), `\$` stands for a `$`, and any
+/// other `$` left over is an error.
 pub(crate) fn substitute(
     value: &str,
     params: &[(String, String)],
@@ -476,6 +493,13 @@ pub(crate) fn substitute(
     let mut out = String::with_capacity(value.len());
     let mut rest = value;
     while let Some(pos) = rest.find('$') {
+        // `\$` is a literal dollar sign (Mitsuba's escape).
+        if rest[..pos].ends_with('\\') {
+            out.push_str(&rest[..pos - 1]);
+            out.push('$');
+            rest = &rest[pos + 1..];
+            continue;
+        }
         out.push_str(&rest[..pos]);
         let after = &rest[pos + 1..];
         let best = params
@@ -504,23 +528,32 @@ pub(crate) fn substitute(
 }
 
 /// Finds a file named in the scene: absolute names as they are; relative names in the
-/// directory of the file that names them, then in `extra` folders, then in the `<path>`
-/// folders. If the file exists nowhere, returns the first candidate so that opening it
-/// reports a sensible error.
+/// directory of the file that names them, then in `extra` folders (the main scene's folder),
+/// then in the `<path>` folders, as Mitsuba's file resolver searches (its list starts with the
+/// main scene's folder; `<path>` puts folders in front). If the file exists nowhere, returns
+/// the first candidate so that opening it reports a sensible error.
 pub(crate) fn resolve_file(name: &str, dir: &Path, extra: &[&Path], search: &[PathBuf]) -> PathBuf {
+    resolve_in(name, dir, extra, search, Path::is_file).unwrap_or_else(|| dir.join(name))
+}
+
+/// The first of `dir/name`, `extra/name`, `search/name` that `exists` accepts (`name` itself if
+/// it is absolute and accepted).
+fn resolve_in(
+    name: &str,
+    dir: &Path,
+    extra: &[&Path],
+    search: &[PathBuf],
+    exists: impl Fn(&Path) -> bool,
+) -> Option<PathBuf> {
     let relative = Path::new(name);
     if relative.is_absolute() {
-        return relative.to_path_buf();
+        return exists(relative).then(|| relative.to_path_buf());
     }
-    let first = dir.join(relative);
-    let others = extra
-        .iter()
+    std::iter::once(dir)
+        .chain(extra.iter().copied())
+        .chain(search.iter().map(PathBuf::as_path))
         .map(|d| d.join(relative))
-        .chain(search.iter().map(|d| d.join(relative)));
-    std::iter::once(first.clone())
-        .chain(others)
-        .find(|p| p.is_file())
-        .unwrap_or(first)
+        .find(|p| exists(p))
 }
 
 #[cfg(test)]
@@ -555,6 +588,10 @@ mod tests {
         let err = substitute("$nope", &p).unwrap_err();
         assert!(err.contains("'$nope'"), "{err}");
         assert!(substitute("$", &p).is_err());
+        assert_eq!(
+            substitute(r"cost \$5 at $spp", &p).unwrap(),
+            "cost $5 at 16"
+        );
     }
 
     #[test]

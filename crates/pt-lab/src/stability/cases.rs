@@ -16,8 +16,8 @@ use crate::bsdf::{build_bsdf, BsdfSpec};
 use pt_bsdf::rough_plastic::CoatingTable;
 use pt_bsdf::{
     Bsdf, Conductor, Dielectric, Distribution, FilmBase, GltfPbr, Microfacet, Minnaert, OrenNayar,
-    OrenNayarVariant, RoughConductor, RoughDielectric, RoughPlastic, RoughThinFilm, ThinDielectric,
-    ThinFilm,
+    OrenNayarVariant, Plastic, RoughConductor, RoughDielectric, RoughPlastic, RoughThinFilm,
+    ThinDielectric, ThinFilm,
 };
 use pt_math::Vec4;
 use pt_spectrum::SampledSpectrum;
@@ -104,6 +104,7 @@ pub fn cases() -> Vec<Case> {
             | Bsdf::ThinDielectric(_)
             | Bsdf::RoughDielectric(_)
             | Bsdf::ThinFilm(_)
+            | Bsdf::Plastic(_)
             | Bsdf::RoughPlastic(_)
             | Bsdf::RoughThinFilm(_)
             | Bsdf::GltfPbr(_) => {}
@@ -335,6 +336,34 @@ fn dielectrics(g: &mut Grid) {
 
 /// Rough plastic: white base and coating.
 fn plastics(g: &mut Grid) {
+    // Smooth plastic, white base: the coating's index from nearly invisible to very high (the
+    // scene format refuses non-positive indices; the model falls back to polypropylene).
+    for e in [1.0001f32, 1.49, 4.0, 0.0, f32::NAN] {
+        for nonlinear in [false, true] {
+            let source = if positive(e) {
+                Source::Scene(
+                    BsdfSpec::new("plastic")
+                        .with("diffuse_reflectance", 1.0)
+                        .with("int_ior", e)
+                        .with("ext_ior", 1.0)
+                        .with("nonlinear", nonlinear),
+                )
+            } else {
+                Source::Raw(Bsdf::Plastic(Plastic::new(
+                    white(),
+                    white(),
+                    e,
+                    nonlinear,
+                    0.5,
+                )))
+            };
+            let detail = format!("nonlinear={nonlinear}");
+            // The internal reflectance comes from Egan & Hilgeman's fit, which is 0.0017 at
+            // eta = 1 instead of 0: a white base under an invisible coating reflects
+            // 1 / (1 - 0.0017), in Mitsuba as here. Above 1.002 the model itself is wrong.
+            g.push("plastic", "eta", e, detail, positive(e), 1.002, source);
+        }
+    }
     for (fam, dist) in [
         ("roughplastic-ggx", Distribution::Ggx),
         ("roughplastic-beckmann", Distribution::Beckmann),

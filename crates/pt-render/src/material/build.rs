@@ -329,6 +329,7 @@ impl Builder<'_> {
                 )?,
                 roughness: self.roughness(microfacet)?,
             },
+            BsdfKind::Plastic { .. } => self.plastic(&d.kind)?,
             BsdfKind::RoughPlastic { .. } => self.rough_plastic(&d.kind)?,
             BsdfKind::ThinFilm {
                 thickness,
@@ -412,9 +413,31 @@ impl Builder<'_> {
         })
     }
 
-    /// `roughplastic`: its coating table, and the share of specular samples from the
-    /// textures' means (Mitsuba; RGB means, the same for every path: it changes the variance,
-    /// not the expectation).
+    /// `plastic`: the share of specular samples from the textures' means (see
+    /// [`Self::coating_textures`]).
+    fn plastic(&mut self, kind: &BsdfKind) -> Result<Material, BuildError> {
+        let BsdfKind::Plastic {
+            diffuse_reflectance,
+            specular_reflectance,
+            int_ior,
+            ext_ior,
+            nonlinear,
+        } = kind
+        else {
+            return Err(self.err("internal: not a plastic BSDF"));
+        };
+        let (rho, ks, weight) = self.coating_textures(diffuse_reflectance, specular_reflectance)?;
+        Ok(Material::Plastic {
+            diffuse_reflectance: rho,
+            specular_reflectance: ks,
+            eta: int_ior / ext_ior,
+            nonlinear: *nonlinear,
+            specular_sampling_weight: weight,
+        })
+    }
+
+    /// `roughplastic`: its coating table, and the share of specular samples from the textures'
+    /// means (see [`Self::coating_textures`]).
     fn rough_plastic(&mut self, kind: &BsdfKind) -> Result<Material, BuildError> {
         let BsdfKind::RoughPlastic {
             diffuse_reflectance,
@@ -430,6 +453,26 @@ impl Builder<'_> {
         };
         let eta = int_ior / ext_ior;
         let mf = Microfacet::new(distribution(*dist), *alpha, *alpha);
+        let (rho, ks, weight) = self.coating_textures(diffuse_reflectance, specular_reflectance)?;
+        Ok(Material::RoughPlastic {
+            diffuse_reflectance: rho,
+            specular_reflectance: ks,
+            eta,
+            microfacet: mf,
+            nonlinear: *nonlinear,
+            specular_sampling_weight: weight,
+            table: CoatingTable::get(mf.dist, mf.alpha_u, eta),
+        })
+    }
+
+    /// A plastic's diffuse and specular textures and Mitsuba's share of specular samples,
+    /// `mean(k_s) / (mean(k_s) + mean(rho))` from the textures' RGB means (the same for every
+    /// path: it changes the variance, not the expectation).
+    fn coating_textures(
+        &mut self,
+        diffuse_reflectance: &TextureDesc,
+        specular_reflectance: &TextureDesc,
+    ) -> Result<(Texture, Texture, f32), BuildError> {
         let rho = self.tex("diffuse_reflectance", diffuse_reflectance, Role::Albedo)?;
         let ks = self.tex(
             "specular_reflectance",
@@ -443,15 +486,7 @@ impl Builder<'_> {
         } else {
             0.5
         };
-        Ok(Material::RoughPlastic {
-            diffuse_reflectance: rho,
-            specular_reflectance: ks,
-            eta,
-            microfacet: mf,
-            nonlinear: *nonlinear,
-            specular_sampling_weight: weight,
-            table: CoatingTable::get(mf.dist, mf.alpha_u, eta),
-        })
+        Ok((rho, ks, weight))
     }
 }
 

@@ -17,7 +17,7 @@ use crate::geometry::Interaction;
 use crate::texture::{Texture, TexturePoint};
 use pt_bsdf::{
     Bsdf, CoatingTable, Conductor, Dielectric, Distribution, FilmBase, GltfPbr, Lambert,
-    Microfacet, Minnaert, OrenNayar, OrenNayarVariant, RoughConductor, RoughDielectric,
+    Microfacet, Minnaert, OrenNayar, OrenNayarVariant, Plastic, RoughConductor, RoughDielectric,
     RoughPlastic, RoughThinFilm, SurfaceBsdf, ThinDielectric, ThinFilm,
 };
 use pt_math::{Frame, Vec3};
@@ -173,6 +173,19 @@ pub enum Material {
         /// Distribution and roughness.
         roughness: Roughness,
     },
+    /// Mitsuba `plastic`.
+    Plastic {
+        /// Albedo of the base.
+        diffuse_reflectance: Texture,
+        /// Factor on the coating's reflection.
+        specular_reflectance: Texture,
+        /// Relative index of the coating.
+        eta: f32,
+        /// Mitsuba's `nonlinear`.
+        nonlinear: bool,
+        /// Share of specular samples, from the textures' means (Mitsuba).
+        specular_sampling_weight: f32,
+    },
     /// Mitsuba `roughplastic`.
     RoughPlastic {
         /// Albedo of the base.
@@ -281,6 +294,19 @@ impl Material {
                 k.eval(at, lambda),
                 specular_reflectance.eval(at, lambda),
                 roughness.at(at),
+            )),
+            Material::Plastic {
+                diffuse_reflectance,
+                specular_reflectance,
+                eta,
+                nonlinear,
+                specular_sampling_weight,
+            } => Bsdf::Plastic(Plastic::new(
+                diffuse_reflectance.eval(at, lambda),
+                specular_reflectance.eval(at, lambda),
+                *eta,
+                *nonlinear,
+                *specular_sampling_weight,
             )),
             Material::RoughPlastic {
                 diffuse_reflectance,
@@ -501,7 +527,12 @@ impl Material {
                 &roughness.alpha_u,
                 &roughness.alpha_v,
             ],
-            Material::RoughPlastic {
+            Material::Plastic {
+                diffuse_reflectance,
+                specular_reflectance,
+                ..
+            }
+            | Material::RoughPlastic {
                 diffuse_reflectance,
                 specular_reflectance,
                 ..

@@ -360,6 +360,7 @@ pub(super) fn bsdf_kind<'e>(
                 specular_transmittance,
             }
         }
+        "plastic" => b.plastic(v, n)?,
         "roughplastic" => b.rough_plastic(v, n)?,
         "conductor" => {
             let (eta, k) = b.conductor_ior(v, n)?;
@@ -400,6 +401,18 @@ impl<'e> Builder<'e> {
     /// `roughplastic`: `diffuse_reflectance` (0.5), `specular_reflectance` (1), `int_ior`
     /// (polypropylene, 1.49), `ext_ior` (air), `distribution`, `alpha` (0.1, a float and
     /// isotropic, as in Mitsuba), `nonlinear` (false).
+    /// `plastic`: Mitsuba's parameters and defaults (it accepts equal indices, unlike
+    /// `roughplastic`: the coating is then invisible).
+    fn plastic(&mut self, v: &ObjectView<'e>, n: &Nested<'e>) -> Result<BsdfKind> {
+        Ok(BsdfKind::Plastic {
+            int_ior: ior(v, "int_ior", 1.49)?,
+            ext_ior: ior(v, "ext_ior", 1.000277)?,
+            diffuse_reflectance: self.albedo(v, n, "diffuse_reflectance")?,
+            specular_reflectance: self.factor(v, n, "specular_reflectance")?,
+            nonlinear: v.boolean("nonlinear")?.unwrap_or(false),
+        })
+    }
+
     fn rough_plastic(&mut self, v: &ObjectView<'e>, n: &Nested<'e>) -> Result<BsdfKind> {
         let int_ior = ior(v, "int_ior", 1.49)?;
         let ext_ior = ior(v, "ext_ior", 1.000277)?;

@@ -19,6 +19,7 @@ use crate::error::{Result, SceneError};
 use crate::ir::*;
 use crate::obj::{self, ObjOptions};
 use crate::props::{Child, ObjectView};
+use crate::serialized;
 use crate::shapes;
 use crate::transform::is_affine;
 use crate::xml::{resolve_file, Document, Element};
@@ -39,12 +40,12 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "volpathmis", "aov", "prb", "prb_basic", "prb_projective", "direct_projective",
         "ptracer", "depth", "stokes", "prbvolpath",
     ]),
-    ("shape", &["obj", "gltf", "rectangle", "cube", "sphere", "disk"], &[
-        "ply", "serialized", "cylinder", "shapegroup", "instance", "bsplinecurve", "linearcurve",
+    ("shape", &["obj", "serialized", "gltf", "rectangle", "cube", "sphere", "disk"], &[
+        "ply", "cylinder", "shapegroup", "instance", "bsplinecurve", "linearcurve",
         "sdfgrid", "ellipsoids", "ellipsoidsmesh",
     ]),
-    ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "roughplastic", "fluorescent", "phosphorescent"], &[
-        "plastic", "bumpmap", "null",
+    ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "plastic", "roughplastic", "fluorescent", "phosphorescent"], &[
+        "bumpmap", "null",
         "polarizer", "retarder", "circular", "measured", "pplastic", "principled",
         "principledthin", "hair",
     ]),

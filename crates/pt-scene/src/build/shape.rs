@@ -23,6 +23,7 @@ impl<'e> Builder<'e> {
                     .map_err(|m| SceneError::at(&el.loc, m))?
             }
             "obj" => self.obj(&v, &to_world, flip)?,
+            "serialized" => self.serialized(&v, &to_world, flip)?,
             "gltf" => self.gltf(&v, &to_world, flip)?,
             _ => return Err(plugin_error(el)),
         };
@@ -71,6 +72,35 @@ impl<'e> Builder<'e> {
         let mut mesh =
             shapes::to_world(local, m, flip).map_err(|e| err(format!("mesh '{name}': {e}")))?;
         if mesh.normals.is_none() && !opts.face_normals {
+            mesh.normals = Some(shapes::vertex_normals(&mesh.positions, &mesh.indices));
+        }
+        Ok(Geometry::Mesh(mesh))
+    }
+
+    /// `serialized`: mesh `shape_index` (0) of a Mitsuba serialized file (see
+    /// [`crate::serialized`]), `filename` resolved as for `obj`, `face_normals` (false). Without
+    /// normals in the file (and without `face_normals`), vertex normals are computed after
+    /// `to_world`, as Mitsuba does.
+    pub(super) fn serialized(&self, v: &ObjectView<'_>, m: &Mat4, flip: bool) -> Result<Geometry> {
+        let err = |msg: String| SceneError::at(&v.el.loc, msg);
+        let name = v
+            .string("filename")?
+            .ok_or_else(|| err("missing <string name=\"filename\" .../>".into()))?;
+        let index = match v.integer("shape_index")? {
+            None => 0,
+            Some(i) => u32::try_from(i).map_err(|_| {
+                v.prop_error("shape_index", format!("shape_index must be >= 0, got {i}"))
+            })?,
+        };
+        let face_normals = v.boolean("face_normals")?.unwrap_or(false);
+        let path = resolve_file(&name, &v.el.dir, &[self.base_dir], self.search_paths);
+        let mut local = serialized::load_serialized(&path, &name, index).map_err(err)?;
+        if face_normals {
+            local.normals = None;
+        }
+        let mut mesh =
+            shapes::to_world(local, m, flip).map_err(|e| err(format!("mesh '{name}': {e}")))?;
+        if mesh.normals.is_none() && !face_normals {
             mesh.normals = Some(shapes::vertex_normals(&mesh.positions, &mesh.indices));
         }
         Ok(Geometry::Mesh(mesh))

@@ -209,6 +209,19 @@ pub enum BsdfKind {
         /// Distribution and roughness of the base.
         microfacet: MicrofacetDesc,
     },
+    /// Smooth plastic: smooth dielectric coating over a diffuse base (Mitsuba `plastic`).
+    Plastic {
+        /// Albedo of the diffuse base.
+        diffuse_reflectance: TextureDesc,
+        /// Factor on the coating's reflection.
+        specular_reflectance: TextureDesc,
+        /// Coating index of refraction.
+        int_ior: f32,
+        /// Exterior index of refraction.
+        ext_ior: f32,
+        /// Mitsuba's `nonlinear`: account for the colour shift of inner bounces.
+        nonlinear: bool,
+    },
     /// Rough plastic: rough dielectric coating over a diffuse base (Mitsuba `roughplastic`).
     RoughPlastic {
         /// Albedo of the diffuse base.
@@ -356,7 +369,12 @@ impl BsdfKind {
                 v.push(("alpha_v", &microfacet.alpha_v));
                 v
             }
-            BsdfKind::RoughPlastic {
+            BsdfKind::Plastic {
+                diffuse_reflectance,
+                specular_reflectance,
+                ..
+            }
+            | BsdfKind::RoughPlastic {
                 diffuse_reflectance,
                 specular_reflectance,
                 ..

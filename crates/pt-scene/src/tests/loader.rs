@@ -131,6 +131,54 @@ fn include_path_default_and_ref_work_together() {
     assert_eq!(mesh(&s.shapes[0]).indices.len(), 1);
 }
 
+/// The layout of scene packages: an included file in a subfolder includes a file named
+/// relative to the main scene's folder (found through the resolver, which starts there), adds a
+/// `<path>` relative to itself, and its shape's mesh is found in that folder.
+#[test]
+fn included_files_resolve_through_the_main_folder_and_their_own_paths() {
+    let dir = temp_dir("include-nested");
+    for sub in ["parts/geometry", "common"] {
+        std::fs::create_dir_all(dir.join(sub)).unwrap();
+    }
+    std::fs::write(
+        dir.join("parts/geometry/tri.obj"),
+        "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("common/bsdfs.xml"),
+        r#"<scene version="3.0.0"><bsdf type="diffuse" id="grey"/></scene>"#,
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("parts/shapes.xml"),
+        r#"<scene version="3.0.0">
+    <path value="geometry"/>
+    <include filename="common/bsdfs.xml"/>
+    <shape type="obj"><string name="filename" value="tri.obj"/><ref id="grey"/></shape>
+</scene>"#,
+    )
+    .unwrap();
+    let main = dir.join("main.xml");
+    std::fs::write(
+        &main,
+        r#"<scene version="3.0.0"><include filename="parts/shapes.xml"/></scene>"#,
+    )
+    .unwrap();
+    let s = load_file(&main, &[]).unwrap();
+    assert_eq!(mesh(&s.shapes[0]).indices.len(), 1);
+    assert_eq!(s.bsdfs[0].loc.file, dir.join("common/bsdfs.xml"));
+    // A folder that exists nowhere is a located error.
+    std::fs::write(
+        &main,
+        "<scene version=\"3.0.0\">\n<path value=\"nowhere\"/>\n</scene>",
+    )
+    .unwrap();
+    let e = load_file(&main, &[]).unwrap_err();
+    assert_eq!(e.loc.as_ref().map(|l| l.line), Some(2), "{e}");
+    assert!(e.message.contains("folder 'nowhere' not found"), "{e}");
+}
+
 #[test]
 fn errors_in_included_files_point_into_them() {
     let dir = temp_dir("include-error");
@@ -245,7 +293,7 @@ fn unknown_plugin_is_an_error() {
 #[test]
 fn unsupported_plugins_say_not_yet_implemented() {
     let cases = [
-        "<bsdf type=\"plastic\"/>",
+        "<bsdf type=\"pplastic\"/>",
         "<emitter type=\"projector\"/>",
         "<emitter type=\"sunsky\"/>",
         "<sensor type=\"orthographic\"/>",
