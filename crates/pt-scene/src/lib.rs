@@ -48,6 +48,7 @@ pub mod gltf;
 pub mod ir;
 pub mod named;
 mod obj;
+mod ply;
 mod props;
 mod serialized;
 mod shapes;

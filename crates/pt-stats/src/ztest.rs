@@ -135,8 +135,9 @@ pub struct ZTestReport {
 /// count, and pixels are taken as independent), `z = d / sqrt(Var(d))`, two-sided
 /// `p = 2 normal_sf(|z|)`. A tile fails when `p < sidak_threshold(alpha, tests)`. Tiles with
 /// `Var(d) = 0` and `d = 0` are skipped (they pass and are not counted in `tests` or `chi2`);
-/// `Var(d) = 0` with `d != 0` fails (`z = inf`). Each pixel's variance includes a rounding term
-/// `(ROUNDING_REL max(|img|, |ref|))^2` (see [`ROUNDING_REL`]). Under the null hypothesis the z are standard
+/// `Var(d) = 0` with `d != 0` fails (`z = inf`). Each tile's variance includes a rounding term
+/// `(ROUNDING_REL sum max(|img|, |ref|))^2` (see [`ROUNDING_REL`]; linear in the pixels, since
+/// a deterministic region rounds the same way in every pixel). Under the null hypothesis the z are standard
 /// normal, so `chi2 = sum z^2` is chi-square with `tests` degrees of freedom, which catches
 /// many small deviations that no single tile shows: `pass` requires no failing tile and
 /// `chi2_sf(chi2, tests) >= alpha`. Non-finite pixels (or negative variances) in any input make
@@ -171,6 +172,10 @@ pub fn block_ztest(
             let (x1, y1) = ((x0 + block).min(w), (y0 + block).min(h));
             let mut sum_d = [0.0f64; 3];
             let mut sum_var = [0.0f64; 3];
+            // Rounding is the same in neighbouring pixels of a deterministic region (the same
+            // value, rounded the same way), so it adds up linearly over the block, not in
+            // quadrature: its allowance is (ROUNDING_REL sum max(|a|, |r|))^2.
+            let mut sum_scale = [0.0f64; 3];
             let mut valid = true;
             for y in y0..y1 {
                 for x in x0..x1 {
@@ -183,11 +188,13 @@ pub fn block_ztest(
                     for c in 0..3 {
                         let (a, r) = (f64::from(img.data[i][c]), f64::from(reference.data[i][c]));
                         sum_d[c] += a - r;
-                        sum_var[c] += f64::from(img_var.data[i][c])
-                            + f64::from(ref_var.data[i][c])
-                            + rounding_variance(a, r);
+                        sum_var[c] += f64::from(img_var.data[i][c]) + f64::from(ref_var.data[i][c]);
+                        sum_scale[c] += a.abs().max(r.abs());
                     }
                 }
+            }
+            for c in 0..3 {
+                sum_var[c] += (ROUNDING_REL * sum_scale[c]).powi(2);
             }
             let npix = f64::from((x1 - x0) * (y1 - y0));
             outcomes.push(
@@ -500,6 +507,22 @@ mod tests {
         assert!(block_ztest(&a, &zero, &b, &zero, 2, 0.01).unwrap().pass);
         let c = Image::filled(4, 4, [0.204; 3]);
         assert!(!block_ztest(&a, &zero, &c, &zero, 2, 0.01).unwrap().pass);
+        // The same rounding in every pixel of a large block adds up linearly: 3e-7 relative
+        // (5 ulps) over 32 x 32 pixels of sky passes, as in one pixel; 1e-4 fails.
+        let sky = Image::filled(32, 32, [0.15; 3]);
+        let zero32 = Image::new(32, 32);
+        let rounded = Image::filled(32, 32, [0.15 * (1.0 + 3e-7); 3]);
+        assert!(
+            block_ztest(&sky, &zero32, &rounded, &zero32, 32, 0.01)
+                .unwrap()
+                .pass
+        );
+        let off = Image::filled(32, 32, [0.15 * (1.0 + 1e-4); 3]);
+        assert!(
+            !block_ztest(&sky, &zero32, &off, &zero32, 32, 0.01)
+                .unwrap()
+                .pass
+        );
         // A NaN pixel fails and is reported.
         let mut nan = Image::filled(4, 4, [1.0; 3]);
         nan.set(0, 3, [1.0, f32::NAN, 1.0]);

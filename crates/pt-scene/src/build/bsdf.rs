@@ -111,7 +111,7 @@ impl<'e> Builder<'e> {
     }
 
     /// Builds one BSDF element: the wrappers here (`twosided`, `mask`, `normalmap`,
-    /// `blendbsdf`), the models in `materials.rs`. Textures may stand for any texturable
+    /// `blendbsdf`) and `null`, the models in `materials.rs`. Textures may stand for any texturable
     /// parameter; nested objects that are neither textures nor BSDFs a wrapper takes are errors.
     pub(super) fn build_bsdf(&mut self, el: &'e Element) -> Result<BsdfDesc> {
         let v = ObjectView::parse(el)?;
@@ -130,6 +130,20 @@ impl<'e> Builder<'e> {
                     inner,
                 }
             }
+            // Mitsuba's `null`: light passes straight through, and the path integrator treats
+            // the crossing as a delta bounce (it counts towards max_depth, shadow rays are
+            // blocked). That is a mask of opacity 0: its pass-through is the same event.
+            "null" => BsdfKind::Mask {
+                opacity: TextureDesc::constant(0.0),
+                cutoff: None,
+                inner: Box::new(BsdfDesc {
+                    loc: el.loc.clone(),
+                    id: None,
+                    kind: BsdfKind::Diffuse {
+                        reflectance: TextureDesc::constant(0.0),
+                    },
+                }),
+            },
             "blendbsdf" => {
                 let weight = self.texture_param(&v, &nested, "weight")?;
                 let weight = scalar_in(&v, "weight", weight, 0.5, 0.0..=1.0)?;

@@ -19,10 +19,10 @@ use crate::error::{Result, SceneError};
 use crate::ir::*;
 use crate::obj::{self, ObjOptions};
 use crate::props::{Child, ObjectView};
-use crate::serialized;
 use crate::shapes;
 use crate::transform::is_affine;
 use crate::xml::{resolve_file, Document, Element};
+use crate::{ply, serialized};
 use glam::{Mat3, Mat4, Vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -40,12 +40,12 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "volpathmis", "aov", "prb", "prb_basic", "prb_projective", "direct_projective",
         "ptracer", "depth", "stokes", "prbvolpath",
     ]),
-    ("shape", &["obj", "serialized", "gltf", "rectangle", "cube", "sphere", "disk"], &[
-        "ply", "cylinder", "shapegroup", "instance", "bsplinecurve", "linearcurve",
+    ("shape", &["obj", "ply", "serialized", "gltf", "rectangle", "cube", "sphere", "disk"], &[
+        "cylinder", "shapegroup", "instance", "bsplinecurve", "linearcurve",
         "sdfgrid", "ellipsoids", "ellipsoidsmesh",
     ]),
-    ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "plastic", "roughplastic", "fluorescent", "phosphorescent"], &[
-        "bumpmap", "null",
+    ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "plastic", "roughplastic", "null", "fluorescent", "phosphorescent"], &[
+        "bumpmap",
         "polarizer", "retarder", "circular", "measured", "pplastic", "principled",
         "principledthin", "hair",
     ]),

@@ -24,6 +24,7 @@ impl<'e> Builder<'e> {
             }
             "obj" => self.obj(&v, &to_world, flip)?,
             "serialized" => self.serialized(&v, &to_world, flip)?,
+            "ply" => self.ply(&v, &to_world, flip)?,
             "gltf" => self.gltf(&v, &to_world, flip)?,
             _ => return Err(plugin_error(el)),
         };
@@ -97,6 +98,32 @@ impl<'e> Builder<'e> {
         let mut local = serialized::load_serialized(&path, &name, index).map_err(err)?;
         if face_normals {
             local.normals = None;
+        }
+        let mut mesh =
+            shapes::to_world(local, m, flip).map_err(|e| err(format!("mesh '{name}': {e}")))?;
+        if mesh.normals.is_none() && !face_normals {
+            mesh.normals = Some(shapes::vertex_normals(&mesh.positions, &mesh.indices));
+        }
+        Ok(Geometry::Mesh(mesh))
+    }
+
+    /// `ply`: a Stanford PLY file (see [`crate::ply`]), `filename` resolved as for `obj`,
+    /// `face_normals` (false), `flip_tex_coords` (false: v' = 1 - v when set). Without normals in the file (and without `face_normals`), vertex
+    /// normals are computed after `to_world`, as Mitsuba does.
+    pub(super) fn ply(&self, v: &ObjectView<'_>, m: &Mat4, flip: bool) -> Result<Geometry> {
+        let err = |msg: String| SceneError::at(&v.el.loc, msg);
+        let name = v
+            .string("filename")?
+            .ok_or_else(|| err("missing <string name=\"filename\" .../>".into()))?;
+        let face_normals = v.boolean("face_normals")?.unwrap_or(false);
+        let path = resolve_file(&name, &v.el.dir, &[self.base_dir], self.search_paths);
+        let flip_tex_coords = v.boolean("flip_tex_coords")?.unwrap_or(false);
+        let mut local = ply::load_ply(&path, &name).map_err(err)?;
+        if face_normals {
+            local.normals = None;
+        }
+        if let (true, Some(uvs)) = (flip_tex_coords, &mut local.uvs) {
+            uvs.iter_mut().for_each(|uv| uv.y = 1.0 - uv.y);
         }
         let mut mesh =
             shapes::to_world(local, m, flip).map_err(|e| err(format!("mesh '{name}': {e}")))?;
