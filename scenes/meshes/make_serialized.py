@@ -70,6 +70,9 @@ def sphere(nu, nv, cut=None):
         phi, theta = 2 * math.pi * s, math.pi * t
         return (math.sin(theta) * math.cos(phi), math.sin(theta) * math.sin(phi), math.cos(theta))
     verts, tris = grid(nu, nv, point)
+    # With u along the azimuth and v from the +z pole down, the grid's cells wind clockwise
+    # seen from outside: reverse them so that the spheres face out.
+    tris = [(a, c, b) for a, b, c in tris]
     if cut:
         # Drop the triangles of rows cut[0] <= j < cut[1] (a band around the equator).
         tris = [t for k, t in enumerate(tris) if not (cut[0] <= (k // 2) // nu < cut[1])]

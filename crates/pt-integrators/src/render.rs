@@ -413,7 +413,13 @@ fn render_row_samples(
             };
             let offset = sample_filter(&settings.filter, &mut sampler);
             let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
-            let path = PathState::new(scene, scene.camera.generate_ray(centre + offset), &lambda);
+            let u_lens = if scene.camera.needs_lens_sample() {
+                sampler.next_2d()
+            } else {
+                Vec2::splat(0.5)
+            };
+            let ray = scene.camera.generate_ray(centre + offset, u_lens);
+            let path = PathState::new(scene, ray, &lambda);
             let tag = taken;
             taken += 1;
             k += 1;

@@ -183,7 +183,12 @@ pub fn render_image(
                     for s in 0..settings.spp {
                         let mut sampler = Sampler::new(settings.seed, pixel, s as u64);
                         let offset = sample_filter(&settings.filter, &mut sampler);
-                        let ray = camera.generate_ray(centre + offset);
+                        let u_lens = if camera.needs_lens_sample() {
+                            sampler.next_2d()
+                        } else {
+                            Vec2::splat(0.5)
+                        };
+                        let ray = camera.generate_ray(centre + offset, u_lens);
                         stats.add(radiance(ray, &mut sampler));
                     }
                     stats

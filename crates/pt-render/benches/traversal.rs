@@ -133,7 +133,7 @@ fn camera_rays(camera: &Camera) -> Vec<Ray> {
     (0..RES)
         .flat_map(|y| (0..RES).map(move |x| Vec2::new(x as f32 + 0.5, y as f32 + 0.5)))
         .map(|p| {
-            let mut r = camera.generate_ray(p);
+            let mut r = camera.generate_ray(p, Vec2::splat(0.5));
             r.tmax = f32::INFINITY;
             r
         })

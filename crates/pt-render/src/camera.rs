@@ -1,9 +1,11 @@
-//! The pinhole perspective camera, with Mitsuba 3's conventions.
+//! The cameras, with Mitsuba 3's conventions: the pinhole perspective camera, the thin-lens
+//! camera and the orthographic camera.
 
+use pt_math::warp::square_to_disk_concentric;
 use pt_math::{Mat4, Ray, Vec2, Vec3};
 use pt_scene::{CameraDesc, FovAxis, Projection};
 
-/// A perspective camera producing world-space rays for film positions in pixels.
+/// A camera producing world-space rays for film positions in pixels.
 ///
 /// Camera space (Mitsuba): looks along +z, +y up, +x to the *left* of the image. Film position
 /// (0, 0) is the top-left corner of the top-left pixel; (width, height) the bottom-right corner.
@@ -11,42 +13,83 @@ use pt_scene::{CameraDesc, FovAxis, Projection};
 pub struct Camera {
     to_world: Mat4,
     origin: Vec3,
-    /// tan of half the field of view along x and y.
+    kind: Kind,
+    /// Perspective: tan of half the field of view along x and y. Orthographic: the half-extent
+    /// of the film in camera space (1 and 1 / aspect).
     tan_half: Vec2,
     inv_size: Vec2,
     near: f32,
     far: f32,
 }
 
+/// What a camera's rays look like.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Kind {
+    Pinhole,
+    /// Aperture radius and focus distance (camera space units: to_world has no scale).
+    ThinLens {
+        radius: f32,
+        focus: f32,
+    },
+    Orthographic,
+}
+
+/// tan(half fov) along x for a `fov_deg` spanning `fov_axis` of a `w` x `h` film (Mitsuba's
+/// fov_axis semantics).
+fn tan_half_x(fov_deg: f32, fov_axis: FovAxis, w: f32, h: f32) -> f32 {
+    let t = (0.5 * fov_deg.to_radians()).tan();
+    match fov_axis {
+        FovAxis::X => t,
+        FovAxis::Y => t * w / h,
+        FovAxis::Diagonal => t * w / (w * w + h * h).sqrt(),
+        FovAxis::Smaller => {
+            if w <= h {
+                t
+            } else {
+                t * w / h
+            }
+        }
+        FovAxis::Larger => {
+            if w >= h {
+                t
+            } else {
+                t * w / h
+            }
+        }
+    }
+}
+
 impl Camera {
-    /// Builds the camera for a film of `width` x `height` pixels.
+    /// Builds the camera for a film of `width` x `height` pixels. A thin lens of aperture 0 is
+    /// the pinhole camera (the same rays, bit for bit, and no lens sample drawn).
     pub fn new(desc: &CameraDesc, width: u32, height: u32) -> Self {
         let (w, h) = (width as f32, height as f32);
-        let Projection::Perspective { fov_deg, fov_axis } = desc.projection;
-        let t = (0.5 * fov_deg.to_radians()).tan();
-        // Resolve the fov axis to tan(half fov) along x (Mitsuba's fov_axis semantics).
-        let tan_x = match fov_axis {
-            FovAxis::X => t,
-            FovAxis::Y => t * w / h,
-            FovAxis::Diagonal => t * w / (w * w + h * h).sqrt(),
-            FovAxis::Smaller => {
-                if w <= h {
-                    t
-                } else {
-                    t * w / h
-                }
+        let (kind, tan_x) = match desc.projection {
+            Projection::Perspective { fov_deg, fov_axis } => {
+                (Kind::Pinhole, tan_half_x(fov_deg, fov_axis, w, h))
             }
-            FovAxis::Larger => {
-                if w >= h {
-                    t
+            Projection::ThinLens {
+                fov_deg,
+                fov_axis,
+                aperture_radius,
+                focus_distance,
+            } => {
+                let kind = if aperture_radius > 0.0 {
+                    Kind::ThinLens {
+                        radius: aperture_radius,
+                        focus: focus_distance,
+                    }
                 } else {
-                    t * w / h
-                }
+                    Kind::Pinhole
+                };
+                (kind, tan_half_x(fov_deg, fov_axis, w, h))
             }
+            Projection::Orthographic => (Kind::Orthographic, 1.0),
         };
         Camera {
             to_world: desc.to_world,
             origin: desc.to_world.transform_point3(Vec3::ZERO),
+            kind,
             tan_half: Vec2::new(tan_x, tan_x * h / w),
             inv_size: Vec2::new(1.0 / w, 1.0 / h),
             near: desc.near_clip,
@@ -54,25 +97,64 @@ impl Camera {
         }
     }
 
-    /// The primary ray through film position `film` (pixels). Near and far clip are planes
-    /// perpendicular to the view axis, as in Mitsuba.
+    /// Whether [`Camera::generate_ray`] uses its lens sample (a thin lens with an aperture):
+    /// the caller draws one only then, so that pinhole images keep their random numbers.
     #[inline]
-    pub fn generate_ray(&self, film: Vec2) -> Ray {
+    pub fn needs_lens_sample(&self) -> bool {
+        matches!(self.kind, Kind::ThinLens { .. })
+    }
+
+    /// The primary ray through film position `film` (pixels); `u_lens` in [0, 1)^2 picks the
+    /// point on a thin lens's aperture (unused by the other cameras). Near and far clip are
+    /// planes perpendicular to the view axis, as in Mitsuba.
+    #[inline]
+    pub fn generate_ray(&self, film: Vec2, u_lens: Vec2) -> Ray {
         let ndc = film * self.inv_size; // [0,1]^2, y down
-        let d_cam = Vec3::new(
-            (1.0 - 2.0 * ndc.x) * self.tan_half.x,
-            (1.0 - 2.0 * ndc.y) * self.tan_half.y,
-            1.0,
-        );
-        let d_world = self.to_world.transform_vector3(d_cam);
-        let len = d_world.length();
-        // d_cam has z = 1, so the clip planes z = near/far are at t = near * |d_cam|/|d_world|
-        // along the normalised world ray... scaled by the world length of d_cam.
-        Ray {
-            origin: self.origin,
-            dir: d_world / len,
-            tmin: self.near * len,
-            tmax: self.far * len,
+                                        // The film point in camera space: at z = 1 for the perspective cameras (the direction
+                                        // of the pinhole ray), at z = 0 for the orthographic one (the ray's origin).
+        let x = (1.0 - 2.0 * ndc.x) * self.tan_half.x;
+        let y = (1.0 - 2.0 * ndc.y) * self.tan_half.y;
+        match self.kind {
+            Kind::Pinhole => {
+                let d_world = self.to_world.transform_vector3(Vec3::new(x, y, 1.0));
+                let len = d_world.length();
+                // d_cam has z = 1, so the clip planes z = near / far are at t = near |d_world|
+                // along the normalised world ray.
+                Ray {
+                    origin: self.origin,
+                    dir: d_world / len,
+                    tmin: self.near * len,
+                    tmax: self.far * len,
+                }
+            }
+            Kind::ThinLens { radius, focus } => {
+                // The pinhole ray through this film point meets the plane z = focus at
+                // `focus * (x, y, 1)`; every ray from the aperture disk goes through that point
+                // (Kolb et al. 1995; pbrt-v4 Sec. 5.2.3).
+                let a = square_to_disk_concentric(u_lens) * radius;
+                let lens = Vec3::new(a.x, a.y, 0.0);
+                let d_cam = Vec3::new(x, y, 1.0) * focus - lens;
+                let d_world = self.to_world.transform_vector3(d_cam);
+                let len = d_world.length();
+                // t per unit of camera z along the normalised ray: |d_world| / d_cam.z.
+                let per_z = len / d_cam.z;
+                Ray {
+                    origin: self.to_world.transform_point3(lens),
+                    dir: d_world / len,
+                    tmin: self.near * per_z,
+                    tmax: self.far * per_z,
+                }
+            }
+            Kind::Orthographic => {
+                let d_world = self.to_world.transform_vector3(Vec3::Z);
+                let len = d_world.length();
+                Ray {
+                    origin: self.to_world.transform_point3(Vec3::new(x, y, 0.0)),
+                    dir: d_world / len,
+                    tmin: self.near * len,
+                    tmax: self.far * len,
+                }
+            }
         }
     }
 }
@@ -108,18 +190,133 @@ mod tests {
             far_clip: 100.0,
         };
         let cam = Camera::new(&desc, 200, 100);
-        let centre = cam.generate_ray(Vec2::new(100.0, 50.0));
+        let centre = cam.generate_ray(Vec2::new(100.0, 50.0), Vec2::splat(0.5));
         assert!((centre.dir - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-6);
         assert!((centre.tmin - 0.01).abs() < 1e-7);
         // Right edge of the image looks towards world +x at 45 degrees (fov 90 on x).
-        let right = cam.generate_ray(Vec2::new(200.0, 50.0));
+        let right = cam.generate_ray(Vec2::new(200.0, 50.0), Vec2::splat(0.5));
         assert!(
             (right.dir - Vec3::new(1.0, 0.0, -1.0).normalize()).length() < 1e-6,
             "{:?}",
             right.dir
         );
         // Top edge looks up, with half the tangent (aspect 2:1).
-        let top = cam.generate_ray(Vec2::new(100.0, 0.0));
+        let top = cam.generate_ray(Vec2::new(100.0, 0.0), Vec2::splat(0.5));
         assert!((top.dir - Vec3::new(0.0, 0.5, -1.0).normalize()).length() < 1e-6);
+    }
+
+    fn thin_lens(radius: f32, focus: f32) -> CameraDesc {
+        CameraDesc {
+            loc: SourceLoc::default(),
+            projection: Projection::ThinLens {
+                fov_deg: 60.0,
+                fov_axis: FovAxis::X,
+                aperture_radius: radius,
+                focus_distance: focus,
+            },
+            to_world: lookat(Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.0, 0.5, -1.0), Vec3::Y),
+            near_clip: 0.01,
+            far_clip: 100.0,
+        }
+    }
+
+    /// A thin lens of aperture 0 is the pinhole camera, bit for bit, and draws no lens sample.
+    #[test]
+    fn thin_lens_of_aperture_zero_is_the_pinhole() {
+        let mut pinhole = thin_lens(0.0, 3.0);
+        let lens = Camera::new(&pinhole, 64, 48);
+        let Projection::ThinLens {
+            fov_deg, fov_axis, ..
+        } = pinhole.projection
+        else {
+            unreachable!()
+        };
+        pinhole.projection = Projection::Perspective { fov_deg, fov_axis };
+        let pin = Camera::new(&pinhole, 64, 48);
+        assert!(!lens.needs_lens_sample());
+        for film in [
+            Vec2::new(0.3, 0.7),
+            Vec2::new(63.9, 47.2),
+            Vec2::new(32.0, 24.0),
+        ] {
+            let (a, b) = (
+                lens.generate_ray(film, Vec2::new(0.9, 0.1)),
+                pin.generate_ray(film, Vec2::splat(0.5)),
+            );
+            assert_eq!(
+                (a.origin, a.dir, a.tmin, a.tmax),
+                (b.origin, b.dir, b.tmin, b.tmax)
+            );
+        }
+    }
+
+    /// The closed forms of the thin lens (Kolb et al. 1995): every ray of a film point, from any
+    /// aperture point, crosses the plane of focus (camera z = F) where the pinhole ray does;
+    /// on the plane z = D the rays from the aperture's rim lie on a circle of radius
+    /// R |1 - D / F| around the pinhole ray's point (the circle of confusion); and the near
+    /// clip is the plane z = near.
+    #[test]
+    fn thin_lens_focuses_and_blurs_by_the_closed_forms() {
+        let (r, f) = (0.2, 4.0);
+        let desc = thin_lens(r, f);
+        let cam = Camera::new(&desc, 64, 48);
+        assert!(cam.needs_lens_sample());
+        let to_cam = desc.to_world.inverse();
+        let at_depth = |ray: &Ray, z: f32| {
+            let o = to_cam.transform_point3(ray.origin);
+            let d = to_cam.transform_vector3(ray.dir);
+            o + d * ((z - o.z) / d.z)
+        };
+        let film = Vec2::new(20.3, 9.7);
+        let pin = Camera::new(&thin_lens(0.0, f), 64, 48).generate_ray(film, Vec2::ZERO);
+        for depth in [1.5f32, 4.0, 9.0] {
+            let centre = at_depth(&pin, depth);
+            for k in 0..16 {
+                // Points on the rim of the square map to the rim of the disk.
+                let t = k as f32 / 16.0;
+                let u = [
+                    Vec2::new(t, 0.0),
+                    Vec2::new(1.0, t),
+                    Vec2::new(1.0 - t, 1.0),
+                    Vec2::new(0.0, 1.0 - t),
+                ][k % 4];
+                let ray = cam.generate_ray(film, u);
+                let spread = (at_depth(&ray, depth) - centre).truncate().length();
+                let expect = r * (1.0 - depth / f).abs();
+                assert!(
+                    (spread - expect).abs() < 1e-4,
+                    "depth {depth}: {spread} vs {expect}"
+                );
+                let near = to_cam.transform_point3(ray.origin + ray.dir * ray.tmin);
+                assert!((near.z - 0.01).abs() < 1e-6, "{near}");
+            }
+        }
+    }
+
+    /// The orthographic camera: parallel rays along the view axis from the rectangle
+    /// [-1, 1] x [-1/aspect, 1/aspect] of camera space, +x to the image's left, scaled by
+    /// `to_world`; film corners map to its corners exactly.
+    #[test]
+    fn orthographic_rays_start_on_the_film_rectangle() {
+        let to_world = Mat4::from_translation(Vec3::new(0.0, 0.0, -2.0))
+            * Mat4::from_scale(Vec3::new(3.0, 3.0, 1.0));
+        let desc = CameraDesc {
+            loc: SourceLoc::default(),
+            projection: Projection::Orthographic,
+            to_world,
+            near_clip: 0.5,
+            far_clip: 10.0,
+        };
+        let cam = Camera::new(&desc, 40, 20);
+        assert!(!cam.needs_lens_sample());
+        let top_left = cam.generate_ray(Vec2::ZERO, Vec2::ZERO);
+        assert_eq!(top_left.origin, Vec3::new(3.0, 1.5, -2.0));
+        assert_eq!(top_left.dir, Vec3::Z);
+        assert_eq!((top_left.tmin, top_left.tmax), (0.5, 10.0));
+        let bottom_right = cam.generate_ray(Vec2::new(40.0, 20.0), Vec2::ZERO);
+        assert_eq!(bottom_right.origin, Vec3::new(-3.0, -1.5, -2.0));
+        // One pixel is 2 / 40 of the unscaled width: 0.15 in the world.
+        let next = cam.generate_ray(Vec2::new(1.0, 0.0), Vec2::ZERO);
+        assert!((top_left.origin.x - next.origin.x - 0.15).abs() < 1e-6);
     }
 }

@@ -6,7 +6,7 @@
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! let desc = pt_scene::load_file("scenes/cornell-box.xml".as_ref(), &[])?;
 //! let scene = pt_render::Scene::build(&desc, Default::default(), Default::default())?;
-//! let ray = scene.camera.generate_ray(pt_math::Vec2::new(128.0, 128.0));
+//! let ray = scene.camera.generate_ray(pt_math::Vec2::new(128.0, 128.0), pt_math::Vec2::splat(0.5));
 //! if let Some(hit) = scene.intersect(&ray) {
 //!     let lambda = pt_spectrum::SampledWavelengths::sample_visible(0.5);
 //!     let bsdf = scene.bsdf(&hit, &lambda);

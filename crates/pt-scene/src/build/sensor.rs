@@ -3,16 +3,18 @@
 use super::*;
 
 impl<'e> Builder<'e> {
-    /// `perspective` (see [`perspective`] for its parameters) with its film and sampler.
+    /// `perspective`, `thinlens` (see [`perspective`]) or `orthographic` (see
+    /// [`orthographic`]) with its film and sampler.
     pub(super) fn sensor(
         &mut self,
         el: &'e Element,
     ) -> Result<(CameraDesc, FilmDesc, SamplerDesc)> {
         let v = ObjectView::parse(el)?;
-        if v.plugin != "perspective" {
-            return Err(plugin_error(el));
-        }
-        let camera = perspective(&v)?;
+        let camera = match v.plugin.as_str() {
+            "perspective" | "thinlens" => perspective(&v)?,
+            "orthographic" => orthographic(&v)?,
+            _ => return Err(plugin_error(el)),
+        };
         let (mut film, mut sampler) = (None, None);
         for child in &v.children {
             let target = self.resolve(child)?;
@@ -84,11 +86,12 @@ impl<'e> Builder<'e> {
     }
 }
 
-/// `perspective`: `fov` (degrees, along `fov_axis`: x, y, diagonal, smaller or larger; default
-/// x) or `focal_length` ("50mm" style, on a 36 x 24 mm film's diagonal; default 50mm),
-/// `near_clip` (1e-2), `far_clip` (1e4), `to_world` (rotation and translation only, as in
+/// `perspective` and `thinlens`: `fov` (degrees, along `fov_axis`: x, y, diagonal, smaller or
+/// larger; default x) or `focal_length` ("50mm" style, on a 36 x 24 mm film's diagonal; default
+/// 50mm), `near_clip` (1e-2), `far_clip` (1e4), `to_world` (rotation and translation only, as in
 /// Mitsuba; a mirroring `scale x="-1"` is allowed), `focus_distance` (accepted, no effect on a
-/// pinhole).
+/// pinhole). `thinlens` also: `aperture_radius` (required, >= 0) and `focus_distance` (default
+/// `far_clip`, as in Mitsuba).
 pub(super) fn perspective(v: &ObjectView<'_>) -> Result<CameraDesc> {
     let projection = projection(v)?;
     let near_clip = positive(v, "near_clip", 1e-2)?;
@@ -96,7 +99,34 @@ pub(super) fn perspective(v: &ObjectView<'_>) -> Result<CameraDesc> {
     if near_clip >= far_clip {
         return Err(v.prop_error("near_clip", "near_clip must be smaller than far_clip"));
     }
-    v.float("focus_distance")?;
+    let projection = if v.plugin == "thinlens" {
+        let Projection::Perspective { fov_deg, fov_axis } = projection else {
+            unreachable!("projection() gives a perspective")
+        };
+        let aperture_radius = v.float("aperture_radius")?.ok_or_else(|| {
+            SceneError::at(
+                &v.el.loc,
+                "thinlens needs <float name=\"aperture_radius\" .../>",
+            )
+        })?;
+        if !(aperture_radius >= 0.0) {
+            return Err(v.prop_error(
+                "aperture_radius",
+                format!("aperture_radius must be >= 0, got {aperture_radius}"),
+            ));
+        }
+        Projection::ThinLens {
+            fov_deg,
+            fov_axis,
+            aperture_radius,
+            // Mitsuba's default: in focus at the far clip plane.
+            focus_distance: positive(v, "focus_distance", far_clip)?,
+        }
+    } else {
+        // Accepted and ignored on a pinhole, as in Mitsuba.
+        v.float("focus_distance")?;
+        projection
+    };
     let to_world = v.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
     if !is_affine(&to_world) || has_scale(&to_world) {
         return Err(v.prop_error(
@@ -107,6 +137,30 @@ pub(super) fn perspective(v: &ObjectView<'_>) -> Result<CameraDesc> {
     Ok(CameraDesc {
         loc: v.el.loc.clone(),
         projection,
+        to_world,
+        near_clip,
+        far_clip,
+    })
+}
+
+/// `orthographic`: `near_clip` (1e-2), `far_clip` (1e4), `to_world` (affine; its scale sets the
+/// film's extent in the scene).
+pub(super) fn orthographic(v: &ObjectView<'_>) -> Result<CameraDesc> {
+    let near_clip = positive(v, "near_clip", 1e-2)?;
+    let far_clip = positive(v, "far_clip", 1e4)?;
+    if near_clip >= far_clip {
+        return Err(v.prop_error("near_clip", "near_clip must be smaller than far_clip"));
+    }
+    let to_world = v.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+    if !is_affine(&to_world) || Mat3::from_mat4(to_world).determinant() == 0.0 {
+        return Err(v.prop_error(
+            "to_world",
+            "the camera's to_world must be affine and invertible",
+        ));
+    }
+    Ok(CameraDesc {
+        loc: v.el.loc.clone(),
+        projection: Projection::Orthographic,
         to_world,
         near_clip,
         far_clip,

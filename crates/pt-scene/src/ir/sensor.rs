@@ -28,6 +28,22 @@ pub enum Projection {
         /// Which image axis `fov_deg` spans.
         fov_axis: FovAxis,
     },
+    /// Thin-lens perspective camera (Mitsuba `thinlens`): a pinhole's field of view, rays from
+    /// a disk-shaped aperture focused on the plane `focus_distance` in front of it.
+    ThinLens {
+        /// Full field of view in degrees.
+        fov_deg: f32,
+        /// Which image axis `fov_deg` spans.
+        fov_axis: FovAxis,
+        /// Aperture radius, scene units (0: a pinhole).
+        aperture_radius: f32,
+        /// Distance of the plane in focus along the view axis, scene units.
+        focus_distance: f32,
+    },
+    /// Orthographic camera (Mitsuba `orthographic`): parallel rays along camera +z from the
+    /// rectangle x in [-1, 1], y in [-1/aspect, 1/aspect] of camera space (aspect = width /
+    /// height), which `to_world` may scale.
+    Orthographic,
 }
 
 /// A camera. Camera space follows Mitsuba: it looks along +z, +y is up, +x is *left* in the image
@@ -38,7 +54,8 @@ pub struct CameraDesc {
     pub loc: SourceLoc,
     /// Projection and its parameters.
     pub projection: Projection,
-    /// Camera-to-world transform (may contain scale, e.g. a mirroring `scale x=-1`).
+    /// Camera-to-world transform (may contain a mirroring `scale x=-1`; any scale for an
+    /// orthographic camera, whose film extent it sets).
     pub to_world: Mat4,
     /// Near clip distance along the ray, scene units.
     pub near_clip: f32,

@@ -296,7 +296,7 @@ fn unsupported_plugins_say_not_yet_implemented() {
         "<bsdf type=\"pplastic\"/>",
         "<emitter type=\"projector\"/>",
         "<emitter type=\"sunsky\"/>",
-        "<sensor type=\"orthographic\"/>",
+        "<sensor type=\"radiancemeter\"/>",
         "<shape type=\"cylinder\"/>",
         "<integrator type=\"volpathmis\"/>",
         "<shape type=\"cube\"><bsdf type=\"bumpmap\"/></shape>",

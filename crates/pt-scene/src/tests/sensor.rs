@@ -60,6 +60,7 @@ fn sensor_parameters() {
             assert!((fov_deg - fov).abs() < 1e-3, "{fov_deg} vs {fov}");
             assert_eq!(fov_axis, FovAxis::Diagonal);
         }
+        ref p => panic!("{p:?}"),
     }
     assert_eq!(s.camera.near_clip, 0.5);
     assert_eq!(
@@ -167,3 +168,37 @@ fn integrators() {
 
 // -------------------------------------------------------------------------------------------
 // Transforms through whole scenes, and old scenes
+
+/// `thinlens` needs its aperture, defaults its focus to the far clip plane (Mitsuba), and
+/// `orthographic` takes a scaling `to_world`.
+#[test]
+fn thin_lens_and_orthographic_sensors() {
+    let s = load(&scene(
+        r#"<sensor type="thinlens"><float name="aperture_radius" value="0.25"/><float name="far_clip" value="50"/></sensor>"#,
+    ))
+    .unwrap();
+    match s.camera.projection {
+        Projection::ThinLens {
+            aperture_radius,
+            focus_distance,
+            ..
+        } => assert_eq!((aperture_radius, focus_distance), (0.25, 50.0)),
+        ref p => panic!("{p:?}"),
+    }
+    let e = fail(&scene(r#"<sensor type="thinlens"/>"#));
+    assert_error(&e, 2, "sensor type=\"thinlens\"", "aperture_radius");
+    let e = fail(&scene(
+        r#"<sensor type="thinlens"><float name="aperture_radius" value="-1"/></sensor>"#,
+    ));
+    assert!(e.message.contains("aperture_radius must be >= 0"), "{e}");
+    let s = load(&scene(
+        r#"<sensor type="orthographic"><transform name="to_world"><scale value="3"/></transform></sensor>"#,
+    ))
+    .unwrap();
+    assert_eq!(s.camera.projection, Projection::Orthographic);
+    assert_eq!(s.camera.to_world.x_axis.x, 3.0);
+    let e = fail(&scene(
+        r#"<sensor type="orthographic"><transform name="to_world"><scale value="0"/></transform></sensor>"#,
+    ));
+    assert!(e.message.contains("invertible"), "{e}");
+}

@@ -1,0 +1,127 @@
+//! The cameras against closed forms, end to end through `pt render`.
+//!
+//! 1. **Orthographic footprint.** An 8 x 8 orthographic film looks straight at an emitting
+//!    rectangle whose radiance is a checkerboard with cells exactly one pixel wide in the
+//!    scene (the film spans [-1, 1]^2, the rectangle too, to_uv scale 4: cells 1/8 of the
+//!    rectangle). The pixel filter is a tent of radius 0.45, so every sample stays inside its
+//!    pixel; emitters only (max_depth 1). Then each pixel sees one cell only, and its value is
+//!    exactly color0 or color1 (to float rounding, 1e-6 relative) with zero variance, in the
+//!    pattern the geometry predicts: pixel (i, j) has u = (i + 1/2) / 8 and v = 1 - (j + 1/2) / 8
+//!    (the rectangle is turned to face the camera, +x is the image's left), which puts color0
+//!    where i + j is odd (Mitsuba's checkerboard: color0 where the fractional parts of 4u and 4v
+//!    are both above 1/2 or both not). Power: the same camera moved by half a pixel sees two
+//!    cells in every pixel and must fail the check.
+//! 2. **A thin lens of aperture 0 is the pinhole.** The same scene through `perspective` and
+//!    through `thinlens` with `aperture_radius` 0 gives bit-identical images (the camera draws no
+//!    lens sample, so the random numbers match too).
+
+mod common;
+
+use common::*;
+use pt_image::Image;
+
+const C0: [f32; 3] = [0.8, 0.6, 0.3];
+const C1: [f32; 3] = [0.1, 0.25, 0.5];
+
+fn ortho_scene(shift_x: f32) -> String {
+    format!(
+        r#"<scene version="3.0.0">
+    <integrator type="path"><integer name="max_depth" value="1"/></integrator>
+    <sensor type="orthographic">
+        <transform name="to_world"><translate x="{shift_x}"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
+        <film type="hdrfilm">
+            <integer name="width" value="8"/><integer name="height" value="8"/>
+            <rfilter type="tent"><float name="radius" value="0.45"/></rfilter>
+        </film>
+    </sensor>
+    <shape type="rectangle">
+        <transform name="to_world"><rotate y="1" angle="180"/><translate z="1"/></transform>
+        <emitter type="area">
+            <texture type="checkerboard" name="radiance">
+                <rgb name="color0" value="{}, {}, {}"/>
+                <rgb name="color1" value="{}, {}, {}"/>
+                <transform name="to_uv"><scale value="4"/></transform>
+            </texture>
+        </emitter>
+    </shape>
+</scene>"#,
+        C0[0], C0[1], C0[2], C1[0], C1[1], C1[2]
+    )
+}
+
+/// Whether every pixel is exactly its predicted cell colour with zero variance; the first
+/// pixel that is not, otherwise.
+fn exact_footprints(img: &Image, var: &Image) -> Result<(), String> {
+    for j in 0..8 {
+        for i in 0..8 {
+            let expect = if (i + j) % 2 == 1 { C0 } else { C1 };
+            let (got, v) = (img.get(i, j), var.get(i, j));
+            for c in 0..3 {
+                if (got[c] - expect[c]).abs() > 1e-6 * expect[c] || v[c] != 0.0 {
+                    return Err(format!(
+                        "pixel ({i}, {j}) channel {c}: {} (variance {}), expected {}",
+                        got[c], v[c], expect[c]
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+#[test]
+fn orthographic_pixels_see_exactly_their_footprint() {
+    let dir = scratch("camera_ortho");
+    let mut results = Vec::new();
+    for (name, shift) in [("aligned", 0.0f32), ("half_pixel", 0.125)] {
+        let path = dir.join(format!("{name}.xml"));
+        std::fs::write(&path, ortho_scene(shift)).expect("write scene");
+        let (img, var) = render(&path, &dir, name, &[]);
+        results.push(exact_footprints(&img, &var));
+    }
+    assert_eq!(results[0], Ok(()), "aligned film");
+    assert!(
+        results[1].is_err(),
+        "a film moved by half a pixel must straddle cells"
+    );
+}
+
+#[test]
+fn thin_lens_of_aperture_zero_renders_the_pinhole_image() {
+    let dir = scratch("camera_thinlens");
+    let scene = |sensor: &str, extra: &str| {
+        format!(
+            r#"<scene version="3.0.0">
+    <sensor type="{sensor}">{extra}
+        <float name="fov" value="50"/>
+        <transform name="to_world"><lookat origin="0.3, 1.2, 3" target="0, 0.3, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="4"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="16"/></film>
+    </sensor>
+    <shape type="sphere"><point name="center" value="0, 0.3, 0"/><float name="radius" value="0.3"/>
+        <bsdf type="plastic"/></shape>
+    <shape type="rectangle"><transform name="to_world"><scale value="3"/><rotate x="1" angle="-90"/></transform></shape>
+    <emitter type="constant"><rgb name="radiance" value="1, 0.9, 0.8"/></emitter>
+</scene>"#
+        )
+    };
+    let mut images = Vec::new();
+    for (name, xml) in [
+        ("pinhole", scene("perspective", "")),
+        (
+            "lens0",
+            scene(
+                "thinlens",
+                r#"<float name="aperture_radius" value="0"/><float name="focus_distance" value="2"/>"#,
+            ),
+        ),
+    ] {
+        let path = dir.join(format!("{name}.xml"));
+        std::fs::write(&path, xml).expect("write scene");
+        images.push(render(&path, &dir, name, &[]));
+    }
+    assert!(images[0].0.data.iter().any(|p| p[0] > 0.0));
+    assert_eq!(images[0].0.data, images[1].0.data, "mean images differ");
+    assert_eq!(images[0].1.data, images[1].1.data, "variance images differ");
+}
