@@ -93,6 +93,8 @@ pub struct Model {
 struct Sampled {
     wi: Vec3,
     weight: f32,
+    /// Whether it came from a delta lobe.
+    delta: bool,
 }
 
 impl Model {
@@ -125,6 +127,7 @@ impl Model {
         self.bsdf.sample(wo, u_lobe, u).map(|s| Sampled {
             wi: s.wi,
             weight: s.weight.luminance_rgb(),
+            delta: s.delta,
         })
     }
 }
@@ -322,7 +325,9 @@ pub fn histogram(model: &Model, theta_i: f64, n: u32, seed: u64, max_theta: f64)
             let m = n / chunks + u32::from(c < n % chunks);
             for _ in 0..m {
                 let (ul, u) = (rng.f32(), Vec2::new(rng.f32(), rng.f32()));
-                if let Some(s) = model.sample(wo, ul, u) {
+                // A delta lobe's samples have no density: the pdf leaves them out (it
+                // integrates to the smooth lobes' share), so the histogram does too.
+                if let Some(s) = model.sample(wo, ul, u).filter(|s| !s.delta) {
                     let theta = (s.wi.z.clamp(-1.0, 1.0) as f64).acos().to_degrees();
                     let b = (theta / width) as usize;
                     if b < bins {
