@@ -15,6 +15,7 @@
 
 use crate::RadiosityError;
 use glam::Vec3;
+use pt_render::texture::Role;
 use pt_scene::{BsdfDesc, BsdfKind, Geometry, SceneDesc, ShapeDesc, SpectrumDesc};
 use std::collections::HashMap;
 
@@ -84,10 +85,10 @@ const ICO_EDGE: f32 = 1.051_462_2;
 /// Icosahedron inradius / circumradius.
 const ICO_INRADIUS: f32 = 0.794_654_5;
 
-/// RGB of a spectral input (tabulated spectra are projected through the CIE observer: the
-/// solver works per RGB channel).
-fn rgb(s: &SpectrumDesc) -> [f32; 3] {
-    pt_render::texture::rgb_of(s)
+/// RGB of a spectral input in a role (tabulated spectra are converted as Mitsuba's RGB
+/// variants convert them: the solver works per RGB channel).
+fn rgb(s: &SpectrumDesc, role: Role) -> [f32; 3] {
+    pt_render::texture::rgb_of(s, role)
 }
 
 /// Diffuse reflectance and two-sidedness of a material. Models radiosity cannot represent are
@@ -103,7 +104,7 @@ fn material(b: &BsdfDesc, warnings: &mut Vec<String>) -> Result<([f32; 3], bool)
                 ));
                 return Ok(([0.5; 3], false));
             };
-            let r = rgb(reflectance);
+            let r = rgb(reflectance, Role::Albedo);
             if !r.iter().all(|v| v.is_finite() && *v >= 0.0) {
                 return Err(RadiosityError::scene(
                     &b.loc,
@@ -293,7 +294,7 @@ impl PatchMesh {
             let emission = match &s.emitter {
                 Some(em) => {
                     let le = match em.radiance.as_constant() {
-                        Some(s) => rgb(s),
+                        Some(s) => rgb(s, Role::Emission),
                         None => {
                             return Err(RadiosityError::scene(
                                 &em.loc,

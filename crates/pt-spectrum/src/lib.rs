@@ -58,7 +58,8 @@ mod spectrum;
 mod wavelengths;
 
 pub use color::{
-    spectrum_to_srgb, spectrum_to_xyz, srgb_to_xyz, xyz_to_srgb, SRGB_TO_XYZ, XYZ_TO_SRGB,
+    mitsuba_points_to_srgb, spectrum_to_srgb, spectrum_to_xyz, srgb_to_xyz, xyz_to_srgb, RgbRole,
+    SRGB_TO_XYZ, XYZ_TO_SRGB,
 };
 pub use rgb2spec::{srgb_to_sigmoid, RgbSigmoid, RgbToSpectrumTable};
 pub use spectrum::{planck, NamedIlluminant, Outside, Spectrum, SpectrumError, Tabulated};

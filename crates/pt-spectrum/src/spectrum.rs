@@ -413,10 +413,9 @@ impl Spectrum {
     /// CIE XYZ of this spectrum as emitted radiance, `int S cmf / int y-bar` (the film's
     /// convention: a constant 1 has Y = 1). Exact quadrature; for load time and tests.
     ///
-    /// `xyz_to_srgb(s.emission_xyz())` is also the RGB-mode value of a tabulated spectrum as
-    /// Mitsuba pre-integrates it (`spectrum_list_to_srgb`: equal-energy weighting, no D65, then
-    /// clamped to [0, 1] for reflectances), so a flat reflectance of 1 becomes about
-    /// (1.205, 0.948, 0.909) before clamping in RGB mode; in spectral mode it stays 1.
+    /// `xyz_to_srgb(s.emission_xyz())` is close to the RGB-mode value Mitsuba gives a tabulated
+    /// *emission* (see [`crate::mitsuba_points_to_srgb`], which also does reflectances: those
+    /// are weighted by D65 there).
     pub fn emission_xyz(&self) -> [f32; 3] {
         [0, 1, 2].map(|c| {
             (cie::integrate_visible(|l| (self.eval(l as f32) * cie::cmf(l as f32)[c]) as f64)

@@ -188,7 +188,7 @@ fn errors_are_clear() {
             .unwrap_err()
             .to_string()
     };
-    assert!(err("plastic").starts_with("unknown model 'plastic' (known: diffuse, orennayar"));
+    assert!(err("principled").starts_with("unknown model 'principled' (known: diffuse, orennayar"));
     assert_eq!(
         err("orennayar foo=1"),
         "orennayar: unknown parameter 'foo' (parameters: reflectance, sigma, variant)"

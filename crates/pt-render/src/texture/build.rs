@@ -5,7 +5,10 @@ use super::bitmap::{Bitmap, Image, Lookup};
 use super::spectral::{SpectralBitmap, Upsampling};
 use super::{Attribute, Checkerboard, ConstantSpectrum, Texture};
 use pt_scene::{BitmapDesc, ImageSource, MeshAttribute, SpectrumDesc, TextureChannel, TextureDesc};
-use pt_spectrum::{xyz_to_srgb, ColorMode, NamedIlluminant, SampledSpectrum, Spectrum};
+use pt_spectrum::{
+    mitsuba_points_to_srgb, xyz_to_srgb, ColorMode, NamedIlluminant, RgbRole, SampledSpectrum,
+    Spectrum,
+};
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -252,7 +255,7 @@ impl TextureBuilder {
                 }
             }
         };
-        let rgb = rgb_of(&s);
+        let rgb = rgb_of(&s, role);
         let scalar = match &s {
             SpectrumDesc::Constant(v) => *v,
             _ => (rgb[0] + rgb[1] + rgb[2]) / 3.0,
@@ -359,17 +362,22 @@ impl TextureBuilder {
     }
 }
 
-/// RGB-mode value of a spectral input. A tabulated spectrum (only with `--mode rgb` on a
-/// spectral scene) is projected to linear sRGB through the CIE 1931 observer, as Mitsuba's RGB
-/// variants do; blackbodies and illuminants as emissions.
-pub fn rgb_of(s: &SpectrumDesc) -> [f32; 3] {
+/// RGB-mode value of a spectral input in a role. A tabulated spectrum (only with `--mode rgb`
+/// on a spectral scene) is converted as Mitsuba's RGB variants convert it
+/// ([`mitsuba_points_to_srgb`]: a reflectance under D65 and clamped to [0, 1], an emission
+/// without D65); blackbodies and illuminants as emissions.
+pub fn rgb_of(s: &SpectrumDesc, role: Role) -> [f32; 3] {
     match s {
         SpectrumDesc::Constant(v) => [*v; 3],
         SpectrumDesc::Rgb(c) => *c,
-        SpectrumDesc::Tabulated(p) => match Spectrum::tabulated(p) {
-            Ok(sp) => xyz_to_srgb(sp.emission_xyz()),
-            Err(_) => [0.0; 3],
-        },
+        SpectrumDesc::Tabulated(p) => {
+            let role = match role {
+                Role::Albedo => RgbRole::Reflectance,
+                Role::Emission => RgbRole::Emission,
+                Role::Unbounded | Role::Scalar | Role::Data => RgbRole::Unbounded,
+            };
+            mitsuba_points_to_srgb(p, role)
+        }
         SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. } => {
             xyz_to_srgb(spectrum_for_role(s, Role::Emission).emission_xyz())
         }
@@ -405,7 +413,7 @@ pub fn spectrum_for_role(s: &SpectrumDesc, role: Role) -> Spectrum {
 /// A constant spectrum in the scene's mode (lights, media): RGB lanes, or the role's spectrum.
 pub fn constant_spectrum(s: &SpectrumDesc, role: Role, mode: ColorMode) -> ConstantSpectrum {
     match mode {
-        ColorMode::Rgb => ConstantSpectrum::Rgb(SampledSpectrum::from_rgb(rgb_of(s))),
+        ColorMode::Rgb => ConstantSpectrum::Rgb(SampledSpectrum::from_rgb(rgb_of(s, role))),
         ColorMode::Spectral => ConstantSpectrum::Spectrum(spectrum_for_role(s, role)),
     }
 }
