@@ -11,14 +11,13 @@ film, so that the time is the file's reading, the normals and the BVH build. Pla
     /usr/bin/time -f "%e s %M KB" .venv/bin/python references/load_mitsuba.py /tmp/load/ply.xml
 """
 
-import math
 import os
 import struct
 import sys
 import zlib
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from make_memory_scene import RINGS, SEGMENTS, bump  # noqa: E402
+from make_memory_scene import mesh  # noqa: E402
 
 SCENE = """<scene version="3.0.0">
     <integrator type="path"><integer name="max_depth" value="2"/></integrator>
@@ -31,25 +30,6 @@ SCENE = """<scene version="3.0.0">
     <emitter type="constant"><rgb name="radiance" value="1"/></emitter>
 </scene>
 """
-
-
-def mesh():
-    verts = []
-    for j in range(RINGS):
-        theta = math.pi * j / (RINGS - 1)
-        for i in range(SEGMENTS):
-            phi = 2 * math.pi * i / SEGMENTS
-            x, y, z = math.sin(theta) * math.cos(phi), math.cos(theta), math.sin(theta) * math.sin(phi)
-            r = 1 + bump(x, y, z)
-            verts.append((r * x, r * y, r * z))
-    faces = []
-    for j in range(RINGS - 1):
-        for i in range(SEGMENTS):
-            a = j * SEGMENTS + i
-            b = j * SEGMENTS + (i + 1) % SEGMENTS
-            c, d = a + SEGMENTS, b + SEGMENTS
-            faces += [(a, b, c), (b, d, c)]
-    return verts, faces
 
 
 def main():

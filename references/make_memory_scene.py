@@ -37,25 +37,35 @@ def bump(x, y, z):
             + 0.005 * math.sin(97 * y) * math.sin(89 * x + 1))
 
 
-def main():
-    out = sys.argv[1] if len(sys.argv) > 1 else "."
-    os.makedirs(out, exist_ok=True)
-    lines = []
+def mesh():
+    """The sphere's vertices (x, y, z) and triangles (0-based, counter-clockwise seen from
+    outside)."""
+    verts = []
     for j in range(RINGS):
         theta = math.pi * j / (RINGS - 1)
         for i in range(SEGMENTS):
             phi = 2 * math.pi * i / SEGMENTS
             x, y, z = math.sin(theta) * math.cos(phi), math.cos(theta), math.sin(theta) * math.sin(phi)
             r = 1 + bump(x, y, z)
-            lines.append(f"v {r * x:.6f} {r * y:.6f} {r * z:.6f}\n")
+            verts.append((r * x, r * y, r * z))
+    faces = []
     for j in range(RINGS - 1):
         for i in range(SEGMENTS):
-            # 1-based OBJ indices; a, b along the ring, c, d one ring further south.
-            a = j * SEGMENTS + i + 1
-            b = j * SEGMENTS + (i + 1) % SEGMENTS + 1
+            # a, b along the ring, c, d one ring further south: (a, b, c) and (b, d, c).
+            a = j * SEGMENTS + i
+            b = j * SEGMENTS + (i + 1) % SEGMENTS
             c, d = a + SEGMENTS, b + SEGMENTS
-            # Counter-clockwise seen from outside: (a, b, c) and (b, d, c).
-            lines.append(f"f {a} {b} {c}\nf {b} {d} {c}\n")
+            faces += [(a, b, c), (b, d, c)]
+    return verts, faces
+
+
+def main():
+    out = sys.argv[1] if len(sys.argv) > 1 else "."
+    os.makedirs(out, exist_ok=True)
+    verts, faces = mesh()
+    lines = [f"v {x:.6f} {y:.6f} {z:.6f}\n" for x, y, z in verts]
+    # OBJ indices count from 1.
+    lines += [f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in faces]
     with open(os.path.join(out, "sphere.obj"), "w") as f:
         f.writelines(lines)
     with open(os.path.join(out, "scene.xml"), "w") as f:

@@ -64,6 +64,15 @@ pub fn fresnel_diffuse_reflectance(eta: f32) -> f32 {
     }
 }
 
+/// A specular sampling weight in [0, 1] (1/2 for NaN or infinity), for both plastics.
+pub(crate) fn sane_sampling_weight(w: f32) -> f32 {
+    if w.is_finite() {
+        w.clamp(0.0, 1.0)
+    } else {
+        0.5
+    }
+}
+
 /// Smooth plastic (see the module documentation).
 #[derive(Clone, Copy, Debug)]
 pub struct Plastic {
@@ -98,17 +107,12 @@ impl Plastic {
         } else {
             1.49
         };
-        let w = if sampling_weight.is_finite() {
-            sampling_weight.clamp(0.0, 1.0)
-        } else {
-            0.5
-        };
         Plastic {
             diffuse_reflectance,
             specular_reflectance,
             eta,
             nonlinear,
-            specular_sampling_weight: w,
+            specular_sampling_weight: sane_sampling_weight(sampling_weight),
             internal_reflectance: fresnel_diffuse_reflectance(1.0 / eta),
         }
     }

@@ -230,18 +230,13 @@ impl RoughPlastic {
         } else {
             1.49
         };
-        let w = if sampling_weight.is_finite() {
-            sampling_weight.clamp(0.0, 1.0)
-        } else {
-            0.5
-        };
         RoughPlastic {
             diffuse_reflectance,
             specular_reflectance,
             eta,
             mf,
             nonlinear,
-            specular_sampling_weight: w,
+            specular_sampling_weight: crate::plastic::sane_sampling_weight(sampling_weight),
             table,
         }
     }

@@ -57,36 +57,50 @@ impl<'e> Builder<'e> {
             .map_err(|msg| SceneError::at(&v.el.loc, msg))
     }
 
-    /// `obj`: `filename` (relative to the file naming it, then the main scene's folder, then
-    /// `<path>` folders), `face_normals` (false), `flip_tex_coords` (true).
-    pub(super) fn obj(&self, v: &ObjectView<'_>, m: &Mat4, flip: bool) -> Result<Geometry> {
+    /// A mesh read from the file named by `filename` (relative to the file naming it, then the
+    /// main scene's folder, then `<path>` folders) by `load(path, name)`: its vertex normals
+    /// dropped if `face_normals`, `to_world` and `flip_normals` applied, and, without normals
+    /// in the file (and without `face_normals`), vertex normals computed after `to_world`, as
+    /// Mitsuba does for every mesh format.
+    fn mesh_file(
+        &self,
+        v: &ObjectView<'_>,
+        m: &Mat4,
+        flip: bool,
+        face_normals: bool,
+        load: impl FnOnce(&Path, &str) -> std::result::Result<shapes::LocalMesh, String>,
+    ) -> Result<Geometry> {
         let err = |msg: String| SceneError::at(&v.el.loc, msg);
         let name = v
             .string("filename")?
             .ok_or_else(|| err("missing <string name=\"filename\" .../>".into()))?;
-        let opts = ObjOptions {
-            face_normals: v.boolean("face_normals")?.unwrap_or(false),
-            flip_tex_coords: v.boolean("flip_tex_coords")?.unwrap_or(true),
-        };
         let path = resolve_file(&name, &v.el.dir, &[self.base_dir], self.search_paths);
-        let local = obj::load_obj(&path, &name, &opts).map_err(err)?;
+        let mut local = load(&path, &name).map_err(err)?;
+        if face_normals {
+            local.normals = None;
+        }
         let mut mesh =
             shapes::to_world(local, m, flip).map_err(|e| err(format!("mesh '{name}': {e}")))?;
-        if mesh.normals.is_none() && !opts.face_normals {
+        if mesh.normals.is_none() && !face_normals {
             mesh.normals = Some(shapes::vertex_normals(&mesh.positions, &mesh.indices));
         }
         Ok(Geometry::Mesh(mesh))
     }
 
-    /// `serialized`: mesh `shape_index` (0) of a Mitsuba serialized file (see
-    /// [`crate::serialized`]), `filename` resolved as for `obj`, `face_normals` (false). Without
-    /// normals in the file (and without `face_normals`), vertex normals are computed after
-    /// `to_world`, as Mitsuba does.
+    /// `obj` (see [`Self::mesh_file`]): `face_normals` (false), `flip_tex_coords` (true).
+    pub(super) fn obj(&self, v: &ObjectView<'_>, m: &Mat4, flip: bool) -> Result<Geometry> {
+        let opts = ObjOptions {
+            face_normals: v.boolean("face_normals")?.unwrap_or(false),
+            flip_tex_coords: v.boolean("flip_tex_coords")?.unwrap_or(true),
+        };
+        self.mesh_file(v, m, flip, opts.face_normals, |path, name| {
+            obj::load_obj(path, name, &opts)
+        })
+    }
+
+    /// `serialized` (see [`Self::mesh_file`] and [`crate::serialized`]): mesh `shape_index` (0)
+    /// of the file, `face_normals` (false).
     pub(super) fn serialized(&self, v: &ObjectView<'_>, m: &Mat4, flip: bool) -> Result<Geometry> {
-        let err = |msg: String| SceneError::at(&v.el.loc, msg);
-        let name = v
-            .string("filename")?
-            .ok_or_else(|| err("missing <string name=\"filename\" .../>".into()))?;
         let index = match v.integer("shape_index")? {
             None => 0,
             Some(i) => u32::try_from(i).map_err(|_| {
@@ -94,43 +108,23 @@ impl<'e> Builder<'e> {
             })?,
         };
         let face_normals = v.boolean("face_normals")?.unwrap_or(false);
-        let path = resolve_file(&name, &v.el.dir, &[self.base_dir], self.search_paths);
-        let mut local = serialized::load_serialized(&path, &name, index).map_err(err)?;
-        if face_normals {
-            local.normals = None;
-        }
-        let mut mesh =
-            shapes::to_world(local, m, flip).map_err(|e| err(format!("mesh '{name}': {e}")))?;
-        if mesh.normals.is_none() && !face_normals {
-            mesh.normals = Some(shapes::vertex_normals(&mesh.positions, &mesh.indices));
-        }
-        Ok(Geometry::Mesh(mesh))
+        self.mesh_file(v, m, flip, face_normals, |path, name| {
+            serialized::load_serialized(path, name, index)
+        })
     }
 
-    /// `ply`: a Stanford PLY file (see [`crate::ply`]), `filename` resolved as for `obj`,
-    /// `face_normals` (false), `flip_tex_coords` (false: v' = 1 - v when set). Without normals in the file (and without `face_normals`), vertex
-    /// normals are computed after `to_world`, as Mitsuba does.
+    /// `ply` (see [`Self::mesh_file`] and [`crate::ply`]): `face_normals` (false),
+    /// `flip_tex_coords` (false; v' = 1 - v when set).
     pub(super) fn ply(&self, v: &ObjectView<'_>, m: &Mat4, flip: bool) -> Result<Geometry> {
-        let err = |msg: String| SceneError::at(&v.el.loc, msg);
-        let name = v
-            .string("filename")?
-            .ok_or_else(|| err("missing <string name=\"filename\" .../>".into()))?;
         let face_normals = v.boolean("face_normals")?.unwrap_or(false);
-        let path = resolve_file(&name, &v.el.dir, &[self.base_dir], self.search_paths);
         let flip_tex_coords = v.boolean("flip_tex_coords")?.unwrap_or(false);
-        let mut local = ply::load_ply(&path, &name).map_err(err)?;
-        if face_normals {
-            local.normals = None;
-        }
-        if let (true, Some(uvs)) = (flip_tex_coords, &mut local.uvs) {
-            uvs.iter_mut().for_each(|uv| uv.y = 1.0 - uv.y);
-        }
-        let mut mesh =
-            shapes::to_world(local, m, flip).map_err(|e| err(format!("mesh '{name}': {e}")))?;
-        if mesh.normals.is_none() && !face_normals {
-            mesh.normals = Some(shapes::vertex_normals(&mesh.positions, &mesh.indices));
-        }
-        Ok(Geometry::Mesh(mesh))
+        self.mesh_file(v, m, flip, face_normals, |path, name| {
+            let mut local = ply::load_ply(path, name)?;
+            if let (true, Some(uvs)) = (flip_tex_coords, &mut local.uvs) {
+                uvs.iter_mut().for_each(|uv| uv.y = 1.0 - uv.y);
+            }
+            Ok(local)
+        })
     }
 
     /// `gltf` (project extension): every triangle primitive of a glTF 2.0 file's scene as one
