@@ -5,7 +5,7 @@
 //! 1e-4 or 1e5 renders the same image as at scale 1 (radiance does not depend on units), a
 //! camera inside a one-sided object sees black, a light of zero power lights nothing.
 
-mod common;
+use crate::common;
 
 use common::*;
 use std::path::{Path, PathBuf};

@@ -3,7 +3,7 @@
 //! with exit code 2 and nothing written. What the numbers mean is tested in `pt-lab` beside
 //! the code (closed forms, chi-square wiring, the atlases' conclusions).
 
-mod common;
+use crate::common;
 
 use common::*;
 use std::path::Path;

@@ -9,7 +9,7 @@
 //! at once: a missing bounce changes L_D by Le rho^(D-1), a wrong pdf or MIS weight by a constant
 //! factor.
 
-mod common;
+use crate::common;
 
 use common::*;
 

@@ -1,6 +1,6 @@
 //! Bad input gets a clear error naming file, line and element, exit code 2, and no output file.
 
-mod common;
+use crate::common;
 
 use common::*;
 use std::path::Path;

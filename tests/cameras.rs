@@ -15,7 +15,7 @@
 //!    through `thinlens` with `aperture_radius` 0 gives bit-identical images (the camera draws no
 //!    lens sample, so the random numbers match too).
 
-mod common;
+use crate::common;
 
 use common::*;
 use pt_image::Image;

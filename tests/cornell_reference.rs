@@ -15,7 +15,7 @@
 //! per-pixel variance estimates are too noisy for the chi-square to be calibrated (3 of 8 seeds
 //! had p ~ 0.03), which is why the test pays for 256.
 
-mod common;
+use crate::common;
 
 use common::*;
 use pt_image::Image;

@@ -1,6 +1,6 @@
 //! The image depends only on the seed and sample count, not on the number of threads.
 
-mod common;
+use crate::common;
 
 use common::*;
 

@@ -19,7 +19,7 @@
 //! - With primaries in RGB mode (`--mode rgb`): the display's matrix gives the same colour
 //!   exactly and without noise.
 
-mod common;
+use crate::common;
 
 use common::*;
 use std::path::{Path, PathBuf};

@@ -1,7 +1,7 @@
 //! glTF 2.0 input: the assets of scenes/gltf/ (written by scenes/gltf/make_gltf.py) against
 //! closed forms, `pt info`'s listing, and bad input (exit code 2, no output file).
 
-mod common;
+use crate::common;
 
 use common::*;
 use pt_bsdf::GltfPbr;

@@ -3,7 +3,7 @@
 //! without NaN or infinite pixels and without non-finite samples (the renderer counts and
 //! reports those on stderr), and with the documented behaviour checked where there is one.
 
-mod common;
+use crate::common;
 
 use common::*;
 

@@ -20,7 +20,7 @@
 //! variance of L over the pixel divided by spp, from the same quadrature): a pixel that a spot's
 //! cutoff cuts in a thin sliver may get no sample inside it, and then its own variance is 0.
 
-mod common;
+use crate::common;
 
 use common::*;
 

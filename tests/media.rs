@@ -19,7 +19,7 @@
 //! and the standard error must be below 0.25% of the value, so that a 2% bias (say, sigma used
 //! as exp(-sigma d / 2), a missing internal reflection, a mask weight of a instead of 1) fails.
 
-mod common;
+use crate::common;
 
 use common::*;
 

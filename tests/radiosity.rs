@@ -3,7 +3,7 @@
 //! The solver's own correctness (closed-form sphere, energy balance, convergence with patch size)
 //! is tested in crates/pt-radiosity/tests/validation.rs.
 
-mod common;
+use crate::common;
 
 use common::*;
 

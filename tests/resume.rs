@@ -7,7 +7,7 @@
 //!   the sample count in its header, leaves no temporary file, exits with code 130, and the
 //!   saved state resumes.
 
-mod common;
+use crate::common;
 
 use common::*;
 use std::process::Command;

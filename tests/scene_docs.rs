@@ -18,7 +18,7 @@
 //! (`crates/pt-scene/src/build/mod.rs`), so that a plugin added there without documentation fails
 //! here; [`NOT_IN_PLUGINS`] adds what the table does not list.
 
-mod common;
+use crate::common;
 
 use pt_render::{BvhKind, LightSelection, Scene};
 use std::collections::BTreeSet;

@@ -2,7 +2,7 @@
 //! 2019, `crates/pt-render/src/spectral_texture.rs`), looked up through the same texture
 //! transform as in RGB mode.
 
-mod common;
+use crate::common;
 
 use common::*;
 use std::path::PathBuf;

@@ -24,7 +24,7 @@
 //!    ignored map cannot pass. A flipped green channel or handedness breaks the dome's and the
 //!    y-stripes' agreement by up to 70 degrees.
 
-mod common;
+use crate::common;
 
 use common::*;
 use pt_math::{Frame, Ray, Vec3};

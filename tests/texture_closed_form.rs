@@ -49,7 +49,7 @@
 //! without weight (its 256-spp render of this scene has 0.07% of the expected mean); pt
 //! samples offsets from the filter, so the same XML gives pixel-centre values.
 
-mod common;
+use crate::common;
 
 use common::*;
 use pt_image::Image;

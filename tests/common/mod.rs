@@ -11,9 +11,16 @@ pub fn repo() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// A fresh scratch folder under target/ for one test.
+/// A fresh scratch folder under target/ for one test, in a folder named after the test file
+/// that asks for it (through `#[track_caller]` helpers), so that equal names in two files of
+/// the one test binary, whose tests run at the same time, do not share a folder.
+#[track_caller]
 pub fn scratch(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let file = Path::new(std::panic::Location::caller().file());
+    let module = file.file_stem().and_then(|s| s.to_str()).unwrap_or("tests");
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join(module)
+        .join(name);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).expect("create scratch folder");
     dir
@@ -175,7 +182,7 @@ impl Verdict {
 /// Compares a render (mean and variance-of-mean images) with the reference of `scene`: block
 /// z-test ([`BLOCK`], [`ALPHA`]) with both variances, and the mean ratio. Prints one summary line;
 /// on a failed z-test writes the relative error and per-block |z| images under
-/// target/tmp/diag_<scene>_<label>/ and says where.
+/// target/tmp/common/diag_<scene>_<label>/ and says where.
 pub fn judge_against_reference(img: &Image, var: &Image, scene: &str, label: &str) -> Verdict {
     let (rimg, rvar) = reference(scene);
     let z = pt_stats::block_ztest(img, var, &rimg, &rvar, BLOCK, ALPHA)

@@ -13,7 +13,7 @@
 //!    model (smooth conductor), the albedo is checked the same way with its closed-form
 //!    Fresnel reflectance.
 
-mod common;
+use crate::common;
 use common::surface_sampler;
 use pt_bsdf::{Bsdf, Conductor, Distribution, Lambert, Microfacet, RoughConductor, SurfaceBsdf};
 use pt_math::Vec3;

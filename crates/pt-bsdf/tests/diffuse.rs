@@ -5,7 +5,7 @@
 //! 0.01 with the Šidák correction, so a correct sampler fails the whole grid with probability
 //! 1% for a random seed (the seed is fixed, so the outcome is deterministic).
 
-mod common;
+use crate::common;
 use common::*;
 use pt_bsdf::{Bsdf, Lambert, Minnaert, OrenNayar, OrenNayarVariant};
 use pt_math::Vec3;

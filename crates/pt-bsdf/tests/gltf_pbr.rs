@@ -1,7 +1,7 @@
 //! Tests of the glTF metallic-roughness BRDF (`GltfPbr`): sampling against its pdf (chi-square,
 //! pt-testkit), energy (white furnace), reciprocity, and closed forms at the limits.
 
-mod common;
+use crate::common;
 use common::*;
 use pt_bsdf::{Bsdf, GltfPbr};
 use pt_spectrum::SampledSpectrum;

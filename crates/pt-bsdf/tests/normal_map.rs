@@ -4,7 +4,7 @@
 //! A pdf that forgot the rotation or the side check moves mass by far more than the few percent
 //! the chi-square test resolves (see pt-testkit's `Chi2Config`).
 
-mod common;
+use crate::common;
 
 use common::surface_sampler;
 use pt_bsdf::{Bsdf, Distribution, Lambert, Microfacet, RoughConductor, SurfaceBsdf};

@@ -8,7 +8,7 @@
 //! differs by design: pt samples D cos, Mitsuba visible normals). That check needs Mitsuba and
 //! is not run here; the scene test (scenes/plastic.xml) covers it in CI.
 
-mod common;
+use crate::common;
 use common::*;
 use pt_bsdf::fresnel::fresnel_dielectric;
 use pt_bsdf::{Bsdf, CoatingTable, Distribution, Microfacet, RoughPlastic};

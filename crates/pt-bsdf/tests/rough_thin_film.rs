@@ -3,7 +3,7 @@
 //! inside), energy (albedo <= 1 counting transmitted energy), the zero-thickness limit (the bare
 //! rough conductor / rough dielectric, to f32 rounding), and robustness.
 
-mod common;
+use crate::common;
 use common::*;
 use pt_bsdf::{
     Bsdf, Distribution, FilmBase, Microfacet, RoughConductor, RoughDielectric, RoughThinFilm,

@@ -5,7 +5,7 @@
 //!
 //! The chi-square grid is judged at family-wise significance 0.01 (Šidák over the grid).
 
-mod common;
+use crate::common;
 use common::*;
 use pt_bsdf::fresnel::{fresnel_conductor, fresnel_dielectric};
 use pt_bsdf::{

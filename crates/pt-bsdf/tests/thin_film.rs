@@ -5,7 +5,7 @@
 //! Thresholds: comparisons with the bare Fresnel functions of `fresnel.rs` (f32) use 1e-6, their
 //! rounding level; f64-only identities use 1e-9 or tighter.
 
-mod common;
+use crate::common;
 use common::*;
 use pt_bsdf::fresnel::{fresnel_conductor, fresnel_dielectric};
 use pt_bsdf::thin_film::{airy_reflectance, belcour_barla_rgb, C64, RGB_WAVELENGTHS_NM};

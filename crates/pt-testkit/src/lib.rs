@@ -164,6 +164,37 @@ pub fn check_delta(
     }
 }
 
+/// The `.rs` files directly in `tests_dir` that the test binary whose root file is `root` (a
+/// file in that folder) does not declare as modules (`mod NAME;` on a line of its own), other
+/// than `root` itself and the files named in `standalone` (test targets of their own). For
+/// packages with `autotests = false`, where an undeclared file would silently never run.
+pub fn undeclared_test_files(
+    tests_dir: &std::path::Path,
+    root: &str,
+    standalone: &[&str],
+) -> std::io::Result<Vec<String>> {
+    let source = std::fs::read_to_string(tests_dir.join(format!("{root}.rs")))?;
+    let declared: Vec<&str> = source
+        .lines()
+        .filter_map(|l| l.strip_prefix("mod ")?.strip_suffix(';'))
+        .collect();
+    let mut missing = Vec::new();
+    for entry in std::fs::read_dir(tests_dir)? {
+        let path = entry?.path();
+        if path.extension().is_none_or(|e| e != "rs") {
+            continue;
+        }
+        let Some(stem) = path.file_stem().and_then(|s| s.to_str()) else {
+            continue;
+        };
+        if stem != root && !standalone.contains(&stem) && !declared.contains(&stem) {
+            missing.push(stem.to_owned());
+        }
+    }
+    missing.sort();
+    Ok(missing)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
