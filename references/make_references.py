@@ -542,7 +542,8 @@ def main():
             continue
 
         film = scene.sensors()[0].film()
-        width, height = (int(x) for x in film.size())
+        # The image's size: a crop window's, else the film's.
+        width, height = (int(x) for x in film.crop_size())
         method = args.variance
         reason = moment_applicable(mi, scene, variant)
         if method == "auto":

@@ -11,7 +11,11 @@
 //!    where i + j is odd (Mitsuba's checkerboard: color0 where the fractional parts of 4u and 4v
 //!    are both above 1/2 or both not). Power: the same camera moved by half a pixel sees two
 //!    cells in every pixel and must fail the check.
-//! 2. **A thin lens of aperture 0 is the pinhole.** The same scene through `perspective` and
+//! 2. **Principal point.** The same checkerboard through a 90-degree perspective camera (the
+//!    footprints on the plane are aligned the same way): an offset of 1/8 of the film moves the
+//!    pattern by exactly one pixel, half of that straddles cells.
+//! 3. **Crop window.** A crop renders the whole film's pixels bit for bit.
+//! 4. **A thin lens of aperture 0 is the pinhole.** The same scene through `perspective` and
 //!    through `thinlens` with `aperture_radius` 0 gives bit-identical images (the camera draws no
 //!    lens sample, so the random numbers match too).
 
@@ -51,11 +55,12 @@ fn ortho_scene(shift_x: f32) -> String {
 }
 
 /// Whether every pixel is exactly its predicted cell colour with zero variance; the first
-/// pixel that is not, otherwise.
-fn exact_footprints(img: &Image, var: &Image) -> Result<(), String> {
+/// pixel that is not, otherwise. `shift`: the image shows the cell pattern moved by this many
+/// pixels (pixel (i, j) sees the cell of the centred image's pixel (i + shift, j)).
+fn exact_footprints(img: &Image, var: &Image, shift: u32) -> Result<(), String> {
     for j in 0..8 {
         for i in 0..8 {
-            let expect = if (i + j) % 2 == 1 { C0 } else { C1 };
+            let expect = if (i + shift + j) % 2 == 1 { C0 } else { C1 };
             let (got, v) = (img.get(i, j), var.get(i, j));
             for c in 0..3 {
                 if (got[c] - expect[c]).abs() > 1e-6 * expect[c] || v[c] != 0.0 {
@@ -78,12 +83,130 @@ fn orthographic_pixels_see_exactly_their_footprint() {
         let path = dir.join(format!("{name}.xml"));
         std::fs::write(&path, ortho_scene(shift)).expect("write scene");
         let (img, var) = render(&path, &dir, name, &[]);
-        results.push(exact_footprints(&img, &var));
+        results.push(exact_footprints(&img, &var, 0));
     }
     assert_eq!(results[0], Ok(()), "aligned film");
     assert!(
         results[1].is_err(),
         "a film moved by half a pixel must straddle cells"
+    );
+}
+
+/// The checkerboard scene seen through a perspective camera at the origin with a 90-degree
+/// field of view: the plane z = 1 spans [-1, 1] across the 8-pixel film, so each pixel's
+/// footprint there is 0.25 wide, and the (larger, 4 x 4) emitting rectangle has 16 cells
+/// across (to_uv scale 8: two cells per unit of scaled u), 0.25 each, aligned with the pixels (its edge at -2 is 8 pixel widths away). Emitters
+/// only, tent radius 0.45: every pixel sees one cell only.
+fn perspective_scene(principal_point: [f32; 2]) -> String {
+    let [px, py] = principal_point;
+    format!(
+        r#"<scene version="3.0.0">
+    <integrator type="path"><integer name="max_depth" value="1"/></integrator>
+    <sensor type="perspective">
+        <float name="fov" value="90"/>
+        <float name="principal_point_offset_x" value="{px}"/>
+        <float name="principal_point_offset_y" value="{py}"/>
+        <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
+        <film type="hdrfilm">
+            <integer name="width" value="8"/><integer name="height" value="8"/>
+            <rfilter type="tent"><float name="radius" value="0.45"/></rfilter>
+        </film>
+    </sensor>
+    <shape type="rectangle">
+        <transform name="to_world"><scale value="2"/><rotate y="1" angle="180"/><translate z="1"/></transform>
+        <emitter type="area">
+            <texture type="checkerboard" name="radiance">
+                <rgb name="color0" value="{}, {}, {}"/>
+                <rgb name="color1" value="{}, {}, {}"/>
+                <transform name="to_uv"><scale value="8"/></transform>
+            </texture>
+        </emitter>
+    </shape>
+</scene>"#,
+        C0[0], C0[1], C0[2], C1[0], C1[1], C1[2]
+    )
+}
+
+/// Mitsuba's principal point offset moves the image content by -offset x film size pixels
+/// (measured with Mitsuba 3.9.1: `principal_point_offset_x` 0.25 on a 200-pixel film moved a
+/// point from x 100.0 to 50.0, `_y` -0.15 on 100 pixels from y 50.0 to 65.0). On the aligned
+/// checkerboard, an offset of 1/8 on the 8-pixel film moves the pattern by exactly one pixel:
+/// each pixel then sees its neighbour's cell, exactly, with zero variance. Power: the centred
+/// pattern fails that check, and an offset of half a pixel straddles cells. (The pattern's
+/// parity cannot tell left from right: the direction, and the crop window, are checked against
+/// Mitsuba by the `crop-principal-point` reference scene.)
+#[test]
+fn principal_point_offset_moves_the_image_by_whole_pixels() {
+    let dir = scratch("camera_principal_point");
+    let mut results = Vec::new();
+    for (name, pp, shift) in [
+        ("centred", [0.0f32, 0.0], 0),
+        ("one_pixel", [0.125, 0.0], 1),
+        ("centred_as_shifted", [0.0, 0.0], 1),
+        ("half_pixel", [0.0625, 0.0], 1),
+    ] {
+        let path = dir.join(format!("{name}.xml"));
+        std::fs::write(&path, perspective_scene(pp)).expect("write scene");
+        let (img, var) = render(&path, &dir, name, &[]);
+        results.push((name, exact_footprints(&img, &var, shift)));
+    }
+    assert_eq!(results[0].1, Ok(()), "centred");
+    assert_eq!(results[1].1, Ok(()), "moved by one pixel");
+    for (name, r) in &results[2..] {
+        assert!(r.is_err(), "{name} must not show the moved pattern");
+    }
+}
+
+/// A crop window renders the whole film's pixels bit for bit: the same rays (the film
+/// position is computed from the pixel's place in the whole film) and the same random streams
+/// (keyed by that place). Default gaussian filter, a lens camera, several bounces. Power: the
+/// crop compared with the region one pixel off differs.
+#[test]
+fn crop_window_renders_the_films_pixels_bit_for_bit() {
+    let dir = scratch("camera_crop");
+    let scene = |crop: &str| {
+        format!(
+            r#"<scene version="3.0.0">
+    <sensor type="thinlens">
+        <float name="fov" value="50"/>
+        <float name="aperture_radius" value="0.05"/><float name="focus_distance" value="3"/>
+        <transform name="to_world"><lookat origin="0.3, 1.2, 3" target="0, 0.3, 0" up="0, 1, 0"/></transform>
+        <sampler type="independent"><integer name="sample_count" value="4"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="16"/>{crop}</film>
+    </sensor>
+    <shape type="sphere"><point name="center" value="0, 0.3, 0"/><float name="radius" value="0.3"/>
+        <bsdf type="plastic"/></shape>
+    <shape type="rectangle"><transform name="to_world"><scale value="3"/><rotate x="1" angle="-90"/></transform></shape>
+    <emitter type="constant"><rgb name="radiance" value="1, 0.9, 0.8"/></emitter>
+</scene>"#
+        )
+    };
+    let full_path = dir.join("full.xml");
+    std::fs::write(&full_path, scene("")).expect("write scene");
+    let (full, full_var) = render(&full_path, &dir, "full", &[]);
+    let crop_path = dir.join("crop.xml");
+    let window = r#"<integer name="crop_offset_x" value="7"/><integer name="crop_offset_y" value="5"/>
+        <integer name="crop_width" value="11"/><integer name="crop_height" value="6"/>"#;
+    std::fs::write(&crop_path, scene(window)).expect("write scene");
+    let (crop, crop_var) = render(&crop_path, &dir, "crop", &[]);
+    assert_eq!((crop.width, crop.height), (11, 6));
+    let region = |img: &Image, dx: u32| -> Vec<[f32; 3]> {
+        (0..6u32)
+            .flat_map(|j| (0..11u32).map(move |i| (i, j)))
+            .map(|(i, j)| img.get(i + 7 + dx, j + 5))
+            .collect()
+    };
+    assert!(crop.data.iter().any(|p| p[0] > 0.0), "the crop is black");
+    assert_eq!(
+        crop.data,
+        region(&full, 0),
+        "mean differs from the film's region"
+    );
+    assert_eq!(crop_var.data, region(&full_var, 0), "variance differs");
+    assert_ne!(
+        crop.data,
+        region(&full, 1),
+        "the region one pixel off must differ"
     );
 }
 

@@ -62,9 +62,13 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
     let scene = Scene::build(&desc, BvhKind::Auto, LightSelection::Power)?;
     out!("scene       {}", desc.source.display());
     out!(
-        "film        {}x{}, filter {:?}",
+        "film        {}x{}{}, filter {:?}",
         desc.film.width,
         desc.film.height,
+        desc.film.crop.map_or(String::new(), |c| format!(
+            " (crop of a {}x{} film at {}, {})",
+            c.film_size[0], c.film_size[1], c.offset[0], c.offset[1]
+        )),
         desc.film.filter
     );
     out!(
@@ -99,7 +103,7 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
         dir.z
     );
     out!(
-        "geometry    {} shapes, {} triangles{}, {} spheres{}",
+        "geometry    {} shapes, {} triangles{}, {} spheres, {} cylinders{}",
         desc.shapes.len(),
         scene.stats.triangles,
         if scene.stats.parallelograms > 0 {
@@ -111,6 +115,7 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
             String::new()
         },
         scene.stats.spheres,
+        scene.stats.cylinders,
         if scene.stats.degenerate_triangles > 0 {
             format!(
                 " ({} zero-area triangles skipped)",
@@ -124,6 +129,9 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
         let geo = match &s.geometry {
             Geometry::Mesh(m) => format!("{} triangles", m.indices.len()),
             Geometry::Sphere { radius, .. } => format!("sphere r={radius}"),
+            Geometry::Cylinder { radius, length, .. } => {
+                format!("cylinder r={radius} length={length}")
+            }
         };
         let bsdf = &desc.bsdfs[s.bsdf];
         out!(

@@ -46,7 +46,8 @@ pub(crate) struct RenderArgs {
     /// [default: the scene's integrator max_depth].
     #[arg(long, allow_hyphen_values = true)]
     max_depth: Option<i32>,
-    /// Image width in pixels [default: the scene's film].
+    /// Image width in pixels [default: the scene's film]. Sets the whole film: the film's crop
+    /// window, if any, is dropped.
     #[arg(long)]
     width: Option<u32>,
     /// Image height in pixels [default: the scene's film].
@@ -193,6 +194,13 @@ impl RenderArgs {
     /// The scene with the command line's film size.
     fn scene(&self) -> Result<SceneDesc> {
         let mut desc = load_scene(self.scene.as_deref(), &self.scene_args)?;
+        if self.width.is_some() || self.height.is_some() {
+            // The command line sizes the whole film: a crop window of the file's film no
+            // longer fits it.
+            if let Some(c) = desc.film.crop.take() {
+                [desc.film.width, desc.film.height] = c.film_size;
+            }
+        }
         if let Some(w) = self.width {
             desc.film.width = w;
         }

@@ -229,6 +229,28 @@ pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, 
                 dark.emitter = emitter(phi);
                 out.shapes.push(dark);
             }
+            &Geometry::Cylinder {
+                p0,
+                frame,
+                radius,
+                length,
+                flip_normals,
+            } => {
+                let mut s = next();
+                let phi = absorbed(&lit, &a, &mut s, &settings, |u| {
+                    let (p, n, _) = pt_render::light::cylinder_point(
+                        p0,
+                        frame,
+                        radius,
+                        length,
+                        flip_normals,
+                        u,
+                    );
+                    (p, n)
+                });
+                dark.emitter = emitter(phi);
+                out.shapes.push(dark);
+            }
         }
     }
     Ok(out)

@@ -324,6 +324,7 @@ fn render_path(
     let settings = RenderSettings {
         width: desc.film.width,
         height: desc.film.height,
+        crop: desc.film.crop,
         spp: job.spp,
         seed: job.seed,
         filter: desc.film.filter,

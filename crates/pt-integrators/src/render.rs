@@ -19,6 +19,10 @@ pub struct RenderSettings {
     pub width: u32,
     /// Image height, pixels.
     pub height: u32,
+    /// Where the image lies in a larger film (a crop window), or `None` for the whole film.
+    /// Each pixel's random stream is keyed by its position in the whole film, so a cropped
+    /// render is the same pixels, bit for bit, as the whole film's render.
+    pub crop: Option<pt_scene::CropWindow>,
     /// Samples per pixel.
     pub spp: u32,
     /// Seed of the random streams.
@@ -36,6 +40,17 @@ pub struct RenderSettings {
 }
 
 impl RenderSettings {
+    /// The key of the image's pixel (x, y) for the random streams: its index in the whole
+    /// film, row by row.
+    #[inline]
+    pub fn pixel_key(&self, x: u32, y: u32) -> u64 {
+        let (dx, dy, film_width) = match &self.crop {
+            Some(c) => (c.offset[0], c.offset[1], c.film_size[0]),
+            None => (0, 0, self.width),
+        };
+        u64::from(y + dy) * u64::from(film_width) + u64::from(x + dx)
+    }
+
     /// The settings a scene file asks for: film size and filter, spp, seed, and the path
     /// tracer's depth from its integrator (`direct`: 2; `volpath`: with media).
     pub fn from_desc(desc: &pt_scene::SceneDesc) -> Self {
@@ -47,6 +62,7 @@ impl RenderSettings {
         RenderSettings {
             width: desc.film.width,
             height: desc.film.height,
+            crop: desc.film.crop,
             spp: desc.sampler.sample_count,
             seed: desc.sampler.seed,
             filter: desc.film.filter,
@@ -404,7 +420,7 @@ fn render_row_samples(
             if taken == SAMPLE_CHUNK || x >= xs.end {
                 return None;
             }
-            let pixel = y as u64 * settings.width as u64 + x as u64;
+            let pixel = settings.pixel_key(x, y);
             let mut sampler = Sampler::new(settings.seed, pixel, u64::from(k));
             let lambda = if spectral {
                 SampledWavelengths::sample_visible(sampler.next_1d())
@@ -412,13 +428,12 @@ fn render_row_samples(
                 rgb_lambda
             };
             let offset = sample_filter(&settings.filter, &mut sampler);
-            let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
             let u_lens = if scene.camera.needs_lens_sample() {
                 sampler.next_2d()
             } else {
                 Vec2::splat(0.5)
             };
-            let ray = scene.camera.generate_ray(centre + offset, u_lens);
+            let ray = scene.camera.pixel_ray(x, y, offset, u_lens);
             let path = PathState::new(scene, ray, &lambda);
             let tag = taken;
             taken += 1;

@@ -179,7 +179,6 @@ pub fn render_image(
                 .map(|x| {
                     let mut stats = PixelStats::default();
                     let pixel = y as u64 * w as u64 + x as u64;
-                    let centre = Vec2::new(x as f32 + 0.5, y as f32 + 0.5);
                     for s in 0..settings.spp {
                         let mut sampler = Sampler::new(settings.seed, pixel, s as u64);
                         let offset = sample_filter(&settings.filter, &mut sampler);
@@ -188,7 +187,7 @@ pub fn render_image(
                         } else {
                             Vec2::splat(0.5)
                         };
-                        let ray = camera.generate_ray(centre + offset, u_lens);
+                        let ray = camera.pixel_ray(x, y, offset, u_lens);
                         stats.add(radiance(ray, &mut sampler));
                     }
                     stats

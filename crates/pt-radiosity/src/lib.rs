@@ -363,7 +363,7 @@ impl Simulation {
         progress: &(dyn Fn(f32) + Sync),
     ) -> RenderOutput {
         let (w, h) = (desc.film.width, desc.film.height);
-        let camera = Camera::new(&desc.camera, w, h);
+        let camera = Camera::for_film(&desc.camera, &desc.film);
         let settings = ImageSettings {
             width: w,
             height: h,

@@ -167,6 +167,19 @@ fn scene_bounds(desc: &SceneDesc) -> (Vec3, Vec3) {
                     hi = hi.max(center + Vec3::splat(radius.abs()));
                 }
             }
+            &Geometry::Cylinder {
+                p0,
+                frame,
+                radius,
+                length,
+                ..
+            } => {
+                let (a, b) = pt_scene::cylinder_bounds(p0, frame.z_axis, radius, length);
+                if a.is_finite() && b.is_finite() {
+                    lo = lo.min(a);
+                    hi = hi.max(b);
+                }
+            }
         }
     }
     if lo.x > hi.x {
@@ -383,6 +396,7 @@ impl PatchMesh {
                         });
                     }
                 }
+                Geometry::Cylinder { .. } => unreachable!("count_shape refuses cylinders"),
             }
             if degenerate > 0 {
                 mesh.warnings.push(format!(
@@ -429,6 +443,12 @@ impl PatchMesh {
                 let k = sphere_subdivisions_f(radius, h);
                 Ok((20.0 * k * k).min(u64::MAX as f64 / 4.0) as u64)
             }
+            Geometry::Cylinder { .. } => Err(RadiosityError::scene(
+                &s.loc,
+                "the radiosity solver meshes triangles and spheres; a cylinder is not supported \
+                 by it yet (the path tracer renders it)"
+                    .to_string(),
+            )),
         }
     }
 

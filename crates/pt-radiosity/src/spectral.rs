@@ -101,7 +101,7 @@ pub fn render(
     }
     let weights = film_weights();
     let (w, h) = (desc.film.width, desc.film.height);
-    let camera = Camera::new(&desc.camera, w, h);
+    let camera = Camera::for_film(&desc.camera, &desc.film);
     let settings = ImageSettings {
         width: w,
         height: h,

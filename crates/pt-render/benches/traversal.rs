@@ -202,6 +202,7 @@ fn mesh_case() -> Case {
         to_world: lookat(Vec3::new(0.4, 0.8, 3.2), Vec3::ZERO, Vec3::Y),
         near_clip: 0.01,
         far_clip: 100.0,
+        principal_point_offset: [0.0; 2],
     };
     let camera = Camera::new(&desc, RES, RES);
     Case {

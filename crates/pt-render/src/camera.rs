@@ -17,7 +17,14 @@ pub struct Camera {
     /// Perspective: tan of half the field of view along x and y. Orthographic: the half-extent
     /// of the film in camera space (1 and 1 / aspect).
     tan_half: Vec2,
+    /// 1 / the whole film's size in pixels.
     inv_size: Vec2,
+    /// Added to every film position (pixels) before projecting: the principal point offset in
+    /// pixels (Mitsuba: the content moves by -offset x size, so the ray through a pixel is the
+    /// centred camera's ray through the pixel + offset x size).
+    film_offset: Vec2,
+    /// The film's pixel at the image's top-left corner (a crop window's offset).
+    crop_offset: [u32; 2],
     near: f32,
     far: f32,
 }
@@ -92,9 +99,33 @@ impl Camera {
             kind,
             tan_half: Vec2::new(tan_x, tan_x * h / w),
             inv_size: Vec2::new(1.0 / w, 1.0 / h),
+            film_offset: Vec2::from(desc.principal_point_offset) * Vec2::new(w, h),
+            crop_offset: [0, 0],
             near: desc.near_clip,
             far: desc.far_clip,
         }
+    }
+
+    /// The camera for `film`: projecting onto the whole film; [`Camera::pixel_ray`] places the
+    /// image's pixels in it through the crop window.
+    pub fn for_film(desc: &CameraDesc, film: &pt_scene::FilmDesc) -> Self {
+        let [w, h] = film.film_size();
+        let mut camera = Camera::new(desc, w, h);
+        camera.crop_offset = film.crop_offset();
+        camera
+    }
+
+    /// The primary ray for the image's pixel (x, y) at `offset` (pixels) from its centre: the
+    /// film position is computed from the pixel's place in the whole film, in the same
+    /// operations for any crop window, so that a cropped render traces the whole film's rays
+    /// bit for bit. `u_lens` as in [`Camera::generate_ray`].
+    #[inline]
+    pub fn pixel_ray(&self, x: u32, y: u32, offset: Vec2, u_lens: Vec2) -> Ray {
+        let centre = Vec2::new(
+            (x + self.crop_offset[0]) as f32 + 0.5,
+            (y + self.crop_offset[1]) as f32 + 0.5,
+        );
+        self.generate_ray(centre + offset, u_lens)
     }
 
     /// Whether [`Camera::generate_ray`] uses its lens sample (a thin lens with an aperture):
@@ -104,14 +135,15 @@ impl Camera {
         matches!(self.kind, Kind::ThinLens { .. })
     }
 
-    /// The primary ray through film position `film` (pixels); `u_lens` in [0, 1)^2 picks the
+    /// The primary ray through film position `film` (pixels of the whole film: (0, 0) its
+    /// top-left corner); `u_lens` in [0, 1)^2 picks the
     /// point on a thin lens's aperture (unused by the other cameras). Near and far clip are
     /// planes perpendicular to the view axis, as in Mitsuba.
     #[inline]
     pub fn generate_ray(&self, film: Vec2, u_lens: Vec2) -> Ray {
-        let ndc = film * self.inv_size; // [0,1]^2, y down
-                                        // The film point in camera space: at z = 1 for the perspective cameras (the direction
-                                        // of the pinhole ray), at z = 0 for the orthographic one (the ray's origin).
+        let ndc = (film + self.film_offset) * self.inv_size; // [0,1]^2 on the film, y down
+                                                             // The film point in camera space: at z = 1 for the perspective cameras (the direction
+                                                             // of the pinhole ray), at z = 0 for the orthographic one (the ray's origin).
         let x = (1.0 - 2.0 * ndc.x) * self.tan_half.x;
         let y = (1.0 - 2.0 * ndc.y) * self.tan_half.y;
         match self.kind {
@@ -188,6 +220,7 @@ mod tests {
             to_world: lookat(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y),
             near_clip: 0.01,
             far_clip: 100.0,
+            principal_point_offset: [0.0; 2],
         };
         let cam = Camera::new(&desc, 200, 100);
         let centre = cam.generate_ray(Vec2::new(100.0, 50.0), Vec2::splat(0.5));
@@ -217,6 +250,7 @@ mod tests {
             to_world: lookat(Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.0, 0.5, -1.0), Vec3::Y),
             near_clip: 0.01,
             far_clip: 100.0,
+            principal_point_offset: [0.0; 2],
         }
     }
 
@@ -306,6 +340,7 @@ mod tests {
             to_world,
             near_clip: 0.5,
             far_clip: 10.0,
+            principal_point_offset: [0.0; 2],
         };
         let cam = Camera::new(&desc, 40, 20);
         assert!(!cam.needs_lens_sample());

@@ -62,6 +62,7 @@ pub use error::SceneError;
 pub use ir::*;
 pub use named::{conductor_names, ior_names, named_conductor, named_ior, NamedConductor};
 pub use props::PropValue;
+pub use shapes::cylinder_bounds;
 
 use std::path::Path;
 

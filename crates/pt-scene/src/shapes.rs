@@ -219,6 +219,81 @@ pub(crate) fn sphere(
     })
 }
 
+/// A world-space cylinder (Mitsuba's `cylinder`): the object-space cylinder of `radius` around
+/// the segment `p0`-`p1` goes through `to_world` = `m`. Mitsuba composes
+/// `m * translate(p0) * to_frame(Frame(axis)) * scale(radius, radius, length)` (its frame is
+/// Duff et al. 2017's, as [`pt_math::Frame::from_normal`]) and reads the radius and length off
+/// the result; the result must keep the cross-section a circle (no shear, the same scale across
+/// the axis: Mitsuba only warns there and renders another shape) and must not mirror.
+pub(crate) fn cylinder(
+    p0: Vec3,
+    p1: Vec3,
+    radius: f32,
+    m: &Mat4,
+    flip: bool,
+) -> std::result::Result<Geometry, String> {
+    check_affine(m)?;
+    let axis = p1 - p0;
+    let length = axis.length();
+    if !(length > 0.0 && length.is_finite()) {
+        return Err(format!(
+            "cylinder p0 {p0} and p1 {p1} must be distinct and finite"
+        ));
+    }
+    let f = pt_math::Frame::from_normal(axis / length);
+    let linear = Mat3::from_mat4(*m);
+    let cols = [
+        linear * (f.s * radius),
+        linear * (f.t * radius),
+        linear * (f.n * length),
+    ];
+    let lengths = cols.map(Vec3::length);
+    let tol = 1e-4;
+    let circular = (lengths[0] - lengths[1]).abs() <= tol * lengths[0]
+        && cols[0].dot(cols[1]).abs() <= tol * lengths[0] * lengths[1]
+        && cols[0].dot(cols[2]).abs() <= tol * lengths[0] * lengths[2]
+        && cols[1].dot(cols[2]).abs() <= tol * lengths[1] * lengths[2];
+    if !circular {
+        return Err(
+            "a cylinder's to_world may only rotate, translate and scale along its axis \
+             and uniformly across it (shear or unequal scale across the axis would make an \
+             elliptic cylinder, which Mitsuba renders as a circular one with a warning)"
+                .into(),
+        );
+    }
+    let frame = Mat3::from_cols(
+        cols[0] / lengths[0],
+        cols[1] / lengths[1],
+        cols[2] / lengths[2],
+    );
+    if frame.determinant() < 0.0 {
+        return Err("a cylinder's to_world must not mirror (negative determinant)".into());
+    }
+    let p0 = m.transform_point3(p0);
+    let (radius, length) = (lengths[0], lengths[2]);
+    if !(p0.is_finite() && radius.is_finite() && radius > 0.0 && length.is_finite()) {
+        return Err(format!(
+            "cylinder has an invalid start {p0}, radius {radius} or length {length}"
+        ));
+    }
+    Ok(Geometry::Cylinder {
+        p0,
+        frame,
+        radius,
+        length,
+        flip_normals: flip,
+    })
+}
+
+/// The bounding box (min, max corners) of the open cylinder around the segment `p0` to
+/// `p0 + length axis` (`axis` unit length): the boxes of its end circles, as a circle of radius
+/// r around the unit axis a reaches r sqrt(1 - a_i^2) along world axis i.
+pub fn cylinder_bounds(p0: Vec3, axis: Vec3, radius: f32, length: f32) -> (Vec3, Vec3) {
+    let p1 = p0 + axis * length;
+    let reach = (Vec3::ONE - axis * axis).max(Vec3::ZERO).sqrt() * radius;
+    (p0.min(p1) - reach, p0.max(p1) + reach)
+}
+
 /// The scale factor s if the linear part of `m` is s times an orthogonal matrix.
 fn uniform_scale(m: &Mat4) -> Option<f32> {
     let l = Mat3::from_mat4(*m);

@@ -1,7 +1,7 @@
 //! Property tests (proptest) of the loaders on hostile input: the XML loader, the OBJ
 //! loader and the glTF reader must return `Ok` or `Err`, never panic, whatever the bytes; and
 //! what they accept must be usable: every mesh index within its vertex list, every position,
-//! normal and sphere finite, every normal unit length, every per-vertex array as long as the
+//! normal, sphere and cylinder finite, every normal unit length, every per-vertex array as long as the
 //! vertex list. A crasher found would be kept here as a plain regression
 //! test (proptest also records failing seeds in `tests/fuzz.proptest-regressions`). None has
 //! been found in the XML and OBJ loaders: the OBJ reader checks every index against the lists
@@ -33,6 +33,9 @@ const SCENE: &str = r#"<scene version="3.0.0">
         <bsdf type="thinfilm"><float name="thickness" value="300"/><float name="int_ior" value="1.5"/></bsdf></shape>
     <shape type="rectangle"><transform name="to_world"><scale value="0.5"/><rotate x="1" angle="90"/><translate y="2"/></transform>
         <emitter type="area"><spectrum name="radiance" value="400:1, 500:2, 600:3"/></emitter></shape>
+    <shape type="cylinder"><point name="p0" x="-1" y="0.2" z="0"/><point name="p1" x="-1" y="0.2" z="1"/><float name="radius" value="$r"/>
+        <transform name="to_world"><rotate y="1" angle="30"/><scale value="0.5"/></transform>
+        <emitter type="area"><rgb name="radiance" value="1, 2, 3"/></emitter></shape>
     <emitter type="point"><point name="position" x="1" y="2" z="1"/><float name="intensity" value="3"/></emitter>
 </scene>"#;
 
@@ -53,6 +56,7 @@ const TOKENS: &[&str] = &[
     "</shape>",
     "<shape type=\"obj\">",
     "<shape type=\"sphere\"/>",
+    "<shape type=\"cylinder\"/>",
     "<transform name=\"to_world\">",
     "<ref id=\"gold\"/>",
     "<ref id=\"nothere\"/>",
@@ -150,6 +154,27 @@ fn check_usable(desc: &SceneDesc) -> Result<(), String> {
             Geometry::Sphere { center, radius, .. } => {
                 if !center.is_finite() || !radius.is_finite() || *radius <= 0.0 {
                     return Err(format!("shape {k}: sphere at {center:?} radius {radius}"));
+                }
+            }
+            Geometry::Cylinder {
+                p0,
+                frame,
+                radius,
+                length,
+                ..
+            } => {
+                let orthonormal = (frame.transpose() * *frame - glam::Mat3::IDENTITY)
+                    .to_cols_array()
+                    .iter()
+                    .all(|x| x.abs() < 1e-4);
+                let sizes = [*radius, *length];
+                if !(p0.is_finite()
+                    && sizes.iter().all(|s| *s > 0.0 && s.is_finite())
+                    && orthonormal)
+                {
+                    return Err(format!(
+                        "shape {k}: cylinder at {p0:?} radius {radius} length {length} frame {frame:?}"
+                    ));
                 }
             }
         }

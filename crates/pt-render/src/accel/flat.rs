@@ -45,14 +45,16 @@ pub(super) struct LaneBest {
 }
 
 impl Block {
-    /// The block of `prims` (at most [`LANES`], no spheres).
+    /// The block of `prims` (at most [`LANES`], no analytic primitives).
     pub(super) fn new(prims: &[Primitive]) -> Block {
         let mut b = Block::default();
         for (i, p) in prims.iter().enumerate() {
             let (v0, e1, e2, k1) = match *p {
                 Primitive::Triangle { v0, e1, e2 } => (v0, e1, e2, 1.0),
                 Primitive::Parallelogram { v0, e1, e2 } => (v0, e1, e2, 0.0),
-                Primitive::Sphere { .. } => unreachable!("spheres are kept out of blocks"),
+                Primitive::Sphere { .. } | Primitive::Cylinder { .. } => {
+                    unreachable!("analytic primitives are kept out of blocks")
+                }
             };
             let n = e1.cross(e2);
             for a in 0..3 {
@@ -139,13 +141,13 @@ impl Block {
 }
 
 /// Closest hit among `blocks` (primitives `0..`, lane `i` of block `k` being `k * LANES + i`)
-/// and `spheres` (primitives `spheres_from..`). Ties go to the lowest lane, then the earliest
+/// and `analytic` (primitives `analytic_from..`). Ties go to the lowest lane, then the earliest
 /// block.
 #[inline(always)]
 pub(super) fn flat_closest(
     blocks: &[Block],
-    spheres: &[Primitive],
-    spheres_from: usize,
+    analytic: &[Primitive],
+    analytic_from: usize,
     ray: &Ray,
 ) -> Option<AccelHit> {
     let mut best = LaneBest {
@@ -180,11 +182,11 @@ pub(super) fn flat_closest(
         b2: best.b2[lane],
     };
     let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
-    for (j, s) in spheres.iter().enumerate() {
+    for (j, s) in analytic.iter().enumerate() {
         let t = s.intersect(o, d, ray.tmin, hit.t);
         if t < hit.t {
             hit = AccelHit {
-                index: spheres_from + j,
+                index: analytic_from + j,
                 t,
                 b1: 0.0,
                 b2: 0.0,
@@ -194,17 +196,17 @@ pub(super) fn flat_closest(
     (hit.t < ray.tmax).then_some(hit)
 }
 
-/// Whether any of `blocks` or `spheres` is hit in `(ray.tmin, ray.tmax)`. Plain loops: the
+/// Whether any of `blocks` or `analytic` is hit in `(ray.tmin, ray.tmax)`. Plain loops: the
 /// iterator adaptor `any` was not inlined, so the lane tests ran outside the x86-64-v3 loop.
 #[inline(always)]
-pub(super) fn flat_any(blocks: &[Block], spheres: &[Primitive], ray: &Ray) -> bool {
+pub(super) fn flat_any(blocks: &[Block], analytic: &[Primitive], ray: &Ray) -> bool {
     for b in blocks {
         if b.any_hit(ray) {
             return true;
         }
     }
     let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
-    for s in spheres {
+    for s in analytic {
         if s.intersect(o, d, ray.tmin, ray.tmax) < ray.tmax {
             return true;
         }

@@ -52,10 +52,10 @@ enum Tree {
     CwChunks(Vec<Chunk>),
     Two(Bvh2),
     /// No tree: `prims[..blocks.len() * LANES]` (at most) are the triangles and parallelograms,
-    /// also held in `blocks`; spheres follow them and are tested one by one.
+    /// also held in `blocks`; the analytic primitives follow them and are tested one by one.
     Flat {
         blocks: Vec<Block>,
-        spheres_from: usize,
+        analytic_from: usize,
     },
     Empty,
 }
@@ -229,33 +229,33 @@ impl Accel {
     }
 
     /// The flat "tree" ([`BvhKind::Flat`]): triangles and parallelograms first, in their given
-    /// order, copied into SIMD blocks; spheres after them.
+    /// order, copied into SIMD blocks; the analytic primitives (spheres, cylinders) after them.
     fn build_flat(mut prims: Vec<Primitive>) -> Self {
         let mut order: Vec<u32> = (0..prims.len() as u32).collect();
         // Stable: the order within each kind is kept.
-        order.sort_by_key(|&i| matches!(prims[i as usize], Primitive::Sphere { .. }));
+        order.sort_by_key(|&i| prims[i as usize].is_analytic());
         permute_in_place(&mut prims, &order);
-        let spheres_from = prims
+        let analytic_from = prims
             .iter()
-            .position(|p| matches!(p, Primitive::Sphere { .. }))
+            .position(Primitive::is_analytic)
             .unwrap_or(prims.len());
-        let blocks = prims[..spheres_from]
+        let blocks = prims[..analytic_from]
             .chunks(LANES)
             .map(Block::new)
             .collect();
-        let unit_normals = prims[..spheres_from]
+        let unit_normals = prims[..analytic_from]
             .iter()
             .map(|p| match *p {
                 Primitive::Triangle { e1, e2, .. } | Primitive::Parallelogram { e1, e2, .. } => {
                     pt_math::Vec3::from(e1.cross(e2)).normalize()
                 }
-                Primitive::Sphere { .. } => pt_math::Vec3::ZERO,
+                Primitive::Sphere { .. } | Primitive::Cylinder { .. } => pt_math::Vec3::ZERO,
             })
             .collect();
         Accel {
             tree: Tree::Flat {
                 blocks,
-                spheres_from,
+                analytic_from,
             },
             small_stack: false,
             prims,
@@ -270,10 +270,10 @@ impl Accel {
     pub fn intersect(&self, ray: &Ray) -> Option<AccelHit> {
         if let Tree::Flat {
             blocks,
-            spheres_from,
+            analytic_from,
         } = &self.tree
         {
-            return flat_closest(blocks, &self.prims[*spheres_from..], *spheres_from, ray);
+            return flat_closest(blocks, &self.prims[*analytic_from..], *analytic_from, ray);
         }
         let r = bvh_ray(ray);
         let mut hit = RayHit::none();
@@ -310,10 +310,10 @@ impl Accel {
     pub fn occluded(&self, ray: &Ray) -> bool {
         if let Tree::Flat {
             blocks,
-            spheres_from,
+            analytic_from,
         } = &self.tree
         {
-            return flat_any(blocks, &self.prims[*spheres_from..], ray);
+            return flat_any(blocks, &self.prims[*analytic_from..], ray);
         }
         let r = bvh_ray(ray);
         let prims = &self.prims;
@@ -340,7 +340,7 @@ pub struct AccelHit {
     /// Distance along the ray (in units of the ray's direction vector).
     pub t: f32,
     /// Coordinate along the primitive's first edge: a triangle's barycentric weight of
-    /// `v0 + e1`, a parallelogram's fraction of `e1`; 0 for spheres.
+    /// `v0 + e1`, a parallelogram's fraction of `e1`; 0 for spheres and cylinders.
     pub b1: f32,
     /// The same along the second edge (`v0 + e2`, `e2`).
     pub b2: f32,

@@ -164,8 +164,8 @@ fn stack_size_follows_the_tree_depth() {
 
 #[test]
 fn flat_blocks_match_the_scalar_tests() {
-    // 45 random triangles and parallelograms (six blocks, the last partly empty) and two
-    // spheres, tested without a tree: each ray's hit must be the scalar tests' nearest (to
+    // 45 random triangles and parallelograms (six blocks, the last partly empty), two
+    // spheres and two cylinders, tested without a tree: each ray's hit must be the scalar tests' nearest (to
     // rounding), and a shadow ray must be blocked exactly when something lies within its
     // interval. A wrong sign or bound in the lanes misses or invents hits here.
     let mut s = 99u64;
@@ -192,16 +192,25 @@ fn flat_blocks_match_the_scalar_tests() {
                 flip: false,
             });
         }
+        if k % 20 == 13 {
+            prims.push(Primitive::Cylinder {
+                p0: v0,
+                axis: e1.normalize(),
+                radius: 0.5,
+                length: 2.0,
+                flip: false,
+            });
+        }
     }
     let accel = Accel::build(prims.clone(), BvhKind::Flat);
     let Tree::Flat {
         blocks,
-        spheres_from,
+        analytic_from,
     } = &accel.tree
     else {
         panic!("not flat")
     };
-    assert_eq!((blocks.len(), *spheres_from), (6, 45));
+    assert_eq!((blocks.len(), *analytic_from), (6, 45));
     let mut hits = 0;
     for _ in 0..20_000 {
         let o = Vec3::new(rnd() * 10.0 - 5.0, rnd() * 10.0 - 5.0, rnd() * 10.0 - 5.0);
@@ -232,7 +241,9 @@ fn flat_blocks_match_the_scalar_tests() {
                     | Primitive::Parallelogram { v0, e1, e2 } => {
                         (v0, e1.cross(e2).normalize().dot(d.into()).abs())
                     }
-                    Primitive::Sphere { center, .. } => (center, 1.0),
+                    Primitive::Sphere { center: c, .. } | Primitive::Cylinder { p0: c, .. } => {
+                        (c, 1.0)
+                    }
                 };
                 let tol = 1e-6 / cos;
                 let scale = t + (Vec3A::from(o) - v0).length();

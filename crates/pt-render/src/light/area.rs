@@ -1,4 +1,4 @@
-//! Area lights: emitting meshes, parallelograms and spheres.
+//! Area lights: emitting meshes, parallelograms, spheres and cylinders.
 
 use super::LightSample;
 use crate::texture::{Texture, TexturePoint};
@@ -54,6 +54,21 @@ pub enum LightShape {
         flip: bool,
         /// Object-to-world rotation, for the texture coordinates of a textured emitter.
         frame: Mat3,
+    },
+    /// An open cylinder (see `pt_scene::Geometry::Cylinder`), sampled uniformly by area as
+    /// Mitsuba samples it (its cylinder has no solid-angle sampling): z uniform along the
+    /// axis, the azimuth uniform, pdf 1 / (2 pi r L) per unit area.
+    Cylinder {
+        /// Centre of the first end circle.
+        p0: Vec3,
+        /// Object-to-world rotation: column 2 the axis, columns 0 and 1 the azimuth's origin.
+        frame: Mat3,
+        /// Radius.
+        radius: f32,
+        /// Length along the axis.
+        length: f32,
+        /// Whether the front side faces the axis.
+        flip: bool,
     },
 }
 
@@ -141,6 +156,13 @@ impl AreaLight {
                     sphere_uv(*frame, d),
                 )
             }
+            &LightShape::Cylinder {
+                p0,
+                frame,
+                radius,
+                length,
+                flip,
+            } => cylinder_point(p0, frame, radius, length, flip, u),
         };
         let s = to_solid_angle(
             &V3::<1>::splat(x),
@@ -217,6 +239,28 @@ impl AreaLight {
             SampledSpectrum::ZERO
         }
     }
+}
+
+/// The point of the open cylinder `p0 + frame * (r cos phi, r sin phi, z)` for the uniform
+/// numbers `u`, uniform by area: z = `length` u.x, phi = 2 pi u.y. Returns the point, its
+/// front normal (towards the axis when `flip`) and its texture coordinates (phi / 2 pi,
+/// z / length: u.y and u.x, as at a hit).
+#[inline]
+pub fn cylinder_point(
+    p0: Vec3,
+    frame: Mat3,
+    radius: f32,
+    length: f32,
+    flip: bool,
+    u: Vec2,
+) -> (Vec3, Vec3, Vec2) {
+    let (sin, cos) = (std::f32::consts::TAU * u.y).sin_cos();
+    let outward = frame * Vec3::new(cos, sin, 0.0);
+    (
+        p0 + outward * radius + frame.z_axis * (u.x * length),
+        if flip { -outward } else { outward },
+        Vec2::new(u.y, u.x),
+    )
 }
 
 /// Solid-angle sampling of a sphere seen from an outside point `x` (pbrt-v4 section 6.2.4,

@@ -19,8 +19,8 @@ mod envmap;
 mod tests;
 
 pub use area::{
-    parallelogram_points, sphere_uv, to_solid_angle, AreaLight, LightShape, LightTriangle,
-    SolidAngle,
+    cylinder_point, parallelogram_points, sphere_uv, to_solid_angle, AreaLight, LightShape,
+    LightTriangle, SolidAngle,
 };
 pub use build::build_light;
 pub use envmap::EnvMap;

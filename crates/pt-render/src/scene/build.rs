@@ -2,7 +2,9 @@
 //! the BVH, lights (area lights in shape order, then the others), the light-selection
 //! distribution and the camera.
 
-use super::mesh::{add_mesh, bounding_sphere, parallelogram_light, primitive_of, PrimRef};
+use super::mesh::{
+    add_mesh, bounding_sphere, parallelogram_light, primitive_of, primitive_of_geometry, PrimRef,
+};
 use super::{BuildError, LightSelection, Scene, SceneStats, ShapeData};
 use crate::accel::{Accel, BvhKind};
 use crate::camera::Camera;
@@ -140,7 +142,7 @@ impl Scene {
             LightSelection::Uniform => vec![1.0; lights.len()],
         };
         let light_distr = Distribution1D::new(&weights);
-        let camera = Camera::new(&desc.camera, desc.film.width, desc.film.height);
+        let camera = Camera::for_film(&desc.camera, &desc.film);
         Ok(Scene {
             accel,
             prim_refs,
@@ -238,6 +240,39 @@ fn geometry(
                     frame,
                 },
                 4.0 * std::f32::consts::PI * radius * radius,
+            ))
+        }
+        &Geometry::Cylinder {
+            p0,
+            frame,
+            radius,
+            length,
+            flip_normals,
+        } => {
+            if !(radius > 0.0 && radius.is_finite() && length > 0.0 && length.is_finite()) {
+                return Err(BuildError {
+                    loc: shape.loc.clone(),
+                    message: format!(
+                        "cylinder radius and length must be positive and finite, got {radius} and {length}"
+                    ),
+                });
+            }
+            prims.push(primitive_of_geometry(
+                &shape.geometry,
+                PrimRef::single(si, 0),
+            ));
+            refs.push(PrimRef::single(si, 0));
+            stats.cylinders += 1;
+            data.frame = Some(frame);
+            Some((
+                LightShape::Cylinder {
+                    p0,
+                    frame,
+                    radius,
+                    length,
+                    flip: flip_normals,
+                },
+                std::f32::consts::TAU * radius * length,
             ))
         }
     })

@@ -276,7 +276,12 @@ fn parallelogram_corner(mesh: &TriangleMesh, k: usize) -> Option<u8> {
 
 /// The BVH primitive `r` refers to, made from the description as the shape loop made it.
 pub(super) fn primitive_of(desc: &SceneDesc, r: PrimRef) -> Primitive {
-    match &desc.shapes[r.shape as usize].geometry {
+    primitive_of_geometry(&desc.shapes[r.shape as usize].geometry, r)
+}
+
+/// The BVH primitive `r` refers to in the shape `geometry`.
+pub(super) fn primitive_of_geometry(geometry: &Geometry, r: PrimRef) -> Primitive {
+    match geometry {
         Geometry::Mesh(m) if r.corner.is_some() => parallelogram_primitive(m, r),
         Geometry::Mesh(m) => {
             triangle_primitive(m.indices[r.local as usize].map(|i| m.positions[i as usize]))
@@ -289,6 +294,19 @@ pub(super) fn primitive_of(desc: &SceneDesc, r: PrimRef) -> Primitive {
         } => Primitive::Sphere {
             center: center.into(),
             radius,
+            flip: flip_normals,
+        },
+        &Geometry::Cylinder {
+            p0,
+            frame,
+            radius,
+            length,
+            flip_normals,
+        } => Primitive::Cylinder {
+            p0: p0.into(),
+            axis: frame.z_axis.into(),
+            radius,
+            length,
             flip: flip_normals,
         },
     }

@@ -40,8 +40,8 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "volpathmis", "aov", "prb", "prb_basic", "prb_projective", "direct_projective",
         "ptracer", "depth", "stokes", "prbvolpath",
     ]),
-    ("shape", &["obj", "ply", "serialized", "gltf", "rectangle", "cube", "sphere", "disk"], &[
-        "cylinder", "shapegroup", "instance", "bsplinecurve", "linearcurve",
+    ("shape", &["obj", "ply", "serialized", "gltf", "rectangle", "cube", "sphere", "disk", "cylinder"], &[
+        "shapegroup", "instance", "bsplinecurve", "linearcurve",
         "sdfgrid", "ellipsoids", "ellipsoidsmesh",
     ]),
     ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "plastic", "roughplastic", "null", "fluorescent", "phosphorescent"], &[
@@ -261,11 +261,7 @@ impl<'e> Builder<'e> {
 
 /// Mitsuba's film when a scene has no sensor: 768 x 576 pixels, its default Gaussian filter.
 pub(super) fn default_film() -> FilmDesc {
-    FilmDesc {
-        width: 768,
-        height: 576,
-        filter: DEFAULT_FILTER,
-    }
+    FilmDesc::new(768, 576, DEFAULT_FILTER)
 }
 
 pub(super) fn default_sampler() -> SamplerDesc {
@@ -322,25 +318,41 @@ pub(super) fn one_of(v: &ObjectView<'_>, name: &str, allowed: &[&str]) -> Result
     }
 }
 
-/// Crop parameters are accepted only when they select the whole image.
-pub(super) fn no_op_crop(v: &ObjectView<'_>, width: u32, height: u32) -> Result<()> {
-    let checks = [
-        ("crop_offset_x", 0),
-        ("crop_offset_y", 0),
-        ("crop_width", width),
-        ("crop_height", height),
-    ];
-    for (name, whole) in checks {
-        if let Some(value) = v.integer(name)? {
-            if value != whole as i64 {
-                return Err(v.prop_error(
-                    name,
-                    format!("cropping ({name}={value}) is not yet supported (not yet implemented)"),
-                ));
-            }
+/// Mitsuba's crop window: `crop_offset_x/y` (0) and `crop_width/height` (the film's width and
+/// height), and the size of the image it makes; `None` when it selects the whole film. The
+/// window must lie inside the film.
+pub(super) fn crop_window(
+    v: &ObjectView<'_>,
+    width: u32,
+    height: u32,
+) -> Result<(Option<CropWindow>, [u32; 2])> {
+    let mut offset = [0u32; 2];
+    let mut size = [width, height];
+    for (axis, (o_name, s_name, full)) in [
+        ("crop_offset_x", "crop_width", width),
+        ("crop_offset_y", "crop_height", height),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let o = int_in(v, o_name, 0, 0, i64::from(full) - 1)? as u32;
+        let s = int_in(v, s_name, i64::from(full), 1, i64::from(full))? as u32;
+        if o + s > full {
+            // As Mitsuba's film: the size defaults to the whole film, even with an offset.
+            return Err(v.prop_error(
+                s_name,
+                format!(
+                    "the crop window reaches past the film: {o_name} {o} + {s_name} {s} > {full}"
+                ),
+            ));
         }
+        (offset[axis], size[axis]) = (o, s);
     }
-    Ok(())
+    let crop = (size != [width, height]).then_some(CropWindow {
+        offset,
+        film_size: [width, height],
+    });
+    Ok((crop, size))
 }
 
 /// Errors if a plugin without nested objects has one.

@@ -38,9 +38,9 @@ impl<'e> Builder<'e> {
         ))
     }
 
-    /// `hdrfilm`: `width` (768), `height` (576), nested `rfilter` (gaussian). Output-format
-    /// options are accepted when valid and ignored (pt writes its own formats); cropping and
-    /// `sample_border` are accepted only at their no-op values.
+    /// `hdrfilm`: `width` (768), `height` (576), the crop window ([`crop_window`]), nested
+    /// `rfilter` (gaussian). Output-format options are accepted when valid and ignored (pt
+    /// writes its own formats); `sample_border` is accepted only at its no-op value.
     pub(super) fn film(&mut self, el: &'e Element) -> Result<FilmDesc> {
         let v = ObjectView::parse(el)?;
         if v.plugin != "hdrfilm" {
@@ -56,7 +56,7 @@ impl<'e> Builder<'e> {
         one_of(&v, "component_format", &["float16", "float32", "uint32"])?;
         one_of(&v, "file_format", &["openexr", "exr", "rgbe", "pfm"])?;
         v.boolean("banner")?;
-        no_op_crop(&v, width, height)?;
+        let (crop, [width, height]) = crop_window(&v, width, height)?;
         if v.boolean("sample_border")? == Some(true) {
             return Err(v.prop_error(
                 "sample_border",
@@ -81,6 +81,7 @@ impl<'e> Builder<'e> {
         Ok(FilmDesc {
             width,
             height,
+            crop,
             filter: filter.unwrap_or(DEFAULT_FILTER),
         })
     }
@@ -127,6 +128,20 @@ pub(super) fn perspective(v: &ObjectView<'_>) -> Result<CameraDesc> {
         v.float("focus_distance")?;
         projection
     };
+    // Mitsuba reads the principal point offset in `perspective` only (not `thinlens`).
+    let mut principal_point_offset = [0.0f32; 2];
+    if v.plugin == "perspective" {
+        for (axis, name) in ["principal_point_offset_x", "principal_point_offset_y"]
+            .into_iter()
+            .enumerate()
+        {
+            let value = v.float(name)?.unwrap_or(0.0);
+            if !value.is_finite() {
+                return Err(v.prop_error(name, format!("'{name}' must be finite, got {value}")));
+            }
+            principal_point_offset[axis] = value;
+        }
+    }
     let to_world = v.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
     if !is_affine(&to_world) || has_scale(&to_world) {
         return Err(v.prop_error(
@@ -140,6 +155,7 @@ pub(super) fn perspective(v: &ObjectView<'_>) -> Result<CameraDesc> {
         to_world,
         near_clip,
         far_clip,
+        principal_point_offset,
     })
 }
 
@@ -164,6 +180,7 @@ pub(super) fn orthographic(v: &ObjectView<'_>) -> Result<CameraDesc> {
         to_world,
         near_clip,
         far_clip,
+        principal_point_offset: [0.0; 2],
     })
 }
 
@@ -284,6 +301,7 @@ pub(super) fn default_camera(root: &Element, shapes: &[ShapeDesc]) -> CameraDesc
         to_world: Mat4::IDENTITY,
         near_clip: 1e-2,
         far_clip: 1e4,
+        principal_point_offset: [0.0; 2],
     };
     if let Some((min, max)) = bounds(shapes) {
         let extent = (max - min).max_element();
@@ -311,6 +329,17 @@ pub(super) fn bounds(shapes: &[ShapeDesc]) -> Option<(Vec3, Vec3)> {
             Geometry::Sphere { center, radius, .. } => {
                 add(*center - *radius);
                 add(*center + *radius);
+            }
+            &Geometry::Cylinder {
+                p0,
+                frame,
+                radius,
+                length,
+                ..
+            } => {
+                let (lo, hi) = crate::shapes::cylinder_bounds(p0, frame.z_axis, radius, length);
+                add(lo);
+                add(hi);
             }
         }
     }

@@ -22,6 +22,13 @@ impl<'e> Builder<'e> {
                 shapes::sphere(center, radius, &to_world, flip)
                     .map_err(|m| SceneError::at(&el.loc, m))?
             }
+            "cylinder" => {
+                let p0 = v.vec3("p0")?.unwrap_or(Vec3::ZERO);
+                let p1 = v.vec3("p1")?.unwrap_or(Vec3::Z);
+                let radius = positive(&v, "radius", 1.0)?;
+                shapes::cylinder(p0, p1, radius, &to_world, flip)
+                    .map_err(|m| SceneError::at(&el.loc, m))?
+            }
             "obj" => self.obj(&v, &to_world, flip)?,
             "serialized" => self.serialized(&v, &to_world, flip)?,
             "ply" => self.ply(&v, &to_world, flip)?,

@@ -248,6 +248,7 @@ fn node_camera(cx: &Ctx, c: &CameraNode, desc: &mut SceneDesc) -> Result<(), Glt
         to_world: c.world * Mat4::from_scale(GLTF_TO_CAMERA),
         near_clip: p.znear().max(1e-6),
         far_clip: p.zfar().unwrap_or(1e6),
+        principal_point_offset: [0.0; 2],
     };
     if let Some(a) = p.aspect_ratio().filter(|a| *a > 0.0 && a.is_finite()) {
         desc.film.height = ((DEFAULT_WIDTH as f32 / a).round() as u32).max(1);

@@ -175,7 +175,7 @@ pub fn load_mesh(path: &Path) -> Result<TriangleMesh, String> {
         .iter()
         .filter_map(|s| match &s.geometry {
             Geometry::Mesh(m) => Some(m),
-            Geometry::Sphere { .. } => None,
+            Geometry::Sphere { .. } | Geometry::Cylinder { .. } => None,
         })
         .collect();
     if meshes.is_empty() {
@@ -363,14 +363,15 @@ fn default_desc(cx: &Ctx) -> SceneDesc {
             to_world: Mat4::IDENTITY,
             near_clip: 0.01,
             far_clip: 1e4,
+            principal_point_offset: [0.0; 2],
         },
         // Box filter: each pixel is the plain average over its own footprint (glTF has no film
         // settings; Mitsuba's default Gaussian would blur across neighbours).
-        film: FilmDesc {
-            width: DEFAULT_WIDTH,
-            height: DEFAULT_HEIGHT,
-            filter: FilterDesc::Box { radius: 0.5 },
-        },
+        film: FilmDesc::new(
+            DEFAULT_WIDTH,
+            DEFAULT_HEIGHT,
+            FilterDesc::Box { radius: 0.5 },
+        ),
         sampler: SamplerDesc {
             sample_count: DEFAULT_SPP,
             seed: 0,
@@ -555,7 +556,7 @@ fn summarise_meshes(cx: &mut Ctx, desc: &SceneDesc, lines: Vec<String>) {
         .iter()
         .map(|s| match &s.geometry {
             Geometry::Mesh(m) => m.indices.len(),
-            Geometry::Sphere { .. } => 0,
+            Geometry::Sphere { .. } | Geometry::Cylinder { .. } => 0,
         })
         .sum();
     cx.summary.push(format!(

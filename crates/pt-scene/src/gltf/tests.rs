@@ -129,7 +129,7 @@ impl Doc {
 fn mesh(g: &GltfScene) -> &TriangleMesh {
     match &g.desc.shapes[0].geometry {
         Geometry::Mesh(m) => m,
-        Geometry::Sphere { .. } => unreachable!(),
+        _ => unreachable!("a glTF shape is a mesh"),
     }
 }
 

@@ -61,6 +61,11 @@ pub struct CameraDesc {
     pub near_clip: f32,
     /// Far clip distance along the ray, scene units.
     pub far_clip: f32,
+    /// Mitsuba's `principal_point_offset_x/y` (perspective only; 0 otherwise): where the view
+    /// axis meets the film, relative to the film's centre, as fractions of the film's width and
+    /// height along camera +x and +y (image left and up). The image content moves by
+    /// -offset x (width, height) pixels.
+    pub principal_point_offset: [f32; 2],
 }
 
 /// Pixel reconstruction filter (Mitsuba's `rfilter`). Radii in pixels.
@@ -83,15 +88,51 @@ pub enum FilterDesc {
     },
 }
 
-/// Film: image size and reconstruction filter.
+/// Film: image size, crop window and reconstruction filter.
 #[derive(Clone, Debug)]
 pub struct FilmDesc {
-    /// Image width in pixels.
+    /// Width of the image rendered and written, pixels: the crop window's width when there is
+    /// one, else the film's.
     pub width: u32,
-    /// Image height in pixels.
+    /// Height of the image rendered and written, pixels (as `width`).
     pub height: u32,
+    /// Mitsuba's crop window (`crop_offset_x/y`, `crop_width/height`), if the image is a part of
+    /// a larger film.
+    pub crop: Option<CropWindow>,
     /// Reconstruction filter (Mitsuba's default is a Gaussian with stddev 0.5).
     pub filter: FilterDesc,
+}
+
+/// The part of a film that is rendered: the image's pixel (i, j) is the film's pixel
+/// (i + `offset[0]`, j + `offset[1]`), and the camera projects onto the whole film.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CropWindow {
+    /// The film's pixel at the image's top-left corner.
+    pub offset: [u32; 2],
+    /// The whole film's width and height, pixels.
+    pub film_size: [u32; 2],
+}
+
+impl FilmDesc {
+    /// A film of `width` x `height` pixels, not cropped.
+    pub fn new(width: u32, height: u32, filter: FilterDesc) -> Self {
+        FilmDesc {
+            width,
+            height,
+            crop: None,
+            filter,
+        }
+    }
+
+    /// The whole film's width and height, pixels (the camera's projection spans it).
+    pub fn film_size(&self) -> [u32; 2] {
+        self.crop.map_or([self.width, self.height], |c| c.film_size)
+    }
+
+    /// The film's pixel at the image's top-left corner ((0, 0) without a crop window).
+    pub fn crop_offset(&self) -> [u32; 2] {
+        self.crop.map_or([0, 0], |c| c.offset)
+    }
 }
 
 /// Sampler settings.

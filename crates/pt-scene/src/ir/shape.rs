@@ -81,6 +81,24 @@ pub enum Geometry {
         /// Mitsuba (u = azimuth about z / 2 pi, v = polar angle from +z / pi).
         frame: Mat3,
     },
+    /// An analytic open cylinder (no end caps), Mitsuba's `cylinder`: the points
+    /// `p0 + frame * (radius cos phi, radius sin phi, z)` for z in [0, `length`]. Its normal
+    /// points away from the axis unless `flip_normals`.
+    Cylinder {
+        /// Centre of the first end circle, world space.
+        p0: Vec3,
+        /// The rotation (orthonormal columns) from the cylinder's object space to world
+        /// space: column 2 is the unit axis from `p0` to the other end; the texture coordinate
+        /// u is the azimuth from column 0 towards column 1 over 2 pi, v is z / `length`, as in
+        /// Mitsuba.
+        frame: Mat3,
+        /// Radius, scene units.
+        radius: f32,
+        /// Length along the axis, scene units.
+        length: f32,
+        /// Whether the normal points towards the axis.
+        flip_normals: bool,
+    },
 }
 
 /// A shape with its material and optional emitter.

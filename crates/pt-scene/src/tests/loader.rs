@@ -297,7 +297,7 @@ fn unsupported_plugins_say_not_yet_implemented() {
         "<emitter type=\"projector\"/>",
         "<emitter type=\"sunsky\"/>",
         "<sensor type=\"radiancemeter\"/>",
-        "<shape type=\"cylinder\"/>",
+        "<shape type=\"sdfgrid\"/>",
         "<integrator type=\"volpathmis\"/>",
         "<shape type=\"cube\"><bsdf type=\"bumpmap\"/></shape>",
         "<shape type=\"cube\"><bsdf type=\"diffuse\"><texture type=\"volume\" name=\"reflectance\"/></bsdf></shape>",

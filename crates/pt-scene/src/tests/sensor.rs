@@ -69,7 +69,44 @@ fn sensor_parameters() {
         "stratified rounds up to a square"
     );
     assert_eq!((s.film.width, s.film.height), (768, 100));
+    assert_eq!(s.film.crop, None, "a window of the whole film is no crop");
     assert_eq!(s.film.filter, FilterDesc::Tent { radius: 1.5 });
+}
+
+#[test]
+fn crop_window_and_principal_point() {
+    let s = load(&scene(
+        r#"<sensor type="perspective">
+    <float name="principal_point_offset_x" value="0.12"/>
+    <float name="principal_point_offset_y" value="-0.08"/>
+    <film type="hdrfilm">
+        <integer name="width" value="112"/><integer name="height" value="64"/>
+        <integer name="crop_offset_x" value="24"/><integer name="crop_width" value="64"/>
+    </film>
+</sensor>"#,
+    ))
+    .unwrap();
+    assert_eq!(s.camera.principal_point_offset, [0.12, -0.08]);
+    // Only the width is cropped: crop_height defaults to the film's height.
+    assert_eq!((s.film.width, s.film.height), (64, 64));
+    assert_eq!(
+        s.film.crop,
+        Some(CropWindow {
+            offset: [24, 0],
+            film_size: [112, 64]
+        })
+    );
+    assert_eq!(s.film.film_size(), [112, 64]);
+    // thinlens has no principal point in Mitsuba: the parameter is refused as unused.
+    let e = fail(&scene(
+        r#"<sensor type="thinlens"><float name="aperture_radius" value="0"/>
+    <float name="principal_point_offset_x" value="0.1"/></sensor>"#,
+    ));
+    assert!(
+        e.message
+            .contains("unused property 'principal_point_offset_x'"),
+        "{e}"
+    );
 }
 
 #[test]
@@ -87,7 +124,10 @@ fn sensor_errors() {
         ("<string name=\"focal_length\" value=\"long\"/>", 3, "focal length"),
         ("<transform name=\"to_world\"><scale value=\"2\"/></transform>", 3, "may only rotate"),
         ("<film type=\"hdrfilm\"><integer name=\"width\" value=\"0\"/></film>", 3, "between 1 and"),
-        ("<film type=\"hdrfilm\"><integer name=\"crop_width\" value=\"10\"/></film>", 3, "cropping"),
+        ("<film type=\"hdrfilm\"><integer name=\"crop_offset_x\" value=\"700\"/><integer name=\"crop_width\" value=\"100\"/></film>", 3, "reaches past the film"),
+        ("<film type=\"hdrfilm\"><integer name=\"crop_offset_y\" value=\"10\"/></film>", 3, "reaches past the film"),
+        ("<film type=\"hdrfilm\"><integer name=\"crop_height\" value=\"0\"/></film>", 3, "between 1 and 576"),
+        ("<float name=\"principal_point_offset_x\" value=\"nan\"/>", 3, "is not finite"),
         ("<film type=\"hdrfilm\"><boolean name=\"sample_border\" value=\"true\"/></film>", 3, "sample_border"),
         ("<film type=\"hdrfilm\"><string name=\"pixel_format\" value=\"cmyk\"/></film>", 3, "pixel_format"),
         ("<film type=\"hdrfilm\"><rfilter type=\"box\"><float name=\"radius\" value=\"1\"/></rfilter></film>", 3, "unused property 'radius'"),
