@@ -28,11 +28,24 @@ const C0: [f32; 3] = [0.8, 0.6, 0.3];
 const C1: [f32; 3] = [0.1, 0.25, 0.5];
 
 fn ortho_scene(shift_x: f32) -> String {
+    checker_scene(
+        &format!(
+            r#"<sensor type="orthographic">
+        <transform name="to_world"><translate x="{shift_x}"/></transform>"#
+        ),
+        1.0,
+        4.0,
+    )
+}
+
+/// An 8 x 8 film (16 spp, tent of radius 0.45) behind the sensor opening `sensor`, looking at
+/// an emitting checkerboard rectangle of half-size `size` at z = 1 facing it, `to_uv` scaled by
+/// `uv_scale`; emitters only.
+fn checker_scene(sensor: &str, size: f32, uv_scale: f32) -> String {
     format!(
         r#"<scene version="3.0.0">
     <integrator type="path"><integer name="max_depth" value="1"/></integrator>
-    <sensor type="orthographic">
-        <transform name="to_world"><translate x="{shift_x}"/></transform>
+    {sensor}
         <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
         <film type="hdrfilm">
             <integer name="width" value="8"/><integer name="height" value="8"/>
@@ -40,12 +53,12 @@ fn ortho_scene(shift_x: f32) -> String {
         </film>
     </sensor>
     <shape type="rectangle">
-        <transform name="to_world"><rotate y="1" angle="180"/><translate z="1"/></transform>
+        <transform name="to_world"><scale value="{size}"/><rotate y="1" angle="180"/><translate z="1"/></transform>
         <emitter type="area">
             <texture type="checkerboard" name="radiance">
                 <rgb name="color0" value="{}, {}, {}"/>
                 <rgb name="color1" value="{}, {}, {}"/>
-                <transform name="to_uv"><scale value="4"/></transform>
+                <transform name="to_uv"><scale value="{uv_scale}"/></transform>
             </texture>
         </emitter>
     </shape>
@@ -99,31 +112,15 @@ fn orthographic_pixels_see_exactly_their_footprint() {
 /// only, tent radius 0.45: every pixel sees one cell only.
 fn perspective_scene(principal_point: [f32; 2]) -> String {
     let [px, py] = principal_point;
-    format!(
-        r#"<scene version="3.0.0">
-    <integrator type="path"><integer name="max_depth" value="1"/></integrator>
-    <sensor type="perspective">
+    checker_scene(
+        &format!(
+            r#"<sensor type="perspective">
         <float name="fov" value="90"/>
         <float name="principal_point_offset_x" value="{px}"/>
-        <float name="principal_point_offset_y" value="{py}"/>
-        <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
-        <film type="hdrfilm">
-            <integer name="width" value="8"/><integer name="height" value="8"/>
-            <rfilter type="tent"><float name="radius" value="0.45"/></rfilter>
-        </film>
-    </sensor>
-    <shape type="rectangle">
-        <transform name="to_world"><scale value="2"/><rotate y="1" angle="180"/><translate z="1"/></transform>
-        <emitter type="area">
-            <texture type="checkerboard" name="radiance">
-                <rgb name="color0" value="{}, {}, {}"/>
-                <rgb name="color1" value="{}, {}, {}"/>
-                <transform name="to_uv"><scale value="8"/></transform>
-            </texture>
-        </emitter>
-    </shape>
-</scene>"#,
-        C0[0], C0[1], C0[2], C1[0], C1[1], C1[2]
+        <float name="principal_point_offset_y" value="{py}"/>"#
+        ),
+        2.0,
+        8.0,
     )
 }
 

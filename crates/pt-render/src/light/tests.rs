@@ -3,6 +3,17 @@
 use super::*;
 use pt_math::{Distribution1D, Mat3};
 
+/// Uniform numbers in [0, 1) from a 64-bit LCG (Knuth's MMIX constants) seeded with `seed`:
+/// deterministic streams for the sampling tests.
+fn lcg(mut s: u64) -> impl FnMut() -> f32 {
+    move || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((s >> 40) as f32) / (1u64 << 24) as f32
+    }
+}
+
 /// The path's four wavelengths all at `l` nm.
 fn at(l: f32) -> SampledWavelengths {
     SampledWavelengths::sample_visible(0.5).with_lambda(pt_math::Vec4::splat(l))
@@ -55,13 +66,7 @@ fn spectral_envmap_sampling_is_consistent_with_its_pdf() {
     e.upsample();
     let lambda = at(520.0);
     let n = 200_000;
-    let mut s = 7u64;
-    let mut rnd = || {
-        s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((s >> 40) as f32) / (1u64 << 24) as f32
-    };
+    let mut rnd = lcg(7);
     let (mut sum, mut sum2) = (0.0f64, 0.0f64);
     let mut boundary = 0;
     for _ in 0..n {
@@ -170,13 +175,7 @@ fn solid_angle_matches_quadrature(light: AreaLight) {
     // Estimate the solid angle subtended: E[1/pdf] = solid angle. Compare with the value from
     // dense midpoint quadrature of cos/d^2 over the rectangle.
     let n = 200_000;
-    let mut s = 99u64;
-    let mut rnd = || {
-        s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((s >> 40) as f32) / (1u64 << 24) as f32
-    };
+    let mut rnd = lcg(99);
     let mut est = 0.0f64;
     let lambda = SampledWavelengths::sample_visible(0.5);
     for _ in 0..n {
@@ -231,13 +230,7 @@ fn cylinder_light_matches_quadrature() {
             area: std::f32::consts::TAU * radius * length,
         };
         let n = 200_000;
-        let mut s = 7u64;
-        let mut rnd = || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((s >> 40) as f32) / (1u64 << 24) as f32
-        };
+        let mut rnd = lcg(7);
         let mut est = 0.0f64;
         for _ in 0..n {
             let ls = light
