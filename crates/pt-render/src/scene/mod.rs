@@ -354,6 +354,17 @@ mod tests {
     use super::*;
     use crate::{BvhKind, LightSelection};
 
+    /// The scene description of an XML text (paths relative to the working folder).
+    fn desc_of(xml: &str) -> pt_scene::SceneDesc {
+        let (file, dir) = (std::path::Path::new("t.xml"), std::path::Path::new("."));
+        pt_scene::load_str(xml, file, dir, &[]).unwrap()
+    }
+
+    /// The render scene of a description, with the default acceleration and light selection.
+    fn built(desc: &pt_scene::SceneDesc) -> Scene {
+        Scene::build(desc, BvhKind::Auto, LightSelection::Power).unwrap()
+    }
+
     /// A sphere turned by its `to_world` keeps Mitsuba's parameterisation in its own frame:
     /// u = azimuth about the object's z axis / 2 pi, v = polar angle from +z / pi, and dp/du
     /// along the object's azimuth direction carried to the world (the tangent that orients
@@ -370,14 +381,7 @@ mod tests {
                 <transform name="to_world"><rotate y="1" angle="90"/><translate x="1"/></transform>
             </shape>
         </scene>"#;
-        let desc = pt_scene::load_str(
-            xml,
-            std::path::Path::new("t.xml"),
-            std::path::Path::new("."),
-            &[],
-        )
-        .unwrap();
-        let scene = Scene::build(&desc, BvhKind::Auto, LightSelection::Power).unwrap();
+        let scene = built(&desc_of(xml));
         // Rotation about y by +90 degrees maps object x -> world -z, y -> y, z -> world +x.
         let frame = Mat3::from_rotation_y(std::f32::consts::FRAC_PI_2);
         let centre = Vec3::new(1.0, 0.0, 0.0);
@@ -438,13 +442,7 @@ mod tests {
                 <texture type="mesh_attribute" name="reflectance"><string name="name" value="face_tint"/><float name="scale" value="0.5"/></texture>
             </bsdf></shape>
         </scene>"#;
-        let mut desc = pt_scene::load_str(
-            xml,
-            std::path::Path::new("t.xml"),
-            std::path::Path::new("."),
-            &[],
-        )
-        .unwrap();
+        let mut desc = desc_of(xml);
         let e = Scene::build(&desc, BvhKind::Auto, LightSelection::Power)
             .err()
             .expect("no attributes yet");
@@ -540,14 +538,7 @@ mod tests {
                 </emitter>
             </shape>
         </scene>"#;
-        let desc = pt_scene::load_str(
-            xml,
-            std::path::Path::new("t.xml"),
-            std::path::Path::new("."),
-            &[],
-        )
-        .unwrap();
-        let scene = Scene::build(&desc, BvhKind::Auto, LightSelection::Power).unwrap();
+        let scene = built(&desc_of(xml));
         let frame = Mat3::from_rotation_y(std::f32::consts::FRAC_PI_2);
         let p0 = Vec3::new(1.0, 0.0, 0.0);
         for (phi, z) in [(0.3f32, 0.2f32), (1.9, 1.0), (3.5, 1.7), (5.9, 0.6)] {
