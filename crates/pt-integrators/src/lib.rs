@@ -328,6 +328,7 @@ fn render_path(
         spp: job.spp,
         seed: job.seed,
         filter: desc.film.filter,
+        sample_border: desc.film.sample_border,
         path: p.settings,
         clamp: p.clamp,
     };

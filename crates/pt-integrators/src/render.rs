@@ -3,7 +3,7 @@
 
 use crate::path::{trace_paths, PathSettings, PathStart, PathState};
 use pt_math::Vec2;
-use pt_render::film::{sample_filter, PixelStats};
+use pt_render::film::{sample_pixel_offset, PixelStats};
 use pt_render::sampler::Sampler;
 use pt_render::{RenderOutput, Scene};
 use pt_scene::FilterDesc;
@@ -21,7 +21,7 @@ pub struct RenderSettings {
     pub height: u32,
     /// Where the image lies in a larger film (a crop window), or `None` for the whole film.
     /// Each pixel's random stream is keyed by its position in the whole film, so a cropped
-    /// render is the same pixels, bit for bit, as the whole film's render.
+    /// render with `sample_border` is the same pixels, bit for bit, as the whole film's render.
     pub crop: Option<pt_scene::CropWindow>,
     /// Samples per pixel.
     pub spp: u32,
@@ -29,6 +29,8 @@ pub struct RenderSettings {
     pub seed: u64,
     /// Pixel reconstruction filter.
     pub filter: FilterDesc,
+    /// Mitsuba's `sample_border` (see `pt_render::film::sample_pixel_offset`).
+    pub sample_border: bool,
     /// Integrator settings.
     pub path: PathSettings,
     /// Optional clamp of each sample's radiance (linear RGB): a sample whose largest channel
@@ -66,6 +68,7 @@ impl RenderSettings {
             spp: desc.sampler.sample_count,
             seed: desc.sampler.seed,
             filter: desc.film.filter,
+            sample_border: desc.film.sample_border,
             path: PathSettings {
                 max_depth,
                 rr_depth: i.rr_depth,
@@ -427,7 +430,13 @@ fn render_row_samples(
             } else {
                 rgb_lambda
             };
-            let offset = sample_filter(&settings.filter, &mut sampler);
+            let offset = sample_pixel_offset(
+                &settings.filter,
+                &mut sampler,
+                (x, y),
+                (settings.width, settings.height),
+                settings.sample_border,
+            );
             let u_lens = if scene.camera.needs_lens_sample() {
                 sampler.next_2d()
             } else {

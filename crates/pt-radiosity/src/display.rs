@@ -21,7 +21,7 @@ use pt_math::warp::square_to_cosine_hemisphere;
 use pt_math::{offset_ray_origin, Frame, Ray, Vec2};
 use pt_render::accel::Accel;
 use pt_render::camera::Camera;
-use pt_render::film::{sample_filter, PixelStats};
+use pt_render::film::{sample_pixel_offset, PixelStats};
 use pt_render::sampler::Sampler;
 use pt_render::RenderOutput;
 use pt_scene::FilterDesc;
@@ -102,6 +102,8 @@ pub struct ImageSettings {
     pub height: u32,
     /// Reconstruction filter (the scene film's).
     pub filter: FilterDesc,
+    /// The film's `sample_border` (see `pt_render::film::sample_pixel_offset`).
+    pub sample_border: bool,
     /// Samples per pixel.
     pub spp: u32,
     /// Seed of the random streams.
@@ -181,7 +183,13 @@ pub fn render_image(
                     let pixel = y as u64 * w as u64 + x as u64;
                     for s in 0..settings.spp {
                         let mut sampler = Sampler::new(settings.seed, pixel, s as u64);
-                        let offset = sample_filter(&settings.filter, &mut sampler);
+                        let offset = sample_pixel_offset(
+                            &settings.filter,
+                            &mut sampler,
+                            (x, y),
+                            (w, h),
+                            settings.sample_border,
+                        );
                         let u_lens = if camera.needs_lens_sample() {
                             sampler.next_2d()
                         } else {

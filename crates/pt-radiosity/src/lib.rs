@@ -368,6 +368,7 @@ impl Simulation {
             width: w,
             height: h,
             filter: desc.film.filter,
+            sample_border: desc.film.sample_border,
             spp: spp.max(1),
             seed,
         };

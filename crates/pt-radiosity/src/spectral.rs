@@ -106,6 +106,7 @@ pub fn render(
         width: w,
         height: h,
         filter: desc.film.filter,
+        sample_border: desc.film.sample_border,
         spp: params.spp.max(1),
         seed: params.seed,
     };

@@ -40,7 +40,7 @@ impl<'e> Builder<'e> {
 
     /// `hdrfilm`: `width` (768), `height` (576), the crop window ([`crop_window`]), nested
     /// `rfilter` (gaussian). Output-format options are accepted when valid and ignored (pt
-    /// writes its own formats); `sample_border` is accepted only at its no-op value.
+    /// writes its own formats); `sample_border` (false).
     pub(super) fn film(&mut self, el: &'e Element) -> Result<FilmDesc> {
         let v = ObjectView::parse(el)?;
         if v.plugin != "hdrfilm" {
@@ -57,12 +57,7 @@ impl<'e> Builder<'e> {
         one_of(&v, "file_format", &["openexr", "exr", "rgbe", "pfm"])?;
         v.boolean("banner")?;
         let (crop, [width, height]) = crop_window(&v, width, height)?;
-        if v.boolean("sample_border")? == Some(true) {
-            return Err(v.prop_error(
-                "sample_border",
-                "sample_border=true is not yet supported (not yet implemented)",
-            ));
-        }
+        let sample_border = v.boolean("sample_border")?.unwrap_or(false);
         let mut filter = None;
         for child in &v.children {
             let target = self.resolve(child)?;
@@ -83,6 +78,7 @@ impl<'e> Builder<'e> {
             height,
             crop,
             filter: filter.unwrap_or(DEFAULT_FILTER),
+            sample_border,
         })
     }
 }

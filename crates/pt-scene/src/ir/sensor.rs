@@ -101,6 +101,10 @@ pub struct FilmDesc {
     pub crop: Option<CropWindow>,
     /// Reconstruction filter (Mitsuba's default is a Gaussian with stddev 0.5).
     pub filter: FilterDesc,
+    /// Mitsuba's `sample_border`: whether samples are also drawn around the image, so that its
+    /// edge pixels see their whole filter (otherwise the filter is cut off at the image's edge,
+    /// the default).
+    pub sample_border: bool,
 }
 
 /// The part of a film that is rendered: the image's pixel (i, j) is the film's pixel
@@ -121,6 +125,7 @@ impl FilmDesc {
             height,
             crop: None,
             filter,
+            sample_border: false,
         }
     }
 

@@ -128,7 +128,6 @@ fn sensor_errors() {
         ("<film type=\"hdrfilm\"><integer name=\"crop_offset_y\" value=\"10\"/></film>", 3, "reaches past the film"),
         ("<film type=\"hdrfilm\"><integer name=\"crop_height\" value=\"0\"/></film>", 3, "between 1 and 576"),
         ("<float name=\"principal_point_offset_x\" value=\"nan\"/>", 3, "is not finite"),
-        ("<film type=\"hdrfilm\"><boolean name=\"sample_border\" value=\"true\"/></film>", 3, "sample_border"),
         ("<film type=\"hdrfilm\"><string name=\"pixel_format\" value=\"cmyk\"/></film>", 3, "pixel_format"),
         ("<film type=\"hdrfilm\"><rfilter type=\"box\"><float name=\"radius\" value=\"1\"/></rfilter></film>", 3, "unused property 'radius'"),
         ("<sampler type=\"independent\"><integer name=\"sample_count\" value=\"0\"/></sampler>", 3, "at least 1"),
