@@ -346,6 +346,26 @@ pub struct Interaction {
     pub b: Vec2,
 }
 
+impl Interaction {
+    /// A hit on an analytic primitive (sphere, cylinder), world space: one normal for geometry
+    /// and shading, no tangent, no barycentrics.
+    #[inline(always)]
+    pub fn analytic(p: Vec3, n: Vec3, uv: Vec2, dpdu: Vec3, t: f32, shape: u32, prim: u32) -> Self {
+        Interaction {
+            p,
+            ng: n,
+            ns: n,
+            uv,
+            dpdu,
+            tangent: Vec4::ZERO,
+            t,
+            shape,
+            prim,
+            b: Vec2::ZERO,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

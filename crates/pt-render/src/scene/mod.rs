@@ -192,18 +192,7 @@ impl Scene {
                 let uv = crate::light::sphere_uv(frame, local);
                 let o = frame.transpose() * local;
                 let dpdu = frame * Vec3::new(-o.y, o.x, 0.0) * (std::f32::consts::TAU * radius);
-                Some(Interaction {
-                    p,
-                    ng: n,
-                    ns: n,
-                    uv,
-                    dpdu,
-                    tangent: pt_math::Vec4::ZERO,
-                    t,
-                    shape: r.shape,
-                    prim: id as u32,
-                    b: Vec2::ZERO,
-                })
+                Some(Interaction::analytic(p, n, uv, dpdu, t, r.shape, id as u32))
             }
             Primitive::Cylinder {
                 p0,
@@ -231,18 +220,7 @@ impl Scene {
                 }
                 let uv = Vec2::new(phi / std::f32::consts::TAU, local.z / length);
                 let dpdu = frame * Vec3::new(-on.y, on.x, 0.0) * std::f32::consts::TAU;
-                Some(Interaction {
-                    p,
-                    ng: n,
-                    ns: n,
-                    uv,
-                    dpdu,
-                    tangent: pt_math::Vec4::ZERO,
-                    t,
-                    shape: r.shape,
-                    prim: id as u32,
-                    b: Vec2::ZERO,
-                })
+                Some(Interaction::analytic(p, n, uv, dpdu, t, r.shape, id as u32))
             }
         }
     }
