@@ -44,6 +44,14 @@ fn describe_bsdf(kind: &pt_scene::BsdfKind) -> String {
             if *gltf { "glTF" } else { "Mitsuba" },
             describe_bsdf(&inner.kind)
         ),
+        K::BumpMap {
+            height,
+            scale,
+            inner,
+        } => format!(
+            "bumpmap({height:?}, scale {scale}, {})",
+            describe_bsdf(&inner.kind)
+        ),
         K::Blend {
             weight,
             first,
@@ -54,6 +62,54 @@ fn describe_bsdf(kind: &pt_scene::BsdfKind) -> String {
             describe_bsdf(&second.kind)
         ),
         other => format!("{other:?}"),
+    }
+}
+
+/// One line per light that is not on a shape: its plugin, where it is and what it emits.
+fn describe_light(k: &pt_scene::LightKind) -> String {
+    use pt_scene::LightKind as L;
+    let at = |m: &pt_math::Mat4| m.transform_point3(pt_math::Vec3::ZERO);
+    match k {
+        L::Point {
+            position,
+            intensity,
+        } => format!("point at {position:.3}, intensity {intensity:?}"),
+        L::Spot {
+            to_world,
+            intensity,
+            cutoff_deg,
+            beam_width_deg,
+            texture,
+        } => format!(
+            "spot at {:.3}, intensity {intensity:?}, cutoff {cutoff_deg} deg, beam {beam_width_deg} deg{}",
+            at(to_world),
+            texture
+                .as_ref()
+                .map(|t| format!(", texture {t:?}"))
+                .unwrap_or_default()
+        ),
+        L::Projector {
+            to_world,
+            irradiance,
+            scale,
+            projection,
+        } => format!(
+            "projector at {:.3}, irradiance {irradiance:?}, scale {scale}, {projection:?}",
+            at(to_world)
+        ),
+        L::Directional {
+            direction,
+            irradiance,
+        } => format!("directional towards {direction:.3}, irradiance {irradiance:?}"),
+        L::Sun {
+            direction,
+            irradiance,
+            angular_diameter_deg,
+        } => format!("sun towards {direction:.3}, irradiance {irradiance:?}, diameter {angular_diameter_deg} deg"),
+        L::Constant { radiance } => format!("constant, radiance {radiance:?}"),
+        L::EnvMap {
+            filename, scale, ..
+        } => format!("envmap {}, scale {scale}", filename.display()),
     }
 }
 
@@ -168,7 +224,19 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
             describe_bsdf(&b.kind)
         );
     }
-    out!("lights      {} area light(s)", scene.lights.len());
+    let areas = scene
+        .lights
+        .iter()
+        .filter(|l| matches!(l, pt_render::light::Light::Area(_)))
+        .count();
+    out!(
+        "lights      {} ({areas} area light(s) on shapes, {} on their own)",
+        scene.lights.len(),
+        desc.lights.len()
+    );
+    for l in &desc.lights {
+        out!("  {}", describe_light(&l.kind));
+    }
     if !gltf_summary.is_empty() {
         out!("glTF        (how the file maps onto the renderer; see pt-gltf's documentation)");
         for line in &gltf_summary {

@@ -125,7 +125,11 @@ pub fn d65_normalised(scene: &str) -> bool {
         .filter_map(|s| s.emitter.as_ref())
         .all(|e| e.primaries.is_none() && e.radiance.spectra().into_iter().all(white));
     let lights = desc.lights.iter().all(|l| match &l.kind {
-        LightKind::Point { intensity, .. } | LightKind::Spot { intensity, .. } => white(intensity),
+        LightKind::Point { intensity, .. } => white(intensity),
+        LightKind::Spot {
+            intensity, texture, ..
+        } => white(intensity) && texture.iter().flat_map(|t| t.spectra()).all(white),
+        LightKind::Projector { irradiance, .. } => irradiance.spectra().into_iter().all(white),
         LightKind::Directional { irradiance, .. } | LightKind::Sun { irradiance, .. } => {
             white(irradiance)
         }

@@ -43,7 +43,7 @@ enum Kind {
 
 /// tan(half fov) along x for a `fov_deg` spanning `fov_axis` of a `w` x `h` film (Mitsuba's
 /// fov_axis semantics).
-fn tan_half_x(fov_deg: f32, fov_axis: FovAxis, w: f32, h: f32) -> f32 {
+pub(crate) fn tan_half_x(fov_deg: f32, fov_axis: FovAxis, w: f32, h: f32) -> f32 {
     let t = (0.5 * fov_deg.to_radians()).tan();
     match fov_axis {
         FovAxis::X => t,

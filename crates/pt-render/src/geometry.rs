@@ -332,6 +332,9 @@ pub struct Interaction {
     /// Tangent along increasing u (not normalised; zero when the surface has no
     /// parameterisation). It orients anisotropic BSDFs, as Mitsuba's `dp_du` does.
     pub dpdu: Vec3,
+    /// Tangent along increasing v (not normalised; zero without a parameterisation): with
+    /// `dpdu`, what a bump map perturbs.
+    pub dpdv: Vec3,
     /// Interpolated mesh tangent for normal maps (xyz world, not normalised; w = +-1 the
     /// handedness, bitangent `w (n x t)`); zero when the mesh has no tangents.
     pub tangent: Vec4,
@@ -350,13 +353,22 @@ impl Interaction {
     /// A hit on an analytic primitive (sphere, cylinder), world space: one normal for geometry
     /// and shading, no tangent, no barycentrics.
     #[inline(always)]
-    pub fn analytic(p: Vec3, n: Vec3, uv: Vec2, dpdu: Vec3, t: f32, shape: u32, prim: u32) -> Self {
+    pub fn analytic(
+        p: Vec3,
+        n: Vec3,
+        uv: Vec2,
+        [dpdu, dpdv]: [Vec3; 2],
+        t: f32,
+        shape: u32,
+        prim: u32,
+    ) -> Self {
         Interaction {
             p,
             ng: n,
             ns: n,
             uv,
             dpdu,
+            dpdv,
             tangent: Vec4::ZERO,
             t,
             shape,

@@ -1,20 +1,35 @@
 //! Lights that are not attached to a shape, from their descriptions.
 
-use super::{EnvMap, Light, SpotCone};
+use super::{EnvMap, Light, Projector, SpotCone, SpotTexture};
+use crate::camera::tan_half_x;
 use crate::scene::BuildError;
-use crate::texture::{constant_spectrum, Role};
-use pt_math::{Frame, Mat3, Vec3};
+use crate::texture::{constant_spectrum, Role, TextureBuilder};
+use pt_math::{Frame, Mat3, Mat4, Vec3};
 use pt_scene::{LightDesc, LightKind};
 use pt_spectrum::ColorMode;
 
 /// A light that is not attached to a shape, in the scene's colour mode (spectral mode: RGB
-/// emission upsampled and multiplied by D65; environment maps upsampled per texel).
-pub fn build_light(l: &LightDesc, mode: ColorMode) -> Result<Light, BuildError> {
+/// emission upsampled and multiplied by D65; environment maps upsampled per texel). Textures
+/// (a spot's image, a projector's) are built by `textures`.
+pub fn build_light(
+    l: &LightDesc,
+    mode: ColorMode,
+    textures: &mut TextureBuilder,
+) -> Result<Light, BuildError> {
     let err = |m: String| BuildError {
         loc: l.loc.clone(),
         message: m,
     };
     let emission = |s| constant_spectrum(s, Role::Emission, mode);
+    // World-to-light linear map of a light's `to_world` (for texture lookups).
+    let to_local = |m: &Mat4| {
+        let inv = Mat3::from_mat4(*m).inverse();
+        if inv.is_finite() {
+            Ok(inv)
+        } else {
+            Err(err("to_world cannot be inverted (a zero scale?)".into()))
+        }
+    };
     Ok(match &l.kind {
         LightKind::Point {
             position,
@@ -28,6 +43,7 @@ pub fn build_light(l: &LightDesc, mode: ColorMode) -> Result<Light, BuildError> 
             intensity,
             cutoff_deg,
             beam_width_deg,
+            texture,
         } => {
             let axis = to_world
                 .transform_vector3(Vec3::Z)
@@ -43,7 +59,40 @@ pub fn build_light(l: &LightDesc, mode: ColorMode) -> Result<Light, BuildError> 
                     cutoff,
                     beam_width: beam_width_deg.to_radians(),
                 },
+                texture: match texture {
+                    Some(t) => Some(Box::new(SpotTexture {
+                        texture: textures.build(t, Role::Albedo).map_err(err)?,
+                        to_local: to_local(to_world)?,
+                        inv_tan_cutoff: 1.0 / cutoff.tan(),
+                    })),
+                    None => None,
+                },
             }
+        }
+        LightKind::Projector {
+            to_world,
+            irradiance,
+            scale,
+            projection,
+        } => {
+            // Mitsuba 3.9.1 reads the projector's image (and a spot's) as a plain texture: in
+            // spectral mode texels are upsampled as reflectances, without D65 (the spot's
+            // intensity carries D65).
+            let irradiance = textures.build(irradiance, Role::Albedo).map_err(err)?;
+            let (w, h) = irradiance.resolution();
+            let pt_scene::Projection::Perspective { fov_deg, fov_axis } = *projection else {
+                return Err(err("a projector's projection must be perspective".into()));
+            };
+            let tan_half = tan_half_x(fov_deg, fov_axis, w as f32, h as f32);
+            Light::Projector(Box::new(Projector {
+                position: to_world.transform_point3(Vec3::ZERO),
+                to_local: to_local(to_world)?,
+                axis: to_world.transform_vector3(Vec3::Z),
+                irradiance,
+                pi_scale: std::f32::consts::PI * scale,
+                cot_half_x: 1.0 / tan_half,
+                aspect: w as f32 / h as f32,
+            }))
         }
         LightKind::Directional {
             direction,

@@ -15,6 +15,7 @@
 mod area;
 mod build;
 mod envmap;
+mod projected;
 #[cfg(test)]
 mod tests;
 
@@ -24,6 +25,7 @@ pub use area::{
 };
 pub use build::build_light;
 pub use envmap::EnvMap;
+pub use projected::{Projector, SpotTexture};
 
 use crate::texture::ConstantSpectrum;
 use pt_math::warp::{square_to_uniform_cone, square_to_uniform_sphere, uniform_cone_pdf};
@@ -103,7 +105,11 @@ pub enum Light {
         intensity: ConstantSpectrum,
         /// Angular falloff.
         cone: SpotCone,
+        /// An image cast through the cone (Mitsuba's `texture`), multiplying the intensity.
+        texture: Option<Box<SpotTexture>>,
     },
+    /// An image cast through a perspective frustum (Mitsuba `projector`).
+    Projector(Box<Projector>),
     /// Directional light: irradiance `irradiance` arriving from direction `to_light`.
     Directional {
         /// Unit direction from the scene towards the light, world.
@@ -149,12 +155,20 @@ impl Light {
             Light::Area(a) => a.power(),
             Light::Point { intensity, .. } => 4.0 * PI * intensity.luminance(),
             Light::Spot {
-                intensity, cone, ..
+                intensity,
+                cone,
+                texture,
+                ..
             } => {
-                // Full cone up to the mid-falloff angle: exact for a hard cutoff.
+                // Full cone up to the mid-falloff angle: exact for a hard cutoff. A texture
+                // counts with its mean (an estimate: selection needs only the proportions).
                 let mid = 0.5 * (cone.cutoff + cone.beam_width);
-                2.0 * PI * (1.0 - mid.cos()) * intensity.luminance()
+                let image = texture
+                    .as_ref()
+                    .map_or(1.0, |t| crate::texture::luminance(t.texture.mean_rgb()));
+                2.0 * PI * (1.0 - mid.cos()) * intensity.luminance() * image
             }
+            Light::Projector(p) => p.power(),
             Light::Directional { irradiance, .. } => disk * irradiance.luminance(),
             Light::Sun { irradiance, .. } => disk * irradiance.luminance(),
             Light::Constant { radiance } => 4.0 * PI * disk * radiance.luminance(),
@@ -201,6 +215,7 @@ impl Light {
                 frame,
                 intensity,
                 cone,
+                texture,
             } => {
                 let to = *position - x;
                 let d2 = to.length_squared();
@@ -210,11 +225,26 @@ impl Light {
                 }
                 let wi = to / dist;
                 let fall = cone.falloff(frame.n.dot(-wi));
-                let radiance = intensity.at(lambda) * (fall / d2);
+                let mut radiance = intensity.at(lambda) * (fall / d2);
+                if let Some(t) = texture.as_deref().filter(|_| fall > 0.0) {
+                    radiance *= t.eval(-to, lambda);
+                }
                 radiance.is_finite().then_some(LightSample {
                     p: *position,
                     n: Vec3::ZERO,
                     wi,
+                    dist,
+                    radiance,
+                    pdf: 1.0,
+                    delta: true,
+                })
+            }
+            Light::Projector(p) => {
+                let (dir, dist, radiance) = p.arriving(x, lambda)?;
+                radiance.is_finite().then_some(LightSample {
+                    p: p.position,
+                    n: Vec3::ZERO,
+                    wi: -dir,
                     dist,
                     radiance,
                     pdf: 1.0,

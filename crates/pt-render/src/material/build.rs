@@ -1,10 +1,12 @@
 //! From a BSDF description to a [`SurfaceMaterial`]: wrappers become its fields, the model a
 //! [`Material`] with a texture per texturable parameter, each built for its role.
 
-use super::{Film, FilmBaseMaterial, Material, NormalMap, Opacity, Roughness, SurfaceMaterial};
+use super::{
+    Film, FilmBaseMaterial, Material, NormalKind, NormalMap, Opacity, Roughness, SurfaceMaterial,
+};
 use crate::fluorescence::Fluorescent;
 use crate::scene::BuildError;
-use crate::texture::{Role, Texture, TextureBuilder};
+use crate::texture::{Role, Texture, TextureBuilder, TexturePoint};
 use pt_bsdf::{CoatingTable, Distribution, Microfacet, OrenNayarVariant, SurfaceBsdf};
 use pt_scene::{
     BsdfDesc, BsdfKind, FilmBaseDesc, MicrofacetDesc, MicrofacetDistribution,
@@ -122,7 +124,35 @@ impl Builder<'_> {
                 s.normal_map = Some(NormalMap {
                     texture,
                     scale: *scale,
-                    gltf: *gltf,
+                    kind: if *gltf {
+                        NormalKind::Gltf
+                    } else {
+                        NormalKind::Mitsuba
+                    },
+                });
+                b.wrappers(inner, s)
+            }
+            BsdfKind::BumpMap {
+                height,
+                scale,
+                inner,
+            } => {
+                if s.normal_map.is_some() {
+                    return Err(b.err(
+                        "a bump map inside a normal or bump map is not supported (not yet implemented)",
+                    ));
+                }
+                let texture = b.tex("bumpmap", height, Role::Scalar)?;
+                if texture
+                    .gradient_1(&TexturePoint::uv(pt_math::Vec2::ZERO))
+                    .is_none()
+                {
+                    return Err(b.err("bumpmap: the height must be a bitmap"));
+                }
+                s.normal_map = Some(NormalMap {
+                    texture,
+                    scale: *scale,
+                    kind: NormalKind::Bump,
                 });
                 b.wrappers(inner, s)
             }
@@ -181,8 +211,11 @@ impl Builder<'_> {
         };
         match &d.kind {
             BsdfKind::TwoSided { inner } => Ok((b.plain(inner)?.0, true)),
-            BsdfKind::Mask { .. } | BsdfKind::NormalMap { .. } | BsdfKind::Blend { .. } => Err(b.err(
-                "blendbsdf of masks, normal maps or blends is not yet supported (not yet implemented): put the mask or normal map around the blendbsdf",
+            BsdfKind::Mask { .. }
+            | BsdfKind::NormalMap { .. }
+            | BsdfKind::BumpMap { .. }
+            | BsdfKind::Blend { .. } => Err(b.err(
+                "blendbsdf of masks, normal or bump maps or blends is not yet supported (not yet implemented): put the mask or normal map around the blendbsdf",
             )),
             _ => Ok((b.model(d)?, false)),
         }
@@ -361,6 +394,7 @@ impl Builder<'_> {
             BsdfKind::TwoSided { .. }
             | BsdfKind::Mask { .. }
             | BsdfKind::NormalMap { .. }
+            | BsdfKind::BumpMap { .. }
             | BsdfKind::Blend { .. } => {
                 return Err(self.err("internal: a wrapper where a model was expected"))
             }

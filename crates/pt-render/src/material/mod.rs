@@ -345,40 +345,86 @@ impl Material {
     }
 }
 
-/// A normal map (Mitsuba `normalmap`, glTF `normalTexture`; pt-bsdf `normal_map`).
+/// Whose perturbation a [`NormalMap`] applies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum NormalKind {
+    /// Mitsuba's `normalmap`: RGB = (n + 1) / 2 in the shading frame (s along dp/du).
+    Mitsuba,
+    /// glTF's `normalTexture`: the mesh's tangent space (tangents and handedness).
+    Gltf,
+    /// Mitsuba's `bumpmap`: the normal of the surface displaced by a height texture.
+    Bump,
+}
+
+/// A perturbed shading normal: a normal map (Mitsuba `normalmap`, glTF `normalTexture`) or a
+/// bump map (Mitsuba `bumpmap`); the BSDF is then evaluated as pt-bsdf `normal_map` says
+/// (flip towards the viewer, shadowing of Conty Estevez et al. 2019), as Mitsuba 3.9.1 does
+/// for both.
 #[derive(Clone, Debug)]
 pub struct NormalMap {
-    /// RGB data: the texel c decodes to n = 2 c - 1.
+    /// Normal maps: RGB data, the texel c decodes to n = 2 c - 1. Bump maps: the height, a
+    /// scalar bitmap.
     pub texture: Texture,
-    /// glTF `scale` on the decoded x and y (1 for Mitsuba).
+    /// glTF `scale` on the decoded x and y (1 for Mitsuba's normal maps); a bump map's `scale`
+    /// on the height's gradient.
     pub scale: f32,
-    /// glTF tangent space (mesh tangents and handedness) rather than Mitsuba's (dp/du).
-    pub gltf: bool,
+    /// Which perturbation.
+    pub kind: NormalKind,
 }
 
 impl NormalMap {
-    /// The mapped normal at a hit, in the integrator's local shading frame
+    /// The mapped normal at a hit (any length), in the integrator's local shading frame
     /// `Frame::from_normal_tangent(hit.ns, hit.dpdu)` (pt-bsdf `normal_map` builds the frame
     /// from it), in the tangent space (s, t, n): Mitsuba: s along dp/du, t = n x s; glTF: s
     /// along the mesh tangent, t = w (n x s).
+    ///
+    /// A bump map (Mitsuba 3.9.1 `bumpmap.cpp`) displaces the surface by h = `scale` height(uv)
+    /// along the shading normal n, neglecting n's own derivatives (Blinn 1978): the tangents
+    /// become dp/du + n (dh/du - n . dp/du) and dp/dv + n (dh/dv - n . dp/dv), i.e. their
+    /// normal components are replaced by the height's gradient, and the normal is their cross
+    /// product, turned to the geometric normal's side.
     #[inline]
     fn normal(&self, hit: &Interaction, at: &TexturePoint) -> Vec3 {
-        let c = self.texture.eval_rgb(at);
-        let n = Vec3::new(2.0 * c[0] - 1.0, 2.0 * c[1] - 1.0, 2.0 * c[2] - 1.0);
-        if !self.gltf {
-            return n;
+        let local = || Frame::from_normal_tangent(hit.ns, hit.dpdu);
+        match self.kind {
+            NormalKind::Mitsuba => {
+                let c = self.texture.eval_rgb(at);
+                Vec3::new(2.0 * c[0] - 1.0, 2.0 * c[1] - 1.0, 2.0 * c[2] - 1.0)
+            }
+            NormalKind::Gltf => {
+                let c = self.texture.eval_rgb(at);
+                let n = Vec3::new(
+                    (2.0 * c[0] - 1.0) * self.scale,
+                    (2.0 * c[1] - 1.0) * self.scale,
+                    2.0 * c[2] - 1.0,
+                );
+                // Tangent frame of the mesh; without tangents, dp/du with w = +1.
+                let (t, w) = if hit.tangent.truncate() != Vec3::ZERO {
+                    (hit.tangent.truncate(), hit.tangent.w)
+                } else {
+                    (hit.dpdu, 1.0)
+                };
+                let tf = Frame::from_normal_tangent(hit.ns, t);
+                let world = tf.s * n.x + tf.t * (w * n.y) + tf.n * n.z;
+                local().to_local(world)
+            }
+            NormalKind::Bump => {
+                let local = local();
+                let g = self.texture.gradient_1(at).unwrap_or_default() * self.scale;
+                let mut du = local.to_local(hit.dpdu);
+                let mut dv = local.to_local(hit.dpdv);
+                du.z = g.x;
+                dv.z = g.y;
+                let n = du.cross(dv);
+                // The local frame is right-handed (t = n x s), so the cross product of local
+                // coordinates is the local form of the world cross product.
+                if local.to_local(hit.ng).dot(n) < 0.0 {
+                    -n
+                } else {
+                    n
+                }
+            }
         }
-        let n = Vec3::new(n.x * self.scale, n.y * self.scale, n.z);
-        let local = Frame::from_normal_tangent(hit.ns, hit.dpdu);
-        // Tangent frame of the mesh; without tangents, dp/du with w = +1.
-        let (t, w) = if hit.tangent.truncate() != Vec3::ZERO {
-            (hit.tangent.truncate(), hit.tangent.w)
-        } else {
-            (hit.dpdu, 1.0)
-        };
-        let tf = Frame::from_normal_tangent(hit.ns, t);
-        let world = tf.s * n.x + tf.t * (w * n.y) + tf.n * n.z;
-        local.to_local(world)
     }
 }
 

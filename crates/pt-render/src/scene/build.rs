@@ -132,7 +132,7 @@ impl Scene {
             }
         }
         for l in &desc.lights {
-            lights.push(build_light(l, mode)?);
+            lights.push(build_light(l, mode, &mut textures)?);
         }
         let infinite_lights = (0..lights.len())
             .filter(|&i| lights[i].is_infinite())

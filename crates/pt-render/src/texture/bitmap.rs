@@ -222,6 +222,31 @@ impl Bitmap {
         })
     }
 
+    /// The uv gradient of the scalar value (each texel's luminance) at `uv`, per unit of the
+    /// surface's uv (Mitsuba 3.9.1's `eval_1_grad`): the derivative of the bilinear
+    /// interpolation in texel units, `df/dx = (1 - fy)(f10 - f00) + fy (f11 - f01)` and
+    /// `df/dy = (1 - fx)(f01 - f00) + fx (f11 - f10)`, taken through the transpose of `to_uv`'s
+    /// linear part and then scaled by the resolution, `(W, H) * (M^T (df/dx, df/dy))`, in that
+    /// order as Mitsuba does (the exact chain rule scales before the transpose; the two agree
+    /// unless `to_uv` rotates a non-square image). Nearest-neighbour lookups have gradient 0.
+    pub fn gradient_1(&self, uv: Vec2) -> Vec2 {
+        if self.lookup.filter == BitmapFilter::Nearest {
+            return Vec2::ZERO;
+        }
+        let f = self.lookup.footprint(uv);
+        let [f00, f10, f01, f11] = f.texels.map(|i| super::luminance(self.texels[i]));
+        // The weights are (1-fx)(1-fy), fx(1-fy), (1-fx)fy, fx fy.
+        let fx = f.weights[1] + f.weights[3];
+        let fy = f.weights[2] + f.weights[3];
+        let dx = (1.0 - fy) * (f10 - f00) + fy * (f11 - f01);
+        let dy = (1.0 - fx) * (f01 - f00) + fx * (f11 - f10);
+        let m = self.lookup.to_uv;
+        Vec2::new(
+            self.lookup.width as f32 * (m[0] * dx + m[3] * dy),
+            self.lookup.height as f32 * (m[1] * dx + m[4] * dy),
+        )
+    }
+
     /// Mean of each channel over the texels (for light power and sampling weights).
     pub fn mean(&self) -> [f32; 3] {
         let mut acc = [0.0f64; 3];
@@ -245,6 +270,41 @@ impl Bitmap {
 
 #[cfg(test)]
 mod tests {
+    /// The gradient of a bilinear lookup of a linear ramp f = a x + b y (x, y texel indices)
+    /// is (a W s_u, b H s_v) per unit uv inside the image, for `to_uv` scales (s_u, s_v): the
+    /// texel-to-uv scale and the transform's chain rule. Nearest lookups have no gradient.
+    #[test]
+    fn gradient_of_a_ramp_is_its_slope_per_unit_uv() {
+        let (w, h, a, b) = (8usize, 5usize, 0.03f32, -0.05f32);
+        let texels = (0..w * h)
+            .map(|i| [a * (i % w) as f32 + b * (i / w) as f32 + 0.5; 3])
+            .collect();
+        let mut bitmap = Bitmap {
+            lookup: Lookup {
+                width: w,
+                height: h,
+                filter: BitmapFilter::Bilinear,
+                wrap: WrapMode::Clamp,
+                to_uv: [2.0, 0.0, 0.1, 0.0, 3.0, 0.05],
+            },
+            texels,
+        };
+        for uv in [
+            Vec2::new(0.2, 0.1),
+            Vec2::new(0.31, 0.22),
+            Vec2::new(0.4, 0.27),
+        ] {
+            let g = bitmap.gradient_1(uv);
+            let want = Vec2::new(a * w as f32 * 2.0, b * h as f32 * 3.0);
+            assert!(
+                (g - want).length() < 1e-4 * want.length(),
+                "{uv}: {g} vs {want}"
+            );
+        }
+        bitmap.lookup.filter = BitmapFilter::Nearest;
+        assert_eq!(bitmap.gradient_1(Vec2::new(0.2, 0.1)), Vec2::ZERO);
+    }
+
     use super::*;
     use pt_scene::UV_IDENTITY;
 

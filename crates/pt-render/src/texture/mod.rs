@@ -298,6 +298,30 @@ impl Texture {
         }
     }
 
+    /// The uv gradient of its scalar value at `at` (a bump map's height), for bitmaps
+    /// ([`Bitmap::gradient_1`]); `None` for textures that cannot be differentiated (Mitsuba
+    /// refuses those in a bump map).
+    pub fn gradient_1(&self, at: &TexturePoint) -> Option<Vec2> {
+        match self {
+            Texture::Bitmap(b) => Some(b.gradient_1(at.uv)),
+            Texture::SpectralBitmap(b) => Some(b.0.gradient_1(at.uv)),
+            _ => None,
+        }
+    }
+
+    /// Its resolution in texels (width, height): a bitmap's size, (1, 1) for everything
+    /// else (Mitsuba's `Texture::resolution`; a projector's aspect ratio comes from it).
+    pub fn resolution(&self) -> (usize, usize) {
+        let of = |b: &Bitmap| (b.lookup.width, b.lookup.height);
+        match self {
+            Texture::Bitmap(b) => of(b),
+            Texture::SpectralBitmap(b) => of(&b.0),
+            Texture::Primaries(p) => of(&p.0),
+            Texture::Illuminated(b) => b.0.resolution(),
+            _ => (1, 1),
+        }
+    }
+
     /// Whether it is the same everywhere.
     pub fn is_constant(&self) -> bool {
         matches!(self, Texture::Constant { .. })

@@ -110,7 +110,7 @@ impl<'e> Builder<'e> {
         Ok(desc)
     }
 
-    /// Builds one BSDF element: the wrappers here (`twosided`, `mask`, `normalmap`,
+    /// Builds one BSDF element: the wrappers here (`twosided`, `mask`, `normalmap`, `bumpmap`,
     /// `blendbsdf`) and `null`, the models in `materials.rs`. Textures may stand for any texturable
     /// parameter; nested objects that are neither textures nor BSDFs a wrapper takes are errors.
     pub(super) fn build_bsdf(&mut self, el: &'e Element) -> Result<BsdfDesc> {
@@ -172,6 +172,27 @@ impl<'e> Builder<'e> {
                     texture,
                     scale: 1.0,
                     gltf: false,
+                    inner,
+                }
+            }
+            "bumpmap" => {
+                let height = match self.only_texture(&v, &nested)? {
+                    t @ TextureDesc::Bitmap(_) => t,
+                    _ => {
+                        return Err(SceneError::at(
+                            &v.el.loc,
+                            "bumpmap needs a bitmap height texture (Mitsuba differentiates only bitmaps)",
+                        ))
+                    }
+                };
+                let scale = v.float("scale")?.unwrap_or(1.0);
+                if !scale.is_finite() {
+                    return Err(v.prop_error("scale", "scale must be finite"));
+                }
+                let inner = Box::new(self.inner_bsdfs(&v, &nested, 1, 1)?.remove(0));
+                BsdfKind::BumpMap {
+                    height,
+                    scale,
                     inner,
                 }
             }

@@ -18,7 +18,9 @@ impl<'e> Builder<'e> {
     /// (`intensity` 1, `cutoff_angle` 20, `beam_width` 3/4 of the cutoff, `to_world`),
     /// `directional` (`irradiance` 1, `direction` or `to_world` +z), `sun` (project extension:
     /// `irradiance` 1, `direction`, `angular_diameter` 0.5338 degrees), `constant` (`radiance` 1),
-    /// `envmap` (`filename`, `scale` 1, `to_world`).
+    /// `envmap` (`filename`, `scale` 1, `to_world`), `projector` (`irradiance` 1 or a nested
+    /// texture, `scale` 1, `fov`/`fov_axis`/`focal_length` as a camera's, `to_world`); a spot
+    /// may carry a nested `<texture name="texture">`.
     pub(super) fn light(&mut self, el: &'e Element) -> Result<LightDesc> {
         let v = ObjectView::parse(el)?;
         let to_world = v.transform("to_world")?;
@@ -45,6 +47,45 @@ impl<'e> Builder<'e> {
             d.try_normalize()
                 .ok_or_else(|| v.prop_error("direction", "direction must not be zero"))
         };
+        // Nested textures by name: a spot's `texture`, a projector's `irradiance` (plain
+        // textures in Mitsuba 3.9.1, not wrapped in D65).
+        let wanted = match v.plugin.as_str() {
+            "spot" => Some("texture"),
+            "projector" => Some("irradiance"),
+            _ => None,
+        };
+        let mut texture = None;
+        for child in &v.children {
+            let t = self.resolve(child)?;
+            let name = child.written().attr("name").or_else(|| t.attr("name"));
+            match wanted {
+                Some(w) if t.tag == "texture" && name == Some(w) && texture.is_none() => {
+                    texture = Some((
+                        self.texture(t)?.expect("a texture element gives a texture"),
+                        &child.written().loc,
+                    ));
+                }
+                Some(w) if t.tag == "texture" => {
+                    return Err(SceneError::at(
+                        &child.written().loc,
+                        format!(
+                            "{} takes one <texture name=\"{w}\">, not name=\"{}\"",
+                            v.what(),
+                            name.unwrap_or_default()
+                        ),
+                    ))
+                }
+                Some(w) => {
+                    return Err(misplaced(
+                        child,
+                        t,
+                        &v,
+                        &format!("one <texture name=\"{w}\">"),
+                    ))
+                }
+                None => no_children(&v)?,
+            }
+        }
         let kind = match v.plugin.as_str() {
             "point" => {
                 let position = match (v.vec3("position")?, to_world) {
@@ -76,11 +117,45 @@ impl<'e> Builder<'e> {
                         "beam_width must be in [0, cutoff_angle] degrees",
                     ));
                 }
+                let texture = match texture {
+                    Some((TextureDesc::Constant(_), loc)) => {
+                        return Err(SceneError::at(
+                            loc,
+                            "a spot's texture must vary over the image (Mitsuba refuses a constant one): give a constant as the intensity",
+                        ))
+                    }
+                    t => t.map(|(t, _)| t),
+                };
                 LightKind::Spot {
                     to_world: to_world.unwrap_or(Mat4::IDENTITY),
                     intensity: spectrum("intensity")?,
                     cutoff_deg,
                     beam_width_deg,
+                    texture,
+                }
+            }
+            "projector" => {
+                let irradiance = match texture {
+                    Some((t, _)) => {
+                        if v.has("irradiance") {
+                            return Err(v.prop_error(
+                                "irradiance",
+                                "give either an irradiance value or an irradiance texture",
+                            ));
+                        }
+                        t
+                    }
+                    None => TextureDesc::Constant(spectrum("irradiance")?),
+                };
+                let scale = v.float("scale")?.unwrap_or(1.0);
+                if !(scale >= 0.0 && scale.is_finite()) {
+                    return Err(v.prop_error("scale", "scale must be finite and not negative"));
+                }
+                LightKind::Projector {
+                    to_world: to_world.unwrap_or(Mat4::IDENTITY),
+                    irradiance,
+                    scale,
+                    projection: super::sensor::projection(&v)?,
                 }
             }
             "directional" => LightKind::Directional {
@@ -130,7 +205,6 @@ impl<'e> Builder<'e> {
             }
             _ => return Err(plugin_error(el)),
         };
-        no_children(&v)?;
         v.finish()?;
         Ok(LightDesc {
             loc: el.loc.clone(),

@@ -44,13 +44,12 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "shapegroup", "instance", "bsplinecurve", "linearcurve",
         "sdfgrid", "ellipsoids", "ellipsoidsmesh",
     ]),
-    ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "plastic", "roughplastic", "null", "fluorescent", "phosphorescent"], &[
-        "bumpmap",
+    ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "plastic", "roughplastic", "null", "fluorescent", "phosphorescent", "bumpmap"], &[
         "polarizer", "retarder", "circular", "measured", "pplastic", "principled",
         "principledthin", "hair",
     ]),
-    ("emitter", &["area", "point", "spot", "directional", "sun", "constant", "envmap"], &[
-        "projector", "directionalarea", "sunsky",
+    ("emitter", &["area", "point", "spot", "directional", "sun", "constant", "envmap", "projector"], &[
+        "directionalarea", "sunsky",
     ]),
     ("texture", &["bitmap", "checkerboard", "mesh_attribute", "rawconstant", "d65"], &["volume"]),
     ("medium", &["homogeneous"], &["heterogeneous"]),

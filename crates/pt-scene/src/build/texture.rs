@@ -105,6 +105,16 @@ impl<'e> Builder<'e> {
                         used: std::cell::Cell::new(false),
                     });
                 }
+                // A bump map's one texture may go without a name (Mitsuba reads its only
+                // texture child, whatever it is called).
+                ("texture", None) if v.plugin == "bumpmap" => {
+                    nested.textures.push(NamedTexture {
+                        name: String::new(),
+                        written,
+                        target,
+                        used: std::cell::Cell::new(false),
+                    });
+                }
                 ("texture", None) => {
                     return Err(SceneError::at(
                         &written.loc,
@@ -118,6 +128,31 @@ impl<'e> Builder<'e> {
             }
         }
         Ok(nested)
+    }
+
+    /// A wrapper's only nested texture, whatever its name (Mitsuba's `bumpmap`); more or fewer
+    /// than one is an error.
+    pub(super) fn only_texture(
+        &mut self,
+        v: &ObjectView<'e>,
+        nested: &Nested<'e>,
+    ) -> Result<TextureDesc> {
+        match nested.textures.as_slice() {
+            [t] => {
+                t.used.set(true);
+                Ok(self
+                    .texture(t.target)?
+                    .expect("a texture element gives a texture"))
+            }
+            [] => Err(SceneError::at(
+                &v.el.loc,
+                format!("{} needs one nested <texture> (the height map)", v.what()),
+            )),
+            [_, second, ..] => Err(SceneError::at(
+                &second.written.loc,
+                format!("{} takes only one nested <texture>", v.what()),
+            )),
+        }
     }
 
     /// The texturable parameter `name` of `v`: a nested texture, a property, or `None` when

@@ -106,6 +106,7 @@ fn spot(
         intensity,
         cutoff_deg: outer.to_degrees(),
         beam_width_deg: inner.to_degrees(),
+        texture: None,
     })
 }
 
@@ -121,6 +122,7 @@ fn describe_light(k: &LightKind) -> String {
             cutoff_deg,
             beam_width_deg,
             to_world,
+            ..
         } => {
             format!("spot at {:.3}, intensity {intensity:?} (cd, 1:1), full to {beam_width_deg:.2} deg, off beyond {cutoff_deg:.2} deg", to_world.transform_point3(Vec3::ZERO))
         }

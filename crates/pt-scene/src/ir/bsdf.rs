@@ -104,6 +104,17 @@ pub enum BsdfKind {
         /// The wrapped BSDF.
         inner: Box<BsdfDesc>,
     },
+    /// Bump map (Mitsuba `bumpmap`): the inner BSDF is evaluated in the shading frame whose
+    /// normal is that of the surface displaced along its normal by `scale` times the height
+    /// texture (only the height's uv gradient matters; pt-render's material layer).
+    BumpMap {
+        /// The height field, a bitmap read as a scalar (its luminance), per unit of uv.
+        height: TextureDesc,
+        /// Factor on the height's gradient.
+        scale: f32,
+        /// The wrapped BSDF.
+        inner: Box<BsdfDesc>,
+    },
     /// Mixture of two BSDFs (Mitsuba `blendbsdf`): `(1 - weight) first + weight second`.
     Blend {
         /// Share of `second` (a scalar texture, clamped to [0, 1]).
@@ -287,7 +298,8 @@ impl BsdfKind {
         match self {
             BsdfKind::TwoSided { inner }
             | BsdfKind::Mask { inner, .. }
-            | BsdfKind::NormalMap { inner, .. } => vec![inner],
+            | BsdfKind::NormalMap { inner, .. }
+            | BsdfKind::BumpMap { inner, .. } => vec![inner],
             BsdfKind::Blend { first, second, .. } => vec![first, second],
             _ => Vec::new(),
         }
@@ -300,6 +312,7 @@ impl BsdfKind {
             BsdfKind::TwoSided { .. } => Vec::new(),
             BsdfKind::Mask { opacity, .. } => vec![("opacity", opacity)],
             BsdfKind::NormalMap { texture, .. } => vec![("normalmap", texture)],
+            BsdfKind::BumpMap { height, .. } => vec![("bumpmap", height)],
             BsdfKind::Blend { weight, .. } => vec![("weight", weight)],
             BsdfKind::OrenNayar {
                 reflectance, sigma, ..

@@ -52,6 +52,26 @@ pub enum LightKind {
         cutoff_deg: f32,
         /// Angle from the axis within which the intensity is full, degrees.
         beam_width_deg: f32,
+        /// An image projected through the cone (Mitsuba's `texture`): the intensity is
+        /// multiplied by its value at uv = (1/2 + x/(2 z tan(cutoff)), 1/2 + y/(2 z
+        /// tan(cutoff))) for the direction (x, y, z) in the light's frame, so the cone's
+        /// cross-section is the circle inscribed in the unit uv square.
+        texture: Option<TextureDesc>,
+    },
+    /// A projector (Mitsuba `projector`): a pinhole at the origin of `to_world` casting an
+    /// image along its +z axis through a perspective frustum. `irradiance` is the
+    /// irradiance (W/m^2, divided by pi) that arrives on the plane z = 1 in the light's frame,
+    /// which is covered by the image; Mitsuba's value at a point is
+    /// `pi scale E(uv) / (d^2 cos^3 theta)` (theta from the axis).
+    Projector {
+        /// Light-to-world transform; the projector sits at its origin and points along its +z.
+        to_world: Mat4,
+        /// The projected image (or a constant).
+        irradiance: TextureDesc,
+        /// Factor on `irradiance`.
+        scale: f32,
+        /// Field of view of the frustum, as a camera's (`fov`, `fov_axis`, or `focal_length`).
+        projection: super::Projection,
     },
     /// A distant light from one direction (Mitsuba `directional`).
     Directional {

@@ -126,17 +126,23 @@ impl SceneDesc {
             }
         }
         for l in &self.lights {
-            let spectrum = match &l.kind {
-                LightKind::Point { intensity, .. } | LightKind::Spot { intensity, .. } => {
-                    Some(intensity)
+            let spectra: Vec<&SpectrumDesc> = match &l.kind {
+                LightKind::Point { intensity, .. } => vec![intensity],
+                LightKind::Spot {
+                    intensity, texture, ..
+                } => {
+                    let mut v = vec![intensity];
+                    v.extend(texture.iter().flat_map(|t| t.spectra()));
+                    v
                 }
                 LightKind::Directional { irradiance, .. } | LightKind::Sun { irradiance, .. } => {
-                    Some(irradiance)
+                    vec![irradiance]
                 }
-                LightKind::Constant { radiance } => Some(radiance),
-                LightKind::EnvMap { .. } => None,
+                LightKind::Projector { irradiance, .. } => irradiance.spectra(),
+                LightKind::Constant { radiance } => vec![radiance],
+                LightKind::EnvMap { .. } => Vec::new(),
             };
-            if let Some(s) = spectrum.filter(|s| s.is_spectral()) {
+            if let Some(s) = spectra.into_iter().find(|s| s.is_spectral()) {
                 return Some(format!("{}: {} emission spectrum", l.loc, s.form_name()));
             }
         }

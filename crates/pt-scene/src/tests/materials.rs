@@ -226,6 +226,69 @@ fn emitters_outside_shapes() {
 }
 
 #[test]
+fn projected_images_on_spots_and_projectors() {
+    let s = load(&scene(
+        r#"<emitter type="spot"><texture type="checkerboard" name="texture"/></emitter>
+<emitter type="projector"><texture type="checkerboard" name="irradiance"/><float name="fov" value="30"/></emitter>
+<emitter type="projector"><rgb name="irradiance" value="0.5, 0.4, 0.3"/></emitter>"#,
+    ))
+    .unwrap();
+    assert!(matches!(
+        &s.lights[0].kind,
+        LightKind::Spot {
+            texture: Some(TextureDesc::Checkerboard(_)),
+            ..
+        }
+    ));
+    assert!(matches!(
+        &s.lights[1].kind,
+        LightKind::Projector { irradiance: TextureDesc::Checkerboard(_), scale, projection: Projection::Perspective { fov_deg, fov_axis: FovAxis::X }, .. } if *scale == 1.0 && *fov_deg == 30.0
+    ));
+    // Mitsuba's default: a 50 mm lens on the diagonal of a 36 x 24 mm film.
+    assert!(matches!(
+        &s.lights[2].kind,
+        LightKind::Projector {
+            irradiance: TextureDesc::Constant(SpectrumDesc::Rgb(_)),
+            projection: Projection::Perspective {
+                fov_axis: FovAxis::Diagonal,
+                ..
+            },
+            ..
+        }
+    ));
+    for (body, line, what) in [
+        // Mitsuba refuses a spot texture that does not vary.
+        (
+            r#"<emitter type="spot">
+<rgb name="texture" value="0.5"/></emitter>"#,
+            3,
+            "texture",
+        ),
+        (
+            r#"<emitter type="spot">
+<texture type="bitmap" name="irradiance"><string name="filename" value="x.png"/></texture></emitter>"#,
+            3,
+            "texture name=\"texture\"",
+        ),
+        (
+            r#"<emitter type="projector"><rgb name="irradiance" value="1"/>
+<texture type="checkerboard" name="irradiance"/></emitter>"#,
+            2,
+            "either",
+        ),
+        (
+            r#"<emitter type="projector"><float name="scale" value="-1"/></emitter>"#,
+            2,
+            "scale",
+        ),
+    ] {
+        let e = fail(&scene(body));
+        assert!(e.to_string().contains(what), "{body}: {e}");
+        assert!(e.to_string().contains(&format!(":{line}:")), "{body}: {e}");
+    }
+}
+
+#[test]
 fn physical_bsdfs_with_mitsuba_defaults_and_names() {
     let s = load(&scene(
         r#"<bsdf type="dielectric" id="glass"><string name="int_ior" value="water"/></bsdf>

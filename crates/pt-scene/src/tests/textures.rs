@@ -171,3 +171,51 @@ fn texture_mistakes_are_located_errors() {
     let e = load_file(&dir.join("s.xml"), &[]).unwrap_err();
     assert!(e.message.contains("unsupported file type"), "{e}");
 }
+
+#[test]
+fn bump_maps_take_one_texture_of_any_name() {
+    let bitmap = |name: &str| {
+        format!(r#"<texture type="bitmap"{name}><string name="filename" value="t.png"/></texture>"#)
+    };
+    for name in ["", r#" name="arbitrary""#, r#" name="height""#] {
+        let body = format!(
+            r#"<shape type="cube"><bsdf type="bumpmap">{}<float name="scale" value="0.2"/><bsdf type="diffuse"/></bsdf></shape>"#,
+            bitmap(name)
+        );
+        let s = load_with_image("bump-ok", &body).1.unwrap();
+        assert!(
+            matches!(&s.bsdfs[0].kind, BsdfKind::BumpMap { height: TextureDesc::Bitmap(_), scale, inner } if *scale == 0.2 && matches!(inner.kind, BsdfKind::Diffuse { .. })),
+            "{name}"
+        );
+    }
+    for (body, what) in [
+        (
+            r#"<shape type="cube"><bsdf type="bumpmap"><bsdf type="diffuse"/></bsdf></shape>"#
+                .to_string(),
+            "needs one nested <texture>",
+        ),
+        (
+            format!(
+                r#"<shape type="cube"><bsdf type="bumpmap">{}{}<bsdf type="diffuse"/></bsdf></shape>"#,
+                bitmap(r#" name="a""#),
+                bitmap(r#" name="b""#)
+            ),
+            "only one nested <texture>",
+        ),
+        (
+            r#"<shape type="cube"><bsdf type="bumpmap"><texture type="checkerboard"/><bsdf type="diffuse"/></bsdf></shape>"#
+                .to_string(),
+            "bitmap",
+        ),
+        (
+            format!(
+                r#"<shape type="cube"><bsdf type="bumpmap">{}</bsdf></shape>"#,
+                bitmap("")
+            ),
+            "nested BSDF",
+        ),
+    ] {
+        let e = load_with_image("bump-bad", &body).1.unwrap_err();
+        assert!(e.to_string().contains(what), "{body}: {e}");
+    }
+}
