@@ -28,6 +28,7 @@ mod parallelograms;
 mod phosphorescence;
 mod radiosity;
 mod resume;
+mod samplers;
 mod scene_docs;
 mod spectral_textures;
 mod surface_textures;

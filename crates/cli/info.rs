@@ -128,7 +128,8 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
         desc.film.filter
     );
     out!(
-        "sampler     {} spp, seed {}",
+        "sampler     {} {} spp, seed {}",
+        desc.sampler.kind.plugin(),
         desc.sampler.sample_count,
         desc.sampler.seed
     );

@@ -327,6 +327,10 @@ fn render_path(
         crop: desc.film.crop,
         spp: job.spp,
         seed: job.seed,
+        sampler: pt_render::sampler::SamplePattern::new(
+            desc.sampler.kind,
+            desc.sampler.sample_count,
+        ),
         filter: desc.film.filter,
         sample_border: desc.film.sample_border,
         path: p.settings,

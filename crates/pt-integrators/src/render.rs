@@ -4,7 +4,7 @@
 use crate::path::{trace_paths, PathSettings, PathStart, PathState};
 use pt_math::Vec2;
 use pt_render::film::{sample_pixel_offset, PixelStats};
-use pt_render::sampler::Sampler;
+use pt_render::sampler::{SamplePattern, Sampler};
 use pt_render::{RenderOutput, Scene};
 use pt_scene::FilterDesc;
 use pt_spectrum::{spectrum_to_srgb, ColorMode, SampledWavelengths};
@@ -27,6 +27,9 @@ pub struct RenderSettings {
     pub spp: u32,
     /// Seed of the random streams.
     pub seed: u64,
+    /// How the samples of a pixel are placed (the scene's sampler, for blocks of its sample
+    /// count, whatever `spp` is).
+    pub sampler: SamplePattern,
     /// Pixel reconstruction filter.
     pub filter: FilterDesc,
     /// Mitsuba's `sample_border` (see `pt_render::film::sample_pixel_offset`).
@@ -67,6 +70,7 @@ impl RenderSettings {
             crop: desc.film.crop,
             spp: desc.sampler.sample_count,
             seed: desc.sampler.seed,
+            sampler: SamplePattern::new(desc.sampler.kind, desc.sampler.sample_count),
             filter: desc.film.filter,
             sample_border: desc.film.sample_border,
             path: PathSettings {
@@ -424,7 +428,8 @@ fn render_row_samples(
                 return None;
             }
             let pixel = settings.pixel_key(x, y);
-            let mut sampler = Sampler::new(settings.seed, pixel, u64::from(k));
+            let mut sampler =
+                Sampler::with_pattern(&settings.sampler, settings.seed, pixel, u64::from(k));
             let lambda = if spectral {
                 SampledWavelengths::sample_visible(sampler.next_1d())
             } else {

@@ -11,12 +11,30 @@ use pt_scene::FilterDesc;
 use crate::sampler::Sampler;
 
 /// Samples a film offset (pixels, relative to the pixel centre) distributed as the filter.
+/// It takes one (2D) dimension of the sample pattern: the box and the tent warp it, the
+/// Gaussian's rejection loop skips it and draws from the sample's own stream (a loop would
+/// otherwise take a varying number of dimensions and misalign the later ones).
 #[inline(always)]
 pub fn sample_filter(filter: &FilterDesc, sampler: &mut Sampler) -> Vec2 {
+    sample_filter_in(filter, sampler, true)
+}
+
+/// [`sample_filter`], from the pattern's next dimension (`pattern`) or from the sample's own
+/// stream (redraws).
+#[inline(always)]
+fn sample_filter_in(filter: &FilterDesc, sampler: &mut Sampler, pattern: bool) -> Vec2 {
+    let u2 = |s: &mut Sampler| {
+        if pattern {
+            s.next_2d()
+        } else {
+            let x = s.independent_1d();
+            Vec2::new(x, s.independent_1d())
+        }
+    };
     match *filter {
-        FilterDesc::Box { radius } => (sampler.next_2d() * 2.0 - Vec2::ONE) * radius,
+        FilterDesc::Box { radius } => (u2(sampler) * 2.0 - Vec2::ONE) * radius,
         FilterDesc::Tent { radius } => {
-            let u = sampler.next_2d();
+            let u = u2(sampler);
             Vec2::new(sample_tent(u.x), sample_tent(u.y)) * radius
         }
         FilterDesc::Gaussian { stddev } => {
@@ -25,10 +43,13 @@ pub fn sample_filter(filter: &FilterDesc, sampler: &mut Sampler) -> Vec2 {
             // exact for any shape, acceptance ~31% per axis.
             let radius = 4.0 * stddev;
             let bias = (-(radius * radius) / (2.0 * stddev * stddev)).exp();
+            if pattern {
+                sampler.skip_dimension();
+            }
             let axis = |sampler: &mut Sampler| loop {
-                let x = (2.0 * sampler.next_1d() - 1.0) * radius;
+                let x = (2.0 * sampler.independent_1d() - 1.0) * radius;
                 let f = ((-(x * x) / (2.0 * stddev * stddev)).exp() - bias) / (1.0 - bias);
-                if sampler.next_1d() < f {
+                if sampler.independent_1d() < f {
                     break x;
                 }
             };
@@ -74,7 +95,7 @@ pub fn sample_pixel_offset(
             let p = (centre + offset).clamp(Vec2::ZERO, size - Vec2::splat(1e-3));
             return p - centre;
         }
-        offset = sample_filter(filter, sampler);
+        offset = sample_filter_in(filter, sampler, false);
         redraws += 1;
     }
     offset

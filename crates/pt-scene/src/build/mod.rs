@@ -34,7 +34,7 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "radiancemeter", "irradiancemeter", "distant", "batch",
     ]),
     ("film", &["hdrfilm"], &["specfilm"]),
-    ("sampler", &["independent", "stratified"], &["multijitter", "orthogonal", "ldsampler"]),
+    ("sampler", &["independent", "stratified", "multijitter", "orthogonal", "ldsampler"], &[]),
     ("rfilter", &["box", "tent", "gaussian"], &["mitchell", "catmullrom", "lanczos"]),
     ("integrator", &["path", "volpath", "direct", "moment", "radiosity"], &[
         "volpathmis", "aov", "prb", "prb_basic", "prb_projective", "direct_projective",
@@ -267,6 +267,7 @@ pub(super) fn default_sampler() -> SamplerDesc {
     SamplerDesc {
         sample_count: 4,
         seed: 0,
+        kind: SamplerKind::Independent,
     }
 }
 

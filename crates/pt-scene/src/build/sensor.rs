@@ -265,24 +265,44 @@ pub(super) fn rfilter(el: &Element) -> Result<FilterDesc> {
     Ok(filter)
 }
 
-/// `independent` and `stratified` (`sample_count` 4, `seed` 0; stratified also `jitter`).
-/// Stratified rounds the sample count up to a square, as Mitsuba does; the IR has no sampler
-/// kind, so the renderer samples it independently with that count.
+/// `independent`, `stratified`, `multijitter`, `orthogonal` and `ldsampler` (`sample_count` 4,
+/// `seed` 0; `jitter` true for the first three, `strength` 2 for `orthogonal`). The count is
+/// rounded as Mitsuba rounds it ([`SamplerKind::round_count`]).
 pub(super) fn sampler_desc(el: &Element) -> Result<SamplerDesc> {
     let v = ObjectView::parse(el)?;
-    if !matches!(v.plugin.as_str(), "independent" | "stratified") {
-        return Err(plugin_error(el));
-    }
-    let mut sample_count = int_in(&v, "sample_count", 4, 1, u32::MAX as i64)? as u32;
+    let requested = int_in(&v, "sample_count", 4, 1, u32::MAX as i64)? as u32;
     let seed = int_in(&v, "seed", 0, 0, i64::MAX)? as u64;
-    if v.plugin == "stratified" {
-        v.boolean("jitter")?;
-        let side = (1u64..).find(|s| s * s >= sample_count as u64).unwrap_or(1);
-        sample_count = u32::try_from(side * side).unwrap_or(u32::MAX);
-    }
+    let jitter = |v: &ObjectView<'_>| -> Result<bool> { Ok(v.boolean("jitter")?.unwrap_or(true)) };
+    let kind = match v.plugin.as_str() {
+        "independent" => SamplerKind::Independent,
+        "stratified" => SamplerKind::Stratified {
+            jitter: jitter(&v)?,
+        },
+        "multijitter" => SamplerKind::MultiJitter {
+            jitter: jitter(&v)?,
+        },
+        "orthogonal" => {
+            let strength = int_in(&v, "strength", 2, 1, i64::from(u32::MAX))?;
+            if strength != 2 {
+                return Err(v.prop_error(
+                    "strength",
+                    format!("orthogonal arrays of strength {strength} (Bush's construction) are not yet supported (not yet implemented): strength 2 is"),
+                ));
+            }
+            SamplerKind::Orthogonal {
+                jitter: jitter(&v)?,
+            }
+        }
+        "ldsampler" => SamplerKind::LowDiscrepancy,
+        _ => return Err(plugin_error(el)),
+    };
     no_children(&v)?;
     v.finish()?;
-    Ok(SamplerDesc { sample_count, seed })
+    Ok(SamplerDesc {
+        sample_count: kind.round_count(requested),
+        seed,
+        kind,
+    })
 }
 
 /// Mitsuba's camera for scenes without a sensor: 45 degrees on x, looking along +z from in

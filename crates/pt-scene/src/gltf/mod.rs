@@ -375,6 +375,7 @@ fn default_desc(cx: &Ctx) -> SceneDesc {
         sampler: SamplerDesc {
             sample_count: DEFAULT_SPP,
             seed: 0,
+            kind: crate::SamplerKind::Independent,
         },
         integrator: IntegratorDesc {
             kind: IntegratorKind::VolPath,

@@ -143,10 +143,90 @@ impl FilmDesc {
 /// Sampler settings.
 #[derive(Clone, Debug)]
 pub struct SamplerDesc {
-    /// Samples per pixel.
+    /// Samples per pixel (already rounded as the kind requires: [`SamplerKind::round_count`]).
     pub sample_count: u32,
     /// Seed of the random streams (Mitsuba default 0).
     pub seed: u64,
+    /// How the samples of a pixel are placed.
+    pub kind: SamplerKind,
+}
+
+/// How the samples of a pixel are spread over each dimension (Mitsuba's sampler plugins).
+/// Every kind gives each sample uniformly distributed numbers (so every estimate stays
+/// unbiased); the structured kinds also spread the samples of one pixel evenly over each
+/// dimension (and pair of dimensions), which lowers the variance of smooth integrands.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum SamplerKind {
+    /// Independent uniform numbers (`independent`).
+    #[default]
+    Independent,
+    /// Stratified (`stratified`): n = r^2 samples, each 1D dimension in n strata and each 2D
+    /// request in an r x r grid, strata shuffled per dimension; `jitter` places each sample
+    /// at random in its stratum (else at its centre).
+    Stratified {
+        /// Random position within the stratum (Mitsuba default true).
+        jitter: bool,
+    },
+    /// Multi-jittered (`multijitter`, Chiu, Shirley & Wang 1994): n = rx ry samples, 2D
+    /// requests stratified in an rx x ry grid and in n columns and n rows at once.
+    MultiJitter {
+        /// Random position within the fine stratum (Mitsuba default true).
+        jitter: bool,
+    },
+    /// Orthogonal array sampling (`orthogonal`, Jarosz et al. 2019; Bose's strength-2 arrays):
+    /// n = p^2 samples (p prime), every pair of dimensions stratified in a p x p grid and
+    /// every dimension in n strata.
+    Orthogonal {
+        /// Random position within the fine stratum (Mitsuba default true).
+        jitter: bool,
+    },
+    /// A scrambled (0, 2)-sequence (`ldsampler`, Kollig & Keller 2002): n = 4^k samples whose
+    /// 2D requests form a (0, 2)-net, dimensions decorrelated by shuffling the sample order.
+    LowDiscrepancy,
+}
+
+impl SamplerKind {
+    /// The sample count Mitsuba 3.9.1 uses when `n` is asked for: `stratified` the least square
+    /// not below n, `multijitter` rx ry with ry = floor(sqrt n) and rx = ceil(n / ry),
+    /// `orthogonal` p^2 for the least prime p with p^2 not below n, `ldsampler` the least power
+    /// of 4 not below n (and at least 4).
+    pub fn round_count(self, n: u32) -> u32 {
+        let n = u64::from(n.max(1));
+        let least_root = |n: u64| (1u64..).find(|r| r * r >= n).unwrap_or(1);
+        let count = match self {
+            SamplerKind::Independent => n,
+            SamplerKind::Stratified { .. } => least_root(n).pow(2),
+            SamplerKind::MultiJitter { .. } => {
+                let ry = (1u64..).take_while(|r| r * r <= n).last().unwrap_or(1);
+                n.div_ceil(ry) * ry
+            }
+            SamplerKind::Orthogonal { .. } => {
+                let is_prime =
+                    |p: u64| p >= 2 && (2..).take_while(|d| d * d <= p).all(|d| p % d != 0);
+                let p = (least_root(n)..).find(|&p| is_prime(p)).unwrap_or(2);
+                p * p
+            }
+            SamplerKind::LowDiscrepancy => {
+                let mut c = 4u64;
+                while c < n {
+                    c *= 4;
+                }
+                c
+            }
+        };
+        u32::try_from(count).unwrap_or(u32::MAX)
+    }
+
+    /// Mitsuba's plugin name.
+    pub fn plugin(self) -> &'static str {
+        match self {
+            SamplerKind::Independent => "independent",
+            SamplerKind::Stratified { .. } => "stratified",
+            SamplerKind::MultiJitter { .. } => "multijitter",
+            SamplerKind::Orthogonal { .. } => "orthogonal",
+            SamplerKind::LowDiscrepancy => "ldsampler",
+        }
+    }
 }
 
 /// Which integrator the scene asks for.

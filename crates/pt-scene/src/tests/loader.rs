@@ -294,12 +294,12 @@ fn unknown_plugin_is_an_error() {
 fn unsupported_plugins_say_not_yet_implemented() {
     let cases = [
         "<bsdf type=\"pplastic\"/>",
-        "<emitter type=\"projector\"/>",
         "<emitter type=\"sunsky\"/>",
+        "<sensor type=\"perspective\"><sampler type=\"orthogonal\"><integer name=\"strength\" value=\"3\"/></sampler></sensor>",
         "<sensor type=\"radiancemeter\"/>",
         "<shape type=\"sdfgrid\"/>",
         "<integrator type=\"volpathmis\"/>",
-        "<shape type=\"cube\"><bsdf type=\"bumpmap\"/></shape>",
+        "<shape type=\"cube\"><bsdf type=\"polarizer\"/></shape>",
         "<shape type=\"cube\"><bsdf type=\"diffuse\"><texture type=\"volume\" name=\"reflectance\"/></bsdf></shape>",
         "<sensor type=\"perspective\"><film type=\"hdrfilm\"><rfilter type=\"mitchell\"/></film></sensor>",
     ];

@@ -241,3 +241,47 @@ fn thin_lens_and_orthographic_sensors() {
     ));
     assert!(e.message.contains("invertible"), "{e}");
 }
+
+#[test]
+fn samplers_and_their_rounded_counts() {
+    for (plugin, extra, asked, count, kind) in [
+        ("independent", "", 10, 10, SamplerKind::Independent),
+        (
+            "stratified",
+            "",
+            10,
+            16,
+            SamplerKind::Stratified { jitter: true },
+        ),
+        (
+            "multijitter",
+            r#"<boolean name="jitter" value="false"/>"#,
+            10,
+            12,
+            SamplerKind::MultiJitter { jitter: false },
+        ),
+        (
+            "orthogonal",
+            r#"<integer name="strength" value="2"/>"#,
+            10,
+            25,
+            SamplerKind::Orthogonal { jitter: true },
+        ),
+        ("ldsampler", "", 5, 16, SamplerKind::LowDiscrepancy),
+    ] {
+        let s = load(&scene(&format!(
+            r#"<sensor type="perspective"><sampler type="{plugin}"><integer name="sample_count" value="{asked}"/>{extra}</sampler></sensor>"#
+        )))
+        .unwrap();
+        assert_eq!(
+            (s.sampler.sample_count, s.sampler.kind),
+            (count, kind),
+            "{plugin}"
+        );
+    }
+    // ldsampler has no jitter (Mitsuba's neither): an unused property.
+    let e = fail(&scene(
+        r#"<sensor type="perspective"><sampler type="ldsampler"><boolean name="jitter" value="true"/></sampler></sensor>"#,
+    ));
+    assert!(e.to_string().contains("jitter"), "{e}");
+}
