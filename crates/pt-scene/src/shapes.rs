@@ -102,22 +102,40 @@ pub(crate) fn cube() -> LocalMesh {
 /// The rim vertices sit on a circle slightly larger than the unit circle, chosen so that the
 /// polygon's area is exactly pi: an inscribed polygon would lose area (0.01% at 256 segments),
 /// and area is what sets an emitter's power and the form factors between surfaces.
-/// The fan has no uvs (Mitsuba's polar uvs cannot be interpolated across a fan).
+///
+/// Texture coordinates are Mitsuba's polar ones, u = r and v = phi / 2 pi (phi from +x towards
+/// +y, in [0, 1)): each triangle has its own three vertices, the centre (u = 0, v at the
+/// wedge's middle angle) and two rim vertices (u = 1, v = i / n and (i + 1) / n, so the last
+/// triangle ends at v = 1 and the seam is not smeared across the disk). Interpolated over a
+/// wedge of 2 pi / 256, u is r to 1e-4 and v the polar angle to within the wedge's half-width
+/// times the centre's barycentric weight (at most 1/512 of a turn, near the centre, where the
+/// texture's angular detail shrinks to a point; radial rings would not remove it, since any
+/// triangle spanning two radii interpolates the angle with an error of the same order). The
+/// tangent dp/du that orients anisotropic BSDFs is then radial, as Mitsuba's.
 pub(crate) fn disk() -> LocalMesh {
     let n = DISK_SEGMENTS;
     let step = std::f32::consts::TAU / n as f32;
     // Area of a regular n-gon with circumradius R: n/2 R^2 sin(2 pi / n) = pi.
     let rim = (std::f32::consts::TAU / (n as f32 * step.sin())).sqrt();
-    let mut positions = vec![Vec3::ZERO];
-    positions.extend((0..n).map(|i| {
-        let phi = step * i as f32;
+    let at = |i: u32| {
+        let phi = step * (i % n) as f32;
         Vec3::new(rim * phi.cos(), rim * phi.sin(), 0.0)
-    }));
-    let indices = (0..n).map(|i| [0, 1 + i, 1 + (i + 1) % n]).collect();
+    };
+    let mut positions = Vec::with_capacity(3 * n as usize);
+    let mut uvs = Vec::with_capacity(3 * n as usize);
+    for i in 0..n {
+        positions.extend([Vec3::ZERO, at(i), at(i + 1)]);
+        uvs.extend([
+            Vec2::new(0.0, (i as f32 + 0.5) / n as f32),
+            Vec2::new(1.0, i as f32 / n as f32),
+            Vec2::new(1.0, (i + 1) as f32 / n as f32),
+        ]);
+    }
+    let indices = (0..n).map(|i| [3 * i, 3 * i + 1, 3 * i + 2]).collect();
     LocalMesh {
         positions,
         normals: None,
-        uvs: None,
+        uvs: Some(uvs),
         indices,
         attributes: Vec::new(),
     }
@@ -408,6 +426,45 @@ mod tests {
             };
             for (c, p) in quad.iter().enumerate() {
                 assert_eq!(uvs[4 * f + c], rule(*p), "face {f} corner {p}");
+            }
+        }
+    }
+
+    /// The fan's interpolated uvs are Mitsuba's polar ones, u = r and v = phi / 2 pi: u to
+    /// 2e-4 (the rim is a polygon), v to within the wedge's half-width times the centre's
+    /// weight (doc of `disk`), over a grid of points in every wedge.
+    #[test]
+    fn disk_uvs_are_polar() {
+        let d = disk();
+        let uvs = d.uvs.as_ref().unwrap();
+        let half_wedge = 0.5 / DISK_SEGMENTS as f32;
+        for tri in &d.indices {
+            for (b1, b2) in [
+                (0.1, 0.1),
+                (0.45, 0.45),
+                (0.8, 0.15),
+                (0.05, 0.9),
+                (0.3, 0.6),
+            ] {
+                let b0 = 1.0 - b1 - b2;
+                let w = [b0, b1, b2];
+                let p: Vec3 = (0..3).map(|k| d.positions[tri[k] as usize] * w[k]).sum();
+                let uv: Vec2 = (0..3).map(|k| uvs[tri[k] as usize] * w[k]).sum();
+                let r = p.truncate().length();
+                let mut v = p.y.atan2(p.x) / std::f32::consts::TAU;
+                if v < 0.0 {
+                    v += 1.0;
+                }
+                // The last wedge ends at v = 1 rather than 0.
+                if uv.y > 0.5 && v < 0.25 {
+                    v += 1.0;
+                }
+                assert!((uv.x - r).abs() < 2e-4, "u {} vs r {r}", uv.x);
+                assert!(
+                    (uv.y - v).abs() <= b0 * half_wedge + 1e-5,
+                    "v {} vs {v}",
+                    uv.y
+                );
             }
         }
     }
