@@ -331,7 +331,7 @@ fn render_path(
             desc.sampler.kind,
             desc.sampler.sample_count,
         ),
-        filter: desc.film.filter,
+        filter: pt_render::film::Filter::new(desc.film.filter),
         sample_border: desc.film.sample_border,
         path: p.settings,
         clamp: p.clamp,

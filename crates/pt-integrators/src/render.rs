@@ -3,10 +3,9 @@
 
 use crate::path::{trace_paths, PathSettings, PathStart, PathState};
 use pt_math::Vec2;
-use pt_render::film::{sample_pixel_offset, PixelStats};
+use pt_render::film::{sample_pixel_offset, Filter, PixelStats};
 use pt_render::sampler::{SamplePattern, Sampler};
 use pt_render::{RenderOutput, Scene};
-use pt_scene::FilterDesc;
 use pt_spectrum::{spectrum_to_srgb, ColorMode, SampledWavelengths};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -31,7 +30,7 @@ pub struct RenderSettings {
     /// count, whatever `spp` is).
     pub sampler: SamplePattern,
     /// Pixel reconstruction filter.
-    pub filter: FilterDesc,
+    pub filter: Filter,
     /// Mitsuba's `sample_border` (see `pt_render::film::sample_pixel_offset`).
     pub sample_border: bool,
     /// Integrator settings.
@@ -71,7 +70,7 @@ impl RenderSettings {
             spp: desc.sampler.sample_count,
             seed: desc.sampler.seed,
             sampler: SamplePattern::new(desc.sampler.kind, desc.sampler.sample_count),
-            filter: desc.film.filter,
+            filter: Filter::new(desc.film.filter),
             sample_border: desc.film.sample_border,
             path: PathSettings {
                 max_depth,
@@ -422,6 +421,8 @@ fn render_row_samples(
     while x < xs.end {
         let (chunk_x, chunk_k) = (x, k);
         let mut results = [[0.0f32; 3]; SAMPLE_CHUNK as usize];
+        // Each sample's film weight (1 but for filters with negative lobes).
+        let mut weights = [1.0f32; SAMPLE_CHUNK as usize];
         let mut taken = 0u32;
         let start = || {
             if taken == SAMPLE_CHUNK || x >= xs.end {
@@ -435,7 +436,7 @@ fn render_row_samples(
             } else {
                 rgb_lambda
             };
-            let offset = sample_pixel_offset(
+            let (offset, weight) = sample_pixel_offset(
                 &settings.filter,
                 &mut sampler,
                 (x, y),
@@ -450,6 +451,7 @@ fn render_row_samples(
             let ray = scene.camera.pixel_ray(x, y, offset, u_lens);
             let path = PathState::new(scene, ray, &lambda);
             let tag = taken;
+            weights[tag as usize] = weight;
             taken += 1;
             k += 1;
             if k == samples.end {
@@ -478,8 +480,8 @@ fn render_row_samples(
         // The chunk's results, in the order they were started: pixel by pixel, each in sample
         // order.
         let (mut px, mut pk) = (chunk_x, chunk_k);
-        for rgb in &results[..taken as usize] {
-            row[px as usize].add(*rgb);
+        for (rgb, w) in results[..taken as usize].iter().zip(&weights) {
+            row[px as usize].add(rgb.map(|c| c * w));
             pk += 1;
             if pk == samples.end {
                 (px, pk) = (px + 1, samples.start);

@@ -21,7 +21,7 @@ use pt_math::warp::square_to_cosine_hemisphere;
 use pt_math::{offset_ray_origin, Frame, Ray, Vec2};
 use pt_render::accel::Accel;
 use pt_render::camera::Camera;
-use pt_render::film::{sample_pixel_offset, PixelStats};
+use pt_render::film::{sample_pixel_offset, Filter, PixelStats};
 use pt_render::sampler::Sampler;
 use pt_render::RenderOutput;
 use pt_scene::FilterDesc;
@@ -174,6 +174,7 @@ pub fn render_image(
             }
         }
     };
+    let filter = Filter::new(settings.filter);
     let rows: Vec<Vec<PixelStats>> = (0..h)
         .into_par_iter()
         .map(|y| {
@@ -183,8 +184,8 @@ pub fn render_image(
                     let pixel = y as u64 * w as u64 + x as u64;
                     for s in 0..settings.spp {
                         let mut sampler = Sampler::new(settings.seed, pixel, s as u64);
-                        let offset = sample_pixel_offset(
-                            &settings.filter,
+                        let (offset, weight) = sample_pixel_offset(
+                            &filter,
                             &mut sampler,
                             (x, y),
                             (w, h),
@@ -196,7 +197,7 @@ pub fn render_image(
                             Vec2::splat(0.5)
                         };
                         let ray = camera.pixel_ray(x, y, offset, u_lens);
-                        stats.add(radiance(ray, &mut sampler));
+                        stats.add(radiance(ray, &mut sampler).map(|c| c * weight));
                     }
                     stats
                 })

@@ -35,7 +35,7 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
     ]),
     ("film", &["hdrfilm"], &["specfilm"]),
     ("sampler", &["independent", "stratified", "multijitter", "orthogonal", "ldsampler"], &[]),
-    ("rfilter", &["box", "tent", "gaussian"], &["mitchell", "catmullrom", "lanczos"]),
+    ("rfilter", &["box", "tent", "gaussian", "mitchell", "catmullrom", "lanczos"], &[]),
     ("integrator", &["path", "volpath", "direct", "moment", "radiosity"], &[
         "volpathmis", "aov", "prb", "prb_basic", "prb_projective", "direct_projective",
         "ptracer", "depth", "stokes", "prbvolpath",
@@ -301,6 +301,16 @@ pub(super) fn positive(v: &ObjectView<'_>, name: &str, default: f32) -> Result<f
         Ok(value)
     } else {
         Err(v.prop_error(name, format!("'{name}' must be positive, got {value}")))
+    }
+}
+
+/// A float parameter that must be finite (any sign), with a default.
+pub(super) fn finite(v: &ObjectView<'_>, name: &str, default: f32) -> Result<f32> {
+    let value = v.float(name)?.unwrap_or(default);
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(v.prop_error(name, format!("'{name}' must be finite, got {value}")))
     }
 }
 

@@ -247,7 +247,8 @@ pub(super) fn projection(v: &ObjectView<'_>) -> Result<Projection> {
 /// Mitsuba's default filter: Gaussian, stddev 0.5 pixel.
 pub(super) const DEFAULT_FILTER: FilterDesc = FilterDesc::Gaussian { stddev: 0.5 };
 
-/// `box` (no parameters: radius 0.5), `tent` (`radius`, 1), `gaussian` (`stddev`, 0.5).
+/// `box` (no parameters: radius 0.5), `tent` (`radius`, 1), `gaussian` (`stddev`, 0.5),
+/// `mitchell` (`B`, `C`, both 1/3), `catmullrom` (no parameters), `lanczos` (`lobes`, 3).
 pub(super) fn rfilter(el: &Element) -> Result<FilterDesc> {
     let v = ObjectView::parse(el)?;
     let filter = match v.plugin.as_str() {
@@ -257,6 +258,14 @@ pub(super) fn rfilter(el: &Element) -> Result<FilterDesc> {
         },
         "gaussian" => FilterDesc::Gaussian {
             stddev: positive(&v, "stddev", 0.5)?,
+        },
+        "mitchell" => FilterDesc::Mitchell {
+            b: finite(&v, "B", 1.0 / 3.0)?,
+            c: finite(&v, "C", 1.0 / 3.0)?,
+        },
+        "catmullrom" => FilterDesc::Mitchell { b: 0.0, c: 0.5 },
+        "lanczos" => FilterDesc::Lanczos {
+            lobes: int_in(&v, "lobes", 3, 1, 64)? as f32,
         },
         _ => return Err(plugin_error(el)),
     };

@@ -86,6 +86,20 @@ pub enum FilterDesc {
         /// Standard deviation in pixels.
         stddev: f32,
     },
+    /// Mitchell & Netravali 1988's cubic of radius 2 with parameters B and C (Mitsuba's
+    /// `mitchell`, B = C = 1/3; `catmullrom` is B = 0, C = 1/2). It has negative lobes.
+    Mitchell {
+        /// Mitchell-Netravali B.
+        b: f32,
+        /// Mitchell-Netravali C.
+        c: f32,
+    },
+    /// Windowed sinc, sinc(x) sinc(x / lobes) for |x| < lobes (Mitsuba's `lanczos`, 3 lobes).
+    /// It has negative lobes.
+    Lanczos {
+        /// Number of lobes: the radius in pixels.
+        lobes: f32,
+    },
 }
 
 /// Film: image size, crop window and reconstruction filter.

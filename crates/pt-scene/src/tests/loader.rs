@@ -301,7 +301,7 @@ fn unsupported_plugins_say_not_yet_implemented() {
         "<integrator type=\"volpathmis\"/>",
         "<shape type=\"cube\"><bsdf type=\"polarizer\"/></shape>",
         "<shape type=\"cube\"><bsdf type=\"diffuse\"><texture type=\"volume\" name=\"reflectance\"/></bsdf></shape>",
-        "<sensor type=\"perspective\"><film type=\"hdrfilm\"><rfilter type=\"mitchell\"/></film></sensor>",
+        "<sensor type=\"perspective\"><film type=\"specfilm\"/></sensor>",
     ];
     for body in cases {
         let e = fail(&scene(body));
