@@ -18,6 +18,7 @@ mod bad_input;
 mod cameras;
 mod cornell_reference;
 mod determinism;
+mod direct_samples;
 mod display_primaries;
 mod fluorescence;
 mod gltf;

@@ -168,7 +168,10 @@ impl RenderArgs {
             kind: self.integrator.map(|i| match i {
                 IntegratorArg::Path => IntegratorKind::Path,
                 IntegratorArg::Volpath => IntegratorKind::VolPath,
-                IntegratorArg::Direct => IntegratorKind::Direct,
+                IntegratorArg::Direct => IntegratorKind::Direct {
+                    emitter_samples: 1,
+                    bsdf_samples: 1,
+                },
                 IntegratorArg::Radiosity => IntegratorKind::Radiosity,
             }),
             max_depth: self.max_depth,

@@ -5,7 +5,7 @@
 //! | variant | Mitsuba plugin | method |
 //! |---|---|---|
 //! | [`Integrator::Path`] | `path`, `volpath` | unidirectional path tracing, NEE + MIS ([`path`]); `volpath` adds absorption by interior media |
-//! | [`Integrator::Direct`] | `direct` | the path tracer with `max_depth` 2 (one emitter and one BSDF sample) |
+//! | [`Integrator::Direct`] | `direct` | the path tracer with `max_depth` 2 (one emitter and one BSDF sample per camera sample; Mitsuba's k of each as k camera samples, either alone as that strategy) |
 //! | [`Integrator::Radiosity`] | `radiosity` (pt) | finite-element radiosity (crate `pt-radiosity`) |
 //! | [`Integrator::Afterglow`] | (pt, `--time`) | phosphorescent afterglow: a first pass with the lights on, then the path tracer in the dark ([`afterglow`]) |
 //!
@@ -78,6 +78,10 @@ pub struct PathTracer {
     pub settings: PathSettings,
     /// Clamp of each sample's radiance (largest RGB channel; off by default, adds bias).
     pub clamp: Option<f32>,
+    /// Camera samples traced for each sample the scene asks for (Mitsuba `direct`'s shading
+    /// samples: k emitter and BSDF samples per hit are traced here as k camera samples, which
+    /// have the same expected image; 1 otherwise).
+    pub repeat: u32,
 }
 
 /// A light transport method with its settings.
@@ -225,6 +229,7 @@ impl Integrator {
                 media: kind == IntegratorKind::VolPath,
             },
             clamp: o.clamp,
+            repeat: 1,
         };
         if let Some(time) = o.afterglow {
             if kind == IntegratorKind::Radiosity {
@@ -245,7 +250,22 @@ impl Integrator {
         Ok(match kind {
             // A radiosity scene rendered by the path tracer keeps its max_depth.
             IntegratorKind::Path | IntegratorKind::VolPath => Integrator::Path(path(d.max_depth)),
-            IntegratorKind::Direct => Integrator::Direct(path(2)),
+            IntegratorKind::Direct {
+                emitter_samples,
+                bsdf_samples,
+            } => {
+                // Mitsuba's MIS weights with equal counts are the power heuristic of one sample
+                // of each; with one count 0 the other strategy is used alone.
+                let strategy = match (emitter_samples, bsdf_samples) {
+                    (0, _) => Strategy::Bsdf,
+                    (_, 0) => Strategy::Light,
+                    _ => Strategy::Mis,
+                };
+                let mut p = path(2);
+                p.settings.strategy = o.strategy.unwrap_or(strategy);
+                p.repeat = emitter_samples.max(bsdf_samples);
+                Integrator::Direct(p)
+            }
             IntegratorKind::Radiosity => {
                 if o.max_depth.is_some() || o.clamp.is_some() || o.strategy.is_some() {
                     return bad("--max-depth, --clamp and --strategy apply to the path tracer, not to radiosity".into());
@@ -270,8 +290,16 @@ impl Integrator {
     /// `run.resume`; radiosity runs to the end.
     pub fn render(&self, job: &Job, run: Run) -> Result<Rendered, IntegratorError> {
         match self {
-            Integrator::Path(p) | Integrator::Direct(p) => {
-                render_path(self.name(), p, job.desc, job, run)
+            Integrator::Path(p) => render_path(self.name(), p, job.desc, job, run),
+            Integrator::Direct(p) => {
+                let spp = job.spp.checked_mul(p.repeat).ok_or_else(|| {
+                    IntegratorError::Settings(format!(
+                        "{} spp x {} shading samples is too many samples",
+                        job.spp, p.repeat
+                    ))
+                })?;
+                let job = Job { spp, ..job.clone() };
+                render_path(self.name(), p, job.desc, &job, run)
             }
             Integrator::Afterglow { time, path } => {
                 let start = Instant::now();

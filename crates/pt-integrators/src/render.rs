@@ -60,7 +60,7 @@ impl RenderSettings {
     pub fn from_desc(desc: &pt_scene::SceneDesc) -> Self {
         let i = &desc.integrator;
         let max_depth = match i.kind {
-            pt_scene::IntegratorKind::Direct => 2,
+            pt_scene::IntegratorKind::Direct { .. } => 2,
             _ => i.max_depth,
         };
         RenderSettings {

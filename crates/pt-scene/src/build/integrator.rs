@@ -97,21 +97,45 @@ pub(super) fn radiosity_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc>
     })
 }
 
-/// Mitsuba's `direct` takes several emitter and BSDF samples per hit; this renderer draws one
-/// of each (the defaults), which is `path` with `max_depth` 2.
+/// Mitsuba's `direct`: `shading_samples` (default 1) sets both `emitter_samples` and
+/// `bsdf_samples`, and may not be given with them; at least one must be positive (Mitsuba
+/// refuses a direct integrator that samples nothing). pt renders equal counts (MIS, as one
+/// sample of each per camera sample, repeated) and either alone; other ratios are not
+/// implemented.
 pub(super) fn direct_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
-    for name in ["shading_samples", "emitter_samples", "bsdf_samples"] {
-        if let Some(n) = v.integer(name)? {
-            if n != 1 {
-                return Err(v.prop_error(
-                    name,
-                    format!("{name}={n} is not yet supported (not yet implemented; only 1)"),
-                ));
-            }
-        }
+    let count = |name: &str, default: u32| -> Result<u32> {
+        Ok(int_in(v, name, i64::from(default), 0, 1 << 16)? as u32)
+    };
+    let shading = count("shading_samples", 1)?;
+    if v.has("shading_samples") && (v.has("emitter_samples") || v.has("bsdf_samples")) {
+        return Err(v.prop_error(
+            "shading_samples",
+            "give either shading_samples or emitter_samples/bsdf_samples (Mitsuba refuses both)",
+        ));
+    }
+    let emitter_samples = count("emitter_samples", shading)?;
+    let bsdf_samples = count("bsdf_samples", shading)?;
+    if emitter_samples == 0 && bsdf_samples == 0 {
+        return Err(v.prop_error(
+            if v.has("shading_samples") {
+                "shading_samples"
+            } else {
+                "emitter_samples"
+            },
+            "a direct integrator needs at least one emitter or BSDF sample",
+        ));
+    }
+    if emitter_samples != 0 && bsdf_samples != 0 && emitter_samples != bsdf_samples {
+        return Err(v.prop_error(
+            "emitter_samples",
+            format!("emitter_samples={emitter_samples} with bsdf_samples={bsdf_samples} is not yet supported (not yet implemented): equal counts, or one of them 0, are"),
+        ));
     }
     Ok(IntegratorDesc {
-        kind: IntegratorKind::Direct,
+        kind: IntegratorKind::Direct {
+            emitter_samples,
+            bsdf_samples,
+        },
         max_depth: 2,
         rr_depth: 5,
         hide_emitters: v.boolean("hide_emitters")?.unwrap_or(false),

@@ -251,8 +251,15 @@ pub enum IntegratorKind {
     /// Path tracing through media (Mitsuba `volpath`): as `Path`, and rays inside a shape with an
     /// interior medium are attenuated by it. (`Path` ignores media, as Mitsuba's does.)
     VolPath,
-    /// Direct illumination only (Mitsuba `direct`): equivalent to `path` with max_depth 2.
-    Direct,
+    /// Direct illumination only (Mitsuba `direct`): `path` with max_depth 2, with Mitsuba's
+    /// numbers of emitter and BSDF samples per hit (`shading_samples` sets both; 1 and 1 by
+    /// default). Supported: equal counts (MIS), or one of them 0 (that strategy alone).
+    Direct {
+        /// Light samples per hit.
+        emitter_samples: u32,
+        /// BSDF samples per hit.
+        bsdf_samples: u32,
+    },
     /// Radiosity (project extension `radiosity`): finite elements for diffuse scenes.
     Radiosity,
 }

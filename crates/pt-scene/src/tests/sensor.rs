@@ -158,7 +158,16 @@ fn integrators() {
         "<integrator type=\"direct\"><integer name=\"emitter_samples\" value=\"1\"/></integrator>",
     )
     .unwrap();
-    assert_eq!((i.kind, i.max_depth), (IntegratorKind::Direct, 2));
+    assert_eq!(
+        (i.kind, i.max_depth),
+        (
+            IntegratorKind::Direct {
+                emitter_samples: 1,
+                bsdf_samples: 1
+            },
+            2
+        )
+    );
     let i = integrator("<integrator type=\"moment\"><integrator type=\"path\"><integer name=\"max_depth\" value=\"3\"/></integrator></integrator>").unwrap();
     assert_eq!(
         (i.kind, i.max_depth, i.moment),
@@ -284,4 +293,46 @@ fn samplers_and_their_rounded_counts() {
         r#"<sensor type="perspective"><sampler type="ldsampler"><boolean name="jitter" value="true"/></sampler></sensor>"#,
     ));
     assert!(e.to_string().contains("jitter"), "{e}");
+}
+
+#[test]
+fn direct_sample_counts_follow_mitsuba() {
+    let direct = |body: &str| format!(r#"<integrator type="direct">{body}</integrator>"#);
+    for (body, e, b) in [
+        ("", 1, 1),
+        (r#"<integer name="shading_samples" value="4"/>"#, 4, 4),
+        (r#"<integer name="emitter_samples" value="0"/>"#, 0, 1),
+        (
+            r#"<integer name="bsdf_samples" value="0"/><integer name="emitter_samples" value="3"/>"#,
+            3,
+            0,
+        ),
+    ] {
+        let s = load(&scene(&direct(body))).unwrap();
+        assert_eq!(
+            s.integrator.kind,
+            IntegratorKind::Direct {
+                emitter_samples: e,
+                bsdf_samples: b
+            },
+            "{body}"
+        );
+    }
+    for (body, what) in [
+        (
+            r#"<integer name="shading_samples" value="2"/><integer name="bsdf_samples" value="2"/>"#,
+            "either shading_samples",
+        ),
+        (
+            r#"<integer name="emitter_samples" value="0"/><integer name="bsdf_samples" value="0"/>"#,
+            "at least one",
+        ),
+        (
+            r#"<integer name="emitter_samples" value="2"/><integer name="bsdf_samples" value="3"/>"#,
+            "not yet implemented",
+        ),
+    ] {
+        let e = fail(&scene(&direct(body)));
+        assert!(e.to_string().contains(what), "{body}: {e}");
+    }
 }
