@@ -8,7 +8,7 @@
 
 use pt_math::{power_heuristic, Ray, Vec3};
 use pt_render::geometry::Interaction;
-use pt_render::sampler::Sampler;
+use pt_render::sampler::RandomSource;
 use pt_render::Scene;
 use pt_spectrum::{ColorMode, SampledSpectrum, SampledWavelengths};
 
@@ -58,11 +58,11 @@ impl Default for PathSettings {
 ///
 /// The same computation as [`trace_paths`] for one path (which is how it is done).
 #[inline(always)]
-pub fn li(
+pub fn li<S: RandomSource>(
     scene: &Scene,
     ray: Ray,
     s: &PathSettings,
-    sampler: &mut Sampler,
+    sampler: &mut S,
     lambda: &SampledWavelengths,
 ) -> SampledSpectrum {
     let mut first = Some(PathStart {
@@ -87,11 +87,11 @@ pub fn li(
 /// A path as [`trace_paths`] takes it and hands it back: the path, its random numbers, the
 /// wavelengths it started with (fluorescence may change the path's own) and a tag of the
 /// caller's choosing (which sample it is).
-pub struct PathStart {
+pub struct PathStart<S = pt_render::sampler::Sampler> {
     /// The path (when handed back, finished: its `radiance` is the estimate).
     pub path: PathState,
     /// The path's random number stream.
-    pub sampler: Sampler,
+    pub sampler: S,
     /// The wavelengths the path started with.
     pub lambda: SampledWavelengths,
     /// The caller's label.
@@ -166,13 +166,13 @@ pub const MAX_PATHS: usize = 8;
 /// numbers and adds its terms in the same order as it would alone, so each result is
 /// bit-identical to tracing the path alone.
 #[inline(always)]
-pub fn trace_paths(
+pub fn trace_paths<S: RandomSource>(
     scene: &Scene,
     s: &PathSettings,
-    mut start: impl FnMut() -> Option<PathStart>,
-    mut finish: impl FnMut(&PathStart),
+    mut start: impl FnMut() -> Option<PathStart<S>>,
+    mut finish: impl FnMut(&PathStart<S>),
 ) {
-    let mut slots: [Option<PathStart>; MAX_PATHS] = [const { None }; MAX_PATHS];
+    let mut slots: [Option<PathStart<S>>; MAX_PATHS] = [const { None }; MAX_PATHS];
     for slot in slots.iter_mut() {
         *slot = start();
     }

@@ -4,7 +4,7 @@
 use crate::path::{trace_paths, PathSettings, PathStart, PathState};
 use pt_math::Vec2;
 use pt_render::film::{sample_pixel_offset, Filter, PixelStats};
-use pt_render::sampler::{SamplePattern, Sampler};
+use pt_render::sampler::{RandomSource, SamplePattern, Sampler, StructuredSampler};
 use pt_render::{RenderOutput, Scene};
 use pt_spectrum::{spectrum_to_srgb, ColorMode, SampledWavelengths};
 use rayon::prelude::*;
@@ -378,17 +378,22 @@ fn render_tile_portable(
     // RGB mode draws no wavelength sample (its lanes are R, G, B), so its random sequence is the
     // same as before the spectral mode existed; these wavelengths are only carried along.
     let rgb_lambda = SampledWavelengths::sample_visible(0.5);
+    // The loop is compiled once per kind of random numbers: independent numbers (most scenes)
+    // pay nothing for the structured patterns' dimension bookkeeping.
+    let pattern = &settings.sampler;
     for y in tile.y0..tile.y1 {
         let row = &mut band[((y - tile.y0) * settings.width) as usize..][..settings.width as usize];
-        render_row_samples(
-            scene,
-            settings,
-            y,
-            tile.x0..tile.x1,
-            tile.samples.clone(),
-            &rgb_lambda,
-            row,
-        );
+        let args = (y, tile.x0..tile.x1, tile.samples.clone(), &rgb_lambda);
+        if pattern.is_independent() {
+            render_row_samples(scene, settings, args, row, |pixel, k| {
+                Sampler::new(settings.seed, pixel, k)
+            });
+        } else {
+            render_row_samples(scene, settings, args, row, |pixel, k| {
+                StructuredSampler::new(pattern, settings.seed, pixel, k)
+                    .expect("a structured pattern")
+            });
+        }
     }
 }
 
@@ -402,14 +407,17 @@ const SAMPLE_CHUNK: u32 = 64;
 /// and traced up to `MAX_PATHS` at a time (see [`trace_paths`]), so that passes of few samples
 /// per pixel still keep the paths in flight; each sample is the same as traced alone.
 #[inline(always)]
-fn render_row_samples(
+fn render_row_samples<S: RandomSource>(
     scene: &Scene,
     settings: &RenderSettings,
-    y: u32,
-    xs: std::ops::Range<u32>,
-    samples: std::ops::Range<u32>,
-    rgb_lambda: &SampledWavelengths,
+    (y, xs, samples, rgb_lambda): (
+        u32,
+        std::ops::Range<u32>,
+        std::ops::Range<u32>,
+        &SampledWavelengths,
+    ),
     row: &mut [PixelStats],
+    new_sampler: impl Fn(u64, u64) -> S,
 ) {
     if samples.is_empty() || xs.is_empty() {
         return;
@@ -429,8 +437,7 @@ fn render_row_samples(
                 return None;
             }
             let pixel = settings.pixel_key(x, y);
-            let mut sampler =
-                Sampler::with_pattern(&settings.sampler, settings.seed, pixel, u64::from(k));
+            let mut sampler = new_sampler(pixel, u64::from(k));
             let lambda = if spectral {
                 SampledWavelengths::sample_visible(sampler.next_1d())
             } else {
@@ -464,7 +471,7 @@ fn render_row_samples(
                 tag,
             })
         };
-        let finish = |done: &PathStart| {
+        let finish = |done: &PathStart<S>| {
             let l = done.path.radiance;
             let rgb = if spectral {
                 spectrum_to_srgb(l, &done.lambda)

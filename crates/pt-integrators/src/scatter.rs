@@ -22,6 +22,7 @@ use pt_math::lanes::{lanes, offset_ray_origins, set_lanes, Frames, Mask, V3};
 use pt_math::{offset_coordinate, power_heuristic, Frame, Ray, Vec2, Vec3};
 use pt_render::geometry::Interaction;
 use pt_render::light::{parallelogram_points, to_solid_angle, Light, LightSample, LightShape};
+use pt_render::sampler::RandomSource;
 use pt_render::Scene;
 use pt_spectrum::SampledSpectrum;
 
@@ -269,10 +270,10 @@ fn mask_of(c: &[bool; N]) -> Mask {
 /// The scattering of the paths in `slots` that scatter at their hits (the lanes of `todo`),
 /// all at once.
 #[inline(always)]
-pub(crate) fn scatter(
+pub(crate) fn scatter<S: RandomSource>(
     scene: &Scene,
     s: &PathSettings,
-    slots: &mut [Option<PathStart>; N],
+    slots: &mut [Option<PathStart<S>>; N],
     hits: &[Option<Interaction>; N],
     todo: Mask,
 ) {
@@ -334,10 +335,10 @@ pub(crate) fn scatter(
 /// parallelograms sampled here, into `l`), the BSDF sample's uniform numbers.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn draw<'a>(
+fn draw<'a, S: RandomSource>(
     scene: &'a Scene,
     s: &PathSettings,
-    slots: &mut [Option<PathStart>; N],
+    slots: &mut [Option<PathStart<S>>; N],
     hits: &[Option<Interaction>; N],
     todo: Mask,
     built: &mut [Option<SurfaceBsdf>; N],
@@ -415,9 +416,9 @@ fn draw<'a>(
 /// The parallelogram lights drawn in `d`, sampled for all lanes at once (by area, then to
 /// solid angle; only the lanes of `d.par` take the results), into `l`.
 #[inline(always)]
-fn sample_parallelograms(
+fn sample_parallelograms<S: RandomSource>(
     scene: &Scene,
-    slots: &[Option<PathStart>; N],
+    slots: &[Option<PathStart<S>>; N],
     d: &Draws,
     l: &mut LightLanes,
 ) {
@@ -585,11 +586,7 @@ impl ShadowRays {
 /// Russian roulette (Mitsuba: after `rr_depth` segments, keep the path with probability
 /// min(max(T) eta^2, 0.95), and divide its throughput by that).
 #[inline(always)]
-fn russian_roulette(
-    s: &PathSettings,
-    path: &mut PathState,
-    sampler: &mut pt_render::sampler::Sampler,
-) {
+fn russian_roulette<S: RandomSource>(s: &PathSettings, path: &mut PathState, sampler: &mut S) {
     if path.depth >= s.rr_depth {
         let q = (path.throughput.max_value() * path.eta_scale * path.eta_scale).min(0.95);
         if !(sampler.next_1d() < q) {

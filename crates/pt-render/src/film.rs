@@ -13,7 +13,7 @@ use pt_math::Vec2;
 use pt_scene::FilterDesc;
 use std::sync::Arc;
 
-use crate::sampler::Sampler;
+use crate::sampler::RandomSource;
 
 /// The 1D profile of a separable filter at offset `x` (pixels), as Mitsuba 3.9.1 evaluates it
 /// (`eval`), for the filters with negative lobes; 0 outside the radius.
@@ -195,15 +195,19 @@ impl PartialEq for Filter {
 /// rejection loop skips it and draws from the sample's own stream (a loop would otherwise take
 /// a varying number of dimensions and misalign the later ones).
 #[inline(always)]
-pub fn sample_filter(filter: &Filter, sampler: &mut Sampler) -> (Vec2, f32) {
+pub fn sample_filter<S: RandomSource>(filter: &Filter, sampler: &mut S) -> (Vec2, f32) {
     sample_filter_in(filter, sampler, true)
 }
 
 /// [`sample_filter`], from the pattern's next dimension (`pattern`) or from the sample's own
 /// stream (redraws).
 #[inline(always)]
-fn sample_filter_in(filter: &Filter, sampler: &mut Sampler, pattern: bool) -> (Vec2, f32) {
-    let u2 = |s: &mut Sampler| {
+fn sample_filter_in<S: RandomSource>(
+    filter: &Filter,
+    sampler: &mut S,
+    pattern: bool,
+) -> (Vec2, f32) {
+    let u2 = |s: &mut S| {
         if pattern {
             s.next_2d()
         } else {
@@ -232,7 +236,7 @@ fn sample_filter_in(filter: &Filter, sampler: &mut Sampler, pattern: bool) -> (V
             if pattern {
                 sampler.skip_dimension();
             }
-            let axis = |sampler: &mut Sampler| loop {
+            let axis = |sampler: &mut S| loop {
                 let x = (2.0 * sampler.independent_1d() - 1.0) * radius;
                 let f = ((-(x * x) / (2.0 * stddev * stddev)).exp() - bias) / (1.0 - bias);
                 if sampler.independent_1d() < f {
@@ -265,9 +269,9 @@ const MAX_REDRAWS: u32 = 64;
 /// also samples a border around the image, so every pixel sees its whole filter: offsets are
 /// kept as drawn.
 #[inline(always)]
-pub fn sample_pixel_offset(
+pub fn sample_pixel_offset<S: RandomSource>(
     filter: &Filter,
-    sampler: &mut Sampler,
+    sampler: &mut S,
     pixel: (u32, u32),
     size: (u32, u32),
     sample_border: bool,
@@ -362,6 +366,7 @@ impl PixelStats {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sampler::Sampler;
 
     #[test]
     fn filter_samples_have_the_filter_moments() {

@@ -151,6 +151,11 @@ impl SamplePattern {
     pub fn count(&self) -> u32 {
         self.count
     }
+
+    /// Whether the numbers are independent (no structured pattern).
+    pub fn is_independent(&self) -> bool {
+        self.pattern.is_none()
+    }
 }
 
 /// The structured part of a sample's numbers: which sample of which block, and the next
@@ -180,6 +185,7 @@ impl Strata {
         permute(self.index, n, self.seed(dim, 0))
     }
 
+    #[inline]
     fn next_1d(&mut self, rng: &mut Pcg32) -> f32 {
         let dim = self.dim;
         self.dim += 1;
@@ -221,6 +227,7 @@ impl Strata {
         }
     }
 
+    #[inline]
     fn next_2d(&mut self, rng: &mut Pcg32) -> Vec2 {
         let n = self.count;
         let jitter = |on: bool, rng: &mut Pcg32| if on { uniform(rng) } else { 0.5 };
@@ -280,11 +287,27 @@ fn uniform(rng: &mut Pcg32) -> f32 {
     (rng.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
 }
 
-/// The random numbers of one camera sample.
+/// What the integrators draw random numbers from: [`Sampler`] (independent numbers) or
+/// [`StructuredSampler`] (a structured pattern). The render loop is compiled for each, so the
+/// independent case pays nothing for the patterns' bookkeeping.
+pub trait RandomSource: Clone {
+    /// A uniform number in [0, 1): the next dimension of the pattern.
+    fn next_1d(&mut self) -> f32;
+    /// Two uniform numbers in [0, 1): the next (2D) dimension of the pattern.
+    fn next_2d(&mut self) -> Vec2;
+    /// A uniform number from the sample's own stream, outside the pattern (for rejection loops,
+    /// which would otherwise use a varying number of dimensions); with independent numbers it
+    /// is [`RandomSource::next_1d`].
+    fn independent_1d(&mut self) -> f32;
+    /// Skips one dimension of the pattern (a request answered from
+    /// [`RandomSource::independent_1d`] instead), so that later requests keep their dimensions.
+    fn skip_dimension(&mut self);
+}
+
+/// Independent random numbers for one camera sample (Mitsuba's `independent`).
 #[derive(Clone)]
 pub struct Sampler {
     rng: Pcg32,
-    strata: Option<Strata>,
 }
 
 impl Sampler {
@@ -296,65 +319,85 @@ impl Sampler {
         // whereas nearby stream increments of PCG are known to be correlated.
         Sampler {
             rng: Pcg32::new(state, 0x0a02_bdbf_7bb3_c0a7),
-            strata: None,
         }
     }
 
-    /// The numbers of sample `sample` of pixel `pixel` under `seed` in `pattern` (the
-    /// independent pattern gives [`Sampler::new`]'s numbers).
+    /// A uniform number in [0, 1).
+    #[inline(always)]
+    pub fn next_1d(&mut self) -> f32 {
+        uniform(&mut self.rng)
+    }
+
+    /// Two uniform numbers in [0, 1).
+    #[inline(always)]
+    pub fn next_2d(&mut self) -> Vec2 {
+        let x = uniform(&mut self.rng);
+        Vec2::new(x, uniform(&mut self.rng))
+    }
+}
+
+impl RandomSource for Sampler {
+    #[inline(always)]
+    fn next_1d(&mut self) -> f32 {
+        Sampler::next_1d(self)
+    }
+    #[inline(always)]
+    fn next_2d(&mut self) -> Vec2 {
+        Sampler::next_2d(self)
+    }
+    #[inline(always)]
+    fn independent_1d(&mut self) -> f32 {
+        uniform(&mut self.rng)
+    }
+    #[inline(always)]
+    fn skip_dimension(&mut self) {}
+}
+
+/// The numbers of one camera sample in a structured pattern ([`SamplePattern`]): the
+/// pattern's value of each dimension, jittered from the sample's own stream.
+#[derive(Clone)]
+pub struct StructuredSampler {
+    rng: Pcg32,
+    strata: Strata,
+}
+
+impl StructuredSampler {
+    /// The numbers of sample `sample` of pixel `pixel` under `seed` in `pattern`; `None` for
+    /// the independent pattern (use [`Sampler::new`]).
     #[inline]
-    pub fn with_pattern(pattern: &SamplePattern, seed: u64, pixel: u64, sample: u64) -> Self {
-        let mut s = Sampler::new(seed, pixel, sample);
-        if let Some(p) = pattern.pattern {
-            let count = u64::from(pattern.count);
-            let block = sample / count;
-            s.strata = Some(Strata {
+    pub fn new(pattern: &SamplePattern, seed: u64, pixel: u64, sample: u64) -> Option<Self> {
+        let p = pattern.pattern?;
+        let count = u64::from(pattern.count);
+        let block = sample / count;
+        Some(StructuredSampler {
+            rng: Sampler::new(seed, pixel, sample).rng,
+            strata: Strata {
                 pattern: p,
                 count: pattern.count,
                 index: (sample % count) as u32,
                 key: splitmix64(splitmix64(splitmix64(seed ^ 0x5bd1_e995) ^ pixel) ^ block),
                 dim: 0,
-            });
-        }
-        s
+            },
+        })
     }
+}
 
-    /// A uniform number in [0, 1): the next dimension of the pattern.
-    #[inline]
-    pub fn next_1d(&mut self) -> f32 {
-        match &mut self.strata {
-            None => uniform(&mut self.rng),
-            Some(s) => s.next_1d(&mut self.rng),
-        }
+impl RandomSource for StructuredSampler {
+    #[inline(always)]
+    fn next_1d(&mut self) -> f32 {
+        self.strata.next_1d(&mut self.rng)
     }
-
-    /// Two uniform numbers in [0, 1): the next (2D) dimension of the pattern.
-    #[inline]
-    pub fn next_2d(&mut self) -> Vec2 {
-        match &mut self.strata {
-            None => {
-                let x = uniform(&mut self.rng);
-                Vec2::new(x, uniform(&mut self.rng))
-            }
-            Some(s) => s.next_2d(&mut self.rng),
-        }
+    #[inline(always)]
+    fn next_2d(&mut self) -> Vec2 {
+        self.strata.next_2d(&mut self.rng)
     }
-
-    /// A uniform number from the sample's own stream, outside the pattern (for rejection loops,
-    /// which would otherwise use a varying number of dimensions); with independent numbers it
-    /// is [`Sampler::next_1d`].
-    #[inline]
-    pub fn independent_1d(&mut self) -> f32 {
+    #[inline(always)]
+    fn independent_1d(&mut self) -> f32 {
         uniform(&mut self.rng)
     }
-
-    /// Skips one dimension of the pattern (a request answered from [`Sampler::independent_1d`]
-    /// instead), so that later requests keep their dimensions.
-    #[inline]
-    pub fn skip_dimension(&mut self) {
-        if let Some(s) = &mut self.strata {
-            s.dim += 1;
-        }
+    #[inline(always)]
+    fn skip_dimension(&mut self) {
+        self.strata.dim += 1;
     }
 }
 
@@ -381,7 +424,7 @@ mod tests {
         let pattern = SamplePattern::new(kind, count);
         (0..pattern.count())
             .map(|k| {
-                let mut s = Sampler::with_pattern(&pattern, 9, pixel, u64::from(k));
+                let mut s = StructuredSampler::new(&pattern, 9, pixel, u64::from(k)).unwrap();
                 (0..dims)
                     .map(|d| {
                         if two.contains(&d) {
@@ -532,12 +575,9 @@ mod tests {
         assert_eq!(counts(KINDS[1]), [1, 6, 12, 20, 64]);
         assert_eq!(counts(KINDS[2]), [4, 9, 25, 25, 121]);
         assert_eq!(counts(KINDS[3]), [4, 16, 16, 64, 64]);
-        let mut a = Sampler::with_pattern(&SamplePattern::INDEPENDENT, 4, 5, 6);
-        let mut b = Sampler::new(4, 5, 6);
-        for _ in 0..10 {
-            assert_eq!(a.next_2d(), b.next_2d());
-            assert_eq!(a.next_1d(), b.next_1d());
-        }
+        assert!(StructuredSampler::new(&SamplePattern::INDEPENDENT, 4, 5, 6).is_none());
+        assert!(SamplePattern::INDEPENDENT.is_independent());
+        assert!(!SamplePattern::new(KINDS[0], 4).is_independent());
     }
 
     #[test]
