@@ -183,12 +183,6 @@ impl Filter {
     }
 }
 
-impl PartialEq for Filter {
-    fn eq(&self, other: &Filter) -> bool {
-        self.desc == other.desc
-    }
-}
-
 /// Samples a film offset (pixels, relative to the pixel centre) distributed as the filter,
 /// with its weight (1 except for filters with negative lobes). It takes one (2D) dimension of
 /// the sample pattern: the box, the tent and the tabulated filters warp it, the Gaussian's
