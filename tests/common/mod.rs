@@ -116,6 +116,7 @@ pub fn d65_normalised(scene: &str) -> bool {
         pt_scene::load_file(&path, &[]).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let white = |s: &SpectrumDesc| match s {
         SpectrumDesc::Constant(_) | SpectrumDesc::Rgb(_) => true,
+        SpectrumDesc::Uniform(_) => false,
         SpectrumDesc::Illuminant { name, .. } => name.eq_ignore_ascii_case("d65"),
         SpectrumDesc::Tabulated(_) | SpectrumDesc::Blackbody { .. } => false,
     };

@@ -375,7 +375,7 @@ impl<'e> ObjectView<'e> {
         };
         match prop.value {
             Value::Rgb(c) => Ok(Some(SpectrumDesc::Rgb(c))),
-            Value::Spectrum(v) => Ok(Some(SpectrumDesc::Constant(v))),
+            Value::Spectrum(v) => Ok(Some(SpectrumDesc::Uniform(v))),
             Value::SpectrumPairs(ref pairs) => Ok(Some(SpectrumDesc::Tabulated(
                 std::sync::Arc::new(pairs.clone()),
             ))),

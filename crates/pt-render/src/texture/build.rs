@@ -257,7 +257,7 @@ impl TextureBuilder {
         };
         let rgb = rgb_of(&s, role);
         let scalar = match &s {
-            SpectrumDesc::Constant(v) => *v,
+            SpectrumDesc::Constant(v) | SpectrumDesc::Uniform(v) => *v,
             _ => (rgb[0] + rgb[1] + rgb[2]) / 3.0,
         };
         let value = match (self.mode, role) {
@@ -369,6 +369,12 @@ impl TextureBuilder {
 pub fn rgb_of(s: &SpectrumDesc, role: Role) -> [f32; 3] {
     match s {
         SpectrumDesc::Constant(v) => [*v; 3],
+        // Mitsuba's RGB variants convert an equal-energy emission without D65 (its white is
+        // E's, not D65's); a uniform reflectance under D65 stays grey.
+        SpectrumDesc::Uniform(v) if role == Role::Emission => {
+            mitsuba_points_to_srgb(&[(360.0, 1.0), (830.0, 1.0)], RgbRole::Emission).map(|c| c * v)
+        }
+        SpectrumDesc::Uniform(v) => [*v; 3],
         SpectrumDesc::Rgb(c) => *c,
         SpectrumDesc::Tabulated(p) => {
             let role = match role {
@@ -393,6 +399,8 @@ pub fn spectrum_for_role(s: &SpectrumDesc, role: Role) -> Spectrum {
             Spectrum::illuminant(NamedIlluminant::D65, *v)
         }
         (SpectrumDesc::Constant(v), _) => Spectrum::constant(*v),
+        // Equal energy, also as an emission (Mitsuba's `<spectrum value="x"/>`).
+        (SpectrumDesc::Uniform(v), _) => Spectrum::constant(*v),
         (SpectrumDesc::Rgb(c), Role::Albedo) => Spectrum::rgb_albedo(*c),
         (SpectrumDesc::Rgb(c), Role::Emission) => Spectrum::rgb_illuminant(*c),
         (SpectrumDesc::Rgb(c), _) => Spectrum::rgb_unbounded(*c),
@@ -415,5 +423,37 @@ pub fn constant_spectrum(s: &SpectrumDesc, role: Role, mode: ColorMode) -> Const
     match mode {
         ColorMode::Rgb => ConstantSpectrum::Rgb(SampledSpectrum::from_rgb(rgb_of(s, role))),
         ColorMode::Spectral => ConstantSpectrum::Spectrum(spectrum_for_role(s, role)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Mitsuba 3.9.1 renders `<spectrum name="radiance" value="1"/>` on a constant emitter as
+    /// (1.2048, 0.9483, 0.9089) in `scalar_rgb` (equal energy, not D65; read back from a
+    /// render), while `<float>` and `<rgb>` give (1, 1, 1); as a reflectance a uniform value
+    /// stays grey. 1e-3 is the renders' rounding to 4 digits plus the 1000-sample sum.
+    #[test]
+    fn a_uniform_spectrum_emits_equal_energy_as_mitsuba() {
+        let want = [1.2048, 0.9483, 0.9089];
+        let e = rgb_of(&SpectrumDesc::Uniform(2.0), Role::Emission);
+        for k in 0..3 {
+            assert!((e[k] - 2.0 * want[k]).abs() < 2e-3, "{e:?}");
+        }
+        assert_eq!(rgb_of(&SpectrumDesc::Uniform(0.5), Role::Albedo), [0.5; 3]);
+        assert_eq!(
+            rgb_of(&SpectrumDesc::Constant(2.0), Role::Emission),
+            [2.0; 3]
+        );
+        // Spectral mode: equal energy for the uniform emission, D65 for the constant one.
+        let lambda = pt_spectrum::SampledWavelengths::sample_visible(0.3);
+        let u = spectrum_for_role(&SpectrumDesc::Uniform(2.0), Role::Emission).sample(&lambda);
+        assert!(u.0.to_array().iter().all(|&v| v == 2.0), "{u:?}");
+        let c = spectrum_for_role(&SpectrumDesc::Constant(2.0), Role::Emission).sample(&lambda);
+        assert!(
+            c.0.to_array().iter().any(|&v| (v - 2.0).abs() > 0.05),
+            "{c:?}"
+        );
     }
 }

@@ -256,6 +256,7 @@ pub(super) fn medium(el: &Element) -> Result<MediumDesc> {
     v.finish()?;
     let sigma_t = match sigma_t {
         SpectrumDesc::Constant(c) => SpectrumDesc::Constant(c * scale),
+        SpectrumDesc::Uniform(c) => SpectrumDesc::Uniform(c * scale),
         SpectrumDesc::Rgb(c) => SpectrumDesc::Rgb(c.map(|x| x * scale)),
         SpectrumDesc::Tabulated(p) => SpectrumDesc::Tabulated(std::sync::Arc::new(
             p.iter().map(|&(w, x)| (w, x * scale)).collect(),

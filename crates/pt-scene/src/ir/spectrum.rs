@@ -4,8 +4,14 @@
 /// tabulated spectrum (which makes the scene spectral).
 #[derive(Clone, Debug, PartialEq)]
 pub enum SpectrumDesc {
-    /// The same value in every channel / at every wavelength.
+    /// The same value in every channel / at every wavelength (`<float>`, `<integer>`); as an
+    /// emission, Mitsuba's D65 white of that luminance.
     Constant(f32),
+    /// Mitsuba's `<spectrum value="x"/>`: the value x at every wavelength, an equal-energy
+    /// spectrum. As a reflectance the same as a constant; as an emission it is not D65 but
+    /// illuminant E (in linear sRGB x (1.205, 0.948, 0.909): Mitsuba 3.9.1 renders it so in
+    /// its RGB and spectral variants alike).
+    Uniform(f32),
     /// Linear Rec.709 RGB.
     Rgb([f32; 3]),
     /// Piecewise-linear (wavelength nm, value) pairs, increasing wavelengths; zero outside
@@ -43,6 +49,7 @@ impl SpectrumDesc {
     pub fn form_name(&self) -> String {
         match self {
             SpectrumDesc::Constant(_) => "constant".into(),
+            SpectrumDesc::Uniform(_) => "uniform".into(),
             SpectrumDesc::Rgb(_) => "RGB".into(),
             SpectrumDesc::Tabulated(_) => "tabulated".into(),
             SpectrumDesc::Blackbody { temperature } => format!("blackbody ({temperature} K)"),
@@ -63,7 +70,7 @@ impl SpectrumDesc {
     /// blackbody, whose temperature is checked when parsed), for range checks.
     pub fn values(&self) -> Vec<f32> {
         match self {
-            SpectrumDesc::Constant(c) => vec![*c],
+            SpectrumDesc::Constant(c) | SpectrumDesc::Uniform(c) => vec![*c],
             SpectrumDesc::Rgb(c) => c.to_vec(),
             SpectrumDesc::Tabulated(p) => p.iter().map(|e| e.1).collect(),
             SpectrumDesc::Blackbody { .. } => vec![],

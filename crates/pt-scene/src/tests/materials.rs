@@ -29,7 +29,8 @@ fn spectrum_pairs_are_tabulated_spectra() {
     ))
     .unwrap();
     assert!(
-        matches!(s.bsdfs[0].kind, BsdfKind::Diffuse { reflectance: TextureDesc::Constant(SpectrumDesc::Constant(r)) } if r == 0.3)
+        matches!(s.bsdfs[0].kind, BsdfKind::Diffuse { reflectance: TextureDesc::Constant(SpectrumDesc::Uniform(r)) } if r == 0.3),
+        "one number in a <spectrum> is Mitsuba's uniform (equal-energy) spectrum"
     );
 }
 
