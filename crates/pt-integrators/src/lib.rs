@@ -350,19 +350,11 @@ fn render_path(
     let scene = Scene::build_with_mode(desc, job.bvh, job.selection, job.mode)?;
     let build_time = build_start.elapsed();
     let settings = RenderSettings {
-        width: desc.film.width,
-        height: desc.film.height,
-        crop: desc.film.crop,
         spp: job.spp,
         seed: job.seed,
-        sampler: pt_render::sampler::SamplePattern::new(
-            desc.sampler.kind,
-            desc.sampler.sample_count,
-        ),
-        filter: pt_render::film::Filter::new(desc.film.filter),
-        sample_border: desc.film.sample_border,
         path: p.settings,
         clamp: p.clamp,
+        ..RenderSettings::from_desc(desc)
     };
     let mut state = match run.resume {
         Some(s) => s,

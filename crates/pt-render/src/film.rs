@@ -16,7 +16,7 @@ use std::sync::Arc;
 use crate::sampler::RandomSource;
 
 /// The 1D profile of a separable filter at offset `x` (pixels), as Mitsuba 3.9.1 evaluates it
-/// (`eval`), for the filters with negative lobes; 0 outside the radius.
+/// (`eval`; its Gaussian with the exact exp), even in x; 0 outside the radius.
 pub fn filter_profile(filter: &FilterDesc, x: f32) -> f32 {
     let x = x.abs();
     match *filter {
@@ -232,7 +232,8 @@ fn sample_filter_in<S: RandomSource>(
             }
             let axis = |sampler: &mut S| loop {
                 let x = (2.0 * sampler.independent_1d() - 1.0) * radius;
-                let f = ((-(x * x) / (2.0 * stddev * stddev)).exp() - bias) / (1.0 - bias);
+                // The profile normalised to 1 at the centre: the acceptance probability.
+                let f = filter_profile(&filter.desc, x) / (1.0 - bias);
                 if sampler.independent_1d() < f {
                     break x;
                 }

@@ -189,7 +189,6 @@ impl Strata {
     fn next_1d(&mut self, rng: &mut Pcg32) -> f32 {
         let dim = self.dim;
         self.dim += 1;
-        let jitter = |on: bool, rng: &mut Pcg32| if on { uniform(rng) } else { 0.5 };
         let n = self.count;
         match self.pattern {
             Pattern::Stratified { jitter: j, .. } | Pattern::MultiJitter { jitter: j, .. } => {
@@ -230,7 +229,6 @@ impl Strata {
     #[inline]
     fn next_2d(&mut self, rng: &mut Pcg32) -> Vec2 {
         let n = self.count;
-        let jitter = |on: bool, rng: &mut Pcg32| if on { uniform(rng) } else { 0.5 };
         match self.pattern {
             Pattern::Stratified { res, jitter: j } => {
                 let dim = self.dim;
@@ -280,11 +278,21 @@ impl Strata {
     }
 }
 
+/// A stratum's jitter: a uniform number from the stream, or its centre without jitter.
+#[inline]
+fn jitter(on: bool, rng: &mut Pcg32) -> f32 {
+    if on {
+        uniform(rng)
+    } else {
+        0.5
+    }
+}
+
 /// A uniform f32 in [0, 1) from the stream: its top 24 bits, so the result is exactly
 /// representable and < 1.
 #[inline(always)]
 fn uniform(rng: &mut Pcg32) -> f32 {
-    (rng.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+    fraction(rng.next_u32())
 }
 
 /// What the integrators draw random numbers from: [`Sampler`] (independent numbers) or
