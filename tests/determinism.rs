@@ -1,4 +1,7 @@
-//! The image depends only on the seed and sample count, not on the number of threads.
+//! The image depends only on the seed and sample count, not on the number of threads: with
+//! importance sampling (the box-filtered Cornell box) and with the splatting film (a tent
+//! filter with `sample_border`, whose splats cross tiles and come from a border outside the
+//! image).
 
 use crate::common;
 
@@ -6,8 +9,14 @@ use common::*;
 
 #[test]
 fn bit_identical_for_one_and_two_threads() {
-    let dir = scratch("determinism");
-    let scene = repo().join("scenes/cornell-box.xml");
+    for name in ["cornell-box", "film-tent"] {
+        identical_for_one_and_two_threads(name);
+    }
+}
+
+fn identical_for_one_and_two_threads(name: &str) {
+    let dir = scratch(&format!("determinism_{name}"));
+    let scene = repo().join(format!("scenes/{name}.xml"));
     let small = ["--spp", "4", "--width", "48", "--height", "40"];
     let (a, va) = render(
         &scene,

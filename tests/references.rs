@@ -12,6 +12,19 @@
 //! over five seeds. At 1024 spp, twelve seed/scene pairs gave p between 0.025 and 0.997, as a
 //! calibrated test should. The seed is the scene's, so CI is deterministic. Scenes with a
 //! dedicated test that also checks failure cases (the Cornell box) are skipped here.
+//!
+//! Multiplicity. Each scene is two tests (the block family and the chi-square of all blocks).
+//! At [`ALPHA`] each, a suite of 47 scenes would fail somewhere with probability
+//! 1 - 0.99^94 = 61% on correct code whenever the random sequences change (on 2026-12-02 the
+//! splatting film re-rolled the Gaussian-filtered scenes' noise and two chi-squares failed: p
+//! 0.004 and 0.0002, with 0 of 120 and 126 blocks failing and mean ratios within 0.1%; the
+//! disk scene's chi-square per degree of freedom is about 1.13 under either film over nine
+//! seeds, its per-sample distribution is heavy-tailed). So the suite divides [`ALPHA`] among
+//! its scenes and their two criteria (Bonferroni): the whole suite fails correct code with
+//! probability at most 1%. What that costs: a block must be about 5.0 instead of 3.9 standard
+//! errors off to fail alone. The mean ratio ([`MEAN_RATIO_TOL`], 0.5%) is unchanged, so a 2%
+//! bias anywhere still fails, and so does any error that moves a block by 5 standard errors (a
+//! missing bounce, a wrong pdf: tens to hundreds).
 
 mod common;
 
@@ -23,7 +36,7 @@ const DEDICATED: &[&str] = &["cornell-box"];
 /// Samples per pixel for the comparison renders.
 const SPP: &str = "1024";
 
-fn check(scene: String) -> Result<(), Failed> {
+fn check(scene: String, alpha: f64) -> Result<(), Failed> {
     let dir = scratch(&format!("ref_{scene}"));
     let (img, var) = render(
         &repo().join("scenes").join(format!("{scene}.xml")),
@@ -38,7 +51,7 @@ fn check(scene: String) -> Result<(), Failed> {
         )
         .into());
     }
-    let v = judge_against_reference(&img, &var, &scene, "1024spp");
+    let v = judge_against_reference_at(&img, &var, &scene, "1024spp", alpha);
     if v.agrees() {
         Ok(())
     } else {
@@ -65,13 +78,17 @@ fn main() {
         .filter(|s| !DEDICATED.contains(&s.as_str()))
         .collect();
     scenes.sort();
+    let has_ref = |s: &str| repo().join("references").join(format!("{s}.exr")).is_file();
+    // ALPHA shared by every scene's two criteria (see the module doc).
+    let tested = scenes.iter().filter(|s| has_ref(s)).count().max(1);
+    let alpha = ALPHA / (2 * tested) as f64;
     let trials = scenes
         .into_iter()
         .map(|s| {
-            let has_ref = repo().join("references").join(format!("{s}.exr")).is_file();
             let name = s.clone();
+            let ignored = !has_ref(&s);
             // A scene without a reference is listed as ignored, so the gap is visible.
-            Trial::test(name, move || check(s)).with_ignored_flag(!has_ref)
+            Trial::test(name, move || check(s, alpha)).with_ignored_flag(ignored)
         })
         .collect();
     libtest_mimic::run(&args, trials).exit();

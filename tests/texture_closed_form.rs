@@ -46,8 +46,9 @@
 //!
 //! This is a closed form, not a Mitsuba reference, on purpose: Mitsuba splats uniformly placed
 //! samples with the filter's weight, so a filter of radius 1e-3 pixel leaves almost every pixel
-//! without weight (its 256-spp render of this scene has 0.07% of the expected mean); pt
-//! samples offsets from the filter, so the same XML gives pixel-centre values.
+//! without weight (its 256-spp render of this scene has 0.07% of the expected mean), and so
+//! does pt's default splatting film. The test renders with `--reconstruction importance`,
+//! which samples offsets from the filter, so the same XML gives pixel-centre values.
 
 use crate::common;
 
@@ -234,7 +235,9 @@ fn render_scene(name: &str, extra: &[&str]) -> (Image, Image) {
     let dir = scratch(name);
     let path = dir.join("scene.xml");
     std::fs::write(&path, scene()).unwrap();
-    render(&path, &dir, name, extra)
+    // Filter importance sampling: every sample at its pixel's centre (see the module doc).
+    let args = [&["--reconstruction", "importance"][..], extra].concat();
+    render(&path, &dir, name, &args)
 }
 
 #[test]

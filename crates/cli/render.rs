@@ -53,9 +53,21 @@ pub(crate) struct RenderArgs {
     /// Image height in pixels [default: the scene's film].
     #[arg(long)]
     height: Option<u32>,
-    /// Also write the per-pixel variance of the mean to OUT_var.exr.
+    /// Also write the per-pixel variance of the mean to OUT_var.exr. Under `splat` (with a
+    /// filter wider than a pixel) it is the variance of the pixel's own samples' mean: what the
+    /// mean of a region larger than the filter has per pixel (block z-tests such as `pt
+    /// compare`'s), above a single splatted pixel's variance.
     #[arg(long)]
     variance: bool,
+    /// How samples become pixels: `splat` is Mitsuba's film (each sample placed uniformly in
+    /// its pixel and added with the filter's weight to every pixel it reaches: Mitsuba's
+    /// per-pixel noise, correlated between neighbours); `importance` draws each sample's offset
+    /// from the filter and keeps it in its own pixel (pbrt-v4's filter importance sampling:
+    /// independent pixels, more noise per pixel under wide filters). Same expected image; the
+    /// box filter gives the same image either way. Radiosity's display always uses
+    /// `importance` [default: splat].
+    #[arg(long, value_enum)]
+    reconstruction: Option<ReconstructionArg>,
     /// Also write a tone-mapped sRGB PNG preview to this path.
     #[arg(long, value_name = "PNG")]
     png: Option<PathBuf>,
@@ -147,6 +159,12 @@ enum StrategyArg {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+enum ReconstructionArg {
+    Splat,
+    Importance,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
 enum SelectionArg {
     Power,
     Uniform,
@@ -209,6 +227,12 @@ impl RenderArgs {
         }
         if let Some(h) = self.height {
             desc.film.height = h;
+        }
+        if let Some(r) = self.reconstruction {
+            desc.film.reconstruction = match r {
+                ReconstructionArg::Splat => pt_scene::Reconstruction::Splat,
+                ReconstructionArg::Importance => pt_scene::Reconstruction::Importance,
+            };
         }
         if desc.film.width == 0 || desc.film.height == 0 {
             bail!(
@@ -383,8 +407,13 @@ fn state_key(args: &RenderArgs, desc: &SceneDesc, job: &Job, integrator: &Integr
         Err(_) => eat(desc.source.to_string_lossy().as_bytes()),
     }
     let text = format!(
-        "{:?}|{:?}|{integrator:?}|{:?}|{:?}|{:?}",
-        args.scene_args.defines, desc.film.filter, job.mode, job.selection, args.scene_args.camera
+        "{:?}|{:?}|{:?}|{integrator:?}|{:?}|{:?}|{:?}",
+        args.scene_args.defines,
+        desc.film.filter,
+        desc.film.reconstruction,
+        job.mode,
+        job.selection,
+        args.scene_args.camera
     );
     eat(text.as_bytes());
     h

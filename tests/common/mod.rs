@@ -189,8 +189,20 @@ impl Verdict {
 /// on a failed z-test writes the relative error and per-block |z| images under
 /// target/tmp/common/diag_<scene>_<label>/ and says where.
 pub fn judge_against_reference(img: &Image, var: &Image, scene: &str, label: &str) -> Verdict {
+    judge_against_reference_at(img, var, scene, label, ALPHA)
+}
+
+/// [`judge_against_reference`] at significance `alpha` for both the block family and the
+/// chi-square of all blocks (a suite of many scenes divides [`ALPHA`] among them).
+pub fn judge_against_reference_at(
+    img: &Image,
+    var: &Image,
+    scene: &str,
+    label: &str,
+    alpha: f64,
+) -> Verdict {
     let (rimg, rvar) = reference(scene);
-    let z = pt_stats::block_ztest(img, var, &rimg, &rvar, BLOCK, ALPHA)
+    let z = pt_stats::block_ztest(img, var, &rimg, &rvar, BLOCK, alpha)
         .expect("same size as the reference");
     let (m, mr) = (img.mean(), rimg.mean());
     let ratio = std::array::from_fn(|c| {

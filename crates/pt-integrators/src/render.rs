@@ -3,7 +3,8 @@
 
 use crate::path::{trace_paths, PathSettings, PathStart, PathState};
 use pt_math::Vec2;
-use pt_render::film::{sample_pixel_offset, Filter, PixelStats};
+use pt_render::film::splat::{SplatFilm, SplatLayout, SplatTile};
+use pt_render::film::{filter_radius, sample_pixel_offset, Filter, PixelStats};
 use pt_render::sampler::{RandomSource, SamplePattern, Sampler, StructuredSampler};
 use pt_render::{RenderOutput, Scene};
 use pt_spectrum::{spectrum_to_srgb, ColorMode, SampledWavelengths};
@@ -33,6 +34,8 @@ pub struct RenderSettings {
     pub filter: Filter,
     /// Mitsuba's `sample_border` (see `pt_render::film::sample_pixel_offset`).
     pub sample_border: bool,
+    /// How samples become pixels (Mitsuba's splatting or filter importance sampling).
+    pub reconstruction: pt_scene::Reconstruction,
     /// Integrator settings.
     pub path: PathSettings,
     /// Optional clamp of each sample's radiance (linear RGB): a sample whose largest channel
@@ -45,14 +48,32 @@ pub struct RenderSettings {
 
 impl RenderSettings {
     /// The key of the image's pixel (x, y) for the random streams: its index in the whole
-    /// film, row by row.
+    /// film, row by row. Pixels outside the film (the border a splatting film samples with
+    /// `sample_border`) get keys above every film pixel's, from their film coordinates.
     #[inline]
-    pub fn pixel_key(&self, x: u32, y: u32) -> u64 {
-        let (dx, dy, film_width) = match &self.crop {
-            Some(c) => (c.offset[0], c.offset[1], c.film_size[0]),
-            None => (0, 0, self.width),
+    pub fn pixel_key(&self, x: i32, y: i32) -> u64 {
+        let (dx, dy, film) = match &self.crop {
+            Some(c) => (c.offset[0], c.offset[1], c.film_size),
+            None => (0, 0, [self.width, self.height]),
         };
-        u64::from(y + dy) * u64::from(film_width) + u64::from(x + dx)
+        let fx = i64::from(x) + i64::from(dx);
+        let fy = i64::from(y) + i64::from(dy);
+        if (0..i64::from(film[0])).contains(&fx) && (0..i64::from(film[1])).contains(&fy) {
+            (fy as u64) * u64::from(film[0]) + fx as u64
+        } else {
+            // Film coordinates are below 2^16 (the loader's limit) and the border a few
+            // pixels: shifted by 2^20 they are non-negative 21-bit numbers.
+            let shift = 1i64 << 20;
+            (1u64 << 62) | (((fy + shift) as u64) << 24) | ((fx + shift) as u64)
+        }
+    }
+
+    /// Whether samples are splatted (Mitsuba's film with a filter wider than a pixel). The box
+    /// filter's splat is its own pixel with weight 1, which is what importance sampling the box
+    /// gives, so it takes the importance-sampling loop under either setting (same image).
+    pub fn splats(&self) -> bool {
+        self.reconstruction == pt_scene::Reconstruction::Splat
+            && !matches!(self.filter.desc, pt_scene::FilterDesc::Box { .. })
     }
 
     /// The settings a scene file asks for: film size and filter, spp, seed, and the path
@@ -72,6 +93,7 @@ impl RenderSettings {
             sampler: SamplePattern::new(desc.sampler.kind, desc.sampler.sample_count),
             filter: Filter::new(desc.film.filter),
             sample_border: desc.film.sample_border,
+            reconstruction: desc.film.reconstruction,
             path: PathSettings {
                 max_depth,
                 rr_depth: i.rr_depth,
@@ -123,12 +145,16 @@ pub struct RenderState {
     pub spp_done: u32,
     /// Wall-clock time spent sampling so far (all sessions).
     pub time: Duration,
-    /// Per-pixel sums, row-major from the top.
+    /// Per-pixel sums of the samples taken in each pixel, row-major from the top: the image
+    /// under importance sampling; under splatting the variance (see [`RenderState::output`]).
     pub pixels: Vec<PixelStats>,
+    /// The splatting film's accumulators, when the render splats
+    /// ([`RenderSettings::splats`]).
+    pub splat: Option<SplatFilm>,
 }
 
 /// First bytes of a state file (and its format version).
-const STATE_MAGIC: &[u8; 8] = b"PTSTATE1";
+const STATE_MAGIC: &[u8; 8] = b"PTSTATE2";
 
 impl RenderState {
     /// An empty state for `settings` (no samples yet).
@@ -141,15 +167,32 @@ impl RenderState {
             spp_done: 0,
             time: Duration::ZERO,
             pixels: vec![PixelStats::default(); n],
+            splat: settings.splats().then(|| {
+                SplatFilm::new(SplatLayout::new(
+                    &settings.filter.desc,
+                    settings.width,
+                    settings.height,
+                    settings.crop.map_or([0, 0], |c| c.offset),
+                    settings.sample_border,
+                ))
+            }),
         }
     }
 
-    /// The image so far (its `spp` is `spp_done`).
+    /// The image so far (its `spp` is `spp_done`). Under splatting the mean is the splatting
+    /// film's and the variance is that of each pixel's own samples' mean (sample variance /
+    /// spp): the variance per pixel of the mean of a region larger than the filter, which is
+    /// what block tests need (a region's splatted mean averages about as many samples as its
+    /// pixels took), and more than a single splatted pixel's variance, which shares samples
+    /// with its neighbours.
     pub fn output(&self) -> RenderOutput {
         RenderOutput {
             width: self.width,
             height: self.height,
-            mean: self.pixels.iter().map(PixelStats::mean).collect(),
+            mean: match &self.splat {
+                Some(film) => film.image(),
+                None => self.pixels.iter().map(PixelStats::mean).collect(),
+            },
             variance: self
                 .pixels
                 .iter()
@@ -181,6 +224,11 @@ impl RenderState {
             b.extend_from_slice(&p.n.to_le_bytes());
             b.extend_from_slice(&p.nonfinite.to_le_bytes());
             for v in p.sum.iter().chain(&p.sum_sq) {
+                b.extend_from_slice(&v.to_bits().to_le_bytes());
+            }
+        }
+        for t in self.splat.iter().flat_map(|f| &f.tiles) {
+            for v in t.sums.iter().flatten() {
                 b.extend_from_slice(&v.to_bits().to_le_bytes());
             }
         }
@@ -217,11 +265,18 @@ impl RenderState {
             ));
         }
         let n = (w * h) as usize;
-        if bytes.len() != header + n * 56 {
+        // The splatting film's layout follows from the settings (filter, crop, border).
+        let mut splat = RenderState::new(settings).splat;
+        let splat_sums: usize = splat
+            .iter()
+            .flat_map(|f| &f.tiles)
+            .map(|t| t.sums.len())
+            .sum();
+        let expected = header + n * 56 + splat_sums * 32;
+        if bytes.len() != expected {
             return Err(format!(
-                "truncated state: {} bytes, expected {}",
+                "the state has {} bytes, a {w}x{h} render with this film needs {expected} (truncated, or saved with another reconstruction or filter)",
                 bytes.len(),
-                header + n * 56
             ));
         }
         let mut pixels = Vec::with_capacity(n);
@@ -243,6 +298,14 @@ impl RenderState {
                 sum_sq: [f(3), f(4), f(5)],
             });
         }
+        let mut o = header + n * 56;
+        for t in splat.iter_mut().flat_map(|f| &mut f.tiles) {
+            for v in t.sums.iter_mut().flatten() {
+                let b8 = bytes[o..o + 8].try_into().expect("8 bytes");
+                *v = f64::from_bits(u64::from_le_bytes(b8));
+                o += 8;
+            }
+        }
         Ok(RenderState {
             width: w as u32,
             height: h as u32,
@@ -250,6 +313,7 @@ impl RenderState {
             spp_done: spp_done as u32,
             time: Duration::from_nanos(nanos),
             pixels,
+            splat,
         })
     }
 }
@@ -260,6 +324,8 @@ impl RenderState {
 /// pixel and grow fourfold while a pass takes under a quarter of a second, so that a cancel is
 /// honoured within about a second. (Each pass ends at a barrier where one core may idle for a
 /// tile: doubling from 1 spp, with more passes, cost 3% of the Cornell box's speed at 64 spp.)
+/// Splatting renders hold a pass's samples per tile until they are splatted (see
+/// [`render_splat_tile`]), so their passes stop growing at [`MAX_SPLAT_PASS`] samples per pixel.
 /// Returns whether all samples were taken.
 pub fn render_passes(
     scene: &Scene,
@@ -268,51 +334,113 @@ pub fn render_passes(
     cancel: &AtomicBool,
     progress: &(dyn Fn(u64) + Sync),
 ) -> bool {
-    let (w, h) = (settings.width, settings.height);
-    // The image is rendered in place, in bands of whole rows (contiguous in `state.pixels`),
-    // each band in tiles of TILE columns. Bands are TILE rows high, lower for small images on
-    // many threads so that every thread gets about 32 bands (the pass ends at a barrier where a
-    // thread may idle for a band). Rendering tiles into copies and writing them back held a
-    // second image of sums: 2048x2048 peaked at 467 MB.
-    let threads = rayon::current_num_threads().max(1) as u32;
-    let rows = (h / (32 * threads)).clamp(1, TILE);
     let mut pass = 1u32;
     while state.spp_done < settings.spp {
         if cancel.load(Ordering::Relaxed) {
             return false;
         }
-        let (s0, s1) = (
-            state.spp_done,
-            state.spp_done.saturating_add(pass).min(settings.spp),
-        );
+        let samples = state.spp_done..state.spp_done.saturating_add(pass).min(settings.spp);
         let start = Instant::now();
-        state
-            .pixels
-            .par_chunks_mut((w * rows) as usize)
-            .enumerate()
-            .for_each(|(b, band)| {
-                let y0 = b as u32 * rows;
-                let y1 = (y0 + rows).min(h);
-                for x0 in (0..w).step_by(TILE as usize) {
-                    let tile = Tile {
-                        x0,
-                        y0,
-                        x1: (x0 + TILE).min(w),
-                        y1,
-                        samples: s0..s1,
-                    };
-                    render_tile(scene, settings, band, &tile);
-                    progress(u64::from((tile.x1 - tile.x0) * (y1 - y0)) * u64::from(s1 - s0));
-                }
-            });
+        let s1 = samples.end;
+        match &mut state.splat {
+            Some(film) => splat_pass(scene, settings, &mut state.pixels, film, samples, progress),
+            None => importance_pass(scene, settings, &mut state.pixels, samples, progress),
+        }
         let took = start.elapsed();
         state.time += took;
         state.spp_done = s1;
         if took < Duration::from_millis(250) {
             pass = pass.saturating_mul(4);
+            if state.splat.is_some() {
+                pass = pass.min(MAX_SPLAT_PASS);
+            }
         }
     }
     true
+}
+
+/// Largest pass of a splatting render, samples per pixel: a tile then holds at most
+/// 16 x 16 x 256 samples of 20 bytes (1.3 MB) per thread.
+const MAX_SPLAT_PASS: u32 = 256;
+
+/// One pass of filter importance sampling: samples `samples` of every pixel.
+fn importance_pass(
+    scene: &Scene,
+    settings: &RenderSettings,
+    pixels: &mut [PixelStats],
+    samples: std::ops::Range<u32>,
+    progress: &(dyn Fn(u64) + Sync),
+) {
+    let (w, h) = (settings.width, settings.height);
+    // The image is rendered in place, in bands of whole rows (contiguous in `pixels`), each
+    // band in tiles of TILE columns. Bands are TILE rows high, lower for small images on many
+    // threads so that every thread gets about 32 bands (the pass ends at a barrier where a
+    // thread may idle for a band). Rendering tiles into copies and writing them back held a
+    // second image of sums: 2048x2048 peaked at 467 MB.
+    let threads = rayon::current_num_threads().max(1) as u32;
+    let rows = (h / (32 * threads)).clamp(1, TILE);
+    pixels
+        .par_chunks_mut((w * rows) as usize)
+        .enumerate()
+        .for_each(|(b, band)| {
+            let y0 = b as u32 * rows;
+            let y1 = (y0 + rows).min(h);
+            for x0 in (0..w).step_by(TILE as usize) {
+                let tile = Tile {
+                    x0: x0 as i32,
+                    y0: y0 as i32,
+                    x1: (x0 + TILE).min(w) as i32,
+                    y1: y1 as i32,
+                    samples: samples.clone(),
+                };
+                render_tile(scene, settings, Target::Pixels(band), &tile);
+                progress(tile.image_pixels(w, h) * u64::from(samples.len() as u32));
+            }
+        });
+}
+
+/// One pass of the splatting film: samples `samples` of every origin pixel (the image's and,
+/// with `sample_border`, its border's), rayon over the rows of the film's tile grid.
+fn splat_pass(
+    scene: &Scene,
+    settings: &RenderSettings,
+    pixels: &mut [PixelStats],
+    film: &mut SplatFilm,
+    samples: std::ops::Range<u32>,
+    progress: &(dyn Fn(u64) + Sync),
+) {
+    let (w, h) = (settings.width, settings.height);
+    let layout = &film.layout;
+    let columns = layout.tile_columns();
+    // Each row of tiles with the image rows of its origins (contiguous in `pixels`).
+    let mut rest = pixels;
+    let mut bands = Vec::with_capacity(layout.tile_rows());
+    for (j, tiles) in film.tiles.chunks_mut(columns).enumerate() {
+        let (_, ys) = layout.origins(0, j);
+        let (y0, y1) = (ys.start.clamp(0, h as i32), ys.end.clamp(0, h as i32));
+        let (band, r) = std::mem::take(&mut rest).split_at_mut(((y1 - y0) as u32 * w) as usize);
+        rest = r;
+        bands.push((j, y0, band, tiles));
+    }
+    bands.into_par_iter().for_each(|(j, y0, band, tiles)| {
+        for (i, acc) in tiles.iter_mut().enumerate() {
+            let (xs, ys) = layout.origins(i, j);
+            let tile = Tile {
+                x0: xs.start,
+                y0: ys.start,
+                x1: xs.end,
+                y1: ys.end,
+                samples: samples.clone(),
+            };
+            let target = Target::Splat {
+                stats: &mut *band,
+                stats_y0: y0,
+                acc,
+            };
+            render_tile(scene, settings, target, &tile);
+            progress(tile.image_pixels(w, h) * u64::from(samples.len() as u32));
+        }
+    });
 }
 
 /// Scales `rgb` so that its largest channel is at most `max` (non-finite samples pass through,
@@ -328,17 +456,40 @@ pub fn clamp_sample(rgb: [f32; 3], max: f32) -> [f32; 3] {
     }
 }
 
-/// Pixels `x0..x1` by `y0..y1` of the image and the samples to add to them.
+/// Pixels `x0..x1` by `y0..y1` of the image (origin pixels beyond the image's edge for a
+/// splatting film with `sample_border`) and the samples to take in them.
 struct Tile {
-    x0: u32,
-    y0: u32,
-    x1: u32,
-    y1: u32,
+    x0: i32,
+    y0: i32,
+    x1: i32,
+    y1: i32,
     samples: std::ops::Range<u32>,
 }
 
-/// Renders one tile: adds its samples to the pixels' stats in `band`, which holds the image's
-/// rows `tile.y0..tile.y1` (full width).
+impl Tile {
+    /// Number of the tile's pixels inside a `w` x `h` image (for progress: border origins are
+    /// not counted).
+    fn image_pixels(&self, w: u32, h: u32) -> u64 {
+        let span = |a: i32, b: i32, n: u32| (b.min(n as i32) - a.max(0)).max(0) as u64;
+        span(self.x0, self.x1, w) * span(self.y0, self.y1, h)
+    }
+}
+
+/// Where a tile's samples go.
+enum Target<'a> {
+    /// Importance sampling: the image rows `tile.y0..tile.y1` (full width), each sample
+    /// added to its own pixel.
+    Pixels(&'a mut [PixelStats]),
+    /// Splatting: the tile's accumulator, and the variance statistics of the image rows from
+    /// `stats_y0` (full width) that hold the tile's origins inside the image.
+    Splat {
+        stats: &'a mut [PixelStats],
+        stats_y0: i32,
+        acc: &'a mut SplatTile,
+    },
+}
+
+/// Renders one tile: takes its samples and adds them to `target`.
 ///
 /// On x86-64 processors with AVX2, FMA and BMI (x86-64-v3: Intel since 2013, AMD since 2015)
 /// the same code runs compiled for those instructions, chosen at run time so that the binary
@@ -349,74 +500,154 @@ struct Tile {
 /// in both. Cornell box, 256x256, 64 spp, 2 threads: 1.71 -> 2.02 M samples/s (+18%, as much
 /// as building everything with `-C target-cpu=x86-64-v3`; AVX-512, `target-cpu=native` on this
 /// project's machine, gave only +6%).
-fn render_tile(scene: &Scene, settings: &RenderSettings, band: &mut [PixelStats], tile: &Tile) {
+fn render_tile(scene: &Scene, settings: &RenderSettings, target: Target, tile: &Tile) {
     #[cfg(target_arch = "x86_64")]
     if pt_render::has_x86_64_v3() {
         // SAFETY: the processor supports every feature `render_tile_v3` is compiled for.
         #[allow(unsafe_code)]
-        return unsafe { render_tile_v3(scene, settings, band, tile) };
+        return unsafe { render_tile_v3(scene, settings, target, tile) };
     }
-    render_tile_portable(scene, settings, band, tile)
+    render_tile_portable(scene, settings, target, tile)
 }
 
 /// [`render_tile_portable`] compiled for x86-64-v3 (AVX2, FMA, BMI1/2, LZCNT, POPCNT, MOVBE).
 /// Callers must check [`pt_render::has_x86_64_v3`] first (calling it is `unsafe` for that reason).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe")]
-fn render_tile_v3(scene: &Scene, settings: &RenderSettings, band: &mut [PixelStats], tile: &Tile) {
-    render_tile_portable(scene, settings, band, tile)
+fn render_tile_v3(scene: &Scene, settings: &RenderSettings, target: Target, tile: &Tile) {
+    render_tile_portable(scene, settings, target, tile)
 }
 
 /// The body of [`render_tile`], inlined into each instruction-set variant.
 #[inline(always)]
-fn render_tile_portable(
+fn render_tile_portable(scene: &Scene, settings: &RenderSettings, target: Target, tile: &Tile) {
+    match target {
+        Target::Pixels(band) => {
+            for y in tile.y0..tile.y1 {
+                let row = &mut band[((y - tile.y0) as u32 * settings.width) as usize..]
+                    [..settings.width as usize];
+                trace_row(scene, settings, y, tile, false, |x, _, rgb, _, w| {
+                    row[x as usize].add(rgb.map(|c| c * w));
+                });
+            }
+        }
+        Target::Splat {
+            stats,
+            stats_y0,
+            acc,
+        } => render_splat_tile(scene, settings, tile, stats, stats_y0, acc),
+    }
+}
+
+/// A splatting tile: traces the samples of every origin pixel of `tile` (adding them to the
+/// variance statistics of the origins inside the image), then splats them into `acc` sample
+/// index first, origin pixel (row-major) second, so that the order in which each pixel's sums
+/// grow does not depend on how samples were split into passes.
+#[inline(always)]
+fn render_splat_tile(
     scene: &Scene,
     settings: &RenderSettings,
-    band: &mut [PixelStats],
     tile: &Tile,
+    stats: &mut [PixelStats],
+    stats_y0: i32,
+    acc: &mut SplatTile,
 ) {
-    // RGB mode draws no wavelength sample (its lanes are R, G, B), so its random sequence is the
-    // same as before the spectral mode existed; these wavelengths are only carried along.
-    let rgb_lambda = SampledWavelengths::sample_visible(0.5);
-    // The loop is compiled once per kind of random numbers: independent numbers (most scenes)
-    // pay nothing for the structured patterns' dimension bookkeeping.
-    let pattern = &settings.sampler;
+    let (w, h) = (settings.width as i32, settings.height as i32);
+    let tw = (tile.x1 - tile.x0) as usize;
+    let ns = tile.samples.len();
+    let s0 = tile.samples.start;
+    // Per origin pixel (row-major) its samples in order: position in the pixel ([0, 1)^2) and
+    // linear RGB.
+    let mut taken = vec![(Vec2::ZERO, [0.0f32; 3]); tw * (tile.y1 - tile.y0) as usize * ns];
     for y in tile.y0..tile.y1 {
-        let row = &mut band[((y - tile.y0) * settings.width) as usize..][..settings.width as usize];
-        let args = (y, tile.x0..tile.x1, tile.samples.clone(), &rgb_lambda);
-        if pattern.is_independent() {
-            render_row_samples(scene, settings, args, row, |pixel, k| {
-                Sampler::new(settings.seed, pixel, k)
-            });
-        } else {
-            render_row_samples(scene, settings, args, row, |pixel, k| {
-                StructuredSampler::new(pattern, settings.seed, pixel, k)
-                    .expect("a structured pattern")
-            });
+        let mut row = (0..h).contains(&y).then(|| {
+            let start = ((y - stats_y0) * w) as usize;
+            &mut stats[start..start + w as usize]
+        });
+        let first = (y - tile.y0) as usize * tw;
+        trace_row(scene, settings, y, tile, true, |x, k, rgb, offset, _| {
+            let q = first + (x - tile.x0) as usize;
+            // Exact: the offset is u - 1/2 for u a multiple of 2^-24 in [0, 1).
+            taken[q * ns + (k - s0) as usize] = (offset + Vec2::splat(0.5), rgb);
+            if let Some(r) = row.as_deref_mut() {
+                if (0..w).contains(&x) {
+                    r[x as usize].add(rgb);
+                }
+            }
+        });
+    }
+    let radius = filter_radius(&settings.filter.desc);
+    for k in 0..ns {
+        for q in 0..taken.len() / ns {
+            let (u, rgb) = taken[q * ns + k];
+            let origin = [tile.x0 + (q % tw) as i32, tile.y0 + (q / tw) as i32];
+            // Non-finite samples are counted by the statistics above and left out here.
+            if rgb.iter().all(|c| c.is_finite()) {
+                acc.splat(&settings.filter.desc, radius, origin, u, rgb);
+            }
         }
     }
 }
 
-/// Samples traced together before their results are added to the pixels' sums: paths finish
-/// out of order, and each pixel's sums are added in sample order (so that the image does not
-/// depend on it).
+/// Traces samples `tile.samples` of pixels `tile.x0..tile.x1` of row `y` and hands each
+/// result to `sink(x, k, rgb, offset, weight)` (pixel x, sample k, linear RGB radiance, film
+/// offset from the pixel's centre, film weight), pixel by pixel, each pixel's in sample order.
+/// `splat`: the sample's position is uniform in its pixel (weight 1; the film weighs it),
+/// else it is drawn from the filter ([`sample_pixel_offset`]).
+#[inline(always)]
+fn trace_row(
+    scene: &Scene,
+    settings: &RenderSettings,
+    y: i32,
+    tile: &Tile,
+    splat: bool,
+    mut sink: impl FnMut(i32, u32, [f32; 3], Vec2, f32),
+) {
+    // RGB mode draws no wavelength sample (its lanes are R, G, B), so its random sequence is the
+    // same as before the spectral mode existed; these wavelengths are only carried along.
+    let rgb_lambda = SampledWavelengths::sample_visible(0.5);
+    let args = (
+        y,
+        tile.x0..tile.x1,
+        tile.samples.clone(),
+        &rgb_lambda,
+        splat,
+    );
+    // The loop is compiled once per kind of random numbers: independent numbers (most scenes)
+    // pay nothing for the structured patterns' dimension bookkeeping.
+    let pattern = &settings.sampler;
+    if pattern.is_independent() {
+        render_row_samples(scene, settings, args, &mut sink, |pixel, k| {
+            Sampler::new(settings.seed, pixel, k)
+        });
+    } else {
+        render_row_samples(scene, settings, args, &mut sink, |pixel, k| {
+            StructuredSampler::new(pattern, settings.seed, pixel, k).expect("a structured pattern")
+        });
+    }
+}
+
+/// Samples traced together before their results are handed on: paths finish out of order, and
+/// each pixel's results are handed on in sample order (so that the image does not depend on
+/// it).
 const SAMPLE_CHUNK: u32 = 64;
 
-/// Adds samples `samples` of pixels `xs` of row `y` to their sums in `row`, each pixel's in
-/// order. The samples are taken pixel after pixel (all of a pixel's, then the next pixel's)
-/// and traced up to `MAX_PATHS` at a time (see [`trace_paths`]), so that passes of few samples
-/// per pixel still keep the paths in flight; each sample is the same as traced alone.
+/// The body of [`trace_row`] for one kind of random numbers. The samples are taken pixel after
+/// pixel (all of a pixel's, then the next pixel's) and traced up to `MAX_PATHS` at a time (see
+/// [`trace_paths`]), so that passes of few samples per pixel still keep the paths in flight;
+/// each sample is the same as traced alone.
 #[inline(always)]
 fn render_row_samples<S: RandomSource>(
     scene: &Scene,
     settings: &RenderSettings,
-    (y, xs, samples, rgb_lambda): (
-        u32,
-        std::ops::Range<u32>,
+    (y, xs, samples, rgb_lambda, splat): (
+        i32,
+        std::ops::Range<i32>,
         std::ops::Range<u32>,
         &SampledWavelengths,
+        bool,
     ),
-    row: &mut [PixelStats],
+    sink: &mut impl FnMut(i32, u32, [f32; 3], Vec2, f32),
     new_sampler: impl Fn(u64, u64) -> S,
 ) {
     if samples.is_empty() || xs.is_empty() {
@@ -429,8 +660,8 @@ fn render_row_samples<S: RandomSource>(
     while x < xs.end {
         let (chunk_x, chunk_k) = (x, k);
         let mut results = [[0.0f32; 3]; SAMPLE_CHUNK as usize];
-        // Each sample's film weight (1 but for filters with negative lobes).
-        let mut weights = [1.0f32; SAMPLE_CHUNK as usize];
+        // Each sample's film offset and weight (1 but for filters with negative lobes).
+        let mut offsets = [(Vec2::ZERO, 1.0f32); SAMPLE_CHUNK as usize];
         let mut taken = 0u32;
         let start = || {
             if taken == SAMPLE_CHUNK || x >= xs.end {
@@ -443,13 +674,17 @@ fn render_row_samples<S: RandomSource>(
             } else {
                 rgb_lambda
             };
-            let (offset, weight) = sample_pixel_offset(
-                &settings.filter,
-                &mut sampler,
-                (x, y),
-                (settings.width, settings.height),
-                settings.sample_border,
-            );
+            let (offset, weight) = if splat {
+                (sampler.next_2d() - Vec2::splat(0.5), 1.0)
+            } else {
+                sample_pixel_offset(
+                    &settings.filter,
+                    &mut sampler,
+                    (x as u32, y as u32),
+                    (settings.width, settings.height),
+                    settings.sample_border,
+                )
+            };
             let u_lens = if scene.camera.needs_lens_sample() {
                 sampler.next_2d()
             } else {
@@ -458,7 +693,7 @@ fn render_row_samples<S: RandomSource>(
             let ray = scene.camera.pixel_ray(x, y, offset, u_lens);
             let path = PathState::new(scene, ray, &lambda);
             let tag = taken;
-            weights[tag as usize] = weight;
+            offsets[tag as usize] = (offset, weight);
             taken += 1;
             k += 1;
             if k == samples.end {
@@ -487,8 +722,8 @@ fn render_row_samples<S: RandomSource>(
         // The chunk's results, in the order they were started: pixel by pixel, each in sample
         // order.
         let (mut px, mut pk) = (chunk_x, chunk_k);
-        for (rgb, w) in results[..taken as usize].iter().zip(&weights) {
-            row[px as usize].add(rgb.map(|c| c * w));
+        for (rgb, (offset, w)) in results[..taken as usize].iter().zip(&offsets) {
+            sink(px, pk, *rgb, *offset, *w);
             pk += 1;
             if pk == samples.end {
                 (px, pk) = (px + 1, samples.start);
@@ -538,19 +773,19 @@ mod tests {
             // A 16 x 16 tile across the image centre, 4 samples per pixel, in its band of rows.
             let (x0, y0) = (settings.width / 2 - 8, settings.height / 2 - 8);
             let tile = Tile {
-                x0,
-                y0,
-                x1: x0 + 16,
-                y1: y0 + 16,
+                x0: x0 as i32,
+                y0: y0 as i32,
+                x1: x0 as i32 + 16,
+                y1: y0 as i32 + 16,
                 samples: 0..4,
             };
             let mut portable = vec![PixelStats::default(); (settings.width * 16) as usize];
             let mut v3 = portable.clone();
-            render_tile_portable(&scene, &settings, &mut portable, &tile);
+            render_tile_portable(&scene, &settings, Target::Pixels(&mut portable), &tile);
             #[allow(unsafe_code)]
             // SAFETY: checked above that the processor has the features.
             unsafe {
-                render_tile_v3(&scene, &settings, &mut v3, &tile)
+                render_tile_v3(&scene, &settings, Target::Pixels(&mut v3), &tile)
             };
             let bits = |v: &[PixelStats]| {
                 v.iter()

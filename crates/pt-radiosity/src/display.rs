@@ -196,7 +196,7 @@ pub fn render_image(
                         } else {
                             Vec2::splat(0.5)
                         };
-                        let ray = camera.pixel_ray(x, y, offset, u_lens);
+                        let ray = camera.pixel_ray(x as i32, y as i32, offset, u_lens);
                         stats.add(radiance(ray, &mut sampler).map(|c| c * weight));
                     }
                     stats

@@ -120,10 +120,12 @@ impl Camera {
     /// operations for any crop window, so that a cropped render traces the whole film's rays
     /// bit for bit. `u_lens` as in [`Camera::generate_ray`].
     #[inline]
-    pub fn pixel_ray(&self, x: u32, y: u32, offset: Vec2, u_lens: Vec2) -> Ray {
+    /// Pixels outside the image (negative or beyond its size: the border a splatting film
+    /// samples with `sample_border`) continue the film's grid.
+    pub fn pixel_ray(&self, x: i32, y: i32, offset: Vec2, u_lens: Vec2) -> Ray {
         let centre = Vec2::new(
-            (x + self.crop_offset[0]) as f32 + 0.5,
-            (y + self.crop_offset[1]) as f32 + 0.5,
+            (i64::from(x) + i64::from(self.crop_offset[0])) as f32 + 0.5,
+            (i64::from(y) + i64::from(self.crop_offset[1])) as f32 + 0.5,
         );
         self.generate_ray(centre + offset, u_lens)
     }

@@ -79,6 +79,7 @@ impl<'e> Builder<'e> {
             crop,
             filter: filter.unwrap_or(DEFAULT_FILTER),
             sample_border,
+            reconstruction: Reconstruction::Splat,
         })
     }
 }

@@ -119,6 +119,27 @@ pub struct FilmDesc {
     /// edge pixels see their whole filter (otherwise the filter is cut off at the image's edge,
     /// the default).
     pub sample_border: bool,
+    /// How samples become pixels (not a Mitsuba parameter: Mitsuba always splats; pt's
+    /// `--reconstruction` chooses).
+    pub reconstruction: Reconstruction,
+}
+
+/// How a film turns samples into pixels. Both have the same expected image for filters
+/// without negative lobes (each pixel the filter-weighted mean of the radiance around it, the
+/// filter cut off at the image's edge unless `sample_border`); they differ in noise.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Reconstruction {
+    /// Mitsuba's: each sample is placed uniformly in its pixel and added, with the filter's
+    /// weight, to every pixel whose filter reaches it; a pixel is its weighted sum divided by
+    /// its summed weights. Neighbouring pixels share samples (smoother, correlated noise: the
+    /// per-pixel variance at equal spp is Mitsuba's).
+    #[default]
+    Splat,
+    /// Filter importance sampling (pbrt-v4's): each sample's offset is drawn from the filter
+    /// and it counts for its own pixel only, so pixels are independent (noisier per pixel at
+    /// equal spp under wide filters, uncorrelated). Filters with negative lobes carry signed
+    /// weights.
+    Importance,
 }
 
 /// The part of a film that is rendered: the image's pixel (i, j) is the film's pixel
@@ -140,6 +161,7 @@ impl FilmDesc {
             crop: None,
             filter,
             sample_border: false,
+            reconstruction: Reconstruction::Splat,
         }
     }
 

@@ -1,7 +1,9 @@
-//! The film: per-pixel sample statistics.
+//! The film: pixel filters, per-pixel sample statistics and the two ways samples become
+//! pixels ([`pt_scene::Reconstruction`]): Mitsuba's splatting ([`splat`]) and filter importance
+//! sampling (here).
 //!
-//! Samples are placed by filter importance sampling (the pixel filter's shape is the density of
-//! sub-pixel offsets), which has the same expectation as Mitsuba's weighted splatting (with its
+//! Filter importance sampling places samples with the pixel filter's shape as the density of
+//! sub-pixel offsets, which has the same expectation as Mitsuba's weighted splatting (with its
 //! `sample_border` semantics at the image's edges: [`sample_pixel_offset`]) and keeps every
 //! pixel independent (so tiles need no locks). Box, tent and Gaussian filters are sampled
 //! exactly and every sample has weight 1. Filters with negative lobes (Mitchell-Netravali,
@@ -14,6 +16,8 @@ use pt_scene::FilterDesc;
 use std::sync::Arc;
 
 use crate::sampler::RandomSource;
+
+pub mod splat;
 
 /// The 1D profile of a separable filter at offset `x` (pixels), as Mitsuba 3.9.1 evaluates it
 /// (`eval`; its Gaussian with the exact exp), even in x; 0 outside the radius.
