@@ -160,8 +160,17 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
         dir.z
     );
     out!(
-        "geometry    {} shapes, {} triangles{}, {} spheres, {} cylinders{}",
+        "geometry    {} shapes{}, {} triangles{}, {} spheres, {} cylinders{}",
         desc.shapes.len(),
+        if desc.instances.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " and {} instances of {} shape groups (their primitives counted once)",
+                desc.instances.len(),
+                desc.groups.len()
+            )
+        },
         scene.stats.triangles,
         if scene.stats.parallelograms > 0 {
             format!(
@@ -215,6 +224,24 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
             s.id.as_deref()
                 .map(|id| format!(" id={id}"))
                 .unwrap_or_default(),
+        );
+    }
+    for (gi, g) in desc.groups.iter().enumerate() {
+        let uses = desc.instances.iter().filter(|i| i.group == gi).count();
+        let triangles: usize = g
+            .shapes
+            .iter()
+            .map(|s| match &s.geometry {
+                Geometry::Mesh(m) => m.indices.len(),
+                _ => 0,
+            })
+            .sum();
+        out!(
+            "  shapegroup {:<16} {} shapes ({} triangles), {} instance(s)",
+            g.id,
+            g.shapes.len(),
+            triangles,
+            uses
         );
     }
     out!("materials   {}", desc.bsdfs.len());

@@ -261,6 +261,12 @@ impl PatchMesh {
         patch_size: Option<f32>,
         max_patches: usize,
     ) -> Result<PatchMesh, RadiosityError> {
+        if let Some(i) = desc.instances.first() {
+            return Err(RadiosityError::scene(
+                &i.loc,
+                "radiosity does not support instances (not yet implemented): render with the path tracer",
+            ));
+        }
         let bounds = scene_bounds(desc);
         let diag = (bounds.1 - bounds.0).length();
         let h = match patch_size {

@@ -367,6 +367,7 @@ mod cwbvh;
 mod flat;
 #[cfg(test)]
 mod tests;
+pub mod top;
 
 pub(crate) use cwbvh::permute_in_place;
 use cwbvh::*;

@@ -5,7 +5,10 @@
 use super::mesh::{
     add_mesh, bounding_sphere, parallelogram_light, primitive_of, primitive_of_geometry, PrimRef,
 };
-use super::{BuildError, LightSelection, Scene, SceneStats, ShapeData};
+use super::{
+    BuildError, Group, Instance, Instancing, LightSelection, Scene, SceneStats, ShapeData,
+};
+use crate::accel::top::TopLevel;
 use crate::accel::{Accel, BvhKind};
 use crate::camera::Camera;
 use crate::geometry::Primitive;
@@ -14,6 +17,8 @@ use crate::material::{build_material, SurfaceMaterial};
 use crate::texture::{
     constant_spectrum, spectrum_for_role, DisplayPrimaries, Role, Texture, TextureBuilder,
 };
+use obvhs::aabb::Aabb;
+use pt_math::glam::{Affine3A, Mat3, Vec3A};
 use pt_math::Distribution1D;
 use pt_scene::{AreaEmitterDesc, Geometry, SceneDesc, ShapeDesc, TextureDesc};
 use pt_spectrum::ColorMode;
@@ -62,17 +67,7 @@ impl Scene {
                     message: format!("BSDF index {} out of range", shape.bsdf),
                 });
             }
-            let mut data = ShapeData {
-                material: shape.bsdf as u32,
-                light: None,
-                interior: None,
-                normals: None,
-                uvs: None,
-                tangents: None,
-                indices: Vec::new(),
-                attributes: Vec::new(),
-                frame: None,
-            };
+            let mut data = ShapeData::new(shape.bsdf as u32, None);
             let light_shape = geometry(
                 shape, si as u32, &mut prims, &mut refs, &mut stats, &mut data,
             )?;
@@ -110,7 +105,12 @@ impl Scene {
             shapes.push(data);
         }
 
-        let bounds = bounding_sphere(&prims);
+        let instancing = instancing(desc, &materials, &mut shapes, &mut stats, bvh)?;
+        let instance_boxes = instancing
+            .iter()
+            .flat_map(|i| &i.instances)
+            .map(|i| i.bounds);
+        let bounds = bounding_sphere(prims.iter().map(Primitive::aabb).chain(instance_boxes));
         // The primitives are made again from the description after the BVH build (less memory).
         let accel = Accel::build_compact(prims, bvh, |i| primitive_of(desc, refs[i]));
         // Into the BVH's order in place (a second array of these was 12 MB per million
@@ -118,14 +118,18 @@ impl Scene {
         let mut prim_refs = refs;
         crate::accel::permute_in_place(&mut prim_refs, &accel.original_index);
         // Vertex data for shading, copied after the BVH build (whose temporaries are the memory
-        // peak) rather than before.
-        for (si, (data, shape)) in shapes.iter_mut().zip(&desc.shapes).enumerate() {
+        // peak) rather than before. Shapes of instanced groups follow the scene's own.
+        let group_shapes = desc.groups.iter().flat_map(|g| &g.shapes);
+        for (data, shape) in shapes
+            .iter_mut()
+            .zip(desc.shapes.iter().chain(group_shapes))
+        {
             if let Geometry::Mesh(mesh) = &shape.geometry {
                 let material = &materials[data.material as usize];
                 let light = data.light.map(|i| &lights[i as usize]);
                 shading_data(data, mesh, material, light, &textures, mode).map_err(|message| {
                     BuildError {
-                        loc: desc.shapes[si].loc.clone(),
+                        loc: shape.loc.clone(),
                         message,
                     }
                 })?;
@@ -146,6 +150,7 @@ impl Scene {
         Ok(Scene {
             accel,
             prim_refs,
+            instancing: instancing.map(|i| i.scene),
             shapes,
             materials,
             media,
@@ -162,6 +167,109 @@ impl Scene {
 
 /// Adds a shape's primitives to the BVH list; returns the geometry an emitter on it samples
 /// and its area.
+/// The instancing of a scene under construction, with each instance's world box.
+struct BuiltInstancing {
+    scene: Instancing,
+    /// World boxes of the instances, in the order of `desc.instances`.
+    instances: Vec<BuiltInstance>,
+}
+
+struct BuiltInstance {
+    bounds: Aabb,
+}
+
+/// The scene's shape groups (one BVH each, in group space; their shapes appended to `shapes`
+/// after the scene's own) and its instances (a top-level tree over their world boxes); `None`
+/// when the scene has no instances. Groups no instance uses are built too (validated) but not
+/// kept apart from that.
+fn instancing(
+    desc: &SceneDesc,
+    materials: &[SurfaceMaterial],
+    shapes: &mut Vec<ShapeData>,
+    stats: &mut SceneStats,
+    bvh: BvhKind,
+) -> Result<Option<BuiltInstancing>, BuildError> {
+    let mut groups = Vec::with_capacity(desc.groups.len());
+    let mut group_boxes = Vec::with_capacity(desc.groups.len());
+    for (gi, group) in desc.groups.iter().enumerate() {
+        let (mut prims, mut refs) = (Vec::new(), Vec::new());
+        for shape in &group.shapes {
+            if shape.bsdf >= materials.len() {
+                return Err(BuildError {
+                    loc: shape.loc.clone(),
+                    message: format!("BSDF index {} out of range", shape.bsdf),
+                });
+            }
+            let si = shapes.len() as u32;
+            let mut data = ShapeData::new(shape.bsdf as u32, Some(gi as u32));
+            geometry(shape, si, &mut prims, &mut refs, stats, &mut data)?;
+            shapes.push(data);
+        }
+        let bounds = prims
+            .iter()
+            .map(Primitive::aabb)
+            .fold(Aabb::empty(), |a, b| a.union(&b));
+        let accel = Accel::build(prims, bvh);
+        let mut prim_refs = refs;
+        crate::accel::permute_in_place(&mut prim_refs, &accel.original_index);
+        groups.push(Group { accel, prim_refs });
+        group_boxes.push(bounds);
+    }
+    if desc.instances.is_empty() {
+        return Ok(None);
+    }
+    let mut list = Vec::with_capacity(desc.instances.len());
+    let mut built = Vec::with_capacity(desc.instances.len());
+    for inst in &desc.instances {
+        let to_world = Affine3A::from_mat4(inst.to_world);
+        let to_local = to_world.inverse();
+        let normal_to_world = Mat3::from(to_local.matrix3).transpose();
+        if !(to_local.is_finite() && normal_to_world.is_finite()) {
+            return Err(BuildError {
+                loc: inst.loc.clone(),
+                message: "the instance's to_world cannot be inverted".into(),
+            });
+        }
+        let b = group_boxes[inst.group];
+        let bounds = if b.min.cmple(b.max).all() {
+            (0..8).fold(Aabb::empty(), |acc, k| {
+                let corner = Vec3A::new(
+                    if k & 1 == 0 { b.min.x } else { b.max.x },
+                    if k & 2 == 0 { b.min.y } else { b.max.y },
+                    if k & 4 == 0 { b.min.z } else { b.max.z },
+                );
+                acc.union(&Aabb::from_point(to_world.transform_point3a(corner)))
+            })
+        } else {
+            b
+        };
+        list.push(Instance {
+            group: inst.group as u32,
+            to_world,
+            to_local,
+            normal_to_world,
+        });
+        built.push(BuiltInstance { bounds });
+    }
+    let boxes: Vec<Aabb> = built.iter().map(|b| b.bounds).collect();
+    let top = TopLevel::build(&boxes);
+    // Into the tree's slot order.
+    let mut instances: Vec<Option<Instance>> = list.into_iter().map(Some).collect();
+    let instances = top
+        .order
+        .iter()
+        .map(|&i| instances[i as usize].take().expect("each instance once"))
+        .collect();
+    Ok(Some(BuiltInstancing {
+        scene: Instancing {
+            groups,
+            instances,
+            top,
+        },
+        instances: built,
+    }))
+}
+
 fn geometry(
     shape: &ShapeDesc,
     si: u32,

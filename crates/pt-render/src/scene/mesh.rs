@@ -313,10 +313,9 @@ pub(super) fn primitive_of_geometry(geometry: &Geometry, r: PrimRef) -> Primitiv
 }
 
 /// Bounding sphere (centre, radius) of all primitives; a unit sphere at the origin if empty.
-pub(super) fn bounding_sphere(prims: &[Primitive]) -> (Vec3, f32) {
+pub(super) fn bounding_sphere(boxes: impl Iterator<Item = obvhs::aabb::Aabb>) -> (Vec3, f32) {
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-    for p in prims {
-        let b = p.aabb();
+    for b in boxes {
         lo = lo.min(b.min.into());
         hi = hi.max(b.max.into());
     }

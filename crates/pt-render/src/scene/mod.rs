@@ -52,6 +52,68 @@ struct ShapeData {
     attributes: Vec<Option<Attribute>>,
     /// Spheres: the object-to-world rotation (uv and dp/du follow its z axis).
     frame: Option<Mat3>,
+    /// The instanced group the shape belongs to (its primitives are in that group's
+    /// [`Group::accel`], in the group's space), or `None` for a shape of the scene itself.
+    group: Option<u32>,
+}
+
+impl ShapeData {
+    /// A shape with `material`, in `group` (or the scene's own), its other data still empty.
+    fn new(material: u32, group: Option<u32>) -> Self {
+        ShapeData {
+            material,
+            light: None,
+            interior: None,
+            normals: None,
+            uvs: None,
+            tangents: None,
+            indices: Vec::new(),
+            attributes: Vec::new(),
+            frame: None,
+            group,
+        }
+    }
+}
+
+/// Instancing (Mitsuba's `shapegroup` and `instance`): each group's primitives once, in the
+/// group's own space, and a top-level tree over the instances' world boxes.
+struct Instancing {
+    groups: Vec<Group>,
+    /// The instances in the top-level tree's slot order.
+    instances: Vec<Instance>,
+    top: crate::accel::top::TopLevel,
+}
+
+/// One shape group: its BVH (group space) and, per primitive, its shape and face.
+struct Group {
+    accel: Accel,
+    prim_refs: Vec<PrimRef>,
+}
+
+/// One instance: which group, and its transforms.
+struct Instance {
+    group: u32,
+    /// Group space to world space.
+    to_world: pt_math::glam::Affine3A,
+    /// World space to group space.
+    to_local: pt_math::glam::Affine3A,
+    /// Normals from group space to world space (the inverse transpose of the linear part).
+    normal_to_world: Mat3,
+}
+
+/// `ray` below `tmax` in the space of instance `i`, with a unit direction, and the factor
+/// from world distances to the local ray's (a local distance divided by it is the world's).
+#[inline(always)]
+fn local_ray(i: &Instance, ray: &Ray, tmax: f32) -> (Ray, f32) {
+    let d = i.to_local.transform_vector3(ray.dir);
+    let scale = d.length();
+    let local = Ray {
+        origin: i.to_local.transform_point3(ray.origin),
+        dir: d / scale,
+        tmin: ray.tmin * scale,
+        tmax: tmax * scale,
+    };
+    (local, scale)
 }
 
 /// Counts for `pt info` and logs.
@@ -73,6 +135,8 @@ pub struct SceneStats {
 pub struct Scene {
     accel: Accel,
     prim_refs: Vec<PrimRef>,
+    /// Instanced groups, if the scene has instances.
+    instancing: Option<Instancing>,
     shapes: Vec<ShapeData>,
     /// One material per BSDF of the description (`ShapeDesc::bsdf` indexes it).
     pub materials: Vec<SurfaceMaterial>,
@@ -97,19 +161,83 @@ impl Scene {
     /// Closest hit along `ray`, with its surface data.
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray) -> Option<Interaction> {
+        let hit = self.accel.intersect(ray);
+        if let Some(inst) = &self.instancing {
+            let tmax = hit.map_or(ray.tmax, |h| h.t);
+            if let Some(it) = self.intersect_instances(inst, ray, tmax) {
+                return Some(it);
+            }
+        }
+        Some(self.interaction(&self.accel, &self.prim_refs, ray, hit?))
+    }
+
+    /// Whether the segment `ray` (tmin..tmax) is blocked.
+    #[inline(always)]
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        self.accel.occluded(ray)
+            || self.instancing.as_ref().is_some_and(|inst| {
+                inst.top.any(ray, |slot, tmax| {
+                    let i = &inst.instances[slot];
+                    let (local, _) = local_ray(i, ray, tmax);
+                    inst.groups[i.group as usize].accel.occluded(&local)
+                })
+            })
+    }
+
+    /// The closest hit on an instance below `tmax`, in world space.
+    #[inline(never)]
+    fn intersect_instances(&self, inst: &Instancing, ray: &Ray, tmax: f32) -> Option<Interaction> {
+        let mut best = None;
+        let (slot, t) = inst.top.closest(ray, tmax, |slot, tmax| {
+            let i = &inst.instances[slot];
+            let (local, scale) = local_ray(i, ray, tmax);
+            match inst.groups[i.group as usize].accel.intersect(&local) {
+                Some(h) if h.t / scale < tmax => {
+                    best = Some((h, local));
+                    h.t / scale
+                }
+                _ => f32::INFINITY,
+            }
+        })?;
+        let (h, local) = best?;
+        let i = &inst.instances[slot];
+        let g = &inst.groups[i.group as usize];
+        let mut it = self.interaction(&g.accel, &g.prim_refs, &local, h);
+        let n = |v: Vec3| (i.normal_to_world * v).normalize();
+        it.p = i.to_world.transform_point3(it.p);
+        it.ng = n(it.ng);
+        it.ns = n(it.ns);
+        it.dpdu = i.to_world.transform_vector3(it.dpdu);
+        it.dpdv = i.to_world.transform_vector3(it.dpdv);
+        let tangent = i.to_world.transform_vector3(it.tangent.truncate());
+        it.tangent = tangent.extend(it.tangent.w);
+        it.t = t;
+        Some(it)
+    }
+
+    /// The surface data of `hit`, a hit of `ray` on `accel`'s primitive, whose shapes and faces
+    /// `prim_refs` gives (in the space of `accel` and `ray`).
+    #[inline(always)]
+    fn interaction(
+        &self,
+        accel: &Accel,
+        prim_refs: &[PrimRef],
+        ray: &Ray,
+        hit: AccelHit,
+    ) -> Interaction {
         let AccelHit {
             index: id,
             t,
             b1,
             b2,
-        } = self.accel.intersect(ray)?;
-        let r = self.prim_refs[id];
+        } = hit;
+        let r = prim_refs[id];
         let shape = &self.shapes[r.shape as usize];
-        match self.accel.prims[id] {
+        match accel.prims[id] {
             Primitive::Triangle { v0, e1, e2 } | Primitive::Parallelogram { v0, e1, e2 } => {
                 let b0 = 1.0 - b1 - b2;
                 let p = Vec3::from(v0 + e1 * b1 + e2 * b2);
-                let ng = match self.accel.unit_normals.get(id) {
+                let ng = match accel.unit_normals.get(id) {
                     Some(&n) => n,
                     None => Vec3::from(e1.cross(e2)).normalize(),
                 };
@@ -164,7 +292,7 @@ impl Scene {
                     }
                     None => pt_math::Vec4::ZERO,
                 };
-                Some(Interaction {
+                Interaction {
                     p,
                     ng,
                     ns,
@@ -176,7 +304,7 @@ impl Scene {
                     shape: r.shape,
                     prim: id as u32,
                     b: Vec2::new(b1, b2),
-                })
+                }
             }
             Primitive::Sphere {
                 center,
@@ -207,7 +335,7 @@ impl Scene {
                     * Vec3::new(o.z * cos_phi, o.z * sin_phi, -rho)
                     * (std::f32::consts::PI * radius);
                 let dp = [dpdu, dpdv];
-                Some(Interaction::analytic(p, n, uv, dp, t, r.shape, id as u32))
+                Interaction::analytic(p, n, uv, dp, t, r.shape, id as u32)
             }
             Primitive::Cylinder {
                 p0,
@@ -236,15 +364,9 @@ impl Scene {
                 let uv = Vec2::new(phi / std::f32::consts::TAU, local.z / length);
                 let dpdu = frame * Vec3::new(-on.y, on.x, 0.0) * std::f32::consts::TAU;
                 let dp = [dpdu, frame * Vec3::new(0.0, 0.0, length)];
-                Some(Interaction::analytic(p, n, uv, dp, t, r.shape, id as u32))
+                Interaction::analytic(p, n, uv, dp, t, r.shape, id as u32)
             }
         }
-    }
-
-    /// Whether the segment `ray` (tmin..tmax) is blocked.
-    #[inline(always)]
-    pub fn occluded(&self, ray: &Ray) -> bool {
-        self.accel.occluded(ray)
     }
 
     /// The primitives the BVH holds (world space, in BVH order): triangles, parallelograms
@@ -267,7 +389,11 @@ impl Scene {
         if shape.attributes.is_empty() {
             return TexturePoint::uv(hit.uv);
         }
-        let r = self.prim_refs[hit.prim as usize];
+        let refs = match (shape.group, &self.instancing) {
+            (Some(g), Some(inst)) => &inst.groups[g as usize].prim_refs,
+            _ => &self.prim_refs,
+        };
+        let r = refs[hit.prim as usize];
         let (b1, b2) = (hit.b.x, hit.b.y);
         TexturePoint {
             uv: hit.uv,

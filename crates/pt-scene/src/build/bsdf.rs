@@ -33,17 +33,7 @@ pub(crate) fn bsdf_from_properties(
             ),
         ));
     }
-    let mut b = Builder {
-        ids: HashMap::new(),
-        search_paths: &[],
-        base_dir: Path::new("."),
-        bsdfs: Vec::new(),
-        bsdf_index: HashMap::new(),
-        bsdf_memo: HashMap::new(),
-        texture_memo: HashMap::new(),
-        visiting: Vec::new(),
-        default_bsdf: [None, None],
-    };
+    let mut b = Builder::new(HashMap::new(), &[], Path::new("."));
     let kind = materials::bsdf_kind(&mut b, &v, &Nested::none())?;
     v.finish()?;
     Ok(BsdfDesc {

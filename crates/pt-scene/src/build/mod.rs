@@ -40,8 +40,8 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "volpathmis", "aov", "prb", "prb_basic", "prb_projective", "direct_projective",
         "ptracer", "depth", "stokes", "prbvolpath",
     ]),
-    ("shape", &["obj", "ply", "serialized", "gltf", "rectangle", "cube", "sphere", "disk", "cylinder"], &[
-        "shapegroup", "instance", "bsplinecurve", "linearcurve",
+    ("shape", &["obj", "ply", "serialized", "gltf", "rectangle", "cube", "sphere", "disk", "cylinder", "shapegroup", "instance"], &[
+        "bsplinecurve", "linearcurve",
         "sdfgrid", "ellipsoids", "ellipsoidsmesh",
     ]),
     ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "plastic", "roughplastic", "null", "fluorescent", "phosphorescent", "bumpmap"], &[
@@ -109,18 +109,7 @@ fn misplaced(
 pub(crate) fn build(doc: &Document, source: &Path, base_dir: &Path) -> Result<SceneDesc> {
     let mut ids = HashMap::new();
     collect_ids(&doc.root, &mut ids)?;
-    let mut builder = Builder {
-        ids,
-        search_paths: &doc.search_paths,
-        base_dir,
-        bsdfs: Vec::new(),
-        bsdf_index: HashMap::new(),
-        bsdf_memo: HashMap::new(),
-        texture_memo: HashMap::new(),
-        visiting: Vec::new(),
-        default_bsdf: [None, None],
-    };
-    builder.scene(&doc.root, source)
+    Builder::new(ids, &doc.search_paths, base_dir).scene(&doc.root, source)
 }
 
 /// Registers every object that has an `id`; ids are global to the scene, like Mitsuba's.
@@ -168,9 +157,36 @@ struct Builder<'e> {
     /// Indices of the implicit diffuse BSDFs shared by all shapes without one: [0] for shapes
     /// without an emitter (reflectance 0.5), [1] for emitting shapes (reflectance 0).
     default_bsdf: [Option<usize>; 2],
+    /// Shape groups built so far (`SceneDesc::groups`).
+    groups: Vec<ShapeGroupDesc>,
+    /// Index in `groups` of each group by its element's address, so that each is built once
+    /// however many instances name it.
+    group_index: HashMap<*const Element, usize>,
 }
 
 impl<'e> Builder<'e> {
+    /// A builder that resolves `<ref>`s through `ids` and files through `search_paths`, then
+    /// `base_dir`, with nothing built yet.
+    pub(super) fn new(
+        ids: HashMap<&'e str, &'e Element>,
+        search_paths: &'e [PathBuf],
+        base_dir: &'e Path,
+    ) -> Self {
+        Builder {
+            ids,
+            search_paths,
+            base_dir,
+            bsdfs: Vec::new(),
+            bsdf_index: HashMap::new(),
+            bsdf_memo: HashMap::new(),
+            texture_memo: HashMap::new(),
+            visiting: Vec::new(),
+            default_bsdf: [None, None],
+            groups: Vec::new(),
+            group_index: HashMap::new(),
+        }
+    }
+
     /// The object a nested child stands for (following `<ref>`).
     pub(super) fn resolve(&self, child: &Child<'e>) -> Result<&'e Element> {
         match *child {
@@ -192,6 +208,7 @@ impl<'e> Builder<'e> {
         let mut integrator = None;
         let mut shapes = Vec::new();
         let mut lights = Vec::new();
+        let mut instances = Vec::new();
         for child in &view.children {
             let Child::Object(el) = *child else {
                 return Err(SceneError::at(
@@ -211,6 +228,11 @@ impl<'e> Builder<'e> {
                     ))
                 }
                 "integrator" => integrator = Some(self.integrator(el)?),
+                // Built (and validated) where it is written, used by the instances naming it.
+                "shape" if el.attr("type") == Some("shapegroup") => drop(self.shape_group(el)?),
+                "shape" if el.attr("type") == Some("instance") => {
+                    instances.push(self.instance(el)?)
+                }
                 "shape" => shapes.push(self.shape(el)?),
                 // Validated now; it enters `bsdfs` when a shape uses it.
                 "bsdf" => drop(self.bsdf_desc(el)?),
@@ -254,6 +276,8 @@ impl<'e> Builder<'e> {
             shapes,
             bsdfs: std::mem::take(&mut self.bsdfs),
             lights,
+            groups: std::mem::take(&mut self.groups),
+            instances,
         })
     }
 }

@@ -52,6 +52,97 @@ impl<'e> Builder<'e> {
         })
     }
 
+    /// `shapegroup` (Mitsuba's): its nested shapes, built once (the index into
+    /// `SceneDesc::groups`). As in Mitsuba 3.9.1, a group holds no emitter and no other group;
+    /// instances inside a group and media on its shapes are not implemented.
+    pub(super) fn shape_group(&mut self, el: &'e Element) -> Result<usize> {
+        let key = el as *const Element;
+        if let Some(&i) = self.group_index.get(&key) {
+            return Ok(i);
+        }
+        let v = ObjectView::parse(el)?;
+        let mut shapes = Vec::new();
+        for child in &v.children {
+            let target = self.resolve(child)?;
+            if target.tag != "shape" {
+                return Err(misplaced(child, target, &v, "shape"));
+            }
+            let at = |m: &str| Err(SceneError::at(&child.written().loc, m.to_string()));
+            match target.attr("type") {
+                Some("shapegroup") => {
+                    return at("a shapegroup cannot contain another shapegroup (nor can Mitsuba's)")
+                }
+                Some("instance") => {
+                    return at("an instance inside a shapegroup (nested instancing) is not supported (not yet implemented)")
+                }
+                _ => {}
+            }
+            let shape = self.shape(target)?;
+            if let Some(e) = &shape.emitter {
+                return Err(SceneError::at(
+                    &e.loc,
+                    "a shape in a shapegroup cannot emit (Mitsuba refuses instanced emitters too)",
+                ));
+            }
+            if let Some(m) = &shape.interior {
+                return Err(SceneError::at(
+                    &m.loc,
+                    "media on shapes in a shapegroup are not supported (not yet implemented)",
+                ));
+            }
+            shapes.push(shape);
+        }
+        v.finish()?;
+        let i = self.groups.len();
+        self.groups.push(ShapeGroupDesc {
+            loc: el.loc.clone(),
+            id: el.attr("id").unwrap_or_default().to_string(),
+            shapes,
+        });
+        self.group_index.insert(key, i);
+        Ok(i)
+    }
+
+    /// `instance` (Mitsuba's): a `<ref>` to a `shapegroup` (or the group written inline) and
+    /// `to_world` (any invertible affine transform).
+    pub(super) fn instance(&mut self, el: &'e Element) -> Result<InstanceDesc> {
+        let v = ObjectView::parse(el)?;
+        let to_world = v.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+        let det = to_world.determinant();
+        if !(det.is_finite() && det != 0.0) {
+            return Err(SceneError::at(
+                &el.loc,
+                "the instance's to_world is not invertible (determinant 0)",
+            ));
+        }
+        let mut group = None;
+        for child in &v.children {
+            let target = self.resolve(child)?;
+            if target.tag != "shape" || target.attr("type") != Some("shapegroup") {
+                return Err(misplaced(child, target, &v, "a reference to a shapegroup"));
+            }
+            if group.is_some() {
+                return Err(SceneError::at(
+                    &child.written().loc,
+                    "an instance places exactly one shapegroup",
+                ));
+            }
+            group = Some(self.shape_group(target)?);
+        }
+        v.finish()?;
+        let group = group.ok_or_else(|| {
+            SceneError::at(
+                &el.loc,
+                "an instance needs a shapegroup: <ref id=\"...\"/> to one",
+            )
+        })?;
+        Ok(InstanceDesc {
+            loc: el.loc.clone(),
+            group,
+            to_world,
+        })
+    }
+
     pub(super) fn mesh(
         &self,
         v: &ObjectView<'_>,

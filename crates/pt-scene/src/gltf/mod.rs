@@ -389,6 +389,8 @@ fn default_desc(cx: &Ctx) -> SceneDesc {
         shapes: Vec::new(),
         bsdfs: Vec::new(),
         lights: Vec::new(),
+        groups: Vec::new(),
+        instances: Vec::new(),
     }
 }
 

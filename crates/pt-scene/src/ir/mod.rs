@@ -68,6 +68,10 @@ pub struct SceneDesc {
     pub bsdfs: Vec<BsdfDesc>,
     /// Emitters that are not attached to a shape (point, spot, directional, sun, environment).
     pub lights: Vec<LightDesc>,
+    /// Mitsuba `shapegroup`s that instances place (not rendered themselves).
+    pub groups: Vec<ShapeGroupDesc>,
+    /// Mitsuba `instance`s: a group placed by a transform.
+    pub instances: Vec<InstanceDesc>,
 }
 
 impl SceneDesc {

@@ -2,7 +2,7 @@
 //! analytic spheres, with their material, emitter and interior medium.
 
 use super::{AreaEmitterDesc, SourceLoc, SpectrumDesc};
-use glam::{Mat3, Vec2, Vec3};
+use glam::{Mat3, Mat4, Vec2, Vec3};
 
 /// A triangle mesh in world space.
 #[derive(Clone, Debug, Default)]
@@ -120,6 +120,32 @@ pub struct ShapeDesc {
     /// The medium inside the shape (Mitsuba `<medium name="interior">`), if any. Rays that
     /// refract into the shape are attenuated by it until they leave.
     pub interior: Option<MediumDesc>,
+}
+
+/// Mitsuba's `shapegroup`: shapes stored once and placed any number of times by
+/// [`InstanceDesc`]s. Its shapes' geometry is in the group's own space (each shape's
+/// `to_world` applied, no instance's); they have no emitters and no media (Mitsuba refuses
+/// emitters in groups; media are not implemented in groups).
+#[derive(Clone, Debug)]
+pub struct ShapeGroupDesc {
+    /// Where it was defined.
+    pub loc: SourceLoc,
+    /// Its `id`.
+    pub id: String,
+    /// Its shapes, in file order.
+    pub shapes: Vec<ShapeDesc>,
+}
+
+/// Mitsuba's `instance`: a [`ShapeGroupDesc`] placed in the world.
+#[derive(Clone, Debug)]
+pub struct InstanceDesc {
+    /// Where it was defined.
+    pub loc: SourceLoc,
+    /// Index into `SceneDesc::groups`.
+    pub group: usize,
+    /// From the group's space to world space (any invertible affine transform, as in
+    /// Mitsuba: a non-uniform scale turns an instanced sphere into an ellipsoid).
+    pub to_world: Mat4,
 }
 
 /// A homogeneous, purely absorbing medium (Mitsuba `homogeneous` with `albedo` 0): radiance
