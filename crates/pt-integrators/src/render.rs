@@ -145,8 +145,10 @@ pub struct RenderState {
     pub spp_done: u32,
     /// Wall-clock time spent sampling so far (all sessions).
     pub time: Duration,
-    /// Per-pixel sums of the samples taken in each pixel, row-major from the top: the image
-    /// under importance sampling; under splatting the variance (see [`RenderState::output`]).
+    /// Per-pixel sums of the samples taken in each pixel: the image under importance sampling
+    /// (row-major from the top); under splatting the variance (see [`RenderState::output`]),
+    /// in the film's tile-major order ([`SplatLayout::tile_major_pixels`]), so that each tile
+    /// owns a contiguous slice.
     pub pixels: Vec<PixelStats>,
     /// The splatting film's accumulators, when the render splats
     /// ([`RenderSettings::splats`]).
@@ -186,18 +188,26 @@ impl RenderState {
     /// pixels took), and more than a single splatted pixel's variance, which shares samples
     /// with its neighbours.
     pub fn output(&self) -> RenderOutput {
+        let variance: Vec<[f32; 3]> = self
+            .pixels
+            .iter()
+            .map(PixelStats::variance_of_mean)
+            .collect();
+        let (mean, variance) = match &self.splat {
+            Some(film) => {
+                let mut row_major = vec![[0.0; 3]; variance.len()];
+                for (v, p) in variance.iter().zip(film.layout.tile_major_pixels()) {
+                    row_major[p] = *v;
+                }
+                (film.image(), row_major)
+            }
+            None => (self.pixels.iter().map(PixelStats::mean).collect(), variance),
+        };
         RenderOutput {
             width: self.width,
             height: self.height,
-            mean: match &self.splat {
-                Some(film) => film.image(),
-                None => self.pixels.iter().map(PixelStats::mean).collect(),
-            },
-            variance: self
-                .pixels
-                .iter()
-                .map(PixelStats::variance_of_mean)
-                .collect(),
+            mean,
+            variance,
             spp: self.spp_done,
             time: self.time,
             nonfinite_samples: self.pixels.iter().map(|p| p.nonfinite as u64).sum(),
@@ -400,7 +410,8 @@ fn importance_pass(
 }
 
 /// One pass of the splatting film: samples `samples` of every origin pixel (the image's and,
-/// with `sample_border`, its border's), rayon over the rows of the film's tile grid.
+/// with `sample_border`, its border's), rayon over the film's tiles (each owns its
+/// accumulator and the contiguous slice of tile-major statistics of its origins).
 fn splat_pass(
     scene: &Scene,
     settings: &RenderSettings,
@@ -409,37 +420,30 @@ fn splat_pass(
     samples: std::ops::Range<u32>,
     progress: &(dyn Fn(u64) + Sync),
 ) {
-    let (w, h) = (settings.width, settings.height);
     let layout = &film.layout;
     let columns = layout.tile_columns();
-    // Each row of tiles with the image rows of its origins (contiguous in `pixels`).
     let mut rest = pixels;
-    let mut bands = Vec::with_capacity(layout.tile_rows());
-    for (j, tiles) in film.tiles.chunks_mut(columns).enumerate() {
-        let (_, ys) = layout.origins(0, j);
-        let (y0, y1) = (ys.start.clamp(0, h as i32), ys.end.clamp(0, h as i32));
-        let (band, r) = std::mem::take(&mut rest).split_at_mut(((y1 - y0) as u32 * w) as usize);
+    let mut jobs = Vec::with_capacity(film.tiles.len());
+    for (k, acc) in film.tiles.iter_mut().enumerate() {
+        let (i, j) = (k % columns, k / columns);
+        let (xs, ys) = layout.image_origins(i, j);
+        let n = xs.len() * ys.len();
+        let (stats, r) = std::mem::take(&mut rest).split_at_mut(n);
         rest = r;
-        bands.push((j, y0, band, tiles));
+        jobs.push((i, j, stats, acc));
     }
-    bands.into_par_iter().for_each(|(j, y0, band, tiles)| {
-        for (i, acc) in tiles.iter_mut().enumerate() {
-            let (xs, ys) = layout.origins(i, j);
-            let tile = Tile {
-                x0: xs.start,
-                y0: ys.start,
-                x1: xs.end,
-                y1: ys.end,
-                samples: samples.clone(),
-            };
-            let target = Target::Splat {
-                stats: &mut *band,
-                stats_y0: y0,
-                acc,
-            };
-            render_tile(scene, settings, target, &tile);
-            progress(tile.image_pixels(w, h) * u64::from(samples.len() as u32));
-        }
+    jobs.into_par_iter().for_each(|(i, j, stats, acc)| {
+        let (xs, ys) = layout.origins(i, j);
+        let tile = Tile {
+            x0: xs.start,
+            y0: ys.start,
+            x1: xs.end,
+            y1: ys.end,
+            samples: samples.clone(),
+        };
+        let n = stats.len() as u64;
+        render_tile(scene, settings, Target::Splat { stats, acc }, &tile);
+        progress(n * u64::from(samples.len() as u32));
     });
 }
 
@@ -480,11 +484,10 @@ enum Target<'a> {
     /// Importance sampling: the image rows `tile.y0..tile.y1` (full width), each sample
     /// added to its own pixel.
     Pixels(&'a mut [PixelStats]),
-    /// Splatting: the tile's accumulator, and the variance statistics of the image rows from
-    /// `stats_y0` (full width) that hold the tile's origins inside the image.
+    /// Splatting: the tile's accumulator, and the variance statistics of the tile's origins
+    /// inside the image (row-major over them).
     Splat {
         stats: &'a mut [PixelStats],
-        stats_y0: i32,
         acc: &'a mut SplatTile,
     },
 }
@@ -531,11 +534,7 @@ fn render_tile_portable(scene: &Scene, settings: &RenderSettings, target: Target
                 });
             }
         }
-        Target::Splat {
-            stats,
-            stats_y0,
-            acc,
-        } => render_splat_tile(scene, settings, tile, stats, stats_y0, acc),
+        Target::Splat { stats, acc } => render_splat_tile(scene, settings, tile, stats, acc),
     }
 }
 
@@ -549,7 +548,6 @@ fn render_splat_tile(
     settings: &RenderSettings,
     tile: &Tile,
     stats: &mut [PixelStats],
-    stats_y0: i32,
     acc: &mut SplatTile,
 ) {
     let (w, h) = (settings.width as i32, settings.height as i32);
@@ -560,9 +558,12 @@ fn render_splat_tile(
     // linear RGB.
     let mut taken = vec![(Vec2::ZERO, [0.0f32; 3]); tw * (tile.y1 - tile.y0) as usize * ns];
     for y in tile.y0..tile.y1 {
-        let mut row = (0..h).contains(&y).then(|| {
-            let start = ((y - stats_y0) * w) as usize;
-            &mut stats[start..start + w as usize]
+        // The row's statistics (the tile's origins inside the image, from column ix0).
+        let (ix0, ix1) = (tile.x0.max(0), tile.x1.min(w));
+        let iy0 = tile.y0.max(0);
+        let mut row = ((0..h).contains(&y) && ix0 < ix1).then(|| {
+            let start = ((y - iy0) * (ix1 - ix0)) as usize;
+            &mut stats[start..start + (ix1 - ix0) as usize]
         });
         let first = (y - tile.y0) as usize * tw;
         trace_row(scene, settings, y, tile, true, |x, k, rgb, offset, _| {
@@ -570,8 +571,8 @@ fn render_splat_tile(
             // Exact: the offset is u - 1/2 for u a multiple of 2^-24 in [0, 1).
             taken[q * ns + (k - s0) as usize] = (offset + Vec2::splat(0.5), rgb);
             if let Some(r) = row.as_deref_mut() {
-                if (0..w).contains(&x) {
-                    r[x as usize].add(rgb);
+                if (ix0..ix1).contains(&x) {
+                    r[(x - ix0) as usize].add(rgb);
                 }
             }
         });

@@ -102,6 +102,35 @@ impl SplatLayout {
         )
     }
 
+    /// The origins of tile (`i`, `j`) inside the image: x range and y range (possibly empty).
+    pub fn image_origins(
+        &self,
+        i: usize,
+        j: usize,
+    ) -> (std::ops::Range<i32>, std::ops::Range<i32>) {
+        let (xs, ys) = self.origins(i, j);
+        let clip = |r: std::ops::Range<i32>, n: u32| r.start.max(0)..r.end.min(n as i32).max(0);
+        (clip(xs, self.width), clip(ys, self.height))
+    }
+
+    /// Every image pixel's index (row-major) in tile-major order: tile after tile (row-major
+    /// over the grid), each tile's image origins row-major. Statistics kept per origin in this
+    /// order give each tile a contiguous slice.
+    pub fn tile_major_pixels(&self) -> Vec<usize> {
+        let mut order = Vec::with_capacity(self.width as usize * self.height as usize);
+        for j in 0..self.tile_rows() {
+            for i in 0..self.tile_columns() {
+                let (xs, ys) = self.image_origins(i, j);
+                for y in ys {
+                    for x in xs.clone() {
+                        order.push(y as usize * self.width as usize + x as usize);
+                    }
+                }
+            }
+        }
+        order
+    }
+
     /// The empty accumulator of tile (`i`, `j`): its origins grown by the margin, clipped to
     /// the image.
     fn tile(&self, i: usize, j: usize) -> SplatTile {
