@@ -36,6 +36,7 @@ pub mod minnaert;
 pub mod normal_map;
 pub mod oren_nayar;
 pub mod plastic;
+pub mod principled;
 pub mod rough_dielectric;
 pub mod rough_plastic;
 pub mod rough_thin_film;
@@ -50,6 +51,7 @@ pub use microfacet::{Distribution, Microfacet};
 pub use minnaert::Minnaert;
 pub use oren_nayar::{OrenNayar, OrenNayarVariant};
 pub use plastic::{fresnel_diffuse_reflectance, Plastic};
+pub use principled::Principled;
 use pt_math::{Vec2, Vec3, Vec4};
 use pt_spectrum::SampledSpectrum;
 pub use rough_dielectric::RoughDielectric;
@@ -114,6 +116,9 @@ pub enum Bsdf {
     RoughPlastic(RoughPlastic),
     /// Thin film on a rough conductor or dielectric base (handles both sides for a dielectric).
     RoughThinFilm(RoughThinFilm),
+    /// Mitsuba's `principled` (Disney): diffuse, sheen, clearcoat, GGX specular and rough
+    /// transmission (handles both sides when it transmits).
+    Principled(Principled),
 }
 
 impl Bsdf {
@@ -134,6 +139,7 @@ impl Bsdf {
             Bsdf::Plastic(m) => m.eval(wo, wi),
             Bsdf::RoughPlastic(m) => m.eval(wo, wi),
             Bsdf::RoughThinFilm(m) => m.eval(wo, wi),
+            Bsdf::Principled(m) => m.eval(wo, wi),
         }
     }
 
@@ -154,6 +160,7 @@ impl Bsdf {
             Bsdf::Plastic(m) => m.pdf(wo, wi),
             Bsdf::RoughPlastic(m) => m.pdf(wo, wi),
             Bsdf::RoughThinFilm(m) => m.pdf(wo, wi),
+            Bsdf::Principled(m) => m.pdf(wo, wi),
         }
     }
 
@@ -174,6 +181,7 @@ impl Bsdf {
             Bsdf::Plastic(m) => m.sample(wo, u_lobe, u),
             Bsdf::RoughPlastic(m) => m.sample(wo, u_lobe, u),
             Bsdf::RoughThinFilm(m) => m.sample(wo, u_lobe, u),
+            Bsdf::Principled(m) => m.sample(wo, u_lobe, u),
         }
     }
 
@@ -184,6 +192,7 @@ impl Bsdf {
             Bsdf::Dielectric(_) | Bsdf::RoughDielectric(_) | Bsdf::ThinDielectric(_) => true,
             Bsdf::ThinFilm(m) => m.is_transmissive(),
             Bsdf::RoughThinFilm(m) => m.film.is_transmissive(),
+            Bsdf::Principled(m) => m.transmissive,
             _ => false,
         }
     }
@@ -200,7 +209,8 @@ impl Bsdf {
             | Bsdf::GltfPbr(_)
             | Bsdf::Plastic(_)
             | Bsdf::RoughPlastic(_)
-            | Bsdf::RoughThinFilm(_) => true,
+            | Bsdf::RoughThinFilm(_)
+            | Bsdf::Principled(_) => true,
             Bsdf::Conductor(_)
             | Bsdf::Dielectric(_)
             | Bsdf::ThinDielectric(_)
@@ -384,6 +394,10 @@ pub fn mirror_side(two_sided: bool, transmissive: bool, wo_z: f32) -> f32 {
 fn flip_z(v: Vec3, s: f32) -> Vec3 {
     Vec3::new(v.x, v.y, v.z * s)
 }
+
+// A BSDF value is copied at every hit (twice in a `SurfaceBsdf` with a blend): a new model
+// must not make the enum larger unnoticed (112 bytes: `RoughThinFilm` and `Principled`).
+const _: () = assert!(std::mem::size_of::<Bsdf>() <= 112);
 
 #[cfg(test)]
 mod tests {

@@ -8,7 +8,8 @@
 //!
 //! Models ([`MODELS`] lists each with its parameters): `diffuse`, `orennayar` (+ `variant`),
 //! `minnaert`, `dielectric`, `thindielectric`, `roughdielectric`, `conductor` (`eta` + `k` or a
-//! named `material`), `roughconductor`, `roughplastic`, `thinfilm`, `roughthinfilm`, and the
+//! named `material`), `roughconductor`, `roughplastic`, `principled`, `thinfilm`,
+//! `roughthinfilm`, and the
 //! wrapper `twosided` around one of them. Values are numbers, linear sRGB colours, names
 //! (`variant="full"`, `material="Au"`, `int_ior="bk7"`, `distribution="ggx"`) or flags, as
 //! [`PropValue`]s; angles in radians (`sigma`), film thickness in nanometres.
@@ -156,6 +157,27 @@ pub const MODELS: &[ModelInfo] = &[
             "alpha_u",
             "alpha_v",
             "sample_visible",
+        ],
+    },
+    ModelInfo {
+        name: "principled",
+        params: &[
+            "base_color",
+            "roughness",
+            "anisotropic",
+            "metallic",
+            "spec_trans",
+            "spec_tint",
+            "sheen",
+            "sheen_tint",
+            "flatness",
+            "clearcoat",
+            "clearcoat_gloss",
+            "eta",
+            "specular",
+            "main_specular_sampling_rate",
+            "clearcoat_sampling_rate",
+            "diffuse_reflectance_sampling_rate",
         ],
     },
     ModelInfo {

@@ -313,6 +313,11 @@ pub fn chi2_resolvable(b: &Bsdf) -> bool {
         Bsdf::RoughPlastic(m) => m.mf.alpha_u.min(m.mf.alpha_v) >= MIN_ALPHA,
         Bsdf::RoughThinFilm(m) => m.mf.alpha_u.min(m.mf.alpha_v) >= MIN_ALPHA,
         Bsdf::GltfPbr(m) => m.mf.alpha_u.min(m.mf.alpha_v) >= MIN_ALPHA,
+        Bsdf::Principled(m) => {
+            m.mf.alpha_u.min(m.mf.alpha_v) >= MIN_ALPHA
+                && (m.clearcoat == 0.0 || m.clearcoat_alpha >= MIN_ALPHA)
+                && (!m.transmissive || (m.eta - 1.0).abs() >= 0.01)
+        }
         _ => true,
     }
 }

@@ -1,6 +1,7 @@
 //! From a BSDF description to a [`SurfaceMaterial`]: wrappers become its fields, the model a
 //! [`Material`] with a texture per texturable parameter, each built for its role.
 
+use super::PrincipledTextures;
 use super::{
     Film, FilmBaseMaterial, Material, NormalKind, NormalMap, Opacity, Roughness, SurfaceMaterial,
 };
@@ -391,6 +392,31 @@ impl Builder<'_> {
                 roughness: self.tex("roughness", roughness, Role::Scalar)?,
                 ior: *ior,
             },
+            BsdfKind::Principled(p) => {
+                let d = [
+                    &p.roughness,
+                    &p.anisotropic,
+                    &p.metallic,
+                    &p.spec_trans,
+                    &p.spec_tint,
+                    &p.sheen,
+                    &p.sheen_tint,
+                    &p.flatness,
+                    &p.clearcoat,
+                    &p.clearcoat_gloss,
+                ];
+                let mut scalars = Vec::with_capacity(d.len());
+                for (name, t) in PrincipledTextures::NAMES.iter().zip(d) {
+                    scalars.push(self.tex(name, t, Role::Scalar)?);
+                }
+                Material::Principled(Box::new(PrincipledTextures {
+                    base_color: self.tex("base_color", &p.base_color, Role::Albedo)?,
+                    scalars: scalars.try_into().expect("ten scalars"),
+                    eta: p.eta,
+                    transmissive: p.transmissive,
+                    rates: p.rates,
+                }))
+            }
             BsdfKind::TwoSided { .. }
             | BsdfKind::Mask { .. }
             | BsdfKind::NormalMap { .. }

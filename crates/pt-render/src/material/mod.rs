@@ -17,8 +17,8 @@ use crate::geometry::Interaction;
 use crate::texture::{Texture, TexturePoint};
 use pt_bsdf::{
     Bsdf, CoatingTable, Conductor, Dielectric, Distribution, FilmBase, GltfPbr, Lambert,
-    Microfacet, Minnaert, OrenNayar, OrenNayarVariant, Plastic, RoughConductor, RoughDielectric,
-    RoughPlastic, RoughThinFilm, SurfaceBsdf, ThinDielectric, ThinFilm,
+    Microfacet, Minnaert, OrenNayar, OrenNayarVariant, Plastic, Principled, RoughConductor,
+    RoughDielectric, RoughPlastic, RoughThinFilm, SurfaceBsdf, ThinDielectric, ThinFilm,
 };
 use pt_math::{Frame, Vec3};
 use pt_spectrum::{ColorMode, SampledSpectrum, SampledWavelengths};
@@ -221,6 +221,81 @@ pub enum Material {
     /// Project extension `fluorescent` in spectral mode: a Lambertian of the total albedo at
     /// each lane's wavelength (the re-emission moves wavelengths: [`SurfaceMaterial::fluorescent`]).
     Fluorescent(Box<Fluorescent>),
+    /// Mitsuba `principled`.
+    Principled(Box<PrincipledTextures>),
+}
+
+/// The textures of a `principled` material (pt-bsdf's `principled.rs` for their meaning).
+#[derive(Clone, Debug)]
+pub struct PrincipledTextures {
+    /// Base colour.
+    pub base_color: Texture,
+    /// Scalar weights, in the order of [`PrincipledTextures::NAMES`].
+    pub scalars: [Texture; 10],
+    /// Relative index of refraction.
+    pub eta: f32,
+    /// Whether the model transmits.
+    pub transmissive: bool,
+    /// Lobe selection weights: main specular, clearcoat, diffuse.
+    pub rates: [f32; 3],
+}
+
+impl PrincipledTextures {
+    /// The scalar parameters, in the order of `scalars`.
+    pub const NAMES: [&'static str; 10] = [
+        "roughness",
+        "anisotropic",
+        "metallic",
+        "spec_trans",
+        "spec_tint",
+        "sheen",
+        "sheen_tint",
+        "flatness",
+        "clearcoat",
+        "clearcoat_gloss",
+    ];
+
+    /// The BSDF at `at`. The tints divide by the base colour's luminance: Rec. 709 Y of the
+    /// RGB lanes, or in spectral mode the CIE-y-weighted mean over the path's wavelengths
+    /// (normalised; Mitsuba 3.9.1's spectral variants leave it unnormalised, so that there its
+    /// tints change even a white base colour).
+    #[inline]
+    fn bsdf(&self, at: &TexturePoint, lambda: &SampledWavelengths, mode: ColorMode) -> Principled {
+        let base_color = self.base_color.eval(at, lambda);
+        let [roughness, anisotropic, metallic, spec_trans, spec_tint, sheen, sheen_tint, flatness, clearcoat, clearcoat_gloss] =
+            std::array::from_fn(|k| self.scalars[k].eval_1(at));
+        let luminance = match mode {
+            ColorMode::Rgb => base_color.luminance_rgb(),
+            ColorMode::Spectral => {
+                let y = lambda.lambda().to_array().map(pt_spectrum::cie::cmf_y);
+                let b = base_color.0.to_array();
+                let num: f32 = (0..4).map(|k| y[k] * b[k]).sum();
+                let den: f32 = y.iter().sum();
+                if den > 0.0 {
+                    num / den
+                } else {
+                    0.0
+                }
+            }
+        };
+        Principled {
+            base_color,
+            luminance,
+            roughness,
+            metallic,
+            spec_trans,
+            spec_tint,
+            sheen,
+            sheen_tint,
+            flatness,
+            clearcoat,
+            clearcoat_alpha: 0.1 + (0.001 - 0.1) * clearcoat_gloss,
+            eta: self.eta,
+            mf: Principled::microfacet(roughness, anisotropic),
+            transmissive: self.transmissive,
+            rates: self.rates,
+        }
+    }
 }
 
 impl Material {
@@ -326,6 +401,7 @@ impl Material {
                 table,
             )),
             Material::ThinFilm(f) => Bsdf::ThinFilm(f.at(at, lambda, mode)),
+            Material::Principled(p) => Bsdf::Principled(p.bsdf(at, lambda, mode)),
             Material::RoughThinFilm(b) => {
                 Bsdf::RoughThinFilm(RoughThinFilm::new(b.0.at(at, lambda, mode), b.1.at(at)))
             }
@@ -595,6 +671,7 @@ impl Material {
                 roughness,
                 ..
             } => vec![base_color, metallic, roughness],
+            Material::Principled(p) => std::iter::once(&p.base_color).chain(&p.scalars).collect(),
         }
     }
 
@@ -606,7 +683,8 @@ impl Material {
             | Material::RoughConductor { .. }
             | Material::RoughPlastic { .. }
             | Material::RoughThinFilm(_)
-            | Material::GltfPbr { .. } => false,
+            | Material::GltfPbr { .. }
+            | Material::Principled(_) => false,
             _ => true,
         };
         isotropic_model && self.textures().iter().all(|t| t.is_constant())

@@ -362,6 +362,7 @@ pub(super) fn bsdf_kind<'e>(
         }
         "plastic" => b.plastic(v, n)?,
         "roughplastic" => b.rough_plastic(v, n)?,
+        "principled" => b.principled(v, n)?,
         "conductor" => {
             let (eta, k) = b.conductor_ior(v, n)?;
             let specular_reflectance = b.factor(v, n, "specular_reflectance")?;
@@ -411,6 +412,86 @@ impl<'e> Builder<'e> {
             specular_reflectance: self.factor(v, n, "specular_reflectance")?,
             nonlinear: v.boolean("nonlinear")?.unwrap_or(false),
         })
+    }
+
+    /// `principled` (Mitsuba 3.9.1's parameters and defaults; see pt-bsdf's `principled.rs`):
+    /// `base_color` (0.5), the scalar textures `roughness` (0.5), `anisotropic`, `metallic`,
+    /// `spec_trans`, `spec_tint`, `sheen`, `sheen_tint`, `flatness`, `clearcoat`,
+    /// `clearcoat_gloss` (0, each in [0, 1]), `eta` or `specular` (0.5; not both; eta = 2 /
+    /// (1 - sqrt(0.08 specular)) - 1), and the three sampling rates (1).
+    fn principled(&mut self, v: &ObjectView<'e>, n: &Nested<'e>) -> Result<BsdfKind> {
+        let mut unit = |name: &str, default: f32| -> Result<TextureDesc> {
+            let t = self.texture_param(v, n, name)?;
+            scalar_in(v, name, t, default, 0.0..=1.0)
+        };
+        let roughness = unit("roughness", 0.5)?;
+        let anisotropic = unit("anisotropic", 0.0)?;
+        let metallic = unit("metallic", 0.0)?;
+        let spec_trans = unit("spec_trans", 0.0)?;
+        let spec_tint = unit("spec_tint", 0.0)?;
+        let sheen = unit("sheen", 0.0)?;
+        let sheen_tint = unit("sheen_tint", 0.0)?;
+        let flatness = unit("flatness", 0.0)?;
+        let clearcoat = unit("clearcoat", 0.0)?;
+        let clearcoat_gloss = unit("clearcoat_gloss", 0.0)?;
+        // Mitsuba adds the transmission lobe when spec_trans is given and not the float 0.
+        let transmissive = spec_trans != TextureDesc::constant(0.0);
+        let eta = match (v.float("eta")?, v.float("specular")?) {
+            (Some(_), Some(_)) => {
+                return Err(v.prop_error(
+                    "specular",
+                    "give either eta or specular (as Mitsuba requires)",
+                ))
+            }
+            (Some(eta), None) => {
+                if !(eta > 0.0 && eta.is_finite()) {
+                    return Err(v.prop_error("eta", format!("eta must be positive, got {eta}")));
+                }
+                if transmissive && eta == 1.0 {
+                    1.001
+                } else {
+                    eta
+                }
+            }
+            (None, s) => {
+                let s = s.unwrap_or(0.5);
+                if !(0.0..=1.0).contains(&s) {
+                    return Err(
+                        v.prop_error("specular", format!("specular must be in [0, 1], got {s}"))
+                    );
+                }
+                let s = if transmissive && s == 0.0 { 1e-3 } else { s };
+                2.0 / (1.0 - (0.08 * s).sqrt()) - 1.0
+            }
+        };
+        let rate = |name: &str| -> Result<f32> {
+            let r = v.float(name)?.unwrap_or(1.0);
+            if !(r >= 0.0 && r.is_finite()) {
+                return Err(v.prop_error(name, format!("{name} must be >= 0, got {r}")));
+            }
+            Ok(r)
+        };
+        let rates = [
+            rate("main_specular_sampling_rate")?,
+            rate("clearcoat_sampling_rate")?,
+            rate("diffuse_reflectance_sampling_rate")?,
+        ];
+        Ok(BsdfKind::Principled(Box::new(PrincipledDesc {
+            base_color: self.albedo(v, n, "base_color")?,
+            roughness,
+            anisotropic,
+            metallic,
+            spec_trans,
+            spec_tint,
+            sheen,
+            sheen_tint,
+            flatness,
+            clearcoat,
+            clearcoat_gloss,
+            eta,
+            transmissive,
+            rates,
+        })))
     }
 
     fn rough_plastic(&mut self, v: &ObjectView<'e>, n: &Nested<'e>) -> Result<BsdfKind> {

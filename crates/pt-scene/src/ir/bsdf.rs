@@ -290,6 +290,42 @@ pub enum BsdfKind {
         /// Index of refraction of the dielectric part (1.5 unless KHR_materials_ior).
         ior: f32,
     },
+    /// Mitsuba's `principled` (its Disney BSDF; model in pt-bsdf's `principled.rs`).
+    Principled(Box<PrincipledDesc>),
+}
+
+/// The parameters of Mitsuba's `principled` (defaults and meaning in pt-bsdf's
+/// `principled.rs`). The scalar ones are scalar textures.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PrincipledDesc {
+    /// Base colour (albedo).
+    pub base_color: TextureDesc,
+    /// Roughness in [0, 1].
+    pub roughness: TextureDesc,
+    /// Anisotropy in [0, 1].
+    pub anisotropic: TextureDesc,
+    /// Metalness in [0, 1].
+    pub metallic: TextureDesc,
+    /// Specular transmission in [0, 1].
+    pub spec_trans: TextureDesc,
+    /// Tint of the dielectric specular in [0, 1].
+    pub spec_tint: TextureDesc,
+    /// Sheen in [0, 1].
+    pub sheen: TextureDesc,
+    /// Tint of the sheen in [0, 1].
+    pub sheen_tint: TextureDesc,
+    /// Blend towards the fake subsurface diffuse in [0, 1].
+    pub flatness: TextureDesc,
+    /// Clearcoat weight in [0, 1].
+    pub clearcoat: TextureDesc,
+    /// Clearcoat glossiness in [0, 1].
+    pub clearcoat_gloss: TextureDesc,
+    /// Relative index of refraction (from `eta`, or from `specular`).
+    pub eta: f32,
+    /// Whether `spec_trans` was given (Mitsuba then adds the transmission lobe).
+    pub transmissive: bool,
+    /// Lobe selection weights: main specular, clearcoat, diffuse.
+    pub rates: [f32; 3],
 }
 
 impl BsdfKind {
@@ -405,6 +441,19 @@ impl BsdfKind {
                 ("base_color", base_color),
                 ("metallic", metallic),
                 ("roughness", roughness),
+            ],
+            BsdfKind::Principled(p) => vec![
+                ("base_color", &p.base_color),
+                ("roughness", &p.roughness),
+                ("anisotropic", &p.anisotropic),
+                ("metallic", &p.metallic),
+                ("spec_trans", &p.spec_trans),
+                ("spec_tint", &p.spec_tint),
+                ("sheen", &p.sheen),
+                ("sheen_tint", &p.sheen_tint),
+                ("flatness", &p.flatness),
+                ("clearcoat", &p.clearcoat),
+                ("clearcoat_gloss", &p.clearcoat_gloss),
             ],
         }
     }
