@@ -37,6 +37,7 @@ pub mod normal_map;
 pub mod oren_nayar;
 pub mod plastic;
 pub mod principled;
+pub mod principled_thin;
 pub mod rough_dielectric;
 pub mod rough_plastic;
 pub mod rough_thin_film;
@@ -52,6 +53,7 @@ pub use minnaert::Minnaert;
 pub use oren_nayar::{OrenNayar, OrenNayarVariant};
 pub use plastic::{fresnel_diffuse_reflectance, Plastic};
 pub use principled::Principled;
+pub use principled_thin::PrincipledThin;
 use pt_math::{Vec2, Vec3, Vec4};
 use pt_spectrum::SampledSpectrum;
 pub use rough_dielectric::RoughDielectric;
@@ -119,6 +121,9 @@ pub enum Bsdf {
     /// Mitsuba's `principled` (Disney): diffuse, sheen, clearcoat, GGX specular and rough
     /// transmission (handles both sides when it transmits).
     Principled(Principled),
+    /// Mitsuba's `principledthin`: the thin-sheet principled BSDF (two-sided, light passes
+    /// without bending).
+    PrincipledThin(PrincipledThin),
 }
 
 impl Bsdf {
@@ -140,6 +145,7 @@ impl Bsdf {
             Bsdf::RoughPlastic(m) => m.eval(wo, wi),
             Bsdf::RoughThinFilm(m) => m.eval(wo, wi),
             Bsdf::Principled(m) => m.eval(wo, wi),
+            Bsdf::PrincipledThin(m) => m.eval(wo, wi),
         }
     }
 
@@ -161,6 +167,7 @@ impl Bsdf {
             Bsdf::RoughPlastic(m) => m.pdf(wo, wi),
             Bsdf::RoughThinFilm(m) => m.pdf(wo, wi),
             Bsdf::Principled(m) => m.pdf(wo, wi),
+            Bsdf::PrincipledThin(m) => m.pdf(wo, wi),
         }
     }
 
@@ -182,6 +189,7 @@ impl Bsdf {
             Bsdf::RoughPlastic(m) => m.sample(wo, u_lobe, u),
             Bsdf::RoughThinFilm(m) => m.sample(wo, u_lobe, u),
             Bsdf::Principled(m) => m.sample(wo, u_lobe, u),
+            Bsdf::PrincipledThin(m) => m.sample(wo, u_lobe, u),
         }
     }
 
@@ -193,6 +201,7 @@ impl Bsdf {
             Bsdf::ThinFilm(m) => m.is_transmissive(),
             Bsdf::RoughThinFilm(m) => m.film.is_transmissive(),
             Bsdf::Principled(m) => m.transmissive,
+            Bsdf::PrincipledThin(_) => true,
             _ => false,
         }
     }
@@ -210,7 +219,8 @@ impl Bsdf {
             | Bsdf::Plastic(_)
             | Bsdf::RoughPlastic(_)
             | Bsdf::RoughThinFilm(_)
-            | Bsdf::Principled(_) => true,
+            | Bsdf::Principled(_)
+            | Bsdf::PrincipledThin(_) => true,
             Bsdf::Conductor(_)
             | Bsdf::Dielectric(_)
             | Bsdf::ThinDielectric(_)

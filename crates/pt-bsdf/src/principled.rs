@@ -97,10 +97,21 @@ pub struct Principled {
 
 /// Schlick's weight (1 - c)^5 with c clamped to [0, 1] (Schlick 1994, eq. 15 without f0).
 #[inline]
-fn schlick_weight(c: f32) -> f32 {
+pub fn schlick_weight(c: f32) -> f32 {
     let m = (1.0 - c).clamp(0.0, 1.0);
     let m2 = m * m;
     m2 * m2 * m
+}
+
+/// The principled models' tint colour `base_color / luminance` (1 when the luminance is not
+/// positive): the base colour's hue at unit luminance.
+#[inline]
+pub fn tint_color(base_color: SampledSpectrum, luminance: f32) -> SampledSpectrum {
+    if luminance > 0.0 {
+        base_color * (1.0 / luminance)
+    } else {
+        SampledSpectrum::splat(1.0)
+    }
 }
 
 /// Normal-incidence reflectance of a dielectric of relative index `eta`.
@@ -239,14 +250,10 @@ impl Principled {
         }
     }
 
-    /// The tint colour `base_color / luminance` (1 when the luminance is not positive).
+    /// The tint colour of this shading point ([`tint_color`]).
     #[inline]
     fn tint_color(&self) -> SampledSpectrum {
-        if self.luminance > 0.0 {
-            self.base_color * (1.0 / self.luminance)
-        } else {
-            SampledSpectrum::splat(1.0)
-        }
+        tint_color(self.base_color, self.luminance)
     }
 
     fn probabilities(&self, front: bool, f: f32) -> LobeProbabilities {

@@ -8,7 +8,7 @@
 //!
 //! Models ([`MODELS`] lists each with its parameters): `diffuse`, `orennayar` (+ `variant`),
 //! `minnaert`, `dielectric`, `thindielectric`, `roughdielectric`, `conductor` (`eta` + `k` or a
-//! named `material`), `roughconductor`, `roughplastic`, `principled`, `thinfilm`,
+//! named `material`), `roughconductor`, `roughplastic`, `principled`, `principledthin`, `thinfilm`,
 //! `roughthinfilm`, and the
 //! wrapper `twosided` around one of them. Values are numbers, linear sRGB colours, names
 //! (`variant="full"`, `material="Au"`, `int_ior="bk7"`, `distribution="ggx"`) or flags, as
@@ -178,6 +178,25 @@ pub const MODELS: &[ModelInfo] = &[
             "main_specular_sampling_rate",
             "clearcoat_sampling_rate",
             "diffuse_reflectance_sampling_rate",
+        ],
+    },
+    ModelInfo {
+        name: "principledthin",
+        params: &[
+            "base_color",
+            "roughness",
+            "anisotropic",
+            "spec_trans",
+            "spec_tint",
+            "sheen",
+            "sheen_tint",
+            "flatness",
+            "diff_trans",
+            "eta",
+            "specular_reflectance_sampling_rate",
+            "specular_transmittance_sampling_rate",
+            "diffuse_reflectance_sampling_rate",
+            "diffuse_transmittance_sampling_rate",
         ],
     },
     ModelInfo {

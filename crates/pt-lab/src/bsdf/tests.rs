@@ -151,7 +151,7 @@ fn sample_params(model: &str, name: &str) -> Vec<(String, PropValue)> {
         "reflectance" | "diffuse_reflectance" => vec![v(name, PropValue::Rgb([0.2, 0.3, 0.4]))],
         "alpha_u" | "alpha_v" => vec![v("alpha_u", f(0.1)), v("alpha_v", f(0.2))],
         "k" if model == "minnaert" => vec![v(name, f(2.0))],
-        "eta" if model == "principled" => vec![v(name, f(1.4))],
+        "eta" if model.starts_with("principled") => vec![v(name, f(1.4))],
         "base_color" => vec![v(name, PropValue::Rgb([0.2, 0.3, 0.4]))],
         "eta" | "k" => vec![v("eta", f(0.5)), v("k", f(2.0))],
         "thickness" => vec![v(name, f(250.0))],
@@ -190,8 +190,7 @@ fn errors_are_clear() {
             .unwrap_err()
             .to_string()
     };
-    assert!(err("principledthin")
-        .starts_with("unknown model 'principledthin' (known: diffuse, orennayar"));
+    assert!(err("hair").starts_with("unknown model 'hair' (known: diffuse, orennayar"));
     assert_eq!(
         err("orennayar foo=1"),
         "orennayar: unknown parameter 'foo' (parameters: reflectance, sigma, variant)"

@@ -93,6 +93,7 @@ pub fn cases() -> Vec<Case> {
     films(&mut g);
     gltf(&mut g);
     principled(&mut g);
+    principled_thin(&mut g);
     // Every variant of `Bsdf` must be in the sweep: this match stops compiling when one is added.
     for c in &g.0 {
         match c.bsdf {
@@ -109,7 +110,8 @@ pub fn cases() -> Vec<Case> {
             | Bsdf::RoughPlastic(_)
             | Bsdf::RoughThinFilm(_)
             | Bsdf::GltfPbr(_)
-            | Bsdf::Principled(_) => {}
+            | Bsdf::Principled(_)
+            | Bsdf::PrincipledThin(_) => {}
         }
     }
     g.0
@@ -573,6 +575,59 @@ fn principled(g: &mut Grid) {
                 format!("metallic={metallic} spec_trans={spec_trans} sheen=clearcoat={extra}");
             g.push(
                 "principled",
+                "roughness",
+                r,
+                detail,
+                ok,
+                PRINCIPLED_BOUND,
+                source,
+            );
+        }
+    }
+}
+
+/// Mitsuba's `principledthin`, white: roughness from mirror-like to rough (and out of range),
+/// opaque, specular sheet, diffuse-transmitting sheet, sheen. Two-sided, so probed from both
+/// sides; energy bound as for `principled` (lobes not coupled).
+fn principled_thin(g: &mut Grid) {
+    for r in [0.0f32, 0.05, 0.3, 1.0, 2.0, f32::NAN] {
+        for (spec_trans, diff_trans, sheen) in [
+            (0.0f32, 0.0f32, 0.0f32),
+            (1.0, 0.0, 0.0),
+            (0.5, 1.0, 0.0),
+            (0.0, 0.0, 1.0),
+        ] {
+            let ok = (0.0..=1.0).contains(&r);
+            let detail = format!("spec_trans={spec_trans} diff_trans={diff_trans} sheen={sheen}");
+            let source = if ok {
+                Source::Scene(
+                    BsdfSpec::new("principledthin")
+                        .with("base_color", 1.0)
+                        .with("roughness", r)
+                        .with("spec_trans", spec_trans)
+                        .with("diff_trans", diff_trans)
+                        .with("sheen", sheen),
+                )
+            } else {
+                let mf = |r: f32| pt_bsdf::Principled::microfacet(r, 0.0);
+                Source::Raw(Bsdf::PrincipledThin(pt_bsdf::PrincipledThin {
+                    base_color: white(),
+                    luminance: 1.0,
+                    roughness: r,
+                    spec_trans,
+                    spec_tint: 0.0,
+                    sheen,
+                    sheen_tint: 0.0,
+                    flatness: 0.0,
+                    diff_trans: 0.5 * diff_trans,
+                    eta: 1.5,
+                    mf_r: mf(r),
+                    mf_t: mf((0.65 * 1.5 - 0.35) * r),
+                    rates: [1.0; 4],
+                }))
+            };
+            g.push(
+                "principledthin",
                 "roughness",
                 r,
                 detail,

@@ -318,6 +318,12 @@ pub fn chi2_resolvable(b: &Bsdf) -> bool {
                 && (m.clearcoat == 0.0 || m.clearcoat_alpha >= MIN_ALPHA)
                 && (!m.transmissive || (m.eta - 1.0).abs() >= 0.01)
         }
+        Bsdf::PrincipledThin(m) => {
+            m.spec_trans == 0.0
+                || [m.mf_r, m.mf_t]
+                    .iter()
+                    .all(|mf| mf.alpha_u.min(mf.alpha_v) >= MIN_ALPHA)
+        }
         _ => true,
     }
 }

@@ -1,10 +1,10 @@
 //! From a BSDF description to a [`SurfaceMaterial`]: wrappers become its fields, the model a
 //! [`Material`] with a texture per texturable parameter, each built for its role.
 
-use super::PrincipledTextures;
 use super::{
     Film, FilmBaseMaterial, Material, NormalKind, NormalMap, Opacity, Roughness, SurfaceMaterial,
 };
+use super::{PrincipledTextures, PrincipledThinTextures};
 use crate::fluorescence::Fluorescent;
 use crate::scene::BuildError;
 use crate::texture::{Role, Texture, TextureBuilder, TexturePoint};
@@ -393,20 +393,8 @@ impl Builder<'_> {
                 ior: *ior,
             },
             BsdfKind::Principled(p) => {
-                let d = [
-                    &p.roughness,
-                    &p.anisotropic,
-                    &p.metallic,
-                    &p.spec_trans,
-                    &p.spec_tint,
-                    &p.sheen,
-                    &p.sheen_tint,
-                    &p.flatness,
-                    &p.clearcoat,
-                    &p.clearcoat_gloss,
-                ];
-                let mut scalars = Vec::with_capacity(d.len());
-                for (name, t) in PrincipledTextures::NAMES.iter().zip(d) {
+                let mut scalars = Vec::with_capacity(p.scalars.len());
+                for (name, t) in pt_scene::PrincipledDesc::NAMES.iter().zip(&p.scalars) {
                     scalars.push(self.tex(name, t, Role::Scalar)?);
                 }
                 Material::Principled(Box::new(PrincipledTextures {
@@ -414,6 +402,17 @@ impl Builder<'_> {
                     scalars: scalars.try_into().expect("ten scalars"),
                     eta: p.eta,
                     transmissive: p.transmissive,
+                    rates: p.rates,
+                }))
+            }
+            BsdfKind::PrincipledThin(p) => {
+                let mut scalars = Vec::with_capacity(p.scalars.len());
+                for (name, t) in pt_scene::PrincipledThinDesc::NAMES.iter().zip(&p.scalars) {
+                    scalars.push(self.tex(name, t, Role::Scalar)?);
+                }
+                Material::PrincipledThin(Box::new(PrincipledThinTextures {
+                    base_color: self.tex("base_color", &p.base_color, Role::Albedo)?,
+                    scalars: scalars.try_into().expect("nine scalars"),
                     rates: p.rates,
                 }))
             }

@@ -17,8 +17,9 @@ use crate::geometry::Interaction;
 use crate::texture::{Texture, TexturePoint};
 use pt_bsdf::{
     Bsdf, CoatingTable, Conductor, Dielectric, Distribution, FilmBase, GltfPbr, Lambert,
-    Microfacet, Minnaert, OrenNayar, OrenNayarVariant, Plastic, Principled, RoughConductor,
-    RoughDielectric, RoughPlastic, RoughThinFilm, SurfaceBsdf, ThinDielectric, ThinFilm,
+    Microfacet, Minnaert, OrenNayar, OrenNayarVariant, Plastic, Principled, PrincipledThin,
+    RoughConductor, RoughDielectric, RoughPlastic, RoughThinFilm, SurfaceBsdf, ThinDielectric,
+    ThinFilm,
 };
 use pt_math::{Frame, Vec3};
 use pt_spectrum::{ColorMode, SampledSpectrum, SampledWavelengths};
@@ -223,6 +224,76 @@ pub enum Material {
     Fluorescent(Box<Fluorescent>),
     /// Mitsuba `principled`.
     Principled(Box<PrincipledTextures>),
+    /// Mitsuba `principledthin`.
+    PrincipledThin(Box<PrincipledThinTextures>),
+}
+
+/// The textures of a `principledthin` material (pt-bsdf's `principled_thin.rs`).
+#[derive(Clone, Debug)]
+pub struct PrincipledThinTextures {
+    /// Base colour.
+    pub base_color: Texture,
+    /// Scalars in the order of `pt_scene::PrincipledThinDesc::NAMES`.
+    pub scalars: [Texture; 9],
+    /// Lobe selection weights.
+    pub rates: [f32; 4],
+}
+
+impl PrincipledThinTextures {
+    /// The BSDF at `at` (the luminance of the tints as for `principled`).
+    #[inline]
+    fn bsdf(
+        &self,
+        at: &TexturePoint,
+        lambda: &SampledWavelengths,
+        mode: ColorMode,
+    ) -> PrincipledThin {
+        let base_color = self.base_color.eval(at, lambda);
+        let [roughness, anisotropic, spec_trans, spec_tint, sheen, sheen_tint, flatness, diff_trans, eta] =
+            std::array::from_fn(|k| self.scalars[k].eval_1(at));
+        PrincipledThin {
+            base_color,
+            luminance: base_luminance(base_color, lambda, mode),
+            roughness,
+            spec_trans,
+            spec_tint,
+            sheen,
+            sheen_tint,
+            flatness,
+            diff_trans: 0.5 * diff_trans,
+            eta,
+            mf_r: Principled::microfacet(roughness, anisotropic),
+            // Burley 2015, figure 15: the thin transmission's roughness.
+            mf_t: Principled::microfacet((0.65 * eta - 0.35) * roughness, anisotropic),
+            rates: self.rates,
+        }
+    }
+}
+
+/// The luminance the principled tints divide by: Rec. 709 Y of the RGB lanes, or in spectral
+/// mode the CIE-y-weighted mean over the path's wavelengths (normalised; Mitsuba 3.9.1's
+/// spectral variants leave it unnormalised, so that there the tints change even a white base
+/// colour).
+#[inline]
+fn base_luminance(
+    base_color: SampledSpectrum,
+    lambda: &SampledWavelengths,
+    mode: ColorMode,
+) -> f32 {
+    match mode {
+        ColorMode::Rgb => base_color.luminance_rgb(),
+        ColorMode::Spectral => {
+            let y = lambda.lambda().to_array().map(pt_spectrum::cie::cmf_y);
+            let b = base_color.0.to_array();
+            let num: f32 = (0..4).map(|k| y[k] * b[k]).sum();
+            let den: f32 = y.iter().sum();
+            if den > 0.0 {
+                num / den
+            } else {
+                0.0
+            }
+        }
+    }
 }
 
 /// The textures of a `principled` material (pt-bsdf's `principled.rs` for their meaning).
@@ -230,7 +301,7 @@ pub enum Material {
 pub struct PrincipledTextures {
     /// Base colour.
     pub base_color: Texture,
-    /// Scalar weights, in the order of [`PrincipledTextures::NAMES`].
+    /// Scalar weights, in the order of `pt_scene::PrincipledDesc::NAMES`.
     pub scalars: [Texture; 10],
     /// Relative index of refraction.
     pub eta: f32,
@@ -241,43 +312,13 @@ pub struct PrincipledTextures {
 }
 
 impl PrincipledTextures {
-    /// The scalar parameters, in the order of `scalars`.
-    pub const NAMES: [&'static str; 10] = [
-        "roughness",
-        "anisotropic",
-        "metallic",
-        "spec_trans",
-        "spec_tint",
-        "sheen",
-        "sheen_tint",
-        "flatness",
-        "clearcoat",
-        "clearcoat_gloss",
-    ];
-
-    /// The BSDF at `at`. The tints divide by the base colour's luminance: Rec. 709 Y of the
-    /// RGB lanes, or in spectral mode the CIE-y-weighted mean over the path's wavelengths
-    /// (normalised; Mitsuba 3.9.1's spectral variants leave it unnormalised, so that there its
-    /// tints change even a white base colour).
+    /// The BSDF at `at` (the tints divide by [`base_luminance`]).
     #[inline]
     fn bsdf(&self, at: &TexturePoint, lambda: &SampledWavelengths, mode: ColorMode) -> Principled {
         let base_color = self.base_color.eval(at, lambda);
         let [roughness, anisotropic, metallic, spec_trans, spec_tint, sheen, sheen_tint, flatness, clearcoat, clearcoat_gloss] =
             std::array::from_fn(|k| self.scalars[k].eval_1(at));
-        let luminance = match mode {
-            ColorMode::Rgb => base_color.luminance_rgb(),
-            ColorMode::Spectral => {
-                let y = lambda.lambda().to_array().map(pt_spectrum::cie::cmf_y);
-                let b = base_color.0.to_array();
-                let num: f32 = (0..4).map(|k| y[k] * b[k]).sum();
-                let den: f32 = y.iter().sum();
-                if den > 0.0 {
-                    num / den
-                } else {
-                    0.0
-                }
-            }
-        };
+        let luminance = base_luminance(base_color, lambda, mode);
         Principled {
             base_color,
             luminance,
@@ -402,6 +443,7 @@ impl Material {
             )),
             Material::ThinFilm(f) => Bsdf::ThinFilm(f.at(at, lambda, mode)),
             Material::Principled(p) => Bsdf::Principled(p.bsdf(at, lambda, mode)),
+            Material::PrincipledThin(p) => Bsdf::PrincipledThin(p.bsdf(at, lambda, mode)),
             Material::RoughThinFilm(b) => {
                 Bsdf::RoughThinFilm(RoughThinFilm::new(b.0.at(at, lambda, mode), b.1.at(at)))
             }
@@ -672,6 +714,9 @@ impl Material {
                 ..
             } => vec![base_color, metallic, roughness],
             Material::Principled(p) => std::iter::once(&p.base_color).chain(&p.scalars).collect(),
+            Material::PrincipledThin(p) => {
+                std::iter::once(&p.base_color).chain(&p.scalars).collect()
+            }
         }
     }
 
@@ -684,7 +729,8 @@ impl Material {
             | Material::RoughPlastic { .. }
             | Material::RoughThinFilm(_)
             | Material::GltfPbr { .. }
-            | Material::Principled(_) => false,
+            | Material::Principled(_)
+            | Material::PrincipledThin(_) => false,
             _ => true,
         };
         isotropic_model && self.textures().iter().all(|t| t.is_constant())

@@ -363,6 +363,7 @@ pub(super) fn bsdf_kind<'e>(
         "plastic" => b.plastic(v, n)?,
         "roughplastic" => b.rough_plastic(v, n)?,
         "principled" => b.principled(v, n)?,
+        "principledthin" => b.principled_thin(v, n)?,
         "conductor" => {
             let (eta, k) = b.conductor_ior(v, n)?;
             let specular_reflectance = b.factor(v, n, "specular_reflectance")?;
@@ -420,22 +421,16 @@ impl<'e> Builder<'e> {
     /// `clearcoat_gloss` (0, each in [0, 1]), `eta` or `specular` (0.5; not both; eta = 2 /
     /// (1 - sqrt(0.08 specular)) - 1), and the three sampling rates (1).
     fn principled(&mut self, v: &ObjectView<'e>, n: &Nested<'e>) -> Result<BsdfKind> {
-        let mut unit = |name: &str, default: f32| -> Result<TextureDesc> {
+        let mut scalars = Vec::with_capacity(PrincipledDesc::NAMES.len());
+        for name in PrincipledDesc::NAMES {
+            let default = if name == "roughness" { 0.5 } else { 0.0 };
             let t = self.texture_param(v, n, name)?;
-            scalar_in(v, name, t, default, 0.0..=1.0)
-        };
-        let roughness = unit("roughness", 0.5)?;
-        let anisotropic = unit("anisotropic", 0.0)?;
-        let metallic = unit("metallic", 0.0)?;
-        let spec_trans = unit("spec_trans", 0.0)?;
-        let spec_tint = unit("spec_tint", 0.0)?;
-        let sheen = unit("sheen", 0.0)?;
-        let sheen_tint = unit("sheen_tint", 0.0)?;
-        let flatness = unit("flatness", 0.0)?;
-        let clearcoat = unit("clearcoat", 0.0)?;
-        let clearcoat_gloss = unit("clearcoat_gloss", 0.0)?;
+            scalars.push(scalar_in(v, name, t, default, 0.0..=1.0)?);
+        }
+        let scalars: [TextureDesc; 10] = scalars.try_into().expect("ten scalars");
+        let spec_trans = &scalars[3];
         // Mitsuba adds the transmission lobe when spec_trans is given and not the float 0.
-        let transmissive = spec_trans != TextureDesc::constant(0.0);
+        let transmissive = *spec_trans != TextureDesc::constant(0.0);
         let eta = match (v.float("eta")?, v.float("specular")?) {
             (Some(_), Some(_)) => {
                 return Err(v.prop_error(
@@ -464,13 +459,7 @@ impl<'e> Builder<'e> {
                 2.0 / (1.0 - (0.08 * s).sqrt()) - 1.0
             }
         };
-        let rate = |name: &str| -> Result<f32> {
-            let r = v.float(name)?.unwrap_or(1.0);
-            if !(r >= 0.0 && r.is_finite()) {
-                return Err(v.prop_error(name, format!("{name} must be >= 0, got {r}")));
-            }
-            Ok(r)
-        };
+        let rate = |name: &str| sampling_rate(v, name);
         let rates = [
             rate("main_specular_sampling_rate")?,
             rate("clearcoat_sampling_rate")?,
@@ -478,18 +467,40 @@ impl<'e> Builder<'e> {
         ];
         Ok(BsdfKind::Principled(Box::new(PrincipledDesc {
             base_color: self.albedo(v, n, "base_color")?,
-            roughness,
-            anisotropic,
-            metallic,
-            spec_trans,
-            spec_tint,
-            sheen,
-            sheen_tint,
-            flatness,
-            clearcoat,
-            clearcoat_gloss,
+            scalars,
             eta,
             transmissive,
+            rates,
+        })))
+    }
+
+    /// `principledthin` (Mitsuba 3.9.1's parameters and defaults; see pt-bsdf's
+    /// `principled_thin.rs`): `base_color` (0.5), the scalar textures `roughness` (0.5),
+    /// `anisotropic`, `spec_trans`, `spec_tint`, `sheen`, `sheen_tint`, `flatness` (0, in [0,
+    /// 1]), `diff_trans` (0, in [0, 2]), `eta` (1.5, a texture too), and the four sampling
+    /// rates (1).
+    fn principled_thin(&mut self, v: &ObjectView<'e>, n: &Nested<'e>) -> Result<BsdfKind> {
+        let mut scalars = Vec::with_capacity(9);
+        for name in PrincipledThinDesc::NAMES {
+            let (default, range) = match name {
+                "roughness" => (0.5, 0.0..=1.0),
+                "diff_trans" => (0.0, 0.0..=2.0),
+                "eta" => (1.5, 1e-3..=f32::MAX),
+                _ => (0.0, 0.0..=1.0),
+            };
+            let t = self.texture_param(v, n, name)?;
+            scalars.push(scalar_in(v, name, t, default, range)?);
+        }
+        let rate = |name: &str| sampling_rate(v, name);
+        let rates = [
+            rate("specular_reflectance_sampling_rate")?,
+            rate("specular_transmittance_sampling_rate")?,
+            rate("diffuse_reflectance_sampling_rate")?,
+            rate("diffuse_transmittance_sampling_rate")?,
+        ];
+        Ok(BsdfKind::PrincipledThin(Box::new(PrincipledThinDesc {
+            base_color: self.albedo(v, n, "base_color")?,
+            scalars: scalars.try_into().expect("nine scalars"),
             rates,
         })))
     }
@@ -528,6 +539,15 @@ impl<'e> Builder<'e> {
             nonlinear: v.boolean("nonlinear")?.unwrap_or(false),
         })
     }
+}
+
+/// A lobe-selection weight of the principled models (`..._sampling_rate`; default 1, >= 0).
+fn sampling_rate(v: &ObjectView<'_>, name: &str) -> Result<f32> {
+    let r = v.float(name)?.unwrap_or(1.0);
+    if !(r >= 0.0 && r.is_finite()) {
+        return Err(v.prop_error(name, format!("{name} must be >= 0, got {r}")));
+    }
+    Ok(r)
 }
 
 /// The Oren-Nayar `variant` (qualitative by default).

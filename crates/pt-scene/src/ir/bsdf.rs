@@ -292,6 +292,37 @@ pub enum BsdfKind {
     },
     /// Mitsuba's `principled` (its Disney BSDF; model in pt-bsdf's `principled.rs`).
     Principled(Box<PrincipledDesc>),
+    /// Mitsuba's `principledthin` (model in pt-bsdf's `principled_thin.rs`).
+    PrincipledThin(Box<PrincipledThinDesc>),
+}
+
+/// The parameters of Mitsuba's `principledthin` (defaults and meaning in pt-bsdf's
+/// `principled_thin.rs`). The scalar ones are scalar textures.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PrincipledThinDesc {
+    /// Base colour (albedo).
+    pub base_color: TextureDesc,
+    /// `roughness`, `anisotropic`, `spec_trans`, `spec_tint`, `sheen`, `sheen_tint`,
+    /// `flatness`, `diff_trans` (in [0, 2]) and `eta`, in this order.
+    pub scalars: [TextureDesc; 9],
+    /// Lobe selection weights: specular reflection, specular transmission, diffuse
+    /// reflection, diffuse transmission.
+    pub rates: [f32; 4],
+}
+
+impl PrincipledThinDesc {
+    /// The names of `scalars`, in order.
+    pub const NAMES: [&'static str; 9] = [
+        "roughness",
+        "anisotropic",
+        "spec_trans",
+        "spec_tint",
+        "sheen",
+        "sheen_tint",
+        "flatness",
+        "diff_trans",
+        "eta",
+    ];
 }
 
 /// The parameters of Mitsuba's `principled` (defaults and meaning in pt-bsdf's
@@ -300,32 +331,30 @@ pub enum BsdfKind {
 pub struct PrincipledDesc {
     /// Base colour (albedo).
     pub base_color: TextureDesc,
-    /// Roughness in [0, 1].
-    pub roughness: TextureDesc,
-    /// Anisotropy in [0, 1].
-    pub anisotropic: TextureDesc,
-    /// Metalness in [0, 1].
-    pub metallic: TextureDesc,
-    /// Specular transmission in [0, 1].
-    pub spec_trans: TextureDesc,
-    /// Tint of the dielectric specular in [0, 1].
-    pub spec_tint: TextureDesc,
-    /// Sheen in [0, 1].
-    pub sheen: TextureDesc,
-    /// Tint of the sheen in [0, 1].
-    pub sheen_tint: TextureDesc,
-    /// Blend towards the fake subsurface diffuse in [0, 1].
-    pub flatness: TextureDesc,
-    /// Clearcoat weight in [0, 1].
-    pub clearcoat: TextureDesc,
-    /// Clearcoat glossiness in [0, 1].
-    pub clearcoat_gloss: TextureDesc,
+    /// The scalar weights, in the order of [`PrincipledDesc::NAMES`], each in [0, 1].
+    pub scalars: [TextureDesc; 10],
     /// Relative index of refraction (from `eta`, or from `specular`).
     pub eta: f32,
     /// Whether `spec_trans` was given (Mitsuba then adds the transmission lobe).
     pub transmissive: bool,
     /// Lobe selection weights: main specular, clearcoat, diffuse.
     pub rates: [f32; 3],
+}
+
+impl PrincipledDesc {
+    /// The names of `scalars`, in order.
+    pub const NAMES: [&'static str; 10] = [
+        "roughness",
+        "anisotropic",
+        "metallic",
+        "spec_trans",
+        "spec_tint",
+        "sheen",
+        "sheen_tint",
+        "flatness",
+        "clearcoat",
+        "clearcoat_gloss",
+    ];
 }
 
 impl BsdfKind {
@@ -442,19 +471,12 @@ impl BsdfKind {
                 ("metallic", metallic),
                 ("roughness", roughness),
             ],
-            BsdfKind::Principled(p) => vec![
-                ("base_color", &p.base_color),
-                ("roughness", &p.roughness),
-                ("anisotropic", &p.anisotropic),
-                ("metallic", &p.metallic),
-                ("spec_trans", &p.spec_trans),
-                ("spec_tint", &p.spec_tint),
-                ("sheen", &p.sheen),
-                ("sheen_tint", &p.sheen_tint),
-                ("flatness", &p.flatness),
-                ("clearcoat", &p.clearcoat),
-                ("clearcoat_gloss", &p.clearcoat_gloss),
-            ],
+            BsdfKind::Principled(p) => std::iter::once(("base_color", &p.base_color))
+                .chain(PrincipledDesc::NAMES.into_iter().zip(&p.scalars))
+                .collect(),
+            BsdfKind::PrincipledThin(p) => std::iter::once(("base_color", &p.base_color))
+                .chain(PrincipledThinDesc::NAMES.into_iter().zip(&p.scalars))
+                .collect(),
         }
     }
 
