@@ -12,7 +12,10 @@ references/README.md):
 
 For each scene `scenes/<name>.xml` it writes
 
-    references/<name>.exr      mean radiance, float32, channels R, G, B (linear sRGB), no alpha
+    references/<name>.exr      mean radiance, float32, channels R, G, B (linear sRGB), and A
+                               (Mitsuba's alpha) when the scene's film has pixel_format rgba
+    references/<name>_channels.exr  for an `aov` integrator: every channel of Mitsuba's film
+                               (the image, the nested integrator's copy, the AOVs), by name
     references/<name>_var.exr  per-pixel variance OF THE MEAN (sample variance / spp), float32 RGB
 
 (a scene in a folder below scenes/, e.g. `scenes/atlas/veach-mis.xml`, which must be named
@@ -170,10 +173,14 @@ def save_manifest(manifest):
     atomic_write_bytes(MANIFEST, (json.dumps(manifest, indent=2) + "\n").encode())
 
 
-def write_exr(mi, path, rgb, metadata):
+def write_exr(mi, path, rgb, metadata, alpha=None):
     rgb = np.ascontiguousarray(rgb, dtype=np.float32)
     assert rgb.ndim == 3 and rgb.shape[2] == 3
-    bmp = mi.Bitmap(rgb, pixel_format=mi.Bitmap.PixelFormat.RGB)
+    if alpha is None:
+        bmp = mi.Bitmap(rgb, pixel_format=mi.Bitmap.PixelFormat.RGB)
+    else:
+        rgba = np.concatenate([rgb, np.asarray(alpha, dtype=np.float32)[..., None]], axis=2)
+        bmp = mi.Bitmap(np.ascontiguousarray(rgba), pixel_format=mi.Bitmap.PixelFormat.RGBA)
     md = bmp.metadata()
     for k, v in metadata.items():
         md[k] = v
@@ -297,6 +304,18 @@ def make_rgb_moment(mi, nested):
 # Rendering
 # --------------------------------------------------------------------------------------------
 
+def write_channels_exr(mi, path, names, planes, metadata):
+    """Every channel of a film (`planes` is height x width x len(names)), named as given."""
+    data = np.ascontiguousarray(planes, dtype=np.float32)
+    bmp = mi.Bitmap(data, pixel_format=mi.Bitmap.PixelFormat.MultiChannel, channel_names=names)
+    md = bmp.metadata()
+    for k, v in metadata.items():
+        md[k] = v
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    bmp.write(str(tmp), mi.Bitmap.FileFormat.OpenEXR)
+    os.replace(tmp, path)
+
+
 def split(total, size):
     """Split `total` samples into passes of at most `size`."""
     return split_n(total, max(1, math.ceil(total / size)))
@@ -310,23 +329,30 @@ def split_n(total, n):
 
 def base_rgb(img, n_aov):
     """First three channels of the developed film (R, G, B), checking the layout."""
+    return base_rgba(img, n_aov)[0]
+
+
+def base_rgba(img, n_aov):
+    """The developed film's R, G, B and its alpha (None for pixel_format rgb)."""
     nbase = img.shape[2] - n_aov
     if nbase not in (3, 4):
         raise RuntimeError(f"film gives {nbase} colour channels; need pixel_format rgb or rgba")
-    return img[..., :3]
+    return img[..., :3], (img[..., 3] if nbase == 4 else None)
 
 
 def render_moment(mi, scene, spp, pass_spp, seed, progress=True):
     integ = make_rgb_moment(mi, scene.integrator())
     n_aov = len(integ.aov_names())
-    s1 = s2 = None
+    s1 = s2 = sa = None
     passes = split(spp, pass_spp)
     for i, n in enumerate(passes):
         img = np.array(mi.render(scene, integrator=integ, spp=n, seed=seed + i), dtype=np.float64)
-        rgb = base_rgb(img, n_aov)
+        rgb, alpha = base_rgba(img, n_aov)
         m2 = img[..., -3:]
         s1 = rgb * n if s1 is None else s1 + rgb * n
         s2 = m2 * n if s2 is None else s2 + m2 * n
+        if alpha is not None:
+            sa = alpha * n if sa is None else sa + alpha * n
         if progress and len(passes) > 1:
             log(f"  pass {i + 1}/{len(passes)} ({n} spp, seed {seed + i})")
     m1, m2 = s1 / spp, s2 / spp
@@ -342,7 +368,19 @@ def render_moment(mi, scene, spp, pass_spp, seed, progress=True):
         "pass_spp": passes[0],
         "seeds": f"{seed} + pass index (0..{len(passes) - 1})",
     }
-    return m1, var, info
+    return m1, var, info, (None if sa is None else sa / spp)
+
+
+def aov_channel_count(scene):
+    """Channels an `aov` integrator appends to the image mi.render returns (its outputs, not
+    its nested integrators' copies), 0 for other integrators."""
+    integ = scene.integrator()
+    if integ.class_name() != "AOVIntegrator":
+        return 0
+    names = integ.aov_names()
+    # Each nested integrator adds NAME.R, .G, .B, .A; an albedo output has no .A.
+    nested = sum(1 for n in names if n.endswith(".A") and n[:-2] + ".R" in names)
+    return len(names) - 4 * nested
 
 
 def render_batches(mi, scene, spp, pass_spp, seed, k_min=MIN_BATCHES, progress=True):
@@ -350,10 +388,17 @@ def render_batches(mi, scene, spp, pass_spp, seed, k_min=MIN_BATCHES, progress=T
     if spp < k:
         raise RuntimeError(f"batch variance needs spp >= {k}")
     batches = split_n(spp, k)
-    means = []
+    n_aov = aov_channel_count(scene)
+    means, alphas, films = [], [], []
     for i, n in enumerate(batches):
         img = np.array(mi.render(scene, spp=n, seed=seed + i), dtype=np.float64)
-        means.append(base_rgb(img, 0) * n)
+        rgb, alpha = base_rgba(img, n_aov)
+        means.append(rgb * n)
+        if alpha is not None:
+            alphas.append(alpha * n)
+        if n_aov:
+            # The film of the AOV pass holds every channel under Mitsuba's names.
+            films.append(np.array(scene.sensors()[0].film().bitmap(), dtype=np.float64) * n)
         if progress:
             log(f"  batch {i + 1}/{k} ({n} spp, seed {seed + i})")
     w = np.array(batches, dtype=np.float64)[:, None, None, None]
@@ -371,7 +416,11 @@ def render_batches(mi, scene, spp, pass_spp, seed, k_min=MIN_BATCHES, progress=T
         "batch_spp": batches[0],
         "seeds": f"{seed} + batch index (0..{k - 1})",
     }
-    return mean, var, info
+    if films:
+        bitmap = scene.sensors()[0].film().bitmap()
+        names = [bitmap.struct_()[i].name for i in range(bitmap.channel_count())]
+        info["aov_channels"] = (names, np.sum(films, axis=0) / spp)
+    return mean, var, info, (np.sum(alphas, axis=0) / spp if alphas else None)
 
 
 def moment_applicable(mi, scene, variant):
@@ -434,10 +483,10 @@ def check_variance(msb, scene_path, args):
     msb.set_variant(variant)
     scene = mi.load_file(str(scene_path))
     t = time.time()
-    m_mean, m_var, _ = render_moment(mi, scene, args.spp, args.pass_spp, args.seed)
+    m_mean, m_var, _, _ = render_moment(mi, scene, args.spp, args.pass_spp, args.seed)
     t_m = time.time() - t
     t = time.time()
-    b_mean, b_var, b_info = render_batches(mi, scene, args.spp, max(1, args.spp // MIN_BATCHES),
+    b_mean, b_var, b_info, _ = render_batches(mi, scene, args.spp, max(1, args.spp // MIN_BATCHES),
                                            args.seed + 100000, progress=False)
     t_b = time.time() - t
     out = {"scene": scene_path.name, "variant": variant, "spp": args.spp,
@@ -555,9 +604,11 @@ def main():
         t0 = time.time()
         try:
             if method == "moment":
-                mean, var, vinfo = render_moment(mi, scene, args.spp, args.pass_spp, args.seed)
+                mean, var, vinfo, alpha = render_moment(
+                    mi, scene, args.spp, args.pass_spp, args.seed)
             else:
-                mean, var, vinfo = render_batches(mi, scene, args.spp, args.pass_spp, args.seed)
+                mean, var, vinfo, alpha = render_batches(
+                    mi, scene, args.spp, args.pass_spp, args.seed)
                 if reason:
                     vinfo["why_not_moment"] = reason
         except Exception as e:  # noqa: BLE001
@@ -579,10 +630,16 @@ def main():
         meta = {"scene": path.name, "scene_sha256": digest, "variant": variant,
                 "spp": args.spp, "seed": args.seed, "mitsuba_version": mi.__version__,
                 "wall_time_s": round(wall, 2), "date": date}
-        write_exr(mi, mean_path, mean, dict(meta, content="mean radiance (linear sRGB)"))
+        write_exr(mi, mean_path, mean, dict(meta, content="mean radiance (linear sRGB)"
+                                             + ("" if alpha is None else " and alpha")),
+                  alpha)
         write_exr(mi, var_path, var,
                   dict(meta, content="variance of the mean (sample variance / spp)",
                        variance_method=vinfo["method"]))
+        if "aov_channels" in vinfo:
+            names, planes = vinfo.pop("aov_channels")
+            write_channels_exr(mi, mean_path.with_name(f"{name.split('/')[-1]}_channels.exr"),
+                               names, planes, dict(meta, content="every channel of the film (aov, moment)"))
         if args.preview:
             Path(args.preview).mkdir(parents=True, exist_ok=True)
             write_preview_png(Path(args.preview) / f"{name.replace('/', '-')}.png", mean)

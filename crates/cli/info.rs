@@ -118,14 +118,15 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
     let scene = Scene::build(&desc, BvhKind::Auto, LightSelection::Power)?;
     out!("scene       {}", desc.source.display());
     out!(
-        "film        {}x{}{}, filter {:?}",
+        "film        {}x{}{}, filter {:?}, channels {}",
         desc.film.width,
         desc.film.height,
         desc.film.crop.map_or(String::new(), |c| format!(
             " (crop of a {}x{} film at {}, {})",
             c.film_size[0], c.film_size[1], c.offset[0], c.offset[1]
         )),
-        desc.film.filter
+        desc.film.filter,
+        desc.film.pixel_format.channels().join("")
     );
     out!(
         "sampler     {} {} spp, seed {}",
@@ -146,6 +147,17 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
             ""
         }
     );
+    if let Some(aov) = &i.aov {
+        out!(
+            "aov         {}{}",
+            aov.channel_names().join(" "),
+            if aov.image.is_none() {
+                " (no nested integrator: the image's channels are zero)"
+            } else {
+                ""
+            }
+        );
+    }
     let c = &desc.camera;
     let pos = c.to_world.transform_point3(pt_math::Vec3::ZERO);
     let dir = c.to_world.transform_vector3(pt_math::Vec3::Z).normalize();

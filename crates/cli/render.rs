@@ -300,6 +300,20 @@ pub(crate) fn run(args: RenderArgs) -> Result<ExitCode> {
     if args.spp == Some(0) {
         bail!("--spp must be at least 1");
     }
+    if desc.film.pixel_format.has_alpha() && !integrator.traces_camera_paths() {
+        bail!(
+            "{}: the film's pixel_format has an alpha channel, which {} does not compute (use rgb, luminance or xyz)",
+            desc.source.display(),
+            integrator.name()
+        );
+    }
+    if desc.integrator.aov.is_some() && !integrator.traces_camera_paths() {
+        bail!(
+            "{}: the scene's aov integrator needs a path tracer, not {}",
+            desc.source.display(),
+            integrator.name()
+        );
+    }
     let job = Job {
         spp: args.spp.unwrap_or(desc.sampler.sample_count),
         seed: args.seed.unwrap_or(desc.sampler.seed),
@@ -448,7 +462,15 @@ fn write_outputs(
         render_time_s: Some(out.time.as_secs_f64()),
         extra,
     };
-    pt_image::write_exr(output, &image, &meta)?;
+    let channels = out
+        .channels(desc.film.pixel_format)
+        .map_err(|m| anyhow::anyhow!("{}: {m}", desc.source.display()))?;
+    let planes: Vec<(&str, &[f32])> = channels
+        .iter()
+        .map(|(n, p)| (*n, &p[..]))
+        .chain(r.extra_channels.iter().map(|(n, p)| (n.as_str(), &p[..])))
+        .collect();
+    pt_image::write_exr_channels(output, out.width, out.height, &planes, &meta)?;
     if args.variance {
         let var = Image {
             width: out.width,

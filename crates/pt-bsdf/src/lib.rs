@@ -87,6 +87,17 @@ pub struct BsdfSample {
     pub eta: f32,
 }
 
+impl BsdfSample {
+    /// Whether the sample passes straight through the surface: a delta event with
+    /// `wi = -wo` and no change of index (Mitsuba's *null* lobes: a `mask`'s holes, a thin
+    /// dielectric's transmission; here also a thin film's). `wo` in the frame of `wi`; the
+    /// tolerance absorbs the rounding of frame changes (normal maps, two-sided flips).
+    #[inline]
+    pub fn is_pass_through(&self, wo: Vec3) -> bool {
+        self.delta && self.eta == 1.0 && (self.wi + wo).length_squared() < 1e-8
+    }
+}
+
 /// A BSDF model (one-sided unless wrapped by [`SurfaceBsdf`] with `two_sided`).
 #[derive(Clone, Copy, Debug)]
 pub enum Bsdf {
@@ -250,6 +261,33 @@ pub struct SurfaceBsdf {
 }
 
 impl SurfaceBsdf {
+    /// The surface's diffuse reflectance seen from `wo` (local frame), as Mitsuba's
+    /// `eval_diffuse_reflectance` (what its `aov` integrator's `albedo` writes): the models
+    /// with a diffuse base give its reflectance whatever the side (`diffuse`, `plastic`,
+    /// `roughplastic`; `principled` and `principledthin` their base colour); the others
+    /// pi f(wo, n) (Mitsuba's default: 0 for smooth models, the lobe's value towards the normal
+    /// for rough ones). A mask gives its nested model's, a blend the blend of its two, a
+    /// two-sided surface its model's seen from the front.
+    pub fn diffuse_reflectance(&self, wo: Vec3) -> SampledSpectrum {
+        let wo = if self.two_sided && wo.z < 0.0 {
+            Vec3::new(wo.x, wo.y, -wo.z)
+        } else {
+            wo
+        };
+        let of = |b: &Bsdf| match b {
+            Bsdf::Lambert(l) => l.reflectance,
+            Bsdf::Plastic(p) => p.diffuse_reflectance,
+            Bsdf::RoughPlastic(p) => p.diffuse_reflectance,
+            Bsdf::Principled(p) => p.base_color,
+            Bsdf::PrincipledThin(p) => p.base_color,
+            _ => b.eval(wo, Vec3::Z) * std::f32::consts::PI,
+        };
+        match &self.blend {
+            None => of(&self.bsdf),
+            Some((w, second)) => of(&self.bsdf) * (1.0 - w) + of(second) * *w,
+        }
+    }
+
     /// An opaque surface with the given model.
     pub fn new(bsdf: Bsdf, two_sided: bool) -> Self {
         SurfaceBsdf {

@@ -1,7 +1,7 @@
 //! OpenEXR input and output.
 //!
-//! Written files are single-part scan-line EXRs with float32 channels `R`, `G`, `B`, ZIP
-//! compressed (lossless, so values round-trip bit-exactly), readable by OpenEXR, Mitsuba 3 and
+//! Written files are single-part scan-line EXRs with float32 channels (`R`, `G`, `B` for
+//! [`write_exr`]; any named channels for [`write_exr_channels`]), ZIP compressed (lossless, so values round-trip bit-exactly), readable by OpenEXR, Mitsuba 3 and
 //! `exrheader`. Metadata goes into header attributes:
 //!
 //! | [`ExrMeta`] field | attribute | EXR type |
@@ -21,7 +21,7 @@ use std::path::Path;
 
 use exr::prelude::{
     self as x, AttributeValue, Encoding, FlatSamples, LayerAttributes, ReadChannels as _,
-    ReadLayers as _, SpecificChannels, Text, Vec2, WritableImage as _,
+    ReadLayers as _, Text, WritableImage as _,
 };
 
 use crate::atomic::write_atomically;
@@ -136,29 +136,67 @@ fn meta_attributes(path: &Path, meta: &ExrMeta) -> Result<LayerAttributes, Image
 /// Fails on an empty image, on an image whose `data` length does not match its size, and on
 /// metadata that EXR cannot hold (see [`ExrMeta::extra`]).
 pub fn write_exr(path: &Path, img: &Image, meta: &ExrMeta) -> Result<(), ImageError> {
-    let what = || path.display().to_string();
     img.check_len().map_err(|reason| ImageError::InvalidImage {
-        what: what(),
+        what: path.display().to_string(),
         reason,
     })?;
-    if img.width == 0 || img.height == 0 {
-        return Err(ImageError::InvalidImage {
-            what: what(),
-            reason: format!("cannot write an empty {}x{} image", img.width, img.height),
-        });
+    let plane = |c: usize| img.data.iter().map(|p| p[c]).collect::<Vec<f32>>();
+    let channels = [("R", plane(0)), ("G", plane(1)), ("B", plane(2))];
+    let named: Vec<(&str, &[f32])> = channels.iter().map(|(n, v)| (*n, &v[..])).collect();
+    write_exr_channels(path, img.width, img.height, &named, meta)
+}
+
+/// Write float32 channels of a `width` x `height` image atomically (as [`write_exr`]): each
+/// `(name, plane)` is one channel, its samples row-major from the top. Names are written as
+/// given (`R`, `A`, `nn.X`: OpenEXR's layer.channel convention), and readers list them
+/// alphabetically, as OpenEXR stores them.
+///
+/// Fails on an empty image, on no channels, on a plane whose length is not `width * height`,
+/// on an empty or repeated channel name, and on metadata that EXR cannot hold.
+pub fn write_exr_channels(
+    path: &Path,
+    width: u32,
+    height: u32,
+    channels: &[(&str, &[f32])],
+    meta: &ExrMeta,
+) -> Result<(), ImageError> {
+    let invalid = |reason: String| ImageError::InvalidImage {
+        what: path.display().to_string(),
+        reason,
+    };
+    if width == 0 || height == 0 {
+        return Err(invalid(format!(
+            "cannot write an empty {width}x{height} image"
+        )));
+    }
+    if channels.is_empty() {
+        return Err(invalid("cannot write an image without channels".into()));
+    }
+    let n = width as usize * height as usize;
+    for (i, (name, plane)) in channels.iter().enumerate() {
+        if plane.len() != n {
+            return Err(invalid(format!(
+                "channel {name:?} has {} samples, a {width}x{height} image needs {n}",
+                plane.len()
+            )));
+        }
+        if name.is_empty() || channels[..i].iter().any(|(other, _)| other == name) {
+            return Err(invalid(format!(
+                "channel name {name:?} is empty or repeated"
+            )));
+        }
     }
     let attrs = meta_attributes(path, meta)?;
-    let w = img.width as usize;
-    let data = &img.data;
-    let channels = SpecificChannels::rgb(|p: Vec2<usize>| {
-        let [r, g, b] = data[p.y() * w + p.x()];
-        (r, g, b)
-    });
+    let mut list = x::SmallVec::new();
+    for (name, plane) in channels {
+        let text = to_text(path, name, "channel name")?;
+        list.push(x::AnyChannel::new(text, FlatSamples::F32(plane.to_vec())));
+    }
     let layer = x::Layer::new(
-        (w, img.height as usize),
+        (width as usize, height as usize),
         attrs,
         Encoding::SMALL_LOSSLESS,
-        channels,
+        x::AnyChannels::sort(list),
     );
     let exr_image = x::Image::from_layer(layer);
 
@@ -264,15 +302,8 @@ fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
     }
 }
 
-/// Read an EXR written by pt or by Mitsuba 3: channels R, G, B (with or without A, half or
-/// float32 or u32; a single Y or L luminance channel becomes grey). Also return metadata where
-/// present (see [`ExrMeta`]).
-///
-/// In a multi-part file the first part with colour channels is used; the data window's offset is
-/// ignored (pixel (0, 0) is the first pixel of the data window). Missing, truncated or corrupt
-/// files and files without colour channels give an error naming the file, never a panic (a panic
-/// inside the `exr` crate is caught and reported as [`ImageError::DecoderPanic`]).
-pub fn read_exr(path: &Path) -> Result<(Image, ExrMeta), ImageError> {
+/// The whole file, every layer and channel, decoded (panics inside the `exr` crate caught).
+fn decode(path: &Path) -> Result<x::Image<x::Layers<x::AnyChannels<FlatSamples>>>, ImageError> {
     let file = File::open(path).map_err(|e| ImageError::io(path, "open file", e))?;
     let reader = BufReader::new(file);
     let result = catch_unwind(AssertUnwindSafe(|| {
@@ -285,21 +316,58 @@ pub fn read_exr(path: &Path) -> Result<(Image, ExrMeta), ImageError> {
             .non_parallel()
             .from_buffered(reader)
     }));
-    let exr_image = match result {
-        Ok(Ok(image)) => image,
-        Ok(Err(source)) => {
-            return Err(ImageError::ExrRead {
-                path: path.to_path_buf(),
-                source,
-            })
-        }
-        Err(payload) => {
-            return Err(ImageError::DecoderPanic {
-                path: path.to_path_buf(),
-                message: panic_message(payload.as_ref()),
-            })
-        }
+    match result {
+        Ok(Ok(image)) => Ok(image),
+        Ok(Err(source)) => Err(ImageError::ExrRead {
+            path: path.to_path_buf(),
+            source,
+        }),
+        Err(payload) => Err(ImageError::DecoderPanic {
+            path: path.to_path_buf(),
+            message: panic_message(payload.as_ref()),
+        }),
+    }
+}
+
+/// Named float32 planes of an image: (channel name, row-major samples).
+pub type NamedChannels = Vec<(String, Vec<f32>)>;
+
+/// Every channel of an EXR's first part as float32 planes (row-major from the top), named as
+/// stored (`R`, `A`, `nn.X`; a part's layer name, where it has one, prefixed with a dot), in
+/// the file's (alphabetical) order; and the image's width and height. For the channels that
+/// [`read_exr`] does not return: alpha, AOVs, moments.
+pub fn read_exr_channels(path: &Path) -> Result<(u32, u32, NamedChannels), ImageError> {
+    let exr_image = decode(path)?;
+    let Some(layer) = exr_image.layer_data.first() else {
+        return Err(ImageError::MissingChannels {
+            path: path.to_path_buf(),
+            channels: Vec::new(),
+        });
     };
+    let (w, h) = (layer.size.x(), layer.size.y());
+    let (Ok(width), Ok(height)) = (u32::try_from(w), u32::try_from(h)) else {
+        return Err(ImageError::Unsupported {
+            path: path.to_path_buf(),
+            reason: format!("image size {w}x{h} is too large"),
+        });
+    };
+    let channels = channel_names(layer)
+        .zip(&layer.channel_data.list)
+        .map(|(name, c)| (name, c.sample_data.values_as_f32().collect()))
+        .collect();
+    Ok((width, height, channels))
+}
+
+/// Read an EXR written by pt or by Mitsuba 3: channels R, G, B (with or without A, half or
+/// float32 or u32; a single Y or L luminance channel becomes grey). Also return metadata where
+/// present (see [`ExrMeta`]).
+///
+/// In a multi-part file the first part with colour channels is used; the data window's offset is
+/// ignored (pixel (0, 0) is the first pixel of the data window). Missing, truncated or corrupt
+/// files and files without colour channels give an error naming the file, never a panic (a panic
+/// inside the `exr` crate is caught and reported as [`ImageError::DecoderPanic`]).
+pub fn read_exr(path: &Path) -> Result<(Image, ExrMeta), ImageError> {
+    let exr_image = decode(path)?;
 
     let found = exr_image
         .layer_data
@@ -609,5 +677,36 @@ mod tests {
         let msg = err.to_string();
         assert!(msg.contains("depth.exr") && msg.contains('Z'), "{msg}");
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// Named channels round-trip bit for bit, layer-style names included; the reader returns
+    /// them in the file's alphabetical order; a wrong plane length or a repeated name is an
+    /// error that writes nothing.
+    #[test]
+    fn named_channels_round_trip() {
+        let dir = scratch_dir("named_channels");
+        let path = dir.join("c.exr");
+        let a: Vec<f32> = (0..6).map(|i| i as f32 * 0.25 - 1e-30).collect();
+        let b: Vec<f32> = (0..6).map(|i| -(i as f32) / 3.0).collect();
+        write_exr_channels(
+            &path,
+            3,
+            2,
+            &[("R", &a), ("nn.X", &b), ("A", &a)],
+            &ExrMeta::default(),
+        )
+        .expect("write");
+        let (w, h, channels) = read_exr_channels(&path).expect("read");
+        assert_eq!((w, h), (3, 2));
+        let names: Vec<&str> = channels.iter().map(|c| c.0.as_str()).collect();
+        assert_eq!(names, ["A", "R", "nn.X"]);
+        assert_eq!(channels[1].1, a);
+        assert_eq!(channels[2].1, b);
+        let bad = dir.join("bad.exr");
+        assert!(write_exr_channels(&bad, 3, 2, &[("R", &a[..5])], &ExrMeta::default()).is_err());
+        assert!(
+            write_exr_channels(&bad, 3, 2, &[("R", &a), ("R", &b)], &ExrMeta::default()).is_err()
+        );
+        assert!(!bad.exists());
     }
 }

@@ -21,7 +21,9 @@ pub mod metrics;
 mod png;
 
 pub use error::ImageError;
-pub use exr_io::{read_exr, write_exr, ExrMeta};
+pub use exr_io::{
+    read_exr, read_exr_channels, write_exr, write_exr_channels, ExrMeta, NamedChannels,
+};
 pub use png::write_png_preview;
 
 /// Linear RGB float image, row-major, top row first. Values are radiance (no gamma).

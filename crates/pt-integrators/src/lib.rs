@@ -25,11 +25,12 @@
 #![deny(unsafe_code)]
 
 pub mod afterglow;
+pub mod aov;
 pub mod path;
 pub mod render;
 mod scatter;
 
-pub use path::{PathSettings, Strategy};
+pub use path::{Coverage, PathSettings, Strategy};
 pub use render::{render, render_passes, RenderSettings, RenderState};
 
 use pt_radiosity::RadiosityParams;
@@ -193,6 +194,9 @@ pub struct Rendered {
     pub complete: bool,
     /// Time to build the scene (BVH, materials, lights), before sampling.
     pub build_time: Duration,
+    /// Channels written besides the image's own (Mitsuba's `aov`: the nested integrator's
+    /// image under its name, then the AOVs), each a row-major plane.
+    pub extra_channels: Vec<(String, Vec<f32>)>,
 }
 
 impl Integrator {
@@ -227,6 +231,7 @@ impl Integrator {
                 hide_emitters: d.hide_emitters,
                 strategy: o.strategy.unwrap_or_default(),
                 media: kind == IntegratorKind::VolPath,
+                coverage: crate::path::Coverage::of(kind),
             },
             clamp: o.clamp,
             repeat: 1,
@@ -284,6 +289,12 @@ impl Integrator {
             Integrator::Radiosity(_) => "radiosity",
             Integrator::Afterglow { .. } => "afterglow",
         }
+    }
+
+    /// Whether the method traces camera paths: the path tracers do, and compute the alpha
+    /// channel and AOVs; radiosity does neither.
+    pub fn traces_camera_paths(&self) -> bool {
+        !matches!(self, Integrator::Radiosity(_))
     }
 
     /// Renders the job. Path tracers honour `run.cancel` between passes and continue
@@ -367,14 +378,30 @@ fn render_path(
         )));
     }
     let pixels = u64::from(settings.width) * u64::from(settings.height);
-    run.progress.start_samples(
-        pixels * u64::from(settings.spp),
-        pixels * u64::from(state.spp_done),
-    );
-    let complete = render_passes(&scene, &settings, &mut state, run.cancel, &|n| {
-        run.progress.samples(n)
-    });
+    let aov = desc.integrator.aov.as_ref();
+    // An `aov` integrator without a nested one renders no image (its channels stay zero).
+    let complete = if aov.is_some_and(|a| a.image.is_none()) {
+        true
+    } else {
+        run.progress.start_samples(
+            pixels * u64::from(settings.spp),
+            pixels * u64::from(state.spp_done),
+        );
+        render_passes(&scene, &settings, &mut state, run.cancel, &|n| {
+            run.progress.samples(n)
+        })
+    };
     let output = state.output();
+    let mut extra_channels = Vec::new();
+    if let (Some(aov), true) = (aov, complete) {
+        let mut planes: Vec<Vec<f32>> = Vec::new();
+        if aov.image.is_some() {
+            planes.extend((0..3).map(|c| output.mean.iter().map(|p| p[c]).collect()));
+            planes.push(output.alpha.clone().unwrap_or_default());
+        }
+        planes.extend(aov::render_aovs(&scene, &settings, aov));
+        extra_channels = aov.channel_names().into_iter().zip(planes).collect();
+    }
     let secs = output.time.as_secs_f64();
     let summary = format!(
         "{name}: {}x{} at {} spp in {:.2} s ({:.2} M samples/s, scene build {:.2} s)",
@@ -412,6 +439,7 @@ fn render_path(
         state: Some(state),
         complete,
         build_time,
+        extra_channels,
     })
 }
 
@@ -471,5 +499,6 @@ fn render_radiosity(
         state: None,
         complete: true,
         build_time: Duration::ZERO,
+        extra_channels: Vec::new(),
     })
 }

@@ -39,6 +39,37 @@ pub struct PathSettings {
     /// Attenuate rays inside shapes with an interior medium (Mitsuba `volpath`); `path` ignores
     /// media, as Mitsuba's does.
     pub media: bool,
+    /// When a sample covers its pixel (its alpha) and what an uncovered sample returns.
+    pub coverage: Coverage,
+}
+
+/// When a path covers its pixel (the pixel's alpha, [`PathState::covered`]) and what a path
+/// that does not returns: Mitsuba 3.9.1's integrators differ, and these are their rules as
+/// measured on it (`llvm_ad_rgb`; a mask of opacity 0.5 over nothing, lit by a point light).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Coverage {
+    /// Mitsuba's `path`: a path covers its pixel when it scatters at a surface by anything but
+    /// a straight pass-through (Mitsuba's null lobes), or when `max_depth` ends it at a hit.
+    /// An uncovered sample returns radiance 0: light gathered at pass-through vertices of a
+    /// path that then leaves the scene is dropped (Mitsuba's `path` renders a half-transparent
+    /// mask over nothing at opacity^2 of its lit brightness, `volpath` and `direct` at opacity).
+    #[default]
+    Path,
+    /// Mitsuba's `volpath`: covered as `Path`; the radiance is kept.
+    VolPath,
+    /// Mitsuba's `direct`: a camera ray that hits any surface covers its pixel.
+    AnyHit,
+}
+
+impl Coverage {
+    /// The rule of a scene's integrator.
+    pub fn of(kind: pt_scene::IntegratorKind) -> Coverage {
+        match kind {
+            pt_scene::IntegratorKind::Direct { .. } => Coverage::AnyHit,
+            pt_scene::IntegratorKind::VolPath => Coverage::VolPath,
+            pt_scene::IntegratorKind::Path | pt_scene::IntegratorKind::Radiosity => Coverage::Path,
+        }
+    }
 }
 
 impl Default for PathSettings {
@@ -49,6 +80,7 @@ impl Default for PathSettings {
             hide_emitters: false,
             strategy: Strategy::Mis,
             media: false,
+            coverage: Coverage::Path,
         }
     }
 }
@@ -120,6 +152,13 @@ pub struct PathState {
     pub(crate) eta_scale: f32,
     /// Whether the path goes on (`ray` is its next segment).
     pub(crate) alive: bool,
+    /// Whether the path met the scene, for the pixel's alpha (Mitsuba's `valid_ray`, measured
+    /// on Mitsuba 3.9.1's `llvm_ad_rgb`): set at a hit where the path scatters unless the
+    /// sampled event is a straight pass-through (Mitsuba's null lobes: a `mask`'s holes, a
+    /// thin sheet's transmission), at a hit where `max_depth` ends the path, and at any hit
+    /// with [`Coverage::AnyHit`]. A visible environment light covers every path (set when the
+    /// path is handed back by [`trace_paths`]).
+    pub covered: bool,
     /// A light sample's shadow ray waiting for its visibility test, and what it adds to
     /// `radiance` if nothing blocks it.
     pub(crate) shadow: Option<(Ray, SampledSpectrum)>,
@@ -145,6 +184,7 @@ impl PathState {
             depth: 0,
             eta_scale: 1.0,
             alive: true,
+            covered: false,
             shadow: None,
         }
     }
@@ -177,6 +217,8 @@ pub fn trace_paths<S: RandomSource>(
         *slot = start();
     }
     let mut hits: [Option<Interaction>; MAX_PATHS] = [None; MAX_PATHS];
+    // A visible environment light covers every pixel (Mitsuba's alpha).
+    let environment_seen = !scene.infinite_lights.is_empty() && !s.hide_emitters;
     loop {
         // The previous scattering's shadow rays; finished paths out and new ones in; the new
         // segments' closest hits. The queries do not depend on each other.
@@ -189,6 +231,10 @@ pub fn trace_paths<S: RandomSource>(
                     }
                 }
                 if !sl.path.alive {
+                    sl.path.covered |= environment_seen;
+                    if !sl.path.covered && s.coverage == Coverage::Path {
+                        sl.path.radiance = SampledSpectrum::ZERO;
+                    }
                     finish(sl);
                     *slot = start();
                 }
@@ -240,6 +286,7 @@ fn arrive(
         prev_delta,
         depth,
         alive,
+        covered,
         ..
     } = path;
     let (depth_now, prev_delta_now, prev_pdf_now) = (*depth, *prev_delta, *prev_pdf);
@@ -259,6 +306,9 @@ fn arrive(
         return false;
     };
     let wo_world = -ray.dir;
+    if s.coverage == Coverage::AnyHit {
+        *covered = true;
+    }
 
     // Beer-Lambert: a ray that reaches a shape's surface from behind travelled inside it, so
     // it crossed the shape's interior medium over the distance hit.t (the ray's direction is a
@@ -288,6 +338,7 @@ fn arrive(
 
     // Mitsuba: continue only if another segment fits within max_depth.
     if depth.saturating_add(1) >= max_depth {
+        *covered = true;
         *alive = false;
         return false;
     }

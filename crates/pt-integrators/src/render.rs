@@ -100,6 +100,7 @@ impl RenderSettings {
                 hide_emitters: i.hide_emitters,
                 strategy: crate::path::Strategy::Mis,
                 media: i.kind == pt_scene::IntegratorKind::VolPath,
+                coverage: crate::path::Coverage::of(i.kind),
             },
             clamp: None,
         }
@@ -155,8 +156,14 @@ pub struct RenderState {
     pub splat: Option<SplatFilm>,
 }
 
+/// Values the image's splatting film adds per sample: linear R, G, B and alpha.
+const IMAGE_CHANNELS: usize = 4;
+
+/// Bytes per pixel of a state file's statistics: two counts (u32) and seven f64 sums.
+const PIXEL_BYTES: usize = 8 + 7 * 8;
+
 /// First bytes of a state file (and its format version).
-const STATE_MAGIC: &[u8; 8] = b"PTSTATE2";
+const STATE_MAGIC: &[u8; 8] = b"PTSTATE3";
 
 impl RenderState {
     /// An empty state for `settings` (no samples yet).
@@ -170,13 +177,16 @@ impl RenderState {
             time: Duration::ZERO,
             pixels: vec![PixelStats::default(); n],
             splat: settings.splats().then(|| {
-                SplatFilm::new(SplatLayout::new(
-                    &settings.filter.desc,
-                    settings.width,
-                    settings.height,
-                    settings.crop.map_or([0, 0], |c| c.offset),
-                    settings.sample_border,
-                ))
+                SplatFilm::new(
+                    SplatLayout::new(
+                        &settings.filter.desc,
+                        settings.width,
+                        settings.height,
+                        settings.crop.map_or([0, 0], |c| c.offset),
+                        settings.sample_border,
+                    ),
+                    IMAGE_CHANNELS,
+                )
             }),
         }
     }
@@ -193,15 +203,23 @@ impl RenderState {
             .iter()
             .map(PixelStats::variance_of_mean)
             .collect();
-        let (mean, variance) = match &self.splat {
+        let (mean, alpha, variance) = match &self.splat {
             Some(film) => {
                 let mut row_major = vec![[0.0; 3]; variance.len()];
                 for (v, p) in variance.iter().zip(film.layout.tile_major_pixels()) {
                     row_major[p] = *v;
                 }
-                (film.image(), row_major)
+                let planes = film.planes();
+                let mean = (0..planes[0].len())
+                    .map(|i| [planes[0][i], planes[1][i], planes[2][i]])
+                    .collect();
+                (mean, planes[3].clone(), row_major)
             }
-            None => (self.pixels.iter().map(PixelStats::mean).collect(), variance),
+            None => (
+                self.pixels.iter().map(PixelStats::mean).collect(),
+                self.pixels.iter().map(PixelStats::mean_alpha).collect(),
+                variance,
+            ),
         };
         RenderOutput {
             width: self.width,
@@ -211,6 +229,7 @@ impl RenderState {
             spp: self.spp_done,
             time: self.time,
             nonfinite_samples: self.pixels.iter().map(|p| p.nonfinite as u64).sum(),
+            alpha: Some(alpha),
         }
     }
 
@@ -218,7 +237,7 @@ impl RenderState {
     /// continues from exactly these values). `scene_key` identifies the scene and settings the
     /// state belongs to (checked by [`RenderState::from_bytes`]).
     pub fn to_bytes(&self, scene_key: u64) -> Vec<u8> {
-        let mut b = Vec::with_capacity(48 + self.pixels.len() * 56);
+        let mut b = Vec::with_capacity(48 + self.pixels.len() * PIXEL_BYTES);
         b.extend_from_slice(STATE_MAGIC);
         for v in [
             scene_key,
@@ -233,12 +252,12 @@ impl RenderState {
         for p in &self.pixels {
             b.extend_from_slice(&p.n.to_le_bytes());
             b.extend_from_slice(&p.nonfinite.to_le_bytes());
-            for v in p.sum.iter().chain(&p.sum_sq) {
+            for v in p.sum.iter().chain(&p.sum_sq).chain([&p.alpha]) {
                 b.extend_from_slice(&v.to_bits().to_le_bytes());
             }
         }
         for t in self.splat.iter().flat_map(|f| &f.tiles) {
-            for v in t.sums.iter().flatten() {
+            for v in &t.sums {
                 b.extend_from_slice(&v.to_bits().to_le_bytes());
             }
         }
@@ -282,7 +301,7 @@ impl RenderState {
             .flat_map(|f| &f.tiles)
             .map(|t| t.sums.len())
             .sum();
-        let expected = header + n * 56 + splat_sums * 32;
+        let expected = header + n * PIXEL_BYTES + splat_sums * 8;
         if bytes.len() != expected {
             return Err(format!(
                 "the state has {} bytes, a {w}x{h} render with this film needs {expected} (truncated, or saved with another reconstruction or filter)",
@@ -291,7 +310,7 @@ impl RenderState {
         }
         let mut pixels = Vec::with_capacity(n);
         for k in 0..n {
-            let o = header + k * 56;
+            let o = header + k * PIXEL_BYTES;
             let u32_at =
                 |i: usize| u32::from_le_bytes(bytes[o + i..o + i + 4].try_into().expect("4 bytes"));
             let f = |i: usize| {
@@ -306,11 +325,12 @@ impl RenderState {
                 nonfinite: u32_at(4),
                 sum: [f(0), f(1), f(2)],
                 sum_sq: [f(3), f(4), f(5)],
+                alpha: f(6),
             });
         }
-        let mut o = header + n * 56;
+        let mut o = header + n * PIXEL_BYTES;
         for t in splat.iter_mut().flat_map(|f| &mut f.tiles) {
-            for v in t.sums.iter_mut().flatten() {
+            for v in t.sums.iter_mut() {
                 let b8 = bytes[o..o + 8].try_into().expect("8 bytes");
                 *v = f64::from_bits(u64::from_le_bytes(b8));
                 o += 8;
@@ -370,7 +390,7 @@ pub fn render_passes(
 }
 
 /// Largest pass of a splatting render, samples per pixel: a tile then holds at most
-/// 16 x 16 x 256 samples of 20 bytes (1.3 MB) per thread.
+/// 16 x 16 x 256 samples of 24 bytes (1.6 MB) per thread.
 const MAX_SPLAT_PASS: u32 = 256;
 
 /// One pass of filter importance sampling: samples `samples` of every pixel.
@@ -529,8 +549,8 @@ fn render_tile_portable(scene: &Scene, settings: &RenderSettings, target: Target
             for y in tile.y0..tile.y1 {
                 let row = &mut band[((y - tile.y0) as u32 * settings.width) as usize..]
                     [..settings.width as usize];
-                trace_row(scene, settings, y, tile, false, |x, _, rgb, _, w| {
-                    row[x as usize].add(rgb.map(|c| c * w));
+                trace_row(scene, settings, y, tile, false, |x, _, rgb, alpha, _, w| {
+                    row[x as usize].add(rgb.map(|c| c * w), alpha * w);
                 });
             }
         }
@@ -554,9 +574,9 @@ fn render_splat_tile(
     let tw = (tile.x1 - tile.x0) as usize;
     let ns = tile.samples.len();
     let s0 = tile.samples.start;
-    // Per origin pixel (row-major) its samples in order: position in the pixel ([0, 1)^2) and
-    // linear RGB.
-    let mut taken = vec![(Vec2::ZERO, [0.0f32; 3]); tw * (tile.y1 - tile.y0) as usize * ns];
+    // Per origin pixel (row-major) its samples in order: position in the pixel ([0, 1)^2),
+    // linear RGB and alpha.
+    let mut taken = vec![(Vec2::ZERO, [0.0f32; 3], 0.0f32); tw * (tile.y1 - tile.y0) as usize * ns];
     for y in tile.y0..tile.y1 {
         // The row's statistics (the tile's origins inside the image, from column ix0).
         let (ix0, ix1) = (tile.x0.max(0), tile.x1.min(w));
@@ -566,33 +586,42 @@ fn render_splat_tile(
             &mut stats[start..start + (ix1 - ix0) as usize]
         });
         let first = (y - tile.y0) as usize * tw;
-        trace_row(scene, settings, y, tile, true, |x, k, rgb, offset, _| {
-            let q = first + (x - tile.x0) as usize;
-            // Exact: the offset is u - 1/2 for u a multiple of 2^-24 in [0, 1).
-            taken[q * ns + (k - s0) as usize] = (offset + Vec2::splat(0.5), rgb);
-            if let Some(r) = row.as_deref_mut() {
-                if (ix0..ix1).contains(&x) {
-                    r[(x - ix0) as usize].add(rgb);
+        trace_row(
+            scene,
+            settings,
+            y,
+            tile,
+            true,
+            |x, k, rgb, alpha, offset, _| {
+                let q = first + (x - tile.x0) as usize;
+                // Exact: the offset is u - 1/2 for u a multiple of 2^-24 in [0, 1).
+                taken[q * ns + (k - s0) as usize] = (offset + Vec2::splat(0.5), rgb, alpha);
+                if let Some(r) = row.as_deref_mut() {
+                    if (ix0..ix1).contains(&x) {
+                        r[(x - ix0) as usize].add(rgb, alpha);
+                    }
                 }
-            }
-        });
+            },
+        );
     }
     let radius = filter_radius(&settings.filter.desc);
     for k in 0..ns {
         for q in 0..taken.len() / ns {
-            let (u, rgb) = taken[q * ns + k];
+            let (u, rgb, alpha) = taken[q * ns + k];
             let origin = [tile.x0 + (q % tw) as i32, tile.y0 + (q / tw) as i32];
             // Non-finite samples are counted by the statistics above and left out here.
             if rgb.iter().all(|c| c.is_finite()) {
-                acc.splat(&settings.filter.desc, radius, origin, u, rgb);
+                let [r, g, b] = rgb;
+                acc.splat(&settings.filter.desc, radius, origin, u, &[r, g, b, alpha]);
             }
         }
     }
 }
 
 /// Traces samples `tile.samples` of pixels `tile.x0..tile.x1` of row `y` and hands each
-/// result to `sink(x, k, rgb, offset, weight)` (pixel x, sample k, linear RGB radiance, film
-/// offset from the pixel's centre, film weight), pixel by pixel, each pixel's in sample order.
+/// result to `sink(x, k, rgb, alpha, offset, weight)` (pixel x, sample k, linear RGB radiance,
+/// alpha 0 or 1, film offset from the pixel's centre, film weight), pixel by pixel, each
+/// pixel's in sample order.
 /// `splat`: the sample's position is uniform in its pixel (weight 1; the film weighs it),
 /// else it is drawn from the filter ([`sample_pixel_offset`]).
 #[inline(always)]
@@ -602,7 +631,7 @@ fn trace_row(
     y: i32,
     tile: &Tile,
     splat: bool,
-    mut sink: impl FnMut(i32, u32, [f32; 3], Vec2, f32),
+    mut sink: impl FnMut(i32, u32, [f32; 3], f32, Vec2, f32),
 ) {
     // RGB mode draws no wavelength sample (its lanes are R, G, B), so its random sequence is the
     // same as before the spectral mode existed; these wavelengths are only carried along.
@@ -648,7 +677,7 @@ fn render_row_samples<S: RandomSource>(
         &SampledWavelengths,
         bool,
     ),
-    sink: &mut impl FnMut(i32, u32, [f32; 3], Vec2, f32),
+    sink: &mut impl FnMut(i32, u32, [f32; 3], f32, Vec2, f32),
     new_sampler: impl Fn(u64, u64) -> S,
 ) {
     if samples.is_empty() || xs.is_empty() {
@@ -660,7 +689,7 @@ fn render_row_samples<S: RandomSource>(
     let (mut x, mut k) = (xs.start, samples.start);
     while x < xs.end {
         let (chunk_x, chunk_k) = (x, k);
-        let mut results = [[0.0f32; 3]; SAMPLE_CHUNK as usize];
+        let mut results = [([0.0f32; 3], 0.0f32); SAMPLE_CHUNK as usize];
         // Each sample's film offset and weight (1 but for filters with negative lobes).
         let mut offsets = [(Vec2::ZERO, 1.0f32); SAMPLE_CHUNK as usize];
         let mut taken = 0u32;
@@ -714,17 +743,19 @@ fn render_row_samples<S: RandomSource>(
             } else {
                 l.rgb()
             };
-            results[done.tag as usize] = match settings.clamp {
+            let rgb = match settings.clamp {
                 Some(c) => clamp_sample(rgb, c),
                 None => rgb,
             };
+            let alpha = f32::from(u8::from(done.path.covered));
+            results[done.tag as usize] = (rgb, alpha);
         };
         trace_paths(scene, &settings.path, start, finish);
         // The chunk's results, in the order they were started: pixel by pixel, each in sample
         // order.
         let (mut px, mut pk) = (chunk_x, chunk_k);
-        for (rgb, (offset, w)) in results[..taken as usize].iter().zip(&offsets) {
-            sink(px, pk, *rgb, *offset, *w);
+        for ((rgb, alpha), (offset, w)) in results[..taken as usize].iter().zip(&offsets) {
+            sink(px, pk, *rgb, *alpha, *offset, *w);
             pk += 1;
             if pk == samples.end {
                 (px, pk) = (px + 1, samples.start);

@@ -242,6 +242,8 @@ struct Scattering {
     delta: [bool; N],
     /// Relative indices of refraction along the sampled directions.
     eta: [f32; N],
+    /// The lanes whose sample passes straight through ([`pt_bsdf::BsdfSample::is_pass_through`]).
+    pass_through: Mask,
 }
 
 impl Scattering {
@@ -257,6 +259,7 @@ impl Scattering {
             pdf: [0.0; N],
             delta: [false; N],
             eta: [1.0; N],
+            pass_through: 0,
         }
     }
 }
@@ -315,6 +318,7 @@ pub(crate) fn scatter<S: RandomSource>(
                 path.throughput * sc.f[k] * l.radiance[k] * shadow.scale[k],
             ));
         }
+        path.covered |= sc.pass_through & (1 << k) == 0;
         if sc.sampled & (1 << k) == 0 || sc.weight[k].is_black() {
             path.alive = false;
             continue;
@@ -513,6 +517,7 @@ fn other_bsdfs(
             (out.weight[k], out.pdf[k]) = (bs.weight, bs.pdf);
             (out.delta[k], out.eta[k]) = (bs.delta, bs.eta);
             out.sampled |= 1 << k;
+            out.pass_through |= Mask::from(bs.is_pass_through(wo)) << k;
         }
     }
 }

@@ -197,7 +197,8 @@ pub fn render_image(
                             Vec2::splat(0.5)
                         };
                         let ray = camera.pixel_ray(x as i32, y as i32, offset, u_lens);
-                        stats.add(radiance(ray, &mut sampler).map(|c| c * weight));
+                        // Radiosity computes no coverage (its output has no alpha).
+                        stats.add(radiance(ray, &mut sampler).map(|c| c * weight), 0.0);
                     }
                     stats
                 })
@@ -224,5 +225,6 @@ pub fn render_image(
         spp: settings.spp,
         time,
         nonfinite_samples: nonfinite,
+        alpha: None,
     }
 }

@@ -182,5 +182,6 @@ pub fn render(
         spp: settings.spp,
         time,
         nonfinite_samples: 0,
+        alpha: None,
     })
 }

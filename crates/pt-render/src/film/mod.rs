@@ -12,7 +12,8 @@
 //! `FilterSampler`, per axis since these filters are separable as in Mitsuba).
 
 use pt_math::Vec2;
-use pt_scene::FilterDesc;
+use pt_scene::{FilterDesc, PixelFormat};
+use pt_spectrum::srgb_to_xyz;
 use std::sync::Arc;
 
 use crate::sampler::RandomSource;
@@ -324,12 +325,15 @@ pub struct PixelStats {
     pub sum: [f64; 3],
     /// Sum of squared sample values per channel.
     pub sum_sq: [f64; 3],
+    /// Sum of the samples' alpha (coverage, times the filter weight where samples carry one).
+    pub alpha: f64,
 }
 
 impl PixelStats {
-    /// Adds one sample (RGB radiance).
+    /// Adds one sample: RGB radiance `v` and its alpha (see [`RenderOutput::alpha`]). A sample
+    /// with a non-finite radiance is counted in `nonfinite` and left out of every sum.
     #[inline]
-    pub fn add(&mut self, v: [f32; 3]) {
+    pub fn add(&mut self, v: [f32; 3], alpha: f32) {
         if !v.iter().all(|c| c.is_finite()) {
             self.nonfinite += 1;
             return;
@@ -340,12 +344,18 @@ impl PixelStats {
             self.sum[c] += x;
             self.sum_sq[c] += x * x;
         }
+        self.alpha += f64::from(alpha);
     }
 
     /// Mean per channel (the pixel value).
     pub fn mean(&self) -> [f32; 3] {
         let n = self.n.max(1) as f64;
         self.sum.map(|s| (s / n) as f32)
+    }
+
+    /// Mean alpha.
+    pub fn mean_alpha(&self) -> f32 {
+        (self.alpha / self.n.max(1) as f64) as f32
     }
 
     /// Estimated variance of the mean per channel: unbiased sample variance / n.
@@ -553,9 +563,10 @@ mod tests {
     fn stats_mean_and_variance() {
         let mut p = PixelStats::default();
         for v in [1.0, 2.0, 3.0, 4.0] {
-            p.add([v, 0.0, v * 2.0]);
+            p.add([v, 0.0, v * 2.0], f32::from(u8::from(v > 1.0)));
         }
-        p.add([f32::NAN, 0.0, 0.0]);
+        p.add([f32::NAN, 0.0, 0.0], 1.0);
+        assert_eq!(p.mean_alpha(), 0.75);
         assert_eq!(p.n, 4);
         assert_eq!(p.nonfinite, 1);
         assert_eq!(p.mean(), [2.5, 0.0, 5.0]);
@@ -582,4 +593,49 @@ pub struct RenderOutput {
     pub time: std::time::Duration,
     /// Samples whose radiance was NaN or infinite (excluded from the means).
     pub nonfinite_samples: u64,
+    /// Per pixel, the filter-weighted fraction of samples whose camera path met the scene
+    /// (Mitsuba's alpha: 1 everywhere when an environment light is visible), row-major; `None`
+    /// for methods that do not compute it.
+    pub alpha: Option<Vec<f32>>,
+}
+
+impl RenderOutput {
+    /// The image's channels in `format`, named as Mitsuba names them, each a row-major plane:
+    /// `R`, `G`, `B` the linear sRGB means; `X`, `Y`, `Z` their CIE 1931 tristimulus values
+    /// (`Y` is the luminance; the sRGB-to-XYZ matrix, so a spectral render's XYZ is that of
+    /// its sRGB, a linear map of the same expectation); `A` the alpha. An error when the format
+    /// has alpha and the method computed none.
+    pub fn channels(&self, format: PixelFormat) -> Result<Vec<(&'static str, Vec<f32>)>, String> {
+        let xyz = || -> Vec<[f32; 3]> { self.mean.iter().map(|&c| srgb_to_xyz(c)).collect() };
+        let plane = |v: &[[f32; 3]], c: usize| v.iter().map(|p| p[c]).collect::<Vec<f32>>();
+        let colour = match format {
+            PixelFormat::Rgb | PixelFormat::Rgba => vec![
+                ("R", plane(&self.mean, 0)),
+                ("G", plane(&self.mean, 1)),
+                ("B", plane(&self.mean, 2)),
+            ],
+            PixelFormat::Luminance | PixelFormat::LuminanceAlpha => vec![("Y", plane(&xyz(), 1))],
+            PixelFormat::Xyz | PixelFormat::Xyza => {
+                let xyz = xyz();
+                vec![
+                    ("X", plane(&xyz, 0)),
+                    ("Y", plane(&xyz, 1)),
+                    ("Z", plane(&xyz, 2)),
+                ]
+            }
+        };
+        let mut out = colour;
+        if format.has_alpha() {
+            let alpha = self.alpha.clone().ok_or_else(|| {
+                "this method computes no alpha: use a pixel_format without it (rgb, luminance, xyz)"
+                    .to_string()
+            })?;
+            out.push(("A", alpha));
+        }
+        debug_assert!(out
+            .iter()
+            .map(|c| c.0)
+            .eq(format.channels().iter().copied()));
+        Ok(out)
+    }
 }

@@ -131,9 +131,9 @@ impl SplatLayout {
         order
     }
 
-    /// The empty accumulator of tile (`i`, `j`): its origins grown by the margin, clipped to
-    /// the image.
-    fn tile(&self, i: usize, j: usize) -> SplatTile {
+    /// The empty accumulator of tile (`i`, `j`) for `channels` values per sample: its origins
+    /// grown by the margin, clipped to the image.
+    fn tile(&self, i: usize, j: usize, channels: usize) -> SplatTile {
         let (xs, ys) = self.origins(i, j);
         let m = self.margin;
         let x0 = (xs.start - m).max(0);
@@ -146,13 +146,15 @@ impl SplatLayout {
             y0,
             w,
             h,
-            sums: vec![[0.0; 4]; (w * h) as usize],
+            stride: channels + 1,
+            sums: vec![0.0; (w * h) as usize * (channels + 1)],
         }
     }
 }
 
-/// The accumulator of one tile: per covered image pixel the weighted sums of red, green and
-/// blue (linear RGB radiance times filter weight) and the summed weight.
+/// The accumulator of one tile: per covered image pixel the weighted sums of each of a
+/// sample's values (filter weight times value: linear RGB radiance and alpha for the image,
+/// the requested quantities for AOVs), and the summed weight.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SplatTile {
     /// Image column of the accumulator's first pixel.
@@ -163,12 +165,14 @@ pub struct SplatTile {
     pub w: i32,
     /// Height, pixels.
     pub h: i32,
-    /// Row-major sums: weight times R, G, B, and weight.
-    pub sums: Vec<[f64; 4]>,
+    /// Sums per pixel: one per value, then the weight.
+    pub stride: usize,
+    /// Row-major sums, `stride` per pixel: weight times each value, and the weight.
+    pub sums: Vec<f64>,
 }
 
 impl SplatTile {
-    /// Adds a sample of linear RGB radiance `rgb` taken at `u` (in [0, 1)^2) within origin
+    /// Adds a sample's `values` (as many as the accumulator's channels) taken at `u` (in [0, 1)^2) within origin
     /// pixel `origin` (image pixels) to every covered pixel whose filter reaches it, with the
     /// separable weight f(X + 1/2 - x) f(Y + 1/2 - y) at the sample's position (x, y)
     /// (Mitsuba's product of 1D profiles). The distances are computed from the whole-pixel
@@ -181,8 +185,9 @@ impl SplatTile {
         radius: f32,
         origin: [i32; 2],
         u: Vec2,
-        rgb: [f32; 3],
+        values: &[f32],
     ) {
+        debug_assert_eq!(values.len() + 1, self.stride);
         // Pixels X with |X + 1/2 - (x0 + u)| <= radius, as whole-pixel differences d = X - x0.
         let range = |u: f32, x0: i32, lo: i32, n: i32| {
             let a = (x0 + (u - 0.5 - radius).ceil() as i32).max(lo);
@@ -202,13 +207,12 @@ impl SplatTile {
                 *w = weight(x - origin[0], u.x);
             }
         }
-        let [r, g, b] = rgb.map(f64::from);
         for y in ys {
             let wy = weight(y - origin[1], u.y);
             if wy == 0.0 {
                 continue;
             }
-            let row = ((y - self.y0) * self.w + xs.start - self.x0) as usize;
+            let row = ((y - self.y0) * self.w + xs.start - self.x0) as usize * self.stride;
             for (k, x) in xs.clone().enumerate() {
                 let w = wy
                     * if cached {
@@ -216,12 +220,12 @@ impl SplatTile {
                     } else {
                         weight(x - origin[0], u.x)
                     };
-                let s = &mut self.sums[row + k];
                 let w = f64::from(w);
-                s[0] += w * r;
-                s[1] += w * g;
-                s[2] += w * b;
-                s[3] += w;
+                let s = &mut self.sums[row + k * self.stride..][..self.stride];
+                for (sum, v) in s.iter_mut().zip(values) {
+                    *sum += w * f64::from(*v);
+                }
+                s[self.stride - 1] += w;
             }
         }
     }
@@ -233,49 +237,60 @@ impl SplatTile {
 pub struct SplatFilm {
     /// The grid.
     pub layout: SplatLayout,
+    /// Values per sample.
+    pub channels: usize,
     /// The tiles' accumulators.
     pub tiles: Vec<SplatTile>,
 }
 
 impl SplatFilm {
-    /// An empty film with `layout`.
-    pub fn new(layout: SplatLayout) -> SplatFilm {
+    /// An empty film with `layout` for samples of `channels` values.
+    pub fn new(layout: SplatLayout, channels: usize) -> SplatFilm {
         let tiles = (0..layout.tile_rows())
             .flat_map(|j| (0..layout.tile_columns()).map(move |i| (i, j)))
-            .map(|(i, j)| layout.tile(i, j))
+            .map(|(i, j)| layout.tile(i, j, channels))
             .collect();
-        SplatFilm { layout, tiles }
+        SplatFilm {
+            layout,
+            channels,
+            tiles,
+        }
     }
 
-    /// The image's sums (weighted R, G, B and weight per pixel, row-major), every pixel's
-    /// accumulators added in tile order.
-    pub fn resolve(&self) -> Vec<[f64; 4]> {
+    /// The image's sums (per pixel, row-major: weight times each value, then the weight),
+    /// every pixel's accumulators added in tile order.
+    pub fn resolve(&self) -> Vec<f64> {
+        let stride = self.channels + 1;
         let w = self.layout.width as usize;
-        let mut out = vec![[0.0f64; 4]; w * self.layout.height as usize];
+        let mut out = vec![0.0f64; w * self.layout.height as usize * stride];
         for t in &self.tiles {
-            for (r, row) in t.sums.chunks_exact(t.w.max(1) as usize).enumerate() {
-                let start = (t.y0 as usize + r) * w + t.x0 as usize;
+            for (r, row) in t
+                .sums
+                .chunks_exact(t.w.max(1) as usize * stride)
+                .enumerate()
+            {
+                let start = ((t.y0 as usize + r) * w + t.x0 as usize) * stride;
                 for (o, s) in out[start..start + row.len()].iter_mut().zip(row) {
-                    for c in 0..4 {
-                        o[c] += s[c];
-                    }
+                    *o += s;
                 }
             }
         }
         out
     }
 
-    /// The image: each pixel's weighted sum over its summed weight (0 where no weight
-    /// arrived), linear RGB.
-    pub fn image(&self) -> Vec<[f32; 3]> {
-        self.resolve()
-            .iter()
-            .map(|s| {
-                if s[3] == 0.0 {
-                    [0.0; 3]
-                } else {
-                    [s[0] / s[3], s[1] / s[3], s[2] / s[3]].map(|v| v as f32)
-                }
+    /// The image, one row-major plane per value: each pixel's weighted sum over its summed
+    /// weight (0 where no weight arrived).
+    pub fn planes(&self) -> Vec<Vec<f32>> {
+        let stride = self.channels + 1;
+        let sums = self.resolve();
+        (0..self.channels)
+            .map(|c| {
+                sums.chunks_exact(stride)
+                    .map(|s| match s[stride - 1] {
+                        0.0 => 0.0,
+                        w => (s[c] / w) as f32,
+                    })
+                    .collect()
             })
             .collect()
     }
@@ -307,13 +322,20 @@ mod tests {
     #[test]
     fn splat_weights_are_the_filter_at_pixel_centres() {
         let tent = FilterDesc::Tent { radius: 1.0 };
-        let mut film = SplatFilm::new(SplatLayout::new(&tent, 4, 3, [0, 0], false));
-        film.tiles[0].splat(&tent, 1.0, [2, 1], Vec2::new(0.25, 0.5), [2.0, 0.0, 0.0]);
+        let mut film = SplatFilm::new(SplatLayout::new(&tent, 4, 3, [0, 0], false), 4);
+        film.tiles[0].splat(
+            &tent,
+            1.0,
+            [2, 1],
+            Vec2::new(0.25, 0.5),
+            &[2.0, 0.0, 0.0, 1.0],
+        );
         let s = film.resolve();
-        let w = |x: usize, y: usize| s[y * 4 + x][3];
-        assert!((w(1, 1) - 0.25).abs() < 1e-7 && (w(2, 1) - 0.75).abs() < 1e-7);
-        assert!((s[4 + 2][0] - 1.5).abs() < 1e-6);
-        let total: f64 = s.iter().map(|p| p[3]).sum();
+        let at = |x: usize, y: usize, c: usize| s[(y * 4 + x) * 5 + c];
+        assert!((at(1, 1, 4) - 0.25).abs() < 1e-7 && (at(2, 1, 4) - 0.75).abs() < 1e-7);
+        assert!((at(2, 1, 0) - 1.5).abs() < 1e-6);
+        assert!((at(2, 1, 3) - 0.75).abs() < 1e-6);
+        let total: f64 = s.chunks_exact(5).map(|p| p[4]).sum();
         assert!((total - 1.0).abs() < 1e-6, "{total}");
     }
 
@@ -334,7 +356,7 @@ mod tests {
         ] {
             for border in [false, true] {
                 let layout = SplatLayout::new(&f, 21, 18, [3, 5], border);
-                let mut film = SplatFilm::new(layout.clone());
+                let mut film = SplatFilm::new(layout.clone(), 4);
                 let r = filter_radius(&f);
                 for j in 0..layout.tile_rows() {
                     for i in 0..layout.tile_columns() {
@@ -347,17 +369,18 @@ mod tests {
                                         0.25 + 0.5 * (k % 2) as f32,
                                         0.25 + 0.5 * (k / 2) as f32,
                                     );
-                                    t.splat(&f, r, [x, y], u, [0.7, 0.2, 3.0]);
+                                    t.splat(&f, r, [x, y], u, &[0.7, 0.2, 3.0, 0.6]);
                                 }
                             }
                         }
                     }
                 }
-                for (k, p) in film.image().iter().enumerate() {
-                    for (c, want) in [0.7f32, 0.2, 3.0].iter().enumerate() {
+                let planes = film.planes();
+                for (c, want) in [0.7f32, 0.2, 3.0, 0.6].iter().enumerate() {
+                    for (k, v) in planes[c].iter().enumerate() {
                         assert!(
-                            (p[c] - want).abs() < 1e-5 * want,
-                            "{f:?} border {border} pixel {k}: {p:?}"
+                            (v - want).abs() < 1e-5 * want,
+                            "{f:?} border {border} channel {c} pixel {k}: {v}"
                         );
                     }
                 }

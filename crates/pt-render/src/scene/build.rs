@@ -120,6 +120,8 @@ impl Scene {
         // Vertex data for shading, copied after the BVH build (whose temporaries are the memory
         // peak) rather than before. Shapes of instanced groups follow the scene's own.
         let group_shapes = desc.groups.iter().flat_map(|g| &g.shapes);
+        // AOVs of texture coordinates need them on every shape, used or not.
+        let keep_uvs = desc.integrator.aov.as_ref().is_some_and(|a| a.needs_uv());
         for (data, shape) in shapes
             .iter_mut()
             .zip(desc.shapes.iter().chain(group_shapes))
@@ -127,12 +129,12 @@ impl Scene {
             if let Geometry::Mesh(mesh) = &shape.geometry {
                 let material = &materials[data.material as usize];
                 let light = data.light.map(|i| &lights[i as usize]);
-                shading_data(data, mesh, material, light, &textures, mode).map_err(|message| {
-                    BuildError {
+                shading_data(data, mesh, material, light, &textures, mode, keep_uvs).map_err(
+                    |message| BuildError {
                         loc: shape.loc.clone(),
                         message,
-                    }
-                })?;
+                    },
+                )?;
             }
         }
         for l in &desc.lights {
@@ -388,6 +390,7 @@ fn geometry(
 
 /// A mesh's shading data: normals, texture coordinates (only where something reads them),
 /// tangents and mesh attributes; every attribute the material reads must exist.
+/// `keep_uvs` keeps texture coordinates that nothing in the scene reads (for AOVs).
 fn shading_data(
     data: &mut ShapeData,
     mesh: &pt_scene::TriangleMesh,
@@ -395,10 +398,11 @@ fn shading_data(
     light: Option<&Light>,
     textures: &TextureBuilder,
     mode: ColorMode,
+    keep_uvs: bool,
 ) -> Result<(), String> {
     data.normals = mesh.normals.clone();
     let textured_light = matches!(light, Some(Light::Area(a)) if !a.radiance.is_constant());
-    if material.uses_uv() || textured_light {
+    if material.uses_uv() || textured_light || keep_uvs {
         data.uvs = mesh.uvs.clone();
     }
     data.tangents = mesh.tangents.clone();

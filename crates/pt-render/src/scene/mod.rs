@@ -404,6 +404,19 @@ impl Scene {
         }
     }
 
+    /// The index of the hit triangle within its shape's mesh, as Mitsuba's `prim_index` (0 on
+    /// spheres and cylinders; a parallelogram merged from two triangles reports the one hit).
+    pub fn primitive_index(&self, hit: &Interaction) -> u32 {
+        let shape = &self.shapes[hit.shape as usize];
+        let refs = match (shape.group, &self.instancing) {
+            (Some(g), Some(inst)) => &inst.groups[g as usize].prim_refs,
+            _ => &self.prim_refs,
+        };
+        let r = refs[hit.prim as usize];
+        // A parallelogram's barycentrics span both triangles: beyond b1 + b2 = 1 is the second.
+        r.local + u32::from(r.corner.is_some() && hit.b.x + hit.b.y > 1.0)
+    }
+
     /// The BSDF at a hit, at the path's wavelengths ([`SurfaceMaterial::bsdf`]).
     #[inline(always)]
     pub fn bsdf(&self, hit: &Interaction, lambda: &SampledWavelengths) -> SurfaceBsdf {

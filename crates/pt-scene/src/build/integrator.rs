@@ -15,6 +15,7 @@ impl<'e> Builder<'e> {
             },
             "direct" => direct_integrator(&v)?,
             "moment" => self.moment(&v)?,
+            "aov" => self.aov(&v)?,
             "radiosity" => radiosity_integrator(&v)?,
             _ => return Err(plugin_error(el)),
         };
@@ -22,7 +23,7 @@ impl<'e> Builder<'e> {
             loc: el.loc.clone(),
             ..desc
         };
-        if v.plugin != "moment" {
+        if v.plugin != "moment" && v.plugin != "aov" {
             if let Some(child) = v.children.first() {
                 let target = self.resolve(child)?;
                 return Err(misplaced(child, target, &v, "no nested objects"));
@@ -52,6 +53,76 @@ impl<'e> Builder<'e> {
         inner.moment = true;
         Ok(inner)
     }
+
+    /// Mitsuba's `aov`: `aovs` ("name:type" pairs separated by commas or spaces; required) and
+    /// at most one nested integrator (Mitsuba takes several; pt renders one), whose image is
+    /// also written under its `name`. Without one, the image's own channels are zero and only
+    /// the AOVs are rendered.
+    pub(super) fn aov(&mut self, v: &ObjectView<'e>) -> Result<IntegratorDesc> {
+        let spec = v.string("aovs")?.ok_or_else(|| {
+            SceneError::at(
+                &v.el.loc,
+                "aov needs <string name=\"aovs\" value=\"name:type, ...\"/>",
+            )
+        })?;
+        let mut outputs = Vec::new();
+        for token in spec.split([',', ' ']).filter(|t| !t.is_empty()) {
+            let bad = |m: String| Err(v.prop_error("aovs", m));
+            let Some((name, kind)) = token
+                .split_once(':')
+                .filter(|(n, k)| !n.is_empty() && !k.is_empty())
+            else {
+                return bad(format!("\"{token}\" is not a <name>:<type> pair"));
+            };
+            let kind = match AovKind::NAMES.iter().find(|(n, _)| *n == kind) {
+                Some((_, k)) => *k,
+                None if ["duv_dx", "duv_dy", "boundary_test"].contains(&kind) => {
+                    return bad(format!(
+                        "AOV type \"{kind}\" is not yet supported (not yet implemented)"
+                    ))
+                }
+                None => {
+                    let names: Vec<&str> = AovKind::NAMES.iter().map(|(n, _)| *n).collect();
+                    return bad(format!(
+                        "invalid AOV type \"{kind}\" (pt knows {})",
+                        names.join(", ")
+                    ));
+                }
+            };
+            outputs.push((name.to_string(), kind));
+        }
+        let mut inner: Option<(String, IntegratorDesc)> = None;
+        for child in &v.children {
+            let target = self.resolve(child)?;
+            if target.tag != "integrator" {
+                return Err(misplaced(child, target, v, "integrator"));
+            }
+            if inner.is_some() {
+                return Err(SceneError::at(
+                    &child.written().loc,
+                    "aov with more than one nested integrator is not yet supported (not yet implemented)",
+                ));
+            }
+            let desc = self.integrator(target)?;
+            if desc.aov.is_some() || desc.kind == IntegratorKind::Radiosity {
+                return Err(SceneError::at(
+                    &child.written().loc,
+                    "the integrator nested in aov must be path, volpath, direct or moment",
+                ));
+            }
+            // Mitsuba names an unnamed nested object by its position.
+            let name = child.written().attr("name").unwrap_or("_arg_0").to_string();
+            inner = Some((name, desc));
+        }
+        let (image, base) = match inner {
+            Some((name, desc)) => (Some(name), desc),
+            None => (None, default_integrator()),
+        };
+        Ok(IntegratorDesc {
+            aov: Some(AovDesc { image, outputs }),
+            ..base
+        })
+    }
 }
 
 pub(super) fn path_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
@@ -61,6 +132,7 @@ pub(super) fn path_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
         rr_depth: int_in(v, "rr_depth", 5, 1, u32::MAX as i64)? as u32,
         hide_emitters: v.boolean("hide_emitters")?.unwrap_or(false),
         moment: false,
+        aov: None,
         radiosity: RadiosityOptions::default(),
         loc: SourceLoc::default(),
     })
@@ -92,6 +164,7 @@ pub(super) fn radiosity_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc>
         rr_depth: 5,
         hide_emitters: false,
         moment: false,
+        aov: None,
         radiosity,
         loc: SourceLoc::default(),
     })
@@ -140,6 +213,7 @@ pub(super) fn direct_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
         rr_depth: 5,
         hide_emitters: v.boolean("hide_emitters")?.unwrap_or(false),
         moment: false,
+        aov: None,
         radiosity: RadiosityOptions::default(),
         loc: SourceLoc::default(),
     })
@@ -154,6 +228,7 @@ pub(super) fn default_integrator() -> IntegratorDesc {
         rr_depth: 5,
         hide_emitters: false,
         moment: false,
+        aov: None,
     }
 }
 

@@ -36,8 +36,8 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
     ("film", &["hdrfilm"], &["specfilm"]),
     ("sampler", &["independent", "stratified", "multijitter", "orthogonal", "ldsampler"], &[]),
     ("rfilter", &["box", "tent", "gaussian", "mitchell", "catmullrom", "lanczos"], &[]),
-    ("integrator", &["path", "volpath", "direct", "moment", "radiosity"], &[
-        "volpathmis", "aov", "prb", "prb_basic", "prb_projective", "direct_projective",
+    ("integrator", &["path", "volpath", "direct", "moment", "aov", "radiosity"], &[
+        "volpathmis", "prb", "prb_basic", "prb_projective", "direct_projective",
         "ptracer", "depth", "stokes", "prbvolpath",
     ]),
     ("shape", &["obj", "ply", "serialized", "gltf", "rectangle", "cube", "sphere", "disk", "cylinder", "shapegroup", "instance"], &[

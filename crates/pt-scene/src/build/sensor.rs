@@ -39,8 +39,8 @@ impl<'e> Builder<'e> {
     }
 
     /// `hdrfilm`: `width` (768), `height` (576), the crop window ([`crop_window`]), nested
-    /// `rfilter` (gaussian). Output-format options are accepted when valid and ignored (pt
-    /// writes its own formats); `sample_border` (false).
+    /// `rfilter` (gaussian), `pixel_format` (rgb), `sample_border` (false). The file and
+    /// component formats are accepted when valid and ignored (pt writes float32 OpenEXR).
     pub(super) fn film(&mut self, el: &'e Element) -> Result<FilmDesc> {
         let v = ObjectView::parse(el)?;
         if v.plugin != "hdrfilm" {
@@ -48,11 +48,23 @@ impl<'e> Builder<'e> {
         }
         let width = int_in(&v, "width", 768, 1, 1 << 16)? as u32;
         let height = int_in(&v, "height", 576, 1, 1 << 16)? as u32;
-        one_of(
-            &v,
-            "pixel_format",
-            &["luminance", "luminance_alpha", "rgb", "rgba", "xyz", "xyza"],
-        )?;
+        let pixel_format = match v.string("pixel_format")? {
+            None => PixelFormat::default(),
+            Some(s) => PixelFormat::NAMES
+                .iter()
+                .find(|(n, _)| s.eq_ignore_ascii_case(n))
+                .map(|(_, f)| *f)
+                .ok_or_else(|| {
+                    let names: Vec<&str> = PixelFormat::NAMES.iter().map(|(n, _)| *n).collect();
+                    v.prop_error(
+                        "pixel_format",
+                        format!(
+                            "'pixel_format' must be one of {}, not \"{s}\"",
+                            names.join(", ")
+                        ),
+                    )
+                })?,
+        };
         one_of(&v, "component_format", &["float16", "float32", "uint32"])?;
         one_of(&v, "file_format", &["openexr", "exr", "rgbe", "pfm"])?;
         v.boolean("banner")?;
@@ -80,6 +92,7 @@ impl<'e> Builder<'e> {
             filter: filter.unwrap_or(DEFAULT_FILTER),
             sample_border,
             reconstruction: Reconstruction::Splat,
+            pixel_format,
         })
     }
 }

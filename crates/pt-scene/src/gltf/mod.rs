@@ -383,6 +383,7 @@ fn default_desc(cx: &Ctx) -> SceneDesc {
             rr_depth: 5,
             hide_emitters: false,
             moment: false,
+            aov: None,
             radiosity: RadiosityOptions::default(),
             loc: cx.loc("integrator".into()),
         },

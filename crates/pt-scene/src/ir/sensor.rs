@@ -122,6 +122,58 @@ pub struct FilmDesc {
     /// How samples become pixels (not a Mitsuba parameter: Mitsuba always splats; pt's
     /// `--reconstruction` chooses).
     pub reconstruction: Reconstruction,
+    /// The channels written (Mitsuba's `pixel_format`; `rgb` by default, as Mitsuba 3.9.1).
+    pub pixel_format: PixelFormat,
+}
+
+/// The colour channels an image file holds (Mitsuba's `hdrfilm` `pixel_format`), in the
+/// order they are written: linear sRGB (Rec. 709 primaries, D65 white), its luminance Y, or
+/// CIE 1931 XYZ, optionally with an alpha channel `A` (the fraction of a pixel's samples
+/// whose camera path met the scene, see pt-integrators' render loop).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum PixelFormat {
+    /// `R`, `G`, `B`.
+    #[default]
+    Rgb,
+    /// `R`, `G`, `B`, `A`.
+    Rgba,
+    /// `Y`.
+    Luminance,
+    /// `Y`, `A`.
+    LuminanceAlpha,
+    /// `X`, `Y`, `Z`.
+    Xyz,
+    /// `X`, `Y`, `Z`, `A`.
+    Xyza,
+}
+
+impl PixelFormat {
+    /// Every format with its Mitsuba name.
+    pub const NAMES: [(&'static str, PixelFormat); 6] = [
+        ("rgb", PixelFormat::Rgb),
+        ("rgba", PixelFormat::Rgba),
+        ("luminance", PixelFormat::Luminance),
+        ("luminance_alpha", PixelFormat::LuminanceAlpha),
+        ("xyz", PixelFormat::Xyz),
+        ("xyza", PixelFormat::Xyza),
+    ];
+
+    /// The channel names, in order (Mitsuba's names).
+    pub fn channels(self) -> &'static [&'static str] {
+        match self {
+            PixelFormat::Rgb => &["R", "G", "B"],
+            PixelFormat::Rgba => &["R", "G", "B", "A"],
+            PixelFormat::Luminance => &["Y"],
+            PixelFormat::LuminanceAlpha => &["Y", "A"],
+            PixelFormat::Xyz => &["X", "Y", "Z"],
+            PixelFormat::Xyza => &["X", "Y", "Z", "A"],
+        }
+    }
+
+    /// Whether the format has an alpha channel.
+    pub fn has_alpha(self) -> bool {
+        self.channels().contains(&"A")
+    }
 }
 
 /// How a film turns samples into pixels. Both have the same expected image for filters
@@ -162,6 +214,7 @@ impl FilmDesc {
             filter,
             sample_border: false,
             reconstruction: Reconstruction::Splat,
+            pixel_format: PixelFormat::Rgb,
         }
     }
 
@@ -377,6 +430,101 @@ pub struct RadiosityOptions {
     pub reciprocity: Option<Reciprocity>,
 }
 
+/// Mitsuba's `aov` integrator: per sample, quantities of the first surface the camera ray
+/// hits (zero where it hits nothing), splatted with the film's filter into extra channels.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AovDesc {
+    /// The nested integrator's name: its image is also written as `name.R`, `name.G`,
+    /// `name.B`, `name.A`. `None` when the `aov` integrator has no nested integrator (the
+    /// image's own channels are then zero, as in Mitsuba).
+    pub image: Option<String>,
+    /// The requested outputs, in the order given: (name, quantity).
+    pub outputs: Vec<(String, AovKind)>,
+}
+
+impl AovDesc {
+    /// Every extra channel's name, in the order written: the nested integrator's image, then
+    /// each output's channels (`name` + `.` + [`AovKind::suffixes`]).
+    pub fn channel_names(&self) -> Vec<String> {
+        let image = self
+            .image
+            .iter()
+            .flat_map(|n| ["R", "G", "B", "A"].map(|c| format!("{n}.{c}")));
+        let outputs = self
+            .outputs
+            .iter()
+            .flat_map(|(n, k)| k.suffixes().iter().map(move |c| format!("{n}.{c}")));
+        image.chain(outputs).collect()
+    }
+
+    /// Whether an output needs texture coordinates or their tangents kept on every shape.
+    pub fn needs_uv(&self) -> bool {
+        self.outputs
+            .iter()
+            .any(|(_, k)| matches!(k, AovKind::Uv | AovKind::DpDu | AovKind::DpDv))
+    }
+}
+
+/// A quantity of Mitsuba's `aov` integrator (world space where it is a vector).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AovKind {
+    /// `albedo`: the BSDF's diffuse reflectance (Mitsuba's `eval_diffuse_reflectance`), linear
+    /// sRGB.
+    Albedo,
+    /// `depth`: the distance along the camera ray from the near clip plane (where Mitsuba's
+    /// camera rays start) to the hit.
+    Depth,
+    /// `position`: the hit point.
+    Position,
+    /// `uv`: the texture coordinates.
+    Uv,
+    /// `geo_normal`: the geometric normal (the primitive's front side).
+    GeoNormal,
+    /// `sh_normal`: the shading normal (interpolated vertex normal, before normal or bump
+    /// maps).
+    ShNormal,
+    /// `dp_du`: the position's derivative along u.
+    DpDu,
+    /// `dp_dv`: the position's derivative along v.
+    DpDv,
+    /// `prim_index`: the triangle's index in its mesh (0 on analytic shapes).
+    PrimIndex,
+    /// `shape_index`: the shape's number, counted from 1 in file order (0 for no hit).
+    /// Mitsuba writes its internal object number, whose order differs between its variants.
+    ShapeIndex,
+}
+
+impl AovKind {
+    /// Mitsuba's names of the quantities pt computes.
+    pub const NAMES: [(&'static str, AovKind); 10] = [
+        ("albedo", AovKind::Albedo),
+        ("depth", AovKind::Depth),
+        ("position", AovKind::Position),
+        ("uv", AovKind::Uv),
+        ("geo_normal", AovKind::GeoNormal),
+        ("sh_normal", AovKind::ShNormal),
+        ("dp_du", AovKind::DpDu),
+        ("dp_dv", AovKind::DpDv),
+        ("prim_index", AovKind::PrimIndex),
+        ("shape_index", AovKind::ShapeIndex),
+    ];
+
+    /// The channel suffixes Mitsuba 3.9.1 writes for the quantity.
+    pub fn suffixes(self) -> &'static [&'static str] {
+        match self {
+            AovKind::Albedo => &["R", "G", "B"],
+            AovKind::Depth => &["T"],
+            AovKind::Uv => &["U", "V"],
+            AovKind::PrimIndex | AovKind::ShapeIndex => &["I"],
+            AovKind::Position
+            | AovKind::GeoNormal
+            | AovKind::ShNormal
+            | AovKind::DpDu
+            | AovKind::DpDv => &["X", "Y", "Z"],
+        }
+    }
+}
+
 /// Integrator settings with Mitsuba semantics.
 #[derive(Clone, Debug)]
 pub struct IntegratorDesc {
@@ -390,6 +538,9 @@ pub struct IntegratorDesc {
     pub hide_emitters: bool,
     /// Whether the scene wrapped the integrator in `moment` (asks for a variance output).
     pub moment: bool,
+    /// Mitsuba's `aov`: the extra channels, when the scene wrapped the integrator in `aov`
+    /// (or asked for AOVs alone).
+    pub aov: Option<AovDesc>,
     /// Radiosity options (with `IntegratorKind::Radiosity`).
     pub radiosity: RadiosityOptions,
     /// Where the integrator was defined (default location if the scene has none).

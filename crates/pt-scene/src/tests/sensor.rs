@@ -214,6 +214,93 @@ fn integrators() {
     .contains("only one"));
 }
 
+/// Mitsuba's `aov`: its outputs in order with Mitsuba's channel names, the nested integrator's
+/// settings and name, AOVs alone (a default path tracer whose image is not rendered), and
+/// located errors for what it refuses.
+#[test]
+fn aov_integrator() {
+    let integrator = |xml: &str| load(&scene(xml)).map(|s| s.integrator);
+    let i = integrator(
+        r#"<integrator type="aov"><string name="aovs" value="dd.y:depth, nn:sh_normal,a:albedo"/>
+        <integrator type="path" name="my_image"><integer name="max_depth" value="3"/></integrator></integrator>"#,
+    )
+    .unwrap();
+    assert_eq!((i.kind, i.max_depth), (IntegratorKind::Path, 3));
+    let aov = i.aov.expect("aov");
+    assert_eq!(aov.image.as_deref(), Some("my_image"));
+    assert_eq!(
+        aov.channel_names(),
+        [
+            "my_image.R",
+            "my_image.G",
+            "my_image.B",
+            "my_image.A",
+            "dd.y.T",
+            "nn.X",
+            "nn.Y",
+            "nn.Z",
+            "a.R",
+            "a.G",
+            "a.B"
+        ]
+    );
+    let i = integrator(
+        r#"<integrator type="aov"><string name="aovs" value="p:position uv:uv"/></integrator>"#,
+    )
+    .unwrap();
+    let aov = i.aov.expect("aov");
+    assert_eq!(aov.image, None);
+    assert_eq!(aov.channel_names(), ["p.X", "p.Y", "p.Z", "uv.U", "uv.V"]);
+    assert!(aov.needs_uv());
+
+    let cases = [
+        ("", "needs <string name=\"aovs\""),
+        ("<string name=\"aovs\" value=\"depth\"/>", "not a <name>:<type> pair"),
+        ("<string name=\"aovs\" value=\"d:distance\"/>", "invalid AOV type \"distance\""),
+        ("<string name=\"aovs\" value=\"d:duv_dx\"/>", "not yet implemented"),
+        (
+            "<string name=\"aovs\" value=\"d:depth\"/><integrator type=\"path\"/><integrator type=\"path\"/>",
+            "more than one nested integrator",
+        ),
+        (
+            "<string name=\"aovs\" value=\"d:depth\"/><integrator type=\"radiosity\"/>",
+            "must be path, volpath, direct or moment",
+        ),
+        ("<string name=\"aovs\" value=\"d:depth\"/><integer name=\"max_depth\" value=\"3\"/>", "unused property 'max_depth'"),
+    ];
+    for (inner, text) in cases {
+        let e = fail(&scene(&format!(
+            "<integrator type=\"aov\">\n{inner}\n</integrator>"
+        )));
+        assert!(e.loc.is_some(), "{inner}: {e}");
+        assert!(
+            e.message.contains(text),
+            "{inner}: expected '{text}' in {e}"
+        );
+    }
+}
+
+/// `pixel_format` parses every Mitsuba name (any case) to its channels.
+#[test]
+fn pixel_formats() {
+    for (name, channels) in [
+        ("rgb", &["R", "G", "B"][..]),
+        ("RGBA", &["R", "G", "B", "A"]),
+        ("luminance", &["Y"]),
+        ("luminance_alpha", &["Y", "A"]),
+        ("xyz", &["X", "Y", "Z"]),
+        ("xyza", &["X", "Y", "Z", "A"]),
+    ] {
+        let s = load(&scene(&format!(
+            r#"<sensor type="perspective"><film type="hdrfilm"><string name="pixel_format" value="{name}"/></film></sensor>"#
+        )))
+        .unwrap();
+        assert_eq!(s.film.pixel_format.channels(), channels, "{name}");
+    }
+    let s = load(&scene(r#"<sensor type="perspective"/>"#)).unwrap();
+    assert_eq!(s.film.pixel_format, PixelFormat::Rgb);
+}
+
 // -------------------------------------------------------------------------------------------
 // Transforms through whole scenes, and old scenes
 
