@@ -14,8 +14,9 @@ For each scene `scenes/<name>.xml` it writes
 
     references/<name>.exr      mean radiance, float32, channels R, G, B (linear sRGB), and A
                                (Mitsuba's alpha) when the scene's film has pixel_format rgba
-    references/<name>_channels.exr  for an `aov` integrator: every channel of Mitsuba's film
-                               (the image, the nested integrator's copy, the AOVs), by name
+    references/<name>_channels.exr  for an `aov` or `moment` integrator: every channel of
+                               Mitsuba's film by name (the image, the nested integrator's copy,
+                               the AOVs; or the moments)
     references/<name>_var.exr  per-pixel variance OF THE MEAN (sample variance / spp), float32 RGB
 
 (a scene in a folder below scenes/, e.g. `scenes/atlas/veach-mis.xml`, which must be named
@@ -371,13 +372,16 @@ def render_moment(mi, scene, spp, pass_spp, seed, progress=True):
     return m1, var, info, (None if sa is None else sa / spp)
 
 
-def aov_channel_count(scene):
-    """Channels an `aov` integrator appends to the image mi.render returns (its outputs, not
-    its nested integrators' copies), 0 for other integrators."""
+def extra_channel_count(scene):
+    """Channels an `aov` or `moment` integrator appends to the image mi.render returns (an aov
+    integrator's outputs, not its nested integrators' copies; a moment integrator's first and
+    second moments), 0 for other integrators."""
     integ = scene.integrator()
+    names = integ.aov_names()
+    if integ.class_name() == "MomentIntegrator":
+        return len(names)
     if integ.class_name() != "AOVIntegrator":
         return 0
-    names = integ.aov_names()
     # Each nested integrator adds NAME.R, .G, .B, .A; an albedo output has no .A.
     nested = sum(1 for n in names if n.endswith(".A") and n[:-2] + ".R" in names)
     return len(names) - 4 * nested
@@ -388,7 +392,7 @@ def render_batches(mi, scene, spp, pass_spp, seed, k_min=MIN_BATCHES, progress=T
     if spp < k:
         raise RuntimeError(f"batch variance needs spp >= {k}")
     batches = split_n(spp, k)
-    n_aov = aov_channel_count(scene)
+    n_aov = extra_channel_count(scene)
     means, alphas, films = [], [], []
     for i, n in enumerate(batches):
         img = np.array(mi.render(scene, spp=n, seed=seed + i), dtype=np.float64)
@@ -397,7 +401,7 @@ def render_batches(mi, scene, spp, pass_spp, seed, k_min=MIN_BATCHES, progress=T
         if alpha is not None:
             alphas.append(alpha * n)
         if n_aov:
-            # The film of the AOV pass holds every channel under Mitsuba's names.
+            # The film (of an aov integrator: its AOV pass) holds every channel by name.
             films.append(np.array(scene.sensors()[0].film().bitmap(), dtype=np.float64) * n)
         if progress:
             log(f"  batch {i + 1}/{k} ({n} spp, seed {seed + i})")

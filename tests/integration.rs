@@ -28,6 +28,7 @@ mod instances;
 mod light_stability;
 mod lights_analytic;
 mod media;
+mod moment;
 mod parallelograms;
 mod phosphorescence;
 mod pixel_format;

@@ -141,10 +141,9 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
         i.max_depth,
         i.rr_depth,
         i.hide_emitters,
-        if i.moment {
-            " (moment: variance requested)"
-        } else {
-            ""
+        match &i.moment {
+            Some(name) => format!(" (moment: writes {name}.X/Y/Z and m2_{name}.X/Y/Z)"),
+            None => String::new(),
         }
     );
     if let Some(aov) = &i.aov {

@@ -36,7 +36,7 @@ pub use render::{render, render_passes, RenderSettings, RenderState};
 use pt_radiosity::RadiosityParams;
 use pt_render::{BuildError, BvhKind, LightSelection, RenderOutput, Scene};
 use pt_scene::{IntegratorDesc, IntegratorKind, RadiosityOptions, SceneDesc};
-use pt_spectrum::ColorMode;
+use pt_spectrum::{srgb_to_xyz, ColorMode};
 use std::sync::atomic::AtomicBool;
 use std::time::{Duration, Instant};
 
@@ -401,6 +401,15 @@ fn render_path(
         }
         planes.extend(aov::render_aovs(&scene, &settings, aov));
         extra_channels = aov.channel_names().into_iter().zip(planes).collect();
+    }
+    if let (Some(name), Some(m2)) = (&desc.integrator.moment, &output.second_moment) {
+        let xyz: Vec<[f32; 3]> = output.mean.iter().map(|&c| srgb_to_xyz(c)).collect();
+        for (prefix, values) in [(name.clone(), &xyz), (format!("m2_{name}"), m2)] {
+            for (c, axis) in ["X", "Y", "Z"].iter().enumerate() {
+                let plane = values.iter().map(|v| v[c]).collect();
+                extra_channels.push((format!("{prefix}.{axis}"), plane));
+            }
+        }
     }
     let secs = output.time.as_secs_f64();
     let summary = format!(

@@ -7,7 +7,7 @@ use pt_render::film::splat::{SplatFilm, SplatLayout, SplatTile};
 use pt_render::film::{filter_radius, sample_pixel_offset, Filter, PixelStats};
 use pt_render::sampler::{RandomSource, SamplePattern, Sampler, StructuredSampler};
 use pt_render::{RenderOutput, Scene};
-use pt_spectrum::{spectrum_to_srgb, ColorMode, SampledWavelengths};
+use pt_spectrum::{spectrum_to_srgb, srgb_to_xyz, ColorMode, SampledWavelengths};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
@@ -36,6 +36,9 @@ pub struct RenderSettings {
     pub sample_border: bool,
     /// How samples become pixels (Mitsuba's splatting or filter importance sampling).
     pub reconstruction: pt_scene::Reconstruction,
+    /// Keep the per-pixel mean of the samples' squared XYZ (Mitsuba's `moment`); such renders
+    /// always splat, as Mitsuba's film does.
+    pub moment: bool,
     /// Integrator settings.
     pub path: PathSettings,
     /// Optional clamp of each sample's radiance (linear RGB): a sample whose largest channel
@@ -71,9 +74,21 @@ impl RenderSettings {
     /// Whether samples are splatted (Mitsuba's film with a filter wider than a pixel). The box
     /// filter's splat is its own pixel with weight 1, which is what importance sampling the box
     /// gives, so it takes the importance-sampling loop under either setting (same image).
+    /// Moment renders always splat (their squared XYZ is kept by the splatting film only).
     pub fn splats(&self) -> bool {
-        self.reconstruction == pt_scene::Reconstruction::Splat
-            && !matches!(self.filter.desc, pt_scene::FilterDesc::Box { .. })
+        self.moment
+            || (self.reconstruction == pt_scene::Reconstruction::Splat
+                && !matches!(self.filter.desc, pt_scene::FilterDesc::Box { .. }))
+    }
+
+    /// Values the splatting film adds per sample: linear R, G, B and alpha, and with
+    /// [`RenderSettings::moment`] the squares of the sample's X, Y, Z.
+    fn splat_channels(&self) -> usize {
+        if self.moment {
+            7
+        } else {
+            4
+        }
     }
 
     /// The settings a scene file asks for: film size and filter, spp, seed, and the path
@@ -94,6 +109,7 @@ impl RenderSettings {
             filter: Filter::new(desc.film.filter),
             sample_border: desc.film.sample_border,
             reconstruction: desc.film.reconstruction,
+            moment: desc.integrator.moment.is_some(),
             path: PathSettings {
                 max_depth,
                 rr_depth: i.rr_depth,
@@ -156,9 +172,6 @@ pub struct RenderState {
     pub splat: Option<SplatFilm>,
 }
 
-/// Values the image's splatting film adds per sample: linear R, G, B and alpha.
-const IMAGE_CHANNELS: usize = 4;
-
 /// Bytes per pixel of a state file's statistics: two counts (u32) and seven f64 sums.
 const PIXEL_BYTES: usize = 8 + 7 * 8;
 
@@ -185,7 +198,7 @@ impl RenderState {
                         settings.crop.map_or([0, 0], |c| c.offset),
                         settings.sample_border,
                     ),
-                    IMAGE_CHANNELS,
+                    settings.splat_channels(),
                 )
             }),
         }
@@ -203,6 +216,7 @@ impl RenderState {
             .iter()
             .map(PixelStats::variance_of_mean)
             .collect();
+        let mut second_moment = None;
         let (mean, alpha, variance) = match &self.splat {
             Some(film) => {
                 let mut row_major = vec![[0.0; 3]; variance.len()];
@@ -210,10 +224,13 @@ impl RenderState {
                     row_major[p] = *v;
                 }
                 let planes = film.planes();
-                let mean = (0..planes[0].len())
-                    .map(|i| [planes[0][i], planes[1][i], planes[2][i]])
-                    .collect();
-                (mean, planes[3].clone(), row_major)
+                let triple = |c: usize| -> Vec<[f32; 3]> {
+                    (0..planes[c].len())
+                        .map(|i| [planes[c][i], planes[c + 1][i], planes[c + 2][i]])
+                        .collect()
+                };
+                second_moment = (planes.len() == 7).then(|| triple(4));
+                (triple(0), planes[3].clone(), row_major)
             }
             None => (
                 self.pixels.iter().map(PixelStats::mean).collect(),
@@ -230,6 +247,7 @@ impl RenderState {
             time: self.time,
             nonfinite_samples: self.pixels.iter().map(|p| p.nonfinite as u64).sum(),
             alpha: Some(alpha),
+            second_moment,
         }
     }
 
@@ -605,6 +623,7 @@ fn render_splat_tile(
         );
     }
     let radius = filter_radius(&settings.filter.desc);
+    let channels = settings.splat_channels();
     for k in 0..ns {
         for q in 0..taken.len() / ns {
             let (u, rgb, alpha) = taken[q * ns + k];
@@ -612,7 +631,15 @@ fn render_splat_tile(
             // Non-finite samples are counted by the statistics above and left out here.
             if rgb.iter().all(|c| c.is_finite()) {
                 let [r, g, b] = rgb;
-                acc.splat(&settings.filter.desc, radius, origin, u, &[r, g, b, alpha]);
+                let [x, y, z] = srgb_to_xyz(rgb);
+                let values = [r, g, b, alpha, x * x, y * y, z * z];
+                acc.splat(
+                    &settings.filter.desc,
+                    radius,
+                    origin,
+                    u,
+                    &values[..channels],
+                );
             }
         }
     }

@@ -226,5 +226,6 @@ pub fn render_image(
         time,
         nonfinite_samples: nonfinite,
         alpha: None,
+        second_moment: None,
     }
 }

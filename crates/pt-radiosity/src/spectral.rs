@@ -183,5 +183,6 @@ pub fn render(
         time,
         nonfinite_samples: 0,
         alpha: None,
+        second_moment: None,
     })
 }

@@ -597,6 +597,9 @@ pub struct RenderOutput {
     /// (Mitsuba's alpha: 1 everywhere when an environment light is visible), row-major; `None`
     /// for methods that do not compute it.
     pub alpha: Option<Vec<f32>>,
+    /// Per pixel, the filter-weighted mean of the samples' squared CIE XYZ (Mitsuba's
+    /// `moment`), row-major; `None` unless asked for.
+    pub second_moment: Option<Vec<[f32; 3]>>,
 }
 
 impl RenderOutput {

@@ -46,11 +46,20 @@ impl<'e> Builder<'e> {
                     "moment with more than one integrator is not yet supported (not yet implemented)",
                 ));
             }
-            inner = Some(self.integrator(target)?);
+            // Mitsuba names an unnamed nested object by its position.
+            let name = child.written().attr("name").unwrap_or("_arg_0").to_string();
+            inner = Some((name, self.integrator(target)?));
         }
-        let mut inner = inner
+        let (name, mut inner) = inner
             .ok_or_else(|| SceneError::at(&v.el.loc, "moment needs one nested <integrator>"))?;
-        inner.moment = true;
+        if inner.moment.is_some() || inner.aov.is_some() || inner.kind == IntegratorKind::Radiosity
+        {
+            return Err(SceneError::at(
+                &v.el.loc,
+                "the integrator nested in moment must be path, volpath or direct",
+            ));
+        }
+        inner.moment = Some(name);
         Ok(inner)
     }
 
@@ -131,7 +140,7 @@ pub(super) fn path_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
         max_depth: int_in(v, "max_depth", -1, -1, i32::MAX as i64)? as i32,
         rr_depth: int_in(v, "rr_depth", 5, 1, u32::MAX as i64)? as u32,
         hide_emitters: v.boolean("hide_emitters")?.unwrap_or(false),
-        moment: false,
+        moment: None,
         aov: None,
         radiosity: RadiosityOptions::default(),
         loc: SourceLoc::default(),
@@ -163,7 +172,7 @@ pub(super) fn radiosity_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc>
         max_depth: -1,
         rr_depth: 5,
         hide_emitters: false,
-        moment: false,
+        moment: None,
         aov: None,
         radiosity,
         loc: SourceLoc::default(),
@@ -212,7 +221,7 @@ pub(super) fn direct_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
         max_depth: 2,
         rr_depth: 5,
         hide_emitters: v.boolean("hide_emitters")?.unwrap_or(false),
-        moment: false,
+        moment: None,
         aov: None,
         radiosity: RadiosityOptions::default(),
         loc: SourceLoc::default(),
@@ -227,7 +236,7 @@ pub(super) fn default_integrator() -> IntegratorDesc {
         max_depth: -1,
         rr_depth: 5,
         hide_emitters: false,
-        moment: false,
+        moment: None,
         aov: None,
     }
 }

@@ -382,7 +382,7 @@ fn default_desc(cx: &Ctx) -> SceneDesc {
             max_depth: -1,
             rr_depth: 5,
             hide_emitters: false,
-            moment: false,
+            moment: None,
             aov: None,
             radiosity: RadiosityOptions::default(),
             loc: cx.loc("integrator".into()),

@@ -536,8 +536,10 @@ pub struct IntegratorDesc {
     pub rr_depth: u32,
     /// Whether directly visible emitters are hidden (black).
     pub hide_emitters: bool,
-    /// Whether the scene wrapped the integrator in `moment` (asks for a variance output).
-    pub moment: bool,
+    /// Mitsuba's `moment`: when the scene wrapped the integrator in it, the nested integrator's
+    /// name (`_arg_0` when it has none): the image's XYZ is also written as `name.X/Y/Z` and the
+    /// per-pixel mean of the samples' squared XYZ as `m2_name.X/Y/Z`.
+    pub moment: Option<String>,
     /// Mitsuba's `aov`: the extra channels, when the scene wrapped the integrator in `aov`
     /// (or asked for AOVs alone).
     pub aov: Option<AovDesc>,

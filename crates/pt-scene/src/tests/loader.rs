@@ -41,7 +41,7 @@ fn cornell_box_loads() {
         (
             s.integrator.max_depth,
             s.integrator.rr_depth,
-            s.integrator.moment
+            s.integrator.moment.is_some()
         ),
         (8, 5, false)
     );

@@ -170,8 +170,8 @@ fn integrators() {
     );
     let i = integrator("<integrator type=\"moment\"><integrator type=\"path\"><integer name=\"max_depth\" value=\"3\"/></integrator></integrator>").unwrap();
     assert_eq!(
-        (i.kind, i.max_depth, i.moment),
-        (IntegratorKind::Path, 3, true)
+        (i.kind, i.max_depth, i.moment.as_deref()),
+        (IntegratorKind::Path, 3, Some("_arg_0"))
     );
 
     let cases = [
