@@ -182,6 +182,11 @@ def write_exr(mi, path, rgb, metadata, alpha=None):
     else:
         rgba = np.concatenate([rgb, np.asarray(alpha, dtype=np.float32)[..., None]], axis=2)
         bmp = mi.Bitmap(np.ascontiguousarray(rgba), pixel_format=mi.Bitmap.PixelFormat.RGBA)
+    write_bitmap(mi, path, bmp, metadata)
+
+
+def write_bitmap(mi, path, bmp, metadata):
+    """`bmp` with `metadata` in its header, as an OpenEXR file written atomically."""
     md = bmp.metadata()
     for k, v in metadata.items():
         md[k] = v
@@ -309,12 +314,7 @@ def write_channels_exr(mi, path, names, planes, metadata):
     """Every channel of a film (`planes` is height x width x len(names)), named as given."""
     data = np.ascontiguousarray(planes, dtype=np.float32)
     bmp = mi.Bitmap(data, pixel_format=mi.Bitmap.PixelFormat.MultiChannel, channel_names=names)
-    md = bmp.metadata()
-    for k, v in metadata.items():
-        md[k] = v
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    bmp.write(str(tmp), mi.Bitmap.FileFormat.OpenEXR)
-    os.replace(tmp, path)
+    write_bitmap(mi, path, bmp, metadata)
 
 
 def split(total, size):

@@ -117,8 +117,8 @@ fn stability_writes_the_csv_report_and_charts() {
     assert!(o.status.success(), "{}", stderr(&o));
     let csv = std::fs::read_to_string(dir.join("stability.csv")).unwrap();
     assert!(csv.starts_with("family,param_name,param,detail,in_range,energy_bound,theta_deg,side,"));
-    // 636 configurations x 8 angles, both sides for transmissive models: 6960 probes.
-    assert_eq!(csv.lines().count(), 1 + 6960);
+    // 675 configurations x 8 angles, both sides for transmissive models: 7296 probes.
+    assert_eq!(csv.lines().count(), 1 + 7296);
     let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
     for section in [
         "# BSDF stability report",

@@ -17,18 +17,9 @@ fn read(path: &Path) -> (usize, usize, Channels) {
 }
 
 fn render_aov(dir: &Path, name: &str, scene: &Path, args: &[&str]) -> Channels {
-    let out = dir.join(format!("{name}.exr"));
-    let mut all = vec![
-        "render",
-        scene.to_str().expect("utf-8"),
-        "-o",
-        out.to_str().expect("utf-8"),
-        "--quiet",
-    ];
-    all.extend_from_slice(args);
-    let o = pt(&all);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    read(&out).2
+    render_channels(scene, dir, name, args)
+        .into_iter()
+        .collect()
 }
 
 /// The `p`-quantile of `v` (sorted copy).

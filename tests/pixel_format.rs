@@ -6,26 +6,6 @@ use crate::common;
 use common::*;
 use std::path::Path;
 
-/// Renders `scene` with `args` into `dir/name.exr` and reads every channel back (name, plane).
-fn render_channels(scene: &Path, dir: &Path, name: &str, args: &[&str]) -> Vec<(String, Vec<f32>)> {
-    let out = dir.join(format!("{name}.exr"));
-    let mut all = vec![
-        "render",
-        scene.to_str().expect("utf-8"),
-        "-o",
-        out.to_str().expect("utf-8"),
-        "--quiet",
-    ];
-    all.extend_from_slice(args);
-    let o = pt(&all);
-    assert!(
-        o.status.success(),
-        "pt {all:?}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
-    pt_image::read_exr_channels(&out).expect("read").2
-}
-
 /// The plane of channel `name`.
 fn plane<'a>(channels: &'a [(String, Vec<f32>)], name: &str) -> &'a [f32] {
     &channels

@@ -68,6 +68,32 @@ pub fn render(scene: &Path, dir: &Path, name: &str, extra: &[&str]) -> (Image, I
     (img, var)
 }
 
+/// Renders `scene` with extra `args` into `dir/name.exr` and reads every channel back (name,
+/// row-major plane), for the channels `render` does not return (alpha, AOVs, moments).
+pub fn render_channels(
+    scene: &Path,
+    dir: &Path,
+    name: &str,
+    args: &[&str],
+) -> Vec<(String, Vec<f32>)> {
+    let out = dir.join(format!("{name}.exr"));
+    let mut all = vec![
+        "render",
+        scene.to_str().expect("utf-8 path"),
+        "-o",
+        out.to_str().expect("utf-8 path"),
+        "--quiet",
+    ];
+    all.extend_from_slice(args);
+    let o = pt(&all);
+    assert!(
+        o.status.success(),
+        "pt {all:?} failed: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    pt_image::read_exr_channels(&out).expect("read render").2
+}
+
 /// Mean of an image per channel and the standard error of that mean, from the per-pixel
 /// variance-of-the-mean image (pixels are independent, so variances add).
 pub fn mean_and_stderr(img: &Image, var: &Image) -> ([f64; 3], [f64; 3]) {

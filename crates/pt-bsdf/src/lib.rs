@@ -36,6 +36,8 @@ pub mod minnaert;
 pub mod normal_map;
 pub mod oren_nayar;
 pub mod plastic;
+pub mod polarizer;
+pub mod pplastic;
 pub mod principled;
 pub mod principled_thin;
 pub mod rough_dielectric;
@@ -52,6 +54,8 @@ pub use microfacet::{Distribution, Microfacet};
 pub use minnaert::Minnaert;
 pub use oren_nayar::{OrenNayar, OrenNayarVariant};
 pub use plastic::{fresnel_diffuse_reflectance, Plastic};
+pub use polarizer::Polarizer;
+pub use pplastic::PPlastic;
 pub use principled::Principled;
 pub use principled_thin::PrincipledThin;
 use pt_math::{Vec2, Vec3, Vec4};
@@ -132,6 +136,11 @@ pub enum Bsdf {
     /// Mitsuba's `principled` (Disney): diffuse, sheen, clearcoat, GGX specular and rough
     /// transmission (handles both sides when it transmits).
     Principled(Principled),
+    /// Mitsuba's `pplastic` without polarization: rough reflection plus a refracted
+    /// Lambertian base.
+    PPlastic(PPlastic),
+    /// Mitsuba's `polarizer` without polarization: half the light straight through.
+    Polarizer(Polarizer),
     /// Mitsuba's `principledthin`: the thin-sheet principled BSDF (two-sided, light passes
     /// without bending).
     PrincipledThin(PrincipledThin),
@@ -157,6 +166,8 @@ impl Bsdf {
             Bsdf::RoughThinFilm(m) => m.eval(wo, wi),
             Bsdf::Principled(m) => m.eval(wo, wi),
             Bsdf::PrincipledThin(m) => m.eval(wo, wi),
+            Bsdf::PPlastic(m) => m.eval(wo, wi),
+            Bsdf::Polarizer(m) => m.eval(wo, wi),
         }
     }
 
@@ -179,6 +190,8 @@ impl Bsdf {
             Bsdf::RoughThinFilm(m) => m.pdf(wo, wi),
             Bsdf::Principled(m) => m.pdf(wo, wi),
             Bsdf::PrincipledThin(m) => m.pdf(wo, wi),
+            Bsdf::PPlastic(m) => m.pdf(wo, wi),
+            Bsdf::Polarizer(m) => m.pdf(wo, wi),
         }
     }
 
@@ -201,6 +214,8 @@ impl Bsdf {
             Bsdf::RoughThinFilm(m) => m.sample(wo, u_lobe, u),
             Bsdf::Principled(m) => m.sample(wo, u_lobe, u),
             Bsdf::PrincipledThin(m) => m.sample(wo, u_lobe, u),
+            Bsdf::PPlastic(m) => m.sample(wo, u_lobe, u),
+            Bsdf::Polarizer(m) => m.sample(wo, u),
         }
     }
 
@@ -212,7 +227,7 @@ impl Bsdf {
             Bsdf::ThinFilm(m) => m.is_transmissive(),
             Bsdf::RoughThinFilm(m) => m.film.is_transmissive(),
             Bsdf::Principled(m) => m.transmissive,
-            Bsdf::PrincipledThin(_) => true,
+            Bsdf::PrincipledThin(_) | Bsdf::Polarizer(_) => true,
             _ => false,
         }
     }
@@ -231,11 +246,13 @@ impl Bsdf {
             | Bsdf::RoughPlastic(_)
             | Bsdf::RoughThinFilm(_)
             | Bsdf::Principled(_)
-            | Bsdf::PrincipledThin(_) => true,
+            | Bsdf::PrincipledThin(_)
+            | Bsdf::PPlastic(_) => true,
             Bsdf::Conductor(_)
             | Bsdf::Dielectric(_)
             | Bsdf::ThinDielectric(_)
-            | Bsdf::ThinFilm(_) => false,
+            | Bsdf::ThinFilm(_)
+            | Bsdf::Polarizer(_) => false,
         }
     }
 }

@@ -13,6 +13,7 @@ mod diffuse;
 mod gltf_pbr;
 mod normal_map;
 mod plastic;
+mod pplastic;
 mod principled;
 mod rough_thin_film;
 mod specular;

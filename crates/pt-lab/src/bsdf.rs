@@ -8,7 +8,8 @@
 //!
 //! Models ([`MODELS`] lists each with its parameters): `diffuse`, `orennayar` (+ `variant`),
 //! `minnaert`, `dielectric`, `thindielectric`, `roughdielectric`, `conductor` (`eta` + `k` or a
-//! named `material`), `roughconductor`, `roughplastic`, `principled`, `principledthin`, `thinfilm`,
+//! named `material`), `roughconductor`, `roughplastic`, `pplastic`, `polarizer`, `principled`,
+//! `principledthin`, `thinfilm`,
 //! `roughthinfilm`, and the
 //! wrapper `twosided` around one of them. Values are numbers, linear sRGB colours, names
 //! (`variant="full"`, `material="Au"`, `int_ior="bk7"`, `distribution="ggx"`) or flags, as
@@ -129,6 +130,24 @@ pub const MODELS: &[ModelInfo] = &[
             "nonlinear",
             "sample_visible",
         ],
+    },
+    ModelInfo {
+        name: "pplastic",
+        params: &[
+            "diffuse_reflectance",
+            "specular_reflectance",
+            "int_ior",
+            "ext_ior",
+            "distribution",
+            "alpha",
+            "alpha_u",
+            "alpha_v",
+            "sample_visible",
+        ],
+    },
+    ModelInfo {
+        name: "polarizer",
+        params: &["transmittance", "theta", "polarizing"],
     },
     ModelInfo {
         name: "thinfilm",

@@ -3,7 +3,7 @@
 
 use pt_bsdf::{Bsdf, SurfaceBsdf};
 use pt_math::{Vec2, Vec3};
-use pt_testkit::{chi2_sphere, Chi2Config, Chi2Result, Sample};
+use pt_testkit::{chi2_sphere, dir_deg, Chi2Config, Chi2Result, Sample};
 
 /// `sample(wo, u)` of a model as the testkit wants it.
 pub fn sampler(b: Bsdf) -> impl Fn(Vec3, Vec3) -> Option<Sample> {
@@ -110,5 +110,30 @@ pub fn assert_finite_everywhere(name: &str, b: Bsdf) {
                 }
             }
         }
+    }
+}
+
+/// One Mitsuba value: (config, wo (theta, phi) degrees, wi (theta, phi), eval including
+/// |cos wi|, pdf).
+pub type MitsubaValue = (usize, (f32, f32), (f32, f32), [f32; 3], f32);
+
+/// Each value of `values` (configuration index into `models`) against the model's eval times
+/// |cos wi| and its pdf, 1e-4 relative.
+pub fn check_against_mitsuba(label: &str, models: &[Bsdf], values: &[MitsubaValue]) {
+    for &(c, o, i, want, want_pdf) in values {
+        let b = models[c];
+        let d = |a: (f32, f32)| dir_deg(f64::from(a.0), f64::from(a.1));
+        let (wo, wi) = (d(o), d(i));
+        let f = b.eval(wo, wi).rgb().map(|v| v * wi.z.abs());
+        let p = b.pdf(wo, wi);
+        let close = |a: f32, b: f32| (a - b).abs() <= 1e-4 * b.abs().max(1e-6);
+        assert!(
+            (0..3).all(|k| close(f[k], want[k])),
+            "{label} config {c}, wo {o:?}, wi {i:?}: eval {f:?}, Mitsuba {want:?}"
+        );
+        assert!(
+            close(p, want_pdf),
+            "{label} config {c}, wo {o:?}, wi {i:?}: pdf {p}, Mitsuba {want_pdf}"
+        );
     }
 }

@@ -147,7 +147,7 @@ fn sample_params(model: &str, name: &str) -> Vec<(String, PropValue)> {
         "variant" => vec![v(name, s("fujii"))],
         "distribution" => vec![v(name, s("ggx"))],
         "material" => vec![v(name, s("Cu"))],
-        "sample_visible" | "nonlinear" => vec![v(name, PropValue::Boolean(true))],
+        "sample_visible" | "nonlinear" | "polarizing" => vec![v(name, PropValue::Boolean(true))],
         "reflectance" | "diffuse_reflectance" => vec![v(name, PropValue::Rgb([0.2, 0.3, 0.4]))],
         "alpha_u" | "alpha_v" => vec![v("alpha_u", f(0.1)), v("alpha_v", f(0.2))],
         "k" if model == "minnaert" => vec![v(name, f(2.0))],

@@ -94,6 +94,7 @@ pub fn cases() -> Vec<Case> {
     gltf(&mut g);
     principled(&mut g);
     principled_thin(&mut g);
+    pplastic(&mut g);
     // Every variant of `Bsdf` must be in the sweep: this match stops compiling when one is added.
     for c in &g.0 {
         match c.bsdf {
@@ -111,7 +112,9 @@ pub fn cases() -> Vec<Case> {
             | Bsdf::RoughThinFilm(_)
             | Bsdf::GltfPbr(_)
             | Bsdf::Principled(_)
-            | Bsdf::PrincipledThin(_) => {}
+            | Bsdf::PrincipledThin(_)
+            | Bsdf::PPlastic(_)
+            | Bsdf::Polarizer(_) => {}
         }
     }
     g.0
@@ -406,6 +409,46 @@ fn plastics(g: &mut Grid) {
                 }
             }
         }
+    }
+}
+
+/// `pplastic` with a white base (its two terms are only added, so it loses energy at grazing
+/// angles but cannot gain: bound 1) over its roughness and index, and the polarizer (half the
+/// light through).
+fn pplastic(g: &mut Grid) {
+    for (fam, dist) in [("pplastic-ggx", "ggx"), ("pplastic-beckmann", "beckmann")] {
+        for a in [1e-3f32, 0.01, 0.1, 0.3, 1.0, 10.0] {
+            for e in [1.49f32, 1.0001, 4.0] {
+                let spec = BsdfSpec::new("pplastic")
+                    .with("diffuse_reflectance", 1.0)
+                    .with("int_ior", e)
+                    .with("ext_ior", 1.0)
+                    .with("alpha", a)
+                    .with("distribution", dist);
+                let detail = format!("eta={e}");
+                g.push(
+                    fam,
+                    "alpha",
+                    a,
+                    detail,
+                    alpha_ok(a),
+                    1.0,
+                    Source::Scene(spec),
+                );
+            }
+        }
+    }
+    for t in [0.0f32, 0.5, 1.0] {
+        let spec = BsdfSpec::new("polarizer").with("transmittance", t);
+        g.push(
+            "polarizer",
+            "transmittance",
+            t,
+            String::new(),
+            true,
+            0.5,
+            Source::Scene(spec),
+        );
     }
 }
 

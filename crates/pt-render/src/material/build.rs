@@ -364,6 +364,26 @@ impl Builder<'_> {
                 roughness: self.roughness(microfacet)?,
             },
             BsdfKind::Plastic { .. } => self.plastic(&d.kind)?,
+            BsdfKind::PPlastic {
+                diffuse_reflectance,
+                specular_reflectance,
+                int_ior,
+                ext_ior,
+                microfacet,
+            } => {
+                let (rho, ks, weight) =
+                    self.coating_textures(diffuse_reflectance, specular_reflectance)?;
+                Material::PPlastic {
+                    diffuse_reflectance: rho,
+                    specular_reflectance: ks,
+                    eta: int_ior / ext_ior,
+                    roughness: self.roughness(microfacet)?,
+                    specular_sampling_weight: weight,
+                }
+            }
+            BsdfKind::Polarizer { transmittance } => Material::Polarizer {
+                transmittance: self.tex("transmittance", transmittance, Role::Albedo)?,
+            },
             BsdfKind::RoughPlastic { .. } => self.rough_plastic(&d.kind)?,
             BsdfKind::ThinFilm {
                 thickness,

@@ -17,9 +17,9 @@ use crate::geometry::Interaction;
 use crate::texture::{Texture, TexturePoint};
 use pt_bsdf::{
     Bsdf, CoatingTable, Conductor, Dielectric, Distribution, FilmBase, GltfPbr, Lambert,
-    Microfacet, Minnaert, OrenNayar, OrenNayarVariant, Plastic, Principled, PrincipledThin,
-    RoughConductor, RoughDielectric, RoughPlastic, RoughThinFilm, SurfaceBsdf, ThinDielectric,
-    ThinFilm,
+    Microfacet, Minnaert, OrenNayar, OrenNayarVariant, PPlastic, Plastic, Polarizer, Principled,
+    PrincipledThin, RoughConductor, RoughDielectric, RoughPlastic, RoughThinFilm, SurfaceBsdf,
+    ThinDielectric, ThinFilm,
 };
 use pt_math::{Frame, Vec3};
 use pt_spectrum::{ColorMode, SampledSpectrum, SampledWavelengths};
@@ -186,6 +186,24 @@ pub enum Material {
         nonlinear: bool,
         /// Share of specular samples, from the textures' means (Mitsuba).
         specular_sampling_weight: f32,
+    },
+    /// Mitsuba `pplastic` without polarization.
+    PPlastic {
+        /// Albedo of the base.
+        diffuse_reflectance: Texture,
+        /// Factor on the reflection.
+        specular_reflectance: Texture,
+        /// Relative index, inside / outside.
+        eta: f32,
+        /// Distribution and roughness of the reflection.
+        roughness: Roughness,
+        /// Share of specular samples, from the textures' means (Mitsuba).
+        specular_sampling_weight: f32,
+    },
+    /// Mitsuba `polarizer` without polarization.
+    Polarizer {
+        /// Transmittance besides the polarizer's one half.
+        transmittance: Texture,
     },
     /// Mitsuba `roughplastic`.
     RoughPlastic {
@@ -411,6 +429,22 @@ impl Material {
                 specular_reflectance.eval(at, lambda),
                 roughness.at(at),
             )),
+            Material::PPlastic {
+                diffuse_reflectance,
+                specular_reflectance,
+                eta,
+                roughness,
+                specular_sampling_weight,
+            } => Bsdf::PPlastic(PPlastic::new(
+                diffuse_reflectance.eval(at, lambda),
+                specular_reflectance.eval(at, lambda),
+                *eta,
+                roughness.at(at),
+                *specular_sampling_weight,
+            )),
+            Material::Polarizer { transmittance } => Bsdf::Polarizer(Polarizer {
+                transmittance: transmittance.eval(at, lambda),
+            }),
             Material::Plastic {
                 diffuse_reflectance,
                 specular_reflectance,
@@ -701,6 +735,18 @@ impl Material {
                 specular_reflectance,
                 ..
             } => vec![diffuse_reflectance, specular_reflectance],
+            Material::PPlastic {
+                diffuse_reflectance,
+                specular_reflectance,
+                roughness,
+                ..
+            } => vec![
+                diffuse_reflectance,
+                specular_reflectance,
+                &roughness.alpha_u,
+                &roughness.alpha_v,
+            ],
+            Material::Polarizer { transmittance } => vec![transmittance],
             Material::ThinFilm(f) => film(f),
             Material::RoughThinFilm(b) => {
                 let mut v = film(&b.0);
@@ -727,6 +773,7 @@ impl Material {
             Material::RoughDielectric { .. }
             | Material::RoughConductor { .. }
             | Material::RoughPlastic { .. }
+            | Material::PPlastic { .. }
             | Material::RoughThinFilm(_)
             | Material::GltfPbr { .. }
             | Material::Principled(_)
@@ -767,5 +814,6 @@ fn isotropic(b: &Bsdf) -> bool {
             | Bsdf::Dielectric(_)
             | Bsdf::ThinDielectric(_)
             | Bsdf::ThinFilm(_)
+            | Bsdf::Polarizer(_)
     )
 }

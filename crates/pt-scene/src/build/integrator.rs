@@ -33,32 +33,51 @@ impl<'e> Builder<'e> {
         Ok(desc)
     }
 
-    pub(super) fn moment(&mut self, v: &ObjectView<'e>) -> Result<IntegratorDesc> {
+    /// The one integrator nested in a wrapper (`moment`, `aov`) and its name (Mitsuba names
+    /// an unnamed nested object by its position: `_arg_0`), or `None`. A second one is not
+    /// implemented; one that `accepts` refuses is an error naming `allowed`.
+    fn nested_integrator(
+        &mut self,
+        v: &ObjectView<'e>,
+        allowed: &str,
+        accepts: impl Fn(&IntegratorDesc) -> bool,
+    ) -> Result<Option<(String, IntegratorDesc)>> {
         let mut inner = None;
         for child in &v.children {
             let target = self.resolve(child)?;
             if target.tag != "integrator" {
                 return Err(misplaced(child, target, v, "integrator"));
             }
+            let loc = &child.written().loc;
             if inner.is_some() {
                 return Err(SceneError::at(
-                    &child.written().loc,
-                    "moment with more than one integrator is not yet supported (not yet implemented)",
+                    loc,
+                    format!(
+                        "{} with more than one nested integrator is not yet supported (not yet implemented)",
+                        v.plugin
+                    ),
                 ));
             }
-            // Mitsuba names an unnamed nested object by its position.
+            let desc = self.integrator(target)?;
+            if !accepts(&desc) {
+                return Err(SceneError::at(
+                    loc,
+                    format!("the integrator nested in {} must be {allowed}", v.plugin),
+                ));
+            }
             let name = child.written().attr("name").unwrap_or("_arg_0").to_string();
-            inner = Some((name, self.integrator(target)?));
+            inner = Some((name, desc));
         }
-        let (name, mut inner) = inner
+        Ok(inner)
+    }
+
+    pub(super) fn moment(&mut self, v: &ObjectView<'e>) -> Result<IntegratorDesc> {
+        let plain = |d: &IntegratorDesc| {
+            d.moment.is_none() && d.aov.is_none() && d.kind != IntegratorKind::Radiosity
+        };
+        let (name, mut inner) = self
+            .nested_integrator(v, "path, volpath or direct", plain)?
             .ok_or_else(|| SceneError::at(&v.el.loc, "moment needs one nested <integrator>"))?;
-        if inner.moment.is_some() || inner.aov.is_some() || inner.kind == IntegratorKind::Radiosity
-        {
-            return Err(SceneError::at(
-                &v.el.loc,
-                "the integrator nested in moment must be path, volpath or direct",
-            ));
-        }
         inner.moment = Some(name);
         Ok(inner)
     }
@@ -100,29 +119,9 @@ impl<'e> Builder<'e> {
             };
             outputs.push((name.to_string(), kind));
         }
-        let mut inner: Option<(String, IntegratorDesc)> = None;
-        for child in &v.children {
-            let target = self.resolve(child)?;
-            if target.tag != "integrator" {
-                return Err(misplaced(child, target, v, "integrator"));
-            }
-            if inner.is_some() {
-                return Err(SceneError::at(
-                    &child.written().loc,
-                    "aov with more than one nested integrator is not yet supported (not yet implemented)",
-                ));
-            }
-            let desc = self.integrator(target)?;
-            if desc.aov.is_some() || desc.kind == IntegratorKind::Radiosity {
-                return Err(SceneError::at(
-                    &child.written().loc,
-                    "the integrator nested in aov must be path, volpath, direct or moment",
-                ));
-            }
-            // Mitsuba names an unnamed nested object by its position.
-            let name = child.written().attr("name").unwrap_or("_arg_0").to_string();
-            inner = Some((name, desc));
-        }
+        let inner = self.nested_integrator(v, "path, volpath, direct or moment", |d| {
+            d.aov.is_none() && d.kind != IntegratorKind::Radiosity
+        })?;
         let (image, base) = match inner {
             Some((name, desc)) => (Some(name), desc),
             None => (None, default_integrator()),

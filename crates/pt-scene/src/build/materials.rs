@@ -385,6 +385,30 @@ pub(super) fn bsdf_kind<'e>(
             }
         }
         "thinfilm" | "roughthinfilm" => b.thin_film(v, n)?,
+        "pplastic" => {
+            let (int_ior, ext_ior) = (ior(v, "int_ior", 1.49)?, ior(v, "ext_ior", 1.000277)?);
+            if int_ior == ext_ior {
+                return Err(v.prop_error(
+                    "int_ior",
+                    "int_ior and ext_ior must differ (as Mitsuba requires)",
+                ));
+            }
+            BsdfKind::PPlastic {
+                diffuse_reflectance: b.albedo(v, n, "diffuse_reflectance")?,
+                specular_reflectance: b.factor(v, n, "specular_reflectance")?,
+                int_ior,
+                ext_ior,
+                microfacet: b.microfacet(v, n)?,
+            }
+        }
+        "polarizer" => {
+            // Without polarization the polarizer's orientation changes nothing.
+            b.texture_param(v, n, "theta")?;
+            v.boolean("polarizing")?;
+            BsdfKind::Polarizer {
+                transmittance: b.factor(v, n, "transmittance")?,
+            }
+        }
         "fluorescent" => {
             let (reflectance, absorption, emission, quantum_yield) = luminescent(v)?;
             BsdfKind::Fluorescent {

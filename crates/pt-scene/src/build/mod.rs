@@ -44,8 +44,8 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "bsplinecurve", "linearcurve",
         "sdfgrid", "ellipsoids", "ellipsoidsmesh",
     ]),
-    ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "plastic", "roughplastic", "null", "fluorescent", "phosphorescent", "bumpmap", "principled", "principledthin"], &[
-        "polarizer", "retarder", "circular", "measured", "pplastic", "hair",
+    ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "plastic", "roughplastic", "null", "fluorescent", "phosphorescent", "bumpmap", "principled", "principledthin", "pplastic", "polarizer"], &[
+        "retarder", "circular", "measured", "hair",
     ]),
     ("emitter", &["area", "point", "spot", "directional", "sun", "constant", "envmap", "projector"], &[
         "directionalarea", "sunsky",

@@ -233,6 +233,26 @@ pub enum BsdfKind {
         /// Mitsuba's `nonlinear`: account for the colour shift of inner bounces.
         nonlinear: bool,
     },
+    /// Mitsuba's `pplastic` as its unpolarized variants render it: a microfacet reflection
+    /// added to a Lambertian base seen through two smooth refractions (Baek et al. 2018).
+    PPlastic {
+        /// Albedo of the base.
+        diffuse_reflectance: TextureDesc,
+        /// Factor on the reflection.
+        specular_reflectance: TextureDesc,
+        /// Interior index of refraction.
+        int_ior: f32,
+        /// Exterior index of refraction.
+        ext_ior: f32,
+        /// Distribution and roughness of the reflection.
+        microfacet: MicrofacetDesc,
+    },
+    /// Mitsuba's `polarizer` as its unpolarized variants render it: half the light passes
+    /// straight through, times `transmittance`.
+    Polarizer {
+        /// Transmittance besides the polarizer's one half.
+        transmittance: TextureDesc,
+    },
     /// Rough plastic: rough dielectric coating over a diffuse base (Mitsuba `roughplastic`).
     RoughPlastic {
         /// Albedo of the diffuse base.
@@ -460,6 +480,18 @@ impl BsdfKind {
                 ("diffuse_reflectance", diffuse_reflectance),
                 ("specular_reflectance", specular_reflectance),
             ],
+            BsdfKind::PPlastic {
+                diffuse_reflectance,
+                specular_reflectance,
+                microfacet,
+                ..
+            } => vec![
+                ("diffuse_reflectance", diffuse_reflectance),
+                ("specular_reflectance", specular_reflectance),
+                ("alpha_u", &microfacet.alpha_u),
+                ("alpha_v", &microfacet.alpha_v),
+            ],
+            BsdfKind::Polarizer { transmittance } => vec![("transmittance", transmittance)],
             BsdfKind::Fluorescent { .. } | BsdfKind::Phosphorescent { .. } => Vec::new(),
             BsdfKind::GltfPbr {
                 base_color,

@@ -293,13 +293,13 @@ fn unknown_plugin_is_an_error() {
 #[test]
 fn unsupported_plugins_say_not_yet_implemented() {
     let cases = [
-        "<bsdf type=\"pplastic\"/>",
+        "<bsdf type=\"retarder\"/>",
         "<emitter type=\"sunsky\"/>",
         "<sensor type=\"perspective\"><sampler type=\"orthogonal\"><integer name=\"strength\" value=\"3\"/></sampler></sensor>",
         "<sensor type=\"radiancemeter\"/>",
         "<shape type=\"sdfgrid\"/>",
         "<integrator type=\"volpathmis\"/>",
-        "<shape type=\"cube\"><bsdf type=\"polarizer\"/></shape>",
+        "<shape type=\"cube\"><bsdf type=\"circular\"/></shape>",
         "<shape type=\"cube\"><bsdf type=\"diffuse\"><texture type=\"volume\" name=\"reflectance\"/></bsdf></shape>",
         "<sensor type=\"perspective\"><film type=\"specfilm\"/></sensor>",
     ];
