@@ -320,8 +320,20 @@ pub(super) fn intersect_node(node: &CwBvhNode, ray: &BvhRay, oct_inv4: u32) -> u
     mask
 }
 
+/// `v` reordered so that element k is the old `v[order[k]]` (`order` a permutation), into a
+/// new array: the loads are independent, so the processor overlaps their cache misses, where
+/// following the permutation's cycles in place ([`permute_in_place`]) waits for each miss in
+/// turn. For the 12-byte primitive references of a 1M-triangle mesh, after the BVH build
+/// (whose temporaries are the memory peak, so the second array does not raise it): the whole
+/// load 11% faster (wall 0.893 of the in-place order, 8 runs A/B; peak 137.1 vs 137.8 MiB).
+pub(crate) fn gathered<T: Copy>(v: Vec<T>, order: &[u32]) -> Vec<T> {
+    assert_eq!(v.len(), order.len());
+    order.iter().map(|&i| v[i as usize]).collect()
+}
+
 /// Reorders `v` so that `v[k]` becomes the old `v[order[k]]` (`order` a permutation), in place
-/// by following cycles; one bit per element marks what is done.
+/// by following cycles; one bit per element marks what is done. For arrays whose copy would
+/// raise the memory peak (the primitives themselves); see [`gathered`].
 pub(crate) fn permute_in_place<T: Copy>(v: &mut [T], order: &[u32]) {
     assert_eq!(v.len(), order.len());
     let mut done = vec![0u64; v.len().div_ceil(64)];

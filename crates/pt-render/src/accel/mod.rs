@@ -369,6 +369,6 @@ mod flat;
 mod tests;
 pub mod top;
 
-pub(crate) use cwbvh::permute_in_place;
 use cwbvh::*;
+pub(crate) use cwbvh::{gathered, permute_in_place};
 use flat::*;

@@ -35,6 +35,8 @@ fn permutes_in_place() {
     let mut v: Vec<u32> = (10..18).collect();
     permute_in_place(&mut v, &order);
     assert_eq!(v, order.map(|i| 10 + i));
+    let w: Vec<u32> = (10..18).collect();
+    assert_eq!(gathered(w, &order), v);
 }
 
 #[test]

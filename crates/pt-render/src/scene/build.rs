@@ -113,10 +113,7 @@ impl Scene {
         let bounds = bounding_sphere(prims.iter().map(Primitive::aabb).chain(instance_boxes));
         // The primitives are made again from the description after the BVH build (less memory).
         let accel = Accel::build_compact(prims, bvh, |i| primitive_of(desc, refs[i]));
-        // Into the BVH's order in place (a second array of these was 12 MB per million
-        // primitives at the memory peak).
-        let mut prim_refs = refs;
-        crate::accel::permute_in_place(&mut prim_refs, &accel.original_index);
+        let prim_refs = crate::accel::gathered(refs, &accel.original_index);
         // Vertex data for shading, copied after the BVH build (whose temporaries are the memory
         // peak) rather than before. Shapes of instanced groups follow the scene's own.
         let group_shapes = desc.groups.iter().flat_map(|g| &g.shapes);
@@ -212,8 +209,7 @@ fn instancing(
             .map(Primitive::aabb)
             .fold(Aabb::empty(), |a, b| a.union(&b));
         let accel = Accel::build(prims, bvh);
-        let mut prim_refs = refs;
-        crate::accel::permute_in_place(&mut prim_refs, &accel.original_index);
+        let prim_refs = crate::accel::gathered(refs, &accel.original_index);
         groups.push(Group { accel, prim_refs });
         group_boxes.push(bounds);
     }
