@@ -30,6 +30,7 @@
 //!
 //! All functions take directions in the local frame with `wo.z >= 0` (callers flip).
 
+use crate::fresnel::fresnel_dielectric;
 use pt_math::{Vec2, Vec3};
 use std::f32::consts::PI;
 
@@ -272,6 +273,30 @@ impl Microfacet {
         let p = self.pdf_m(wo, h) / (4.0 * woh);
         if p.is_finite() {
             p
+        } else {
+            0.0
+        }
+    }
+
+    /// The reflection of a rough dielectric interface of relative index `eta`, without the
+    /// cosine: F(wo.h) D(h) G(wo, wi) / (4 cos_o cos_i) (Walter et al. 2007 eq. 20), for `wo`
+    /// and `wi` above the surface; 0 outside the support of [`Microfacet::reflection_pdf`] and
+    /// where it is not finite. That support matters at grazing angles: wo.h, positive in exact
+    /// arithmetic, can round to <= 0 where D / (4 cos cos) is ~1e12 at alpha 1e-3, and a sample
+    /// of another lobe landing there got a weight of 1e14 (`pt stability`, Beckmann alpha 1e-3
+    /// at 89.99 degrees). The coated models' specular term (`roughplastic`, `pplastic`).
+    pub fn dielectric_reflection(&self, wo: Vec3, wi: Vec3, eta: f32) -> f32 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return 0.0;
+        }
+        let h = (wo + wi).normalize_or_zero();
+        if h.z <= 0.0 || wo.dot(h) <= 0.0 {
+            return 0.0;
+        }
+        let v =
+            fresnel_dielectric(wo.dot(h), eta) * self.d(h) * self.g2(wo, wi) / (4.0 * wo.z * wi.z);
+        if v.is_finite() {
+            v
         } else {
             0.0
         }

@@ -70,19 +70,10 @@ impl PPlastic {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return SampledSpectrum::ZERO;
         }
-        let mut f = SampledSpectrum::ZERO;
-        let h = (wo + wi).normalize_or_zero();
-        // The support of the specular pdf (`wo.h > 0`, which exact arithmetic always gives
-        // above the surface): at grazing angles the rounded wo.h can be <= 0 where D / (4 cos
-        // cos) is ~1e12 at alpha 1e-3, and a diffuse sample landing there got a weight of 1e9
-        // (`pt stability`; the same guard as `RoughPlastic::eval`).
-        if h.z > 0.0 && wo.dot(h) > 0.0 {
-            let v = fresnel_dielectric(wo.dot(h), self.eta) * self.mf.d(h) * self.mf.g2(wo, wi)
-                / (4.0 * wo.z * wi.z);
-            if v.is_finite() {
-                f += self.specular_reflectance * v;
-            }
-        }
+        // Mitsuba evaluates the reflection wherever both directions are above the surface; the
+        // shared term also drops where rounding leaves the pdf's support (a 1e9 weight at
+        // grazing angles in `pt stability` without it).
+        let f = self.specular_reflectance * self.mf.dielectric_reflection(wo, wi, self.eta);
         let t =
             (1.0 - fresnel_dielectric(wo.z, self.eta)) * (1.0 - fresnel_dielectric(wi.z, self.eta));
         f + self.diffuse_reflectance * (t * FRAC_1_PI)

@@ -271,20 +271,8 @@ impl RoughPlastic {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return SampledSpectrum::ZERO;
         }
-        let mut result = SampledSpectrum::ZERO;
-        let h = (wo + wi).normalize_or_zero();
-        // Same support as the specular pdf (`wo.h > 0`): where wo and wi are grazing and nearly
-        // opposite in azimuth (wi close to the mirror direction), the rounded wo.h can come out
-        // <= 0; the pdf is then 0 while D(h) / (4 cos_o cos_i) is ~1e12 at alpha 1e-3, and a
-        // diffuse-lobe sample landing there got a weight of 1e14 (`pt stability`, Beckmann
-        // alpha 1e-3 at 89.99 degrees: albedo 2e12).
-        if h.z > 0.0 && wo.dot(h) > 0.0 {
-            let v = fresnel_dielectric(wo.dot(h), self.eta) * self.mf.d(h) * self.mf.g2(wo, wi)
-                / (4.0 * wo.z * wi.z);
-            if v.is_finite() {
-                result += self.specular_reflectance * v;
-            }
-        }
+        let mut result =
+            self.specular_reflectance * self.mf.dielectric_reflection(wo, wi, self.eta);
         let r_i = self.table.internal_reflectance;
         let rho = self.diffuse_reflectance;
         let denom = if self.nonlinear {
