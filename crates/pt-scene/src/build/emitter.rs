@@ -58,6 +58,16 @@ impl<'e> Builder<'e> {
         for child in &v.children {
             let t = self.resolve(child)?;
             let name = child.written().attr("name").or_else(|| t.attr("name"));
+            if t.tag == "texture" && name == Some("intensity") && v.plugin != "projector" {
+                // Mitsuba's rule for point and spot lights: no surface to look a texture up on.
+                return Err(SceneError::at(
+                    &child.written().loc,
+                    format!(
+                        "the intensity of {} cannot be a texture that varies over space (Mitsuba refuses it too): give a number, <rgb> or <spectrum>",
+                        v.what()
+                    ),
+                ));
+            }
             match wanted {
                 Some(w) if t.tag == "texture" && name == Some(w) && texture.is_none() => {
                     texture = Some((

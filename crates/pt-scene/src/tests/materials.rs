@@ -220,6 +220,14 @@ fn emitters_outside_shapes() {
             r#"<emitter type="directional"><vector name="direction" value="0, 0, 0"/></emitter>"#,
             "direction",
         ),
+        (
+            r#"<emitter type="point"><texture type="checkerboard" name="intensity"/></emitter>"#,
+            "cannot be a texture that varies over space",
+        ),
+        (
+            r#"<emitter type="spot"><texture type="checkerboard" name="intensity"/></emitter>"#,
+            "cannot be a texture that varies over space",
+        ),
     ] {
         let e = fail(&scene(body));
         assert!(e.to_string().contains(what), "{body}: {e}");
