@@ -20,25 +20,16 @@ use std::collections::HashMap;
 #[test]
 fn moments_agree_with_mitsuba() {
     let dir = scratch("moment");
-    let out = dir.join("moment.exr");
-    let o = pt(&[
-        "render",
-        repo().join("scenes/moment.xml").to_str().expect("utf-8"),
-        "--spp",
-        "256",
-        "--light-selection",
-        "uniform",
-        "-o",
-        out.to_str().expect("utf-8"),
-        "--quiet",
-    ]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let read = |p: &std::path::Path| -> (usize, usize, HashMap<String, Vec<f32>>) {
-        let (w, h, c) = pt_image::read_exr_channels(p).expect("read");
-        (w as usize, h as usize, c.into_iter().collect())
-    };
-    let (w, h, ours) = read(&out);
-    let (_, _, reference) = read(&repo().join("references/moment_channels.exr"));
+    let args = ["--spp", "256", "--light-selection", "uniform"];
+    let ours: HashMap<String, Vec<f32>> =
+        render_channels(&repo().join("scenes/moment.xml"), &dir, "moment", &args)
+            .into_iter()
+            .collect();
+    let (w, h, reference) =
+        pt_image::read_exr_channels(&repo().join("references/moment_channels.exr"))
+            .expect("references/moment_channels.exr");
+    let (w, h) = (w as usize, h as usize);
+    let reference: HashMap<String, Vec<f32>> = reference.into_iter().collect();
     let mut names: Vec<&String> = ours.keys().collect();
     names.sort();
     assert_eq!(

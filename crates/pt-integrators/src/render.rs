@@ -631,7 +631,12 @@ fn render_splat_tile(
             // Non-finite samples are counted by the statistics above and left out here.
             if rgb.iter().all(|c| c.is_finite()) {
                 let [r, g, b] = rgb;
-                let [x, y, z] = srgb_to_xyz(rgb);
+                // The squared XYZ only for moment renders (the film reads `channels` values).
+                let [x, y, z] = if channels > 4 {
+                    srgb_to_xyz(rgb)
+                } else {
+                    [0.0; 3]
+                };
                 let values = [r, g, b, alpha, x * x, y * y, z * z];
                 acc.splat(
                     &settings.filter.desc,
