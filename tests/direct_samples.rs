@@ -1,7 +1,9 @@
 //! Mitsuba's `direct` integrator with its sample counts (`emitter_samples`, `bsdf_samples`):
-//! light sampling alone, BSDF sampling alone and three of each (MIS) all render the expected
-//! image of `scenes/direct-samples.xml`, whose Mitsuba 3.9.1 reference was made with two of
-//! each. Same judge as the reference tests (block z-test with both variances, Sidak-corrected
+//! light sampling alone, BSDF sampling alone, three of each and unequal counts (one and four,
+//! four and one: Veach's count-weighted power heuristic, each strategy's sum divided by its own
+//! count; a count left out of either would brighten or darken the image by up to 4x) all render
+//! the expected image of `scenes/direct-samples.xml`, whose Mitsuba 3.9.1 reference was made
+//! with two of each. Same judge as the reference tests (block z-test with both variances, Sidak-corrected
 //! at alpha 0.01, chi-square of the blocks, mean ratio). 256 spp at the scene's seed: the
 //! single strategies are the noisy ones (BSDF sampling misses the small light, light sampling
 //! the sharp plate), and their variances enter the z-scores, so noise does not fail them; the
@@ -28,6 +30,8 @@ fn every_choice_of_sample_counts_renders_the_direct_light_image() {
         ("light-only", "1", "0"),
         ("bsdf-only", "0", "1"),
         ("three-each", "3", "3"),
+        ("one-light-four-bsdf", "1", "4"),
+        ("four-light-one-bsdf", "4", "1"),
     ] {
         let (img, var) = rendered(
             label,

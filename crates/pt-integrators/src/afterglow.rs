@@ -279,7 +279,7 @@ fn absorbed(
             let u = sampler.next_2d();
             if let Some(ls) = scene.lights[i].sample(p, u_sel, u, &lambda) {
                 let cos = ls.wi.dot(n);
-                if cos > 0.0 && !ls.radiance.is_black() && unoccluded(scene, origin, &ls) {
+                if cos > 0.0 && !ls.radiance.is_black() && scene.light_unoccluded(origin, &ls) {
                     e += ls.radiance * (cos / (pmf * ls.pdf));
                 }
             }
@@ -295,27 +295,6 @@ fn absorbed(
         }
     }
     sum / n_samples as f64
-}
-
-/// Whether nothing blocks the segment from `origin` to the light sample.
-fn unoccluded(scene: &Scene, origin: Vec3, ls: &pt_render::light::LightSample) -> bool {
-    if ls.dist.is_infinite() {
-        return !scene.occluded(&Ray::new(origin, ls.wi));
-    }
-    let target = if ls.n == Vec3::ZERO {
-        ls.p
-    } else {
-        offset_ray_origin(ls.p, ls.n * ls.n.dot(-ls.wi).signum())
-    };
-    let seg = target - origin;
-    let dist = seg.length();
-    dist > 0.0
-        && !scene.occluded(&Ray {
-            origin,
-            dir: seg / dist,
-            tmin: 0.0,
-            tmax: dist * (1.0 - 1e-5),
-        })
 }
 
 /// The values of a mesh attribute for one triangle `t` of the mesh, as the attribute of a

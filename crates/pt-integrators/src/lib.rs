@@ -5,7 +5,7 @@
 //! | variant | Mitsuba plugin | method |
 //! |---|---|---|
 //! | [`Integrator::Path`] | `path`, `volpath` | unidirectional path tracing, NEE + MIS ([`path`]); `volpath` adds absorption by interior media |
-//! | [`Integrator::Direct`] | `direct` | the path tracer with `max_depth` 2 (one emitter and one BSDF sample per camera sample; Mitsuba's k of each as k camera samples, either alone as that strategy) |
+//! | [`Integrator::Direct`] | `direct` | direct illumination at the camera ray's hit: any numbers of light and BSDF samples, weighted by Veach's count-weighted power heuristic ([`direct`]) |
 //! | [`Integrator::Radiosity`] | `radiosity` (pt) | finite-element radiosity (crate `pt-radiosity`) |
 //! | [`Integrator::Afterglow`] | (pt, `--time`) | phosphorescent afterglow: a first pass with the lights on, then the path tracer in the dark ([`afterglow`]) |
 //!
@@ -26,6 +26,7 @@
 
 pub mod afterglow;
 pub mod aov;
+pub mod direct;
 pub mod path;
 pub mod render;
 mod scatter;
@@ -79,10 +80,6 @@ pub struct PathTracer {
     pub settings: PathSettings,
     /// Clamp of each sample's radiance (largest RGB channel; off by default, adds bias).
     pub clamp: Option<f32>,
-    /// Camera samples traced for each sample the scene asks for (Mitsuba `direct`'s shading
-    /// samples: k emitter and BSDF samples per hit are traced here as k camera samples, which
-    /// have the same expected image; 1 otherwise).
-    pub repeat: u32,
 }
 
 /// A light transport method with its settings.
@@ -90,7 +87,8 @@ pub struct PathTracer {
 pub enum Integrator {
     /// Path tracing (Mitsuba `path`, and `volpath` with absorbing media).
     Path(PathTracer),
-    /// Direct illumination (Mitsuba `direct`): the path tracer with `max_depth` 2.
+    /// Direct illumination (Mitsuba `direct`): Mitsuba's numbers of light and BSDF samples at
+    /// the camera ray's hit ([`direct`]).
     Direct(PathTracer),
     /// Radiosity (project extension).
     Radiosity(RadiosityParams),
@@ -224,17 +222,15 @@ impl Integrator {
         if kind != IntegratorKind::Radiosity && radiosity_options {
             return bad("radiosity options apply to --integrator radiosity only".into());
         }
+        // The scene's settings for the method chosen (which may not be the scene's).
+        let scene_settings = PathSettings::from_desc(&IntegratorDesc { kind, ..d.clone() });
         let path = |max_depth: i32| PathTracer {
             settings: PathSettings {
                 max_depth: o.max_depth.unwrap_or(max_depth),
-                rr_depth: d.rr_depth,
-                hide_emitters: d.hide_emitters,
                 strategy: o.strategy.unwrap_or_default(),
-                media: kind == IntegratorKind::VolPath,
-                coverage: crate::path::Coverage::of(kind),
+                ..scene_settings
             },
             clamp: o.clamp,
-            repeat: 1,
         };
         if let Some(time) = o.afterglow {
             if kind == IntegratorKind::Radiosity {
@@ -259,16 +255,25 @@ impl Integrator {
                 emitter_samples,
                 bsdf_samples,
             } => {
-                // Mitsuba's MIS weights with equal counts are the power heuristic of one sample
-                // of each; with one count 0 the other strategy is used alone.
-                let strategy = match (emitter_samples, bsdf_samples) {
-                    (0, _) => Strategy::Bsdf,
-                    (_, 0) => Strategy::Light,
-                    _ => Strategy::Mis,
+                if o.max_depth.is_some() {
+                    return bad(
+                        "--max-depth applies to path and volpath; direct shades the first hit only"
+                            .into(),
+                    );
+                }
+                // --strategy keeps one strategy with the larger count, or both.
+                let most = emitter_samples.max(bsdf_samples);
+                let counts = match o.strategy {
+                    None => (emitter_samples, bsdf_samples),
+                    Some(Strategy::Mis) => (most, most),
+                    Some(Strategy::Light) => (most, 0),
+                    Some(Strategy::Bsdf) => (0, most),
                 };
                 let mut p = path(2);
-                p.settings.strategy = o.strategy.unwrap_or(strategy);
-                p.repeat = emitter_samples.max(bsdf_samples);
+                p.settings.direct = Some(direct::ShadingSamples {
+                    emitter: counts.0,
+                    bsdf: counts.1,
+                });
                 Integrator::Direct(p)
             }
             IntegratorKind::Radiosity => {
@@ -302,16 +307,7 @@ impl Integrator {
     pub fn render(&self, job: &Job, run: Run) -> Result<Rendered, IntegratorError> {
         match self {
             Integrator::Path(p) => render_path(self.name(), p, job.desc, job, run),
-            Integrator::Direct(p) => {
-                let spp = job.spp.checked_mul(p.repeat).ok_or_else(|| {
-                    IntegratorError::Settings(format!(
-                        "{} spp x {} shading samples is too many samples",
-                        job.spp, p.repeat
-                    ))
-                })?;
-                let job = Job { spp, ..job.clone() };
-                render_path(self.name(), p, job.desc, &job, run)
-            }
+            Integrator::Direct(p) => render_path(self.name(), p, job.desc, job, run),
             Integrator::Afterglow { time, path } => {
                 let start = Instant::now();
                 let dark = afterglow::afterglow(job.desc, *time, job.seed)?;

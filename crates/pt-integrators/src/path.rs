@@ -6,6 +6,7 @@
 //! unlimited); Russian roulette starts once `rr_depth` segments have been traced, continuing with
 //! probability min(max throughput, 0.95). Emitters are one-sided.
 
+use crate::direct::ShadingSamples;
 use pt_math::{power_heuristic, Ray, Vec3};
 use pt_render::geometry::Interaction;
 use pt_render::sampler::RandomSource;
@@ -41,6 +42,36 @@ pub struct PathSettings {
     pub media: bool,
     /// When a sample covers its pixel (its alpha) and what an uncovered sample returns.
     pub coverage: Coverage,
+    /// Mitsuba's `direct`: the camera ray's hit is shaded with these numbers of light and BSDF
+    /// samples ([`crate::direct`]) instead of tracing a path; `max_depth`, `rr_depth`,
+    /// `strategy` and `media` do not apply then.
+    pub direct: Option<ShadingSamples>,
+}
+
+impl PathSettings {
+    /// The settings a scene's `<integrator>` gives (for `radiosity` scenes, the path tracer's
+    /// with its `max_depth`).
+    pub fn from_desc(i: &pt_scene::IntegratorDesc) -> Self {
+        use pt_scene::IntegratorKind as K;
+        PathSettings {
+            max_depth: i.max_depth,
+            rr_depth: i.rr_depth,
+            hide_emitters: i.hide_emitters,
+            strategy: Strategy::Mis,
+            media: i.kind == K::VolPath,
+            coverage: Coverage::of(i.kind),
+            direct: match i.kind {
+                K::Direct {
+                    emitter_samples,
+                    bsdf_samples,
+                } => Some(ShadingSamples {
+                    emitter: emitter_samples,
+                    bsdf: bsdf_samples,
+                }),
+                _ => None,
+            },
+        }
+    }
 }
 
 /// When a path covers its pixel (the pixel's alpha, [`PathState::covered`]) and what a path
@@ -81,6 +112,7 @@ impl Default for PathSettings {
             strategy: Strategy::Mis,
             media: false,
             coverage: Coverage::Path,
+            direct: None,
         }
     }
 }
@@ -212,6 +244,14 @@ pub fn trace_paths<S: RandomSource>(
     mut start: impl FnMut() -> Option<PathStart<S>>,
     mut finish: impl FnMut(&PathStart<S>),
 ) {
+    if let Some(counts) = s.direct {
+        // Mitsuba's `direct` shades one hit per camera ray: nothing to keep in flight.
+        while let Some(mut sl) = start() {
+            crate::direct::estimate(scene, s, counts, &mut sl.path, &mut sl.sampler);
+            finish(&sl);
+        }
+        return;
+    }
     let mut slots: [Option<PathStart<S>>; MAX_PATHS] = [const { None }; MAX_PATHS];
     for slot in slots.iter_mut() {
         *slot = start();

@@ -91,14 +91,9 @@ impl RenderSettings {
         }
     }
 
-    /// The settings a scene file asks for: film size and filter, spp, seed, and the path
-    /// tracer's depth from its integrator (`direct`: 2; `volpath`: with media).
+    /// The settings a scene file asks for: film size and filter, spp, seed, and its
+    /// integrator's ([`PathSettings::from_desc`]).
     pub fn from_desc(desc: &pt_scene::SceneDesc) -> Self {
-        let i = &desc.integrator;
-        let max_depth = match i.kind {
-            pt_scene::IntegratorKind::Direct { .. } => 2,
-            _ => i.max_depth,
-        };
         RenderSettings {
             width: desc.film.width,
             height: desc.film.height,
@@ -110,14 +105,7 @@ impl RenderSettings {
             sample_border: desc.film.sample_border,
             reconstruction: desc.film.reconstruction,
             moment: desc.integrator.moment.is_some(),
-            path: PathSettings {
-                max_depth,
-                rr_depth: i.rr_depth,
-                hide_emitters: i.hide_emitters,
-                strategy: crate::path::Strategy::Mis,
-                media: i.kind == pt_scene::IntegratorKind::VolPath,
-                coverage: crate::path::Coverage::of(i.kind),
-            },
+            path: PathSettings::from_desc(&desc.integrator),
             clamp: None,
         }
     }

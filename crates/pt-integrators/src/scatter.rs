@@ -23,15 +23,12 @@ use pt_math::{offset_coordinate, power_heuristic, Frame, Ray, Vec2, Vec3};
 use pt_render::geometry::Interaction;
 use pt_render::light::{parallelogram_points, to_solid_angle, Light, LightSample, LightShape};
 use pt_render::sampler::RandomSource;
+use pt_render::scene::SHADOW_RAY_SHORTEN;
 use pt_render::Scene;
 use pt_spectrum::SampledSpectrum;
 
 /// Lanes: one per path in flight.
 const N: usize = MAX_PATHS;
-
-/// Shadow rays stop this fraction short of the light point, whose origin is already offset: a
-/// relative guard against rounding at the far end, not an absolute epsilon.
-pub(crate) const SHADOW_RAY_SHORTEN: f32 = 1.0 - 1e-5;
 
 /// The lanes' light samples (structure of arrays): which lanes have one, and its values (see
 /// `pt_render::light::LightSample`).

@@ -16,6 +16,10 @@ use pt_math::{Distribution1D, Mat3, Ray, Vec2, Vec3};
 use pt_scene::SourceLoc;
 use pt_spectrum::{ColorMode, SampledSpectrum, SampledWavelengths};
 
+/// Shadow rays stop this fraction short of the light point, whose origin is already offset: a
+/// relative guard against rounding at the far end, not an absolute epsilon.
+pub const SHADOW_RAY_SHORTEN: f32 = 1.0 - 1e-5;
+
 /// Errors found while building a scene (after parsing): each names the element at fault.
 #[derive(Debug, thiserror::Error)]
 #[error("{loc}: {message}")]
@@ -373,6 +377,32 @@ impl Scene {
     /// merged from triangle pairs, spheres, cylinders. For benchmarks and tools.
     pub fn primitives(&self) -> &[Primitive] {
         &self.accel.prims
+    }
+
+    /// Whether nothing blocks the segment from `origin` (a ray origin already offset off its
+    /// surface) to the light sample `ls`: to the light point offset off the light's own surface
+    /// (point-like lights have no normal and need no offset), or along `ls.wi` to infinity for
+    /// distant lights. The far end stops a relative fraction short of the point
+    /// (`SHADOW_RAY_SHORTEN`), a guard against rounding, not an absolute epsilon.
+    #[inline]
+    pub fn light_unoccluded(&self, origin: Vec3, ls: &crate::light::LightSample) -> bool {
+        if ls.dist.is_infinite() {
+            return !self.occluded(&Ray::new(origin, ls.wi));
+        }
+        let target = if ls.n == Vec3::ZERO {
+            ls.p
+        } else {
+            pt_math::offset_ray_origin(ls.p, ls.n * ls.n.dot(-ls.wi).signum())
+        };
+        let seg = target - origin;
+        let dist = seg.length();
+        dist > 0.0
+            && !self.occluded(&Ray {
+                origin,
+                dir: seg / dist,
+                tmin: 0.0,
+                tmax: dist * SHADOW_RAY_SHORTEN,
+            })
     }
 
     /// The material of a hit shape.

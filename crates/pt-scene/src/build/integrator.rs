@@ -180,9 +180,7 @@ pub(super) fn radiosity_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc>
 
 /// Mitsuba's `direct`: `shading_samples` (default 1) sets both `emitter_samples` and
 /// `bsdf_samples`, and may not be given with them; at least one must be positive (Mitsuba
-/// refuses a direct integrator that samples nothing). pt renders equal counts (MIS, as one
-/// sample of each per camera sample, repeated) and either alone; other ratios are not
-/// implemented.
+/// refuses a direct integrator that samples nothing).
 pub(super) fn direct_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
     let count = |name: &str, default: u32| -> Result<u32> {
         Ok(int_in(v, name, i64::from(default), 0, 1 << 16)? as u32)
@@ -204,12 +202,6 @@ pub(super) fn direct_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
                 "emitter_samples"
             },
             "a direct integrator needs at least one emitter or BSDF sample",
-        ));
-    }
-    if emitter_samples != 0 && bsdf_samples != 0 && emitter_samples != bsdf_samples {
-        return Err(v.prop_error(
-            "emitter_samples",
-            format!("emitter_samples={emitter_samples} with bsdf_samples={bsdf_samples} is not yet supported (not yet implemented): equal counts, or one of them 0, are"),
         ));
     }
     Ok(IntegratorDesc {

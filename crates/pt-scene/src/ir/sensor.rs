@@ -326,9 +326,8 @@ pub enum IntegratorKind {
     /// Path tracing through media (Mitsuba `volpath`): as `Path`, and rays inside a shape with an
     /// interior medium are attenuated by it. (`Path` ignores media, as Mitsuba's does.)
     VolPath,
-    /// Direct illumination only (Mitsuba `direct`): `path` with max_depth 2, with Mitsuba's
-    /// numbers of emitter and BSDF samples per hit (`shading_samples` sets both; 1 and 1 by
-    /// default). Supported: equal counts (MIS), or one of them 0 (that strategy alone).
+    /// Direct illumination only (Mitsuba `direct`), with Mitsuba's numbers of emitter and BSDF
+    /// samples per hit (`shading_samples` sets both; 1 and 1 by default; one may be 0).
     Direct {
         /// Light samples per hit.
         emitter_samples: u32,

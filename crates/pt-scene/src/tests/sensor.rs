@@ -186,9 +186,9 @@ fn integrators() {
             "at least 1",
         ),
         (
-            "<integer name=\"bsdf_samples\" value=\"4\"/>",
+            "<integer name=\"bsdf_samples\" value=\"4\"/><integer name=\"shading_samples\" value=\"2\"/>",
             "direct",
-            "not yet supported",
+            "Mitsuba refuses both",
         ),
         (
             "<integer name=\"max_depth\" value=\"3\"/>",
@@ -394,6 +394,11 @@ fn direct_sample_counts_follow_mitsuba() {
             3,
             0,
         ),
+        (
+            r#"<integer name="emitter_samples" value="2"/><integer name="bsdf_samples" value="3"/>"#,
+            2,
+            3,
+        ),
     ] {
         let s = load(&scene(&direct(body))).unwrap();
         assert_eq!(
@@ -413,10 +418,6 @@ fn direct_sample_counts_follow_mitsuba() {
         (
             r#"<integer name="emitter_samples" value="0"/><integer name="bsdf_samples" value="0"/>"#,
             "at least one",
-        ),
-        (
-            r#"<integer name="emitter_samples" value="2"/><integer name="bsdf_samples" value="3"/>"#,
-            "not yet implemented",
         ),
     ] {
         let e = fail(&scene(&direct(body)));
