@@ -209,6 +209,18 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
             Geometry::Cylinder { radius, length, .. } => {
                 format!("cylinder r={radius} length={length}")
             }
+            Geometry::SdfGrid(g) => format!(
+                "sdf grid {}x{}x{}, {} voxels on the surface, {} normals",
+                g.resolution[0],
+                g.resolution[1],
+                g.resolution[2],
+                g.occupied_voxels().count(),
+                if g.smooth_normals {
+                    "smooth"
+                } else {
+                    "analytic"
+                }
+            ),
         };
         let bsdf = &desc.bsdfs[s.bsdf];
         out!(

@@ -167,6 +167,15 @@ pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, 
                 primaries: None,
             })
         };
+        if matches!(shape.geometry, Geometry::SdfGrid(_)) {
+            // Its afterglow would make it an emitter, and an sdfgrid cannot emit (no point
+            // on it can be sampled, as in Mitsuba).
+            return Err(BuildError {
+                loc: shape.loc.clone(),
+                message: "a phosphorescent sdfgrid cannot glow: an sdfgrid cannot be an emitter"
+                    .into(),
+            });
+        }
         let mut sampler_index = 0u64;
         let mut next = || {
             sampler_index += 1;
@@ -251,6 +260,7 @@ pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, 
                 dark.emitter = emitter(phi);
                 out.shapes.push(dark);
             }
+            Geometry::SdfGrid(_) => unreachable!("refused above"),
         }
     }
     Ok(out)

@@ -180,6 +180,10 @@ fn scene_bounds(desc: &SceneDesc) -> (Vec3, Vec3) {
                     hi = hi.max(b);
                 }
             }
+            Geometry::SdfGrid(g) => {
+                lo = lo.min(g.origin);
+                hi = hi.max(g.origin + g.extent);
+            }
         }
     }
     if lo.x > hi.x {
@@ -402,7 +406,9 @@ impl PatchMesh {
                         });
                     }
                 }
-                Geometry::Cylinder { .. } => unreachable!("count_shape refuses cylinders"),
+                Geometry::Cylinder { .. } | Geometry::SdfGrid(_) => {
+                    unreachable!("count_shape refuses cylinders and SDF grids")
+                }
             }
             if degenerate > 0 {
                 mesh.warnings.push(format!(
@@ -453,6 +459,12 @@ impl PatchMesh {
                 &s.loc,
                 "the radiosity solver meshes triangles and spheres; a cylinder is not supported \
                  by it yet (the path tracer renders it)"
+                    .to_string(),
+            )),
+            Geometry::SdfGrid(_) => Err(RadiosityError::scene(
+                &s.loc,
+                "the radiosity solver meshes triangles and spheres; an sdfgrid is not supported \
+                 by it (the path tracer renders it)"
                     .to_string(),
             )),
         }

@@ -1,4 +1,4 @@
-//! Primitives (triangles, parallelograms, analytic spheres and cylinders), their ray intersection, and the surface
+//! Primitives (triangles, parallelograms, analytic spheres and cylinders, SDF voxels), their ray intersection, and the surface
 //! interaction recorded at a hit. Everything in world space.
 
 use obvhs::aabb::Aabb;
@@ -55,7 +55,21 @@ pub enum Primitive {
         /// Whether the normal points towards the axis.
         flip: bool,
     },
+    /// One voxel of Mitsuba's `sdfgrid` that the surface passes through: the zero set of the
+    /// trilinear interpolant of its corner values inside the axis-aligned box `lo + [0,
+    /// size]` (see [`crate::sdf`]).
+    SdfVoxel {
+        /// The box's lowest corner.
+        lo: Vec3,
+        /// The box's size along x, y, z (positive).
+        size: Vec3,
+        /// The distances at the corners, corner `i` at offset (i & 1, (i >> 1) & 1, i >> 2).
+        f: [f32; 8],
+    },
 }
+
+// Every variant fits the 64 bytes the BVH's primitive array is laid out for.
+const _: () = assert!(std::mem::size_of::<Primitive>() == 64);
 
 /// obvhs builds directly from the primitives (no separate array of boxes).
 impl obvhs::Boundable for Primitive {
@@ -90,14 +104,21 @@ impl Primitive {
                 let (lo, hi) = pt_scene::cylinder_bounds(p0.into(), axis.into(), radius, length);
                 Aabb::new(lo.into(), hi.into())
             }
+            Primitive::SdfVoxel { lo, size, ref f } => {
+                let (min, max) = crate::sdf::voxel_bounds(lo, size, f);
+                Aabb::new(min.into(), max.into())
+            }
         }
     }
 
-    /// Whether this is an analytic primitive (sphere, cylinder), which the flat SIMD blocks of
-    /// triangles and parallelograms leave out.
+    /// Whether this is an analytic primitive (sphere, cylinder, SDF voxel), which the flat
+    /// SIMD blocks of triangles and parallelograms leave out.
     #[inline]
     pub fn is_analytic(&self) -> bool {
-        matches!(self, Primitive::Sphere { .. } | Primitive::Cylinder { .. })
+        matches!(
+            self,
+            Primitive::Sphere { .. } | Primitive::Cylinder { .. } | Primitive::SdfVoxel { .. }
+        )
     }
 
     /// Distance along the ray to the nearest hit in `(tmin, tmax)`, or +inf. `dir` need not be
@@ -123,6 +144,9 @@ impl Primitive {
                 length,
                 ..
             } => intersect_cylinder(origin, dir, p0, axis, radius, length, tmin, tmax),
+            Primitive::SdfVoxel { lo, size, ref f } => {
+                crate::sdf::intersect_voxel(lo, size, f, origin.into(), dir.into(), tmin, tmax)
+            }
         }
     }
 
@@ -145,7 +169,7 @@ impl Primitive {
                 origin, dir, v0, e1, e2, tmin, tmax,
             )
             .unwrap_or((f32::INFINITY, 0.0, 0.0)),
-            Primitive::Sphere { .. } | Primitive::Cylinder { .. } => {
+            Primitive::Sphere { .. } | Primitive::Cylinder { .. } | Primitive::SdfVoxel { .. } => {
                 (self.intersect(origin, dir, tmin, tmax), 0.0, 0.0)
             }
         }

@@ -26,6 +26,7 @@ pub mod light;
 pub mod material;
 pub mod sampler;
 pub mod scene;
+pub mod sdf;
 pub mod texture;
 
 pub use accel::BvhKind;

@@ -53,6 +53,7 @@ mod props;
 mod serialized;
 mod shapes;
 mod transform;
+pub mod volgrid;
 mod xml;
 
 #[cfg(test)]

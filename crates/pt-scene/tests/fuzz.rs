@@ -151,6 +151,21 @@ fn check_usable(desc: &SceneDesc) -> Result<(), String> {
                     }
                 }
             }
+            Geometry::SdfGrid(g) => {
+                let n: usize = g.resolution.iter().map(|&r| r as usize).product();
+                if g.resolution.iter().any(|&r| r < 2)
+                    || g.values.len() != n
+                    || g.values.iter().any(|v| !v.is_finite())
+                    || !(g.extent.min_element() > 0.0 && g.extent.is_finite())
+                    || !g.origin.is_finite()
+                {
+                    return Err(format!(
+                        "shape {k}: sdfgrid {:?} with {} values",
+                        g.resolution,
+                        g.values.len()
+                    ));
+                }
+            }
             Geometry::Sphere { center, radius, .. } => {
                 if !center.is_finite() || !radius.is_finite() || *radius <= 0.0 {
                     return Err(format!("shape {k}: sphere at {center:?} radius {radius}"));

@@ -246,6 +246,7 @@ fn flat_blocks_match_the_scalar_tests() {
                     Primitive::Sphere { center: c, .. } | Primitive::Cylinder { p0: c, .. } => {
                         (c, 1.0)
                     }
+                    Primitive::SdfVoxel { lo, .. } => (lo.into(), 1.0),
                 };
                 let tol = 1e-6 / cos;
                 let scale = t + (Vec3A::from(o) - v0).length();

@@ -381,6 +381,19 @@ fn geometry(
                 std::f32::consts::TAU * radius * length,
             ))
         }
+        Geometry::SdfGrid(g) => {
+            // One primitive per voxel the surface passes through, referenced by the grid
+            // index of its lowest corner. The loader refuses emitters on it.
+            let [nx, ny, _] = g.resolution;
+            for [x, y, z] in g.occupied_voxels() {
+                let r = PrimRef::single(si, (z * ny + y) * nx + x);
+                prims.push(primitive_of_geometry(&shape.geometry, r));
+                refs.push(r);
+                stats.sdf_voxels += 1;
+            }
+            data.sdf = Some(g.clone());
+            None
+        }
     })
 }
 

@@ -309,6 +309,19 @@ pub(super) fn primitive_of_geometry(geometry: &Geometry, r: PrimRef) -> Primitiv
             length,
             flip: flip_normals,
         },
+        Geometry::SdfGrid(g) => sdf_voxel(g, r.local),
+    }
+}
+
+/// The BVH primitive of the voxel of `grid` whose lowest corner is grid vertex `index`.
+pub(super) fn sdf_voxel(grid: &pt_scene::SdfGrid, index: u32) -> Primitive {
+    let [nx, ny, _] = grid.resolution;
+    let v = [index % nx, (index / nx) % ny, index / (nx * ny)];
+    let (lo, size) = grid.voxel_box(v);
+    Primitive::SdfVoxel {
+        lo,
+        size,
+        f: grid.corners(v),
     }
 }
 

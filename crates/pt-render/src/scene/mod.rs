@@ -56,6 +56,8 @@ struct ShapeData {
     attributes: Vec<Option<Attribute>>,
     /// Spheres: the object-to-world rotation (uv and dp/du follow its z axis).
     frame: Option<Mat3>,
+    /// `sdfgrid` shapes: the grid, for smooth shading normals.
+    sdf: Option<std::sync::Arc<pt_scene::SdfGrid>>,
     /// The instanced group the shape belongs to (its primitives are in that group's
     /// [`Group::accel`], in the group's space), or `None` for a shape of the scene itself.
     group: Option<u32>,
@@ -74,6 +76,7 @@ impl ShapeData {
             indices: Vec::new(),
             attributes: Vec::new(),
             frame: None,
+            sdf: None,
             group,
         }
     }
@@ -131,6 +134,8 @@ pub struct SceneStats {
     pub spheres: usize,
     /// Analytic cylinders in the BVH.
     pub cylinders: usize,
+    /// Voxels of `sdfgrid` shapes that the surface passes through (one primitive each).
+    pub sdf_voxels: usize,
     /// Zero-area triangles left out of the BVH (they can neither be hit nor emit).
     pub degenerate_triangles: usize,
 }
@@ -369,6 +374,29 @@ impl Scene {
                 let dpdu = frame * Vec3::new(-on.y, on.x, 0.0) * std::f32::consts::TAU;
                 let dp = [dpdu, frame * Vec3::new(0.0, 0.0, length)];
                 Interaction::analytic(p, n, uv, dp, t, r.shape, id as u32)
+            }
+            Primitive::SdfVoxel { lo, size, ref f } => {
+                // As Mitsuba's sdfgrid: no texture coordinates, no dp/du; the geometric
+                // normal is the voxel's gradient, the shading normal the smooth one unless
+                // `normals` is `analytic`.
+                let p = ray.at(t);
+                let ng = crate::sdf::voxel_normal(lo, size, f, p);
+                let mut it = Interaction::analytic(
+                    p,
+                    ng,
+                    Vec2::ZERO,
+                    [Vec3::ZERO; 2],
+                    t,
+                    r.shape,
+                    id as u32,
+                );
+                if let Some(g) = shape.sdf.as_deref().filter(|g| g.smooth_normals) {
+                    let ns = crate::sdf::smooth_normal(g, p);
+                    if ns != Vec3::ZERO {
+                        it.ns = ns;
+                    }
+                }
+                it
             }
         }
     }

@@ -40,9 +40,9 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "volpathmis", "prb", "prb_basic", "prb_projective", "direct_projective",
         "ptracer", "depth", "stokes", "prbvolpath",
     ]),
-    ("shape", &["obj", "ply", "serialized", "gltf", "rectangle", "cube", "sphere", "disk", "cylinder", "shapegroup", "instance"], &[
+    ("shape", &["obj", "ply", "serialized", "gltf", "rectangle", "cube", "sphere", "disk", "cylinder", "sdfgrid", "shapegroup", "instance"], &[
         "bsplinecurve", "linearcurve",
-        "sdfgrid", "ellipsoids", "ellipsoidsmesh",
+        "ellipsoids", "ellipsoidsmesh",
     ]),
     ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "plastic", "roughplastic", "null", "fluorescent", "phosphorescent", "bumpmap", "principled", "principledthin", "pplastic", "polarizer"], &[
         "retarder", "circular", "measured", "hair",

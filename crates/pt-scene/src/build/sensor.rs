@@ -380,6 +380,10 @@ pub(super) fn bounds(shapes: &[ShapeDesc]) -> Option<(Vec3, Vec3)> {
                 add(lo);
                 add(hi);
             }
+            Geometry::SdfGrid(g) => {
+                add(g.origin);
+                add(g.origin + g.extent);
+            }
         }
     }
     acc

@@ -33,9 +33,26 @@ impl<'e> Builder<'e> {
             "serialized" => self.serialized(&v, &to_world, flip)?,
             "ply" => self.ply(&v, &to_world, flip)?,
             "gltf" => self.gltf(&v, &to_world, flip)?,
+            "sdfgrid" => {
+                if v.has("flip_normals") {
+                    // Mitsuba's sdfgrid has no such parameter: its outside is where the
+                    // function is positive.
+                    return Err(v.prop_error(
+                        "flip_normals",
+                        "an sdfgrid has no flip_normals (its outside is where the distance is positive; negate the grid)",
+                    ));
+                }
+                self.sdfgrid(&v, &to_world)?
+            }
             _ => return Err(plugin_error(el)),
         };
         let (bsdf, emitter, interior) = self.shape_children(&v)?;
+        if emitter.is_some() && matches!(geometry, Geometry::SdfGrid(_)) {
+            return Err(SceneError::at(
+                &el.loc,
+                "an sdfgrid cannot be an area emitter (as in Mitsuba, which samples no point on it)",
+            ));
+        }
         v.finish()?;
         let bsdf = match bsdf {
             Some(b) => b,
@@ -245,6 +262,68 @@ impl<'e> Builder<'e> {
         shapes::to_world(local, m, flip)
             .map(Geometry::Mesh)
             .map_err(|e| err(format!("mesh '{name}': {e}")))
+    }
+
+    /// `sdfgrid` (Mitsuba's): the one-channel grid of the `.vol` file `filename` (resolved as
+    /// for `obj`) over the object space's unit cube; `normals` `smooth` (default) or
+    /// `analytic`. `to_world` must be scales and a translation: Mitsuba warns against
+    /// rotations (and asks for an `instance` instead), and pt refuses them and mirrors.
+    pub(super) fn sdfgrid(&self, v: &ObjectView<'_>, m: &Mat4) -> Result<Geometry> {
+        let err = |msg: String| SceneError::at(&v.el.loc, msg);
+        let smooth_normals = match v.string("normals")?.as_deref() {
+            None | Some("smooth") => true,
+            Some("analytic") => false,
+            Some(other) => {
+                return Err(v.prop_error(
+                    "normals",
+                    format!("normals \"{other}\" is not one of: smooth, analytic"),
+                ))
+            }
+        };
+        let name = v.string("filename")?.ok_or_else(|| {
+            err("missing <string name=\"filename\" .../> (the grid's .vol file)".into())
+        })?;
+        let path = resolve_file(&name, &v.el.dir, &[self.base_dir], self.search_paths);
+        let grid = crate::volgrid::load_vol(&path, &name).map_err(err)?;
+        if grid.channels != 1 {
+            return Err(err(format!(
+                "grid '{name}' has {} channels; an sdfgrid needs 1",
+                grid.channels
+            )));
+        }
+        if let Some(n) = grid.resolution.iter().find(|&&n| n < 2) {
+            return Err(err(format!(
+                "grid '{name}' has {n} sample along an axis; an sdfgrid needs at least 2 (one voxel)"
+            )));
+        }
+        if let Some(bad) = grid.values.iter().find(|x| !x.is_finite()) {
+            return Err(err(format!("grid '{name}' holds the value {bad}")));
+        }
+        // Scales and a translation only: the diagonal positive, the rest zero (to rounding).
+        let diag = Vec3::new(m.x_axis.x, m.y_axis.y, m.z_axis.z);
+        let off = [
+            m.x_axis.y, m.x_axis.z, m.y_axis.x, m.y_axis.z, m.z_axis.x, m.z_axis.y,
+        ];
+        let tol = 1e-6 * diag.abs().max_element();
+        if !(diag.min_element() > 0.0 && off.iter().all(|o| o.abs() <= tol) && diag.is_finite()) {
+            return Err(v.prop_error(
+                "to_world",
+                "an sdfgrid's to_world must be positive scales and a translation (Mitsuba warns against rotations; place the shape with shapegroup/instance instead)",
+            ));
+        }
+        let sdf = SdfGrid {
+            resolution: grid.resolution,
+            values: grid.values,
+            origin: m.w_axis.truncate(),
+            extent: diag,
+            smooth_normals,
+        };
+        if sdf.occupied_voxels().next().is_none() {
+            return Err(err(format!(
+                "grid '{name}' has no voxel the surface passes through (no value >= 0 beside one <= 0; Mitsuba refuses it too)"
+            )));
+        }
+        Ok(Geometry::SdfGrid(std::sync::Arc::new(sdf)))
     }
 
     /// A shape's nested BSDF (or `<ref>` to one), area emitter and interior medium, at most one

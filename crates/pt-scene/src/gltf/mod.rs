@@ -175,7 +175,7 @@ pub fn load_mesh(path: &Path) -> Result<TriangleMesh, String> {
         .iter()
         .filter_map(|s| match &s.geometry {
             Geometry::Mesh(m) => Some(m),
-            Geometry::Sphere { .. } | Geometry::Cylinder { .. } => None,
+            Geometry::Sphere { .. } | Geometry::Cylinder { .. } | Geometry::SdfGrid(_) => None,
         })
         .collect();
     if meshes.is_empty() {
@@ -560,7 +560,7 @@ fn summarise_meshes(cx: &mut Ctx, desc: &SceneDesc, lines: Vec<String>) {
         .iter()
         .map(|s| match &s.geometry {
             Geometry::Mesh(m) => m.indices.len(),
-            Geometry::Sphere { .. } | Geometry::Cylinder { .. } => 0,
+            Geometry::Sphere { .. } | Geometry::Cylinder { .. } | Geometry::SdfGrid(_) => 0,
         })
         .sum();
     cx.summary.push(format!(

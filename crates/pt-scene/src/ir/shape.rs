@@ -99,6 +99,70 @@ pub enum Geometry {
         /// Whether the normal points towards the axis.
         flip_normals: bool,
     },
+    /// Mitsuba's `sdfgrid` (shared: the shape's primitives are its occupied voxels).
+    SdfGrid(std::sync::Arc<SdfGrid>),
+}
+
+/// Mitsuba's `sdfgrid`: a signed distance function sampled at the vertices of a regular grid
+/// over the unit cube of the shape's object space, and interpolated trilinearly in each voxel;
+/// the surface is its zero set, the outside where it is positive.
+#[derive(Clone, Debug)]
+pub struct SdfGrid {
+    /// Samples along x, y and z (each at least 2: a voxel spans 1 / (resolution - 1)).
+    pub resolution: [u32; 3],
+    /// The samples (object-space units), x fastest, then y, then z.
+    pub values: Vec<f32>,
+    /// Where the object space's origin (the grid's corner sample 0) lies, world space.
+    pub origin: Vec3,
+    /// The world-space size of the object space's unit cube along x, y and z (positive: the
+    /// loader accepts a `to_world` of scales and a translation only).
+    pub extent: Vec3,
+    /// Shading normals: `true` for Mitsuba's `smooth` (continuous across voxels; Hansson-
+    /// Söderlund, Evans and Akenine-Möller 2022), `false` for `analytic` (the gradient of the
+    /// voxel's interpolant, which the geometric normal always is).
+    pub smooth_normals: bool,
+}
+
+impl SdfGrid {
+    /// The sample at grid vertex (x, y, z).
+    #[inline]
+    pub fn at(&self, x: u32, y: u32, z: u32) -> f32 {
+        let [nx, ny, _] = self.resolution;
+        self.values[((z * ny + y) * nx + x) as usize]
+    }
+
+    /// The eight samples at the corners of the voxel whose lowest corner is vertex (x, y, z),
+    /// corner `i` at offset (i & 1, (i >> 1) & 1, i >> 2).
+    #[inline]
+    pub fn corners(&self, [x, y, z]: [u32; 3]) -> [f32; 8] {
+        std::array::from_fn(|i| {
+            let i = i as u32;
+            self.at(x + (i & 1), y + ((i >> 1) & 1), z + (i >> 2))
+        })
+    }
+
+    /// The voxels the surface passes through, by lowest corner vertex, x fastest: those
+    /// whose corners include a value >= 0 and one <= 0 (Mitsuba's occupied voxels).
+    pub fn occupied_voxels(&self) -> impl Iterator<Item = [u32; 3]> + '_ {
+        let [nx, ny, nz] = self.resolution.map(|n| n - 1);
+        (0..nz).flat_map(move |z| {
+            (0..ny).flat_map(move |y| {
+                (0..nx).map(move |x| [x, y, z]).filter(|&v| {
+                    let f = self.corners(v);
+                    f.iter().any(|&c| c >= 0.0) && f.iter().any(|&c| c <= 0.0)
+                })
+            })
+        })
+    }
+
+    /// The world-space box of the voxel whose lowest corner is vertex `v`: its low corner and
+    /// its size.
+    #[inline]
+    pub fn voxel_box(&self, v: [u32; 3]) -> (Vec3, Vec3) {
+        let cells = Vec3::from(self.resolution.map(|n| (n - 1) as f32));
+        let size = self.extent / cells;
+        (self.origin + Vec3::from(v.map(|c| c as f32)) * size, size)
+    }
 }
 
 /// A shape with its material and optional emitter.

@@ -277,3 +277,103 @@ fn scattering_exterior_and_nameless_media_are_clear_errors() {
         "{e}"
     );
 }
+
+#[test]
+fn sdfgrid_loads_its_grid_and_refuses_what_it_cannot_render() {
+    use crate::volgrid::{write_vol, VolumeGrid};
+    let dir = temp_dir("sdfgrid");
+    // A 3 x 2 x 2 grid: the plane x = 0.5 (object space).
+    let plane = |channels: u32, res: [u32; 3], f: &dyn Fn(u32) -> f32| VolumeGrid {
+        resolution: res,
+        channels,
+        bbox: [[0.0; 3], [1.0; 3]],
+        values: (0..res.iter().product::<u32>() * channels).map(f).collect(),
+    };
+    let files = [
+        (
+            "plane.vol",
+            plane(1, [3, 2, 2], &|i| (i % 3) as f32 * 0.5 - 0.5),
+        ),
+        ("two.vol", plane(2, [3, 2, 2], &|_| 0.0)),
+        ("thin.vol", plane(1, [3, 1, 2], &|_| 0.0)),
+        ("empty.vol", plane(1, [3, 2, 2], &|_| 1.0)),
+    ];
+    for (name, g) in &files {
+        std::fs::write(dir.join(name), write_vol(g)).unwrap();
+    }
+    let shape = |file: &str, inner: &str| {
+        scene(&format!(
+            "<shape type=\"sdfgrid\">\n<string name=\"filename\" value=\"{file}\"/>\n{inner}</shape>"
+        ))
+    };
+    let load_in = |xml: &str| load_str(xml, Path::new("test.xml"), &dir, &[]);
+    let s = load_in(&shape(
+        "plane.vol",
+        "<transform name=\"to_world\"><scale value=\"2, 3, 4\"/><translate value=\"1, 0, 0\"/></transform>\n",
+    ))
+    .unwrap();
+    let Geometry::SdfGrid(g) = &s.shapes[0].geometry else {
+        panic!("not an sdfgrid")
+    };
+    assert_eq!(g.resolution, [3, 2, 2]);
+    assert_eq!((g.origin, g.extent), (Vec3::X, Vec3::new(2.0, 3.0, 4.0)));
+    assert!(g.smooth_normals);
+    // The two voxels along x both touch the plane (its samples are 0 on the middle layer).
+    assert_eq!(g.occupied_voxels().count(), 2);
+    let s = load_in(&shape(
+        "plane.vol",
+        "<string name=\"normals\" value=\"analytic\"/>\n",
+    ))
+    .unwrap();
+    assert!(matches!(&s.shapes[0].geometry, Geometry::SdfGrid(g) if !g.smooth_normals));
+
+    let cases = [
+        (shape("missing.vol", ""), "cannot open grid 'missing.vol'"),
+        (shape("two.vol", ""), "has 2 channels; an sdfgrid needs 1"),
+        (shape("thin.vol", ""), "needs at least 2"),
+        (
+            shape("empty.vol", ""),
+            "no voxel the surface passes through",
+        ),
+        (
+            shape("plane.vol", "<string name=\"normals\" value=\"flat\"/>\n"),
+            "not one of: smooth, analytic",
+        ),
+        (
+            shape(
+                "plane.vol",
+                "<transform name=\"to_world\"><rotate y=\"1\" angle=\"30\"/></transform>\n",
+            ),
+            "positive scales and a translation",
+        ),
+        (
+            shape(
+                "plane.vol",
+                "<transform name=\"to_world\"><scale value=\"-1, 1, 1\"/></transform>\n",
+            ),
+            "positive scales and a translation",
+        ),
+        (
+            shape(
+                "plane.vol",
+                "<boolean name=\"flip_normals\" value=\"true\"/>\n",
+            ),
+            "has no flip_normals",
+        ),
+        (
+            shape("plane.vol", "<emitter type=\"area\"/>\n"),
+            "cannot be an area emitter",
+        ),
+        (
+            scene("<shape type=\"sdfgrid\">\n</shape>"),
+            "missing <string name=\"filename\"",
+        ),
+    ];
+    for (xml, want) in cases {
+        let e = load_in(&xml).unwrap_err();
+        // At the shape, or at the property at fault inside it.
+        let loc = e.loc.as_ref().expect("located");
+        assert!(loc.line >= 2 && !loc.element.is_empty(), "{e}");
+        assert!(e.message.contains(want), "{want}: {e}");
+    }
+}
