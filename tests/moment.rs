@@ -8,9 +8,10 @@ use common::*;
 use std::collections::HashMap;
 
 /// The moments agree with Mitsuba's. A second moment depends on the estimator, not only on the
-/// image: pt's default light selection (by power) has 1.27 times Mitsuba's per-pixel variance
-/// on this scene (m2 11% higher), so the test renders with `--light-selection uniform`,
-/// Mitsuba's strategy, where pt's per-pixel variance is 0.9995 of Mitsuba's. Thresholds, from
+/// image: selecting lights by power alone had 1.27 times Mitsuba's per-pixel variance on this
+/// scene (m2 11% higher), so the test renders with `--light-selection uniform`, Mitsuba's
+/// strategy, where pt's per-pixel variance is 0.9995 of Mitsuba's (pt's default gives a sky its
+/// uniform share, which with one area light is the same choice). Thresholds, from
 /// three seeds at 256 spp (whole-image m2 ratios 0.995-1.000, a standard error near 0.002):
 /// the whole-image mean of each moment channel within 1.2% of Mitsuba's (a 2% bias fails; m2
 /// summed from squared R, G, B instead of squared X, Y, Z is off by a factor of about 2.7),

@@ -83,7 +83,9 @@ pub(crate) struct RenderArgs {
     /// small lights); `pt stability` measures how much on a test scene.
     #[arg(long, value_name = "X")]
     clamp: Option<f32>,
-    /// How next-event estimation picks a light.
+    /// How next-event estimation picks a light: `power` gives each distant light
+    /// (environment, sun, directional) its uniform share and splits the rest among the other
+    /// lights by power; `uniform` is Mitsuba's choice.
     #[arg(long, value_enum, default_value_t = SelectionArg::Power)]
     light_selection: SelectionArg,
     /// Acceleration structure: `auto` tests scenes of at most 32 primitives without a tree
@@ -98,7 +100,7 @@ pub(crate) struct RenderArgs {
     mode: Option<ModeArg>,
     /// Light transport method [default: the scene's integrator]. `radiosity` solves for
     /// diffuse patch radiosities and displays them (see the radiosity options below);
-    /// `direct` is the path tracer with max_depth 2; `volpath` adds absorbing media.
+    /// `direct` shades the first hit with light and BSDF samples (Mitsuba's, one of each); `volpath` adds absorbing media.
     #[arg(long, value_enum)]
     integrator: Option<IntegratorArg>,
     #[command(flatten)]

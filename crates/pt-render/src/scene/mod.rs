@@ -33,7 +33,8 @@ pub struct BuildError {
 /// How lights are chosen for next-event estimation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum LightSelection {
-    /// Proportional to emitted power (default).
+    /// Each distant light its uniform share, the others the rest in proportion to their
+    /// emitted power (default; see `power_selection` in build.rs).
     #[default]
     Power,
     /// Uniform over lights (Mitsuba 3's choice), for comparison.
@@ -835,5 +836,44 @@ mod tests {
             differ * 1000 <= seen,
             "{differ} of {seen} seen samples differ"
         );
+    }
+
+    /// Light selection by power: a sky gets the uniform share (1/3 here) whatever its power
+    /// over the scene's disk, and the two rectangles split the rest by power (area x radiance:
+    /// 1 x 3 against 4 x 3, so 2/3 x 1/5 and 2/3 x 4/5); without the sky they split it all;
+    /// uniform selection gives each a third.
+    #[test]
+    fn power_selection_gives_distant_lights_their_uniform_share() {
+        let rect = |scale: &str, y: f32| {
+            format!(
+                r#"<shape type="rectangle"><transform name="to_world"><scale value="{scale}"/><translate y="{y}"/></transform>
+                <emitter type="area"><rgb name="radiance" value="3"/></emitter></shape>"#
+            )
+        };
+        let lights = format!("{}{}", rect("0.5", 0.0), rect("1", 3.0));
+        let sky = r#"<emitter type="constant"><rgb name="radiance" value="50"/></emitter>"#;
+        let xml = |body: &str| format!(r#"<scene version="3.0.0">{body}</scene>"#);
+        let pmfs = |scene: &Scene| {
+            (0..scene.lights.len())
+                .map(|i| scene.light_pmf(i))
+                .collect::<Vec<_>>()
+        };
+        let close = |a: &[f32], b: &[f32]| {
+            a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-5)
+        };
+        let with_sky = built(&desc_of(&xml(&format!("{lights}{sky}"))));
+        let got = pmfs(&with_sky);
+        assert!(close(&got, &[2.0 / 15.0, 8.0 / 15.0, 1.0 / 3.0]), "{got:?}");
+        let without = built(&desc_of(&xml(&lights)));
+        let got = pmfs(&without);
+        assert!(close(&got, &[0.2, 0.8]), "{got:?}");
+        let uniform = Scene::build(
+            &desc_of(&xml(&format!("{lights}{sky}"))),
+            BvhKind::Auto,
+            LightSelection::Uniform,
+        )
+        .unwrap();
+        let got = pmfs(&uniform);
+        assert!(close(&got, &[1.0 / 3.0; 3]), "{got:?}");
     }
 }
