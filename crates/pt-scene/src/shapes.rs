@@ -17,7 +17,7 @@ use crate::transform::is_affine;
 use glam::{Mat3, Mat4, Vec2, Vec3};
 
 /// Segments of the disk's triangle fan.
-pub(crate) const DISK_SEGMENTS: u32 = 256;
+pub(crate) const DISK_SEGMENTS: u32 = 1024;
 
 /// A mesh in object space, before `to_world` and `flip_normals`.
 #[derive(Debug, Default)]
@@ -100,15 +100,15 @@ pub(crate) fn cube() -> LocalMesh {
 /// Mitsuba's `disk` (unit radius, z = 0, facing +z) as a fan of [`DISK_SEGMENTS`] triangles.
 ///
 /// The rim vertices sit on a circle slightly larger than the unit circle, chosen so that the
-/// polygon's area is exactly pi: an inscribed polygon would lose area (0.01% at 256 segments),
+/// polygon's area is exactly pi: an inscribed polygon would lose area (6e-4 % at 1024 segments),
 /// and area is what sets an emitter's power and the form factors between surfaces.
 ///
 /// Texture coordinates are Mitsuba's polar ones, u = r and v = phi / 2 pi (phi from +x towards
 /// +y, in [0, 1)): each triangle has its own three vertices, the centre (u = 0, v at the
 /// wedge's middle angle) and two rim vertices (u = 1, v = i / n and (i + 1) / n, so the last
 /// triangle ends at v = 1 and the seam is not smeared across the disk). Interpolated over a
-/// wedge of 2 pi / 256, u is r to 1e-4 and v the polar angle to within the wedge's half-width
-/// times the centre's barycentric weight (at most 1/512 of a turn, near the centre, where the
+/// wedge of 2 pi / 1024, u is r to 1e-5 and v the polar angle to within the wedge's half-width
+/// times the centre's barycentric weight (at most 1/2048 of a turn, near the centre, where the
 /// texture's angular detail shrinks to a point; radial rings would not remove it, since any
 /// triangle spanning two radii interpolates the angle with an error of the same order). The
 /// tangent dp/du that orients anisotropic BSDFs is then radial, as Mitsuba's.

@@ -297,7 +297,7 @@ fn unsupported_plugins_say_not_yet_implemented() {
         "<emitter type=\"sunsky\"/>",
         "<sensor type=\"perspective\"><sampler type=\"orthogonal\"><integer name=\"strength\" value=\"3\"/></sampler></sensor>",
         "<sensor type=\"radiancemeter\"/>",
-        "<shape type=\"sdfgrid\"/>",
+        "<shape type=\"ellipsoids\"/>",
         "<integrator type=\"volpathmis\"/>",
         "<shape type=\"cube\"><bsdf type=\"circular\"/></shape>",
         "<shape type=\"cube\"><bsdf type=\"diffuse\"><texture type=\"volume\" name=\"reflectance\"/></bsdf></shape>",
