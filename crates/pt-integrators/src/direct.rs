@@ -10,13 +10,12 @@
 //! traced past the first hit except the BSDF samples' rays, which count the emission they find
 //! (through a mirror or a mask's hole too), and media are ignored.
 
-use crate::path::{PathSettings, PathState};
+use crate::path::{emitted_radiance, escaped_radiance, PathSettings, PathState};
 use pt_bsdf::SurfaceBsdf;
 use pt_math::{offset_ray_origin, power_heuristic, Frame, Ray, Vec3};
-use pt_render::geometry::Interaction;
 use pt_render::sampler::RandomSource;
 use pt_render::Scene;
-use pt_spectrum::{SampledSpectrum, SampledWavelengths};
+use pt_spectrum::SampledSpectrum;
 
 /// Mitsuba `direct`'s sample counts per camera hit (`emitter_samples`, `bsdf_samples`); at
 /// least one is positive.
@@ -45,13 +44,18 @@ pub(crate) fn estimate<S: RandomSource>(
     let ray = path.ray;
     let Some(hit) = scene.intersect(&ray) else {
         if !s.hide_emitters {
-            path.radiance += escaped(scene, &ray, &path.lambda, |_| 1.0);
+            path.radiance +=
+                escaped_radiance(scene, ray.dir, &path.lambda, path.throughput, |_| 1.0);
         }
         return;
     };
     path.covered = true;
     if !s.hide_emitters {
-        path.radiance += emitted(scene, ray.origin, &ray, &hit, &path.lambda, |_| 1.0);
+        path.radiance +=
+            emitted_radiance(scene, &hit, -ray.dir, &path.lambda, path.throughput, |_| {
+                1.0
+            })
+            .unwrap_or(SampledSpectrum::ZERO);
     }
     let material = scene.material(hit.shape);
     let built: SurfaceBsdf;
@@ -125,52 +129,17 @@ pub(crate) fn estimate<S: RandomSource>(
                     power_heuristic(n_b * bs.pdf, n_e * light_pdf)
                 }
             };
-            found += bs.weight
-                * match scene.intersect(&next) {
-                    Some(h) => emitted(scene, hit.p, &next, &h, &lambda, weight),
-                    None => escaped(scene, &next, &lambda, weight),
-                };
+            found += match scene.intersect(&next) {
+                Some(h) => emitted_radiance(scene, &h, -dir, &lambda, bs.weight, |pdf| {
+                    weight(pdf.from(hit.p))
+                })
+                .unwrap_or(SampledSpectrum::ZERO),
+                None => escaped_radiance(scene, dir, &lambda, bs.weight, |i| {
+                    weight(scene.light_pmf(i) * scene.lights[i].escaped_pdf(dir))
+                }),
+            };
         }
         sum += found * (1.0 / n_b);
     }
     path.radiance += path.throughput * sum;
-}
-
-/// Radiance the area light at `hit` (if any) emits back along `ray`, times
-/// `weight(light-sampling pdf of that point seen from the point `from`)`.
-fn emitted(
-    scene: &Scene,
-    from: Vec3,
-    ray: &Ray,
-    hit: &Interaction,
-    lambda: &SampledWavelengths,
-    weight: impl Fn(f32) -> f32,
-) -> SampledSpectrum {
-    let Some((i, light)) = scene.shape_light(hit.shape) else {
-        return SampledSpectrum::ZERO;
-    };
-    let le = light.emitted(hit.ns, -ray.dir, hit.uv, lambda);
-    if le.is_black() {
-        return le;
-    }
-    le * weight(scene.light_pmf(i) * light.pdf(from, hit.p, hit.ns))
-}
-
-/// Radiance of the environment and sun along `ray`, which left the scene, each light's times
-/// `weight(its light-sampling pdf of that direction)`.
-fn escaped(
-    scene: &Scene,
-    ray: &Ray,
-    lambda: &SampledWavelengths,
-    weight: impl Fn(f32) -> f32,
-) -> SampledSpectrum {
-    let mut sum = SampledSpectrum::ZERO;
-    for &i in &scene.infinite_lights {
-        let light = &scene.lights[i];
-        let le = light.escaped_radiance(ray.dir, lambda);
-        if !le.is_black() {
-            sum += le * weight(scene.light_pmf(i) * light.escaped_pdf(ray.dir));
-        }
-    }
-    sum
 }

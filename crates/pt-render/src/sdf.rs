@@ -428,9 +428,9 @@ mod tests {
 
     #[test]
     fn the_first_of_several_roots_is_found() {
-        // f = (x - 0.2)(x - 0.8) has no trilinear form; a saddle does: f = (x - 0.5)(y - 0.5)
-        // along the diagonal x = y = s is (s - 0.5)^2 touching 0 once; with z mixed in,
-        // f = 4 (x - 0.5)(y - 0.5) - 0.25 + z/2 ... take a ray where the cubic has two roots.
+        // A saddle, f = 4 (x - 0.5)(y - 0.5) (1 - z) - 0.2 + 0.4 z: along the diagonal
+        // x = y = s of the face z = 0 it is 4 (s - 0.5)^2 - 0.2, which has two roots; the
+        // nearer one must be reported.
         let f: [f32; 8] = std::array::from_fn(|i| {
             let (x, y, z) = ((i & 1) as f32, ((i >> 1) & 1) as f32, (i >> 2) as f32);
             4.0 * (x - 0.5) * (y - 0.5) * (1.0 - z) - 0.2 + 0.4 * z
