@@ -100,7 +100,9 @@ pub(crate) struct RenderArgs {
     mode: Option<ModeArg>,
     /// Light transport method [default: the scene's integrator]. `radiosity` solves for
     /// diffuse patch radiosities and displays them (see the radiosity options below);
-    /// `direct` shades the first hit with light and BSDF samples (Mitsuba's, one of each); `volpath` adds absorbing media.
+    /// `direct` shades the first hit with light and BSDF samples (Mitsuba's, one of each); `volpath` adds absorbing media;
+    /// `ptracer` traces light paths from the lights and splats each vertex the camera sees
+    /// (`--spp` light paths per pixel).
     #[arg(long, value_enum)]
     integrator: Option<IntegratorArg>,
     #[command(flatten)]
@@ -150,6 +152,7 @@ enum IntegratorArg {
     Path,
     Volpath,
     Direct,
+    Ptracer,
     Radiosity,
 }
 
@@ -191,6 +194,9 @@ impl RenderArgs {
                 IntegratorArg::Direct => IntegratorKind::Direct {
                     emitter_samples: 1,
                     bsdf_samples: 1,
+                },
+                IntegratorArg::Ptracer => IntegratorKind::PTracer {
+                    samples_per_pass: None,
                 },
                 IntegratorArg::Radiosity => IntegratorKind::Radiosity,
             }),

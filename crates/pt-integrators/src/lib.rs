@@ -6,6 +6,7 @@
 //! |---|---|---|
 //! | [`Integrator::Path`] | `path`, `volpath` | unidirectional path tracing, NEE + MIS ([`path`]); `volpath` adds absorption by interior media |
 //! | [`Integrator::Direct`] | `direct` | direct illumination at the camera ray's hit: any numbers of light and BSDF samples, weighted by Veach's count-weighted power heuristic ([`direct`]) |
+//! | [`Integrator::PTracer`] | `ptracer` | light tracing: paths from the lights, every vertex connected to the camera and splatted ([`ptracer`]) |
 //! | [`Integrator::Radiosity`] | `radiosity` (pt) | finite-element radiosity (crate `pt-radiosity`) |
 //! | [`Integrator::Afterglow`] | (pt, `--time`) | phosphorescent afterglow: a first pass with the lights on, then the path tracer in the dark ([`afterglow`]) |
 //!
@@ -28,6 +29,7 @@ pub mod afterglow;
 pub mod aov;
 pub mod direct;
 pub mod path;
+pub mod ptracer;
 pub mod render;
 mod scatter;
 
@@ -90,6 +92,14 @@ pub enum Integrator {
     /// Direct illumination (Mitsuba `direct`): Mitsuba's numbers of light and BSDF samples at
     /// the camera ray's hit ([`direct`]).
     Direct(PathTracer),
+    /// Light tracing (Mitsuba `ptracer`, [`ptracer`]): `max_depth`, `rr_depth` and
+    /// `hide_emitters` of the path settings apply.
+    PTracer {
+        /// Depth, Russian roulette, hidden emitters.
+        settings: PathSettings,
+        /// Mitsuba's `samples_per_pass`: the sample count must be a multiple of it.
+        samples_per_pass: Option<u32>,
+    },
     /// Radiosity (project extension).
     Radiosity(RadiosityParams),
     /// The afterglow of phosphorescent materials `time` seconds after the lights went out,
@@ -233,10 +243,11 @@ impl Integrator {
             clamp: o.clamp,
         };
         if let Some(time) = o.afterglow {
-            if kind == IntegratorKind::Radiosity {
-                return bad(
-                    "--time (afterglow) is rendered by the path tracer, not radiosity".into(),
-                );
+            if matches!(
+                kind,
+                IntegratorKind::Radiosity | IntegratorKind::PTracer { .. }
+            ) {
+                return bad("--time (afterglow) is rendered by the path tracer".into());
             }
             if !(time >= 0.0 && time.is_finite()) {
                 return bad(format!(
@@ -276,6 +287,17 @@ impl Integrator {
                 });
                 Integrator::Direct(p)
             }
+            IntegratorKind::PTracer { samples_per_pass } => {
+                if o.clamp.is_some() || o.strategy.is_some() {
+                    return bad(
+                        "--clamp and --strategy apply to the path tracer, not to ptracer".into(),
+                    );
+                }
+                Integrator::PTracer {
+                    settings: path(d.max_depth).settings,
+                    samples_per_pass,
+                }
+            }
             IntegratorKind::Radiosity => {
                 if o.max_depth.is_some() || o.clamp.is_some() || o.strategy.is_some() {
                     return bad("--max-depth, --clamp and --strategy apply to the path tracer, not to radiosity".into());
@@ -291,15 +313,16 @@ impl Integrator {
             Integrator::Path(p) if p.settings.media => "volpath",
             Integrator::Path(_) => "path",
             Integrator::Direct(_) => "direct",
+            Integrator::PTracer { .. } => "ptracer",
             Integrator::Radiosity(_) => "radiosity",
             Integrator::Afterglow { .. } => "afterglow",
         }
     }
 
     /// Whether the method traces camera paths: the path tracers do, and compute the alpha
-    /// channel and AOVs; radiosity does neither.
+    /// channel and AOVs; radiosity and the light tracer do neither.
     pub fn traces_camera_paths(&self) -> bool {
-        !matches!(self, Integrator::Radiosity(_))
+        !matches!(self, Integrator::Radiosity(_) | Integrator::PTracer { .. })
     }
 
     /// Renders the job. Path tracers honour `run.cancel` between passes and continue
@@ -316,9 +339,98 @@ impl Integrator {
                 r.header.push(("afterglow_time_s".into(), time.to_string()));
                 Ok(r)
             }
+            Integrator::PTracer {
+                settings,
+                samples_per_pass,
+            } => render_ptracer(settings, *samples_per_pass, job, run),
             Integrator::Radiosity(params) => render_radiosity(params, job, run),
         }
     }
+}
+
+/// The light tracer over the image in passes of batches of light paths
+/// ([`ptracer::render_light_passes`]).
+fn render_ptracer(
+    path: &PathSettings,
+    samples_per_pass: Option<u32>,
+    job: &Job,
+    run: Run,
+) -> Result<Rendered, IntegratorError> {
+    if let Some(n) = samples_per_pass {
+        if job.spp % n.min(job.spp.max(1)) != 0 {
+            return Err(IntegratorError::Settings(format!(
+                "ptracer: the sample count ({}) must be a multiple of samples_per_pass ({n})",
+                job.spp
+            )));
+        }
+    }
+    let desc = job.desc;
+    let build_start = Instant::now();
+    let scene = Scene::build_with_mode(desc, job.bvh, job.selection, job.mode)?;
+    let build_time = build_start.elapsed();
+    let settings = RenderSettings {
+        spp: job.spp,
+        seed: job.seed,
+        path: *path,
+        ..RenderSettings::from_desc(desc)
+    };
+    ptracer::check(&scene, &settings).map_err(IntegratorError::Settings)?;
+    let mut state = match run.resume {
+        Some(s) if s.light.is_some() => s,
+        Some(_) => {
+            return Err(IntegratorError::Settings(
+                "the saved state is a path tracer's, not a light tracer's".into(),
+            ))
+        }
+        None => RenderState::for_light_paths(&settings),
+    };
+    if state.spp_done > settings.spp {
+        return Err(IntegratorError::Settings(format!(
+            "the saved render already has {} spp, more than --spp {}",
+            state.spp_done, settings.spp
+        )));
+    }
+    let paths_per_batch = u64::from(settings.width) * u64::from(settings.height);
+    run.progress.start_samples(
+        paths_per_batch * u64::from(settings.spp),
+        paths_per_batch * u64::from(state.spp_done),
+    );
+    let complete = ptracer::render_light_passes(&scene, &settings, &mut state, run.cancel, &|n| {
+        run.progress.samples(n)
+    });
+    let output = state.output();
+    let secs = output.time.as_secs_f64();
+    let summary = format!(
+        "ptracer: {}x{}, {} light paths per pixel in {:.2} s ({:.2} M paths/s, scene build {:.2} s)",
+        output.width,
+        output.height,
+        output.spp,
+        secs,
+        (paths_per_batch * u64::from(output.spp)) as f64 / secs.max(1e-9) / 1e6,
+        build_time.as_secs_f64()
+    );
+    let mut warnings = Vec::new();
+    if output.nonfinite_samples > 0 {
+        warnings.push(format!(
+            "{} light path contributions were NaN or infinite and were left out",
+            output.nonfinite_samples
+        ));
+    }
+    let header = vec![
+        ("integrator".to_string(), "ptracer".to_string()),
+        ("max_depth".to_string(), path.max_depth.to_string()),
+    ];
+    Ok(Rendered {
+        output,
+        mode: scene.mode,
+        header,
+        summary,
+        warnings,
+        state: Some(state),
+        complete,
+        build_time,
+        extra_channels: Vec::new(),
+    })
 }
 
 /// The radiosity parameters: the scene's options, each overridden by the command line's.

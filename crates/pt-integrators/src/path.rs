@@ -98,7 +98,9 @@ impl Coverage {
         match kind {
             pt_scene::IntegratorKind::Direct { .. } => Coverage::AnyHit,
             pt_scene::IntegratorKind::VolPath => Coverage::VolPath,
-            pt_scene::IntegratorKind::Path | pt_scene::IntegratorKind::Radiosity => Coverage::Path,
+            pt_scene::IntegratorKind::Path
+            | pt_scene::IntegratorKind::Radiosity
+            | pt_scene::IntegratorKind::PTracer { .. } => Coverage::Path,
         }
     }
 }

@@ -3,6 +3,7 @@
 
 use crate::path::{trace_paths, PathSettings, PathStart, PathState};
 use pt_math::Vec2;
+use pt_render::film::light::LightFilm;
 use pt_render::film::splat::{SplatFilm, SplatLayout, SplatTile};
 use pt_render::film::{filter_radius, sample_pixel_offset, Filter, PixelStats};
 use pt_render::sampler::{RandomSource, SamplePattern, Sampler, StructuredSampler};
@@ -158,6 +159,10 @@ pub struct RenderState {
     /// The splatting film's accumulators, when the render splats
     /// ([`RenderSettings::splats`]).
     pub splat: Option<SplatFilm>,
+    /// The light tracer's film (`ptracer`): the sums of its filtered splats, already scaled
+    /// so that their sum over batches divided by `spp_done` is the image. `pixels` then holds
+    /// per pixel the statistics of the unfiltered batches (see [`crate::ptracer`]).
+    pub light: Option<LightFilm>,
 }
 
 /// Bytes per pixel of a state file's statistics: two counts (u32) and seven f64 sums.
@@ -165,6 +170,9 @@ const PIXEL_BYTES: usize = 8 + 7 * 8;
 
 /// First bytes of a state file (and its format version).
 const STATE_MAGIC: &[u8; 8] = b"PTSTATE3";
+
+/// First bytes of a light tracer's state file (its film's sums follow the pixels').
+const LIGHT_STATE_MAGIC: &[u8; 8] = b"PTLIGHT1";
 
 impl RenderState {
     /// An empty state for `settings` (no samples yet).
@@ -189,6 +197,24 @@ impl RenderState {
                     settings.splat_channels(),
                 )
             }),
+            light: None,
+        }
+    }
+
+    /// An empty state for the light tracer with `settings` (no batches yet).
+    pub fn for_light_paths(settings: &RenderSettings) -> Self {
+        RenderState {
+            splat: None,
+            light: Some(LightFilm::new(
+                settings.filter.desc,
+                settings.width,
+                settings.height,
+            )),
+            ..RenderState::new(&RenderSettings {
+                reconstruction: pt_scene::Reconstruction::Importance,
+                moment: false,
+                ..settings.clone()
+            })
         }
     }
 
@@ -205,6 +231,20 @@ impl RenderState {
             .map(PixelStats::variance_of_mean)
             .collect();
         let mut second_moment = None;
+        if let Some(light) = &self.light {
+            let n = f64::from(self.spp_done.max(1));
+            return RenderOutput {
+                width: self.width,
+                height: self.height,
+                mean: light.sums.iter().map(|s| s.map(|v| (v / n) as f32)).collect(),
+                variance,
+                spp: self.spp_done,
+                time: self.time,
+                nonfinite_samples: self.pixels.iter().map(|p| p.nonfinite as u64).sum(),
+                alpha: None,
+                second_moment: None,
+            };
+        }
         let (mean, alpha, variance) = match &self.splat {
             Some(film) => {
                 let mut row_major = vec![[0.0; 3]; variance.len()];
@@ -244,7 +284,11 @@ impl RenderState {
     /// state belongs to (checked by [`RenderState::from_bytes`]).
     pub fn to_bytes(&self, scene_key: u64) -> Vec<u8> {
         let mut b = Vec::with_capacity(48 + self.pixels.len() * PIXEL_BYTES);
-        b.extend_from_slice(STATE_MAGIC);
+        b.extend_from_slice(if self.light.is_some() {
+            LIGHT_STATE_MAGIC
+        } else {
+            STATE_MAGIC
+        });
         for v in [
             scene_key,
             self.seed,
@@ -267,6 +311,9 @@ impl RenderState {
                 b.extend_from_slice(&v.to_bits().to_le_bytes());
             }
         }
+        for v in self.light.iter().flat_map(|f| f.sums.iter().flatten()) {
+            b.extend_from_slice(&v.to_bits().to_le_bytes());
+        }
         b
     }
 
@@ -278,9 +325,11 @@ impl RenderState {
         settings: &RenderSettings,
     ) -> Result<RenderState, String> {
         let header = 8 + 6 * 8;
-        if bytes.len() < header || &bytes[..8] != STATE_MAGIC {
+        if bytes.len() < header || (&bytes[..8] != STATE_MAGIC && &bytes[..8] != LIGHT_STATE_MAGIC)
+        {
             return Err("not a pt render state (wrong magic number or truncated header)".into());
         }
+        let light_paths = &bytes[..8] == LIGHT_STATE_MAGIC;
         let u = |i: usize| {
             u64::from_le_bytes(bytes[8 + 8 * i..16 + 8 * i].try_into().expect("8 bytes"))
         };
@@ -301,13 +350,19 @@ impl RenderState {
         }
         let n = (w * h) as usize;
         // The splatting film's layout follows from the settings (filter, crop, border).
-        let mut splat = RenderState::new(settings).splat;
+        let empty = if light_paths {
+            RenderState::for_light_paths(settings)
+        } else {
+            RenderState::new(settings)
+        };
+        let (mut splat, mut light) = (empty.splat, empty.light);
         let splat_sums: usize = splat
             .iter()
             .flat_map(|f| &f.tiles)
             .map(|t| t.sums.len())
             .sum();
-        let expected = header + n * PIXEL_BYTES + splat_sums * 8;
+        let light_sums = light.as_ref().map_or(0, |f| f.sums.len() * 3);
+        let expected = header + n * PIXEL_BYTES + (splat_sums + light_sums) * 8;
         if bytes.len() != expected {
             return Err(format!(
                 "the state has {} bytes, a {w}x{h} render with this film needs {expected} (truncated, or saved with another reconstruction or filter)",
@@ -342,6 +397,11 @@ impl RenderState {
                 o += 8;
             }
         }
+        for v in light.iter_mut().flat_map(|f| f.sums.iter_mut().flatten()) {
+            let b8 = bytes[o..o + 8].try_into().expect("8 bytes");
+            *v = f64::from_bits(u64::from_le_bytes(b8));
+            o += 8;
+        }
         Ok(RenderState {
             width: w as u32,
             height: h as u32,
@@ -350,6 +410,7 @@ impl RenderState {
             time: Duration::from_nanos(nanos),
             pixels,
             splat,
+            light,
         })
     }
 }

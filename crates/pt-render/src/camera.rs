@@ -12,6 +12,8 @@ use pt_scene::{CameraDesc, FovAxis, Projection};
 #[derive(Clone, Debug)]
 pub struct Camera {
     to_world: Mat4,
+    /// The inverse of `to_world`.
+    to_camera: Mat4,
     origin: Vec3,
     kind: Kind,
     /// Perspective: tan of half the field of view along x and y. Orthographic: the half-extent
@@ -25,6 +27,8 @@ pub struct Camera {
     film_offset: Vec2,
     /// The film's pixel at the image's top-left corner (a crop window's offset).
     crop_offset: [u32; 2],
+    /// The image's size in pixels (a crop window's, or the whole film's).
+    image_size: Vec2,
     near: f32,
     far: f32,
 }
@@ -95,12 +99,14 @@ impl Camera {
         };
         Camera {
             to_world: desc.to_world,
+            to_camera: desc.to_world.inverse(),
             origin: desc.to_world.transform_point3(Vec3::ZERO),
             kind,
             tan_half: Vec2::new(tan_x, tan_x * h / w),
             inv_size: Vec2::new(1.0 / w, 1.0 / h),
             film_offset: Vec2::from(desc.principal_point_offset) * Vec2::new(w, h),
             crop_offset: [0, 0],
+            image_size: Vec2::new(w, h),
             near: desc.near_clip,
             far: desc.far_clip,
         }
@@ -112,6 +118,7 @@ impl Camera {
         let [w, h] = film.film_size();
         let mut camera = Camera::new(desc, w, h);
         camera.crop_offset = film.crop_offset();
+        camera.image_size = Vec2::new(film.width as f32, film.height as f32);
         camera
     }
 
@@ -190,6 +197,113 @@ impl Camera {
                 }
             }
         }
+    }
+}
+
+/// A point of the scene connected to the camera (a light path's vertex seen by the camera).
+#[derive(Clone, Copy, Debug)]
+pub struct CameraConnection {
+    /// The point on the camera the connection reaches (the pinhole, a point of the lens, or
+    /// the orthographic film's point), world space.
+    pub camera_point: Vec3,
+    /// Unit direction from the scene point towards `camera_point`, world space.
+    pub dir: Vec3,
+    /// Distance from the scene point to `camera_point`.
+    pub dist: f32,
+    /// Where the connection lands on the image: pixels from the image's top-left corner (a
+    /// crop window's own), inside the image.
+    pub film: Vec2,
+    /// The camera's importance over the density of the camera point, per unit area at the
+    /// scene point: a vertex with throughput `beta` (radiance-like measure, per unit area)
+    /// whose BSDF sends `f |cos|` towards the camera adds `beta f |cos| weight` to the
+    /// measurement `integral of W_e L` over the whole film, whose importance integrates to 1.
+    /// Pinhole: `1 / (A cos^3 theta d^2)`, A the film's area on the plane z = 1 of camera
+    /// space; thin lens: the same for the ray from the sampled lens point (the lens density
+    /// cancels the importance's 1 / (pi r^2)); orthographic: `1 / A`, A the film's area in the
+    /// world (a delta direction: no distance falloff).
+    pub weight: f32,
+}
+
+impl Camera {
+    /// The camera's side of a connection from the scene point `p` (world space) to the
+    /// camera (pbrt-v4's `SampleWi` of its cameras; Veach 1997, sec. 10.2): `None` when `p` is
+    /// behind the camera, outside the near/far clip range (camera-space depth, as Mitsuba's
+    /// `sample_direction` tests it) or projects outside the image. `u_lens` picks the thin
+    /// lens's point (unused by the other cameras). The film position is the inverse of
+    /// [`Camera::generate_ray`]: the camera ray through it passes through `p`.
+    #[inline]
+    pub fn connect(&self, p: Vec3, u_lens: Vec2) -> Option<CameraConnection> {
+        let local = self.to_camera.transform_point3(p);
+        if !(local.z >= self.near && local.z <= self.far) {
+            return None;
+        }
+        let area = 4.0 * self.tan_half.x * self.tan_half.y;
+        // The point's place on the plane z = 1 (perspective) or z = 0 (orthographic) of
+        // camera space, the camera's point, and the importance weight.
+        let (plane, camera_point, cam_dir) = match self.kind {
+            Kind::Pinhole => (
+                Vec2::new(local.x / local.z, local.y / local.z),
+                self.origin,
+                local,
+            ),
+            Kind::ThinLens { radius, focus } => {
+                let a = square_to_disk_concentric(u_lens) * radius;
+                let lens = Vec3::new(a.x, a.y, 0.0);
+                let d = local - lens;
+                // Where the line from the lens point through p meets the plane of focus, over
+                // the focus distance: the pinhole ray's film-plane point.
+                let q = (lens.truncate() + d.truncate() * (focus / d.z)) / focus;
+                (q, self.to_world.transform_point3(lens), d)
+            }
+            Kind::Orthographic => (
+                Vec2::new(local.x, local.y),
+                self.to_world
+                    .transform_point3(Vec3::new(local.x, local.y, 0.0)),
+                Vec3::Z,
+            ),
+        };
+        // Inverse of generate_ray: x = (1 - 2 ndc.x) tan_half.x.
+        let ndc = (Vec2::ONE - plane / self.tan_half) * 0.5;
+        let film = ndc / self.inv_size - self.film_offset
+            - Vec2::new(self.crop_offset[0] as f32, self.crop_offset[1] as f32);
+        if !(film.cmpge(Vec2::ZERO).all() && film.cmplt(self.image_size).all()) {
+            return None;
+        }
+        let to = camera_point - p;
+        let dist = to.length();
+        if !(dist > 0.0) {
+            return None;
+        }
+        let weight = match self.kind {
+            Kind::Pinhole | Kind::ThinLens { .. } => {
+                let cos = cam_dir.z / cam_dir.length();
+                1.0 / (area * cos * cos * cos * dist * dist)
+            }
+            Kind::Orthographic => {
+                let sx = self.to_world.transform_vector3(Vec3::X).length();
+                let sy = self.to_world.transform_vector3(Vec3::Y).length();
+                1.0 / (area * sx * sy)
+            }
+        };
+        weight.is_finite().then_some(CameraConnection {
+            camera_point,
+            dir: to / dist,
+            dist,
+            film,
+            weight,
+        })
+    }
+
+    /// The camera's centre (the pinhole, the lens's centre, the orthographic film's centre),
+    /// world space: where light paths aim at the camera from distant lights.
+    pub fn position(&self) -> Vec3 {
+        self.origin
+    }
+
+    /// Whether the camera sees along one direction only per film point (orthographic): such a
+    /// camera cannot see a distant light by a connection from the light.
+    pub fn is_orthographic(&self) -> bool {
+        self.kind == Kind::Orthographic
     }
 }
 

@@ -18,6 +18,7 @@ use std::sync::Arc;
 
 use crate::sampler::RandomSource;
 
+pub mod light;
 pub mod splat;
 
 /// The 1D profile of a separable filter at offset `x` (pixels), as Mitsuba 3.9.1 evaluates it

@@ -90,38 +90,13 @@ impl AreaLight {
         PI * self.area * crate::texture::luminance(self.radiance.mean_rgb()).max(0.0)
     }
 
-    /// The emitted radiance at texture coordinates `uv` (front side), before the one-sided test,
-    /// at the path's wavelengths `lambda` (used only by spectral textures).
+    /// A point uniformly distributed by area over the whole light (density `1 / area`): its
+    /// position, its front-side unit normal and its texture coordinates (world space). `u_sel`
+    /// picks a mesh's triangle (by area), `u` the point on it. The one area sampling of every
+    /// light shape, used by light sampling seen from a point and by light paths.
     #[inline(always)]
-    fn radiance_at(&self, uv: Vec2, lambda: &SampledWavelengths) -> SampledSpectrum {
-        self.radiance.eval(&TexturePoint::uv(uv), lambda)
-    }
-
-    /// Samples a point uniformly by area and converts to solid angle as seen from `x`.
-    /// Returns `None` when the pdf is not finite (the point coincides with `x` or is seen
-    /// exactly edge-on). `lambda`: the path's wavelengths (spectral textures).
-    #[inline(always)]
-    pub fn sample(
-        &self,
-        x: Vec3,
-        u_sel: f32,
-        u: Vec2,
-        lambda: &SampledWavelengths,
-    ) -> Option<LightSample> {
-        if let LightShape::Sphere {
-            center,
-            radius,
-            flip,
-            frame,
-        } = &self.shape
-        {
-            if let Some(cone) = SphereCone::new(*center, *radius, x) {
-                return cone.sample(u, *flip, x, |p| {
-                    self.radiance_at(sphere_uv(*frame, (p - *center) / *radius), lambda)
-                });
-            }
-        }
-        let (p, n, uv) = match &self.shape {
+    pub fn sample_point(&self, u_sel: f32, u: Vec2) -> (Vec3, Vec3, Vec2) {
+        match &self.shape {
             LightShape::Mesh { tris, distr } => {
                 let (i, _, _) = distr.sample(u_sel);
                 let t = &tris[i];
@@ -163,7 +138,41 @@ impl AreaLight {
                 length,
                 flip,
             } => cylinder_point(p0, frame, radius, length, flip, u),
-        };
+        }
+    }
+
+    /// The emitted radiance at texture coordinates `uv` (front side), before the one-sided test,
+    /// at the path's wavelengths `lambda` (used only by spectral textures).
+    #[inline(always)]
+    fn radiance_at(&self, uv: Vec2, lambda: &SampledWavelengths) -> SampledSpectrum {
+        self.radiance.eval(&TexturePoint::uv(uv), lambda)
+    }
+
+    /// Samples a point uniformly by area and converts to solid angle as seen from `x`.
+    /// Returns `None` when the pdf is not finite (the point coincides with `x` or is seen
+    /// exactly edge-on). `lambda`: the path's wavelengths (spectral textures).
+    #[inline(always)]
+    pub fn sample(
+        &self,
+        x: Vec3,
+        u_sel: f32,
+        u: Vec2,
+        lambda: &SampledWavelengths,
+    ) -> Option<LightSample> {
+        if let LightShape::Sphere {
+            center,
+            radius,
+            flip,
+            frame,
+        } = &self.shape
+        {
+            if let Some(cone) = SphereCone::new(*center, *radius, x) {
+                return cone.sample(u, *flip, x, |p| {
+                    self.radiance_at(sphere_uv(*frame, (p - *center) / *radius), lambda)
+                });
+            }
+        }
+        let (p, n, uv) = self.sample_point(u_sel, u);
         let s = to_solid_angle(
             &V3::<1>::splat(x),
             &V3::splat(p),

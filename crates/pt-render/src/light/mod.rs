@@ -14,6 +14,7 @@
 
 mod area;
 mod build;
+mod emit;
 mod envmap;
 mod projected;
 #[cfg(test)]
@@ -24,6 +25,7 @@ pub use area::{
     LightTriangle, SolidAngle,
 };
 pub use build::build_light;
+pub use emit::{EmittedRay, LightPoint};
 pub use envmap::EnvMap;
 pub use projected::{Projector, SpotTexture};
 

@@ -91,6 +91,25 @@ impl Projector {
         Some((dir, dist, value))
     }
 
+    /// A direction of the frustum (world, unit) for the uniform numbers `u`, uniform over the
+    /// image on the plane z = 1 of the light's frame, and its solid-angle density: with `M`
+    /// the light's linear `to_world` and `q` the plane point, the direction `M q / |M q|` has
+    /// density `|M q|^3 / (|det M| A)` (the projective map's Jacobian; `cos^3 theta / A` for
+    /// an unscaled frame), A the image's area on the plane.
+    pub fn sample_direction(&self, u: Vec2) -> (Vec3, f32) {
+        let to_world = self.to_local.inverse();
+        let half_w = 1.0 / self.cot_half_x;
+        let q = Vec3::new(
+            (1.0 - 2.0 * u.x) * half_w,
+            (1.0 - 2.0 * u.y) * half_w / self.aspect,
+            1.0,
+        );
+        let d = to_world * q;
+        let len = d.length();
+        let pdf = len * len * len / (to_world.determinant().abs() * self.image_area());
+        (d / len, pdf)
+    }
+
     /// Area of the image on the plane z = 1 of the light's frame: (2 tan(f/2))^2 / aspect.
     pub fn image_area(&self) -> f32 {
         let w = 2.0 / self.cot_half_x;

@@ -17,6 +17,7 @@ impl<'e> Builder<'e> {
             "moment" => self.moment(&v)?,
             "aov" => self.aov(&v)?,
             "radiosity" => radiosity_integrator(&v)?,
+            "ptracer" => ptracer_integrator(&v)?,
             _ => return Err(plugin_error(el)),
         };
         let desc = IntegratorDesc {
@@ -73,7 +74,12 @@ impl<'e> Builder<'e> {
 
     pub(super) fn moment(&mut self, v: &ObjectView<'e>) -> Result<IntegratorDesc> {
         let plain = |d: &IntegratorDesc| {
-            d.moment.is_none() && d.aov.is_none() && d.kind != IntegratorKind::Radiosity
+            d.moment.is_none()
+                && d.aov.is_none()
+                && !matches!(
+                    d.kind,
+                    IntegratorKind::Radiosity | IntegratorKind::PTracer { .. }
+                )
         };
         let (name, mut inner) = self
             .nested_integrator(v, "path, volpath or direct", plain)?
@@ -120,7 +126,11 @@ impl<'e> Builder<'e> {
             outputs.push((name.to_string(), kind));
         }
         let inner = self.nested_integrator(v, "path, volpath, direct or moment", |d| {
-            d.aov.is_none() && d.kind != IntegratorKind::Radiosity
+            d.aov.is_none()
+                && !matches!(
+                    d.kind,
+                    IntegratorKind::Radiosity | IntegratorKind::PTracer { .. }
+                )
         })?;
         let (image, base) = match inner {
             Some((name, desc)) => (Some(name), desc),
@@ -143,6 +153,25 @@ pub(super) fn path_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
         aov: None,
         radiosity: RadiosityOptions::default(),
         loc: SourceLoc::default(),
+    })
+}
+
+/// Mitsuba's `ptracer`: `max_depth`, `rr_depth` and `hide_emitters` as `path`, and
+/// `samples_per_pass` (positive; Mitsuba's default -1 means all samples in one pass).
+pub(super) fn ptracer_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
+    let samples_per_pass = match v.integer("samples_per_pass")? {
+        None | Some(-1) => None,
+        Some(n) if n >= 1 && n <= i64::from(u32::MAX) => Some(n as u32),
+        Some(n) => {
+            return Err(v.prop_error(
+                "samples_per_pass",
+                format!("samples_per_pass must be positive (or -1 for one pass), got {n}"),
+            ))
+        }
+    };
+    Ok(IntegratorDesc {
+        kind: IntegratorKind::PTracer { samples_per_pass },
+        ..path_integrator(v)?
     })
 }
 

@@ -36,9 +36,9 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
     ("film", &["hdrfilm"], &["specfilm"]),
     ("sampler", &["independent", "stratified", "multijitter", "orthogonal", "ldsampler"], &[]),
     ("rfilter", &["box", "tent", "gaussian", "mitchell", "catmullrom", "lanczos"], &[]),
-    ("integrator", &["path", "volpath", "direct", "moment", "aov", "radiosity"], &[
+    ("integrator", &["path", "volpath", "direct", "moment", "aov", "radiosity", "ptracer"], &[
         "volpathmis", "prb", "prb_basic", "prb_projective", "direct_projective",
-        "ptracer", "depth", "stokes", "prbvolpath",
+        "depth", "stokes", "prbvolpath",
     ]),
     ("shape", &["obj", "ply", "serialized", "gltf", "rectangle", "cube", "sphere", "disk", "cylinder", "sdfgrid", "shapegroup", "instance"], &[
         "bsplinecurve", "linearcurve",

@@ -336,6 +336,14 @@ pub enum IntegratorKind {
     },
     /// Radiosity (project extension `radiosity`): finite elements for diffuse scenes.
     Radiosity,
+    /// Light tracing (Mitsuba `ptracer`): paths from the lights, each vertex connected to the
+    /// camera. `samples_per_pass` splits the samples into passes of that many per pixel
+    /// (Mitsuba requires the sample count to be a multiple of it); it does not change the
+    /// image.
+    PTracer {
+        /// Samples per pixel per pass, if given.
+        samples_per_pass: Option<u32>,
+    },
 }
 
 /// Which radiosity solver to use (`solver`).

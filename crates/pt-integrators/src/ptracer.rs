@@ -1,0 +1,351 @@
+//! Light tracing (Mitsuba 3.9.1's `ptracer`, the particle tracer): paths start at the lights
+//! and every vertex is connected to the camera, its contribution splatted where it lands on
+//! the film (Arvo & Kirk 1990; Veach 1997, sec. 10.2, the bidirectional strategies with one
+//! camera vertex, t = 1).
+//!
+//! Per light path, as Mitsuba's `ptracer` does:
+//! 1. *Emitters seen directly* (unless `hide_emitters`, or `max_depth` 0): a light is chosen
+//!    and a point on it (area lights, by area) or a direction towards it from the camera's
+//!    centre (environment and sun) is connected to the camera. Delta lights cannot be seen.
+//! 2. *A ray from a light* ([`pt_render::light::EmittedRay`]), traced through the scene by
+//!    BSDF sampling; at every surface it meets, the vertex is connected to the camera:
+//!    `beta f(w_cam, w_light) |cos_s(w_light)| |ng . w_cam| / |ng . w_light| W`, where `f` is the
+//!    BSDF the path tracer evaluates for the same path, the cosine factors are the adjoint BSDF
+//!    for shading normals (Veach 1997, eq. 5.21) and `W` the camera's weight
+//!    ([`pt_render::camera::CameraConnection::weight`]). Sampling a BSDF from the light's side
+//!    gives radiance-transport weights; refraction multiplies them by `eta^2` for importance
+//!    transport (Veach 1997, sec. 5.2; pbrt-v4's `TransportMode::Importance`). Vertices and
+//!    directions where the shading and geometric normals disagree are dropped (light leaks).
+//!
+//! Depth follows Mitsuba: `max_depth` counts segments including the one to the camera
+//! (1: emitters seen directly, 2: direct illumination); Russian roulette after `rr_depth`
+//! segments keeps a path with probability min(max(beta) eta^2, 0.95).
+//!
+//! The image: every pass traces, per sample per pixel, as many light paths as the image has
+//! pixels; a splat of contribution `c` adds `c P_film / P_image` times its normalised filter
+//! weights ([`pt_render::film::light::LightFilm`]), P the pixel counts of the whole film and of
+//! the image (a crop window), so each pixel's value is the measurement of its filter over the
+//! film: what the path tracer estimates. Splats are kept per chunk of light paths and added
+//! in path order, so the image is the same for any number of threads.
+//!
+//! Variance: each batch of light paths (one sample per pixel) is an independent estimate of
+//! the image. Each pixel keeps the statistics of its value over the batches, taken without the
+//! filter (a splat counted in the pixel it lands in): the variance of a region's mean is then
+//! the sum of its pixels' variances, what block tests need, where the filtered pixels share
+//! splats with their neighbours and would understate it.
+
+use crate::path::PathSettings;
+use pt_math::{offset_ray_origin, Frame, Ray, Vec2, Vec3};
+use pt_render::film::light::LightFilm;
+use pt_render::geometry::Interaction;
+use pt_render::light::Light;
+use pt_render::sampler::{RandomSource, Sampler};
+use pt_render::Scene;
+use pt_spectrum::{spectrum_to_srgb, ColorMode, SampledSpectrum, SampledWavelengths};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+/// The key of the light paths' random streams (in the place of a pixel's: above every pixel
+/// key, see `RenderSettings::pixel_key`).
+const LIGHT_STREAM: u64 = (1 << 63) | 0x4c_4947_4854; // "LIGHT"
+
+/// Light paths per work item: each item's splats are kept in one list.
+const CHUNK: u64 = 1024;
+
+/// Most light paths in one pass (their splats are held until the pass ends: about 8 splats of
+/// 20 bytes per path, so 40 MB).
+const MAX_PASS_PATHS: u64 = 1 << 18;
+
+/// One contribution to the image: where it lands (pixels from the image's top-left corner)
+/// and its linear RGB value.
+#[derive(Clone, Copy, Debug)]
+struct Splat {
+    film: Vec2,
+    rgb: [f32; 3],
+}
+
+/// The shading frame of a hit: the same as the path tracer's (oriented by dp/du when the
+/// surface has a parameterisation, for anisotropic models).
+#[inline]
+fn shading_frame(hit: &Interaction) -> Frame {
+    if hit.dpdu == Vec3::ZERO {
+        Frame::from_normal(hit.ns)
+    } else {
+        Frame::from_normal_tangent(hit.ns, hit.dpdu)
+    }
+}
+
+/// The colour of a contribution at the path's wavelengths: linear sRGB.
+#[inline]
+fn to_rgb(scene: &Scene, c: SampledSpectrum, lambda: &SampledWavelengths) -> [f32; 3] {
+    match scene.mode {
+        ColorMode::Spectral => spectrum_to_srgb(c, lambda),
+        ColorMode::Rgb => c.rgb(),
+    }
+}
+
+/// Whether nothing blocks the segment from `origin` to the camera point `target`.
+#[inline]
+fn camera_visible(scene: &Scene, origin: Vec3, target: Vec3) -> bool {
+    let seg = target - origin;
+    let dist = seg.length();
+    dist > 0.0
+        && !scene.occluded(&Ray {
+            origin,
+            dir: seg / dist,
+            tmin: 0.0,
+            tmax: dist * pt_render::scene::SHADOW_RAY_SHORTEN,
+        })
+}
+
+/// Traces one light path (steps 1 and 2 of the module documentation) and appends its splats.
+fn trace_light_path<S: RandomSource>(
+    scene: &Scene,
+    s: &PathSettings,
+    sampler: &mut S,
+    out: &mut Vec<Splat>,
+) {
+    let lambda = match scene.mode {
+        ColorMode::Spectral => SampledWavelengths::sample_visible(sampler.next_1d()),
+        ColorMode::Rgb => SampledWavelengths::sample_visible(0.5),
+    };
+    let camera = &scene.camera;
+    let mut push = |film: Vec2, c: SampledSpectrum| {
+        if !c.is_black() {
+            out.push(Splat {
+                film,
+                rgb: to_rgb(scene, c, &lambda),
+            });
+        }
+    };
+    if s.max_depth != 0 && !s.hide_emitters {
+        if let Some((li, pmf, u_sel)) = scene.sample_light(sampler.next_1d()) {
+            let (u, u_lens) = (sampler.next_2d(), sampler.next_2d());
+            match &scene.lights[li] {
+                Light::Area(a) => {
+                    let pt = a.sample_position(u_sel, u);
+                    if let Some(cc) = camera.connect(pt.p, u_lens) {
+                        let cos = pt.n.dot(cc.dir);
+                        let le = a.emitted(pt.n, cc.dir, pt.uv, &lambda);
+                        if cos > 0.0
+                            && !le.is_black()
+                            && camera_visible(
+                                scene,
+                                offset_ray_origin(pt.p, pt.n),
+                                cc.camera_point,
+                            )
+                        {
+                            push(cc.film, le * (cos * cc.weight / (pt.pdf_area * pmf)));
+                        }
+                    }
+                }
+                light if light.is_infinite() && !camera.is_orthographic() => {
+                    // A direction towards the light from the camera's centre, made a point
+                    // far outside the scene (its distance cancels in the weight).
+                    let at = camera.position();
+                    if let Some(ls) = light.sample(at, u_sel, u, &lambda) {
+                        let (c, r) = scene.bounds;
+                        let far = 1e3 * (r + (at - c).length());
+                        let p = at + ls.wi * far;
+                        if let Some(cc) = camera.connect(p, u_lens) {
+                            if camera_visible(scene, cc.camera_point, p)
+                                && ls.pdf > 0.0
+                                && !ls.radiance.is_black()
+                            {
+                                let w = cc.weight * cc.dist * cc.dist / (ls.pdf * pmf);
+                                push(cc.film, ls.radiance * w);
+                            }
+                        }
+                    }
+                }
+                // Delta lights cannot be seen; an orthographic camera sees one direction.
+                _ => {}
+            }
+        }
+    }
+
+    // A ray from a light.
+    let Some((li, pmf, u_sel)) = scene.sample_light(sampler.next_1d()) else {
+        return;
+    };
+    let (u_pos, u_dir) = (sampler.next_2d(), sampler.next_2d());
+    let Some(emitted) =
+        scene.lights[li].sample_emission(u_sel, u_pos, u_dir, &lambda, scene.bounds)
+    else {
+        return;
+    };
+    let mut beta = emitted.weight * (1.0 / pmf);
+    let mut ray = emitted.ray;
+    let mut eta = 1.0f32;
+    let max_depth = if s.max_depth < 0 {
+        u32::MAX
+    } else {
+        s.max_depth as u32
+    };
+    let mut depth = 1u32;
+    while depth < max_depth {
+        let Some(hit) = scene.intersect(&ray) else {
+            return;
+        };
+        let bsdf = scene.bsdf(&hit, &lambda);
+        let frame = shading_frame(&hit);
+        let w_light = -ray.dir;
+        let wl = frame.to_local(w_light);
+        let ng_light = hit.ng.dot(w_light);
+        // Light leaks through shading normals: the arriving direction must lie on the same
+        // side of both normals.
+        if ng_light * wl.z <= 0.0 {
+            return;
+        }
+        // Connect the vertex to the camera.
+        let u_lens = sampler.next_2d();
+        if let Some(cc) = camera.connect(hit.p, u_lens) {
+            let wc = frame.to_local(cc.dir);
+            let ng_cam = hit.ng.dot(cc.dir);
+            if ng_cam * wc.z > 0.0 {
+                let f = bsdf.eval(wc, wl);
+                if !f.is_black() {
+                    let adjoint = wl.z.abs() * ng_cam.abs() / ng_light.abs();
+                    let origin = offset_ray_origin(hit.p, hit.ng * ng_cam.signum());
+                    if camera_visible(scene, origin, cc.camera_point) {
+                        push(cc.film, beta * f * (adjoint * cc.weight));
+                    }
+                }
+            }
+        }
+        // Continue by sampling the BSDF from the light's side.
+        let u_lobe = sampler.next_1d();
+        let Some(bs) = bsdf.sample(wl, u_lobe, sampler.next_2d()) else {
+            return;
+        };
+        let dir = frame.to_world(bs.wi);
+        let ng_next = hit.ng.dot(dir);
+        if ng_next * bs.wi.z <= 0.0 {
+            return;
+        }
+        // Importance transport: refraction's 1 / eta^2 undone, and the adjoint's shading
+        // normal correction.
+        let correction = (wl.z * ng_next).abs() / (bs.wi.z * ng_light).abs();
+        beta *= bs.weight * (bs.eta * bs.eta * correction);
+        eta *= bs.eta;
+        if beta.is_black() || !beta.is_finite() {
+            return;
+        }
+        ray = Ray::new(offset_ray_origin(hit.p, hit.ng * ng_next.signum()), dir);
+        depth += 1;
+        if depth > s.rr_depth {
+            let q = (beta.max_value() * eta * eta).min(0.95);
+            if !(sampler.next_1d() < q) {
+                return;
+            }
+            beta *= 1.0 / q;
+        }
+    }
+}
+
+/// Continues `state` (whose `light` film the light tracer fills) up to `settings.spp`
+/// batches of light paths, one batch per sample per pixel, checking `cancel` between passes
+/// (see [`crate::render_passes`] for the pass sizes). Returns whether all were traced.
+pub fn render_light_passes(
+    scene: &Scene,
+    settings: &crate::RenderSettings,
+    state: &mut crate::RenderState,
+    cancel: &AtomicBool,
+    progress: &(dyn Fn(u64) + Sync),
+) -> bool {
+    let per_batch = u64::from(settings.width) * u64::from(settings.height);
+    let [fw, fh] = settings
+        .crop
+        .map_or([settings.width, settings.height], |c| c.film_size);
+    let scale = (f64::from(fw) * f64::from(fh)) / per_batch as f64;
+    let mut pass = 1u32;
+    while state.spp_done < settings.spp {
+        if cancel.load(Ordering::Relaxed) {
+            return false;
+        }
+        let batches = state.spp_done..state.spp_done.saturating_add(pass).min(settings.spp);
+        let start = Instant::now();
+        light_pass(scene, settings, state, batches.clone(), scale, progress);
+        let took = start.elapsed();
+        state.time += took;
+        state.spp_done = batches.end;
+        if took < Duration::from_millis(250) {
+            let most = (MAX_PASS_PATHS / per_batch).max(1) as u32;
+            pass = pass.saturating_mul(2).min(most);
+        }
+    }
+    true
+}
+
+/// Traces the light paths of `batches` (in parallel, in chunks), then adds their splats in
+/// path order: to the filtered film, and per batch to the unfiltered image whose values go
+/// into each pixel's statistics.
+fn light_pass(
+    scene: &Scene,
+    settings: &crate::RenderSettings,
+    state: &mut crate::RenderState,
+    batches: std::ops::Range<u32>,
+    scale: f64,
+    progress: &(dyn Fn(u64) + Sync),
+) {
+    let per_batch = u64::from(settings.width) * u64::from(settings.height);
+    let chunks_per_batch = per_batch.div_ceil(CHUNK);
+    let items: Vec<(u32, u64)> = batches
+        .clone()
+        .flat_map(|b| (0..chunks_per_batch).map(move |c| (b, c)))
+        .collect();
+    let s = &settings.path;
+    let lists: Vec<Vec<Splat>> = items
+        .par_iter()
+        .map(|&(b, c)| {
+            let first = u64::from(b) * per_batch + c * CHUNK;
+            let end = (u64::from(b) * per_batch + per_batch).min(first + CHUNK);
+            let mut out = Vec::with_capacity(((end - first) * 4) as usize);
+            for path in first..end {
+                let mut sampler = Sampler::new(settings.seed, LIGHT_STREAM, path);
+                trace_light_path(scene, s, &mut sampler, &mut out);
+            }
+            progress(end - first);
+            out
+        })
+        .collect();
+    let light = state
+        .light
+        .as_mut()
+        .expect("a light-path render keeps a light film");
+    let (w, h) = (settings.width as usize, settings.height as usize);
+    let mut batch = vec![[0.0f64; 3]; w * h];
+    for per_batch_lists in lists.chunks(chunks_per_batch as usize) {
+        batch.fill([0.0; 3]);
+        for sp in per_batch_lists.iter().flatten() {
+            let (x, y) = (sp.film.x as usize, sp.film.y as usize);
+            let pixel = (y.min(h - 1)) * w + x.min(w - 1);
+            if !sp.rgb.iter().all(|c| c.is_finite()) {
+                state.pixels[pixel].nonfinite += 1;
+                continue;
+            }
+            light.splat(sp.film, sp.rgb, scale);
+            for c in 0..3 {
+                batch[pixel][c] += scale * f64::from(sp.rgb[c]);
+            }
+        }
+        for (stats, v) in state.pixels.iter_mut().zip(&batch) {
+            stats.add(v.map(|c| c as f32), 0.0);
+        }
+    }
+}
+
+/// Whether the light tracer can render `scene` with `settings`; the reason when it cannot.
+pub fn check(scene: &Scene, settings: &crate::RenderSettings) -> Result<(), String> {
+    if !LightFilm::supports(&settings.filter.desc) {
+        return Err("ptracer: the reconstruction filter is wider than 15 pixels".into());
+    }
+    if scene.materials.iter().any(|m| m.fluorescent().is_some()) {
+        return Err(
+            "ptracer does not yet trace fluorescence on light paths (not yet implemented); render fluorescent scenes with path"
+                .into(),
+        );
+    }
+    Ok(())
+}

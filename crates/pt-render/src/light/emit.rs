@@ -1,0 +1,184 @@
+//! Light leaving the lights: rays sampled from a light into the scene, for the methods that
+//! trace paths from the lights (Mitsuba's `ptracer`; photon mapping and the bidirectional
+//! methods build on the same rays).
+//!
+//! Each ray comes with its weight `Le cos / (p_pos p_dir)`: the emitted radiance times the
+//! cosine at the light over the densities of its origin (per unit area) and direction (per
+//! unit solid angle), so that the mean weight over many rays is the light's power (pbrt-v4
+//! `SampleLe`; Veach 1997, sec. 10.2). Light selection is not included. The strategies follow
+//! Mitsuba 3.9.1's `sample_ray` of each emitter:
+//!
+//! | light | origin | direction | weight |
+//! |---|---|---|---|
+//! | area | uniform by area | cosine-weighted about the front normal | `pi A Le(uv)` |
+//! | point | the point | uniform over the sphere | `4 pi I` |
+//! | spot | the point | uniform in the cutoff cone | `2 pi (1 - cos c) I falloff T` |
+//! | projector | the point | uniform over the image on its plane z = 1 | `I(d) / p(d)` |
+//! | directional | uniform on a disk of the scene's bounding radius R, facing the light, behind the scene | the light's | `pi R^2 E` |
+//! | sun | as directional, for a direction uniform in the sun's cone | | `pi R^2 L / p(d)` |
+//! | constant, envmap | as directional, for a direction from the light's own sampling | | `pi R^2 L(d) / p(d)` |
+//!
+//! Distant lights emit from a disk of radius R perpendicular to the direction, placed at
+//! distance R from the bounding sphere's centre on the light's side, so that every ray of the
+//! sampled direction that meets the scene starts on the disk (Mitsuba's choice).
+
+use super::{AreaLight, Light};
+use pt_math::warp::{
+    square_to_cosine_hemisphere, square_to_disk_concentric, square_to_uniform_cone,
+    square_to_uniform_sphere, uniform_cone_pdf,
+};
+use pt_math::{offset_ray_origin, Frame, Ray, Vec2, Vec3};
+use pt_spectrum::{SampledSpectrum, SampledWavelengths};
+use std::f32::consts::PI;
+
+/// A ray leaving a light, world space.
+#[derive(Clone, Copy, Debug)]
+pub struct EmittedRay {
+    /// The ray (its origin moved off the light's surface for area lights).
+    pub ray: Ray,
+    /// `Le cos / (p_pos p_dir)` (see the module documentation), light selection not included.
+    pub weight: SampledSpectrum,
+}
+
+/// A point on an area light, uniform by area: what connecting a light directly to the camera
+/// needs.
+#[derive(Clone, Copy, Debug)]
+pub struct LightPoint {
+    /// Position, world.
+    pub p: Vec3,
+    /// Front-side unit normal, world.
+    pub n: Vec3,
+    /// Texture coordinates (for textured emission).
+    pub uv: Vec2,
+    /// Density of the point per unit area: 1 / the light's area.
+    pub pdf_area: f32,
+}
+
+impl AreaLight {
+    /// A point of the light uniform by area ([`AreaLight::sample_point`]) with its density.
+    #[inline]
+    pub fn sample_position(&self, u_sel: f32, u: Vec2) -> LightPoint {
+        let (p, n, uv) = self.sample_point(u_sel, u);
+        LightPoint {
+            p,
+            n,
+            uv,
+            pdf_area: 1.0 / self.area,
+        }
+    }
+}
+
+/// A ray entering the scene's bounding sphere (`centre`, `radius`) from the distant
+/// direction `to_light` (unit, from the scene towards the light): its origin uniform on the
+/// disk of radius `radius` facing the light at distance `radius` from the centre (density
+/// 1 / (pi R^2)).
+#[inline]
+fn ray_from_disk(to_light: Vec3, u: Vec2, (centre, radius): (Vec3, f32)) -> Ray {
+    let frame = Frame::from_normal(to_light);
+    let d = square_to_disk_concentric(u) * radius;
+    let origin = centre + frame.to_world(Vec3::new(d.x, d.y, radius));
+    Ray::new(origin, -to_light)
+}
+
+impl Light {
+    /// Samples a ray leaving the light ([`EmittedRay`]): `u_sel` picks a mesh light's
+    /// triangle, `u_pos` the origin, `u_dir` the direction (the table in the module
+    /// documentation); `bounds` is the scene's bounding sphere (centre, radius), from which
+    /// distant lights emit. `None` when the sample carries nothing (outside a projector's
+    /// image, a degenerate light).
+    pub fn sample_emission(
+        &self,
+        u_sel: f32,
+        u_pos: Vec2,
+        u_dir: Vec2,
+        lambda: &SampledWavelengths,
+        bounds: (Vec3, f32),
+    ) -> Option<EmittedRay> {
+        let disk_area = PI * bounds.1 * bounds.1;
+        let (ray, weight) = match self {
+            Light::Area(a) => {
+                let pt = a.sample_position(u_sel, u_pos);
+                if pt.n == Vec3::ZERO {
+                    return None;
+                }
+                let dir = Frame::from_normal(pt.n).to_world(square_to_cosine_hemisphere(u_dir));
+                // Le cos / (pdf_area cos / pi) = pi A Le.
+                let le = a.radiance_at_uv(pt.uv, lambda);
+                (
+                    Ray::new(offset_ray_origin(pt.p, pt.n), dir),
+                    le * (PI * a.area),
+                )
+            }
+            Light::Point {
+                position,
+                intensity,
+            } => (
+                Ray::new(*position, square_to_uniform_sphere(u_dir)),
+                intensity.at(lambda) * (4.0 * PI),
+            ),
+            Light::Spot {
+                position,
+                frame,
+                intensity,
+                cone,
+                texture,
+            } => {
+                let one_minus_cos = 1.0 - cone.cos_cutoff;
+                let local = square_to_uniform_cone(u_dir, one_minus_cos);
+                let dir = frame.to_world(local).normalize();
+                let mut w =
+                    intensity.at(lambda) * (cone.falloff(local.z) / uniform_cone_pdf(one_minus_cos));
+                if let Some(t) = texture.as_deref() {
+                    w *= t.eval(dir, lambda);
+                }
+                (Ray::new(*position, dir), w)
+            }
+            Light::Projector(p) => {
+                let (dir, pdf) = p.sample_direction(u_dir);
+                // The intensity towards `dir`: what arrives at unit distance.
+                let (_, _, intensity) = p.arriving(p.position + dir, lambda)?;
+                (Ray::new(p.position, dir), intensity * (1.0 / pdf))
+            }
+            Light::Directional {
+                to_light,
+                irradiance,
+            } => (
+                ray_from_disk(*to_light, u_pos, bounds),
+                irradiance.at(lambda) * disk_area,
+            ),
+            Light::Sun {
+                frame,
+                irradiance,
+                to_radiance,
+                one_minus_cos,
+            } => {
+                let to_light = frame
+                    .to_world(square_to_uniform_cone(u_dir, *one_minus_cos))
+                    .normalize();
+                let le = irradiance.at(lambda) * *to_radiance;
+                (
+                    ray_from_disk(to_light, u_pos, bounds),
+                    le * (disk_area / uniform_cone_pdf(*one_minus_cos)),
+                )
+            }
+            Light::Constant { radiance } => (
+                ray_from_disk(square_to_uniform_sphere(u_dir), u_pos, bounds),
+                radiance.at(lambda) * (disk_area / pt_math::warp::UNIFORM_SPHERE_PDF),
+            ),
+            Light::EnvMap(e) => {
+                let (to_light, le, pdf) = e.sample(u_dir, lambda)?;
+                (ray_from_disk(to_light, u_pos, bounds), le * (disk_area / pdf))
+            }
+        };
+        (weight.is_finite() && !weight.is_black()).then_some(EmittedRay { ray, weight })
+    }
+
+    /// Whether the light is a delta light (point, spot, projector, directional): it can be
+    /// neither hit by a ray nor seen by the camera.
+    pub fn is_delta(&self) -> bool {
+        matches!(
+            self,
+            Light::Point { .. } | Light::Spot { .. } | Light::Projector(_) | Light::Directional { .. }
+        )
+    }
+}
