@@ -32,6 +32,7 @@ mod moment;
 mod parallelograms;
 mod phosphorescence;
 mod pixel_format;
+mod ptracer;
 mod radiosity;
 mod resume;
 mod samplers;

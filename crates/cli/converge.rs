@@ -46,9 +46,13 @@ pub struct ConvergeArgs {
         default_value = "1,2,4,8,16,32,64,128,256,512,1024"
     )]
     pub spp: Vec<u32>,
-    /// Direct-light strategies of pt, comma separated: one curve each.
+    /// Direct-light strategies of pt's path tracer, comma separated: one curve each.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "mis")]
     pub strategy: Vec<ConvergeStrategy>,
+    /// Light transport methods of pt, comma separated: `path` (one curve per --strategy) and
+    /// `ptracer` (light tracing, curve `pt-ptracer`; its spp are light paths per pixel).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "path")]
+    pub integrators: Vec<ConvergeIntegrator>,
     /// Colour modes of pt, comma separated (`rgb,spectral`): one curve per mode and strategy,
     /// named `pt-<mode>-<strategy>`, each timed with its own scene build [default: the scene's
     /// automatic mode only, curves named `pt-<strategy>`]. On a spectral scene, RGB converges
@@ -132,6 +136,15 @@ impl ConvergeStrategy {
     }
 }
 
+/// A method of pt charted by `pt converge`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ConvergeIntegrator {
+    /// The path tracer.
+    Path,
+    /// Light tracing (Mitsuba's `ptracer`).
+    Ptracer,
+}
+
 /// Mitsuba 3 variant used by `--mitsuba`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum MitsubaVariant {
@@ -206,6 +219,14 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
         reference: args.reference,
         spp: args.spp,
         strategies: args.strategy.iter().map(|s| s.strategy()).collect(),
+        integrators: args
+            .integrators
+            .iter()
+            .map(|i| match i {
+                ConvergeIntegrator::Path => pt_lab::converge::Method::Path,
+                ConvergeIntegrator::Ptracer => pt_lab::converge::Method::PTracer,
+            })
+            .collect(),
         modes: args.modes.iter().map(|m| m.mode()).collect(),
         out,
         max_depth: args.max_depth,

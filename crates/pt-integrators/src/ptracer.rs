@@ -5,8 +5,10 @@
 //!
 //! Per light path, as Mitsuba's `ptracer` does:
 //! 1. *Emitters seen directly* (unless `hide_emitters`, or `max_depth` 0): a light is chosen
-//!    and a point on it (area lights, by area) or a direction towards it from the camera's
-//!    centre (environment and sun) is connected to the camera. Delta lights cannot be seen.
+//!    and, for an area light, a point on it by area is connected to the camera; distant lights
+//!    (environment, sun) are seen by a camera ray through a film point uniform over the image
+//!    (where Mitsuba draws a direction from the light, mostly outside the image: the same
+//!    expected image, with far less noise). Delta lights cannot be seen.
 //! 2. *A ray from a light* ([`pt_render::light::EmittedRay`]), traced through the scene by
 //!    BSDF sampling; at every surface it meets, the vertex is connected to the camera:
 //!    `beta f(w_cam, w_light) |cos_s(w_light)| |ng . w_cam| / |ng . w_light| W`, where `f` is the
@@ -100,10 +102,13 @@ fn camera_visible(scene: &Scene, origin: Vec3, target: Vec3) -> bool {
 }
 
 /// Traces one light path (steps 1 and 2 of the module documentation) and appends its splats.
+/// `inv_scale` is P_image / P_film, the inverse of the scale every splat gets (see the module
+/// documentation), for contributions sampled uniformly over the image.
 fn trace_light_path<S: RandomSource>(
     scene: &Scene,
     s: &PathSettings,
     sampler: &mut S,
+    inv_scale: f32,
     out: &mut Vec<Splat>,
 ) {
     let lambda = match scene.mode {
@@ -111,6 +116,10 @@ fn trace_light_path<S: RandomSource>(
         ColorMode::Rgb => SampledWavelengths::sample_visible(0.5),
     };
     let camera = &scene.camera;
+    let one = match scene.mode {
+        ColorMode::Spectral => SampledSpectrum::splat(1.0),
+        ColorMode::Rgb => SampledSpectrum::from_rgb([1.0; 3]),
+    };
     let mut push = |film: Vec2, c: SampledSpectrum| {
         if !c.is_black() {
             out.push(Splat {
@@ -120,47 +129,40 @@ fn trace_light_path<S: RandomSource>(
         }
     };
     if s.max_depth != 0 && !s.hide_emitters {
+        // Area lights seen directly: a point on one, connected to the camera.
         if let Some((li, pmf, u_sel)) = scene.sample_light(sampler.next_1d()) {
             let (u, u_lens) = (sampler.next_2d(), sampler.next_2d());
-            match &scene.lights[li] {
-                Light::Area(a) => {
-                    let pt = a.sample_position(u_sel, u);
-                    if let Some(cc) = camera.connect(pt.p, u_lens) {
-                        let cos = pt.n.dot(cc.dir);
-                        let le = a.emitted(pt.n, cc.dir, pt.uv, &lambda);
-                        if cos > 0.0
-                            && !le.is_black()
-                            && camera_visible(
-                                scene,
-                                offset_ray_origin(pt.p, pt.n),
-                                cc.camera_point,
-                            )
-                        {
-                            push(cc.film, le * (cos * cc.weight / (pt.pdf_area * pmf)));
-                        }
+            if let Light::Area(a) = &scene.lights[li] {
+                let pt = a.sample_position(u_sel, u);
+                if let Some(cc) = camera.connect(pt.p, u_lens) {
+                    let cos = pt.n.dot(cc.dir);
+                    let le = a.emitted(pt.n, cc.dir, pt.uv, &lambda);
+                    if cos > 0.0
+                        && !le.is_black()
+                        && camera_visible(scene, offset_ray_origin(pt.p, pt.n), cc.camera_point)
+                    {
+                        push(cc.film, le * (cos * cc.weight / (pt.pdf_area * pmf)));
                     }
                 }
-                light if light.is_infinite() && !camera.is_orthographic() => {
-                    // A direction towards the light from the camera's centre, made a point
-                    // far outside the scene (its distance cancels in the weight).
-                    let at = camera.position();
-                    if let Some(ls) = light.sample(at, u_sel, u, &lambda) {
-                        let (c, r) = scene.bounds;
-                        let far = 1e3 * (r + (at - c).length());
-                        let p = at + ls.wi * far;
-                        if let Some(cc) = camera.connect(p, u_lens) {
-                            if camera_visible(scene, cc.camera_point, p)
-                                && ls.pdf > 0.0
-                                && !ls.radiance.is_black()
-                            {
-                                let w = cc.weight * cc.dist * cc.dist / (ls.pdf * pmf);
-                                push(cc.film, ls.radiance * w);
-                            }
-                        }
-                    }
-                }
-                // Delta lights cannot be seen; an orthographic camera sees one direction.
-                _ => {}
+            }
+        }
+        // Distant lights seen directly (environment, sun): a camera ray through a film point
+        // uniform over the image that leaves the scene. Mitsuba instead draws a direction from
+        // the light's own distribution, most of which miss the image; both estimate the same
+        // integral of W_e L_e, this one with the path tracer's first-segment noise.
+        if !scene.infinite_lights.is_empty() {
+            let (u_film, u_lens) = (sampler.next_2d(), sampler.next_2d());
+            let film = u_film * camera.image_size();
+            let (x, y) = (film.x.floor(), film.y.floor());
+            let ray = camera.pixel_ray(
+                x as i32,
+                y as i32,
+                film - Vec2::new(x + 0.5, y + 0.5),
+                u_lens,
+            );
+            if scene.intersect(&ray).is_none() {
+                let le = crate::path::escaped_radiance(scene, ray.dir, &lambda, one, |_| 1.0);
+                push(film, le * inv_scale);
             }
         }
     }
@@ -304,7 +306,7 @@ fn light_pass(
             let mut out = Vec::with_capacity(((end - first) * 4) as usize);
             for path in first..end {
                 let mut sampler = Sampler::new(settings.seed, LIGHT_STREAM, path);
-                trace_light_path(scene, s, &mut sampler, &mut out);
+                trace_light_path(scene, s, &mut sampler, (1.0 / scale) as f32, &mut out);
             }
             progress(end - first);
             out
@@ -348,4 +350,23 @@ pub fn check(scene: &Scene, settings: &crate::RenderSettings) -> Result<(), Stri
         );
     }
     Ok(())
+}
+
+/// Renders the image by light tracing (`settings.spp` batches of light paths; the path
+/// settings' depth, Russian roulette and hidden emitters apply), as [`crate::render`] does by
+/// path tracing. The caller checks the scene with [`check`] first.
+pub fn render(
+    scene: &Scene,
+    settings: &crate::RenderSettings,
+    progress: &(dyn Fn(u64) + Sync),
+) -> pt_render::RenderOutput {
+    let mut state = crate::RenderState::for_light_paths(settings);
+    render_light_passes(
+        scene,
+        settings,
+        &mut state,
+        &AtomicBool::new(false),
+        progress,
+    );
+    state.output()
 }

@@ -236,7 +236,11 @@ impl RenderState {
             return RenderOutput {
                 width: self.width,
                 height: self.height,
-                mean: light.sums.iter().map(|s| s.map(|v| (v / n) as f32)).collect(),
+                mean: light
+                    .sums
+                    .iter()
+                    .map(|s| s.map(|v| (v / n) as f32))
+                    .collect(),
                 variance,
                 spp: self.spp_done,
                 time: self.time,

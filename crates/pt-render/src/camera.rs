@@ -264,7 +264,8 @@ impl Camera {
         };
         // Inverse of generate_ray: x = (1 - 2 ndc.x) tan_half.x.
         let ndc = (Vec2::ONE - plane / self.tan_half) * 0.5;
-        let film = ndc / self.inv_size - self.film_offset
+        let film = ndc / self.inv_size
+            - self.film_offset
             - Vec2::new(self.crop_offset[0] as f32, self.crop_offset[1] as f32);
         if !(film.cmpge(Vec2::ZERO).all() && film.cmplt(self.image_size).all()) {
             return None;
@@ -298,6 +299,11 @@ impl Camera {
     /// world space: where light paths aim at the camera from distant lights.
     pub fn position(&self) -> Vec3 {
         self.origin
+    }
+
+    /// The image's size in pixels (a crop window's, or the whole film's).
+    pub fn image_size(&self) -> Vec2 {
+        self.image_size
     }
 
     /// Whether the camera sees along one direction only per film point (orthographic): such a
@@ -469,5 +475,114 @@ mod tests {
         // One pixel is 2 / 40 of the unscaled width: 0.15 in the world.
         let next = cam.generate_ray(Vec2::new(1.0, 0.0), Vec2::ZERO);
         assert!((top_left.origin.x - next.origin.x - 0.15).abs() < 1e-6);
+    }
+
+    /// `connect` inverts `generate_ray` for every camera, with a crop window and a principal
+    /// point offset: a point on the ray through a film position (with the same lens point)
+    /// lands at that film position, seen along the reversed ray.
+    #[test]
+    fn connect_inverts_generate_ray() {
+        let to_world = lookat(Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.0, 0.5, -1.0), Vec3::Y);
+        let film = pt_scene::FilmDesc {
+            width: 40,
+            height: 30,
+            crop: Some(pt_scene::CropWindow {
+                offset: [7, 5],
+                film_size: [64, 48],
+            }),
+            filter: pt_scene::FilterDesc::Box { radius: 0.5 },
+            sample_border: false,
+            reconstruction: pt_scene::Reconstruction::Splat,
+            pixel_format: pt_scene::PixelFormat::Rgb,
+        };
+        for projection in [
+            Projection::Perspective {
+                fov_deg: 50.0,
+                fov_axis: FovAxis::X,
+            },
+            Projection::ThinLens {
+                fov_deg: 50.0,
+                fov_axis: FovAxis::Y,
+                aperture_radius: 0.2,
+                focus_distance: 3.0,
+            },
+            Projection::Orthographic,
+        ] {
+            let desc = CameraDesc {
+                loc: SourceLoc::default(),
+                projection,
+                to_world,
+                near_clip: 0.01,
+                far_clip: 100.0,
+                principal_point_offset: [0.1, -0.05],
+            };
+            let cam = Camera::for_film(&desc, &film);
+            for (x, y, off, lens, t) in [
+                (3, 4, Vec2::new(0.2, -0.3), Vec2::new(0.3, 0.8), 2.0),
+                (39, 0, Vec2::new(0.49, -0.49), Vec2::new(0.9, 0.1), 5.0),
+                (20, 29, Vec2::new(-0.1, 0.4), Vec2::new(0.5, 0.5), 0.7),
+            ] {
+                let ray = cam.pixel_ray(x, y, off, lens);
+                let p = ray.origin + ray.dir * t;
+                let c = cam.connect(p, lens).expect("the point is in view");
+                let want = Vec2::new(x as f32 + 0.5, y as f32 + 0.5) + off;
+                assert!(
+                    (c.film - want).length() < 2e-3,
+                    "{projection:?}: {} vs {want}",
+                    c.film
+                );
+                assert!((c.dir + ray.dir).length() < 1e-4, "{projection:?}");
+                assert!(
+                    (c.camera_point - ray.origin).length() < 1e-4,
+                    "{projection:?}"
+                );
+            }
+            // Behind the camera: nothing.
+            let behind = to_world.transform_point3(Vec3::new(0.0, 0.0, -1.0));
+            assert!(cam.connect(behind, Vec2::splat(0.5)).is_none());
+        }
+    }
+
+    /// The importance integrates to 1 over the film (the normalisation the light tracer's
+    /// pixels rely on): for the perspective cameras, the mean of `weight d^2 / p(w)` over
+    /// directions uniform on the sphere (p = 1 / 4 pi), points at distance d = 2, equals 1; for
+    /// the thin lens also averaged over lens points. 2^18 samples: the estimate's relative
+    /// standard error is sqrt(4 pi / (film solid angle) - 1) / 512, about 1% for this 60
+    /// degree film; 4% is four of them. A factor such as cos^3 for cos^4 moves it by more.
+    #[test]
+    fn importance_integrates_to_one() {
+        for projection in [
+            Projection::Perspective {
+                fov_deg: 60.0,
+                fov_axis: FovAxis::X,
+            },
+            Projection::ThinLens {
+                fov_deg: 60.0,
+                fov_axis: FovAxis::X,
+                aperture_radius: 0.05,
+                focus_distance: 1.5,
+            },
+        ] {
+            let desc = CameraDesc {
+                loc: SourceLoc::default(),
+                projection,
+                to_world: lookat(Vec3::ZERO, Vec3::new(0.3, -0.2, -1.0), Vec3::Y),
+                near_clip: 0.01,
+                far_clip: 100.0,
+                principal_point_offset: [0.0; 2],
+            };
+            let cam = Camera::new(&desc, 48, 32);
+            let mut rng = crate::sampler::Sampler::new(7, 0, 0);
+            let n = 1 << 18;
+            let mut sum = 0.0f64;
+            for _ in 0..n {
+                let d = pt_math::warp::square_to_uniform_sphere(rng.next_2d());
+                if let Some(c) = cam.connect(d * 2.0, rng.next_2d()) {
+                    sum += f64::from(c.weight * c.dist * c.dist) * 4.0 * std::f64::consts::PI;
+                }
+            }
+            let mean = sum / n as f64;
+            assert!((mean - 1.0).abs() < 0.04, "{projection:?}: {mean}");
+        }
     }
 }

@@ -56,8 +56,11 @@ pub struct ConvergeSettings {
     pub reference: PathBuf,
     /// Sample counts per pixel, one render (one point) each; sorted and deduplicated by [`run`].
     pub spp: Vec<u32>,
-    /// Direct-light strategies of pt, one curve each (repeats ignored).
+    /// Direct-light strategies of pt's path tracer, one curve each (repeats ignored).
     pub strategies: Vec<Strategy>,
+    /// Light transport methods of pt: the path tracer (a curve per strategy) and others, one
+    /// curve each, named `pt-<method>` (repeats ignored).
+    pub integrators: Vec<Method>,
     /// Colour modes of pt, one curve per mode and strategy, named `pt-<mode>-<strategy>`,
     /// each timed with its own scene build; empty: the scene's automatic mode only, curves
     /// named `pt-<strategy>`.
@@ -76,6 +79,15 @@ pub struct ConvergeSettings {
     pub radiosity_patch_sizes: Vec<f32>,
     /// Form-factor rays per patch for the radiosity points.
     pub radiosity_rays: u32,
+}
+
+/// A light transport method charted by [`run`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Method {
+    /// The path tracer, one curve per [`ConvergeSettings::strategies`].
+    Path,
+    /// Light tracing (`ptracer`): its spp are light paths per pixel.
+    PTracer,
 }
 
 /// One render: its sample count (for radiosity: its patch count), render time and error
@@ -271,11 +283,14 @@ fn pt_curves(
             .collect::<Result<_, _>>()?
     };
     let mut strategies: Vec<Strategy> = Vec::new();
-    for st in &s.strategies {
-        if !strategies.contains(st) {
-            strategies.push(*st);
+    if s.integrators.contains(&Method::Path) {
+        for st in &s.strategies {
+            if !strategies.contains(st) {
+                strategies.push(*st);
+            }
         }
     }
+    let light_tracer = s.integrators.contains(&Method::PTracer);
     let mut all = Vec::new();
     for (mode, scene) in &scenes {
         // Untimed warm-up (page faults, thread start-up), as Mitsuba gets one.
@@ -293,20 +308,46 @@ fn pt_curves(
                 None => format!("pt-{}", strategy_name(strategy)),
                 Some(m) => format!("pt-{}-{}", m.name(), strategy_name(strategy)),
             };
-            let points = pt_curve(s, scene, settings, strategy, &name, spp, reference, log)?;
+            let settings = RenderSettings {
+                path: pt_integrators::PathSettings {
+                    strategy,
+                    ..settings.path
+                },
+                ..settings.clone()
+            };
+            let render = |rs: &RenderSettings| pt_integrators::render(scene, rs, &|_| {});
+            let extra = ("strategy", strategy_name(strategy));
+            let points = pt_curve(
+                s, scene, &settings, render, extra, &name, spp, reference, log,
+            )?;
+            all.push(Series { name, points });
+        }
+        if light_tracer {
+            pt_integrators::ptracer::check(scene, settings).map_err(LabError::Invalid)?;
+            let name = match mode {
+                None => "pt-ptracer".to_string(),
+                Some(m) => format!("pt-{}-ptracer", m.name()),
+            };
+            let render = |rs: &RenderSettings| pt_integrators::ptracer::render(scene, rs, &|_| {});
+            let extra = ("integrator", "ptracer");
+            let points = pt_curve(
+                s, scene, settings, render, extra, &name, spp, reference, log,
+            )?;
             all.push(Series { name, points });
         }
     }
     Ok(all)
 }
 
-/// One pt curve: a render per sample count, written as `NAME/spp<N>.exr` and measured.
+/// One pt curve: a render per sample count by `render`, written as `NAME/spp<N>.exr` (with
+/// `extra`, a header entry naming what the curve varies) and measured.
 #[allow(clippy::too_many_arguments)]
 fn pt_curve(
     s: &ConvergeSettings,
     scene: &Scene,
     settings: &RenderSettings,
-    strategy: Strategy,
+    render: impl Fn(&RenderSettings) -> pt_render::RenderOutput,
+    extra: (&str, &str),
     name: &str,
     spp: &[u32],
     reference: &Image,
@@ -318,13 +359,9 @@ fn pt_curve(
     for &n in spp {
         let settings = RenderSettings {
             spp: n,
-            path: pt_integrators::PathSettings {
-                strategy,
-                ..settings.path
-            },
             ..settings.clone()
         };
-        let out = pt_integrators::render(scene, &settings, &|_| {});
+        let out = render(&settings);
         let image = Image {
             width: out.width,
             height: out.height,
@@ -335,7 +372,7 @@ fn pt_curve(
             mode: Some(scene.mode.name().to_string()),
             render_time_s: Some(out.time.as_secs_f64()),
             extra: vec![
-                ("strategy".into(), strategy_name(strategy).into()),
+                (extra.0.into(), extra.1.into()),
                 ("seed".into(), s.seed.to_string()),
             ],
         };
@@ -609,6 +646,7 @@ mod tests {
             reference: "none.exr".into(),
             spp: vec![4, 1, 4],
             strategies: vec![Strategy::Mis],
+            integrators: vec![Method::Path],
             modes: Vec::new(),
             out: "out".into(),
             max_depth: None,

@@ -126,8 +126,8 @@ impl Light {
                 let one_minus_cos = 1.0 - cone.cos_cutoff;
                 let local = square_to_uniform_cone(u_dir, one_minus_cos);
                 let dir = frame.to_world(local).normalize();
-                let mut w =
-                    intensity.at(lambda) * (cone.falloff(local.z) / uniform_cone_pdf(one_minus_cos));
+                let mut w = intensity.at(lambda)
+                    * (cone.falloff(local.z) / uniform_cone_pdf(one_minus_cos));
                 if let Some(t) = texture.as_deref() {
                     w *= t.eval(dir, lambda);
                 }
@@ -167,7 +167,10 @@ impl Light {
             ),
             Light::EnvMap(e) => {
                 let (to_light, le, pdf) = e.sample(u_dir, lambda)?;
-                (ray_from_disk(to_light, u_pos, bounds), le * (disk_area / pdf))
+                (
+                    ray_from_disk(to_light, u_pos, bounds),
+                    le * (disk_area / pdf),
+                )
             }
         };
         (weight.is_finite() && !weight.is_black()).then_some(EmittedRay { ray, weight })
@@ -178,7 +181,10 @@ impl Light {
     pub fn is_delta(&self) -> bool {
         matches!(
             self,
-            Light::Point { .. } | Light::Spot { .. } | Light::Projector(_) | Light::Directional { .. }
+            Light::Point { .. }
+                | Light::Spot { .. }
+                | Light::Projector(_)
+                | Light::Directional { .. }
         )
     }
 }

@@ -277,3 +277,107 @@ fn cylinder_light_matches_quadrature() {
         );
     }
 }
+
+/// Rays leaving each kind of light carry, on average, the light's power
+/// (`Light::sample_emission`'s weight is Le cos / (p_pos p_dir)): 4 pi I for a point light,
+/// 2 pi (1 - cos c) I for a hard spot (beam width = cutoff), pi A L for an area light, pi R^2 E
+/// for a directional light over the disk of radius R, and pi R^2 times 4 pi L for a constant
+/// environment. The directions stay where the light sends light: inside the spot's cone, in
+/// the area light's front hemisphere, along -to_light for the directional light, and every
+/// distant ray starts on its disk at distance R from the centre. 2^16 samples; every weight
+/// here is constant but for the spot (constant too: hard cone) and area light (constant
+/// radiance), so the means are exact to rounding: 1e-3 relative.
+#[test]
+fn emitted_rays_carry_the_lights_power() {
+    use std::f32::consts::PI;
+    let lambda = SampledWavelengths::sample_visible(0.5);
+    let rgb = |v: f32| crate::texture::ConstantSpectrum::Rgb(SampledSpectrum::from_rgb([v; 3]));
+    let bounds = (Vec3::new(0.5, -1.0, 2.0), 3.0);
+    let spot_frame = Frame::from_normal(Vec3::new(0.0, -1.0, 0.2).normalize());
+    let cutoff = 0.4f32;
+    let to_light = Vec3::new(0.3, 1.0, -0.2).normalize();
+    let par_n = Vec3::new(0.0, -1.0, 0.0);
+    let lights: Vec<(Light, f32)> = vec![
+        (
+            Light::Point {
+                position: Vec3::new(1.0, 2.0, 3.0),
+                intensity: rgb(2.0),
+            },
+            4.0 * PI * 2.0,
+        ),
+        (
+            Light::Spot {
+                position: Vec3::ZERO,
+                frame: spot_frame,
+                intensity: rgb(3.0),
+                cone: SpotCone {
+                    cos_cutoff: cutoff.cos(),
+                    cutoff,
+                    beam_width: cutoff,
+                },
+                texture: None,
+            },
+            2.0 * PI * (1.0 - cutoff.cos()) * 3.0,
+        ),
+        (
+            Light::Area(AreaLight {
+                radiance: crate::texture::Texture::rgb([1.5; 3]),
+                shape: LightShape::Parallelogram {
+                    v0: Vec3::new(-1.0, 1.0, -0.5),
+                    e1: Vec3::new(2.0, 0.0, 0.0),
+                    e2: Vec3::new(0.0, 0.0, 1.0),
+                    n: par_n,
+                    uv: [Vec2::ZERO, Vec2::X, Vec2::Y],
+                },
+                area: 2.0,
+            }),
+            PI * 2.0 * 1.5,
+        ),
+        (
+            Light::Directional {
+                to_light,
+                irradiance: rgb(0.7),
+            },
+            PI * 9.0 * 0.7,
+        ),
+        (
+            Light::Constant { radiance: rgb(0.2) },
+            PI * 9.0 * 4.0 * PI * 0.2,
+        ),
+    ];
+    for (light, power) in &lights {
+        let mut u = lcg(11);
+        let n = 1 << 16;
+        let mut sum = 0.0f64;
+        for _ in 0..n {
+            let (us, up, ud) = (u(), Vec2::new(u(), u()), Vec2::new(u(), u()));
+            let Some(e) = light.sample_emission(us, up, ud, &lambda, bounds) else {
+                continue;
+            };
+            sum += f64::from(e.weight.0.x);
+            match light {
+                Light::Spot { frame, .. } => {
+                    assert!(frame.n.dot(e.ray.dir) >= cutoff.cos() - 1e-5)
+                }
+                Light::Area(_) => assert!(e.ray.dir.dot(par_n) > 0.0),
+                Light::Directional { .. } => {
+                    assert!((e.ray.dir + to_light).length() < 1e-5);
+                }
+                _ => {}
+            }
+            if light.is_infinite() || matches!(light, Light::Directional { .. }) {
+                // On the disk: distance R from the centre along the direction, within R of
+                // the axis.
+                let rel = e.ray.origin - bounds.0;
+                let along = rel.dot(-e.ray.dir);
+                assert!((along - bounds.1).abs() < 1e-4, "{along}");
+                assert!((rel - along * -e.ray.dir).length() <= bounds.1 * 1.0001);
+            }
+        }
+        let mean = sum / f64::from(n);
+        assert!(
+            (mean / f64::from(*power) - 1.0).abs() < 1e-3,
+            "{light:?}: {mean} vs {power}"
+        );
+    }
+}
