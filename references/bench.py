@@ -62,6 +62,10 @@ SUITE = [
     ("mesh-5m", "generated:mesh-5m.xml", 128, {}, "5M-triangle serialized mesh, sphere light, box"),
     ("instances", "generated:instances.xml", 16, {}, "1,000 instances of 100k-triangle groups"),
     ("many-lights", "generated:many-lights.xml", 256, {}, "144 sphere lights"),
+    ("ptracer-sphere", "scenes/caustic-sphere-light.xml", 256, {},
+     "ptracer: light paths through a glass ball, small sphere light, gaussian"),
+    ("ptracer-point", "scenes/caustic-point-light.xml", 256, {},
+     "ptracer: a point light's caustic through a glass ball, gaussian"),
 ]
 
 SEEDS = (1, 2)

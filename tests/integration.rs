@@ -38,6 +38,7 @@ mod resume;
 mod samplers;
 mod scene_docs;
 mod spectral_textures;
+mod sppm;
 mod surface_textures;
 mod texture_closed_form;
 

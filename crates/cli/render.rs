@@ -102,7 +102,8 @@ pub(crate) struct RenderArgs {
     /// diffuse patch radiosities and displays them (see the radiosity options below);
     /// `direct` shades the first hit with light and BSDF samples (Mitsuba's, one of each); `volpath` adds absorbing media;
     /// `ptracer` traces light paths from the lights and splats each vertex the camera sees
-    /// (`--spp` light paths per pixel).
+    /// (`--spp` light paths per pixel); `sppm` is stochastic progressive photon mapping (`--spp`
+    /// iterations).
     #[arg(long, value_enum)]
     integrator: Option<IntegratorArg>,
     #[command(flatten)]
@@ -153,6 +154,7 @@ enum IntegratorArg {
     Volpath,
     Direct,
     Ptracer,
+    Sppm,
     Radiosity,
 }
 
@@ -197,6 +199,11 @@ impl RenderArgs {
                 },
                 IntegratorArg::Ptracer => IntegratorKind::PTracer {
                     samples_per_pass: None,
+                },
+                IntegratorArg::Sppm => IntegratorKind::Sppm {
+                    photons_per_iteration: None,
+                    initial_radius: None,
+                    alpha: 2.0 / 3.0,
                 },
                 IntegratorArg::Radiosity => IntegratorKind::Radiosity,
             }),

@@ -7,6 +7,7 @@
 //! | [`Integrator::Path`] | `path`, `volpath` | unidirectional path tracing, NEE + MIS ([`path`]); `volpath` adds absorption by interior media |
 //! | [`Integrator::Direct`] | `direct` | direct illumination at the camera ray's hit: any numbers of light and BSDF samples, weighted by Veach's count-weighted power heuristic ([`direct`]) |
 //! | [`Integrator::PTracer`] | `ptracer` | light tracing: paths from the lights, every vertex connected to the camera and splatted ([`ptracer`]) |
+//! | [`Integrator::Sppm`] | `sppm` (pt) | stochastic progressive photon mapping with Knaus & Zwicker's radius schedule ([`sppm`]) |
 //! | [`Integrator::Radiosity`] | `radiosity` (pt) | finite-element radiosity (crate `pt-radiosity`) |
 //! | [`Integrator::Afterglow`] | (pt, `--time`) | phosphorescent afterglow: a first pass with the lights on, then the path tracer in the dark ([`afterglow`]) |
 //!
@@ -32,6 +33,7 @@ pub mod path;
 pub mod ptracer;
 pub mod render;
 mod scatter;
+pub mod sppm;
 
 pub use path::{Coverage, PathSettings, Strategy};
 pub use render::{render, render_passes, RenderSettings, RenderState};
@@ -99,6 +101,14 @@ pub enum Integrator {
         settings: PathSettings,
         /// Mitsuba's `samples_per_pass`: the sample count must be a multiple of it.
         samples_per_pass: Option<u32>,
+    },
+    /// Stochastic progressive photon mapping (pt extension, [`sppm`]): `max_depth`,
+    /// `rr_depth` and `hide_emitters` of the path settings apply.
+    Sppm {
+        /// Depth, Russian roulette, hidden emitters.
+        settings: PathSettings,
+        /// Photons, radius, alpha.
+        sppm: sppm::SppmSettings,
     },
     /// Radiosity (project extension).
     Radiosity(RadiosityParams),
@@ -245,7 +255,9 @@ impl Integrator {
         if let Some(time) = o.afterglow {
             if matches!(
                 kind,
-                IntegratorKind::Radiosity | IntegratorKind::PTracer { .. }
+                IntegratorKind::Radiosity
+                    | IntegratorKind::PTracer { .. }
+                    | IntegratorKind::Sppm { .. }
             ) {
                 return bad("--time (afterglow) is rendered by the path tracer".into());
             }
@@ -298,6 +310,25 @@ impl Integrator {
                     samples_per_pass,
                 }
             }
+            IntegratorKind::Sppm {
+                photons_per_iteration,
+                initial_radius,
+                alpha,
+            } => {
+                if o.clamp.is_some() || o.strategy.is_some() {
+                    return bad(
+                        "--clamp and --strategy apply to the path tracer, not to sppm".into(),
+                    );
+                }
+                Integrator::Sppm {
+                    settings: path(d.max_depth).settings,
+                    sppm: sppm::SppmSettings {
+                        photons: photons_per_iteration.map(u64::from),
+                        initial_radius,
+                        alpha,
+                    },
+                }
+            }
             IntegratorKind::Radiosity => {
                 if o.max_depth.is_some() || o.clamp.is_some() || o.strategy.is_some() {
                     return bad("--max-depth, --clamp and --strategy apply to the path tracer, not to radiosity".into());
@@ -314,6 +345,7 @@ impl Integrator {
             Integrator::Path(_) => "path",
             Integrator::Direct(_) => "direct",
             Integrator::PTracer { .. } => "ptracer",
+            Integrator::Sppm { .. } => "sppm",
             Integrator::Radiosity(_) => "radiosity",
             Integrator::Afterglow { .. } => "afterglow",
         }
@@ -322,7 +354,10 @@ impl Integrator {
     /// Whether the method traces camera paths: the path tracers do, and compute the alpha
     /// channel and AOVs; radiosity and the light tracer do neither.
     pub fn traces_camera_paths(&self) -> bool {
-        !matches!(self, Integrator::Radiosity(_) | Integrator::PTracer { .. })
+        !matches!(
+            self,
+            Integrator::Radiosity(_) | Integrator::PTracer { .. } | Integrator::Sppm { .. }
+        )
     }
 
     /// Renders the job. Path tracers honour `run.cancel` between passes and continue
@@ -343,6 +378,7 @@ impl Integrator {
                 settings,
                 samples_per_pass,
             } => render_ptracer(settings, *samples_per_pass, job, run),
+            Integrator::Sppm { settings, sppm } => render_sppm(settings, sppm, job, run),
             Integrator::Radiosity(params) => render_radiosity(params, job, run),
         }
     }
@@ -401,7 +437,7 @@ fn render_ptracer(
     let output = state.output();
     let secs = output.time.as_secs_f64();
     let summary = format!(
-        "ptracer: {}x{}, {} light paths per pixel in {:.2} s ({:.2} M paths/s, scene build {:.2} s)",
+        "ptracer: {}x{} at {} spp in {:.2} s ({:.2} M samples/s, a sample being one light path; scene build {:.2} s)",
         output.width,
         output.height,
         output.spp,
@@ -557,6 +593,79 @@ fn render_path(
         complete,
         build_time,
         extra_channels,
+    })
+}
+
+/// Stochastic progressive photon mapping ([`sppm::render_sppm_passes`]).
+fn render_sppm(
+    path: &PathSettings,
+    params: &sppm::SppmSettings,
+    job: &Job,
+    run: Run,
+) -> Result<Rendered, IntegratorError> {
+    if run.resume.is_some() {
+        return Err(IntegratorError::Settings(
+            "--resume applies to path and ptracer, not yet to sppm (not yet implemented)".into(),
+        ));
+    }
+    let desc = job.desc;
+    let build_start = Instant::now();
+    let scene = Scene::build_with_mode(desc, job.bvh, job.selection, job.mode)?;
+    let build_time = build_start.elapsed();
+    let settings = RenderSettings {
+        spp: job.spp,
+        seed: job.seed,
+        path: *path,
+        reconstruction: pt_scene::Reconstruction::Importance,
+        moment: false,
+        ..RenderSettings::from_desc(desc)
+    };
+    sppm::check(&scene, params).map_err(IntegratorError::Settings)?;
+    let mut state = RenderState::new(&settings);
+    let pixels = u64::from(settings.width) * u64::from(settings.height);
+    run.progress
+        .start_samples(pixels * u64::from(settings.spp), 0);
+    let complete =
+        sppm::render_sppm_passes(&scene, &settings, params, &mut state, run.cancel, &|n| {
+            run.progress.samples(n)
+        });
+    let mut output = state.output();
+    output.alpha = None;
+    let secs = output.time.as_secs_f64();
+    let photons = params.photons.unwrap_or(pixels);
+    let summary = format!(
+        "sppm: {}x{} at {} spp in {:.2} s ({:.2} M samples/s, a sample being an iteration's camera path, {} photons per iteration; scene build {:.2} s)",
+        output.width,
+        output.height,
+        output.spp,
+        secs,
+        (pixels * u64::from(output.spp)) as f64 / secs.max(1e-9) / 1e6,
+        photons,
+        build_time.as_secs_f64()
+    );
+    let mut warnings = Vec::new();
+    if output.nonfinite_samples > 0 {
+        warnings.push(format!(
+            "{} pixel estimates were NaN or infinite and were left out",
+            output.nonfinite_samples
+        ));
+    }
+    let header = vec![
+        ("integrator".to_string(), "sppm".to_string()),
+        ("max_depth".to_string(), path.max_depth.to_string()),
+        ("photons_per_iteration".to_string(), photons.to_string()),
+        ("alpha".to_string(), params.alpha.to_string()),
+    ];
+    Ok(Rendered {
+        output,
+        mode: scene.mode,
+        header,
+        summary,
+        warnings,
+        state: None,
+        complete,
+        build_time,
+        extra_channels: Vec::new(),
     })
 }
 

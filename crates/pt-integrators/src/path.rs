@@ -100,7 +100,8 @@ impl Coverage {
             pt_scene::IntegratorKind::VolPath => Coverage::VolPath,
             pt_scene::IntegratorKind::Path
             | pt_scene::IntegratorKind::Radiosity
-            | pt_scene::IntegratorKind::PTracer { .. } => Coverage::Path,
+            | pt_scene::IntegratorKind::PTracer { .. }
+            | pt_scene::IntegratorKind::Sppm { .. } => Coverage::Path,
         }
     }
 }

@@ -37,6 +37,7 @@
 //! splats with their neighbours and would understate it.
 
 use crate::path::PathSettings;
+use pt_bsdf::SurfaceBsdf;
 use pt_math::{offset_ray_origin, Frame, Ray, Vec2, Vec3};
 use pt_render::film::light::LightFilm;
 use pt_render::geometry::Interaction;
@@ -70,7 +71,7 @@ struct Splat {
 /// The shading frame of a hit: the same as the path tracer's (oriented by dp/du when the
 /// surface has a parameterisation, for anisotropic models).
 #[inline]
-fn shading_frame(hit: &Interaction) -> Frame {
+pub(crate) fn shading_frame(hit: &Interaction) -> Frame {
     if hit.dpdu == Vec3::ZERO {
         Frame::from_normal(hit.ns)
     } else {
@@ -167,13 +168,70 @@ fn trace_light_path<S: RandomSource>(
         }
     }
 
-    // A ray from a light.
+    // A ray from a light, and every surface it meets connected to the camera.
+    walk_light_path(scene, s, sampler, &lambda, |v, sampler| {
+        let u_lens = sampler.next_2d();
+        let Some(cc) = camera.connect(v.hit.p, u_lens) else {
+            return;
+        };
+        let wc = v.frame.to_local(cc.dir);
+        let ng_cam = v.hit.ng.dot(cc.dir);
+        if ng_cam * wc.z <= 0.0 {
+            return;
+        }
+        let f = v.bsdf.eval(wc, v.wl);
+        if f.is_black() {
+            return;
+        }
+        let adjoint = v.wl.z.abs() * ng_cam.abs() / v.ng_light.abs();
+        let origin = offset_ray_origin(v.hit.p, v.hit.ng * ng_cam.signum());
+        if camera_visible(scene, origin, cc.camera_point) {
+            push(cc.film, v.beta * f * (adjoint * cc.weight));
+        }
+    });
+}
+
+/// A surface a light path meets (see [`walk_light_path`]).
+pub(crate) struct LightVertex<'a> {
+    /// The hit, world space.
+    pub hit: &'a Interaction,
+    /// Its BSDF at the path's wavelengths.
+    pub bsdf: &'a SurfaceBsdf,
+    /// Its shading frame (the path tracer's).
+    pub frame: Frame,
+    /// Unit direction towards the previous vertex (the light's side), local frame.
+    pub wl: Vec3,
+    /// The same direction, world space.
+    pub w_light: Vec3,
+    /// The geometric normal's cosine with the direction towards the previous vertex.
+    pub ng_light: f32,
+    /// The path's weight arriving here: emitted power over the densities, importance
+    /// transport (see the module documentation).
+    pub beta: SampledSpectrum,
+    /// Segments from the light to here (1 at the first surface).
+    pub depth: u32,
+}
+
+/// Traces a path from a light: a light chosen by the scene's light selection, a ray from it
+/// ([`Light::sample_emission`]), then BSDF sampling from the light's side with importance
+/// transport weights (refraction's `eta^2`, the adjoint's shading normal correction), Russian
+/// roulette after `rr_depth` segments (keeping min(max(beta) eta^2, 0.95)), up to `max_depth`
+/// segments counting one more to the eye (Mitsuba's `ptracer`). `visit` sees every surface
+/// met, before the path leaves it, with the sampler for its own numbers. Vertices whose
+/// arriving or leaving direction lies on different sides of the shading and geometric
+/// normals end the path (light leaks).
+pub(crate) fn walk_light_path<S: RandomSource>(
+    scene: &Scene,
+    s: &PathSettings,
+    sampler: &mut S,
+    lambda: &SampledWavelengths,
+    mut visit: impl FnMut(&LightVertex, &mut S),
+) {
     let Some((li, pmf, u_sel)) = scene.sample_light(sampler.next_1d()) else {
         return;
     };
     let (u_pos, u_dir) = (sampler.next_2d(), sampler.next_2d());
-    let Some(emitted) =
-        scene.lights[li].sample_emission(u_sel, u_pos, u_dir, &lambda, scene.bounds)
+    let Some(emitted) = scene.lights[li].sample_emission(u_sel, u_pos, u_dir, lambda, scene.bounds)
     else {
         return;
     };
@@ -190,33 +248,27 @@ fn trace_light_path<S: RandomSource>(
         let Some(hit) = scene.intersect(&ray) else {
             return;
         };
-        let bsdf = scene.bsdf(&hit, &lambda);
+        let bsdf = scene.bsdf(&hit, lambda);
         let frame = shading_frame(&hit);
         let w_light = -ray.dir;
         let wl = frame.to_local(w_light);
         let ng_light = hit.ng.dot(w_light);
-        // Light leaks through shading normals: the arriving direction must lie on the same
-        // side of both normals.
         if ng_light * wl.z <= 0.0 {
             return;
         }
-        // Connect the vertex to the camera.
-        let u_lens = sampler.next_2d();
-        if let Some(cc) = camera.connect(hit.p, u_lens) {
-            let wc = frame.to_local(cc.dir);
-            let ng_cam = hit.ng.dot(cc.dir);
-            if ng_cam * wc.z > 0.0 {
-                let f = bsdf.eval(wc, wl);
-                if !f.is_black() {
-                    let adjoint = wl.z.abs() * ng_cam.abs() / ng_light.abs();
-                    let origin = offset_ray_origin(hit.p, hit.ng * ng_cam.signum());
-                    if camera_visible(scene, origin, cc.camera_point) {
-                        push(cc.film, beta * f * (adjoint * cc.weight));
-                    }
-                }
-            }
-        }
-        // Continue by sampling the BSDF from the light's side.
+        visit(
+            &LightVertex {
+                hit: &hit,
+                bsdf: &bsdf,
+                frame,
+                wl,
+                w_light,
+                ng_light,
+                beta,
+                depth,
+            },
+            sampler,
+        );
         let u_lobe = sampler.next_1d();
         let Some(bs) = bsdf.sample(wl, u_lobe, sampler.next_2d()) else {
             return;

@@ -18,6 +18,7 @@ impl<'e> Builder<'e> {
             "aov" => self.aov(&v)?,
             "radiosity" => radiosity_integrator(&v)?,
             "ptracer" => ptracer_integrator(&v)?,
+            "sppm" => sppm_integrator(&v)?,
             _ => return Err(plugin_error(el)),
         };
         let desc = IntegratorDesc {
@@ -78,7 +79,9 @@ impl<'e> Builder<'e> {
                 && d.aov.is_none()
                 && !matches!(
                     d.kind,
-                    IntegratorKind::Radiosity | IntegratorKind::PTracer { .. }
+                    IntegratorKind::Radiosity
+                        | IntegratorKind::PTracer { .. }
+                        | IntegratorKind::Sppm { .. }
                 )
         };
         let (name, mut inner) = self
@@ -129,7 +132,9 @@ impl<'e> Builder<'e> {
             d.aov.is_none()
                 && !matches!(
                     d.kind,
-                    IntegratorKind::Radiosity | IntegratorKind::PTracer { .. }
+                    IntegratorKind::Radiosity
+                        | IntegratorKind::PTracer { .. }
+                        | IntegratorKind::Sppm { .. }
                 )
         })?;
         let (image, base) = match inner {
@@ -171,6 +176,50 @@ pub(super) fn ptracer_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
     };
     Ok(IntegratorDesc {
         kind: IntegratorKind::PTracer { samples_per_pass },
+        ..path_integrator(v)?
+    })
+}
+
+/// `sppm` (project extension): `max_depth`, `rr_depth` and `hide_emitters` as `path`, and
+/// `photons_per_iteration` (positive), `initial_radius` (positive, scene units) and `alpha`
+/// (in (0, 1), default 2/3).
+pub(super) fn sppm_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
+    let photons_per_iteration = match v.integer("photons_per_iteration")? {
+        None => None,
+        Some(n) if n >= 1 && n <= i64::from(u32::MAX) => Some(n as u32),
+        Some(n) => {
+            return Err(v.prop_error(
+                "photons_per_iteration",
+                format!("photons_per_iteration must be positive, got {n}"),
+            ))
+        }
+    };
+    let initial_radius = match v.float("initial_radius")? {
+        None => None,
+        Some(r) if r > 0.0 && r.is_finite() => Some(r),
+        Some(r) => {
+            return Err(v.prop_error(
+                "initial_radius",
+                format!("initial_radius must be a positive distance, got {r}"),
+            ))
+        }
+    };
+    let alpha = match v.float("alpha")? {
+        None => 2.0 / 3.0,
+        Some(a) if a > 0.0 && a < 1.0 => a,
+        Some(a) => {
+            return Err(v.prop_error(
+                "alpha",
+                format!("alpha must lie strictly between 0 and 1, got {a}"),
+            ))
+        }
+    };
+    Ok(IntegratorDesc {
+        kind: IntegratorKind::Sppm {
+            photons_per_iteration,
+            initial_radius,
+            alpha,
+        },
         ..path_integrator(v)?
     })
 }

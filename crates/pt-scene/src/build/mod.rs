@@ -36,7 +36,7 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
     ("film", &["hdrfilm"], &["specfilm"]),
     ("sampler", &["independent", "stratified", "multijitter", "orthogonal", "ldsampler"], &[]),
     ("rfilter", &["box", "tent", "gaussian", "mitchell", "catmullrom", "lanczos"], &[]),
-    ("integrator", &["path", "volpath", "direct", "moment", "aov", "radiosity", "ptracer"], &[
+    ("integrator", &["path", "volpath", "direct", "moment", "aov", "radiosity", "ptracer", "sppm"], &[
         "volpathmis", "prb", "prb_basic", "prb_projective", "direct_projective",
         "depth", "stokes", "prbvolpath",
     ]),

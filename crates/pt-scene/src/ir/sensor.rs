@@ -319,7 +319,7 @@ impl SamplerKind {
 }
 
 /// Which integrator the scene asks for.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum IntegratorKind {
     /// Unidirectional path tracing with NEE and MIS (Mitsuba `path`).
     Path,
@@ -343,6 +343,16 @@ pub enum IntegratorKind {
     PTracer {
         /// Samples per pixel per pass, if given.
         samples_per_pass: Option<u32>,
+    },
+    /// Stochastic progressive photon mapping (pt extension `sppm`): one iteration per sample.
+    Sppm {
+        /// Photons per iteration (`photons_per_iteration`; default: the image's pixel count).
+        photons_per_iteration: Option<u32>,
+        /// First iteration's radius, scene units (`initial_radius`; default: 1% of the scene's
+        /// bounding sphere radius).
+        initial_radius: Option<f32>,
+        /// Knaus & Zwicker's radius reduction `alpha` in (0, 1) (default 2/3).
+        alpha: f32,
     },
 }
 
