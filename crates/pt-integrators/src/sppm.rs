@@ -75,13 +75,17 @@ impl Default for SppmSettings {
 }
 
 /// The key of the photons' random streams (above every pixel key).
-const PHOTON_STREAM: u64 = (1 << 63) | 0x50_484f_544f_4e; // "PHOTON"
+const PHOTON_STREAM: u64 = (1 << 63) | 0x5048_4f54_4f4e; // "PHOTON"
 /// The key of the iterations' wavelength streams.
-const WAVELENGTH_STREAM: u64 = (1 << 63) | 0x57_4156_45; // "WAVE"
+const WAVELENGTH_STREAM: u64 = (1 << 63) | 0x5741_5645; // "WAVE"
 /// Photons per work item (each keeps its deposits in one list).
 const CHUNK: u64 = 4096;
 /// Most segments of a camera path through specular surfaces when `max_depth` is unlimited.
 const MAX_SPECULAR_CHAIN: u32 = 64;
+
+/// One image row's camera pass: per pixel its direct light and filter weight, and the row's
+/// visible points.
+type CameraRow = (Vec<(SampledSpectrum, f32)>, Vec<VisiblePoint>);
 
 /// A camera path's stop at a surface with a non-specular lobe.
 struct VisiblePoint {
@@ -324,7 +328,7 @@ pub fn render_sppm_passes(
             ColorMode::Rgb => SampledWavelengths::sample_visible(0.5),
         };
         // 1. Camera pass, row by row.
-        let rows: Vec<(Vec<(SampledSpectrum, f32)>, Vec<VisiblePoint>)> = (0..h)
+        let rows: Vec<CameraRow> = (0..h)
             .into_par_iter()
             .map(|y| {
                 let mut points = Vec::new();
