@@ -49,8 +49,9 @@ pub struct ConvergeArgs {
     /// Direct-light strategies of pt's path tracer, comma separated: one curve each.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "mis")]
     pub strategy: Vec<ConvergeStrategy>,
-    /// Light transport methods of pt, comma separated: `path` (one curve per --strategy) and
-    /// `ptracer` (light tracing, curve `pt-ptracer`; its spp are light paths per pixel).
+    /// Light transport methods of pt, comma separated: `path` (one curve per --strategy),
+    /// `ptracer` (light tracing, curve `pt-ptracer`; its spp are light paths per pixel) and
+    /// `sppm` (photon mapping, curve `pt-sppm`; its spp are iterations).
     #[arg(long, value_enum, value_delimiter = ',', default_value = "path")]
     pub integrators: Vec<ConvergeIntegrator>,
     /// Colour modes of pt, comma separated (`rgb,spectral`): one curve per mode and strategy,
@@ -143,6 +144,8 @@ pub enum ConvergeIntegrator {
     Path,
     /// Light tracing (Mitsuba's `ptracer`).
     Ptracer,
+    /// Stochastic progressive photon mapping (spp are iterations).
+    Sppm,
 }
 
 /// Mitsuba 3 variant used by `--mitsuba`.
@@ -225,6 +228,7 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
             .map(|i| match i {
                 ConvergeIntegrator::Path => pt_lab::converge::Method::Path,
                 ConvergeIntegrator::Ptracer => pt_lab::converge::Method::PTracer,
+                ConvergeIntegrator::Sppm => pt_lab::converge::Method::Sppm,
             })
             .collect(),
         modes: args.modes.iter().map(|m| m.mode()).collect(),

@@ -88,6 +88,9 @@ pub enum Method {
     Path,
     /// Light tracing (`ptracer`): its spp are light paths per pixel.
     PTracer,
+    /// Stochastic progressive photon mapping (`sppm`, default settings): its spp are
+    /// iterations.
+    Sppm,
 }
 
 /// One render: its sample count (for radiosity: its patch count), render time and error
@@ -291,6 +294,7 @@ fn pt_curves(
         }
     }
     let light_tracer = s.integrators.contains(&Method::PTracer);
+    let photon_mapper = s.integrators.contains(&Method::Sppm);
     let mut all = Vec::new();
     for (mode, scene) in &scenes {
         // Untimed warm-up (page faults, thread start-up), as Mitsuba gets one.
@@ -330,6 +334,21 @@ fn pt_curves(
             };
             let render = |rs: &RenderSettings| pt_integrators::ptracer::render(scene, rs, &|_| {});
             let extra = ("integrator", "ptracer");
+            let points = pt_curve(
+                s, scene, settings, render, extra, &name, spp, reference, log,
+            )?;
+            all.push(Series { name, points });
+        }
+        if photon_mapper {
+            let params = pt_integrators::sppm::SppmSettings::default();
+            pt_integrators::sppm::check(scene, &params).map_err(LabError::Invalid)?;
+            let name = match mode {
+                None => "pt-sppm".to_string(),
+                Some(m) => format!("pt-{}-sppm", m.name()),
+            };
+            let render =
+                |rs: &RenderSettings| pt_integrators::sppm::render(scene, rs, &params, &|_| {});
+            let extra = ("integrator", "sppm");
             let points = pt_curve(
                 s, scene, settings, render, extra, &name, spp, reference, log,
             )?;
