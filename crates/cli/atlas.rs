@@ -6,7 +6,7 @@
 //!          [--only veach,caustic,radiosity] [--threads T] [--quiet]
 //! ```
 //!
-//! Writes `report.md` and `atlas-{veach,caustic,radiosity}.svg/.png` to DIR. Without the
+//! Writes `report.md` and `atlas-{veach,caustic,radiosity,transport}.svg/.png` to DIR. Without the
 //! Mitsuba references a long pt MIS render stands in, and the report says so.
 
 use anyhow::{bail, Result};
@@ -33,6 +33,8 @@ pub enum Which {
     Caustic,
     /// Radiosity on glossy strips.
     Radiosity,
+    /// A caustic behind glass: path tracing, light tracing (ptracer), photon mapping (sppm).
+    Transport,
 }
 
 /// Options of `pt atlas`.
@@ -42,19 +44,22 @@ pub struct AtlasArgs {
     #[arg(long, default_value = "atlas-report")]
     out: PathBuf,
     /// Folder of the Mitsuba references of scenes/atlas/ (NAME.exr and NAME_var.exr). A missing
-    /// one is replaced by a long pt MIS render, and the report says so.
+    /// one is replaced by a long pt MIS render, and the report says so. The transport study
+    /// reads the scene suite's `ptracer` references from here or the folder above (required:
+    /// a path-traced stand-in would lack the caustic).
     #[arg(long, default_value = "references/atlas")]
     references: PathBuf,
     /// What the methods get the same of: wall time (MIS's time at --spp) or samples per pixel.
     #[arg(long, value_enum, default_value_t = Equal::Time)]
     equal: Equal,
     /// Samples per pixel of MIS (equal time: the others get its wall time), and of the path
-    /// tracer in the radiosity study with --equal spp [default: 64 for veach and radiosity,
-    /// 1024 for caustic, where fewer samples find no caustic at all under the smallest light].
+    /// tracer in the radiosity study with --equal spp; in the transport study, of the path
+    /// tracer [default: 64 for veach and radiosity, 1024 for caustic, where fewer samples find
+    /// no caustic at all under the smallest light, 256 for transport].
     #[arg(long)]
     spp: Option<u32>,
     /// Studies to run, comma separated.
-    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Which::Veach, Which::Caustic, Which::Radiosity])]
+    #[arg(long, value_enum, value_delimiter = ',', default_values_t = [Which::Veach, Which::Caustic, Which::Radiosity, Which::Transport])]
     only: Vec<Which>,
     /// Worker threads [default: all cores].
     #[arg(long)]
@@ -79,6 +84,7 @@ impl Which {
             Which::Veach => pt_lab::atlas::Which::Veach,
             Which::Caustic => pt_lab::atlas::Which::Caustic,
             Which::Radiosity => pt_lab::atlas::Which::Radiosity,
+            Which::Transport => pt_lab::atlas::Which::Transport,
         }
     }
 }

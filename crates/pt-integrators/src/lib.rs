@@ -616,12 +616,10 @@ fn render_sppm(
         spp: job.spp,
         seed: job.seed,
         path: *path,
-        reconstruction: pt_scene::Reconstruction::Importance,
-        moment: false,
         ..RenderSettings::from_desc(desc)
     };
     sppm::check(&scene, params).map_err(IntegratorError::Settings)?;
-    let mut state = RenderState::new(&settings);
+    let mut state = sppm::new_state(&settings);
     let pixels = u64::from(settings.width) * u64::from(settings.height);
     run.progress
         .start_samples(pixels * u64::from(settings.spp), 0);

@@ -427,6 +427,16 @@ pub fn check(scene: &Scene, sppm: &SppmSettings) -> Result<(), String> {
     Ok(())
 }
 
+/// An empty state for SPPM with `settings`: per-pixel statistics of the iterations' estimates
+/// (no splatting film: each camera path's film position is drawn from the filter).
+pub fn new_state(settings: &crate::RenderSettings) -> crate::RenderState {
+    crate::RenderState::new(&crate::RenderSettings {
+        reconstruction: pt_scene::Reconstruction::Importance,
+        moment: false,
+        ..settings.clone()
+    })
+}
+
 /// Renders the image by SPPM (`settings.spp` iterations) into a new state's statistics.
 pub fn render(
     scene: &Scene,
@@ -434,11 +444,7 @@ pub fn render(
     sppm: &SppmSettings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> RenderOutput {
-    let mut state = crate::RenderState::new(&crate::RenderSettings {
-        reconstruction: pt_scene::Reconstruction::Importance,
-        moment: false,
-        ..settings.clone()
-    });
+    let mut state = new_state(settings);
     render_sppm_passes(
         scene,
         settings,

@@ -1,6 +1,6 @@
 //! The method failure atlas (`pt atlas`): where each rendering method fails, by numbers.
 //!
-//! Three studies, each a scene (or family of scenes) written for this project under
+//! Four studies, each a scene (or family of scenes) written for this project under
 //! `scenes/atlas/` (embedded in `studies.rs`), rendered by competing methods and compared region by region
 //! with a Mitsuba 3 reference (`references/atlas/NAME.exr` and `NAME_var.exr`, made by
 //! `references/make_references.py scenes/atlas/NAME.xml`). When a reference file is missing, a
@@ -16,6 +16,11 @@
 //!    diffuse strip and five GGX strips of alpha 0.5 to 0.01, each with albedo 0.5 at the camera's
 //!    view; `pt-radiosity` (which substitutes grey diffuse 0.5 for every non-diffuse material)
 //!    against path tracing.
+//! 4. **Transport** (`scenes/caustic-sphere-light.xml`, `scenes/caustic-point-light.xml`): a
+//!    glass ball in the Cornell box focuses a small sphere light or a point light onto the red
+//!    wall; path tracing (MIS), light tracing (`ptracer`) and photon mapping (`sppm`), against
+//!    Mitsuba's `ptracer` references, in the caustic and on the walls (the ball itself, which a
+//!    light tracer cannot show, is left out).
 //!
 //! **Budget.** By default the methods get **equal time**: MIS renders `--spp` samples per pixel
 //! and its wall time `T` is the budget of the other strategies, which render in steps (1 spp,
@@ -40,7 +45,7 @@ mod studies;
 #[cfg(test)]
 mod tests;
 
-pub use studies::{caustic, radiosity, veach, CAUSTIC};
+pub use studies::{caustic, radiosity, transport, veach, CAUSTIC, TRANSPORT};
 
 use crate::{LabError, Result};
 use pt_image::fireflies::luminance;
@@ -73,6 +78,8 @@ pub enum Which {
     Caustic,
     /// Radiosity on glossy strips.
     Radiosity,
+    /// A caustic behind glass: path tracing, light tracing and photon mapping.
+    Transport,
 }
 
 impl Which {
@@ -81,6 +88,7 @@ impl Which {
     pub fn default_spp(self) -> u32 {
         match self {
             Which::Caustic => 1024,
+            Which::Transport => 256,
             Which::Veach | Which::Radiosity => 64,
         }
     }
@@ -108,6 +116,7 @@ pub fn study(which: Which, s: &AtlasSettings) -> Result<Study> {
         Which::Veach => veach(s),
         Which::Caustic => caustic(s, &[0, 1, 2, 3, 4]),
         Which::Radiosity => radiosity(s),
+        Which::Transport => transport(s),
     }
 }
 
@@ -142,35 +151,35 @@ pub enum Budget {
 /// the rest (at most 4x the samples so far, so one slow estimate cannot overshoot far), until
 /// not one more sample fits. The image is that of a plain render at the final sample count.
 pub fn render_within(scene: &Scene, settings: &RenderSettings, budget: Budget) -> RenderOutput {
-    let cancel = AtomicBool::new(false);
-    let mut state = RenderState::new(settings);
+    render_steps(
+        settings,
+        budget,
+        RenderState::new(settings),
+        |rs: &RenderSettings, state: &mut RenderState| {
+            pt_integrators::render_passes(scene, rs, state, &AtomicBool::new(false), &|_| {});
+        },
+    )
+}
+
+/// [`render_within`] for any method whose renders continue a [`RenderState`]: `advance` takes
+/// `state` to `settings.spp` samples (light paths per pixel, iterations).
+pub fn render_steps(
+    settings: &RenderSettings,
+    budget: Budget,
+    mut state: RenderState,
+    advance: impl Fn(&RenderSettings, &mut RenderState),
+) -> RenderOutput {
+    let at = |spp: u32| RenderSettings {
+        spp,
+        ..settings.clone()
+    };
     match budget {
-        Budget::Spp(n) => {
-            pt_integrators::render_passes(
-                scene,
-                &RenderSettings {
-                    spp: n.max(1),
-                    ..settings.clone()
-                },
-                &mut state,
-                &cancel,
-                &|_| {},
-            );
-        }
+        Budget::Spp(n) => advance(&at(n.max(1)), &mut state),
         Budget::Time(t) => {
             let budget = t.as_secs_f64();
             let mut target = 1u32;
             loop {
-                pt_integrators::render_passes(
-                    scene,
-                    &RenderSettings {
-                        spp: target,
-                        ..settings.clone()
-                    },
-                    &mut state,
-                    &cancel,
-                    &|_| {},
-                );
+                advance(&at(target), &mut state);
                 let used = state.time.as_secs_f64();
                 let per_spp = used / f64::from(state.spp_done);
                 let fit = ((budget - used) / per_spp).floor();

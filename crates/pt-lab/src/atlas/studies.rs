@@ -1,11 +1,14 @@
-//! The three studies: their scenes (embedded from `scenes/atlas/`), regions and texts.
+//! The four studies: their scenes (embedded from `scenes/atlas/`), regions and texts.
 
 use super::{
-    budget_words, check, load, mean_bias, rect, reference, region_error, render_within,
-    three_strategies, with_strategy, AtlasSettings, Budget, Equal, Panel, Study, SEED, STRATEGIES,
+    budget_words, check, load, mean_bias, rect, reference, region_error, render_steps,
+    render_within, three_strategies, with_strategy, AtlasSettings, Budget, Equal, Panel, Study,
+    SEED, STRATEGIES,
 };
 use crate::{LabError, Result};
-use pt_integrators::Strategy;
+use pt_integrators::{RenderSettings, Strategy};
+use std::path::Path;
+use std::sync::atomic::AtomicBool;
 
 /// The Veach atlas scene (see the module doc).
 pub(super) const VEACH: &str = include_str!("../../../../scenes/atlas/veach-mis.xml");
@@ -364,6 +367,172 @@ pub fn radiosity(o: &AtlasSettings) -> Result<Study> {
             .map(|a| a.map_or("diffuse".to_string(), |a| a.to_string()))
             .chain(std::iter::once("walls".to_string()))
             .collect(),
+        panels,
+        ref_noise,
+        text,
+    })
+}
+
+/// The transport study's scenes (name, column label, XML): the Cornell box with a glass ball
+/// focusing a small sphere light, or a point light, onto the red wall.
+pub const TRANSPORT: [(&str, &str, &str); 2] = [
+    (
+        "caustic-sphere-light",
+        "sphere light (r 0.05)",
+        include_str!("../../../../scenes/caustic-sphere-light.xml"),
+    ),
+    (
+        "caustic-point-light",
+        "point light",
+        include_str!("../../../../scenes/caustic-point-light.xml"),
+    ),
+];
+
+/// The methods of the transport study, in panel order.
+const TRANSPORT_METHODS: [&str; 3] = ["path (MIS)", "ptracer", "sppm"];
+
+/// The regions of a `w x h` transport image, as fractions of the 128 x 128 film: the caustic
+/// (rows 80-92, columns 13-25: the spot the ball focuses on the red wall, around pixel
+/// (19, 86) in both scenes' Mitsuba references) and the walls (every other pixel but a disc of
+/// radius 16 around the ball's image at (43.8, 68.5): the ball renders black in the light
+/// tracer and in the references, which are Mitsuba's `ptracer`, so it is no region).
+fn transport_regions(w: u32, h: u32) -> [Vec<usize>; 2] {
+    let (sx, sy) = (w as f32 / 128.0, h as f32 / 128.0);
+    let caustic = rect(
+        w,
+        (
+            (80.0 * sy) as u32,
+            (93.0 * sy).ceil() as u32,
+            (13.0 * sx) as u32,
+            (26.0 * sx).ceil() as u32,
+        ),
+    );
+    let inside: std::collections::HashSet<usize> = caustic.iter().copied().collect();
+    let (cx, cy, r) = (43.8 * sx, 68.5 * sy, 16.0 * sx);
+    let walls = (0..(w * h) as usize)
+        .filter(|i| {
+            let (x, y) = ((i % w as usize) as f32 + 0.5, (i / w as usize) as f32 + 0.5);
+            !inside.contains(i) && (x - cx).powi(2) + (y - cy).powi(2) > r * r
+        })
+        .collect();
+    [caustic, walls]
+}
+
+/// The transport study (on the current rayon pool): each scene rendered by the path tracer
+/// (MIS) at `o.spp`, then by the light tracer and SPPM at its time (or spp). References:
+/// Mitsuba's `ptracer` images of the scenes (`NAME.exr` in `o.references` or, as the scene
+/// suite's references, in its parent folder).
+pub fn transport(o: &AtlasSettings) -> Result<Study> {
+    check(o)?;
+    let mut panels: Vec<Panel> = TRANSPORT_METHODS
+        .iter()
+        .map(|n| Panel {
+            name: n.to_string(),
+            cells: vec![Vec::new(), Vec::new()],
+            spp: Vec::new(),
+            secs: Vec::new(),
+        })
+        .collect();
+    let mut ref_noise = vec![Vec::new(), Vec::new()];
+    let mut sources = Vec::new();
+    let mut size = (0, 0);
+    for (name, _, xml) in TRANSPORT {
+        let (scene, base, _) = load(xml, name, o.shrink)?;
+        size = (base.width, base.height);
+        let folder = if o.references.join(format!("{name}.exr")).is_file() {
+            o.references.clone()
+        } else {
+            o.references
+                .parent()
+                .map_or_else(|| o.references.clone(), Path::to_path_buf)
+        };
+        let reference = reference(&folder, name, &scene, &base, o.fallback_spp)?;
+        if !reference.source.starts_with("Mitsuba") {
+            return Err(LabError::Invalid(format!(
+                "transport: no Mitsuba ptracer reference {name}.exr in {} or its parent (a path-traced stand-in would lack the caustic)",
+                o.references.display()
+            )));
+        }
+        sources.push(reference.source.clone());
+        let regions = transport_regions(base.width, base.height);
+        let settings = RenderSettings {
+            seed: SEED,
+            ..base.clone()
+        };
+        pt_integrators::ptracer::check(&scene, &settings).map_err(LabError::Invalid)?;
+        let photons = pt_integrators::sppm::SppmSettings::default();
+        pt_integrators::sppm::check(&scene, &photons).map_err(LabError::Invalid)?;
+        let path = render_within(
+            &scene,
+            &with_strategy(&base, Strategy::Mis),
+            Budget::Spp(o.spp),
+        );
+        let budget = match o.equal {
+            Equal::Time => Budget::Time(path.time),
+            Equal::Spp => Budget::Spp(o.spp),
+        };
+        let never = AtomicBool::new(false);
+        let light = render_steps(
+            &settings,
+            budget,
+            pt_integrators::RenderState::for_light_paths(&settings),
+            |rs, state| {
+                pt_integrators::ptracer::render_light_passes(&scene, rs, state, &never, &|_| {});
+            },
+        );
+        let sppm = render_steps(
+            &settings,
+            budget,
+            pt_integrators::sppm::new_state(&settings),
+            |rs, state| {
+                pt_integrators::sppm::render_sppm_passes(
+                    &scene,
+                    rs,
+                    &photons,
+                    state,
+                    &never,
+                    &|_| {},
+                );
+            },
+        );
+        for (k, (panel, out)) in panels.iter_mut().zip([&path, &light, &sppm]).enumerate() {
+            for (g, pixels) in regions.iter().enumerate() {
+                let (e, n) = region_error(&out.mean, &reference, pixels);
+                panel.cells[g].push(e);
+                if k == 0 {
+                    ref_noise[g].push(n);
+                }
+            }
+            panel.spp.push(out.spp);
+            panel.secs.push(out.time.as_secs_f64());
+        }
+    }
+    let text = format!(
+        "Scenes `scenes/caustic-sphere-light.xml` and `scenes/caustic-point-light.xml` (issue 21's caustic): a glass \
+         ball (ior 1.5) in the Cornell box focuses a light onto the red wall, {}x{} pixels, max_depth 8; the sphere \
+         light (radius 0.05) and the point light (columns) have equal power. Regions: the caustic spot on the red \
+         wall, and the walls (every other pixel but the ball's disc: the references are Mitsuba's particle tracer, \
+         which cannot show the ball). Budget: {}; the light tracer's spp are light paths per pixel, SPPM's are \
+         iterations (one camera path per pixel and as many photons). References: {}. The caustic is light that \
+         reaches the wall only through the glass. A path from the camera finds it only when a cosine-sampled \
+         direction from the wall passes through the ball onto the light: rarely under the small sphere, never under \
+         the point light (a delta light behind a delta surface), where the path tracer's image lacks the focused \
+         light at any budget (its caustic error is then the focused light's share of the region). A \
+         light path finds it by tracing from the light through the ball and connecting the wall to the camera; \
+         SPPM's photons find it the same way and are gathered at the wall's visible points (biased: blurred over \
+         the shrinking radius).",
+        size.0,
+        size.1,
+        budget_words(o).replace("MIS renders", "path tracing (MIS) renders").replace("the other strategies", "ptracer and sppm"),
+        sources.join("; ")
+    );
+    Ok(Study {
+        key: "transport",
+        title: "A caustic behind glass: path tracing, light tracing and photon mapping".into(),
+        row_label: "region".into(),
+        col_label: "light".into(),
+        rows: vec!["caustic".into(), "walls".into()],
+        cols: TRANSPORT.iter().map(|t| t.1.to_string()).collect(),
         panels,
         ref_noise,
         text,
