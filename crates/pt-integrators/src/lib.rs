@@ -410,7 +410,7 @@ fn render_ptracer(
         path: *path,
         ..RenderSettings::from_desc(desc)
     };
-    ptracer::check(&scene, &settings).map_err(IntegratorError::Settings)?;
+    ptracer::check(&settings).map_err(IntegratorError::Settings)?;
     let mut state = match run.resume {
         Some(s) if s.light.is_some() => s,
         Some(_) => {

@@ -19,6 +19,12 @@
 //!    transport (Veach 1997, sec. 5.2; pbrt-v4's `TransportMode::Importance`). Vertices and
 //!    directions where the shading and geometric normals disagree are dropped (light leaks).
 //!
+//! Fluorescent surfaces (a pt extension) scatter light paths by the adjoint of the camera
+//! paths' rule (`pt_render::fluorescence`): light arriving at `li` is reflected at `li` or
+//! re-emitted at a longer wavelength drawn from the emission spectrum over wavelength, with
+//! the weight `r(li) + Q a(li) li int_{li} e(l) / l dl`; the film then weighs each lane at the
+//! wavelength it reaches the camera with the density it was drawn with at the light.
+//!
 //! Depth follows Mitsuba: `max_depth` counts segments including the one to the camera
 //! (1: emitters seen directly, 2: direct illumination); Russian roulette after `rr_depth`
 //! segments keeps a path with probability min(max(beta) eta^2, 0.95).
@@ -37,7 +43,7 @@
 //! splats with their neighbours and would understate it.
 
 use crate::path::PathSettings;
-use pt_bsdf::SurfaceBsdf;
+use pt_bsdf::{Bsdf, Lambert, SurfaceBsdf};
 use pt_math::{offset_ray_origin, Frame, Ray, Vec2, Vec3};
 use pt_render::film::light::LightFilm;
 use pt_render::geometry::Interaction;
@@ -121,11 +127,12 @@ fn trace_light_path<S: RandomSource>(
         ColorMode::Spectral => SampledSpectrum::splat(1.0),
         ColorMode::Rgb => SampledSpectrum::from_rgb([1.0; 3]),
     };
-    let mut push = |film: Vec2, c: SampledSpectrum| {
+    // A contribution at the wavelengths `at` (the path's, moved by fluorescence).
+    let mut push = |film: Vec2, c: SampledSpectrum, at: &SampledWavelengths| {
         if !c.is_black() {
             out.push(Splat {
                 film,
-                rgb: to_rgb(scene, c, &lambda),
+                rgb: to_rgb(scene, c, at),
             });
         }
     };
@@ -142,7 +149,11 @@ fn trace_light_path<S: RandomSource>(
                         && !le.is_black()
                         && camera_visible(scene, offset_ray_origin(pt.p, pt.n), cc.camera_point)
                     {
-                        push(cc.film, le * (cos * cc.weight / (pt.pdf_area * pmf)));
+                        push(
+                            cc.film,
+                            le * (cos * cc.weight / (pt.pdf_area * pmf)),
+                            &lambda,
+                        );
                     }
                 }
             }
@@ -163,7 +174,7 @@ fn trace_light_path<S: RandomSource>(
             );
             if scene.intersect(&ray).is_none() {
                 let le = crate::path::escaped_radiance(scene, ray.dir, &lambda, one, |_| 1.0);
-                push(film, le * inv_scale);
+                push(film, le * inv_scale, &lambda);
             }
         }
     }
@@ -186,7 +197,7 @@ fn trace_light_path<S: RandomSource>(
         let adjoint = v.wl.z.abs() * ng_cam.abs() / v.ng_light.abs();
         let origin = offset_ray_origin(v.hit.p, v.hit.ng * ng_cam.signum());
         if camera_visible(scene, origin, cc.camera_point) {
-            push(cc.film, v.beta * f * (adjoint * cc.weight));
+            push(cc.film, v.beta * f * (adjoint * cc.weight), &v.lambda);
         }
     });
 }
@@ -208,6 +219,9 @@ pub(crate) struct LightVertex<'a> {
     /// The path's weight arriving here: emitted power over the densities, importance
     /// transport (see the module documentation).
     pub beta: SampledSpectrum,
+    /// The wavelengths the light leaves this vertex at (a fluorescent surface moves lanes to
+    /// longer ones; the pdfs stay those of the light's sampling).
+    pub lambda: SampledWavelengths,
     /// Segments from the light to here (1 at the first surface).
     pub depth: u32,
 }
@@ -237,6 +251,7 @@ pub(crate) fn walk_light_path<S: RandomSource>(
     };
     let mut beta = emitted.weight * (1.0 / pmf);
     let mut ray = emitted.ray;
+    let mut lambda = *lambda;
     let mut eta = 1.0f32;
     let max_depth = if s.max_depth < 0 {
         u32::MAX
@@ -248,13 +263,20 @@ pub(crate) fn walk_light_path<S: RandomSource>(
         let Some(hit) = scene.intersect(&ray) else {
             return;
         };
-        let bsdf = scene.bsdf(&hit, lambda);
+        let mut bsdf = scene.bsdf(&hit, &lambda);
         let frame = shading_frame(&hit);
         let w_light = -ray.dir;
         let wl = frame.to_local(w_light);
         let ng_light = hit.ng.dot(w_light);
         if ng_light * wl.z <= 0.0 {
             return;
+        }
+        // A fluorescent surface: the Lambertian of the adjoint albedo at the arriving
+        // wavelengths, and the lanes move to the wavelengths they leave at (before the vertex
+        // is seen: what leaves it, towards the camera too, is at those).
+        if let Some(f) = scene.material(hit.shape).fluorescent() {
+            bsdf.bsdf = Bsdf::Lambert(Lambert::new(f.adjoint_albedo(&lambda)));
+            lambda = f.scatter_adjoint(&lambda, sampler.next_1d());
         }
         visit(
             &LightVertex {
@@ -265,6 +287,7 @@ pub(crate) fn walk_light_path<S: RandomSource>(
                 w_light,
                 ng_light,
                 beta,
+                lambda,
                 depth,
             },
             sampler,
@@ -390,16 +413,10 @@ fn light_pass(
     }
 }
 
-/// Whether the light tracer can render `scene` with `settings`; the reason when it cannot.
-pub fn check(scene: &Scene, settings: &crate::RenderSettings) -> Result<(), String> {
+/// Whether the light tracer can render with `settings`; the reason when it cannot.
+pub fn check(settings: &crate::RenderSettings) -> Result<(), String> {
     if !LightFilm::supports(&settings.filter.desc) {
         return Err("ptracer: the reconstruction filter is wider than 15 pixels".into());
-    }
-    if scene.materials.iter().any(|m| m.fluorescent().is_some()) {
-        return Err(
-            "ptracer does not yet trace fluorescence on light paths (not yet implemented); render fluorescent scenes with path"
-                .into(),
-        );
     }
     Ok(())
 }

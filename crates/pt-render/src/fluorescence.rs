@@ -82,6 +82,10 @@ pub struct Fluorescent {
     /// `cdf[j]` = int_{360}^{360 + j} a(l) l dl with a(l) l constant on each 1 nm bin (its value
     /// at the bin centre); `BINS + 1` entries, nm^2.
     cdf: Vec<f64>,
+    /// `emission_cdf[j]` = int_{360}^{360 + j} e(l) / l dl with e(l) / l constant on each 1 nm
+    /// bin (its value at the bin centre); `BINS + 1` entries, 1/nm. For light paths (the
+    /// adjoint, see [`Fluorescent::scatter_adjoint`]).
+    emission_cdf: Vec<f64>,
 }
 
 impl Fluorescent {
@@ -121,12 +125,21 @@ impl Fluorescent {
             acc += absorption.eval(c as f32) as f64 * c;
             cdf.push(acc);
         }
+        let mut emission_cdf = Vec::with_capacity(BINS + 1);
+        let mut acc = 0.0f64;
+        emission_cdf.push(0.0);
+        for j in 0..BINS {
+            let c = LAMBDA_MIN as f64 + j as f64 + 0.5;
+            acc += emission.eval(c as f32) as f64 / c;
+            emission_cdf.push(acc);
+        }
         Ok(Fluorescent {
             reflectance,
             absorption: absorption.clone(),
             emission,
             quantum_yield,
             cdf,
+            emission_cdf,
         })
     }
 
@@ -214,6 +227,96 @@ impl Fluorescent {
             let v = ((uk - p_elastic) / (1.0 - p_elastic)).min(1.0 - f32::EPSILON);
             if let Some((li, _)) = self.sample_excitation(*lo, v) {
                 *lo = li;
+            }
+        }
+        lambda.with_lambda(out.into())
+    }
+}
+
+impl Fluorescent {
+    /// `int_{360}^{l} e(x) / x dx` of the tabulated model, 1/nm.
+    #[inline]
+    fn emission_cumulative(&self, l: f32) -> f64 {
+        let x = (l - LAMBDA_MIN).clamp(0.0, BINS as f32) as f64;
+        let j = (x as usize).min(BINS - 1);
+        self.emission_cdf[j] + (self.emission_cdf[j + 1] - self.emission_cdf[j]) * (x - j as f64)
+    }
+
+    /// Elastic and fluorescent albedo `(r(li), G(li))` of light arriving at `li` (nm), the
+    /// adjoint of [`Fluorescent::albedos`]: the power re-emitted at all longer wavelengths per
+    /// unit arriving, `G(li) = int_{lo > li} P(li -> lo) dlo = Q a(li) li int_{li}^{830} e(l) /
+    /// l dl`.
+    #[inline]
+    pub fn adjoint_albedos(&self, li: f32) -> (f32, f32) {
+        let above = self.emission_cdf[BINS] - self.emission_cumulative(li);
+        let g = self.quantum_yield as f64 * self.absorption.eval(li) as f64 * li as f64 * above;
+        (self.reflectance.eval(li), g.max(0.0) as f32)
+    }
+
+    /// Total adjoint albedo `r + G` per lane at the lanes' arriving wavelengths: the
+    /// reflectance of the Lambertian BSDF a light path meets here.
+    pub fn adjoint_albedo(&self, lambda: &SampledWavelengths) -> SampledSpectrum {
+        SampledSpectrum(
+            lambda
+                .lambda()
+                .to_array()
+                .map(|l| {
+                    let (r, g) = self.adjoint_albedos(l);
+                    r + g
+                })
+                .into(),
+        )
+    }
+
+    /// A re-emitted wavelength for light absorbed at `li`, drawn with density
+    /// `(e(l) / l) / int_{li}^{830} e(x) / x dx` on (li, 830] by inverting the tabulated
+    /// cumulative; `None` if nothing above `li` is emitted.
+    pub fn sample_reemission(&self, li: f32, u: f32) -> Option<f32> {
+        let base = self.emission_cumulative(li);
+        let total = self.emission_cdf[BINS] - base;
+        if !(total > 0.0) {
+            return None;
+        }
+        let target = base + u.clamp(0.0, 1.0) as f64 * total;
+        let j = self
+            .emission_cdf
+            .partition_point(|&c| c <= target)
+            .clamp(1, BINS)
+            - 1;
+        let g = self.emission_cdf[j + 1] - self.emission_cdf[j];
+        let t = if g > 0.0 {
+            (target - self.emission_cdf[j]) / g
+        } else {
+            0.0
+        };
+        let lo = (LAMBDA_MIN as f64 + j as f64 + t.clamp(0.0, 1.0)).max(li as f64 + 1e-4);
+        Some(lo.min(LAMBDA_MAX as f64) as f32)
+    }
+
+    /// For a light path (the adjoint of [`Fluorescent::scatter`]): per lane, light arriving at
+    /// `li` is reflected elastically (wavelength kept) with probability `r / (r + G)`, or
+    /// absorbed and re-emitted at a longer wavelength drawn by
+    /// [`Fluorescent::sample_reemission`]. The throughput factor is
+    /// [`Fluorescent::adjoint_albedo`] at the wavelengths before the call, whatever is chosen:
+    /// the estimate `(r + G)(li)` of the re-emitted light at the chosen wavelength has the
+    /// expectation of `r(li)` at `li` plus `int P(li -> lo)` spread over `lo`. Lane k uses
+    /// `u + k / 4` (mod 1). The pdfs of the wavelengths are kept (the film weighs each lane by
+    /// how its light was sampled, at the light).
+    pub fn scatter_adjoint(&self, lambda: &SampledWavelengths, u: f32) -> SampledWavelengths {
+        let mut out = lambda.lambda().to_array();
+        for (k, l) in out.iter_mut().enumerate() {
+            let (r, g) = self.adjoint_albedos(*l);
+            if !(g > 0.0) {
+                continue;
+            }
+            let uk = (u + k as f32 * 0.25).fract();
+            let p_elastic = r / (r + g);
+            if uk < p_elastic {
+                continue;
+            }
+            let v = ((uk - p_elastic) / (1.0 - p_elastic)).min(1.0 - f32::EPSILON);
+            if let Some(lo) = self.sample_reemission(*l, v) {
+                *l = lo;
             }
         }
         lambda.with_lambda(out.into())

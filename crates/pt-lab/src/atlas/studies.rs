@@ -459,7 +459,7 @@ pub fn transport(o: &AtlasSettings) -> Result<Study> {
             seed: SEED,
             ..base.clone()
         };
-        pt_integrators::ptracer::check(&scene, &settings).map_err(LabError::Invalid)?;
+        pt_integrators::ptracer::check(&settings).map_err(LabError::Invalid)?;
         let photons = pt_integrators::sppm::SppmSettings::default();
         pt_integrators::sppm::check(&scene, &photons).map_err(LabError::Invalid)?;
         let path = render_within(

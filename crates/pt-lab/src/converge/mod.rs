@@ -327,7 +327,7 @@ fn pt_curves(
             all.push(Series { name, points });
         }
         if light_tracer {
-            pt_integrators::ptracer::check(scene, settings).map_err(LabError::Invalid)?;
+            pt_integrators::ptracer::check(settings).map_err(LabError::Invalid)?;
             let name = match mode {
                 None => "pt-ptracer".to_string(),
                 Some(m) => format!("pt-{}-ptracer", m.name()),
