@@ -9,7 +9,7 @@ use common::*;
 
 /// relMSE against the reference of the diffuse scene at 32 and 128 iterations. With alpha 2/3
 /// both the variance of the mean and the squared bias fall as N^(-2/3) once the radius has
-/// shrunk (Knaus & Zwicker 2011, sec. 4.3), and faster before that (the schedule starts
+/// shrunk (Knaus & Zwicker 2011), and faster before that (the schedule starts
 /// slowly): measured 3.4x per 4x iterations (slope -0.88) here, -0.70 on the Cornell box at 64
 /// to 256. The test takes slopes between -0.5 and -1.1: a radius that does not shrink (bias
 /// left: slope towards 0) or a kernel normalised for the wrong radius (a bias that stays) fails
@@ -61,9 +61,11 @@ fn sppm_error_falls_at_its_radius_schedules_rate() {
     }
 }
 
-/// The image is the same for one and two threads (photon deposits are added in photon order).
+/// The image is the same for one and two threads (photon deposits are added in photon order),
+/// and a render saved after 2 iterations and resumed to 4 is the 4-iteration render, bit for
+/// bit (each iteration's radius, wavelengths and random streams follow from its index).
 #[test]
-fn sppm_is_deterministic() {
+fn sppm_is_deterministic_and_resumable() {
     let dir = scratch("sppm_threads");
     let scene = repo().join("scenes/caustic-sphere-light.xml");
     let args = |t: &'static str| -> Vec<&'static str> {
@@ -86,4 +88,20 @@ fn sppm_is_deterministic() {
         img.data.iter().map(|px| px.map(f32::to_bits)).collect()
     };
     assert!(bits(&a) == bits(&b), "thread count changed the image");
+    let state = dir.join("state.bin");
+    let state = state.to_str().unwrap();
+    let small = ["--integrator", "sppm", "--width", "40", "--height", "32"];
+    render(
+        &scene,
+        &dir,
+        "part",
+        &[&small[..], &["--spp", "2", "--save-state", state]].concat(),
+    );
+    let (resumed, _) = render(
+        &scene,
+        &dir,
+        "resumed",
+        &[&small[..], &["--spp", "4", "--resume", state]].concat(),
+    );
+    assert!(bits(&resumed) == bits(&a), "the resumed render differs");
 }

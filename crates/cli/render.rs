@@ -6,7 +6,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use pt_image::{ExrMeta, Image};
-use pt_integrators::{Integrator, Job, Overrides, Progress, RenderState, Rendered, Run, Strategy};
+use pt_integrators::{Integrator, Job, Overrides, Progress, Rendered, Run, Strategy};
 use pt_render::{BvhKind, LightSelection};
 use pt_scene::{IntegratorKind, RadiosityOptions, SceneDesc};
 use std::io::IsTerminal;
@@ -367,7 +367,8 @@ pub(crate) fn run(args: RenderArgs) -> Result<ExitCode> {
                 ..pt_integrators::RenderSettings::from_desc(&desc)
             };
             Some(
-                RenderState::from_bytes(&bytes, key, &settings)
+                integrator
+                    .read_state(&bytes, key, &settings)
                     .map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))?,
             )
         }
@@ -394,7 +395,7 @@ pub(crate) fn run(args: RenderArgs) -> Result<ExitCode> {
         pt_image::write_bytes_atomically(path, &state.to_bytes(key))?;
     } else if args.save_state.is_some() {
         bail!(
-            "--save-state applies to the path tracer, not to {}",
+            "--save-state applies to path, ptracer and sppm, not to {}",
             integrator.name()
         );
     }

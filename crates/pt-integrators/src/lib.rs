@@ -338,6 +338,29 @@ impl Integrator {
         })
     }
 
+    /// Reads a render state saved by `--save-state` for this method, scene and `settings`
+    /// (the scene's film: the state's layout follows from it and the method).
+    pub fn read_state(
+        &self,
+        bytes: &[u8],
+        scene_key: u64,
+        settings: &RenderSettings,
+    ) -> Result<RenderState, String> {
+        match self {
+            // The photon mapper keeps per-pixel statistics only (no splatting film).
+            Integrator::Sppm { .. } => RenderState::from_bytes(
+                bytes,
+                scene_key,
+                &RenderSettings {
+                    reconstruction: pt_scene::Reconstruction::Importance,
+                    moment: false,
+                    ..settings.clone()
+                },
+            ),
+            _ => RenderState::from_bytes(bytes, scene_key, settings),
+        }
+    }
+
     /// The method's name, as in `<integrator type="...">`.
     pub fn name(&self) -> &'static str {
         match self {
@@ -435,23 +458,12 @@ fn render_ptracer(
         run.progress.samples(n)
     });
     let output = state.output();
-    let secs = output.time.as_secs_f64();
-    let summary = format!(
-        "ptracer: {}x{} at {} spp in {:.2} s ({:.2} M samples/s, a sample being one light path; scene build {:.2} s)",
-        output.width,
-        output.height,
-        output.spp,
-        secs,
-        (paths_per_batch * u64::from(output.spp)) as f64 / secs.max(1e-9) / 1e6,
-        build_time.as_secs_f64()
+    let (summary, warnings) = report(
+        "ptracer",
+        "a sample being one light path; ",
+        &output,
+        build_time,
     );
-    let mut warnings = Vec::new();
-    if output.nonfinite_samples > 0 {
-        warnings.push(format!(
-            "{} light path contributions were NaN or infinite and were left out",
-            output.nonfinite_samples
-        ));
-    }
     let header = vec![
         ("integrator".to_string(), "ptracer".to_string()),
         ("max_depth".to_string(), path.max_depth.to_string()),
@@ -467,6 +479,36 @@ fn render_ptracer(
         build_time,
         extra_channels: Vec::new(),
     })
+}
+
+/// The log line every sampling method ends with (size, samples per pixel, time, rate, scene
+/// build; `what` says what a sample is where it is not a camera path) and the warning about
+/// samples left out as NaN or infinite.
+fn report(
+    name: &str,
+    what: &str,
+    output: &RenderOutput,
+    build_time: Duration,
+) -> (String, Vec<String>) {
+    let secs = output.time.as_secs_f64();
+    let samples = u64::from(output.width) * u64::from(output.height) * u64::from(output.spp);
+    let summary = format!(
+        "{name}: {}x{} at {} spp in {:.2} s ({:.2} M samples/s, {what}scene build {:.2} s)",
+        output.width,
+        output.height,
+        output.spp,
+        secs,
+        samples as f64 / secs.max(1e-9) / 1e6,
+        build_time.as_secs_f64()
+    );
+    let mut warnings = Vec::new();
+    if output.nonfinite_samples > 0 {
+        warnings.push(format!(
+            "{} samples were NaN or infinite and were left out of the image",
+            output.nonfinite_samples
+        ));
+    }
+    (summary, warnings)
 }
 
 /// The radiosity parameters: the scene's options, each overridden by the command line's.
@@ -555,23 +597,7 @@ fn render_path(
             }
         }
     }
-    let secs = output.time.as_secs_f64();
-    let summary = format!(
-        "{name}: {}x{} at {} spp in {:.2} s ({:.2} M samples/s, scene build {:.2} s)",
-        output.width,
-        output.height,
-        output.spp,
-        secs,
-        (pixels * u64::from(output.spp)) as f64 / secs.max(1e-9) / 1e6,
-        build_time.as_secs_f64()
-    );
-    let mut warnings = Vec::new();
-    if output.nonfinite_samples > 0 {
-        warnings.push(format!(
-            "{} samples were NaN or infinite and were left out of their pixels",
-            output.nonfinite_samples
-        ));
-    }
+    let (summary, warnings) = report(name, "", &output, build_time);
     let mut header = vec![
         ("integrator".to_string(), name.to_string()),
         ("max_depth".to_string(), p.settings.max_depth.to_string()),
@@ -603,11 +629,6 @@ fn render_sppm(
     job: &Job,
     run: Run,
 ) -> Result<Rendered, IntegratorError> {
-    if run.resume.is_some() {
-        return Err(IntegratorError::Settings(
-            "--resume applies to path and ptracer, not yet to sppm (not yet implemented)".into(),
-        ));
-    }
     let desc = job.desc;
     let build_start = Instant::now();
     let scene = Scene::build_with_mode(desc, job.bvh, job.selection, job.mode)?;
@@ -619,35 +640,36 @@ fn render_sppm(
         ..RenderSettings::from_desc(desc)
     };
     sppm::check(&scene, params).map_err(IntegratorError::Settings)?;
-    let mut state = sppm::new_state(&settings);
+    let mut state = match run.resume {
+        Some(s) if s.light.is_none() && s.splat.is_none() => s,
+        Some(_) => {
+            return Err(IntegratorError::Settings(
+                "the saved state is not a photon mapper's".into(),
+            ))
+        }
+        None => sppm::new_state(&settings),
+    };
+    if state.spp_done > settings.spp {
+        return Err(IntegratorError::Settings(format!(
+            "the saved render already has {} iterations, more than --spp {}",
+            state.spp_done, settings.spp
+        )));
+    }
     let pixels = u64::from(settings.width) * u64::from(settings.height);
-    run.progress
-        .start_samples(pixels * u64::from(settings.spp), 0);
+    run.progress.start_samples(
+        pixels * u64::from(settings.spp),
+        pixels * u64::from(state.spp_done),
+    );
     let complete =
         sppm::render_sppm_passes(&scene, &settings, params, &mut state, run.cancel, &|n| {
             run.progress.samples(n)
         });
     let mut output = state.output();
     output.alpha = None;
-    let secs = output.time.as_secs_f64();
     let photons = params.photons.unwrap_or(pixels);
-    let summary = format!(
-        "sppm: {}x{} at {} spp in {:.2} s ({:.2} M samples/s, a sample being an iteration's camera path, {} photons per iteration; scene build {:.2} s)",
-        output.width,
-        output.height,
-        output.spp,
-        secs,
-        (pixels * u64::from(output.spp)) as f64 / secs.max(1e-9) / 1e6,
-        photons,
-        build_time.as_secs_f64()
-    );
-    let mut warnings = Vec::new();
-    if output.nonfinite_samples > 0 {
-        warnings.push(format!(
-            "{} pixel estimates were NaN or infinite and were left out",
-            output.nonfinite_samples
-        ));
-    }
+    let what =
+        format!("a sample being an iteration's camera path, {photons} photons per iteration; ");
+    let (summary, warnings) = report("sppm", &what, &output, build_time);
     let header = vec![
         ("integrator".to_string(), "sppm".to_string()),
         ("max_depth".to_string(), path.max_depth.to_string()),
@@ -660,7 +682,7 @@ fn render_sppm(
         header,
         summary,
         warnings,
-        state: None,
+        state: Some(state),
         complete,
         build_time,
         extra_channels: Vec::new(),

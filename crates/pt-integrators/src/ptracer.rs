@@ -1,6 +1,6 @@
 //! Light tracing (Mitsuba 3.9.1's `ptracer`, the particle tracer): paths start at the lights
 //! and every vertex is connected to the camera, its contribution splatted where it lands on
-//! the film (Arvo & Kirk 1990; Veach 1997, sec. 10.2, the bidirectional strategies with one
+//! the film (Arvo & Kirk 1990; Veach 1997, ch. 10, the bidirectional strategies with one
 //! camera vertex, t = 1).
 //!
 //! Per light path, as Mitsuba's `ptracer` does:
@@ -13,7 +13,7 @@
 //!    BSDF sampling; at every surface it meets, the vertex is connected to the camera:
 //!    `beta f(w_cam, w_light) |cos_s(w_light)| |ng . w_cam| / |ng . w_light| W`, where `f` is the
 //!    BSDF the path tracer evaluates for the same path, the cosine factors are the adjoint BSDF
-//!    for shading normals (Veach 1997, eq. 5.21) and `W` the camera's weight
+//!    for shading normals (Veach 1997, sec. 5.3) and `W` the camera's weight
 //!    ([`pt_render::camera::CameraConnection::weight`]). Sampling a BSDF from the light's side
 //!    gives radiance-transport weights; refraction multiplies them by `eta^2` for importance
 //!    transport (Veach 1997, sec. 5.2; pbrt-v4's `TransportMode::Importance`). Vertices and
@@ -52,8 +52,7 @@ use pt_render::sampler::{RandomSource, Sampler};
 use pt_render::Scene;
 use pt_spectrum::{spectrum_to_srgb, ColorMode, SampledSpectrum, SampledWavelengths};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::{Duration, Instant};
+use std::sync::atomic::AtomicBool;
 
 /// The key of the light paths' random streams (in the place of a pixel's: above every pixel
 /// key, see `RenderSettings::pixel_key`).
@@ -336,23 +335,10 @@ pub fn render_light_passes(
         .crop
         .map_or([settings.width, settings.height], |c| c.film_size);
     let scale = (f64::from(fw) * f64::from(fh)) / per_batch as f64;
-    let mut pass = 1u32;
-    while state.spp_done < settings.spp {
-        if cancel.load(Ordering::Relaxed) {
-            return false;
-        }
-        let batches = state.spp_done..state.spp_done.saturating_add(pass).min(settings.spp);
-        let start = Instant::now();
-        light_pass(scene, settings, state, batches.clone(), scale, progress);
-        let took = start.elapsed();
-        state.time += took;
-        state.spp_done = batches.end;
-        if took < Duration::from_millis(250) {
-            let most = (MAX_PASS_PATHS / per_batch).max(1) as u32;
-            pass = pass.saturating_mul(2).min(most);
-        }
-    }
-    true
+    let most = (MAX_PASS_PATHS / per_batch).max(1) as u32;
+    crate::render::in_passes(state, settings.spp, cancel, 2, most, |state, batches| {
+        light_pass(scene, settings, state, batches, scale, progress)
+    })
 }
 
 /// Traces the light paths of `batches` (in parallel, in chunks), then adds their splats in

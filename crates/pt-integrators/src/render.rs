@@ -435,26 +435,52 @@ pub fn render_passes(
     cancel: &AtomicBool,
     progress: &(dyn Fn(u64) + Sync),
 ) -> bool {
-    let mut pass = 1u32;
-    while state.spp_done < settings.spp {
+    let most = if state.splat.is_some() {
+        MAX_SPLAT_PASS
+    } else {
+        u32::MAX
+    };
+    in_passes(
+        state,
+        settings.spp,
+        cancel,
+        4,
+        most,
+        |state, samples| match &mut state.splat {
+            Some(film) => splat_pass(scene, settings, &mut state.pixels, film, samples, progress),
+            None => importance_pass(scene, settings, &mut state.pixels, samples, progress),
+        },
+    )
+}
+
+/// Continues `state` up to `spp` samples per pixel in passes: `pass(state, samples)` takes
+/// the samples `samples` of every pixel; `cancel` is checked between passes (returns false
+/// when it was set, with every pixel at `state.spp_done`). Passes start at one sample per
+/// pixel and grow by `growth` while a pass takes under a quarter of a second, up to `most`,
+/// so that a cancel is honoured within about a second. The one pass schedule of every
+/// sampling method.
+pub(crate) fn in_passes(
+    state: &mut RenderState,
+    spp: u32,
+    cancel: &AtomicBool,
+    growth: u32,
+    most: u32,
+    mut pass: impl FnMut(&mut RenderState, std::ops::Range<u32>),
+) -> bool {
+    let mut size = 1u32;
+    while state.spp_done < spp {
         if cancel.load(Ordering::Relaxed) {
             return false;
         }
-        let samples = state.spp_done..state.spp_done.saturating_add(pass).min(settings.spp);
+        let samples = state.spp_done..state.spp_done.saturating_add(size).min(spp);
         let start = Instant::now();
-        let s1 = samples.end;
-        match &mut state.splat {
-            Some(film) => splat_pass(scene, settings, &mut state.pixels, film, samples, progress),
-            None => importance_pass(scene, settings, &mut state.pixels, samples, progress),
-        }
+        let end = samples.end;
+        pass(state, samples);
         let took = start.elapsed();
         state.time += took;
-        state.spp_done = s1;
+        state.spp_done = end;
         if took < Duration::from_millis(250) {
-            pass = pass.saturating_mul(4);
-            if state.splat.is_some() {
-                pass = pass.min(MAX_SPLAT_PASS);
-            }
+            size = size.saturating_mul(growth).min(most.max(1));
         }
     }
     true

@@ -1,6 +1,6 @@
 //! Stochastic progressive photon mapping (Hachisuka & Jensen 2009, "Stochastic Progressive
 //! Photon Mapping"), with the radius schedule of Knaus & Zwicker 2011 ("Progressive Photon
-//! Mapping: A Probabilistic Approach", eq. 15): a pt extension (`<integrator type="sppm">`;
+//! Mapping: A Probabilistic Approach"): a pt extension (`<integrator type="sppm">`;
 //! Mitsuba 3 has no photon mapper).
 //!
 //! Each iteration (one per sample per pixel):
@@ -18,13 +18,13 @@
 //!    same way, where `wi` is the photon's arriving direction and `beta` its weight.
 //! 3. The pixel's estimate of this iteration is its direct light plus, per visible point,
 //!    `throughput * sum / (N pi r_i^2)` (N photons): a density estimate with the constant
-//!    kernel over the disc of radius r_i (Jensen 1996, eq. 8, in its SPPM form).
+//!    kernel over the disc of radius r_i (Jensen 1996's radiance estimate, in its SPPM form).
 //!
 //! The image is the mean of the iterations' estimates. The radius shrinks as
-//! `r_{i+1}^2 = r_i^2 (i + alpha) / (i + 1)` (Knaus & Zwicker 2011, eq. 15; alpha in (0, 1),
+//! `r_{i+1}^2 = r_i^2 (i + alpha) / (i + 1)` (Knaus & Zwicker 2011's radius sequence; alpha in (0, 1),
 //! 2/3 by default), so the kernel's bias vanishes while the variance of the mean still falls:
 //! the estimate is consistent, with a mean squared error falling as N^-alpha in the number of
-//! iterations (their sec. 4.3). It is biased at any finite count: blurred by the kernel
+//! iterations (their analysis of the sequence). It is biased at any finite count: blurred by the kernel
 //! (caustics and shadows spread over r), darkened near edges and corners where the disc leaves
 //! the surface. The initial radius defaults to 1% of the scene's bounding sphere radius.
 //!
@@ -35,7 +35,9 @@
 //!
 //! Determinism: the camera pass is per pixel, photons are traced in chunks whose deposits are
 //! added in photon order, and the grid is built in visible-point order: the image is the same
-//! for any number of threads. Variance: each pixel's estimates over the iterations (not
+//! for any number of threads. An iteration's radius, wavelengths and random streams follow
+//! from its index, so the pixels' statistics are the whole state: a saved render resumes
+//! exactly. Variance: each pixel's estimates over the iterations (not
 //! identically distributed while the radius shrinks; the written variance treats them as
 //! independent samples).
 
@@ -48,8 +50,7 @@ use pt_render::sampler::Sampler;
 use pt_render::{RenderOutput, Scene};
 use pt_spectrum::{spectrum_to_srgb, ColorMode, SampledSpectrum, SampledWavelengths};
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::time::Instant;
+use std::sync::atomic::AtomicBool;
 
 /// The photon mapper's own settings.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -108,7 +109,7 @@ struct VisiblePoint {
 }
 
 /// The squared radius of iteration `i` (0-based): r_0^2 prod_{k=1}^{i} (k + alpha) / (k + 1)
-/// (Knaus & Zwicker 2011, eq. 15, counting iterations from 1).
+/// (Knaus & Zwicker 2011's sequence, counting iterations from 1).
 pub fn radius_squared(r0: f32, alpha: f32, i: u32) -> f64 {
     let mut r2 = f64::from(r0) * f64::from(r0);
     for k in 1..=i {
@@ -313,12 +314,9 @@ pub fn render_sppm_passes(
     let photons = sppm.photons.unwrap_or(pixels).max(1);
     let r0 = sppm.initial_radius.unwrap_or(0.01 * scene.bounds.1);
     let s = &settings.path;
-    while state.spp_done < settings.spp {
-        if cancel.load(Ordering::Relaxed) {
-            return false;
-        }
-        let start = Instant::now();
-        let it = state.spp_done;
+    // One iteration per pass: each builds its own grid of visible points.
+    crate::render::in_passes(state, settings.spp, cancel, 1, 1, |state, its| {
+        let it = its.start;
         let r2 = radius_squared(r0, sppm.alpha, it);
         let r = r2.sqrt() as f32;
         let lambda = match scene.mode {
@@ -399,10 +397,7 @@ pub fn render_sppm_passes(
             let rgb = to_rgb(scene, *d + *ind, &lambda).map(|c| c * weight);
             stats.add(rgb, 1.0);
         }
-        state.time += start.elapsed();
-        state.spp_done += 1;
-    }
-    true
+    })
 }
 
 /// Whether SPPM can render `scene`; the reason when it cannot.
@@ -463,7 +458,7 @@ mod tests {
     use super::*;
 
     /// Knaus & Zwicker's schedule: r_2^2 = r_1^2 (1 + alpha) / 2, and the product telescopes
-    /// towards r^2 ~ i^(alpha - 1) (their eq. 16): over i from 1000 to 8000 the squared radius
+    /// towards r^2 ~ i^(alpha - 1): over i from 1000 to 8000 the squared radius
     /// falls by 8^(alpha - 1) within 0.5%.
     #[test]
     fn radius_follows_knaus_zwicker() {

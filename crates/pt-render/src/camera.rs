@@ -226,7 +226,7 @@ pub struct CameraConnection {
 
 impl Camera {
     /// The camera's side of a connection from the scene point `p` (world space) to the
-    /// camera (pbrt-v4's `SampleWi` of its cameras; Veach 1997, sec. 10.2): `None` when `p` is
+    /// camera (pbrt-v4's `SampleWi` of its cameras; Veach 1997, ch. 10): `None` when `p` is
     /// behind the camera, outside the near/far clip range (camera-space depth, as Mitsuba's
     /// `sample_direction` tests it) or projects outside the image. `u_lens` picks the thin
     /// lens's point (unused by the other cameras). The film position is the inverse of

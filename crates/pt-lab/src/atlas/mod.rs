@@ -353,6 +353,21 @@ pub struct Panel {
     pub secs: Vec<f64>,
 }
 
+impl Panel {
+    /// Panels named `names` with `rows` empty rows each, for studies that fill them a column
+    /// (a scene) at a time.
+    fn empty<'a>(names: impl Iterator<Item = &'a str>, rows: usize) -> Vec<Panel> {
+        names
+            .map(|n| Panel {
+                name: n.to_string(),
+                cells: vec![Vec::new(); rows],
+                spp: Vec::new(),
+                secs: Vec::new(),
+            })
+            .collect()
+    }
+}
+
 /// A study: methods x regions, with the reference's own noise per region.
 #[derive(Clone, Debug)]
 pub struct Study {

@@ -185,15 +185,7 @@ pub fn caustic(o: &AtlasSettings, radii: &[usize]) -> Result<Study> {
             CAUSTIC.len()
         )));
     }
-    let mut panels: Vec<Panel> = STRATEGIES
-        .iter()
-        .map(|(n, _)| Panel {
-            name: n.to_string(),
-            cells: vec![Vec::new(), Vec::new()],
-            spp: Vec::new(),
-            secs: Vec::new(),
-        })
-        .collect();
+    let mut panels = Panel::empty(STRATEGIES.iter().map(|(n, _)| *n), 2);
     let mut ref_noise = vec![Vec::new(), Vec::new()];
     let mut sources = Vec::new();
     let mut size = (0, 0);
@@ -424,15 +416,7 @@ fn transport_regions(w: u32, h: u32) -> [Vec<usize>; 2] {
 /// suite's references, in its parent folder).
 pub fn transport(o: &AtlasSettings) -> Result<Study> {
     check(o)?;
-    let mut panels: Vec<Panel> = TRANSPORT_METHODS
-        .iter()
-        .map(|n| Panel {
-            name: n.to_string(),
-            cells: vec![Vec::new(), Vec::new()],
-            spp: Vec::new(),
-            secs: Vec::new(),
-        })
-        .collect();
+    let mut panels = Panel::empty(TRANSPORT_METHODS.iter().copied(), 2);
     let mut ref_noise = vec![Vec::new(), Vec::new()];
     let mut sources = Vec::new();
     let mut size = (0, 0);

@@ -5,7 +5,7 @@
 //! Each ray comes with its weight `Le cos / (p_pos p_dir)`: the emitted radiance times the
 //! cosine at the light over the densities of its origin (per unit area) and direction (per
 //! unit solid angle), so that the mean weight over many rays is the light's power (pbrt-v4
-//! `SampleLe`; Veach 1997, sec. 10.2). Light selection is not included. The strategies follow
+//! `SampleLe`; Veach 1997, ch. 10). Light selection is not included. The strategies follow
 //! Mitsuba 3.9.1's `sample_ray` of each emitter:
 //!
 //! | light | origin | direction | weight |
@@ -15,8 +15,7 @@
 //! | spot | the point | uniform in the cutoff cone | `2 pi (1 - cos c) I falloff T` |
 //! | projector | the point | uniform over the image on its plane z = 1 | `I(d) / p(d)` |
 //! | directional | uniform on a disk of the scene's bounding radius R, facing the light, behind the scene | the light's | `pi R^2 E` |
-//! | sun | as directional, for a direction uniform in the sun's cone | | `pi R^2 L / p(d)` |
-//! | constant, envmap | as directional, for a direction from the light's own sampling | | `pi R^2 L(d) / p(d)` |
+//! | sun, constant, envmap | as directional | the light's own sampling (uniform in the sun's cone, uniform sphere, the map's distribution) | `pi R^2 L(d) / p(d)` |
 //!
 //! Distant lights emit from a disk of radius R perpendicular to the direction, placed at
 //! distance R from the bounding sphere's centre on the light's side, so that every ray of the
@@ -139,37 +138,20 @@ impl Light {
                 let (_, _, intensity) = p.arriving(p.position + dir, lambda)?;
                 (Ray::new(p.position, dir), intensity * (1.0 / pdf))
             }
-            Light::Directional {
-                to_light,
-                irradiance,
-            } => (
-                ray_from_disk(*to_light, u_pos, bounds),
-                irradiance.at(lambda) * disk_area,
-            ),
-            Light::Sun {
-                frame,
-                irradiance,
-                to_radiance,
-                one_minus_cos,
-            } => {
-                let to_light = frame
-                    .to_world(square_to_uniform_cone(u_dir, *one_minus_cos))
-                    .normalize();
-                let le = irradiance.at(lambda) * *to_radiance;
+            // Distant lights: the direction their own light sampling draws (from any point:
+            // it does not depend on it), the origin on the disk facing it. The weight is
+            // L / p(d) times the disk's area (a directional light: E, with p = 1).
+            Light::Directional { .. }
+            | Light::Sun { .. }
+            | Light::Constant { .. }
+            | Light::EnvMap(_) => {
+                let ls = self.sample(bounds.0, u_sel, u_dir, lambda)?;
+                if !(ls.pdf > 0.0) {
+                    return None;
+                }
                 (
-                    ray_from_disk(to_light, u_pos, bounds),
-                    le * (disk_area / uniform_cone_pdf(*one_minus_cos)),
-                )
-            }
-            Light::Constant { radiance } => (
-                ray_from_disk(square_to_uniform_sphere(u_dir), u_pos, bounds),
-                radiance.at(lambda) * (disk_area / pt_math::warp::UNIFORM_SPHERE_PDF),
-            ),
-            Light::EnvMap(e) => {
-                let (to_light, le, pdf) = e.sample(u_dir, lambda)?;
-                (
-                    ray_from_disk(to_light, u_pos, bounds),
-                    le * (disk_area / pdf),
+                    ray_from_disk(ls.wi, u_pos, bounds),
+                    ls.radiance * (disk_area / ls.pdf),
                 )
             }
         };
