@@ -109,17 +109,19 @@ fn camera_visible(scene: &Scene, origin: Vec3, target: Vec3) -> bool {
 
 /// Traces one light path (steps 1 and 2 of the module documentation) and appends its splats.
 /// `inv_scale` is P_image / P_film, the inverse of the scale every splat gets (see the module
-/// documentation), for contributions sampled uniformly over the image.
+/// documentation), for contributions sampled uniformly over the image; `rgb_lambda` the
+/// (unused) wavelengths of RGB mode, made once.
 fn trace_light_path<S: RandomSource>(
     scene: &Scene,
     s: &PathSettings,
     sampler: &mut S,
     inv_scale: f32,
+    rgb_lambda: &SampledWavelengths,
     out: &mut Vec<Splat>,
 ) {
     let lambda = match scene.mode {
         ColorMode::Spectral => SampledWavelengths::sample_visible(sampler.next_1d()),
-        ColorMode::Rgb => SampledWavelengths::sample_visible(0.5),
+        ColorMode::Rgb => *rgb_lambda,
     };
     let camera = &scene.camera;
     let one = match scene.mode {
@@ -359,6 +361,7 @@ fn light_pass(
         .flat_map(|b| (0..chunks_per_batch).map(move |c| (b, c)))
         .collect();
     let s = &settings.path;
+    let rgb_lambda = SampledWavelengths::sample_visible(0.5);
     let lists: Vec<Vec<Splat>> = items
         .par_iter()
         .map(|&(b, c)| {
@@ -367,7 +370,8 @@ fn light_pass(
             let mut out = Vec::with_capacity(((end - first) * 4) as usize);
             for path in first..end {
                 let mut sampler = Sampler::new(settings.seed, LIGHT_STREAM, path);
-                trace_light_path(scene, s, &mut sampler, (1.0 / scale) as f32, &mut out);
+                let inv_scale = (1.0 / scale) as f32;
+                trace_light_path(scene, s, &mut sampler, inv_scale, &rgb_lambda, &mut out);
             }
             progress(end - first);
             out
@@ -379,8 +383,10 @@ fn light_pass(
         .expect("a light-path render keeps a light film");
     let (w, h) = (settings.width as usize, settings.height as usize);
     let mut batch = vec![[0.0f64; 3]; w * h];
+    let mut finite = Vec::new();
     for per_batch_lists in lists.chunks(chunks_per_batch as usize) {
         batch.fill([0.0; 3]);
+        finite.clear();
         for sp in per_batch_lists.iter().flatten() {
             let (x, y) = (sp.film.x as usize, sp.film.y as usize);
             let pixel = (y.min(h - 1)) * w + x.min(w - 1);
@@ -388,11 +394,13 @@ fn light_pass(
                 state.pixels[pixel].nonfinite += 1;
                 continue;
             }
-            light.splat(sp.film, sp.rgb, scale);
+            finite.push((sp.film, sp.rgb));
             for c in 0..3 {
                 batch[pixel][c] += scale * f64::from(sp.rgb[c]);
             }
         }
+        // The filtered splats in row bands on all threads (same sums as one by one).
+        light.splat_all(&finite, scale);
         for (stats, v) in state.pixels.iter_mut().zip(&batch) {
             stats.add(v.map(|c| c as f32), 0.0);
         }
