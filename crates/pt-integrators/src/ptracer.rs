@@ -86,25 +86,11 @@ pub(crate) fn shading_frame(hit: &Interaction) -> Frame {
 
 /// The colour of a contribution at the path's wavelengths: linear sRGB.
 #[inline]
-fn to_rgb(scene: &Scene, c: SampledSpectrum, lambda: &SampledWavelengths) -> [f32; 3] {
+pub(crate) fn to_rgb(scene: &Scene, c: SampledSpectrum, lambda: &SampledWavelengths) -> [f32; 3] {
     match scene.mode {
         ColorMode::Spectral => spectrum_to_srgb(c, lambda),
         ColorMode::Rgb => c.rgb(),
     }
-}
-
-/// Whether nothing blocks the segment from `origin` to the camera point `target`.
-#[inline]
-fn camera_visible(scene: &Scene, origin: Vec3, target: Vec3) -> bool {
-    let seg = target - origin;
-    let dist = seg.length();
-    dist > 0.0
-        && !scene.occluded(&Ray {
-            origin,
-            dir: seg / dist,
-            tmin: 0.0,
-            tmax: dist * pt_render::scene::SHADOW_RAY_SHORTEN,
-        })
 }
 
 /// Traces one light path (steps 1 and 2 of the module documentation) and appends its splats.
@@ -148,7 +134,7 @@ fn trace_light_path<S: RandomSource>(
                     let le = a.emitted(pt.n, cc.dir, pt.uv, &lambda);
                     if cos > 0.0
                         && !le.is_black()
-                        && camera_visible(scene, offset_ray_origin(pt.p, pt.n), cc.camera_point)
+                        && scene.segment_unoccluded(offset_ray_origin(pt.p, pt.n), cc.camera_point)
                     {
                         push(
                             cc.film,
@@ -197,7 +183,7 @@ fn trace_light_path<S: RandomSource>(
         }
         let adjoint = v.wl.z.abs() * ng_cam.abs() / v.ng_light.abs();
         let origin = offset_ray_origin(v.hit.p, v.hit.ng * ng_cam.signum());
-        if camera_visible(scene, origin, cc.camera_point) {
+        if scene.segment_unoccluded(origin, cc.camera_point) {
             push(cc.film, v.beta * f * (adjoint * cc.weight), &v.lambda);
         }
     });

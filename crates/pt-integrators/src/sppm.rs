@@ -42,13 +42,13 @@
 //! independent samples).
 
 use crate::path::PathSettings;
-use crate::ptracer::{shading_frame, walk_light_path};
+use crate::ptracer::{shading_frame, to_rgb, walk_light_path};
 use pt_bsdf::SurfaceBsdf;
 use pt_math::{offset_ray_origin, Frame, Ray, Vec3};
 use pt_render::film::sample_pixel_offset;
 use pt_render::sampler::Sampler;
 use pt_render::{RenderOutput, Scene};
-use pt_spectrum::{spectrum_to_srgb, ColorMode, SampledSpectrum, SampledWavelengths};
+use pt_spectrum::{ColorMode, SampledSpectrum, SampledWavelengths};
 use rayon::prelude::*;
 use std::sync::atomic::AtomicBool;
 
@@ -178,14 +178,6 @@ impl Grid {
     fn near(&self, p: Vec3) -> &[u32] {
         let b = self.bucket(self.cell_of(p));
         &self.entries[self.starts[b] as usize..self.starts[b + 1] as usize]
-    }
-}
-
-/// The colour of a spectrum at the iteration's wavelengths.
-fn to_rgb(scene: &Scene, c: SampledSpectrum, lambda: &SampledWavelengths) -> [f32; 3] {
-    match scene.mode {
-        ColorMode::Spectral => spectrum_to_srgb(c, lambda),
-        ColorMode::Rgb => c.rgb(),
     }
 }
 

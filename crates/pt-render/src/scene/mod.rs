@@ -423,6 +423,15 @@ impl Scene {
         } else {
             pt_math::offset_ray_origin(ls.p, ls.n * ls.n.dot(-ls.wi).signum())
         };
+        self.segment_unoccluded(origin, target)
+    }
+
+    /// Whether nothing blocks the segment from `origin` (a ray origin already offset off its
+    /// surface) to `target` (a point off any surface, or already offset): the far end stops a
+    /// relative fraction short (`SHADOW_RAY_SHORTEN`). Light samples and connections to the
+    /// camera use it.
+    #[inline]
+    pub fn segment_unoccluded(&self, origin: Vec3, target: Vec3) -> bool {
         let seg = target - origin;
         let dist = seg.length();
         dist > 0.0
