@@ -50,8 +50,10 @@ pub struct ConvergeArgs {
     #[arg(long, value_enum, value_delimiter = ',', default_value = "mis")]
     pub strategy: Vec<ConvergeStrategy>,
     /// Light transport methods of pt, comma separated: `path` (one curve per --strategy),
-    /// `ptracer` (light tracing, curve `pt-ptracer`; its spp are light paths per pixel) and
-    /// `sppm` (photon mapping, curve `pt-sppm`; its spp are iterations).
+    /// `ptracer` (light tracing, curve `pt-ptracer`; its spp are light paths per pixel),
+    /// `sppm` (photon mapping, curve `pt-sppm`; its spp are iterations), `bdpt`
+    /// (bidirectional path tracing, `pt-bdpt`) and `vcm` (vertex connection and merging,
+    /// `pt-vcm`; spp are iterations of a camera and a light subpath per pixel).
     #[arg(long, value_enum, value_delimiter = ',', default_value = "path")]
     pub integrators: Vec<ConvergeIntegrator>,
     /// Colour modes of pt, comma separated (`rgb,spectral`): one curve per mode and strategy,
@@ -146,6 +148,10 @@ pub enum ConvergeIntegrator {
     Ptracer,
     /// Stochastic progressive photon mapping (spp are iterations).
     Sppm,
+    /// Bidirectional path tracing.
+    Bdpt,
+    /// Vertex connection and merging (spp are iterations).
+    Vcm,
 }
 
 /// Mitsuba 3 variant used by `--mitsuba`.
@@ -229,6 +235,8 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
                 ConvergeIntegrator::Path => pt_lab::converge::Method::Path,
                 ConvergeIntegrator::Ptracer => pt_lab::converge::Method::PTracer,
                 ConvergeIntegrator::Sppm => pt_lab::converge::Method::Sppm,
+                ConvergeIntegrator::Bdpt => pt_lab::converge::Method::Bdpt,
+                ConvergeIntegrator::Vcm => pt_lab::converge::Method::Vcm,
             })
             .collect(),
         modes: args.modes.iter().map(|m| m.mode()).collect(),

@@ -103,7 +103,9 @@ pub(crate) struct RenderArgs {
     /// `direct` shades the first hit with light and BSDF samples (Mitsuba's, one of each); `volpath` adds absorbing media;
     /// `ptracer` traces light paths from the lights and splats each vertex the camera sees
     /// (`--spp` light paths per pixel); `sppm` is stochastic progressive photon mapping (`--spp`
-    /// iterations).
+    /// iterations); `bdpt` is bidirectional path tracing and `vcm` vertex connection and
+    /// merging (`--spp` iterations of one camera and one light subpath per pixel). Naming the
+    /// scene's own method keeps its parameters.
     #[arg(long, value_enum)]
     integrator: Option<IntegratorArg>,
     #[command(flatten)]
@@ -155,6 +157,8 @@ enum IntegratorArg {
     Direct,
     Ptracer,
     Sppm,
+    Bdpt,
+    Vcm,
     Radiosity,
 }
 
@@ -204,6 +208,11 @@ impl RenderArgs {
                     photons_per_iteration: None,
                     initial_radius: None,
                     alpha: 2.0 / 3.0,
+                },
+                IntegratorArg::Bdpt => IntegratorKind::Bdpt,
+                IntegratorArg::Vcm => IntegratorKind::Vcm {
+                    initial_radius: None,
+                    alpha: 0.75,
                 },
                 IntegratorArg::Radiosity => IntegratorKind::Radiosity,
             }),
@@ -395,7 +404,7 @@ pub(crate) fn run(args: RenderArgs) -> Result<ExitCode> {
         pt_image::write_bytes_atomically(path, &state.to_bytes(key))?;
     } else if args.save_state.is_some() {
         bail!(
-            "--save-state applies to path, ptracer and sppm, not to {}",
+            "--save-state applies to path, ptracer, sppm, bdpt and vcm, not to {}",
             integrator.name()
         );
     }

@@ -29,11 +29,13 @@
 pub mod afterglow;
 pub mod aov;
 pub mod direct;
+mod grid;
 pub mod path;
 pub mod ptracer;
 pub mod render;
 mod scatter;
 pub mod sppm;
+pub mod vcm;
 
 pub use path::{Coverage, PathSettings, Strategy};
 pub use render::{render, render_passes, RenderSettings, RenderState};
@@ -109,6 +111,14 @@ pub enum Integrator {
         settings: PathSettings,
         /// Photons, radius, alpha.
         sppm: sppm::SppmSettings,
+    },
+    /// Bidirectional path tracing or vertex connection and merging (pt extensions,
+    /// [`vcm`]): `max_depth`, `rr_depth` and `hide_emitters` of the path settings apply.
+    Vcm {
+        /// Depth, Russian roulette, hidden emitters.
+        settings: PathSettings,
+        /// Merging on or off, radius schedule.
+        vcm: vcm::VcmSettings,
     },
     /// Radiosity (project extension).
     Radiosity(RadiosityParams),
@@ -237,7 +247,11 @@ impl Integrator {
                 ));
             }
         }
-        let kind = o.kind.unwrap_or(d.kind);
+        // Naming the scene's own method keeps the scene's parameters for it.
+        let kind = match o.kind {
+            Some(k) if std::mem::discriminant(&k) != std::mem::discriminant(&d.kind) => k,
+            _ => d.kind,
+        };
         let radiosity_options = o.radiosity != RadiosityOptions::default();
         if kind != IntegratorKind::Radiosity && radiosity_options {
             return bad("radiosity options apply to --integrator radiosity only".into());
@@ -258,6 +272,8 @@ impl Integrator {
                 IntegratorKind::Radiosity
                     | IntegratorKind::PTracer { .. }
                     | IntegratorKind::Sppm { .. }
+                    | IntegratorKind::Bdpt
+                    | IntegratorKind::Vcm { .. }
             ) {
                 return bad("--time (afterglow) is rendered by the path tracer".into());
             }
@@ -329,6 +345,29 @@ impl Integrator {
                     },
                 }
             }
+            IntegratorKind::Bdpt | IntegratorKind::Vcm { .. } => {
+                let params = match kind {
+                    IntegratorKind::Vcm {
+                        initial_radius,
+                        alpha,
+                    } => vcm::VcmSettings {
+                        initial_radius,
+                        alpha,
+                        ..vcm::VcmSettings::vcm()
+                    },
+                    _ => vcm::VcmSettings::bdpt(),
+                };
+                if o.clamp.is_some() || o.strategy.is_some() {
+                    return bad(format!(
+                        "--clamp and --strategy apply to the path tracer, not to {}",
+                        params.name()
+                    ));
+                }
+                Integrator::Vcm {
+                    settings: path(d.max_depth).settings,
+                    vcm: params,
+                }
+            }
             IntegratorKind::Radiosity => {
                 if o.max_depth.is_some() || o.clamp.is_some() || o.strategy.is_some() {
                     return bad("--max-depth, --clamp and --strategy apply to the path tracer, not to radiosity".into());
@@ -369,6 +408,7 @@ impl Integrator {
             Integrator::Direct(_) => "direct",
             Integrator::PTracer { .. } => "ptracer",
             Integrator::Sppm { .. } => "sppm",
+            Integrator::Vcm { vcm, .. } => vcm.name(),
             Integrator::Radiosity(_) => "radiosity",
             Integrator::Afterglow { .. } => "afterglow",
         }
@@ -379,7 +419,10 @@ impl Integrator {
     pub fn traces_camera_paths(&self) -> bool {
         !matches!(
             self,
-            Integrator::Radiosity(_) | Integrator::PTracer { .. } | Integrator::Sppm { .. }
+            Integrator::Radiosity(_)
+                | Integrator::PTracer { .. }
+                | Integrator::Sppm { .. }
+                | Integrator::Vcm { .. }
         )
     }
 
@@ -402,6 +445,7 @@ impl Integrator {
                 samples_per_pass,
             } => render_ptracer(settings, *samples_per_pass, job, run),
             Integrator::Sppm { settings, sppm } => render_sppm(settings, sppm, job, run),
+            Integrator::Vcm { settings, vcm } => render_vcm(settings, vcm, job, run),
             Integrator::Radiosity(params) => render_radiosity(params, job, run),
         }
     }
@@ -423,32 +467,15 @@ fn render_ptracer(
             )));
         }
     }
-    let desc = job.desc;
-    let build_start = Instant::now();
-    let scene = Scene::build_with_mode(desc, job.bvh, job.selection, job.mode)?;
-    let build_time = build_start.elapsed();
-    let settings = RenderSettings {
-        spp: job.spp,
-        seed: job.seed,
-        path: *path,
-        ..RenderSettings::from_desc(desc)
-    };
-    ptracer::check(&settings).map_err(IntegratorError::Settings)?;
-    let mut state = match run.resume {
-        Some(s) if s.light.is_some() => s,
-        Some(_) => {
-            return Err(IntegratorError::Settings(
-                "the saved state is a path tracer's, not a light tracer's".into(),
-            ))
-        }
-        None => RenderState::for_light_paths(&settings),
-    };
-    if state.spp_done > settings.spp {
-        return Err(IntegratorError::Settings(format!(
-            "the saved render already has {} spp, more than --spp {}",
-            state.spp_done, settings.spp
-        )));
-    }
+    let (scene, settings, build_time, mut state) = prepare(
+        job,
+        path,
+        run.resume,
+        |s| s.light.is_some(),
+        "the saved state is a path tracer's, not a light tracer's",
+        RenderState::for_light_paths,
+        |_, settings| ptracer::check(settings),
+    )?;
     let paths_per_batch = u64::from(settings.width) * u64::from(settings.height);
     run.progress.start_samples(
         paths_per_batch * u64::from(settings.spp),
@@ -629,32 +656,15 @@ fn render_sppm(
     job: &Job,
     run: Run,
 ) -> Result<Rendered, IntegratorError> {
-    let desc = job.desc;
-    let build_start = Instant::now();
-    let scene = Scene::build_with_mode(desc, job.bvh, job.selection, job.mode)?;
-    let build_time = build_start.elapsed();
-    let settings = RenderSettings {
-        spp: job.spp,
-        seed: job.seed,
-        path: *path,
-        ..RenderSettings::from_desc(desc)
-    };
-    sppm::check(&scene, params).map_err(IntegratorError::Settings)?;
-    let mut state = match run.resume {
-        Some(s) if s.light.is_none() && s.splat.is_none() => s,
-        Some(_) => {
-            return Err(IntegratorError::Settings(
-                "the saved state is not a photon mapper's".into(),
-            ))
-        }
-        None => sppm::new_state(&settings),
-    };
-    if state.spp_done > settings.spp {
-        return Err(IntegratorError::Settings(format!(
-            "the saved render already has {} iterations, more than --spp {}",
-            state.spp_done, settings.spp
-        )));
-    }
+    let (scene, settings, build_time, mut state) = prepare(
+        job,
+        path,
+        run.resume,
+        |s| s.light.is_none() && s.splat.is_none(),
+        "the saved state is not a photon mapper's",
+        sppm::new_state,
+        |scene, _| sppm::check(scene, params),
+    )?;
     let pixels = u64::from(settings.width) * u64::from(settings.height);
     run.progress.start_samples(
         pixels * u64::from(settings.spp),
@@ -676,6 +686,99 @@ fn render_sppm(
         ("photons_per_iteration".to_string(), photons.to_string()),
         ("alpha".to_string(), params.alpha.to_string()),
     ];
+    Ok(Rendered {
+        output,
+        mode: scene.mode,
+        header,
+        summary,
+        warnings,
+        state: Some(state),
+        complete,
+        build_time,
+        extra_channels: Vec::new(),
+    })
+}
+
+/// What every sampling method does before it samples: builds the scene and the render
+/// settings (the job's spp and seed, `path`), runs the method's `check`, and takes the saved
+/// state to continue (refused with `wrong` unless `accepts` it, or holding more samples than
+/// asked for) or a `new` one.
+#[allow(clippy::type_complexity)]
+fn prepare(
+    job: &Job,
+    path: &PathSettings,
+    resume: Option<RenderState>,
+    accepts: impl Fn(&RenderState) -> bool,
+    wrong: &str,
+    new: impl Fn(&RenderSettings) -> RenderState,
+    check: impl Fn(&Scene, &RenderSettings) -> Result<(), String>,
+) -> Result<(Scene, RenderSettings, Duration, RenderState), IntegratorError> {
+    let desc = job.desc;
+    let build_start = Instant::now();
+    let scene = Scene::build_with_mode(desc, job.bvh, job.selection, job.mode)?;
+    let build_time = build_start.elapsed();
+    let settings = RenderSettings {
+        spp: job.spp,
+        seed: job.seed,
+        path: *path,
+        ..RenderSettings::from_desc(desc)
+    };
+    check(&scene, &settings).map_err(IntegratorError::Settings)?;
+    let state = match resume {
+        Some(s) if accepts(&s) => s,
+        Some(_) => return Err(IntegratorError::Settings(wrong.into())),
+        None => new(&settings),
+    };
+    if state.spp_done > settings.spp {
+        return Err(IntegratorError::Settings(format!(
+            "the saved render already has {} spp, more than --spp {}",
+            state.spp_done, settings.spp
+        )));
+    }
+    Ok((scene, settings, build_time, state))
+}
+
+/// Bidirectional path tracing and vertex connection and merging
+/// ([`vcm::render_vcm_passes`]).
+fn render_vcm(
+    path: &PathSettings,
+    params: &vcm::VcmSettings,
+    job: &Job,
+    run: Run,
+) -> Result<Rendered, IntegratorError> {
+    let name = params.name();
+    let (scene, settings, build_time, mut state) = prepare(
+        job,
+        path,
+        run.resume,
+        |s| s.light.is_some(),
+        "the saved state is not a bidirectional render's (a light film)",
+        RenderState::for_light_paths,
+        |scene, settings| vcm::check(scene, settings, params),
+    )?;
+    let pixels = u64::from(settings.width) * u64::from(settings.height);
+    run.progress.start_samples(
+        pixels * u64::from(settings.spp),
+        pixels * u64::from(state.spp_done),
+    );
+    let complete =
+        vcm::render_vcm_passes(&scene, &settings, params, &mut state, run.cancel, &|n| {
+            run.progress.samples(n)
+        });
+    let output = state.output();
+    let what = "a sample being a camera and a light subpath per pixel; ";
+    let (summary, warnings) = report(name, what, &output, build_time);
+    let mut header = vec![
+        ("integrator".to_string(), name.to_string()),
+        ("max_depth".to_string(), path.max_depth.to_string()),
+    ];
+    if params.merging {
+        header.push((
+            "initial_radius".to_string(),
+            params.radius(0, scene.bounds.1).to_string(),
+        ));
+        header.push(("alpha".to_string(), params.alpha.to_string()));
+    }
     Ok(Rendered {
         output,
         mode: scene.mode,

@@ -101,7 +101,9 @@ impl Coverage {
             pt_scene::IntegratorKind::Path
             | pt_scene::IntegratorKind::Radiosity
             | pt_scene::IntegratorKind::PTracer { .. }
-            | pt_scene::IntegratorKind::Sppm { .. } => Coverage::Path,
+            | pt_scene::IntegratorKind::Sppm { .. }
+            | pt_scene::IntegratorKind::Bdpt
+            | pt_scene::IntegratorKind::Vcm { .. } => Coverage::Path,
         }
     }
 }

@@ -68,9 +68,14 @@ const MAX_PASS_PATHS: u64 = 1 << 18;
 /// One contribution to the image: where it lands (pixels from the image's top-left corner)
 /// and its linear RGB value.
 #[derive(Clone, Copy, Debug)]
-struct Splat {
-    film: Vec2,
-    rgb: [f32; 3],
+pub(crate) struct Splat {
+    /// Film position, pixels from the image's top-left corner.
+    pub film: Vec2,
+    /// Linear RGB: a light splat's before the pass's scale, a camera sample's radiance.
+    pub rgb: [f32; 3],
+    /// Whether it is a camera sample (the bidirectional methods': averaged with the filter's
+    /// weights, see [`LightFilm`]) rather than a light splat.
+    pub camera: bool,
 }
 
 /// The shading frame of a hit: the same as the path tracer's (oriented by dp/du when the
@@ -120,6 +125,7 @@ fn trace_light_path<S: RandomSource>(
             out.push(Splat {
                 film,
                 rgb: to_rgb(scene, c, at),
+                camera: false,
             });
         }
     };
@@ -167,7 +173,7 @@ fn trace_light_path<S: RandomSource>(
     }
 
     // A ray from a light, and every surface it meets connected to the camera.
-    walk_light_path(scene, s, sampler, &lambda, |v, sampler| {
+    walk_light_path::<_, false>(scene, s, sampler, &lambda, |v, sampler| {
         let u_lens = sampler.next_2d();
         let Some(cc) = camera.connect(v.hit.p, u_lens) else {
             return;
@@ -211,6 +217,37 @@ pub(crate) struct LightVertex<'a> {
     pub lambda: SampledWavelengths,
     /// Segments from the light to here (1 at the first surface).
     pub depth: u32,
+    /// How the path arrived here (what the bidirectional methods weigh strategies with).
+    pub arrival: Arrival,
+}
+
+/// How a light path reached a vertex ([`LightVertex::arrival`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Arrival {
+    /// Straight from the light `light` (chosen with probability `pmf`) by the ray `ray`.
+    Emitted {
+        /// The light's index in the scene.
+        light: usize,
+        /// Its selection probability.
+        pmf: f32,
+        /// The ray and its densities.
+        ray: pt_render::light::EmittedRay,
+    },
+    /// Scattered at the previous vertex: the solid-angle densities of the direction taken as
+    /// sampled from the light's side (`fwd`) and of the opposite choice (`rev`: sampling the
+    /// direction back towards the light from the direction taken; computed only when the
+    /// walk is asked for it), the geometric cosine of the direction taken there, and whether
+    /// a delta lobe was sampled.
+    Scattered {
+        /// Forward density, per unit solid angle.
+        fwd: f32,
+        /// Reverse density, per unit solid angle.
+        rev: f32,
+        /// |ng . direction taken| at the previous vertex.
+        cos_out: f32,
+        /// Whether the lobe sampled was a delta lobe.
+        delta: bool,
+    },
 }
 
 /// Traces a path from a light: a light chosen by the scene's light selection, a ray from it
@@ -220,8 +257,13 @@ pub(crate) struct LightVertex<'a> {
 /// segments counting one more to the eye (Mitsuba's `ptracer`). `visit` sees every surface
 /// met, before the path leaves it, with the sampler for its own numbers. Vertices whose
 /// arriving or leaving direction lies on different sides of the shading and geometric
-/// normals end the path (light leaks).
-pub(crate) fn walk_light_path<S: RandomSource>(
+/// normals end the path (light leaks). `BIDIR`: the walk of the bidirectional methods:
+/// [`Arrival::Scattered`] carries the reverse density (one more BSDF evaluation per bounce),
+/// and Russian roulette weighs the throughput relative to the emitted ray's weight, as the
+/// camera side weighs its own (where Mitsuba's `ptracer` compares the weight itself, in the
+/// light's power units, with 1: a bright light's paths then run until the 0.95 cap stops them,
+/// each vertex connecting to every camera vertex).
+pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
     scene: &Scene,
     s: &PathSettings,
     sampler: &mut S,
@@ -237,7 +279,13 @@ pub(crate) fn walk_light_path<S: RandomSource>(
         return;
     };
     let mut beta = emitted.weight * (1.0 / pmf);
+    let rr_norm = if BIDIR { 1.0 / beta.max_value() } else { 1.0 };
     let mut ray = emitted.ray;
+    let mut arrival = Arrival::Emitted {
+        light: li,
+        pmf,
+        ray: emitted,
+    };
     let mut lambda = *lambda;
     let mut eta = 1.0f32;
     let max_depth = if s.max_depth < 0 {
@@ -276,6 +324,7 @@ pub(crate) fn walk_light_path<S: RandomSource>(
                 beta,
                 lambda,
                 depth,
+                arrival,
             },
             sampler,
         );
@@ -293,13 +342,23 @@ pub(crate) fn walk_light_path<S: RandomSource>(
         let correction = (wl.z * ng_next).abs() / (bs.wi.z * ng_light).abs();
         beta *= bs.weight * (bs.eta * bs.eta * correction);
         eta *= bs.eta;
+        arrival = Arrival::Scattered {
+            fwd: bs.pdf,
+            rev: if BIDIR && !bs.delta {
+                bsdf.pdf(bs.wi, wl)
+            } else {
+                bs.pdf
+            },
+            cos_out: ng_next.abs(),
+            delta: bs.delta,
+        };
         if beta.is_black() || !beta.is_finite() {
             return;
         }
         ray = Ray::new(offset_ray_origin(hit.p, hit.ng * ng_next.signum()), dir);
         depth += 1;
         if depth > s.rr_depth {
-            let q = (beta.max_value() * eta * eta).min(0.95);
+            let q = (beta.max_value() * rr_norm * eta * eta).min(0.95);
             if !(sampler.next_1d() < q) {
                 return;
             }
@@ -363,30 +422,54 @@ fn light_pass(
             out
         })
         .collect();
+    add_batches(state, &lists, chunks_per_batch as usize, scale);
+}
+
+/// Adds a pass's splats in list order: `lists` holds `per_batch` lists per batch of paths
+/// (one sample per pixel), each batch going to the filtered film and, without the filter,
+/// into the pixels' statistics (see the module documentation on variance). Splats are
+/// scaled by `scale`; non-finite ones are counted in the pixel they land in and dropped.
+pub(crate) fn add_batches<L: AsRef<[Splat]>>(
+    state: &mut crate::RenderState,
+    lists: &[L],
+    per_batch: usize,
+    scale: f64,
+) {
     let light = state
         .light
         .as_mut()
         .expect("a light-path render keeps a light film");
-    let (w, h) = (settings.width as usize, settings.height as usize);
+    let (w, h) = (light.width as usize, light.height as usize);
     let mut batch = vec![[0.0f64; 3]; w * h];
-    let mut finite = Vec::new();
-    for per_batch_lists in lists.chunks(chunks_per_batch as usize) {
+    let (mut finite, mut camera) = (Vec::new(), Vec::new());
+    for per_batch_lists in lists.chunks(per_batch) {
         batch.fill([0.0; 3]);
         finite.clear();
-        for sp in per_batch_lists.iter().flatten() {
+        camera.clear();
+        for sp in per_batch_lists.iter().flat_map(|l| l.as_ref()) {
             let (x, y) = (sp.film.x as usize, sp.film.y as usize);
             let pixel = (y.min(h - 1)) * w + x.min(w - 1);
             if !sp.rgb.iter().all(|c| c.is_finite()) {
                 state.pixels[pixel].nonfinite += 1;
                 continue;
             }
-            finite.push((sp.film, sp.rgb));
+            // A camera sample counts as itself in its pixel; a light splat scaled.
+            let k = if sp.camera {
+                camera.push((sp.film, sp.rgb));
+                1.0
+            } else {
+                finite.push((sp.film, sp.rgb));
+                scale
+            };
             for c in 0..3 {
-                batch[pixel][c] += scale * f64::from(sp.rgb[c]);
+                batch[pixel][c] += k * f64::from(sp.rgb[c]);
             }
         }
         // The filtered splats in row bands on all threads (same sums as one by one).
         light.splat_all(&finite, scale);
+        if !camera.is_empty() {
+            light.add_camera_samples(&camera);
+        }
         for (stats, v) in state.pixels.iter_mut().zip(&batch) {
             stats.add(v.map(|c| c as f32), 0.0);
         }

@@ -172,7 +172,7 @@ const PIXEL_BYTES: usize = 8 + 7 * 8;
 const STATE_MAGIC: &[u8; 8] = b"PTSTATE3";
 
 /// First bytes of a light tracer's state file (its film's sums follow the pixels').
-const LIGHT_STATE_MAGIC: &[u8; 8] = b"PTLIGHT1";
+const LIGHT_STATE_MAGIC: &[u8; 8] = b"PTLIGHT2";
 
 impl RenderState {
     /// An empty state for `settings` (no samples yet).
@@ -236,11 +236,7 @@ impl RenderState {
             return RenderOutput {
                 width: self.width,
                 height: self.height,
-                mean: light
-                    .sums
-                    .iter()
-                    .map(|s| s.map(|v| (v / n) as f32))
-                    .collect(),
+                mean: (0..light.sums.len()).map(|i| light.value(i, n)).collect(),
                 variance,
                 spp: self.spp_done,
                 time: self.time,
@@ -315,8 +311,10 @@ impl RenderState {
                 b.extend_from_slice(&v.to_bits().to_le_bytes());
             }
         }
-        for v in self.light.iter().flat_map(|f| f.sums.iter().flatten()) {
-            b.extend_from_slice(&v.to_bits().to_le_bytes());
+        if let Some(f) = &self.light {
+            for v in f.sums.iter().flatten().chain(f.camera.iter().flatten()) {
+                b.extend_from_slice(&v.to_bits().to_le_bytes());
+            }
         }
         b
     }
@@ -365,7 +363,9 @@ impl RenderState {
             .flat_map(|f| &f.tiles)
             .map(|t| t.sums.len())
             .sum();
-        let light_sums = light.as_ref().map_or(0, |f| f.sums.len() * 3);
+        let light_sums = light
+            .as_ref()
+            .map_or(0, |f| f.sums.len() * 3 + f.camera.len() * 4);
         let expected = header + n * PIXEL_BYTES + (splat_sums + light_sums) * 8;
         if bytes.len() != expected {
             return Err(format!(
@@ -401,10 +401,17 @@ impl RenderState {
                 o += 8;
             }
         }
-        for v in light.iter_mut().flat_map(|f| f.sums.iter_mut().flatten()) {
-            let b8 = bytes[o..o + 8].try_into().expect("8 bytes");
-            *v = f64::from_bits(u64::from_le_bytes(b8));
-            o += 8;
+        for f in light.iter_mut() {
+            for v in f
+                .sums
+                .iter_mut()
+                .flatten()
+                .chain(f.camera.iter_mut().flatten())
+            {
+                let b8 = bytes[o..o + 8].try_into().expect("8 bytes");
+                *v = f64::from_bits(u64::from_le_bytes(b8));
+                o += 8;
+            }
         }
         Ok(RenderState {
             width: w as u32,

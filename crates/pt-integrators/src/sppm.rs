@@ -41,6 +41,7 @@
 //! identically distributed while the radius shrinks; the written variance treats them as
 //! independent samples).
 
+use crate::grid::PointGrid;
 use crate::path::PathSettings;
 use crate::ptracer::{shading_frame, to_rgb, walk_light_path};
 use pt_bsdf::SurfaceBsdf;
@@ -116,69 +117,6 @@ pub fn radius_squared(r0: f32, alpha: f32, i: u32) -> f64 {
         r2 *= (f64::from(k) + f64::from(alpha)) / (f64::from(k) + 1.0);
     }
     r2
-}
-
-/// A uniform grid of cells of edge `2 r` hashed into buckets: every visible point is listed in
-/// each cell its disc's bounding box overlaps (at most 8), so a photon looks in its own cell.
-struct Grid {
-    cell: f32,
-    /// Per bucket, the range of `entries` it holds.
-    starts: Vec<u32>,
-    /// Visible point indices, bucket by bucket.
-    entries: Vec<u32>,
-}
-
-impl Grid {
-    fn bucket(&self, c: [i32; 3]) -> usize {
-        // Teschner et al. 2003's spatial hash.
-        let h = (c[0] as u32).wrapping_mul(73_856_093)
-            ^ (c[1] as u32).wrapping_mul(19_349_663)
-            ^ (c[2] as u32).wrapping_mul(83_492_791);
-        h as usize % (self.starts.len() - 1)
-    }
-
-    fn cell_of(&self, p: Vec3) -> [i32; 3] {
-        let q = p / self.cell;
-        [q.x.floor() as i32, q.y.floor() as i32, q.z.floor() as i32]
-    }
-
-    fn new(points: &[VisiblePoint], r: f32) -> Grid {
-        let buckets = (2 * points.len()).max(1);
-        let mut g = Grid {
-            cell: 2.0 * r,
-            starts: vec![0; buckets + 1],
-            entries: Vec::new(),
-        };
-        let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(points.len() * 2);
-        for (i, vp) in points.iter().enumerate() {
-            let (lo, hi) = (
-                g.cell_of(vp.p - Vec3::splat(r)),
-                g.cell_of(vp.p + Vec3::splat(r)),
-            );
-            for z in lo[2]..=hi[2] {
-                for y in lo[1]..=hi[1] {
-                    for x in lo[0]..=hi[0] {
-                        pairs.push((g.bucket([x, y, z]) as u32, i as u32));
-                    }
-                }
-            }
-        }
-        pairs.sort_unstable();
-        pairs.dedup();
-        for &(b, _) in &pairs {
-            g.starts[b as usize + 1] += 1;
-        }
-        for b in 0..buckets {
-            g.starts[b + 1] += g.starts[b];
-        }
-        g.entries = pairs.into_iter().map(|(_, i)| i).collect();
-        g
-    }
-
-    fn near(&self, p: Vec3) -> &[u32] {
-        let b = self.bucket(self.cell_of(p));
-        &self.entries[self.starts[b] as usize..self.starts[b + 1] as usize]
-    }
 }
 
 /// Step 1 for one pixel: its direct light (emission and light sampling along the camera path)
@@ -336,7 +274,7 @@ pub fn render_sppm_passes(
             points.extend(p);
         }
         // 2. Photon pass.
-        let grid = Grid::new(&points, r);
+        let grid = PointGrid::new(points.iter().map(|vp| vp.p), r);
         let chunks = photons.div_ceil(CHUNK);
         let max_depth = if s.max_depth < 0 {
             u32::MAX
@@ -352,7 +290,7 @@ pub fn render_sppm_passes(
                 for k in first..end {
                     let index = u64::from(it) * photons + k;
                     let mut sampler = Sampler::new(settings.seed, PHOTON_STREAM, index);
-                    walk_light_path(scene, s, &mut sampler, &lambda, |v, _| {
+                    walk_light_path::<_, false>(scene, s, &mut sampler, &lambda, |v, _| {
                         if v.depth < 2 {
                             return;
                         }

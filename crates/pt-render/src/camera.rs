@@ -295,6 +295,24 @@ impl Camera {
         })
     }
 
+    /// The solid-angle density of a camera ray's direction `dir` (world, unit) when its film
+    /// point is uniform over the whole film: `1 / (A cos^3 theta)`, A the film's area on the
+    /// plane z = 1 of camera space and theta the angle to the view axis (for the thin lens,
+    /// of the ray from its lens point: the lens point's own density is left out, as in
+    /// [`CameraConnection::weight`]). Orthographic cameras have a delta direction: 0. The
+    /// bidirectional methods weigh the camera's strategies with it.
+    pub fn direction_pdf(&self, dir: Vec3) -> f32 {
+        if self.kind == Kind::Orthographic {
+            return 0.0;
+        }
+        let local = self.to_camera.transform_vector3(dir);
+        let cos = local.z / local.length();
+        if !(cos > 0.0) {
+            return 0.0;
+        }
+        1.0 / (4.0 * self.tan_half.x * self.tan_half.y * cos * cos * cos)
+    }
+
     /// The camera's centre (the pinhole, the lens's centre, the orthographic film's centre),
     /// world space: where light paths aim at the camera from distant lights.
     pub fn position(&self) -> Vec3 {
@@ -536,6 +554,15 @@ mod tests {
                     (c.camera_point - ray.origin).length() < 1e-4,
                     "{projection:?}"
                 );
+                // The ray's direction density is the connection's weight without the
+                // distance falloff (both 1 / (A cos^3)).
+                if projection != Projection::Orthographic {
+                    let pdf = cam.direction_pdf(ray.dir);
+                    assert!(
+                        (pdf / (c.weight * c.dist * c.dist) - 1.0).abs() < 1e-3,
+                        "{projection:?}"
+                    );
+                }
             }
             // Behind the camera: nothing.
             let behind = to_world.transform_point3(Vec3::new(0.0, 0.0, -1.0));

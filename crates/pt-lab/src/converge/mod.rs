@@ -91,6 +91,10 @@ pub enum Method {
     /// Stochastic progressive photon mapping (`sppm`, default settings): its spp are
     /// iterations.
     Sppm,
+    /// Bidirectional path tracing (`bdpt`).
+    Bdpt,
+    /// Vertex connection and merging (`vcm`, default settings): its spp are iterations.
+    Vcm,
 }
 
 /// One render: its sample count (for radiosity: its patch count), render time and error
@@ -295,6 +299,14 @@ fn pt_curves(
     }
     let light_tracer = s.integrators.contains(&Method::PTracer);
     let photon_mapper = s.integrators.contains(&Method::Sppm);
+    let bidirectional: Vec<pt_integrators::vcm::VcmSettings> = [
+        (Method::Bdpt, pt_integrators::vcm::VcmSettings::bdpt()),
+        (Method::Vcm, pt_integrators::vcm::VcmSettings::vcm()),
+    ]
+    .into_iter()
+    .filter(|(m, _)| s.integrators.contains(m))
+    .map(|(_, v)| v)
+    .collect();
     let mut all = Vec::new();
     for (mode, scene) in &scenes {
         // Untimed warm-up (page faults, thread start-up), as Mitsuba gets one.
@@ -349,6 +361,21 @@ fn pt_curves(
             let render =
                 |rs: &RenderSettings| pt_integrators::sppm::render(scene, rs, &params, &|_| {});
             let extra = ("integrator", "sppm");
+            let points = pt_curve(
+                s, scene, settings, render, extra, &name, spp, reference, log,
+            )?;
+            all.push(Series { name, points });
+        }
+        for params in &bidirectional {
+            pt_integrators::vcm::check(scene, settings, params).map_err(LabError::Invalid)?;
+            let method = params.name();
+            let name = match mode {
+                None => format!("pt-{method}"),
+                Some(m) => format!("pt-{}-{method}", m.name()),
+            };
+            let render =
+                |rs: &RenderSettings| pt_integrators::vcm::render(scene, rs, params, &|_| {});
+            let extra = ("integrator", method);
             let points = pt_curve(
                 s, scene, settings, render, extra, &name, spp, reference, log,
             )?;

@@ -12,6 +12,11 @@
 //!
 //! Splats are added in the order given: the caller keeps that order fixed (light path by light
 //! path), which makes the image independent of the number of threads.
+//!
+//! The bidirectional methods also add their camera samples here, each at its own film
+//! position: those are reconstructed as the path tracer's are (Mitsuba's `hdrfilm`): each
+//! pixel keeps the sum of the samples' filter weights `w` and of `w L`, and its value is their
+//! quotient ([`LightFilm::camera`]). The image is the light splats' sum plus that average.
 
 use super::{filter_profile, filter_radius};
 use pt_math::Vec2;
@@ -32,6 +37,9 @@ pub struct LightFilm {
     radius: f32,
     /// Per pixel (row-major), the sum of the splats' weighted values (linear RGB).
     pub sums: Vec<[f64; 3]>,
+    /// Per pixel (row-major), the camera samples' filter-weighted sums (linear RGB) and the
+    /// sum of their weights (all zero for the light tracer).
+    pub camera: Vec<[f64; 4]>,
 }
 
 impl LightFilm {
@@ -43,7 +51,16 @@ impl LightFilm {
             filter,
             radius: filter_radius(&filter),
             sums: vec![[0.0; 3]; width as usize * height as usize],
+            camera: vec![[0.0; 4]; width as usize * height as usize],
         }
+    }
+
+    /// Pixel `i`'s value (row-major): the light splats' sum over `n` plus the camera samples'
+    /// weighted average.
+    pub fn value(&self, i: usize, n: f64) -> [f32; 3] {
+        let c = self.camera[i];
+        let avg = if c[3] > 0.0 { 1.0 / c[3] } else { 0.0 };
+        [0, 1, 2].map(|k| (self.sums[i][k] / n + c[k] * avg) as f32)
     }
 
     /// Whether splats under `filter` fit the footprint this film computes at once.
@@ -74,25 +91,132 @@ impl LightFilm {
     /// thread) adding in order the parts of the splats that reach it, so every pixel receives
     /// the same additions in the same order.
     pub fn splat_all(&mut self, splats: &[(Vec2, [f32; 3])], scale: f64) {
-        use rayon::prelude::*;
-        let (w, h) = (self.width as i32, self.height as i32);
-        let (filter, radius) = (self.filter, self.radius);
-        let threads = rayon::current_num_threads().max(1) as i32;
-        let rows = (h / (4 * threads)).max(1);
-        // A splat at y reaches rows whose centre is within the radius: y - 1/2 +- radius.
-        let reach = radius + 0.5;
-        self.sums
-            .par_chunks_mut((rows * w) as usize)
-            .enumerate()
-            .for_each(|(b, band)| {
-                let y0 = b as i32 * rows;
-                let y1 = (y0 + rows).min(h);
-                for &(pos, value) in splats {
-                    if pos.y + reach >= y0 as f32 && pos.y - reach < y1 as f32 {
-                        splat_rows(&filter, radius, (w, h), y0..y1, band, pos, value, scale);
+        let (filter, radius, w, h) = (self.filter, self.radius, self.width, self.height);
+        in_bands(
+            &mut self.sums,
+            (w, h),
+            radius,
+            splats,
+            |band, rows, pos, value| {
+                splat_rows(
+                    &filter,
+                    radius,
+                    (w as i32, h as i32),
+                    rows,
+                    band,
+                    pos,
+                    value,
+                    scale,
+                )
+            },
+        );
+    }
+
+    /// Adds camera samples `(pos, value)` in order (see the module documentation), in bands of
+    /// rows on all threads as [`LightFilm::splat_all`] does.
+    pub fn add_camera_samples(&mut self, samples: &[(Vec2, [f32; 3])]) {
+        let (filter, radius, w, h) = (self.filter, self.radius, self.width, self.height);
+        in_bands(
+            &mut self.camera,
+            (w, h),
+            radius,
+            samples,
+            |band, rows, pos, value| {
+                let Some(fp) = Footprint::new(&filter, radius, (w as i32, h as i32), pos) else {
+                    return;
+                };
+                for (j, y) in fp.ys.clone().enumerate() {
+                    if !rows.contains(&y) {
+                        continue;
+                    }
+                    let row = ((y - rows.start) * w as i32) as usize;
+                    for (k, x) in fp.xs.clone().enumerate() {
+                        let weight = f64::from(fp.wx[k] * fp.wy[j]);
+                        let s = &mut band[row + x as usize];
+                        for c in 0..3 {
+                            s[c] += weight * f64::from(value[c]);
+                        }
+                        s[3] += weight;
                     }
                 }
-            });
+            },
+        );
+    }
+}
+
+/// Runs `add(band, rows, pos, value)` for every splat on the bands of rows of `pixels` it
+/// reaches, the bands on all threads, each adding its splats in order.
+fn in_bands<T: Send>(
+    pixels: &mut [T],
+    (w, h): (u32, u32),
+    radius: f32,
+    splats: &[(Vec2, [f32; 3])],
+    add: impl Fn(&mut [T], std::ops::Range<i32>, Vec2, [f32; 3]) + Sync,
+) {
+    use rayon::prelude::*;
+    let (w, h) = (w as i32, h as i32);
+    let threads = rayon::current_num_threads().max(1) as i32;
+    let rows = (h / (4 * threads)).max(1);
+    // A splat at y reaches rows whose centre is within the radius: y - 1/2 +- radius.
+    let reach = radius + 0.5;
+    pixels
+        .par_chunks_mut((rows * w) as usize)
+        .enumerate()
+        .for_each(|(b, band)| {
+            let y0 = b as i32 * rows;
+            let y1 = (y0 + rows).min(h);
+            for &(pos, value) in splats {
+                if pos.y + reach >= y0 as f32 && pos.y - reach < y1 as f32 {
+                    add(band, y0..y1, pos, value);
+                }
+            }
+        });
+}
+
+/// The pixels a sample at `pos` reaches (centres within the filter's radius, clipped to the
+/// image; the box of radius 1/2: the pixel it falls in) and their separable filter weights.
+struct Footprint {
+    xs: std::ops::Range<i32>,
+    ys: std::ops::Range<i32>,
+    wx: [f32; MAX_FOOTPRINT],
+    wy: [f32; MAX_FOOTPRINT],
+}
+
+impl Footprint {
+    #[inline]
+    fn new(filter: &FilterDesc, radius: f32, (w, h): (i32, i32), pos: Vec2) -> Option<Footprint> {
+        let mut fp = Footprint {
+            xs: 0..0,
+            ys: 0..0,
+            wx: [0.0; MAX_FOOTPRINT],
+            wy: [0.0; MAX_FOOTPRINT],
+        };
+        if matches!(filter, FilterDesc::Box { radius } if *radius <= 0.5) {
+            let (x, y) = (pos.x.floor() as i32, pos.y.floor() as i32);
+            if !((0..w).contains(&x) && (0..h).contains(&y)) {
+                return None;
+            }
+            (fp.xs, fp.ys) = (x..x + 1, y..y + 1);
+            (fp.wx[0], fp.wy[0]) = (1.0, 1.0);
+            return Some(fp);
+        }
+        // Pixels X with |X + 1/2 - x| <= radius, clipped to the image.
+        let range = |x: f32, n: i32| {
+            let a = ((x - 0.5 - radius).ceil() as i32).max(0);
+            let b = ((x - 0.5 + radius).floor() as i32).min(n - 1);
+            a..b + 1
+        };
+        (fp.xs, fp.ys) = (range(pos.x, w), range(pos.y, h));
+        if fp.xs.is_empty() || fp.ys.is_empty() {
+            return None;
+        }
+        for (k, x) in fp.xs.clone().enumerate() {
+            fp.wx[k] = filter_profile(filter, x as f32 + 0.5 - pos.x);
+        }
+        for (k, y) in fp.ys.clone().enumerate() {
+            fp.wy[k] = filter_profile(filter, y as f32 + 0.5 - pos.y);
+        }
+        Some(fp)
     }
 }
 
@@ -111,49 +235,23 @@ fn splat_rows(
     value: [f32; 3],
     scale: f64,
 ) {
-    if matches!(filter, FilterDesc::Box { radius } if *radius <= 0.5) {
-        let (x, y) = (pos.x.floor() as i32, pos.y.floor() as i32);
-        if (0..w).contains(&x) && band.contains(&y) {
-            let s = &mut sums[((y - band.start) * w + x) as usize];
-            for c in 0..3 {
-                s[c] += scale * f64::from(value[c]);
-            }
-        }
+    let Some(fp) = Footprint::new(filter, radius, (w, h), pos) else {
         return;
-    }
-    // Pixels X with |X + 1/2 - x| <= radius, clipped to the image.
-    let range = |x: f32, n: i32| {
-        let a = ((x - 0.5 - radius).ceil() as i32).max(0);
-        let b = ((x - 0.5 + radius).floor() as i32).min(n - 1);
-        a..b + 1
     };
-    let (xs, ys) = (range(pos.x, w), range(pos.y, h));
-    if xs.is_empty() || ys.is_empty() {
-        return;
-    }
-    let mut wx = [0.0f32; MAX_FOOTPRINT];
-    let mut wy = [0.0f32; MAX_FOOTPRINT];
-    let (mut sx, mut sy) = (0.0f32, 0.0f32);
-    for (k, x) in xs.clone().enumerate() {
-        wx[k] = filter_profile(filter, x as f32 + 0.5 - pos.x);
-        sx += wx[k];
-    }
-    for (k, y) in ys.clone().enumerate() {
-        wy[k] = filter_profile(filter, y as f32 + 0.5 - pos.y);
-        sy += wy[k];
-    }
+    let sx: f32 = fp.wx[..fp.xs.len()].iter().sum();
+    let sy: f32 = fp.wy[..fp.ys.len()].iter().sum();
     let norm = sx * sy;
     if norm == 0.0 {
         return;
     }
     let v = value.map(|c| scale * f64::from(c) / f64::from(norm));
-    for (j, y) in ys.enumerate() {
+    for (j, y) in fp.ys.clone().enumerate() {
         if !band.contains(&y) {
             continue;
         }
         let row = ((y - band.start) * w) as usize;
-        for (k, x) in xs.clone().enumerate() {
-            let weight = f64::from(wx[k] * wy[j]);
+        for (k, x) in fp.xs.clone().enumerate() {
+            let weight = f64::from(fp.wx[k] * fp.wy[j]);
             let s = &mut sums[row + x as usize];
             for c in 0..3 {
                 s[c] += weight * v[c];

@@ -24,11 +24,11 @@
 use super::{AreaLight, Light};
 use pt_math::warp::{
     square_to_cosine_hemisphere, square_to_disk_concentric, square_to_uniform_cone,
-    square_to_uniform_sphere, uniform_cone_pdf,
+    square_to_uniform_sphere, uniform_cone_pdf, UNIFORM_SPHERE_PDF,
 };
 use pt_math::{offset_ray_origin, Frame, Ray, Vec2, Vec3};
 use pt_spectrum::{SampledSpectrum, SampledWavelengths};
-use std::f32::consts::PI;
+use std::f32::consts::{FRAC_1_PI, PI};
 
 /// A ray leaving a light, world space.
 #[derive(Clone, Copy, Debug)]
@@ -37,6 +37,17 @@ pub struct EmittedRay {
     pub ray: Ray,
     /// `Le cos / (p_pos p_dir)` (see the module documentation), light selection not included.
     pub weight: SampledSpectrum,
+    /// The point the ray leaves from, world space: on an area light (before the offset), the
+    /// position of a point-like light, the point on a distant light's disk.
+    pub origin: Vec3,
+    /// The area light's front normal at `origin` (zero for the other lights).
+    pub normal: Vec3,
+    /// The densities the ray was drawn with ([`Light::emission_pdf`]): the origin's per unit
+    /// area (1 for point-like lights), the direction's per unit solid angle (1 for a
+    /// directional light).
+    pub pdf_pos: f32,
+    /// See `pdf_pos`.
+    pub pdf_dir: f32,
 }
 
 /// A point on an area light, uniform by area: what connecting a light directly to the camera
@@ -94,26 +105,43 @@ impl Light {
         bounds: (Vec3, f32),
     ) -> Option<EmittedRay> {
         let disk_area = PI * bounds.1 * bounds.1;
-        let (ray, weight) = match self {
+        let point_like = |position: Vec3, dir: Vec3, weight: SampledSpectrum, pdf_dir: f32| {
+            (
+                Ray::new(position, dir),
+                weight,
+                position,
+                Vec3::ZERO,
+                1.0,
+                pdf_dir,
+            )
+        };
+        let (ray, weight, origin, normal, pdf_pos, pdf_dir) = match self {
             Light::Area(a) => {
                 let pt = a.sample_position(u_sel, u_pos);
                 if pt.n == Vec3::ZERO {
                     return None;
                 }
-                let dir = Frame::from_normal(pt.n).to_world(square_to_cosine_hemisphere(u_dir));
+                let local = square_to_cosine_hemisphere(u_dir);
+                let dir = Frame::from_normal(pt.n).to_world(local);
                 // Le cos / (pdf_area cos / pi) = pi A Le.
                 let le = a.radiance_at_uv(pt.uv, lambda);
                 (
                     Ray::new(offset_ray_origin(pt.p, pt.n), dir),
                     le * (PI * a.area),
+                    pt.p,
+                    pt.n,
+                    pt.pdf_area,
+                    local.z * FRAC_1_PI,
                 )
             }
             Light::Point {
                 position,
                 intensity,
-            } => (
-                Ray::new(*position, square_to_uniform_sphere(u_dir)),
+            } => point_like(
+                *position,
+                square_to_uniform_sphere(u_dir),
                 intensity.at(lambda) * (4.0 * PI),
+                UNIFORM_SPHERE_PDF,
             ),
             Light::Spot {
                 position,
@@ -125,18 +153,18 @@ impl Light {
                 let one_minus_cos = 1.0 - cone.cos_cutoff;
                 let local = square_to_uniform_cone(u_dir, one_minus_cos);
                 let dir = frame.to_world(local).normalize();
-                let mut w = intensity.at(lambda)
-                    * (cone.falloff(local.z) / uniform_cone_pdf(one_minus_cos));
+                let pdf = uniform_cone_pdf(one_minus_cos);
+                let mut w = intensity.at(lambda) * (cone.falloff(local.z) / pdf);
                 if let Some(t) = texture.as_deref() {
                     w *= t.eval(dir, lambda);
                 }
-                (Ray::new(*position, dir), w)
+                point_like(*position, dir, w, pdf)
             }
             Light::Projector(p) => {
                 let (dir, pdf) = p.sample_direction(u_dir);
                 // The intensity towards `dir`: what arrives at unit distance.
                 let (_, _, intensity) = p.arriving(p.position + dir, lambda)?;
-                (Ray::new(p.position, dir), intensity * (1.0 / pdf))
+                point_like(p.position, dir, intensity * (1.0 / pdf), pdf)
             }
             // Distant lights: the direction their own light sampling draws (from any point:
             // it does not depend on it), the origin on the disk facing it. The weight is
@@ -149,13 +177,54 @@ impl Light {
                 if !(ls.pdf > 0.0) {
                     return None;
                 }
+                let ray = ray_from_disk(ls.wi, u_pos, bounds);
                 (
-                    ray_from_disk(ls.wi, u_pos, bounds),
+                    ray,
                     ls.radiance * (disk_area / ls.pdf),
+                    ray.origin,
+                    Vec3::ZERO,
+                    1.0 / disk_area,
+                    ls.pdf,
                 )
             }
         };
-        (weight.is_finite() && !weight.is_black()).then_some(EmittedRay { ray, weight })
+        (weight.is_finite() && !weight.is_black()).then_some(EmittedRay {
+            ray,
+            weight,
+            origin,
+            normal,
+            pdf_pos,
+            pdf_dir,
+        })
+    }
+
+    /// The densities with which [`Light::sample_emission`] draws a ray leaving the point `p`
+    /// (normal `n`, for area lights) in the unit direction `dir` (world, away from the
+    /// light): the origin's per unit area (1 for point-like lights: a delta), the
+    /// direction's per unit solid angle (1 for a directional light: a delta). Light
+    /// selection is not included. What the bidirectional methods weigh strategies with.
+    pub fn emission_pdf(&self, n: Vec3, dir: Vec3, bounds: (Vec3, f32)) -> (f32, f32) {
+        let disk = 1.0 / (PI * bounds.1 * bounds.1);
+        match self {
+            Light::Area(a) => (1.0 / a.area, n.dot(dir).max(0.0) * FRAC_1_PI),
+            Light::Point { .. } => (1.0, UNIFORM_SPHERE_PDF),
+            Light::Spot { frame, cone, .. } => {
+                let inside = frame.n.dot(dir) >= cone.cos_cutoff;
+                (
+                    1.0,
+                    if inside {
+                        uniform_cone_pdf(1.0 - cone.cos_cutoff)
+                    } else {
+                        0.0
+                    },
+                )
+            }
+            Light::Projector(p) => (1.0, p.direction_pdf(dir)),
+            Light::Directional { .. } => (disk, 1.0),
+            Light::Sun { .. } | Light::Constant { .. } | Light::EnvMap(_) => {
+                (disk, self.escaped_pdf(-dir))
+            }
+        }
     }
 
     /// Whether the light is a delta light (point, spot, projector, directional): it can be

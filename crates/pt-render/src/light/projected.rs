@@ -110,6 +110,24 @@ impl Projector {
         (d / len, pdf)
     }
 
+    /// The solid-angle density with which [`Projector::sample_direction`] draws the unit
+    /// direction `dir` (world): `1 / (z^3 |det M| A)`, z the direction's depth in the light's
+    /// frame (so that `M q`, q its point on the plane z = 1, has length 1 / z); 0 outside
+    /// the image.
+    pub fn direction_pdf(&self, dir: Vec3) -> f32 {
+        let local = self.to_local * dir;
+        if !(local.z > 0.0) {
+            return 0.0;
+        }
+        let k = 0.5 * self.cot_half_x / local.z;
+        let uv = Vec2::new(0.5 - local.x * k, 0.5 - self.aspect * local.y * k);
+        if !(uv.cmpge(Vec2::ZERO).all() && uv.cmple(Vec2::ONE).all()) {
+            return 0.0;
+        }
+        let det = self.to_local.inverse().determinant().abs();
+        1.0 / (local.z * local.z * local.z * det * self.image_area())
+    }
+
     /// Area of the image on the plane z = 1 of the light's frame: (2 tan(f/2))^2 / aspect.
     pub fn image_area(&self) -> f32 {
         let w = 2.0 / self.cot_half_x;
@@ -184,6 +202,13 @@ mod tests {
             .is_none());
         // The image area on z = 1 is (2 tan)^2 / aspect.
         assert!((p.image_area() - 0.64 / 1.6).abs() < 1e-6);
+        // The density of a sampled direction is the one `direction_pdf` gives it (what the
+        // bidirectional methods weigh with), and nothing is drawn outside the frustum.
+        for (ux, uy) in [(0.5, 0.5), (0.1, 0.9), (0.97, 0.02), (0.3, 0.6)] {
+            let (dir, pdf) = p.sample_direction(pt_math::Vec2::new(ux, uy));
+            assert!((p.direction_pdf(dir) / pdf - 1.0).abs() < 1e-4, "{ux} {uy}");
+        }
+        assert_eq!(p.direction_pdf(-p.axis.normalize()), 0.0);
     }
 
     /// The image's orientation: +x of the light's frame is u = 0 (the image is seen from

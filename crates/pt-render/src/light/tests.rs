@@ -355,6 +355,11 @@ fn emitted_rays_carry_the_lights_power() {
                 continue;
             };
             sum += f64::from(e.weight.0.x);
+            // The densities the bidirectional methods weigh strategies with are those the
+            // ray was drawn with.
+            let (pdf_pos, pdf_dir) = light.emission_pdf(e.normal, e.ray.dir, bounds);
+            assert!((pdf_pos / e.pdf_pos - 1.0).abs() < 1e-4, "{light:?}");
+            assert!((pdf_dir / e.pdf_dir - 1.0).abs() < 1e-3, "{light:?}");
             match light {
                 Light::Spot { frame, .. } => {
                     assert!(frame.n.dot(e.ray.dir) >= cutoff.cos() - 1e-5)

@@ -19,6 +19,11 @@ impl<'e> Builder<'e> {
             "radiosity" => radiosity_integrator(&v)?,
             "ptracer" => ptracer_integrator(&v)?,
             "sppm" => sppm_integrator(&v)?,
+            "bdpt" => IntegratorDesc {
+                kind: IntegratorKind::Bdpt,
+                ..path_integrator(&v)?
+            },
+            "vcm" => vcm_integrator(&v)?,
             _ => return Err(plugin_error(el)),
         };
         let desc = IntegratorDesc {
@@ -82,6 +87,8 @@ impl<'e> Builder<'e> {
                     IntegratorKind::Radiosity
                         | IntegratorKind::PTracer { .. }
                         | IntegratorKind::Sppm { .. }
+                        | IntegratorKind::Bdpt
+                        | IntegratorKind::Vcm { .. }
                 )
         };
         let (name, mut inner) = self
@@ -135,6 +142,8 @@ impl<'e> Builder<'e> {
                     IntegratorKind::Radiosity
                         | IntegratorKind::PTracer { .. }
                         | IntegratorKind::Sppm { .. }
+                        | IntegratorKind::Bdpt
+                        | IntegratorKind::Vcm { .. }
                 )
         })?;
         let (image, base) = match inner {
@@ -184,6 +193,7 @@ pub(super) fn ptracer_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
 /// `photons_per_iteration` (positive), `initial_radius` (positive, scene units) and `alpha`
 /// (in (0, 1), default 2/3).
 pub(super) fn sppm_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
+    let (initial_radius, alpha) = radius_schedule(v, 2.0 / 3.0)?;
     let photons_per_iteration = match v.integer("photons_per_iteration")? {
         None => None,
         Some(n) if n >= 1 && n <= i64::from(u32::MAX) => Some(n as u32),
@@ -191,26 +201,6 @@ pub(super) fn sppm_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
             return Err(v.prop_error(
                 "photons_per_iteration",
                 format!("photons_per_iteration must be positive, got {n}"),
-            ))
-        }
-    };
-    let initial_radius = match v.float("initial_radius")? {
-        None => None,
-        Some(r) if r > 0.0 && r.is_finite() => Some(r),
-        Some(r) => {
-            return Err(v.prop_error(
-                "initial_radius",
-                format!("initial_radius must be a positive distance, got {r}"),
-            ))
-        }
-    };
-    let alpha = match v.float("alpha")? {
-        None => 2.0 / 3.0,
-        Some(a) if a > 0.0 && a < 1.0 => a,
-        Some(a) => {
-            return Err(v.prop_error(
-                "alpha",
-                format!("alpha must lie strictly between 0 and 1, got {a}"),
             ))
         }
     };
@@ -222,6 +212,45 @@ pub(super) fn sppm_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
         },
         ..path_integrator(v)?
     })
+}
+
+/// `vcm` (project extension): `max_depth`, `rr_depth` and `hide_emitters` as `path`, and
+/// `initial_radius` (positive, scene units) and `alpha` (in (0, 1), default 3/4).
+pub(super) fn vcm_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
+    let (initial_radius, alpha) = radius_schedule(v, 0.75)?;
+    Ok(IntegratorDesc {
+        kind: IntegratorKind::Vcm {
+            initial_radius,
+            alpha,
+        },
+        ..path_integrator(v)?
+    })
+}
+
+/// The photon mappers' `initial_radius` (positive, scene units; optional) and `alpha` (in
+/// (0, 1), `default_alpha` when not given).
+fn radius_schedule(v: &ObjectView<'_>, default_alpha: f32) -> Result<(Option<f32>, f32)> {
+    let initial_radius = match v.float("initial_radius")? {
+        None => None,
+        Some(r) if r > 0.0 && r.is_finite() => Some(r),
+        Some(r) => {
+            return Err(v.prop_error(
+                "initial_radius",
+                format!("initial_radius must be a positive distance, got {r}"),
+            ))
+        }
+    };
+    let alpha = match v.float("alpha")? {
+        None => default_alpha,
+        Some(a) if a > 0.0 && a < 1.0 => a,
+        Some(a) => {
+            return Err(v.prop_error(
+                "alpha",
+                format!("alpha must lie strictly between 0 and 1, got {a}"),
+            ))
+        }
+    };
+    Ok((initial_radius, alpha))
 }
 
 /// `radiosity` (project extension): `patch_size` (float, scene units), `rays_per_patch`,

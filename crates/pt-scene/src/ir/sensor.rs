@@ -354,6 +354,18 @@ pub enum IntegratorKind {
         /// Knaus & Zwicker's radius reduction `alpha` in (0, 1) (default 2/3).
         alpha: f32,
     },
+    /// Bidirectional path tracing (pt extension `bdpt`): all connection strategies under the
+    /// power heuristic.
+    Bdpt,
+    /// Vertex connection and merging (pt extension `vcm`): bdpt's strategies and photon
+    /// merging under one power heuristic.
+    Vcm {
+        /// First iteration's merging radius, scene units (`initial_radius`; default: 1% of
+        /// the scene's bounding sphere radius).
+        initial_radius: Option<f32>,
+        /// Radius schedule exponent in (0, 1): r_i = r_0 i^((alpha - 1) / 2) (default 3/4).
+        alpha: f32,
+    },
 }
 
 /// Which radiosity solver to use (`solver`).
