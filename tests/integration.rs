@@ -16,6 +16,7 @@ mod analysis_commands;
 mod analytic;
 mod aov;
 mod bad_input;
+mod bdpt;
 mod cameras;
 mod cornell_reference;
 mod determinism;

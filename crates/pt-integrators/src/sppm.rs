@@ -274,7 +274,14 @@ pub fn render_sppm_passes(
             points.extend(p);
         }
         // 2. Photon pass.
-        let grid = PointGrid::new(points.iter().map(|vp| vp.p), r);
+        let grid = PointGrid::new(
+            points
+                .iter()
+                .enumerate()
+                .map(|(i, vp)| (vp.p, i as u32))
+                .collect(),
+            r,
+        );
         let chunks = photons.div_ceil(CHUNK);
         let max_depth = if s.max_depth < 0 {
             u32::MAX
@@ -294,19 +301,18 @@ pub fn render_sppm_passes(
                         if v.depth < 2 {
                             return;
                         }
-                        for &i in grid.near(v.hit.p) {
+                        grid.within(v.hit.p, |&i| {
                             let vp = &points[i as usize];
-                            if (vp.p - v.hit.p).length_squared() > r * r
-                                || vp.ng.dot(v.hit.ng) <= 0.0
+                            if vp.ng.dot(v.hit.ng) <= 0.0
                                 || vp.segments.saturating_add(v.depth) > max_depth
                             {
-                                continue;
+                                return;
                             }
                             let f = vp.bsdf.eval(vp.wo, vp.frame.to_local(v.w_light));
                             if !f.is_black() {
                                 out.push((i, f * v.beta));
                             }
-                        }
+                        });
                     });
                 }
                 progress(((end - first) * pixels / photons) / 2);

@@ -327,6 +327,21 @@ struct LightVertex {
     depth: u32,
 }
 
+/// What merging needs of a light vertex (kept in the grid, in grid order).
+#[derive(Clone, Copy, Debug)]
+struct Photon {
+    /// Geometric normal, world.
+    ng: Vec3,
+    /// Unit direction towards the previous vertex, world.
+    w_light: Vec3,
+    /// Weight arriving here.
+    beta: SampledSpectrum,
+    /// The subpath's partial sums here.
+    mis: SubpathMis,
+    /// Segments from the light.
+    depth: u32,
+}
+
 /// The largest path depth of `s` (Mitsuba's max_depth; -1: none).
 fn max_depth(s: &PathSettings) -> u32 {
     if s.max_depth < 0 {
@@ -351,10 +366,8 @@ struct Iteration<'a> {
     /// Merging: the light subpaths' vertices, per chunk of subpaths (chunk c holds subpaths
     /// c CHUNK.., each subpath's vertices in a range ending at its entry of `ends`).
     chunks: &'a [LightChunk],
-    /// Merging: per chunk, the number of vertices in the chunks before it (grid indices
-    /// count through the chunks in order).
-    firsts: Vec<u32>,
-    grid: Option<PointGrid>,
+    /// Merging: every light vertex.
+    grid: Option<PointGrid<Photon>>,
 }
 
 /// One chunk of light subpaths: their vertices, where each subpath's end, and their camera
@@ -367,12 +380,6 @@ struct LightChunk {
 }
 
 impl Iteration<'_> {
-    /// The light vertex of grid index `i`.
-    fn vertex(&self, i: u32) -> &LightVertex {
-        let c = self.firsts.partition_point(|&f| f <= i) - 1;
-        &self.chunks[c].vertices[(i - self.firsts[c]) as usize]
-    }
-
     /// The vertices of light subpath `k` (merging: all were traced before the camera pass).
     fn subpath(&self, k: u64) -> &[LightVertex] {
         let chunk = &self.chunks[(k / CHUNK) as usize];
@@ -614,29 +621,24 @@ fn camera_subpath(
             // Merging with the light vertices of every subpath nearby.
             if let Some(grid) = &it.grid {
                 let mut sum = SampledSpectrum::ZERO;
-                let r2 = it.radius * it.radius;
-                for &i in grid.near(hit.p) {
-                    let lv = it.vertex(i);
-                    if (lv.p - hit.p).length_squared() > r2
-                        || lv.ng.dot(hit.ng) <= 0.0
-                        || lv.depth.saturating_add(depth) > max_depth
-                    {
-                        continue;
+                grid.within(hit.p, |ph| {
+                    if ph.ng.dot(hit.ng) <= 0.0 || ph.depth.saturating_add(depth) > max_depth {
+                        return;
                     }
-                    let wi = frame.to_local(lv.w_light);
-                    let ng_wi = hit.ng.dot(lv.w_light);
+                    let wi = frame.to_local(ph.w_light);
+                    let ng_wi = hit.ng.dot(ph.w_light);
                     if ng_wi * wi.z <= 0.0 {
-                        continue;
+                        return;
                     }
                     let fv = bsdf.eval(wo, wi);
                     if fv.is_black() {
-                        continue;
+                        return;
                     }
                     let w =
-                        merge_weight(&lv.mis, &mis_state, bsdf.pdf(wo, wi), bsdf.pdf(wi, wo), f);
-                    sum += fv * lv.beta * (w * wi.z.abs() / ng_wi.abs());
-                }
-                radiance += beta * sum * (1.0 / (PI * r2 * it.n));
+                        merge_weight(&ph.mis, &mis_state, bsdf.pdf(wo, wi), bsdf.pdf(wi, wo), f);
+                    sum += fv * ph.beta * (w * wi.z.abs() / ng_wi.abs());
+                });
+                radiance += beta * sum * (1.0 / (PI * it.radius * it.radius * it.n));
             }
         }
         // Continue the camera subpath.
@@ -827,7 +829,6 @@ pub fn render_vcm_passes(
             n: paths as f32,
             scale: scale as f32,
             chunks: &[],
-            firsts: Vec::new(),
             grid: None,
         };
         for c in pool.iter_mut() {
@@ -889,23 +890,24 @@ pub fn render_vcm_passes(
                 progress(range(c as u64).count() as u64 / 2);
             });
             // 2. The grid of all light vertices, then every camera subpath.
-            let mut firsts = Vec::with_capacity(pool.len());
-            let mut total = 0u32;
-            for c in &pool {
-                firsts.push(total);
-                total += c.vertices.len() as u32;
-            }
-            let grid = PointGrid::new(
-                pool.iter()
-                    .flat_map(|c| c.vertices.iter().map(|v| v.p))
-                    .collect::<Vec<_>>()
-                    .into_iter(),
-                radius,
-            );
+            let photons = pool
+                .iter()
+                .flat_map(|c| &c.vertices)
+                .map(|v| {
+                    let ph = Photon {
+                        ng: v.ng,
+                        w_light: v.w_light,
+                        beta: v.beta,
+                        mis: v.mis,
+                        depth: v.depth,
+                    };
+                    (v.p, ph)
+                })
+                .collect();
+            let grid = PointGrid::new(photons, radius);
             let camera: Vec<Vec<Splat>> = {
                 let it = Iteration {
                     chunks: &pool,
-                    firsts,
                     grid: Some(grid),
                     ..it
                 };
