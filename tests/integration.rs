@@ -32,6 +32,7 @@ mod media;
 mod moment;
 mod parallelograms;
 mod phosphorescence;
+mod photonmapper;
 mod pixel_format;
 mod ptracer;
 mod radiosity;

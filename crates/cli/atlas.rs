@@ -33,7 +33,7 @@ pub enum Which {
     Caustic,
     /// Radiosity on glossy strips.
     Radiosity,
-    /// A caustic behind glass: path tracing, light tracing (ptracer), photon mapping (sppm).
+    /// A caustic behind glass: path tracing, light tracing (ptracer), photon mapping (sppm), bdpt and vcm.
     Transport,
 }
 

@@ -104,7 +104,9 @@ pub(crate) struct RenderArgs {
     /// `ptracer` traces light paths from the lights and splats each vertex the camera sees
     /// (`--spp` light paths per pixel); `sppm` is stochastic progressive photon mapping (`--spp`
     /// iterations); `bdpt` is bidirectional path tracing and `vcm` vertex connection and
-    /// merging (`--spp` iterations of one camera and one light subpath per pixel). Naming the
+    /// merging (`--spp` iterations of one camera and one light subpath per pixel);
+    /// `photonmapper` is Jensen's photon mapping (`--spp` iterations, each with its own
+    /// photon maps). Naming the
     /// scene's own method keeps its parameters.
     #[arg(long, value_enum)]
     integrator: Option<IntegratorArg>,
@@ -159,6 +161,7 @@ enum IntegratorArg {
     Sppm,
     Bdpt,
     Vcm,
+    Photonmapper,
     Radiosity,
 }
 
@@ -210,6 +213,13 @@ impl RenderArgs {
                     alpha: 2.0 / 3.0,
                 },
                 IntegratorArg::Bdpt => IntegratorKind::Bdpt,
+                IntegratorArg::Photonmapper => IntegratorKind::PhotonMapper {
+                    global_photons: 100_000,
+                    caustic_photons: 100_000,
+                    lookup_size: 50,
+                    lookup_radius: None,
+                    final_gather: true,
+                },
                 IntegratorArg::Vcm => IntegratorKind::Vcm {
                     initial_radius: None,
                     alpha: 0.75,
@@ -404,7 +414,7 @@ pub(crate) fn run(args: RenderArgs) -> Result<ExitCode> {
         pt_image::write_bytes_atomically(path, &state.to_bytes(key))?;
     } else if args.save_state.is_some() {
         bail!(
-            "--save-state applies to path, ptracer, sppm, bdpt and vcm, not to {}",
+            "--save-state applies to path, ptracer, sppm, photonmapper, bdpt and vcm, not to {}",
             integrator.name()
         );
     }

@@ -31,6 +31,7 @@ pub mod aov;
 pub mod direct;
 mod grid;
 pub mod path;
+pub mod photonmap;
 pub mod ptracer;
 pub mod render;
 mod scatter;
@@ -111,6 +112,14 @@ pub enum Integrator {
         settings: PathSettings,
         /// Photons, radius, alpha.
         sppm: sppm::SppmSettings,
+    },
+    /// Photon mapping as Jensen 1996 describes it (pt extension, [`photonmap`]):
+    /// `max_depth`, `rr_depth` and `hide_emitters` of the path settings apply.
+    PhotonMapper {
+        /// Depth, Russian roulette, hidden emitters.
+        settings: PathSettings,
+        /// Photon counts, lookups, final gathering.
+        photons: photonmap::PhotonMapSettings,
     },
     /// Bidirectional path tracing or vertex connection and merging (pt extensions,
     /// [`vcm`]): `max_depth`, `rr_depth` and `hide_emitters` of the path settings apply.
@@ -274,6 +283,7 @@ impl Integrator {
                     | IntegratorKind::Sppm { .. }
                     | IntegratorKind::Bdpt
                     | IntegratorKind::Vcm { .. }
+                    | IntegratorKind::PhotonMapper { .. }
             ) {
                 return bad("--time (afterglow) is rendered by the path tracer".into());
             }
@@ -345,6 +355,30 @@ impl Integrator {
                     },
                 }
             }
+            IntegratorKind::PhotonMapper {
+                global_photons,
+                caustic_photons,
+                lookup_size,
+                lookup_radius,
+                final_gather,
+            } => {
+                if o.clamp.is_some() || o.strategy.is_some() {
+                    return bad(
+                        "--clamp and --strategy apply to the path tracer, not to photonmapper"
+                            .into(),
+                    );
+                }
+                Integrator::PhotonMapper {
+                    settings: path(d.max_depth).settings,
+                    photons: photonmap::PhotonMapSettings {
+                        global_photons: u64::from(global_photons),
+                        caustic_photons: u64::from(caustic_photons),
+                        lookup: lookup_size as usize,
+                        max_radius: lookup_radius,
+                        final_gather,
+                    },
+                }
+            }
             IntegratorKind::Bdpt | IntegratorKind::Vcm { .. } => {
                 let params = match kind {
                     IntegratorKind::Vcm {
@@ -386,8 +420,8 @@ impl Integrator {
         settings: &RenderSettings,
     ) -> Result<RenderState, String> {
         match self {
-            // The photon mapper keeps per-pixel statistics only (no splatting film).
-            Integrator::Sppm { .. } => RenderState::from_bytes(
+            // The photon mappers keep per-pixel statistics only (no splatting film).
+            Integrator::Sppm { .. } | Integrator::PhotonMapper { .. } => RenderState::from_bytes(
                 bytes,
                 scene_key,
                 &RenderSettings {
@@ -409,6 +443,7 @@ impl Integrator {
             Integrator::PTracer { .. } => "ptracer",
             Integrator::Sppm { .. } => "sppm",
             Integrator::Vcm { vcm, .. } => vcm.name(),
+            Integrator::PhotonMapper { .. } => "photonmapper",
             Integrator::Radiosity(_) => "radiosity",
             Integrator::Afterglow { .. } => "afterglow",
         }
@@ -423,6 +458,7 @@ impl Integrator {
                 | Integrator::PTracer { .. }
                 | Integrator::Sppm { .. }
                 | Integrator::Vcm { .. }
+                | Integrator::PhotonMapper { .. }
         )
     }
 
@@ -446,6 +482,9 @@ impl Integrator {
             } => render_ptracer(settings, *samples_per_pass, job, run),
             Integrator::Sppm { settings, sppm } => render_sppm(settings, sppm, job, run),
             Integrator::Vcm { settings, vcm } => render_vcm(settings, vcm, job, run),
+            Integrator::PhotonMapper { settings, photons } => {
+                render_photonmapper(settings, photons, job, run)
+            }
             Integrator::Radiosity(params) => render_radiosity(params, job, run),
         }
     }
@@ -736,6 +775,65 @@ fn prepare(
         )));
     }
     Ok((scene, settings, build_time, state))
+}
+
+/// Photon mapping ([`photonmap::render_photon_passes`]).
+fn render_photonmapper(
+    path: &PathSettings,
+    params: &photonmap::PhotonMapSettings,
+    job: &Job,
+    run: Run,
+) -> Result<Rendered, IntegratorError> {
+    let (scene, settings, build_time, mut state) = prepare(
+        job,
+        path,
+        run.resume,
+        |s| s.light.is_none() && s.splat.is_none(),
+        "the saved state is not a photon mapper's",
+        sppm::new_state,
+        |scene, _| photonmap::check(scene, params),
+    )?;
+    let pixels = u64::from(settings.width) * u64::from(settings.height);
+    run.progress.start_samples(
+        pixels * u64::from(settings.spp),
+        pixels * u64::from(state.spp_done),
+    );
+    let complete =
+        photonmap::render_photon_passes(&scene, &settings, params, &mut state, run.cancel, &|n| {
+            run.progress.samples(n)
+        });
+    let mut output = state.output();
+    output.alpha = None;
+    let what = format!(
+        "a sample being an iteration's camera path, {} + {} photons per iteration; ",
+        params.global_photons, params.caustic_photons
+    );
+    let (summary, warnings) = report("photonmapper", &what, &output, build_time);
+    let header = vec![
+        ("integrator".to_string(), "photonmapper".to_string()),
+        ("max_depth".to_string(), path.max_depth.to_string()),
+        (
+            "global_photons".to_string(),
+            params.global_photons.to_string(),
+        ),
+        (
+            "caustic_photons".to_string(),
+            params.caustic_photons.to_string(),
+        ),
+        ("lookup_size".to_string(), params.lookup.to_string()),
+        ("final_gather".to_string(), params.final_gather.to_string()),
+    ];
+    Ok(Rendered {
+        output,
+        mode: scene.mode,
+        header,
+        summary,
+        warnings,
+        state: Some(state),
+        complete,
+        build_time,
+        extra_channels: Vec::new(),
+    })
 }
 
 /// Bidirectional path tracing and vertex connection and merging

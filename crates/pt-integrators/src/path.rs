@@ -103,6 +103,7 @@ impl Coverage {
             | pt_scene::IntegratorKind::PTracer { .. }
             | pt_scene::IntegratorKind::Sppm { .. }
             | pt_scene::IntegratorKind::Bdpt
+            | pt_scene::IntegratorKind::PhotonMapper { .. }
             | pt_scene::IntegratorKind::Vcm { .. } => Coverage::Path,
         }
     }

@@ -18,7 +18,8 @@ impl Study {
     /// Heat maps (one panel per method) of the errors, value written in each cell; SVG and
     /// PNG.
     pub fn charts(&self) -> Result<(String, Vec<u8>)> {
-        let size: (u32, u32) = (1200, 110 + 80 * self.rows.len() as u32);
+        let (_, lines) = panel_grid(self.panels.len());
+        let size: (u32, u32) = (1200, lines * (110 + 80 * self.rows.len() as u32));
         chart_both(self, size, "the atlas")
     }
 
@@ -132,6 +133,13 @@ fn fmt_pct(e: f64) -> String {
     }
 }
 
+/// Panels per line and lines of a chart of `n` panels: up to four on one line (their captions
+/// fit 1200 pixels), more in lines of three.
+fn panel_grid(n: usize) -> (u32, u32) {
+    let per_line = if n <= 4 { n.max(1) } else { 3 };
+    (per_line as u32, n.div_ceil(per_line) as u32)
+}
+
 fn draw<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     s: &Study,
@@ -141,7 +149,8 @@ where
 {
     root.fill(&WHITE)?;
     let (nr, nc) = (s.rows.len(), s.cols.len());
-    let panels = root.split_evenly((1, s.panels.len()));
+    let (per_line, lines) = panel_grid(s.panels.len());
+    let panels = root.split_evenly((lines as usize, per_line as usize));
     for (p, area) in s.panels.iter().zip(panels.iter()) {
         let (s0, s1) = (
             p.spp.iter().min().copied().unwrap_or(0),

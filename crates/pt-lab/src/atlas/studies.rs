@@ -381,7 +381,14 @@ pub const TRANSPORT: [(&str, &str, &str); 2] = [
 ];
 
 /// The methods of the transport study, in panel order.
-const TRANSPORT_METHODS: [&str; 3] = ["path (MIS)", "ptracer", "sppm"];
+const TRANSPORT_METHODS: [&str; 6] = [
+    "path (MIS)",
+    "ptracer",
+    "sppm",
+    "photonmapper",
+    "bdpt",
+    "vcm",
+];
 
 /// The regions of a `w x h` transport image, as fractions of the 128 x 128 film: the caustic
 /// (rows 80-92, columns 13-25: the spot the ball focuses on the red wall, around pixel
@@ -479,7 +486,45 @@ pub fn transport(o: &AtlasSettings) -> Result<Study> {
                 );
             },
         );
-        for (k, (panel, out)) in panels.iter_mut().zip([&path, &light, &sppm]).enumerate() {
+        let bidirectional = |params: pt_integrators::vcm::VcmSettings| -> Result<_> {
+            pt_integrators::vcm::check(&scene, &settings, &params).map_err(LabError::Invalid)?;
+            Ok(render_steps(
+                &settings,
+                budget,
+                pt_integrators::RenderState::for_light_paths(&settings),
+                |rs, state| {
+                    pt_integrators::vcm::render_vcm_passes(
+                        &scene,
+                        rs,
+                        &params,
+                        state,
+                        &never,
+                        &|_| {},
+                    );
+                },
+            ))
+        };
+        let bdpt = bidirectional(pt_integrators::vcm::VcmSettings::bdpt())?;
+        let vcm = bidirectional(pt_integrators::vcm::VcmSettings::vcm())?;
+        let maps = pt_integrators::photonmap::PhotonMapSettings::default();
+        pt_integrators::photonmap::check(&scene, &maps).map_err(LabError::Invalid)?;
+        let jensen = render_steps(
+            &settings,
+            budget,
+            pt_integrators::sppm::new_state(&settings),
+            |rs, state| {
+                pt_integrators::photonmap::render_photon_passes(
+                    &scene,
+                    rs,
+                    &maps,
+                    state,
+                    &never,
+                    &|_| {},
+                );
+            },
+        );
+        let outs = [&path, &light, &sppm, &jensen, &bdpt, &vcm];
+        for (k, (panel, out)) in panels.iter_mut().zip(outs).enumerate() {
             for (g, pixels) in regions.iter().enumerate() {
                 let (e, n) = region_error(&out.mean, &reference, pixels);
                 panel.cells[g].push(e);
@@ -504,15 +549,18 @@ pub fn transport(o: &AtlasSettings) -> Result<Study> {
          light at any budget (its caustic error is then the focused light's share of the region). A \
          light path finds it by tracing from the light through the ball and connecting the wall to the camera; \
          SPPM's photons find it the same way and are gathered at the wall's visible points (biased: blurred over \
-         the shrinking radius).",
+         the shrinking radius). The photon mapper (Jensen 1996) reads the caustic from its caustic map at the \
+         wall's visible points (biased: blurred over its 50 nearest photons). BDPT weighs all of these strategies by the power heuristic (unbiased); VCM adds \
+         merging of light vertices at camera vertices under the same weights (biased like SPPM where merging \
+         dominates). Both use one camera and one light subpath per pixel per sample.",
         size.0,
         size.1,
-        budget_words(o).replace("MIS renders", "path tracing (MIS) renders").replace("the other strategies", "ptracer and sppm"),
+        budget_words(o).replace("MIS renders", "path tracing (MIS) renders").replace("the other strategies", "ptracer, sppm, photonmapper, bdpt and vcm"),
         sources.join("; ")
     );
     Ok(Study {
         key: "transport",
-        title: "A caustic behind glass: path tracing, light tracing and photon mapping".into(),
+        title: "A caustic behind glass: path tracing, light tracing, photon mapping (SPPM, Jensen), BDPT and VCM".into(),
         row_label: "region".into(),
         col_label: "light".into(),
         rows: vec!["caustic".into(), "walls".into()],

@@ -24,6 +24,7 @@ impl<'e> Builder<'e> {
                 ..path_integrator(&v)?
             },
             "vcm" => vcm_integrator(&v)?,
+            "photonmapper" => photonmapper_integrator(&v)?,
             _ => return Err(plugin_error(el)),
         };
         let desc = IntegratorDesc {
@@ -89,6 +90,7 @@ impl<'e> Builder<'e> {
                         | IntegratorKind::Sppm { .. }
                         | IntegratorKind::Bdpt
                         | IntegratorKind::Vcm { .. }
+                        | IntegratorKind::PhotonMapper { .. }
                 )
         };
         let (name, mut inner) = self
@@ -144,6 +146,7 @@ impl<'e> Builder<'e> {
                         | IntegratorKind::Sppm { .. }
                         | IntegratorKind::Bdpt
                         | IntegratorKind::Vcm { .. }
+                        | IntegratorKind::PhotonMapper { .. }
                 )
         })?;
         let (image, base) = match inner {
@@ -222,6 +225,41 @@ pub(super) fn vcm_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
         kind: IntegratorKind::Vcm {
             initial_radius,
             alpha,
+        },
+        ..path_integrator(v)?
+    })
+}
+
+/// `photonmapper` (project extension): `max_depth`, `rr_depth` and `hide_emitters` as
+/// `path`, `global_photons` and `caustic_photons` (>= 0, not both 0), `lookup_size` (>= 1),
+/// `lookup_radius` (positive, scene units) and `final_gather` (boolean).
+pub(super) fn photonmapper_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
+    let global_photons = int_in(v, "global_photons", 100_000, 0, i64::from(u32::MAX))? as u32;
+    let caustic_photons = int_in(v, "caustic_photons", 100_000, 0, i64::from(u32::MAX))? as u32;
+    if global_photons == 0 && caustic_photons == 0 {
+        return Err(v.prop_error(
+            "global_photons",
+            "global_photons and caustic_photons cannot both be 0",
+        ));
+    }
+    let lookup_size = int_in(v, "lookup_size", 50, 1, 100_000)? as u32;
+    let lookup_radius = match v.float("lookup_radius")? {
+        None => None,
+        Some(r) if r > 0.0 && r.is_finite() => Some(r),
+        Some(r) => {
+            return Err(v.prop_error(
+                "lookup_radius",
+                format!("lookup_radius must be a positive distance, got {r}"),
+            ))
+        }
+    };
+    Ok(IntegratorDesc {
+        kind: IntegratorKind::PhotonMapper {
+            global_photons,
+            caustic_photons,
+            lookup_size,
+            lookup_radius,
+            final_gather: v.boolean("final_gather")?.unwrap_or(true),
         },
         ..path_integrator(v)?
     })

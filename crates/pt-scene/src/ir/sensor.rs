@@ -354,6 +354,21 @@ pub enum IntegratorKind {
         /// Knaus & Zwicker's radius reduction `alpha` in (0, 1) (default 2/3).
         alpha: f32,
     },
+    /// Photon mapping as Jensen 1996 describes it (pt extension `photonmapper`): a global and
+    /// a caustic map per iteration, k-nearest radiance estimates, final gathering.
+    PhotonMapper {
+        /// Photons emitted for the global map per iteration (`global_photons`, 100000).
+        global_photons: u32,
+        /// Photons emitted for the caustic map per iteration (`caustic_photons`, 100000).
+        caustic_photons: u32,
+        /// Photons per radiance estimate (`lookup_size`, 50).
+        lookup_size: u32,
+        /// Largest gathering radius, scene units (`lookup_radius`; default: 5% of the scene's
+        /// bounding sphere radius).
+        lookup_radius: Option<f32>,
+        /// Final gathering for indirect light (`final_gather`, true).
+        final_gather: bool,
+    },
     /// Bidirectional path tracing (pt extension `bdpt`): all connection strategies under the
     /// power heuristic.
     Bdpt,
