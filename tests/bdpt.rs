@@ -137,15 +137,7 @@ fn vcm_and_merging_alone_agree_with_the_path_reference() {
 fn bidirectional_methods_find_the_point_light_caustic() {
     let dir = scratch("bdpt_caustic");
     let scene = repo().join("scenes/caustic-point-light.xml");
-    let spot = |img: &pt_image::Image| {
-        let mut sum = 0.0f64;
-        for y in 83..90 {
-            for x in 16..23 {
-                sum += f64::from(img.data[y * img.width as usize + x][0]);
-            }
-        }
-        sum / 49.0
-    };
+    let spot = caustic_spot;
     let (reference, _) = reference("caustic-point-light");
     let r = spot(&reference);
     for method in ["bdpt", "vcm"] {

@@ -102,15 +102,7 @@ fn photon_mapper_bias_shrinks_with_more_photons() {
 fn photon_mapper_finds_the_caustic() {
     let dir = scratch("photonmapper_caustic");
     let scene = repo().join("scenes/caustic-sphere-light.xml");
-    let spot = |img: &pt_image::Image| {
-        let mut sum = 0.0f64;
-        for y in 83..90 {
-            for x in 16..23 {
-                sum += f64::from(img.data[y * img.width as usize + x][0]);
-            }
-        }
-        sum / 49.0
-    };
+    let spot = caustic_spot;
     let (img, _) = render(
         &scene,
         &dir,

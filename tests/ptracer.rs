@@ -81,15 +81,7 @@ fn light_tracer_agrees_with_the_path_references() {
 fn light_tracer_finds_the_point_light_caustic() {
     let dir = scratch("ptracer_caustic");
     let scene = repo().join("scenes/caustic-point-light.xml");
-    let spot = |img: &pt_image::Image| {
-        let mut sum = 0.0f64;
-        for y in 83..90 {
-            for x in 16..23 {
-                sum += f64::from(img.data[y * img.width as usize + x][0]);
-            }
-        }
-        sum / 49.0
-    };
+    let spot = caustic_spot;
     let (light, _) = render(&scene, &dir, "ptracer", &["--spp", "64"]);
     let (photons, _) = render(
         &scene,

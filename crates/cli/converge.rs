@@ -51,7 +51,8 @@ pub struct ConvergeArgs {
     pub strategy: Vec<ConvergeStrategy>,
     /// Light transport methods of pt, comma separated: `path` (one curve per --strategy),
     /// `ptracer` (light tracing, curve `pt-ptracer`; its spp are light paths per pixel),
-    /// `sppm` (photon mapping, curve `pt-sppm`; its spp are iterations), `bdpt`
+    /// `sppm` (photon mapping, curve `pt-sppm`; its spp are iterations), `photonmapper`
+    /// (Jensen's, `pt-photonmapper`; spp are iterations), `bdpt`
     /// (bidirectional path tracing, `pt-bdpt`) and `vcm` (vertex connection and merging,
     /// `pt-vcm`; spp are iterations of a camera and a light subpath per pixel).
     #[arg(long, value_enum, value_delimiter = ',', default_value = "path")]
@@ -148,6 +149,8 @@ pub enum ConvergeIntegrator {
     Ptracer,
     /// Stochastic progressive photon mapping (spp are iterations).
     Sppm,
+    /// Jensen's photon mapping (spp are iterations).
+    Photonmapper,
     /// Bidirectional path tracing.
     Bdpt,
     /// Vertex connection and merging (spp are iterations).
@@ -235,6 +238,7 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
                 ConvergeIntegrator::Path => pt_lab::converge::Method::Path,
                 ConvergeIntegrator::Ptracer => pt_lab::converge::Method::PTracer,
                 ConvergeIntegrator::Sppm => pt_lab::converge::Method::Sppm,
+                ConvergeIntegrator::Photonmapper => pt_lab::converge::Method::PhotonMapper,
                 ConvergeIntegrator::Bdpt => pt_lab::converge::Method::Bdpt,
                 ConvergeIntegrator::Vcm => pt_lab::converge::Method::Vcm,
             })

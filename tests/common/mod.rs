@@ -267,3 +267,16 @@ fn write_diagnostics(img: &Image, reference: &Image, z: &pt_stats::ZTestReport, 
         dir.display()
     );
 }
+
+/// The mean red value of the caustic spot the glass ball focuses on the red wall
+/// (scenes/include/cornell-caustic.xml): the 7 x 7 pixels around (19, 86) of the 128 x 128
+/// image, where both caustic scenes' Mitsuba references put it.
+pub fn caustic_spot(img: &Image) -> f64 {
+    let mut sum = 0.0f64;
+    for y in 83..90 {
+        for x in 16..23 {
+            sum += f64::from(img.data[y * img.width as usize + x][0]);
+        }
+    }
+    sum / 49.0
+}

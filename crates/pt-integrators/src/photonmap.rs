@@ -36,7 +36,6 @@ use crate::path::PathSettings;
 use crate::ptracer::{shading_frame, to_rgb, walk_light_path, Arrival};
 use pt_bsdf::SurfaceBsdf;
 use pt_math::{offset_ray_origin, Ray, Vec3};
-use pt_render::film::sample_pixel_offset;
 use pt_render::sampler::Sampler;
 use pt_render::Scene;
 use pt_spectrum::{ColorMode, SampledSpectrum, SampledWavelengths};
@@ -78,7 +77,7 @@ const CONE_K: f32 = 1.1;
 /// The key of the photons' random streams.
 const PHOTON_STREAM: u64 = (1 << 63) | 0x4a_504d; // "JPM"
 /// The key of the iterations' wavelength streams.
-const WAVELENGTH_STREAM: u64 = (1 << 63) | 0x4a_504d_57; // "JPMW"
+const WAVELENGTH_STREAM: u64 = (1 << 63) | 0x4a50_4d57; // "JPMW"
 
 /// Photons per work item.
 const CHUNK: u64 = 4096;
@@ -248,9 +247,10 @@ impl Maps {
     }
 }
 
-/// Traces `count` photons (iteration `it`, stream offset `first_stream`) and keeps, per
-/// photon in order, the hits `keep` accepts (given the hit's depth and whether every bounce
-/// before it was specular).
+/// Traces `count` photons (random streams `stream..stream + count`) at the wavelengths
+/// `lambda` and keeps, photon by photon in order, the hits `keep` accepts (given the hit's
+/// depth and whether every bounce before it was specular), each with its power.
+#[allow(clippy::too_many_arguments)]
 fn trace_photons(
     scene: &Scene,
     s: &PathSettings,
@@ -345,21 +345,8 @@ fn camera_sample(
     iteration: u32,
     heap: &mut BinaryHeap<(u32, u32)>,
 ) -> (SampledSpectrum, f32) {
-    let key = settings.pixel_key(x as i32, y as i32);
-    let mut sampler = Sampler::new(settings.seed, key, u64::from(iteration));
-    let (offset, weight) = sample_pixel_offset(
-        &settings.filter,
-        &mut sampler,
-        (x, y),
-        (settings.width, settings.height),
-        settings.sample_border,
-    );
-    let u_lens = sampler.next_2d();
-    let mut ray = scene.camera.pixel_ray(x as i32, y as i32, offset, u_lens);
-    let mut beta = match scene.mode {
-        ColorMode::Spectral => SampledSpectrum::splat(1.0),
-        ColorMode::Rgb => SampledSpectrum::from_rgb([1.0; 3]),
-    };
+    let (mut sampler, mut ray, weight) = crate::sppm::pixel_ray(scene, settings, (x, y), iteration);
+    let mut beta = crate::sppm::unit(scene);
     let mut radiance = SampledSpectrum::ZERO;
     let max_segments = maps.max_depth.min(MAX_SPECULAR_CHAIN);
     let mut segments = 1u32;

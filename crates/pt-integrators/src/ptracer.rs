@@ -174,25 +174,48 @@ fn trace_light_path<S: RandomSource>(
 
     // A ray from a light, and every surface it meets connected to the camera.
     walk_light_path::<_, false>(scene, s, sampler, &lambda, |v, sampler| {
-        let u_lens = sampler.next_2d();
-        let Some(cc) = camera.connect(v.hit.p, u_lens) else {
-            return;
-        };
-        let wc = v.frame.to_local(cc.dir);
-        let ng_cam = v.hit.ng.dot(cc.dir);
-        if ng_cam * wc.z <= 0.0 {
-            return;
-        }
-        let f = v.bsdf.eval(wc, v.wl);
-        if f.is_black() {
-            return;
-        }
-        let adjoint = v.wl.z.abs() * ng_cam.abs() / v.ng_light.abs();
-        let origin = offset_ray_origin(v.hit.p, v.hit.ng * ng_cam.signum());
-        if scene.segment_unoccluded(origin, cc.camera_point) {
-            push(cc.film, v.beta * f * (adjoint * cc.weight), &v.lambda);
+        if let Some(seen) = seen_by_camera(scene, v, sampler.next_2d()) {
+            push(seen.connection.film, seen.contribution, &v.lambda);
         }
     });
+}
+
+/// A light path's vertex seen by the camera ([`seen_by_camera`]).
+pub(crate) struct CameraSight {
+    /// The connection (film position, importance).
+    pub connection: pt_render::camera::CameraConnection,
+    /// The direction to the camera, the vertex's local frame.
+    pub wc: Vec3,
+    /// |ng . direction to the camera|.
+    pub cos: f32,
+    /// `beta f(w_cam, w_light) |cos_s(w_light)| |ng . w_cam| / |ng . w_light| W`: what the vertex
+    /// adds to the measurement (see the module documentation).
+    pub contribution: SampledSpectrum,
+}
+
+/// Connects a light path's vertex to the camera (`u_lens` picks a thin lens's point): `None`
+/// when the camera cannot see it, the BSDF sends nothing that way, or the segment is blocked.
+pub(crate) fn seen_by_camera(scene: &Scene, v: &LightVertex, u_lens: Vec2) -> Option<CameraSight> {
+    let cc = scene.camera.connect(v.hit.p, u_lens)?;
+    let wc = v.frame.to_local(cc.dir);
+    let ng_cam = v.hit.ng.dot(cc.dir);
+    if ng_cam * wc.z <= 0.0 {
+        return None;
+    }
+    let f = v.bsdf.eval(wc, v.wl);
+    if f.is_black() {
+        return None;
+    }
+    let adjoint = v.wl.z.abs() * ng_cam.abs() / v.ng_light.abs();
+    let origin = offset_ray_origin(v.hit.p, v.hit.ng * ng_cam.signum());
+    scene
+        .segment_unoccluded(origin, cc.camera_point)
+        .then(|| CameraSight {
+            contribution: v.beta * f * (adjoint * cc.weight),
+            connection: cc,
+            wc,
+            cos: ng_cam.abs(),
+        })
 }
 
 /// A surface a light path meets (see [`walk_light_path`]).

@@ -132,21 +132,8 @@ fn camera_path(
     out: &mut Vec<VisiblePoint>,
 ) -> (SampledSpectrum, f32) {
     let pixel = y * settings.width + x;
-    let key = settings.pixel_key(x as i32, y as i32);
-    let mut sampler = Sampler::new(settings.seed, key, u64::from(iteration));
-    let (offset, weight) = sample_pixel_offset(
-        &settings.filter,
-        &mut sampler,
-        (x, y),
-        (settings.width, settings.height),
-        settings.sample_border,
-    );
-    let u_lens = sampler.next_2d();
-    let mut ray = scene.camera.pixel_ray(x as i32, y as i32, offset, u_lens);
-    let mut beta = match scene.mode {
-        ColorMode::Spectral => SampledSpectrum::splat(1.0),
-        ColorMode::Rgb => SampledSpectrum::from_rgb([1.0; 3]),
-    };
+    let (mut sampler, mut ray, weight) = pixel_ray(scene, settings, (x, y), iteration);
+    let mut beta = unit(scene);
     let mut radiance = SampledSpectrum::ZERO;
     let max_segments = if s.max_depth < 0 {
         MAX_SPECULAR_CHAIN
@@ -227,6 +214,37 @@ fn camera_path(
         segments += 1;
     }
     (radiance, weight)
+}
+
+/// The camera ray of pixel (x, y) in iteration `iteration` (its film position drawn from the
+/// filter, as `--reconstruction importance` does), the pixel's sampler for what follows, and
+/// the sample's filter weight.
+pub(crate) fn pixel_ray(
+    scene: &Scene,
+    settings: &crate::RenderSettings,
+    (x, y): (u32, u32),
+    iteration: u32,
+) -> (Sampler, Ray, f32) {
+    let key = settings.pixel_key(x as i32, y as i32);
+    let mut sampler = Sampler::new(settings.seed, key, u64::from(iteration));
+    let (offset, weight) = sample_pixel_offset(
+        &settings.filter,
+        &mut sampler,
+        (x, y),
+        (settings.width, settings.height),
+        settings.sample_border,
+    );
+    let u_lens = sampler.next_2d();
+    let ray = scene.camera.pixel_ray(x as i32, y as i32, offset, u_lens);
+    (sampler, ray, weight)
+}
+
+/// A path's initial throughput, 1 in the scene's colour mode.
+pub(crate) fn unit(scene: &Scene) -> SampledSpectrum {
+    match scene.mode {
+        ColorMode::Spectral => SampledSpectrum::splat(1.0),
+        ColorMode::Rgb => SampledSpectrum::from_rgb([1.0; 3]),
+    }
 }
 
 /// Renders `settings.spp` iterations of SPPM into `state` (its pixels' statistics), checking

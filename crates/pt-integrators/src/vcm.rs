@@ -46,7 +46,9 @@
 
 use crate::grid::PointGrid;
 use crate::path::PathSettings;
-use crate::ptracer::{add_batches, shading_frame, to_rgb, walk_light_path, Arrival, Splat};
+use crate::ptracer::{
+    add_batches, seen_by_camera, shading_frame, to_rgb, walk_light_path, Arrival, Splat,
+};
 use pt_bsdf::SurfaceBsdf;
 use pt_math::{offset_ray_origin, Frame, Ray, Vec2, Vec3};
 use pt_render::light::Light;
@@ -58,11 +60,11 @@ use std::f32::consts::PI;
 use std::sync::atomic::AtomicBool;
 
 /// The key of the light subpaths' random streams (above every pixel key).
-const LIGHT_STREAM: u64 = (1 << 63) | 0x56_434d_4c; // "VCML"
+const LIGHT_STREAM: u64 = (1 << 63) | 0x5643_4d4c; // "VCML"
 /// The key of the camera subpaths' random streams.
-const CAMERA_STREAM: u64 = (1 << 63) | 0x56_434d_43; // "VCMC"
+const CAMERA_STREAM: u64 = (1 << 63) | 0x5643_4d43; // "VCMC"
 /// The key of the iterations' wavelength streams (`vcm`).
-const WAVELENGTH_STREAM: u64 = (1 << 63) | 0x56_434d_57; // "VCMW"
+const WAVELENGTH_STREAM: u64 = (1 << 63) | 0x5643_4d57; // "VCMW"
 
 /// Subpaths per work item: each item keeps its splats and light vertices in one list.
 const CHUNK: u64 = 1024;
@@ -430,7 +432,6 @@ fn light_subpath(
     out: &mut Vec<LightVertex>,
     splats: &mut Vec<Splat>,
 ) {
-    let camera = &scene.camera;
     let mut mis_state = SubpathMis::default();
     let mut prev = Vec3::ZERO;
     walk_light_path::<_, true>(scene, s, sampler, lambda, |v, sampler| {
@@ -486,32 +487,16 @@ fn light_subpath(
             return;
         }
         // t = 1: the vertex seen by the camera.
-        let u_lens = sampler.next_2d();
-        let Some(cc) = camera.connect(v.hit.p, u_lens) else {
-            return;
-        };
-        let wc = v.frame.to_local(cc.dir);
-        let ng_cam = v.hit.ng.dot(cc.dir);
-        if ng_cam * wc.z <= 0.0 {
-            return;
-        }
-        let fv = v.bsdf.eval(wc, v.wl);
-        if fv.is_black() {
-            return;
-        }
-        let weight = camera_weight(
-            &mis_state,
-            cc.weight * ng_cam.abs() * scale,
-            v.bsdf.pdf(wc, v.wl),
-            f,
-        );
-        let adjoint = v.wl.z.abs() * ng_cam.abs() / v.ng_light.abs();
-        let c = v.beta * fv * (adjoint * cc.weight * weight);
-        let origin = offset_ray_origin(v.hit.p, v.hit.ng * ng_cam.signum());
-        if !c.is_black() && scene.segment_unoccluded(origin, cc.camera_point) {
+        if let Some(seen) = seen_by_camera(scene, v, sampler.next_2d()) {
+            let weight = camera_weight(
+                &mis_state,
+                seen.connection.weight * seen.cos * scale,
+                v.bsdf.pdf(seen.wc, v.wl),
+                f,
+            );
             splats.push(Splat {
-                film: cc.film,
-                rgb: to_rgb(scene, c, &v.lambda),
+                film: seen.connection.film,
+                rgb: to_rgb(scene, seen.contribution * weight, &v.lambda),
                 camera: false,
             });
         }
@@ -583,7 +568,7 @@ fn camera_subpath(
         // Emitters met (s = 0).
         if let Some((li, light)) = scene.shape_light(hit.shape) {
             let le = light.emitted(hit.ns, wo_world, hit.uv, lambda);
-            if !le.is_black() && !(depth == 1 && s.hide_emitters) {
+            if !(le.is_black() || depth == 1 && s.hide_emitters) {
                 let w = if depth == 1 {
                     1.0
                 } else {
@@ -674,6 +659,24 @@ fn camera_subpath(
         }
     }
     (film, radiance)
+}
+
+/// Camera subpath `k` as a camera sample for the film (black ones too: their filter weights
+/// count in the pixels' averages).
+fn camera_sample(
+    it: &Iteration,
+    sampler: &mut Sampler,
+    lambda: &SampledWavelengths,
+    k: u64,
+    width: u32,
+    own: &[LightVertex],
+) -> Splat {
+    let (film, l) = camera_subpath(it, sampler, lambda, k as usize, width, own);
+    Splat {
+        film,
+        rgb: to_rgb(it.scene, l, lambda),
+        camera: true,
+    }
 }
 
 /// Light sampling at a camera vertex (s = 1), weighted.
@@ -857,13 +860,9 @@ pub fn render_vcm_passes(
                         &mut chunk.splats,
                     );
                     let mut sampler = Sampler::new(settings.seed, CAMERA_STREAM, index);
-                    let (film, l) = camera_subpath(&it, &mut sampler, &lambda, k as usize, w, &own);
-                    // Black samples too: their filter weights count in the average.
-                    chunk.splats.push(Splat {
-                        film,
-                        rgb: to_rgb(scene, l, &lambda),
-                        camera: true,
-                    });
+                    chunk
+                        .splats
+                        .push(camera_sample(&it, &mut sampler, &lambda, k, w, &own));
                 }
                 progress(range(c as u64).count() as u64);
             });
@@ -920,13 +919,7 @@ pub fn render_vcm_passes(
                             let index = u64::from(iteration) * paths + k;
                             let mut sampler = Sampler::new(settings.seed, CAMERA_STREAM, index);
                             let own = it.subpath(k);
-                            let (film, l) =
-                                camera_subpath(&it, &mut sampler, &lambda, k as usize, w, own);
-                            out.push(Splat {
-                                film,
-                                rgb: to_rgb(scene, l, &lambda),
-                                camera: true,
-                            });
+                            out.push(camera_sample(&it, &mut sampler, &lambda, k, w, own));
                         }
                         let n = range(c).count() as u64;
                         progress(n - n / 2);

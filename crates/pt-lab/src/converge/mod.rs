@@ -91,6 +91,8 @@ pub enum Method {
     /// Stochastic progressive photon mapping (`sppm`, default settings): its spp are
     /// iterations.
     Sppm,
+    /// Jensen's photon mapping (`photonmapper`, default settings): its spp are iterations.
+    PhotonMapper,
     /// Bidirectional path tracing (`bdpt`).
     Bdpt,
     /// Vertex connection and merging (`vcm`, default settings): its spp are iterations.
@@ -361,6 +363,22 @@ fn pt_curves(
             let render =
                 |rs: &RenderSettings| pt_integrators::sppm::render(scene, rs, &params, &|_| {});
             let extra = ("integrator", "sppm");
+            let points = pt_curve(
+                s, scene, settings, render, extra, &name, spp, reference, log,
+            )?;
+            all.push(Series { name, points });
+        }
+        if s.integrators.contains(&Method::PhotonMapper) {
+            let params = pt_integrators::photonmap::PhotonMapSettings::default();
+            pt_integrators::photonmap::check(scene, &params).map_err(LabError::Invalid)?;
+            let name = match mode {
+                None => "pt-photonmapper".to_string(),
+                Some(m) => format!("pt-{}-photonmapper", m.name()),
+            };
+            let render = |rs: &RenderSettings| {
+                pt_integrators::photonmap::render(scene, rs, &params, &|_| {})
+            };
+            let extra = ("integrator", "photonmapper");
             let points = pt_curve(
                 s, scene, settings, render, extra, &name, spp, reference, log,
             )?;
