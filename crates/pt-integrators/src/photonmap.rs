@@ -38,7 +38,7 @@ use pt_bsdf::SurfaceBsdf;
 use pt_math::{offset_ray_origin, Ray, Vec3};
 use pt_render::sampler::Sampler;
 use pt_render::Scene;
-use pt_spectrum::{ColorMode, SampledSpectrum, SampledWavelengths};
+use pt_spectrum::{SampledSpectrum, SampledWavelengths};
 use rayon::prelude::*;
 use std::collections::BinaryHeap;
 use std::sync::atomic::AtomicBool;
@@ -76,8 +76,6 @@ const CONE_K: f32 = 1.1;
 
 /// The key of the photons' random streams.
 const PHOTON_STREAM: u64 = (1 << 63) | 0x4a_504d; // "JPM"
-/// The key of the iterations' wavelength streams.
-const WAVELENGTH_STREAM: u64 = (1 << 63) | 0x4a50_4d57; // "JPMW"
 
 /// Photons per work item.
 const CHUNK: u64 = 4096;
@@ -516,12 +514,7 @@ pub fn render_photon_passes(
     let photon_progress = |n: u64| progress(n * pixels / (2 * photons.max(1)));
     crate::render::in_passes(state, settings.spp, cancel, 1, 1, |state, its| {
         let it = its.start;
-        let lambda = match scene.mode {
-            ColorMode::Spectral => SampledWavelengths::sample_visible(
-                Sampler::new(settings.seed, WAVELENGTH_STREAM, u64::from(it)).next_1d(),
-            ),
-            ColorMode::Rgb => SampledWavelengths::sample_visible(0.5),
-        };
+        let lambda = crate::render::iteration_wavelengths(scene, settings.seed, it);
         let base = u64::from(it) * photons;
         let global = trace_photons(
             scene,

@@ -78,8 +78,6 @@ impl Default for SppmSettings {
 
 /// The key of the photons' random streams (above every pixel key).
 const PHOTON_STREAM: u64 = (1 << 63) | 0x5048_4f54_4f4e; // "PHOTON"
-/// The key of the iterations' wavelength streams.
-const WAVELENGTH_STREAM: u64 = (1 << 63) | 0x5741_5645; // "WAVE"
 /// Photons per work item (each keeps its deposits in one list).
 const CHUNK: u64 = 4096;
 /// Most segments of a camera path through specular surfaces when `max_depth` is unlimited.
@@ -267,12 +265,7 @@ pub fn render_sppm_passes(
         let it = its.start;
         let r2 = radius_squared(r0, sppm.alpha, it);
         let r = r2.sqrt() as f32;
-        let lambda = match scene.mode {
-            ColorMode::Spectral => SampledWavelengths::sample_visible(
-                Sampler::new(settings.seed, WAVELENGTH_STREAM, u64::from(it)).next_1d(),
-            ),
-            ColorMode::Rgb => SampledWavelengths::sample_visible(0.5),
-        };
+        let lambda = crate::render::iteration_wavelengths(scene, settings.seed, it);
         // 1. Camera pass, row by row.
         let rows: Vec<CameraRow> = (0..h)
             .into_par_iter()

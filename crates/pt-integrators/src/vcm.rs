@@ -63,7 +63,7 @@ use std::sync::atomic::AtomicBool;
 const LIGHT_STREAM: u64 = (1 << 63) | 0x5643_4d4c; // "VCML"
 /// The key of the camera subpaths' random streams.
 const CAMERA_STREAM: u64 = (1 << 63) | 0x5643_4d43; // "VCMC"
-/// The key of the iterations' wavelength streams (`vcm`).
+/// The key of the subpath pairs' wavelength streams (`bdpt`).
 const WAVELENGTH_STREAM: u64 = (1 << 63) | 0x5643_4d57; // "VCMW"
 
 /// Subpaths per work item: each item keeps its splats and light vertices in one list.
@@ -405,16 +405,10 @@ fn wavelengths(
 ) -> SampledWavelengths {
     match scene.mode {
         ColorMode::Rgb => SampledWavelengths::sample_visible(0.5),
-        ColorMode::Spectral => {
-            let stream = if vcm.merging {
-                u64::from(it)
-            } else {
-                (u64::from(it) << 32) | index
-            };
-            SampledWavelengths::sample_visible(
-                Sampler::new(seed, WAVELENGTH_STREAM, stream).next_1d(),
-            )
-        }
+        ColorMode::Spectral if vcm.merging => crate::render::iteration_wavelengths(scene, seed, it),
+        ColorMode::Spectral => SampledWavelengths::sample_visible(
+            Sampler::new(seed, WAVELENGTH_STREAM, (u64::from(it) << 32) | index).next_1d(),
+        ),
     }
 }
 
