@@ -369,32 +369,15 @@ fn camera_sample(
         let frame = shading_frame(&hit);
         let wo = frame.to_local(w_cam);
         if bsdf.has_smooth_lobe() {
+            let estimate = |map: &KdTree<Photon>, heap: &mut BinaryHeap<(u32, u32)>| {
+                maps.estimate(map, hit.p, hit.ng, &frame, wo, &bsdf, segments, heap)
+            };
             if !pm.final_gather {
-                radiance += beta
-                    * maps.estimate(
-                        &maps.global,
-                        hit.p,
-                        hit.ng,
-                        &frame,
-                        wo,
-                        &bsdf,
-                        segments,
-                        heap,
-                    );
+                radiance += beta * estimate(&maps.global, heap);
                 break;
             }
             radiance += beta * direct_light(scene, &hit, &frame, &bsdf, wo, lambda, &mut sampler);
-            radiance += beta
-                * maps.estimate(
-                    &maps.caustic,
-                    hit.p,
-                    hit.ng,
-                    &frame,
-                    wo,
-                    &bsdf,
-                    segments,
-                    heap,
-                );
+            radiance += beta * estimate(&maps.caustic, heap);
             radiance += beta
                 * gather(
                     scene,

@@ -828,6 +828,24 @@ pub fn render_vcm_passes(
             chunks: &[],
             grid: None,
         };
+        // Light subpath k: its vertices and camera splats appended; returns its wavelengths.
+        let trace_light = |k: u64, vertices: &mut Vec<LightVertex>, splats: &mut Vec<Splat>| {
+            let lambda = wavelengths(scene, vcm, settings.seed, iteration, k);
+            let index = u64::from(iteration) * paths + k;
+            let mut sampler = Sampler::new(settings.seed, LIGHT_STREAM, index);
+            light_subpath(
+                scene,
+                s,
+                vcm,
+                &f,
+                scale as f32,
+                &mut sampler,
+                &lambda,
+                vertices,
+                splats,
+            );
+            lambda
+        };
         for c in pool.iter_mut() {
             c.vertices.clear();
             c.ends.clear();
@@ -839,20 +857,8 @@ pub fn render_vcm_passes(
                 let mut own = Vec::new();
                 for k in range(c as u64) {
                     own.clear();
-                    let lambda = wavelengths(scene, vcm, settings.seed, iteration, k);
+                    let lambda = trace_light(k, &mut own, &mut chunk.splats);
                     let index = u64::from(iteration) * paths + k;
-                    let mut sampler = Sampler::new(settings.seed, LIGHT_STREAM, index);
-                    light_subpath(
-                        scene,
-                        s,
-                        vcm,
-                        &it.f,
-                        it.scale,
-                        &mut sampler,
-                        &lambda,
-                        &mut own,
-                        &mut chunk.splats,
-                    );
                     let mut sampler = Sampler::new(settings.seed, CAMERA_STREAM, index);
                     chunk
                         .splats
@@ -864,20 +870,7 @@ pub fn render_vcm_passes(
             // 1. Every light subpath: vertices and t = 1 splats.
             pool.par_iter_mut().enumerate().for_each(|(c, chunk)| {
                 for k in range(c as u64) {
-                    let lambda = wavelengths(scene, vcm, settings.seed, iteration, k);
-                    let index = u64::from(iteration) * paths + k;
-                    let mut sampler = Sampler::new(settings.seed, LIGHT_STREAM, index);
-                    light_subpath(
-                        scene,
-                        s,
-                        vcm,
-                        &it.f,
-                        it.scale,
-                        &mut sampler,
-                        &lambda,
-                        &mut chunk.vertices,
-                        &mut chunk.splats,
-                    );
+                    trace_light(k, &mut chunk.vertices, &mut chunk.splats);
                     chunk.ends.push(chunk.vertices.len() as u32);
                 }
                 progress(range(c as u64).count() as u64 / 2);
