@@ -3,8 +3,8 @@
 //!   on scenes whose camera sees no specular surface it agrees with the Mitsuba `path`
 //!   references (block z-test and mean ratio, `common::judge_against_reference_at`), over
 //!   every kind of light it emits from (area lights with textures, spot light with an image,
-//!   projector, directional light, environment map) and in spectral mode; with fluorescence
-//!   it agrees with the path tracer's image; Its own Mitsuba
+//!   projector, directional light, environment map) and in spectral mode (fluorescence:
+//!   tests/fluorescence.rs, with every integrator); its own Mitsuba
 //!   `ptracer` references (the caustic scenes) are tested by tests/references.rs;
 //! - the caustic a point light throws through a glass ball onto a diffuse wall, which no camera
 //!   path can sample, is there (and in the photon mapper's image);
@@ -144,43 +144,4 @@ fn light_tracer_is_deterministic_and_resumable() {
     // A different seed gives a different image.
     let other = run(&p("seed.exr"), &["--spp", "12", "--seed", "3"]);
     assert!(bits(&other) != bits(&one));
-}
-
-/// Fluorescence on light paths (the adjoint of the camera paths' rule): on the fluorescent
-/// scene the light tracer's image agrees with the path tracer's, whose fluorescence
-/// tests/fluorescence.rs checks against closed forms. The whole image's mean per channel must
-/// agree within 4 combined standard errors (from both renders' variances; measured at 4096
-/// spp: 0.8, 0.5 and 0.7 of them), and no block may fail the z-test family. A light path that
-/// kept its wavelength at the fluorescent surface (the adjoint albedo without the move) fails
-/// 78 of 120 blocks (max |z| 304).
-#[test]
-fn light_tracer_traces_fluorescence() {
-    let dir = scratch("ptracer_fluorescence");
-    let scene = repo().join("scenes/fluorescence.xml");
-    let (light, lvar) = render(
-        &scene,
-        &dir,
-        "ptracer",
-        &["--integrator", "ptracer", "--spp", "1024"],
-    );
-    let (camera, cvar) = render(&scene, &dir, "path", &["--spp", "1024", "--seed", "9"]);
-    let z = pt_stats::block_ztest(&light, &lvar, &camera, &cvar, BLOCK, ALPHA).unwrap();
-    eprintln!(
-        "fluorescence ptracer vs path: {} of {} blocks fail, max |z| {:.2}",
-        z.failed, z.tests, z.max_abs_z
-    );
-    assert_eq!(z.failed, 0, "max |z| {}", z.max_abs_z);
-    let n = light.data.len() as f64;
-    let sum = |img: &pt_image::Image, c: usize| -> f64 {
-        img.data.iter().map(|p| f64::from(p[c])).sum::<f64>()
-    };
-    for c in 0..3 {
-        let (ml, mc) = (sum(&light, c) / n, sum(&camera, c) / n);
-        let se = ((sum(&lvar, c) + sum(&cvar, c)) / (n * n)).sqrt();
-        eprintln!("channel {c}: ptracer {ml:.6}, path {mc:.6}, se {se:.2e}");
-        assert!(
-            (ml - mc).abs() < 4.0 * se,
-            "channel {c}: {ml} vs {mc} (se {se})"
-        );
-    }
 }

@@ -702,7 +702,7 @@ fn render_sppm(
         |s| s.light.is_none() && s.splat.is_none(),
         "the saved state is not a photon mapper's",
         sppm::new_state,
-        |scene, _| sppm::check(scene, params),
+        |_, _| sppm::check(params),
     )?;
     let pixels = u64::from(settings.width) * u64::from(settings.height);
     run.progress.start_samples(
@@ -791,7 +791,7 @@ fn render_photonmapper(
         |s| s.light.is_none() && s.splat.is_none(),
         "the saved state is not a photon mapper's",
         sppm::new_state,
-        |scene, _| photonmap::check(scene, params),
+        |_, _| photonmap::check(params),
     )?;
     let pixels = u64::from(settings.width) * u64::from(settings.height);
     run.progress.start_samples(

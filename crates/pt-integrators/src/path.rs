@@ -135,8 +135,27 @@ pub fn li<S: RandomSource>(
     sampler: &mut S,
     lambda: &SampledWavelengths,
 ) -> SampledSpectrum {
+    trace_one(
+        scene,
+        s,
+        PathState::new(scene, ray, lambda),
+        sampler,
+        lambda,
+    )
+}
+
+/// Traces the one path `path` (drawing from `sampler`, which it leaves where the path ended)
+/// and returns its estimate.
+#[inline(always)]
+fn trace_one<S: RandomSource>(
+    scene: &Scene,
+    s: &PathSettings,
+    path: PathState,
+    sampler: &mut S,
+    lambda: &SampledWavelengths,
+) -> SampledSpectrum {
     let mut first = Some(PathStart {
-        path: PathState::new(scene, ray, lambda),
+        path,
         sampler: sampler.clone(),
         lambda: *lambda,
         tag: 0,
@@ -152,6 +171,35 @@ pub fn li<S: RandomSource>(
         },
     );
     radiance
+}
+
+/// Radiance arriving along `ray` through at least one fluorescent surface (where the path
+/// scatters at a fluorescent material, whichever lane choices it makes there), estimated
+/// with one path of the path tracer continuing a camera path: `throughput` is the camera
+/// path's weight up to `ray` and `segments` the number of segments before it.
+///
+/// The bidirectional and photon-based methods take such paths from the camera side alone:
+/// a light subpath that changed wavelengths at a fluorescent surface cannot be joined to a
+/// camera subpath at the film's wavelengths (the two would have to agree on a continuous
+/// wavelength: an event of probability zero), so their light subpaths end where they meet a
+/// fluorescent surface and the paths through one are left to the path tracer's strategies,
+/// light sampling and BSDF sampling under its MIS, with fluorescence as the camera paths do
+/// it (`pt_render::fluorescence`). The split is a partition of path space: each path is
+/// estimated by one of the two sides.
+pub(crate) fn li_through_fluorescence<S: RandomSource>(
+    scene: &Scene,
+    ray: Ray,
+    throughput: SampledSpectrum,
+    segments: u32,
+    s: &PathSettings,
+    sampler: &mut S,
+    lambda: &SampledWavelengths,
+) -> SampledSpectrum {
+    let mut path = PathState::new(scene, ray, lambda);
+    path.throughput = throughput;
+    path.depth = segments;
+    path.awaits_fluorescence = true;
+    trace_one(scene, s, path, sampler, lambda)
 }
 
 /// A path as [`trace_paths`] takes it and hands it back: the path, its random numbers, the
@@ -200,6 +248,10 @@ pub struct PathState {
     /// A light sample's shadow ray waiting for its visibility test, and what it adds to
     /// `radiance` if nothing blocks it.
     pub(crate) shadow: Option<(Ray, SampledSpectrum)>,
+    /// Whether the path counts only light that reaches it through a fluorescent surface (see
+    /// [`li_through_fluorescence`]): its radiance is dropped when it first scatters at one
+    /// (the flag then clears), and at its end if it never did.
+    pub(crate) awaits_fluorescence: bool,
 }
 
 impl PathState {
@@ -224,6 +276,7 @@ impl PathState {
             alive: true,
             covered: false,
             shadow: None,
+            awaits_fluorescence: false,
         }
     }
 }
@@ -278,7 +331,9 @@ pub fn trace_paths<S: RandomSource>(
                 }
                 if !sl.path.alive {
                     sl.path.covered |= environment_seen;
-                    if !sl.path.covered && s.coverage == Coverage::Path {
+                    if sl.path.awaits_fluorescence
+                        || !sl.path.covered && s.coverage == Coverage::Path
+                    {
                         sl.path.radiance = SampledSpectrum::ZERO;
                     }
                     finish(sl);

@@ -31,9 +31,13 @@
 //! of `lookup` photons shrinks), not with the number of samples per pixel. Each iteration
 //! (`--spp` counts them) traces its own maps at one set of wavelengths (spectral mode; as SPPM
 //! does), so the noise of the maps averages out over the iterations while their bias stays.
+//! Fluorescence: photons end where they meet a fluorescent surface, and the paths through one
+//! are the camera side's, estimated without bias by the path tracer's strategies from the
+//! first hit on ([`crate::path::li_through_fluorescence`], which says why); final gathering
+//! that reaches a fluorescent surface adds nothing there.
 
 use crate::path::PathSettings;
-use crate::ptracer::{shading_frame, to_rgb, walk_light_path, Arrival};
+use crate::ptracer::{shading_frame, to_rgb, walk_light_path, Arrival, AtFluorescence};
 use pt_bsdf::SurfaceBsdf;
 use pt_math::{offset_ray_origin, Ray, Vec3};
 use pt_render::sampler::Sampler;
@@ -269,22 +273,29 @@ fn trace_photons(
             for k in first..end {
                 let mut sampler = Sampler::new(seed, PHOTON_STREAM, stream + k);
                 let mut specular = true;
-                walk_light_path::<_, false>(scene, s, &mut sampler, lambda, |v, _| {
-                    if let Arrival::Scattered { delta, .. } = v.arrival {
-                        specular &= delta;
-                    }
-                    if v.bsdf.has_smooth_lobe() && keep(v.depth, specular) {
-                        out.push((
-                            v.hit.p,
-                            Photon {
-                                ng: v.hit.ng,
-                                w_light: v.w_light,
-                                power: v.beta * scale,
-                                depth: v.depth,
-                            },
-                        ));
-                    }
-                });
+                walk_light_path::<_, false>(
+                    scene,
+                    s,
+                    &mut sampler,
+                    lambda,
+                    AtFluorescence::Absorb,
+                    |v, _| {
+                        if let Arrival::Scattered { delta, .. } = v.arrival {
+                            specular &= delta;
+                        }
+                        if v.bsdf.has_smooth_lobe() && keep(v.depth, specular) {
+                            out.push((
+                                v.hit.p,
+                                Photon {
+                                    ng: v.hit.ng,
+                                    w_light: v.w_light,
+                                    power: v.beta * scale,
+                                    depth: v.depth,
+                                },
+                            ));
+                        }
+                    },
+                );
             }
             progress(end - first);
             out
@@ -348,6 +359,9 @@ fn camera_sample(
     let mut radiance = SampledSpectrum::ZERO;
     let max_segments = maps.max_depth.min(MAX_SPECULAR_CHAIN);
     let mut segments = 1u32;
+    // Whether the paths through a fluorescent surface are counted already (photons end at
+    // one: from the first hit on, the path tracer takes them).
+    let mut fluorescence_counted = !scene.has_fluorescence();
     loop {
         let seen = segments > 1 || !s.hide_emitters;
         let Some(hit) = scene.intersect(&ray) else {
@@ -363,6 +377,22 @@ fn camera_sample(
             }
         }
         if segments >= max_segments {
+            break;
+        }
+        if !fluorescence_counted {
+            radiance += crate::path::li_through_fluorescence(
+                scene,
+                ray,
+                beta,
+                segments - 1,
+                s,
+                &mut sampler,
+                lambda,
+            );
+            fluorescence_counted = true;
+        }
+        if scene.material(hit.shape).fluorescent().is_some() {
+            // Every path on from here scatters at a fluorescent surface: counted above.
             break;
         }
         let bsdf = scene.bsdf(&hit, lambda);
@@ -454,6 +484,10 @@ fn gather(
         let Some(next) = scene.intersect(&ray) else {
             return SampledSpectrum::ZERO;
         };
+        if scene.material(next.shape).fluorescent().is_some() {
+            // What a fluorescent surface sends is the camera side's to count.
+            return SampledSpectrum::ZERO;
+        }
         let b = scene.bsdf(&next, lambda);
         let f = shading_frame(&next);
         let w = f.to_local(-dir);
@@ -556,8 +590,8 @@ pub fn render_photon_passes(
     })
 }
 
-/// Whether the photon mapper can render `scene`; the reason when it cannot.
-pub fn check(scene: &Scene, pm: &PhotonMapSettings) -> Result<(), String> {
+/// Whether the photon mapper's settings are valid; the reason when they are not.
+pub fn check(pm: &PhotonMapSettings) -> Result<(), String> {
     if pm.global_photons == 0 && pm.caustic_photons == 0 {
         return Err(
             "photonmapper: no photons to trace (global_photons and caustic_photons are 0)".into(),
@@ -569,12 +603,6 @@ pub fn check(scene: &Scene, pm: &PhotonMapSettings) -> Result<(), String> {
                 "photonmapper: max_radius must be positive, got {r}"
             ));
         }
-    }
-    if scene.materials.iter().any(|m| m.fluorescent().is_some()) {
-        return Err(
-            "photonmapper does not yet trace fluorescence (not yet implemented); render fluorescent scenes with path or ptracer"
-                .into(),
-        );
     }
     Ok(())
 }

@@ -173,11 +173,18 @@ fn trace_light_path<S: RandomSource>(
     }
 
     // A ray from a light, and every surface it meets connected to the camera.
-    walk_light_path::<_, false>(scene, s, sampler, &lambda, |v, sampler| {
-        if let Some(seen) = seen_by_camera(scene, v, sampler.next_2d()) {
-            push(seen.connection.film, seen.contribution, &v.lambda);
-        }
-    });
+    walk_light_path::<_, false>(
+        scene,
+        s,
+        sampler,
+        &lambda,
+        AtFluorescence::Adjoint,
+        |v, sampler| {
+            if let Some(seen) = seen_by_camera(scene, v, sampler.next_2d()) {
+                push(seen.connection.film, seen.contribution, &v.lambda);
+            }
+        },
+    );
 }
 
 /// A light path's vertex seen by the camera ([`seen_by_camera`]).
@@ -273,6 +280,17 @@ pub(crate) enum Arrival {
     },
 }
 
+/// What a light path does where it meets a fluorescent surface.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum AtFluorescence {
+    /// Scatter by the adjoint of the camera paths' rule (the module documentation): the light
+    /// tracer's way.
+    Adjoint,
+    /// End on arrival, unseen: the methods that leave paths through fluorescent surfaces to
+    /// the camera side ([`crate::path::li_through_fluorescence`]).
+    Absorb,
+}
+
 /// Traces a path from a light: a light chosen by the scene's light selection, a ray from it
 /// ([`Light::sample_emission`]), then BSDF sampling from the light's side with importance
 /// transport weights (refraction's `eta^2`, the adjoint's shading normal correction), Russian
@@ -280,7 +298,8 @@ pub(crate) enum Arrival {
 /// segments counting one more to the eye (Mitsuba's `ptracer`). `visit` sees every surface
 /// met, before the path leaves it, with the sampler for its own numbers. Vertices whose
 /// arriving or leaving direction lies on different sides of the shading and geometric
-/// normals end the path (light leaks). `BIDIR`: the walk of the bidirectional methods:
+/// normals end the path (light leaks). At fluorescent surfaces the walk does what
+/// `fluorescence` says. `BIDIR`: the walk of the bidirectional methods:
 /// [`Arrival::Scattered`] carries the reverse density (one more BSDF evaluation per bounce),
 /// and Russian roulette weighs the throughput relative to the emitted ray's weight, as the
 /// camera side weighs its own (where Mitsuba's `ptracer` compares the weight itself, in the
@@ -291,6 +310,7 @@ pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
     s: &PathSettings,
     sampler: &mut S,
     lambda: &SampledWavelengths,
+    fluorescence: AtFluorescence,
     mut visit: impl FnMut(&LightVertex, &mut S),
 ) {
     let Some((li, pmf, u_sel)) = scene.sample_light(sampler.next_1d()) else {
@@ -333,6 +353,9 @@ pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
         // wavelengths, and the lanes move to the wavelengths they leave at (before the vertex
         // is seen: what leaves it, towards the camera too, is at those).
         if let Some(f) = scene.material(hit.shape).fluorescent() {
+            if fluorescence == AtFluorescence::Absorb {
+                return;
+            }
             bsdf.bsdf = Bsdf::Lambert(Lambert::new(f.adjoint_albedo(&lambda)));
             lambda = f.scatter_adjoint(&lambda, sampler.next_1d());
         }

@@ -372,6 +372,11 @@ fn draw<'a, S: RandomSource>(
         // some lanes move to an excitation wavelength, used by NEE and the rest of the path.
         if let Some(f) = material.fluorescent() {
             path.lambda = f.scatter(&path.lambda, sampler.next_1d());
+            if path.awaits_fluorescence {
+                // What the path found before this vertex is the other side's to count.
+                path.radiance = SampledSpectrum::ZERO;
+                path.awaits_fluorescence = false;
+            }
         }
         if use_light && bsdf.has_smooth_lobe() {
             match scene.sample_light(sampler.next_1d()) {

@@ -32,6 +32,9 @@
 //! found after `c` camera segments, by a photon that travelled `p` segments, forms a path of
 //! `c + p` segments. Each iteration uses one set of wavelengths for all its camera and photon
 //! paths (pbrt-v4's SPPM), so photons and visible points meet at the same wavelengths.
+//! Fluorescence: photons end where they meet a fluorescent surface, and the paths through one
+//! are the camera side's, estimated by the path tracer's strategies from the first hit on
+//! ([`crate::path::li_through_fluorescence`], which says why): consistent as before.
 //!
 //! Determinism: the camera pass is per pixel, photons are traced in chunks whose deposits are
 //! added in photon order, and the grid is built in visible-point order: the image is the same
@@ -43,7 +46,7 @@
 
 use crate::grid::PointGrid;
 use crate::path::PathSettings;
-use crate::ptracer::{shading_frame, to_rgb, walk_light_path};
+use crate::ptracer::{shading_frame, to_rgb, walk_light_path, AtFluorescence};
 use pt_bsdf::SurfaceBsdf;
 use pt_math::{offset_ray_origin, Frame, Ray, Vec3};
 use pt_render::film::sample_pixel_offset;
@@ -140,6 +143,9 @@ fn camera_path(
     };
     // Segments traced so far (the camera ray is the first).
     let mut segments = 1u32;
+    // Whether the paths through a fluorescent surface are counted already (photons end at
+    // one: from the first visible point on, the path tracer takes them).
+    let mut fluorescence_counted = !scene.has_fluorescence();
     loop {
         let seen = segments > 1 || !s.hide_emitters;
         let Some(hit) = scene.intersect(&ray) else {
@@ -155,6 +161,23 @@ fn camera_path(
             }
         }
         if segments >= max_segments {
+            break;
+        }
+        let fluorescent = scene.material(hit.shape).fluorescent().is_some();
+        if !fluorescence_counted {
+            radiance += crate::path::li_through_fluorescence(
+                scene,
+                ray,
+                beta,
+                segments - 1,
+                s,
+                &mut sampler,
+                lambda,
+            );
+            fluorescence_counted = true;
+        }
+        if fluorescent {
+            // Every path on from here scatters at a fluorescent surface: counted above.
             break;
         }
         let bsdf = scene.bsdf(&hit, lambda);
@@ -308,23 +331,30 @@ pub fn render_sppm_passes(
                 for k in first..end {
                     let index = u64::from(it) * photons + k;
                     let mut sampler = Sampler::new(settings.seed, PHOTON_STREAM, index);
-                    walk_light_path::<_, false>(scene, s, &mut sampler, &lambda, |v, _| {
-                        if v.depth < 2 {
-                            return;
-                        }
-                        grid.within(v.hit.p, |&i| {
-                            let vp = &points[i as usize];
-                            if vp.ng.dot(v.hit.ng) <= 0.0
-                                || vp.segments.saturating_add(v.depth) > max_depth
-                            {
+                    walk_light_path::<_, false>(
+                        scene,
+                        s,
+                        &mut sampler,
+                        &lambda,
+                        AtFluorescence::Absorb,
+                        |v, _| {
+                            if v.depth < 2 {
                                 return;
                             }
-                            let f = vp.bsdf.eval(vp.wo, vp.frame.to_local(v.w_light));
-                            if !f.is_black() {
-                                out.push((i, f * v.beta));
-                            }
-                        });
-                    });
+                            grid.within(v.hit.p, |&i| {
+                                let vp = &points[i as usize];
+                                if vp.ng.dot(v.hit.ng) <= 0.0
+                                    || vp.segments.saturating_add(v.depth) > max_depth
+                                {
+                                    return;
+                                }
+                                let f = vp.bsdf.eval(vp.wo, vp.frame.to_local(v.w_light));
+                                if !f.is_black() {
+                                    out.push((i, f * v.beta));
+                                }
+                            });
+                        },
+                    );
                 }
                 progress(((end - first) * pixels / photons) / 2);
                 out
@@ -347,8 +377,8 @@ pub fn render_sppm_passes(
     })
 }
 
-/// Whether SPPM can render `scene`; the reason when it cannot.
-pub fn check(scene: &Scene, sppm: &SppmSettings) -> Result<(), String> {
+/// Whether `sppm` settings are valid; the reason when they are not.
+pub fn check(sppm: &SppmSettings) -> Result<(), String> {
     if !(sppm.alpha > 0.0 && sppm.alpha < 1.0) {
         return Err(format!(
             "sppm: alpha must lie in (0, 1), got {}",
@@ -359,12 +389,6 @@ pub fn check(scene: &Scene, sppm: &SppmSettings) -> Result<(), String> {
         if !(r > 0.0 && r.is_finite()) {
             return Err(format!("sppm: initial_radius must be positive, got {r}"));
         }
-    }
-    if scene.materials.iter().any(|m| m.fluorescent().is_some()) {
-        return Err(
-            "sppm does not yet trace fluorescence on photon paths (not yet implemented); render fluorescent scenes with path"
-                .into(),
-        );
     }
     Ok(())
 }

@@ -43,11 +43,16 @@
 //! the same image for any number of threads, and per-batch pixel statistics for variance.
 //! Spectral mode: light subpath k and camera subpath k share their wavelengths (per path in
 //! `bdpt`; per iteration in `vcm`, where any camera path may merge with any light path).
+//! Fluorescence: light subpaths end where they meet a fluorescent surface, and a camera
+//! subpath that meets one hands the paths through it to the path tracer's strategies
+//! ([`crate::path::li_through_fluorescence`], which says why): a partition of path space,
+//! so the estimate stays unbiased; paths without fluorescent surfaces keep every strategy.
 
 use crate::grid::PointGrid;
 use crate::path::PathSettings;
 use crate::ptracer::{
-    add_batches, seen_by_camera, shading_frame, to_rgb, walk_light_path, Arrival, Splat,
+    add_batches, seen_by_camera, shading_frame, to_rgb, walk_light_path, Arrival, AtFluorescence,
+    Splat,
 };
 use pt_bsdf::SurfaceBsdf;
 use pt_math::{offset_ray_origin, Frame, Ray, Vec2, Vec3};
@@ -428,73 +433,80 @@ fn light_subpath(
 ) {
     let mut mis_state = SubpathMis::default();
     let mut prev = Vec3::ZERO;
-    walk_light_path::<_, true>(scene, s, sampler, lambda, |v, sampler| {
-        let cos_in = v.ng_light.abs();
-        match v.arrival {
-            Arrival::Emitted { light, pmf, ray } => {
-                let l = &scene.lights[light];
-                let emit = pmf * ray.pdf_pos * ray.pdf_dir;
-                let to_light = ray.origin - v.hit.p;
-                let d2 = to_light.length_squared();
-                let (direct, cos_light, dist2) = match l {
-                    Light::Area(a) => {
-                        let cos_l = ray.normal.dot(ray.ray.dir).abs();
-                        // Light sampling's solid-angle density from this vertex, per unit
-                        // area at the light.
-                        let direct = pmf * a.pdf(v.hit.p, ray.origin, ray.normal) * cos_l / d2;
-                        (direct, cos_l, Some(d2))
-                    }
-                    _ if l.is_infinite() => (pmf * l.escaped_pdf(-ray.ray.dir), 1.0, None),
-                    Light::Directional { .. } => (pmf, 1.0, None),
-                    _ => (pmf, 1.0, Some(d2)),
-                };
-                mis_state = SubpathMis::light(direct, emit, cos_light, l.is_delta(), f);
-                mis_state.arrive(dist2, cos_in);
+    walk_light_path::<_, true>(
+        scene,
+        s,
+        sampler,
+        lambda,
+        AtFluorescence::Absorb,
+        |v, sampler| {
+            let cos_in = v.ng_light.abs();
+            match v.arrival {
+                Arrival::Emitted { light, pmf, ray } => {
+                    let l = &scene.lights[light];
+                    let emit = pmf * ray.pdf_pos * ray.pdf_dir;
+                    let to_light = ray.origin - v.hit.p;
+                    let d2 = to_light.length_squared();
+                    let (direct, cos_light, dist2) = match l {
+                        Light::Area(a) => {
+                            let cos_l = ray.normal.dot(ray.ray.dir).abs();
+                            // Light sampling's solid-angle density from this vertex, per unit
+                            // area at the light.
+                            let direct = pmf * a.pdf(v.hit.p, ray.origin, ray.normal) * cos_l / d2;
+                            (direct, cos_l, Some(d2))
+                        }
+                        _ if l.is_infinite() => (pmf * l.escaped_pdf(-ray.ray.dir), 1.0, None),
+                        Light::Directional { .. } => (pmf, 1.0, None),
+                        _ => (pmf, 1.0, Some(d2)),
+                    };
+                    mis_state = SubpathMis::light(direct, emit, cos_light, l.is_delta(), f);
+                    mis_state.arrive(dist2, cos_in);
+                }
+                Arrival::Scattered {
+                    fwd,
+                    rev,
+                    cos_out,
+                    delta,
+                } => {
+                    mis_state.scatter(cos_out, fwd, rev, delta, f);
+                    mis_state.arrive(Some((v.hit.p - prev).length_squared()), cos_in);
+                }
             }
-            Arrival::Scattered {
-                fwd,
-                rev,
-                cos_out,
-                delta,
-            } => {
-                mis_state.scatter(cos_out, fwd, rev, delta, f);
-                mis_state.arrive(Some((v.hit.p - prev).length_squared()), cos_in);
+            prev = v.hit.p;
+            if !v.bsdf.has_smooth_lobe() {
+                return;
             }
-        }
-        prev = v.hit.p;
-        if !v.bsdf.has_smooth_lobe() {
-            return;
-        }
-        out.push(LightVertex {
-            p: v.hit.p,
-            ng: v.hit.ng,
-            frame: v.frame,
-            wl: v.wl,
-            w_light: v.w_light,
-            ng_light: v.ng_light,
-            bsdf: *v.bsdf,
-            beta: v.beta,
-            mis: mis_state,
-            depth: v.depth,
-        });
-        if !vcm.connections {
-            return;
-        }
-        // t = 1: the vertex seen by the camera.
-        if let Some(seen) = seen_by_camera(scene, v, sampler.next_2d()) {
-            let weight = camera_weight(
-                &mis_state,
-                seen.connection.weight * seen.cos * scale,
-                v.bsdf.pdf(seen.wc, v.wl),
-                f,
-            );
-            splats.push(Splat {
-                film: seen.connection.film,
-                rgb: to_rgb(scene, seen.contribution * weight, &v.lambda),
-                camera: false,
+            out.push(LightVertex {
+                p: v.hit.p,
+                ng: v.hit.ng,
+                frame: v.frame,
+                wl: v.wl,
+                w_light: v.w_light,
+                ng_light: v.ng_light,
+                bsdf: *v.bsdf,
+                beta: v.beta,
+                mis: mis_state,
+                depth: v.depth,
             });
-        }
-    });
+            if !vcm.connections {
+                return;
+            }
+            // t = 1: the vertex seen by the camera.
+            if let Some(seen) = seen_by_camera(scene, v, sampler.next_2d()) {
+                let weight = camera_weight(
+                    &mis_state,
+                    seen.connection.weight * seen.cos * scale,
+                    v.bsdf.pdf(seen.wc, v.wl),
+                    f,
+                );
+                splats.push(Splat {
+                    film: seen.connection.film,
+                    rgb: to_rgb(scene, seen.contribution * weight, &v.lambda),
+                    camera: false,
+                });
+            }
+        },
+    );
 }
 
 /// Traces camera subpath `index` (pixel `index` of the image) and returns its film position
@@ -574,6 +586,20 @@ fn camera_subpath(
                 };
                 radiance += beta * le * w;
             }
+        }
+        // Paths through a fluorescent surface are the camera side's alone (light subpaths end
+        // there): the path tracer's strategies from here on.
+        if scene.material(hit.shape).fluorescent().is_some() {
+            radiance += crate::path::li_through_fluorescence(
+                scene,
+                ray,
+                beta,
+                depth - 1,
+                s,
+                sampler,
+                lambda,
+            );
+            break;
         }
         if depth >= max_depth || ng_wo * wo.z <= 0.0 {
             break;
@@ -944,11 +970,6 @@ pub fn check(
     if scene.camera.is_orthographic() {
         return Err(format!(
             "{name}: an orthographic sensor is not yet supported (not yet implemented); use path or ptracer"
-        ));
-    }
-    if scene.materials.iter().any(|m| m.fluorescent().is_some()) {
-        return Err(format!(
-            "{name} does not yet trace fluorescence (not yet implemented); render fluorescent scenes with path or ptracer"
         ));
     }
     crate::ptracer::check(settings).map_err(|e| e.replace("ptracer", name))

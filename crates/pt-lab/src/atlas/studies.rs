@@ -452,7 +452,7 @@ pub fn transport(o: &AtlasSettings) -> Result<Study> {
         };
         pt_integrators::ptracer::check(&settings).map_err(LabError::Invalid)?;
         let photons = pt_integrators::sppm::SppmSettings::default();
-        pt_integrators::sppm::check(&scene, &photons).map_err(LabError::Invalid)?;
+        pt_integrators::sppm::check(&photons).map_err(LabError::Invalid)?;
         let path = render_within(
             &scene,
             &with_strategy(&base, Strategy::Mis),
@@ -507,7 +507,7 @@ pub fn transport(o: &AtlasSettings) -> Result<Study> {
         let bdpt = bidirectional(pt_integrators::vcm::VcmSettings::bdpt())?;
         let vcm = bidirectional(pt_integrators::vcm::VcmSettings::vcm())?;
         let maps = pt_integrators::photonmap::PhotonMapSettings::default();
-        pt_integrators::photonmap::check(&scene, &maps).map_err(LabError::Invalid)?;
+        pt_integrators::photonmap::check(&maps).map_err(LabError::Invalid)?;
         let jensen = render_steps(
             &settings,
             budget,

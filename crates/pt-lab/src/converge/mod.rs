@@ -355,7 +355,7 @@ fn pt_curves(
         }
         if photon_mapper {
             let params = pt_integrators::sppm::SppmSettings::default();
-            pt_integrators::sppm::check(scene, &params).map_err(LabError::Invalid)?;
+            pt_integrators::sppm::check(&params).map_err(LabError::Invalid)?;
             let name = match mode {
                 None => "pt-sppm".to_string(),
                 Some(m) => format!("pt-{}-sppm", m.name()),
@@ -370,7 +370,7 @@ fn pt_curves(
         }
         if s.integrators.contains(&Method::PhotonMapper) {
             let params = pt_integrators::photonmap::PhotonMapSettings::default();
-            pt_integrators::photonmap::check(scene, &params).map_err(LabError::Invalid)?;
+            pt_integrators::photonmap::check(&params).map_err(LabError::Invalid)?;
             let name = match mode {
                 None => "pt-photonmapper".to_string(),
                 Some(m) => format!("pt-{}-photonmapper", m.name()),

@@ -443,6 +443,12 @@ impl Scene {
             })
     }
 
+    /// Whether any surface is `fluorescent` (spectral mode only: RGB mode keeps the elastic
+    /// part).
+    pub fn has_fluorescence(&self) -> bool {
+        self.materials.iter().any(|m| m.fluorescent().is_some())
+    }
+
     /// The material of a hit shape.
     #[inline(always)]
     pub fn material(&self, shape: u32) -> &SurfaceMaterial {
