@@ -394,6 +394,23 @@ impl SurfaceBsdf {
         }
     }
 
+    /// The fraction of light that passes straight through the surface arriving along `-wo`
+    /// (`wo` local frame, pointing away from the side the light arrives from): a mask's holes
+    /// (1 - opacity) plus what the model lets through unbent, a thin dielectric's transmission
+    /// (1 - R', its `specular_transmittance` included); 0 for every other model (Mitsuba's
+    /// `eval_null_transmission`). Light sampling through media multiplies shadow rays by it.
+    pub fn null_transmission(&self, wo: Vec3) -> SampledSpectrum {
+        let model = |b: &Bsdf| match b {
+            Bsdf::ThinDielectric(t) => t.specular_transmittance * (1.0 - t.reflectance(wo.z)),
+            _ => SampledSpectrum::ZERO,
+        };
+        let through = match &self.blend {
+            None => model(&self.bsdf),
+            Some((w, b)) => model(&self.bsdf) * (1.0 - w) + model(b) * *w,
+        };
+        through * self.opacity + SampledSpectrum::splat(1.0 - self.opacity)
+    }
+
     /// Solid-angle pdf of `wi`, local frame.
     #[inline(always)]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {

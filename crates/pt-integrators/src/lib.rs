@@ -4,7 +4,7 @@
 //!
 //! | variant | Mitsuba plugin | method |
 //! |---|---|---|
-//! | [`Integrator::Path`] | `path`, `volpath` | unidirectional path tracing, NEE + MIS ([`path`]); `volpath` adds absorption by interior media |
+//! | [`Integrator::Path`] | `path`, `volpath` | unidirectional path tracing, NEE + MIS ([`path`]); `volpath` with media: [`volpath`] (free-flight and phase sampling, light sampling through media and null surfaces) |
 //! | [`Integrator::Direct`] | `direct` | direct illumination at the camera ray's hit: any numbers of light and BSDF samples, weighted by Veach's count-weighted power heuristic ([`direct`]) |
 //! | [`Integrator::PTracer`] | `ptracer` | light tracing: paths from the lights, every vertex connected to the camera and splatted ([`ptracer`]) |
 //! | [`Integrator::Sppm`] | `sppm` (pt) | stochastic progressive photon mapping with Knaus & Zwicker's radius schedule ([`sppm`]) |
@@ -37,6 +37,7 @@ pub mod render;
 mod scatter;
 pub mod sppm;
 pub mod vcm;
+pub mod volpath;
 
 pub use path::{Coverage, PathSettings, Strategy};
 pub use render::{render, render_passes, RenderSettings, RenderState};
@@ -507,6 +508,7 @@ fn render_ptracer(
         }
     }
     let (scene, settings, build_time, mut state) = prepare(
+        "ptracer",
         job,
         path,
         run.resume,
@@ -696,6 +698,7 @@ fn render_sppm(
     run: Run,
 ) -> Result<Rendered, IntegratorError> {
     let (scene, settings, build_time, mut state) = prepare(
+        "sppm",
         job,
         path,
         run.resume,
@@ -743,7 +746,9 @@ fn render_sppm(
 /// state to continue (refused with `wrong` unless `accepts` it, or holding more samples than
 /// asked for) or a `new` one.
 #[allow(clippy::type_complexity)]
+#[allow(clippy::too_many_arguments)]
 fn prepare(
+    name: &str,
     job: &Job,
     path: &PathSettings,
     resume: Option<RenderState>,
@@ -762,6 +767,12 @@ fn prepare(
         path: *path,
         ..RenderSettings::from_desc(desc)
     };
+    if scene.has_media() {
+        return Err(IntegratorError::Settings(format!(
+            "{name} does not yet trace participating media (not yet implemented): the scene has {} medium(s); render it with volpath",
+            scene.media.len()
+        )));
+    }
     check(&scene, &settings).map_err(IntegratorError::Settings)?;
     let state = match resume {
         Some(s) if accepts(&s) => s,
@@ -785,6 +796,7 @@ fn render_photonmapper(
     run: Run,
 ) -> Result<Rendered, IntegratorError> {
     let (scene, settings, build_time, mut state) = prepare(
+        "photonmapper",
         job,
         path,
         run.resume,
@@ -846,6 +858,7 @@ fn render_vcm(
 ) -> Result<Rendered, IntegratorError> {
     let name = params.name();
     let (scene, settings, build_time, mut state) = prepare(
+        params.name(),
         job,
         path,
         run.resume,

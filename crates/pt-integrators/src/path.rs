@@ -37,7 +37,7 @@ pub struct PathSettings {
     pub hide_emitters: bool,
     /// Direct-light strategy.
     pub strategy: Strategy,
-    /// Attenuate rays inside shapes with an interior medium (Mitsuba `volpath`); `path` ignores
+    /// Trace participating media (Mitsuba `volpath`, [`crate::volpath`]); `path` ignores
     /// media, as Mitsuba's does.
     pub media: bool,
     /// When a sample covers its pixel (its alpha) and what an uncovered sample returns.
@@ -303,6 +303,14 @@ pub fn trace_paths<S: RandomSource>(
     mut start: impl FnMut() -> Option<PathStart<S>>,
     mut finish: impl FnMut(&PathStart<S>),
 ) {
+    if crate::volpath::applies(scene, s) {
+        // Media: one path at a time through `volpath.rs`.
+        while let Some(mut sl) = start() {
+            crate::volpath::estimate(scene, s, &mut sl.path, &mut sl.sampler);
+            finish(&sl);
+        }
+        return;
+    }
     if let Some(counts) = s.direct {
         // Mitsuba's `direct` shades one hit per camera ray: nothing to keep in flight.
         while let Some(mut sl) = start() {
@@ -406,20 +414,6 @@ fn arrive(
         *covered = true;
     }
 
-    // Beer-Lambert: a ray that reaches a shape's surface from behind travelled inside it, so
-    // it crossed the shape's interior medium over the distance hit.t (the ray's direction is a
-    // unit vector). Multiplying by the transmittance exp(-sigma_t t) is the expected value of
-    // Mitsuba volpath's free-flight sampling for albedo 0, without its variance.
-    if s.media && ray.dir.dot(hit.ng) > 0.0 {
-        if let Some(tr) = scene.interior_transmittance(hit.shape, hit.t, lambda) {
-            *throughput *= tr;
-            if throughput.is_black() {
-                *alive = false;
-                return false;
-            }
-        }
-    }
-
     // Emission found by the ray just traced (written out here rather than through
     // `emitted_radiance`: the call cost 1.4% of the Cornell box's instructions).
     if let Some((li_idx, light)) = scene.shape_light(hit.shape) {
@@ -520,7 +514,7 @@ impl HitLightPdf<'_> {
 /// light sampling under MIS, 1 with BSDF sampling alone, and 0 with light sampling alone (NEE
 /// already counted it).
 #[inline]
-fn emission_weight(
+pub(crate) fn emission_weight(
     s: &PathSettings,
     depth: u32,
     prev_delta: bool,

@@ -24,6 +24,7 @@ pub mod fluorescence;
 pub mod geometry;
 pub mod light;
 pub mod material;
+pub mod medium;
 pub mod sampler;
 pub mod scene;
 pub mod sdf;

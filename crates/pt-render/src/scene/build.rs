@@ -14,8 +14,9 @@ use crate::camera::Camera;
 use crate::geometry::Primitive;
 use crate::light::{build_light, AreaLight, Light, LightShape};
 use crate::material::{build_material, SurfaceMaterial};
+use crate::medium::{Medium, Phase};
 use crate::texture::{
-    constant_spectrum, spectrum_for_role, DisplayPrimaries, Role, Texture, TextureBuilder,
+    constant_spectrum, rgb_of, spectrum_for_role, DisplayPrimaries, Role, Texture, TextureBuilder,
 };
 use obvhs::aabb::Aabb;
 use pt_math::glam::{Affine3A, Mat3, Vec3A};
@@ -72,16 +73,10 @@ impl Scene {
                 shape, si as u32, &mut prims, &mut refs, &mut stats, &mut data,
             )?;
             if let Some(m) = &shape.interior {
-                let sigma = constant_spectrum(&m.sigma_t, Role::Unbounded, ColorMode::Rgb);
-                let rgb = sigma.at(&pt_spectrum::SampledWavelengths::sample_visible(0.5));
-                if !rgb.is_finite() || rgb.0.min_element() < 0.0 {
-                    return Err(BuildError {
-                        loc: m.loc.clone(),
-                        message: "sigma_t must be finite and non-negative".into(),
-                    });
-                }
-                data.interior = Some(media.len() as u32);
-                media.push(constant_spectrum(&m.sigma_t, Role::Unbounded, mode));
+                data.interior = Some(add_medium(&mut media, m, mode)?);
+            }
+            if let Some(m) = &shape.exterior {
+                data.exterior = Some(add_medium(&mut media, m, mode)?);
             }
             if let Some(em) = &shape.emitter {
                 let radiance = emission_texture(em, &mut textures)?;
@@ -146,13 +141,18 @@ impl Scene {
         };
         let light_distr = Distribution1D::new(&weights);
         let camera = Camera::for_film(&desc.camera, &desc.film);
+        let camera_medium = match &desc.camera_medium {
+            Some(m) => Some(add_medium(&mut media, m, mode)?),
+            None => None,
+        };
         Ok(Scene {
             accel,
             prim_refs,
             instancing: instancing.map(|i| i.scene),
             shapes,
             materials,
-            media,
+            media: media.into_iter().map(|(_, m)| m).collect(),
+            camera_medium,
             lights,
             infinite_lights,
             light_distr,
@@ -162,6 +162,46 @@ impl Scene {
             stats,
         })
     }
+}
+
+/// Builds `m` in the colour mode `mode` and appends it to `media`; returns its index. The same
+/// description written once and referenced by several shapes becomes one medium.
+fn add_medium(
+    media: &mut Vec<(pt_scene::MediumDesc, Medium)>,
+    m: &pt_scene::MediumDesc,
+    mode: ColorMode,
+) -> Result<u32, BuildError> {
+    if let Some(i) = media.iter().position(|(d, _)| d == m) {
+        return Ok(i as u32);
+    }
+    let sigma_rgb = rgb_of(&m.sigma_t, Role::Unbounded);
+    let albedo_rgb = rgb_of(&m.albedo, Role::Albedo);
+    if sigma_rgb.iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
+        return Err(BuildError {
+            loc: m.loc.clone(),
+            message: "sigma_t must be finite and non-negative".into(),
+        });
+    }
+    let scatters = sigma_rgb.iter().any(|&x| x > 0.0)
+        && match &m.albedo {
+            pt_scene::SpectrumDesc::Constant(a) | pt_scene::SpectrumDesc::Uniform(a) => *a > 0.0,
+            _ => albedo_rgb.iter().any(|&x| x > 0.0),
+        };
+    let phase = match m.phase {
+        pt_scene::PhaseDesc::Isotropic => Phase::Isotropic,
+        pt_scene::PhaseDesc::HenyeyGreenstein { g } => Phase::HenyeyGreenstein { g },
+    };
+    media.push((
+        m.clone(),
+        Medium {
+            sigma_t: constant_spectrum(&m.sigma_t, Role::Unbounded, mode),
+            albedo: constant_spectrum(&m.albedo, Role::Albedo, mode),
+            phase,
+            sample_emitters: m.sample_emitters,
+            scatters,
+        },
+    ));
+    Ok((media.len() - 1) as u32)
 }
 
 /// Adds a shape's primitives to the BVH list; returns the geometry an emitter on it samples

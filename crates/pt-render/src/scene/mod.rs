@@ -9,12 +9,13 @@ use crate::camera::Camera;
 use crate::geometry::{Interaction, Primitive};
 use crate::light::{AreaLight, Light};
 use crate::material::SurfaceMaterial;
-use crate::texture::{Attribute, ConstantSpectrum, TexturePoint};
+use crate::medium::Medium;
+use crate::texture::{Attribute, TexturePoint};
 use mesh::PrimRef;
 use pt_bsdf::SurfaceBsdf;
 use pt_math::{Distribution1D, Mat3, Ray, Vec2, Vec3};
 use pt_scene::SourceLoc;
-use pt_spectrum::{ColorMode, SampledSpectrum, SampledWavelengths};
+use pt_spectrum::{ColorMode, SampledWavelengths};
 
 /// Shadow rays stop this fraction short of the light point, whose origin is already offset: a
 /// relative guard against rounding at the far end, not an absolute epsilon.
@@ -45,8 +46,10 @@ pub enum LightSelection {
 struct ShapeData {
     material: u32,
     light: Option<u32>,
-    /// Index into `Scene::media` of the shape's interior medium.
+    /// Indices into `Scene::media` of the media inside and outside the shape; a shape with
+    /// either is a medium boundary ([`Scene::medium_boundary`]).
     interior: Option<u32>,
+    exterior: Option<u32>,
     /// Vertex normals and uvs of meshes, indexed through `indices`.
     normals: Option<Vec<Vec3>>,
     uvs: Option<Vec<Vec2>>,
@@ -71,6 +74,7 @@ impl ShapeData {
             material,
             light: None,
             interior: None,
+            exterior: None,
             normals: None,
             uvs: None,
             tangents: None,
@@ -150,8 +154,10 @@ pub struct Scene {
     shapes: Vec<ShapeData>,
     /// One material per BSDF of the description (`ShapeDesc::bsdf` indexes it).
     pub materials: Vec<SurfaceMaterial>,
-    /// Interior media (absorbing only): extinction per scene unit.
-    media: Vec<ConstantSpectrum>,
+    /// The participating media that shapes bound and the camera may sit in.
+    pub media: Vec<Medium>,
+    /// Index into `media` of the medium around the camera, if any.
+    pub camera_medium: Option<u32>,
     /// All lights: area lights first (in shape order), then the others in file order.
     pub lights: Vec<Light>,
     /// Indices into `lights` of lights that rays leaving the scene can see.
@@ -513,24 +519,18 @@ impl Scene {
             .map(|f| f.scatter(lambda, u))
     }
 
-    /// Transmittance exp(-sigma_t d) of the interior medium of `shape` over `distance` scene
-    /// units, at the path's wavelengths (spectral mode) or per RGB channel; `None` if it has no
-    /// medium.
+    /// The media on the two sides of `shape` (inside, outside) if it is a medium boundary
+    /// (has either; Mitsuba's `is_medium_transition`), else `None`: crossing it then keeps
+    /// the medium the ray is in.
     #[inline]
-    pub fn interior_transmittance(
-        &self,
-        shape: u32,
-        distance: f32,
-        lambda: &SampledWavelengths,
-    ) -> Option<SampledSpectrum> {
-        let sigma = self.media[self.shapes[shape as usize].interior? as usize].at(lambda);
-        let e = sigma.0 * -distance;
-        Some(SampledSpectrum(pt_math::Vec4::new(
-            e.x.exp(),
-            e.y.exp(),
-            e.z.exp(),
-            e.w.exp(),
-        )))
+    pub fn medium_boundary(&self, shape: u32) -> Option<(Option<u32>, Option<u32>)> {
+        let s = &self.shapes[shape as usize];
+        (s.interior.is_some() || s.exterior.is_some()).then_some((s.interior, s.exterior))
+    }
+
+    /// Whether the scene has any participating medium.
+    pub fn has_media(&self) -> bool {
+        !self.media.is_empty()
     }
 
     /// The light attached to a shape, if it emits: `(light index, light)`.

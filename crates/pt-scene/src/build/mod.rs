@@ -52,7 +52,7 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
     ]),
     ("texture", &["bitmap", "checkerboard", "mesh_attribute", "rawconstant", "d65"], &["volume"]),
     ("medium", &["homogeneous"], &["heterogeneous"]),
-    ("phase", &[], &["isotropic", "hg", "rayleigh", "sggx", "tabphase", "blendphase"]),
+    ("phase", &["isotropic", "hg"], &["rayleigh", "sggx", "tabphase", "blendphase"]),
     ("volume", &[], &["constvolume", "gridvolume"]),
 ];
 
@@ -203,7 +203,8 @@ impl<'e> Builder<'e> {
     pub(super) fn scene(&mut self, root: &'e Element, source: &Path) -> Result<SceneDesc> {
         let view = ObjectView::parse_scene(root)?;
         view.finish()?;
-        let mut sensor: Option<(CameraDesc, FilmDesc, SamplerDesc)> = None;
+        #[allow(clippy::type_complexity)]
+        let mut sensor: Option<(CameraDesc, FilmDesc, SamplerDesc, Option<MediumDesc>)> = None;
         let mut integrator = None;
         let mut shapes = Vec::new();
         let mut lights = Vec::new();
@@ -235,7 +236,7 @@ impl<'e> Builder<'e> {
                 "shape" => shapes.push(self.shape(el)?),
                 // Validated now; it enters `bsdfs` when a shape uses it.
                 "bsdf" => drop(self.bsdf_desc(el)?),
-                // Validated now; shapes use it through <ref name="interior" id="..."/>.
+                // Validated now; shapes and the sensor use it through <ref id="..."/>.
                 "medium" => drop(medium(el)?),
                 // Validated now; materials use it through <ref name="..." id="..."/>.
                 "texture" => drop(self.texture(el)?),
@@ -258,17 +259,19 @@ impl<'e> Builder<'e> {
                 _ => return Err(plugin_error(el)),
             }
         }
-        let (camera, film, sampler) = match sensor {
+        let (camera, film, sampler, camera_medium) = match sensor {
             Some(s) => s,
             None => (
                 default_camera(root, &shapes),
                 default_film(),
                 default_sampler(),
+                None,
             ),
         };
         Ok(SceneDesc {
             source: source.to_path_buf(),
             camera,
+            camera_medium,
             film,
             sampler,
             integrator: integrator.unwrap_or_else(default_integrator),

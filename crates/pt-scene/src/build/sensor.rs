@@ -4,30 +4,31 @@ use super::*;
 
 impl<'e> Builder<'e> {
     /// `perspective`, `thinlens` (see [`perspective`]) or `orthographic` (see
-    /// [`orthographic`]) with its film and sampler.
+    /// [`orthographic`]) with its film, sampler and the medium it sits in.
     pub(super) fn sensor(
         &mut self,
         el: &'e Element,
-    ) -> Result<(CameraDesc, FilmDesc, SamplerDesc)> {
+    ) -> Result<(CameraDesc, FilmDesc, SamplerDesc, Option<MediumDesc>)> {
         let v = ObjectView::parse(el)?;
         let camera = match v.plugin.as_str() {
             "perspective" | "thinlens" => perspective(&v)?,
             "orthographic" => orthographic(&v)?,
             _ => return Err(plugin_error(el)),
         };
-        let (mut film, mut sampler) = (None, None);
+        let (mut film, mut sampler, mut medium) = (None, None, None);
         for child in &v.children {
             let target = self.resolve(child)?;
             match target.tag.as_str() {
                 "film" if film.is_none() => film = Some(self.film(target)?),
                 "sampler" if sampler.is_none() => sampler = Some(sampler_desc(target)?),
-                "film" | "sampler" => {
+                "medium" if medium.is_none() => medium = Some(super::shape::medium(target)?),
+                "film" | "sampler" | "medium" => {
                     return Err(SceneError::at(
                         &child.written().loc,
                         format!("a sensor takes only one <{}>", target.tag),
                     ))
                 }
-                _ => return Err(misplaced(child, target, &v, "film or sampler")),
+                _ => return Err(misplaced(child, target, &v, "film, sampler or medium")),
             }
         }
         v.finish()?;
@@ -35,6 +36,7 @@ impl<'e> Builder<'e> {
             camera,
             film.unwrap_or_else(default_film),
             sampler.unwrap_or_else(default_sampler),
+            medium,
         ))
     }
 

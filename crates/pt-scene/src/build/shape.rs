@@ -1,4 +1,4 @@
-//! Shapes and their interior media.
+//! Shapes and the media on their two sides.
 
 use super::*;
 
@@ -46,7 +46,7 @@ impl<'e> Builder<'e> {
             }
             _ => return Err(plugin_error(el)),
         };
-        let (bsdf, emitter, interior) = self.shape_children(&v)?;
+        let (bsdf, emitter, [interior, exterior]) = self.shape_children(&v)?;
         if emitter.is_some() && matches!(geometry, Geometry::SdfGrid(_)) {
             return Err(SceneError::at(
                 &el.loc,
@@ -66,6 +66,7 @@ impl<'e> Builder<'e> {
             bsdf,
             emitter,
             interior,
+            exterior,
         })
     }
 
@@ -101,7 +102,7 @@ impl<'e> Builder<'e> {
                     "a shape in a shapegroup cannot emit (Mitsuba refuses instanced emitters too)",
                 ));
             }
-            if let Some(m) = &shape.interior {
+            if let Some(m) = shape.interior.as_ref().or(shape.exterior.as_ref()) {
                 return Err(SceneError::at(
                     &m.loc,
                     "media on shapes in a shapegroup are not supported (not yet implemented)",
@@ -326,13 +327,18 @@ impl<'e> Builder<'e> {
         Ok(Geometry::SdfGrid(std::sync::Arc::new(sdf)))
     }
 
-    /// A shape's nested BSDF (or `<ref>` to one), area emitter and interior medium, at most one
-    /// of each.
+    /// A shape's nested BSDF (or `<ref>` to one), area emitter, and interior and exterior
+    /// media, at most one of each.
+    #[allow(clippy::type_complexity)]
     pub(super) fn shape_children(
         &mut self,
         v: &ObjectView<'e>,
-    ) -> Result<(Option<usize>, Option<AreaEmitterDesc>, Option<MediumDesc>)> {
-        let (mut bsdf, mut emitter, mut interior) = (None, None, None);
+    ) -> Result<(
+        Option<usize>,
+        Option<AreaEmitterDesc>,
+        [Option<MediumDesc>; 2],
+    )> {
+        let (mut bsdf, mut emitter, mut interior, mut exterior) = (None, None, None, None);
         for child in &v.children {
             let target = self.resolve(child)?;
             let once = |what: &str| {
@@ -351,12 +357,8 @@ impl<'e> Builder<'e> {
                     match written.attr("name") {
                         Some("interior") if interior.is_some() => return Err(once("interior medium")),
                         Some("interior") => interior = Some(medium(target)?),
-                        Some("exterior") => {
-                            return Err(SceneError::at(
-                                &written.loc,
-                                "exterior media are not yet supported (not yet implemented): the space outside all shapes is vacuum; give the medium to the shape that encloses it as name=\"interior\"",
-                            ))
-                        }
+                        Some("exterior") if exterior.is_some() => return Err(once("exterior medium")),
+                        Some("exterior") => exterior = Some(medium(target)?),
                         other => {
                             return Err(SceneError::at(
                                 &written.loc,
@@ -371,25 +373,44 @@ impl<'e> Builder<'e> {
                 _ => return Err(misplaced(child, target, v, "bsdf, emitter or medium")),
             }
         }
-        Ok((bsdf, emitter, interior))
+        Ok((bsdf, emitter, [interior, exterior]))
     }
 }
 
-/// `homogeneous` medium, purely absorbing: `sigma_t` (extinction per scene unit: float, rgb or
-/// spectrum; default 1), `scale` (multiplies sigma_t; default 1), `albedo` (must be 0: scattering
-/// media are not implemented, and Mitsuba's default albedo is 0.75, so it must be written),
-/// `sample_emitters` and `has_spectral_extinction` (accepted; no effect on an absorbing medium).
+/// `homogeneous` medium (Mitsuba 3.9.1): `sigma_t` (extinction per scene unit: float, rgb or
+/// spectrum; default 1), `scale` (multiplies sigma_t; default 1), `albedo` (single scattering
+/// albedo in [0, 1]: float, rgb or spectrum; Mitsuba's default 0.75), `sample_emitters`
+/// (default true), `has_spectral_extinction` (accepted: the estimate does not depend on it),
+/// and a nested phase function ([`phase`]; isotropic by default).
 pub(super) fn medium(el: &Element) -> Result<MediumDesc> {
     let v = ObjectView::parse(el)?;
     if v.plugin != "homogeneous" {
         return Err(plugin_error(el));
     }
-    if let Some(child) = v.children.first() {
+    let mut phase_fn = None;
+    for child in &v.children {
         let what = child.written();
-        return Err(SceneError::at(
-            &what.loc,
-            "a phase function or nested object in a medium is not yet supported (not yet implemented): media here only absorb",
-        ));
+        match what.tag.as_str() {
+            "phase" if phase_fn.is_none() => phase_fn = Some(phase(what)?),
+            "phase" => {
+                return Err(SceneError::at(
+                    &what.loc,
+                    "a medium takes only one phase function",
+                ))
+            }
+            "volume" => {
+                return Err(SceneError::at(
+                    &what.loc,
+                    "a <volume> in a homogeneous medium is not yet supported (not yet implemented): give sigma_t and albedo as float, rgb or spectrum",
+                ))
+            }
+            _ => {
+                return Err(SceneError::at(
+                    &what.loc,
+                    format!("a medium takes a <phase>, not <{}>", what.tag),
+                ))
+            }
+        }
     }
     let sigma_t = v
         .spectrum("sigma_t")?
@@ -408,20 +429,24 @@ pub(super) fn medium(el: &Element) -> Result<MediumDesc> {
     {
         return Err(v.prop_error("sigma_t", "sigma_t must be finite and >= 0"));
     }
-    let albedo = v.spectrum("albedo")?;
-    let absorbing = matches!(&albedo, Some(a) if a.values().iter().all(|x| *x == 0.0));
-    if !absorbing {
-        let message = if albedo.is_none() {
-            "a medium without 'albedo' scatters (Mitsuba's default albedo is 0.75); scattering media are not yet supported (not yet implemented): write <float name=\"albedo\" value=\"0\"/> for an absorbing medium"
-        } else {
-            "scattering media (albedo > 0) are not yet supported (not yet implemented): only albedo 0 (pure absorption, Beer-Lambert)"
-        };
-        return Err(match albedo {
-            Some(_) => v.prop_error("albedo", message),
-            None => SceneError::at(&el.loc, message),
-        });
+    // Mitsuba's default albedo.
+    let albedo = v
+        .spectrum("albedo")?
+        .unwrap_or(SpectrumDesc::Constant(0.75));
+    if albedo
+        .values()
+        .iter()
+        .any(|x| !(x.is_finite() && (0.0..=1.0).contains(x)))
+    {
+        return Err(v.prop_error("albedo", "albedo must lie in [0, 1]"));
     }
-    v.boolean("sample_emitters")?;
+    if let s @ (SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. }) = &albedo {
+        return Err(v.prop_error(
+            "albedo",
+            format!("albedo cannot be an emission spectrum ({})", s.form_name()),
+        ));
+    }
+    let sample_emitters = v.boolean("sample_emitters")?.unwrap_or(true);
     v.boolean("has_spectral_extinction")?;
     v.finish()?;
     let sigma_t = match sigma_t {
@@ -441,5 +466,32 @@ pub(super) fn medium(el: &Element) -> Result<MediumDesc> {
     Ok(MediumDesc {
         loc: el.loc.clone(),
         sigma_t,
+        albedo,
+        phase: phase_fn.unwrap_or(PhaseDesc::Isotropic),
+        sample_emitters,
     })
+}
+
+/// A phase function: `isotropic`, or `hg` with `g` (default 0.8, Mitsuba's) in (-1, 1).
+fn phase(el: &Element) -> Result<PhaseDesc> {
+    let v = ObjectView::parse(el)?;
+    let p = match v.plugin.as_str() {
+        "isotropic" => PhaseDesc::Isotropic,
+        "hg" => {
+            let g = v.float("g")?.unwrap_or(0.8);
+            if !(g > -1.0 && g < 1.0) {
+                return Err(v.prop_error("g", format!("g must lie in (-1, 1), got {g}")));
+            }
+            PhaseDesc::HenyeyGreenstein { g }
+        }
+        _ => return Err(plugin_error(el)),
+    };
+    if let Some(child) = v.children.first() {
+        return Err(SceneError::at(
+            &child.written().loc,
+            "a phase function takes no nested objects",
+        ));
+    }
+    v.finish()?;
+    Ok(p)
 }

@@ -6,7 +6,7 @@ use super::texture::{self, Encoding};
 use super::{Ctx, GltfError};
 use crate::ir::{
     BitmapDesc, BsdfDesc, BsdfKind, FilmBaseDesc, MediumDesc, MicrofacetDesc,
-    MicrofacetDistribution, SourceLoc, SpectrumDesc, TextureChannel, TextureDesc,
+    MicrofacetDistribution, PhaseDesc, SourceLoc, SpectrumDesc, TextureChannel, TextureDesc,
 };
 use gltf::material::AlphaMode;
 use std::sync::Arc;
@@ -547,9 +547,13 @@ fn volume_medium(mat: &Material, v: &gltf::material::Volume, r: &mut Report) -> 
     r.used.push(format!(
         "{note}: interior medium sigma_t = -ln({c:?})/{d} = {sigma:?} per m"
     ));
+    // KHR_materials_volume's attenuation absorbs only.
     Some(MediumDesc {
         loc: mat.loc.clone(),
         sigma_t: SpectrumDesc::Rgb(sigma),
+        albedo: SpectrumDesc::Constant(0.0),
+        phase: PhaseDesc::Isotropic,
+        sample_emitters: true,
     })
 }
 

@@ -365,6 +365,7 @@ fn default_desc(cx: &Ctx) -> SceneDesc {
             far_clip: 1e4,
             principal_point_offset: [0.0; 2],
         },
+        camera_medium: None,
         // Box filter: each pixel is the plain average over its own footprint (glTF has no film
         // settings; Mitsuba's default Gaussian would blur across neighbours).
         film: FilmDesc::new(
@@ -548,6 +549,7 @@ impl<'d> Walk<'d, '_> {
                 primaries: None,
             }),
             interior: mm.interior.clone(),
+            exterior: None,
         });
         Ok(())
     }

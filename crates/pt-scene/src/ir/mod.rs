@@ -56,6 +56,9 @@ pub struct SceneDesc {
     pub source: PathBuf,
     /// The (only) camera.
     pub camera: CameraDesc,
+    /// The medium the camera sits in (Mitsuba: a `<medium>` or `<ref>` nested in the sensor),
+    /// if any.
+    pub camera_medium: Option<MediumDesc>,
     /// Image size and reconstruction filter.
     pub film: FilmDesc,
     /// Sample count and seed.

@@ -181,9 +181,13 @@ pub struct ShapeDesc {
     pub bsdf: usize,
     /// The area emitter, if the shape emits.
     pub emitter: Option<AreaEmitterDesc>,
-    /// The medium inside the shape (Mitsuba `<medium name="interior">`), if any. Rays that
-    /// refract into the shape are attenuated by it until they leave.
+    /// The medium inside the shape (Mitsuba `<medium name="interior">`), if any: a ray that
+    /// crosses the surface inwards (against its geometric normal) travels in it.
     pub interior: Option<MediumDesc>,
+    /// The medium outside the shape (Mitsuba `<medium name="exterior">`), if any: a ray that
+    /// crosses the surface outwards travels in it. A shape with either is a medium boundary;
+    /// crossing a boundary that leaves one side unset enters vacuum (Mitsuba).
+    pub exterior: Option<MediumDesc>,
 }
 
 /// Mitsuba's `shapegroup`: shapes stored once and placed any number of times by
@@ -212,8 +216,9 @@ pub struct InstanceDesc {
     pub to_world: Mat4,
 }
 
-/// A homogeneous, purely absorbing medium (Mitsuba `homogeneous` with `albedo` 0): radiance
-/// travelling a distance d through it is multiplied by exp(-sigma_t d) (Beer-Lambert).
+/// A homogeneous participating medium (Mitsuba `homogeneous`): extinction `sigma_t`, single
+/// scattering albedo `albedo` (sigma_s = albedo sigma_t, sigma_a = (1 - albedo) sigma_t) and a
+/// phase function.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MediumDesc {
     /// Where it was defined.
@@ -221,4 +226,23 @@ pub struct MediumDesc {
     /// Extinction coefficient per scene unit of length, Mitsuba's `sigma_t` already multiplied by
     /// its `scale`. Linear RGB, a constant or a tabulated spectrum, each value >= 0.
     pub sigma_t: SpectrumDesc,
+    /// Single scattering albedo, each value in [0, 1] (Mitsuba's default 0.75).
+    pub albedo: SpectrumDesc,
+    /// The phase function (Mitsuba's default: isotropic).
+    pub phase: PhaseDesc,
+    /// Mitsuba's `sample_emitters` (default true): whether scattering in the medium samples
+    /// the lights (next-event estimation); without it only phase sampling finds them.
+    pub sample_emitters: bool,
+}
+
+/// A phase function (Mitsuba's `<phase>`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PhaseDesc {
+    /// `isotropic`: 1 / (4 pi).
+    Isotropic,
+    /// `hg`: Henyey-Greenstein with mean cosine `g` in (-1, 1) (positive: forward).
+    HenyeyGreenstein {
+        /// Mean cosine of the scattering angle.
+        g: f32,
+    },
 }

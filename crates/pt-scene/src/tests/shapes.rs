@@ -242,24 +242,47 @@ fn interior_medium_inline_and_by_reference_with_scale() {
 }
 
 #[test]
-fn scattering_exterior_and_nameless_media_are_clear_errors() {
+fn media_on_both_sides_the_sensor_and_phase_functions() {
+    let s = load(&scene(r#"<integrator type="volpath"/>
+<medium type="homogeneous" id="fog"><float name="sigma_t" value="0.5"/><phase type="hg"><float name="g" value="0.3"/></phase></medium>
+<sensor type="perspective"><ref id="fog"/></sensor>
+<shape type="cube"><bsdf type="null"/><ref name="interior" id="fog"/>
+    <medium type="homogeneous" name="exterior"><rgb name="albedo" value="0.2, 0.4, 0.6"/><boolean name="sample_emitters" value="false"/></medium></shape>"#))
+    .unwrap();
+    let fog = s.camera_medium.as_ref().unwrap();
+    // Mitsuba's default albedo, and the phase function given.
+    assert_eq!(fog.albedo, SpectrumDesc::Constant(0.75));
+    assert_eq!(fog.phase, PhaseDesc::HenyeyGreenstein { g: 0.3 });
+    assert!(fog.sample_emitters);
+    assert_eq!(s.shapes[0].interior.as_ref(), Some(fog));
+    let outside = s.shapes[0].exterior.as_ref().unwrap();
+    assert_eq!(outside.albedo, SpectrumDesc::Rgb([0.2, 0.4, 0.6]));
+    assert_eq!(outside.phase, PhaseDesc::Isotropic);
+    assert_eq!(outside.sigma_t, SpectrumDesc::Constant(1.0));
+    assert!(!outside.sample_emitters);
+}
+
+#[test]
+fn bad_media_are_clear_errors() {
     let e = fail(&scene(
-        r#"<shape type="sphere"><medium type="homogeneous" name="interior"/></shape>"#,
+        r#"<shape type="sphere"><medium type="homogeneous" name="interior"><float name="albedo" value="1.5"/></medium></shape>"#,
     ));
-    assert_error(
-        &e,
-        2,
-        "medium type=\"homogeneous\"",
-        "without 'albedo' scatters",
+    assert_error(&e, 2, "float name=\"albedo\"", "albedo must lie in [0, 1]");
+    let e = fail(&scene(
+        r#"<shape type="sphere"><medium type="homogeneous" name="interior"><phase type="hg"><float name="g" value="1"/></phase></medium></shape>"#,
+    ));
+    assert!(e.message.contains("g must lie in (-1, 1)"), "{e}");
+    let e = fail(&scene(
+        r#"<shape type="sphere"><medium type="homogeneous" name="interior"><phase type="rayleigh"/></medium></shape>"#,
+    ));
+    assert!(
+        e.message.contains("unsupported plugin phase \"rayleigh\""),
+        "{e}"
     );
     let e = fail(&scene(
-        r#"<shape type="sphere"><medium type="homogeneous" name="interior"><float name="albedo" value="0.5"/></medium></shape>"#,
+        r#"<shape type="sphere"><medium type="homogeneous" name="exterior"/><medium type="homogeneous" name="exterior"/></shape>"#,
     ));
-    assert_error(&e, 2, "float name=\"albedo\"", "scattering media");
-    let e = fail(&scene(
-        r#"<shape type="sphere"><medium type="homogeneous" name="exterior"><float name="albedo" value="0"/></medium></shape>"#,
-    ));
-    assert!(e.message.contains("exterior media"), "{e}");
+    assert!(e.message.contains("only one exterior medium"), "{e}");
     let e = fail(&scene(
         r#"<shape type="sphere"><medium type="homogeneous"><float name="albedo" value="0"/></medium></shape>"#,
     ));

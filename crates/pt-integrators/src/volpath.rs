@@ -1,0 +1,355 @@
+//! Volumetric path tracing (Mitsuba 3.9.1's `volpath`) through homogeneous participating media
+//! ([`pt_render::medium`]): the radiative transfer equation solved by free-flight sampling,
+//! phase-function sampling and light sampling with transmittance, under MIS.
+//!
+//! A path starts in the camera's medium (`Scene::camera_medium`) and changes medium where it
+//! crosses a shape that bounds media (`Scene::medium_boundary`): into the shape's interior when
+//! it crosses against the geometric normal, its exterior otherwise (vacuum where that side is
+//! unset), as Mitsuba does. In each segment through a medium:
+//! - *Free flight*: a distance `t` is drawn with density `sigma_t,c exp(-sigma_t,c t)` for a
+//!   channel `c` chosen uniformly among the colour channels (RGB) or wavelength lanes
+//!   (spectral), and weighted with the density averaged over all channels, `p(t) = mean_k
+//!   sigma_t,k exp(-sigma_t,k t)`: one-sample MIS with the balance heuristic over the channels
+//!   (Mitsuba's `volpathmis`; Miller, Georgiev & Jarosz 2019, sec. 5.2), where Mitsuba's
+//!   `volpath` weights by the chosen channel's density alone (the same expected value, with a
+//!   variance that grows without bound as the channels' extinctions part: a red path through a
+//!   blue-dense fog). If `t` falls before the next surface, the path scatters there with the
+//!   weight `sigma_s T(t) / p(t)`; otherwise it reaches the surface with `T(t_s) / P(t > t_s)`,
+//!   P likewise averaged. A medium that only absorbs (albedo 0) is crossed with its
+//!   transmittance `T(t_s)` instead: the expected value of the same sampling, without its
+//!   variance (Mitsuba's free flight ends such paths at random).
+//! - *Scattering in the medium*: light sampling (Mitsuba's `sample_emitters`, on by default)
+//!   weighted by the phase function, and phase-function sampling for the next direction; the
+//!   two are joined by the power heuristic.
+//!
+//! Surfaces are shaded as the path tracer shades them (BSDF, light sampling, MIS), but light
+//! samples see through *null* interfaces: the transmittance to a light is the product of the
+//! media's transmittances along the segment and of the straight-through transmission
+//! ([`pt_bsdf::SurfaceBsdf::null_transmission`]) of the surfaces it crosses (a `null` BSDF, a mask's
+//! holes, a thin dielectric), where Mitsuba estimates the same product by tracking.
+//!
+//! Depth follows Mitsuba's `volpath`: `max_depth` counts scattering events, in media and at
+//! surfaces, with passes straight through a surface (null events) not counted; Russian roulette
+//! starts once the depth exceeds `rr_depth` (q = min(max(throughput) eta^2, 0.95)). A sample
+//! covers its pixel (alpha) when the path scatters somewhere (medium or non-null surface
+//! event), or when an environment light is visible.
+
+use crate::path::{emission_weight, escaped_radiance, PathSettings, PathState, Strategy};
+use crate::ptracer::shading_frame;
+use pt_math::{offset_ray_origin, power_heuristic, Ray, Vec3};
+use pt_render::light::LightSample;
+use pt_render::medium::transmittance;
+use pt_render::sampler::RandomSource;
+use pt_render::scene::SHADOW_RAY_SHORTEN;
+use pt_render::Scene;
+use pt_spectrum::{ColorMode, SampledSpectrum, SampledWavelengths};
+
+/// Most surfaces a light sample's shadow ray crosses before it is taken as blocked (a guard
+/// against rounding loops on coincident surfaces, far above what scenes stack).
+const MAX_CROSSINGS: u32 = 256;
+
+/// Traces `path` (a camera path, not yet traced) through the scene's media and surfaces with
+/// Mitsuba's `volpath` rules (see the module documentation); leaves the estimate in
+/// `path.radiance` and whether the sample covers its pixel in `path.covered`.
+pub fn estimate<S: RandomSource>(
+    scene: &Scene,
+    s: &PathSettings,
+    path: &mut PathState,
+    sampler: &mut S,
+) {
+    let max_depth = if s.max_depth < 0 {
+        u32::MAX
+    } else {
+        s.max_depth as u32
+    };
+    // The channels free-flight sampling chooses among (RGB's fourth lane is unused).
+    let channels = match scene.mode {
+        ColorMode::Spectral => 4,
+        ColorMode::Rgb => 3,
+    };
+    let mean =
+        |x: SampledSpectrum| x.0.to_array()[..channels].iter().sum::<f32>() / channels as f32;
+    let mut lambda = path.lambda;
+    let mut ray = path.ray;
+    let mut throughput = path.throughput;
+    let mut radiance = SampledSpectrum::ZERO;
+    let mut medium = scene.camera_medium;
+    let mut eta = 1.0f32;
+    let mut depth = 0u32;
+    // The last scattering event (not a null one): where it was, the density of the direction
+    // it chose, and whether light sampling could not have made that choice.
+    let (mut prev_p, mut prev_pdf, mut prev_delta) = (ray.origin, 0.0f32, true);
+    let mut covered = !s.hide_emitters && !scene.infinite_lights.is_empty();
+    loop {
+        if throughput.is_black() {
+            break;
+        }
+        if depth > s.rr_depth {
+            let q = (throughput.max_value() * eta * eta).min(0.95);
+            if !(sampler.next_1d() < q) {
+                break;
+            }
+            throughput *= 1.0 / q;
+        }
+        if depth >= max_depth {
+            break;
+        }
+        let hit = scene.intersect(&ray);
+        let t_surface = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+
+        // The segment through the current medium.
+        if let Some(m) = medium.map(|i| &scene.media[i as usize]) {
+            let (sigma_t, albedo) = m.coefficients(&lambda);
+            if m.scatters {
+                let channel = ((sampler.next_1d() * channels as f32) as usize).min(channels - 1);
+                let sigma_c = sigma_t.0[channel];
+                let u = sampler.next_1d();
+                let t = if sigma_c > 0.0 {
+                    -(1.0 - u).ln() / sigma_c
+                } else {
+                    f32::INFINITY
+                };
+                if t < t_surface {
+                    // A scattering event: weight sigma_s T(t) / p(t).
+                    let tr = transmittance(sigma_t, t);
+                    let pdf = mean(sigma_t * tr);
+                    if !(pdf > 0.0) {
+                        break;
+                    }
+                    throughput *= sigma_t * albedo * tr * (1.0 / pdf);
+                    let p = ray.origin + ray.dir * t;
+                    depth += 1;
+                    covered = true;
+                    if depth >= max_depth {
+                        break;
+                    }
+                    let wo = -ray.dir;
+                    // Light sampling, weighted by the phase function.
+                    let sample_lights = m.sample_emitters && s.strategy != Strategy::Bsdf;
+                    if sample_lights {
+                        let (u_light, u_pos) = (sampler.next_1d(), sampler.next_2d());
+                        if let Some((ls, pmf)) = sample_light(scene, p, &lambda, u_light, u_pos) {
+                            let phase = m.phase.eval(wo, ls.wi);
+                            let w = nee_weight(s, &ls, pmf, phase);
+                            if w > 0.0 && phase > 0.0 {
+                                let tr = transmittance_to(scene, p, &ls, medium, &lambda);
+                                radiance +=
+                                    throughput * ls.radiance * tr * (phase * w / (pmf * ls.pdf));
+                            }
+                        }
+                    }
+                    let ps = m.phase.sample(wo, sampler.next_2d());
+                    if !(ps.pdf > 0.0) {
+                        break;
+                    }
+                    (prev_p, prev_pdf, prev_delta) = (p, ps.pdf, !sample_lights);
+                    ray = Ray::new(p, ps.wi);
+                    continue;
+                }
+                // Reaching the surface (or leaving the scene): weight T(t_s) / P(t > t_s).
+                let tr = transmittance(sigma_t, t_surface);
+                let p = mean(tr);
+                if !(p > 0.0) {
+                    break;
+                }
+                throughput *= tr * (1.0 / p);
+            } else {
+                throughput *= transmittance(sigma_t, t_surface);
+            }
+        }
+
+        // A surface, or the environment.
+        let Some(hit) = hit else {
+            radiance += escaped_radiance(scene, ray.dir, &lambda, throughput, |i| {
+                emission_weight(s, depth, prev_delta, prev_pdf, || {
+                    scene.light_pmf(i) * scene.lights[i].escaped_pdf(ray.dir)
+                })
+            });
+            break;
+        };
+        let wo_world = -ray.dir;
+        if let Some((li, light)) = scene.shape_light(hit.shape) {
+            let le = light.emitted(hit.ns, wo_world, hit.uv, &lambda);
+            if !le.is_black() {
+                let w = emission_weight(s, depth, prev_delta, prev_pdf, || {
+                    scene.light_pmf(li) * light.pdf(prev_p, hit.p, hit.ns)
+                });
+                radiance += throughput * le * w;
+            }
+        }
+        let frame = shading_frame(&hit);
+        let wo = frame.to_local(wo_world);
+        let ng_wo = hit.ng.dot(wo_world);
+        if ng_wo * wo.z <= 0.0 {
+            // The shading and geometric normals disagree about the side: a light leak.
+            break;
+        }
+        let bsdf = scene.bsdf(&hit, &lambda);
+        if let Some(f) = scene.material(hit.shape).fluorescent() {
+            // The BSDF holds each lane's total albedo at its emitted wavelength; the lanes move
+            // to the wavelengths they were excited at (as the path tracer does).
+            lambda = f.scatter(&lambda, sampler.next_1d());
+        }
+        // Light sampling at the surface.
+        if bsdf.has_smooth_lobe()
+            && depth.saturating_add(1) < max_depth
+            && s.strategy != Strategy::Bsdf
+        {
+            let (u_light, u_pos) = (sampler.next_1d(), sampler.next_2d());
+            let origin_side = |d: Vec3| offset_ray_origin(hit.p, hit.ng * hit.ng.dot(d).signum());
+            if let Some((ls, pmf)) = sample_light(scene, hit.p, &lambda, u_light, u_pos) {
+                let wi = frame.to_local(ls.wi);
+                let ng_wi = hit.ng.dot(ls.wi);
+                if ng_wi * wi.z > 0.0 {
+                    let f = bsdf.eval(wo, wi);
+                    if !f.is_black() {
+                        let w = nee_weight(s, &ls, pmf, bsdf.pdf(wo, wi));
+                        if w > 0.0 {
+                            // The shadow ray starts in the medium on the light's side.
+                            let start = match scene.medium_boundary(hit.shape) {
+                                Some((_, outside)) if ng_wi > 0.0 => outside,
+                                Some((inside, _)) => inside,
+                                None => medium,
+                            };
+                            let tr =
+                                transmittance_to(scene, origin_side(ls.wi), &ls, start, &lambda);
+                            radiance += throughput
+                                * f
+                                * ls.radiance
+                                * tr
+                                * (wi.z.abs() * w / (pmf * ls.pdf));
+                        }
+                    }
+                }
+            }
+        }
+        // BSDF sampling.
+        let u_lobe = sampler.next_1d();
+        let Some(bs) = bsdf.sample(wo, u_lobe, sampler.next_2d()) else {
+            break;
+        };
+        let dir = frame.to_world(bs.wi);
+        let ng_next = hit.ng.dot(dir);
+        if ng_next * bs.wi.z <= 0.0 {
+            break;
+        }
+        throughput *= bs.weight;
+        eta *= bs.eta;
+        if !bs.is_pass_through(wo) {
+            depth += 1;
+            covered = true;
+            (prev_p, prev_pdf, prev_delta) = (hit.p, bs.pdf, bs.delta);
+        }
+        if let Some((inside, outside)) = scene.medium_boundary(hit.shape) {
+            medium = if ng_next > 0.0 { outside } else { inside };
+        }
+        ray = Ray::new(offset_ray_origin(hit.p, hit.ng * ng_next.signum()), dir);
+    }
+    path.radiance = radiance;
+    path.covered = covered;
+}
+
+/// A light sample for the point `p` (the scene's light selection, then the light's own
+/// sampling) and the selection probability, if it carries light.
+#[inline]
+fn sample_light(
+    scene: &Scene,
+    p: Vec3,
+    lambda: &SampledWavelengths,
+    u_light: f32,
+    u_pos: pt_math::Vec2,
+) -> Option<(LightSample, f32)> {
+    let (li, pmf, u_sel) = scene.sample_light(u_light)?;
+    let ls = scene.lights[li].sample(p, u_sel, u_pos, lambda)?;
+    (!ls.radiance.is_black() && ls.pdf > 0.0).then_some((ls, pmf))
+}
+
+/// The MIS weight of a light sample against the scattering's density `scatter_pdf` of the
+/// same direction (BSDF or phase function): the power heuristic, 1 for a delta light or with
+/// light sampling alone.
+#[inline]
+fn nee_weight(s: &PathSettings, ls: &LightSample, pmf: f32, scatter_pdf: f32) -> f32 {
+    if ls.delta || s.strategy == Strategy::Light {
+        1.0
+    } else {
+        power_heuristic(pmf * ls.pdf, scatter_pdf)
+    }
+}
+
+/// The fraction of the light sample's radiance that reaches `origin` (a ray origin already
+/// off its surface, in `medium`): the product of the media's transmittances along the segment
+/// and of the straight-through transmission of each surface it crosses; 0 when an opaque
+/// surface blocks it.
+fn transmittance_to(
+    scene: &Scene,
+    origin: Vec3,
+    ls: &LightSample,
+    mut medium: Option<u32>,
+    lambda: &SampledWavelengths,
+) -> SampledSpectrum {
+    // The far end: the light's point off its own surface, or infinitely far along `ls.wi`.
+    let (dir, mut remaining) = if ls.dist.is_infinite() {
+        (ls.wi, f32::INFINITY)
+    } else {
+        let target = if ls.n == Vec3::ZERO {
+            ls.p
+        } else {
+            offset_ray_origin(ls.p, ls.n * ls.n.dot(-ls.wi).signum())
+        };
+        let seg = target - origin;
+        let d = seg.length();
+        if !(d > 0.0) {
+            return SampledSpectrum::ZERO;
+        }
+        (seg / d, d * SHADOW_RAY_SHORTEN)
+    };
+    let mut tr = SampledSpectrum::splat(1.0);
+    let mut o = origin;
+    for _ in 0..MAX_CROSSINGS {
+        let ray = Ray {
+            origin: o,
+            dir,
+            tmin: 0.0,
+            tmax: remaining,
+        };
+        let hit = scene.intersect(&ray);
+        let t = hit.as_ref().map_or(remaining, |h| h.t);
+        if let Some(m) = medium {
+            tr *= scene.media[m as usize].transmittance(t, lambda);
+        }
+        let Some(hit) = hit else {
+            return tr;
+        };
+        let frame = shading_frame(&hit);
+        let through = scene
+            .bsdf(&hit, lambda)
+            .null_transmission(frame.to_local(-dir));
+        tr *= through;
+        if tr.is_black() {
+            return tr;
+        }
+        let ng_dir = hit.ng.dot(dir);
+        if let Some((inside, outside)) = scene.medium_boundary(hit.shape) {
+            medium = if ng_dir > 0.0 { outside } else { inside };
+        }
+        o = offset_ray_origin(hit.p, hit.ng * ng_dir.signum());
+        remaining = if remaining.is_finite() {
+            // What is left of the segment beyond the crossing, measured from the new origin.
+            let left = (ray.origin + dir * remaining - o).dot(dir);
+            if !(left > 0.0) {
+                return tr;
+            }
+            left
+        } else {
+            f32::INFINITY
+        };
+    }
+    SampledSpectrum::ZERO
+}
+
+/// Whether the volumetric path tracer renders `scene` with the path settings `s`: a `volpath`
+/// scene that has media (without media it is the path tracer's image, which the faster path
+/// tracer renders).
+pub fn applies(scene: &Scene, s: &PathSettings) -> bool {
+    s.media && scene.has_media()
+}
