@@ -164,10 +164,15 @@ pub(crate) fn load_scene_with_summary(
         }
     };
     if desc.integrator.kind == pt_scene::IntegratorKind::Path {
-        if let Some(s) = desc.shapes.iter().find(|s| s.interior.is_some()) {
+        let medium = desc.camera_medium.as_ref().or_else(|| {
+            desc.shapes
+                .iter()
+                .find_map(|s| s.interior.as_ref().or(s.exterior.as_ref()))
+        });
+        if let Some(m) = medium {
             eprintln!(
-                "warning: {}: the `path` integrator ignores media, as Mitsuba's does; use <integrator type=\"volpath\"> for absorption",
-                s.interior.as_ref().map_or(&s.loc, |m| &m.loc)
+                "warning: {}: the `path` integrator ignores media, as Mitsuba's does; use <integrator type=\"volpath\"> to trace them",
+                m.loc
             );
         }
     }

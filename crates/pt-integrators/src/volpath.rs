@@ -38,7 +38,7 @@ use crate::path::{emission_weight, escaped_radiance, PathSettings, PathState, St
 use crate::ptracer::shading_frame;
 use pt_math::{offset_ray_origin, power_heuristic, Ray, Vec3};
 use pt_render::light::LightSample;
-use pt_render::medium::transmittance;
+use pt_render::medium::{transmittance, Medium};
 use pt_render::sampler::RandomSource;
 use pt_render::scene::SHADOW_RAY_SHORTEN;
 use pt_render::Scene;
@@ -67,8 +67,6 @@ pub fn estimate<S: RandomSource>(
         ColorMode::Spectral => 4,
         ColorMode::Rgb => 3,
     };
-    let mean =
-        |x: SampledSpectrum| x.0.to_array()[..channels].iter().sum::<f32>() / channels as f32;
     let mut lambda = path.lambda;
     let mut ray = path.ray;
     let mut throughput = path.throughput;
@@ -99,62 +97,40 @@ pub fn estimate<S: RandomSource>(
 
         // The segment through the current medium.
         if let Some(m) = medium.map(|i| &scene.media[i as usize]) {
-            let (sigma_t, albedo) = m.coefficients(&lambda);
-            if m.scatters {
-                let channel = ((sampler.next_1d() * channels as f32) as usize).min(channels - 1);
-                let sigma_c = sigma_t.0[channel];
-                let u = sampler.next_1d();
-                let t = if sigma_c > 0.0 {
-                    -(1.0 - u).ln() / sigma_c
-                } else {
-                    f32::INFINITY
-                };
-                if t < t_surface {
-                    // A scattering event: weight sigma_s T(t) / p(t).
-                    let tr = transmittance(sigma_t, t);
-                    let pdf = mean(sigma_t * tr);
-                    if !(pdf > 0.0) {
-                        break;
-                    }
-                    throughput *= sigma_t * albedo * tr * (1.0 / pdf);
-                    let p = ray.origin + ray.dir * t;
-                    depth += 1;
-                    covered = true;
-                    if depth >= max_depth {
-                        break;
-                    }
-                    let wo = -ray.dir;
-                    // Light sampling, weighted by the phase function.
-                    let sample_lights = m.sample_emitters && s.strategy != Strategy::Bsdf;
-                    if sample_lights {
-                        let (u_light, u_pos) = (sampler.next_1d(), sampler.next_2d());
-                        if let Some((ls, pmf)) = sample_light(scene, p, &lambda, u_light, u_pos) {
-                            let phase = m.phase.eval(wo, ls.wi);
-                            let w = nee_weight(s, &ls, pmf, phase);
-                            if w > 0.0 && phase > 0.0 {
-                                let tr = transmittance_to(scene, p, &ls, medium, &lambda);
-                                radiance +=
-                                    throughput * ls.radiance * tr * (phase * w / (pmf * ls.pdf));
-                            }
-                        }
-                    }
-                    let ps = m.phase.sample(wo, sampler.next_2d());
-                    if !(ps.pdf > 0.0) {
-                        break;
-                    }
-                    (prev_p, prev_pdf, prev_delta) = (p, ps.pdf, !sample_lights);
-                    ray = Ray::new(p, ps.wi);
-                    continue;
-                }
-                // Reaching the surface (or leaving the scene): weight T(t_s) / P(t > t_s).
-                let tr = transmittance(sigma_t, t_surface);
-                let p = mean(tr);
-                if !(p > 0.0) {
+            let flight = free_flight(m, &ray, t_surface, &lambda, channels, sampler);
+            throughput *= flight.weight;
+            if throughput.is_black() {
+                break;
+            }
+            if let Some(t) = flight.scatter_at {
+                let p = ray.origin + ray.dir * t;
+                depth += 1;
+                covered = true;
+                if depth >= max_depth {
                     break;
                 }
-                throughput *= tr * (1.0 / p);
-            } else {
-                throughput *= transmittance(sigma_t, t_surface);
+                let wo = -ray.dir;
+                // Light sampling, weighted by the phase function.
+                let sample_lights = m.sample_emitters && s.strategy != Strategy::Bsdf;
+                if sample_lights {
+                    let (u_light, u_pos) = (sampler.next_1d(), sampler.next_2d());
+                    if let Some((ls, pmf)) = sample_light(scene, p, &lambda, u_light, u_pos) {
+                        let phase = m.phase.eval(wo, ls.wi);
+                        let w = nee_weight(s, &ls, pmf, phase);
+                        if w > 0.0 && phase > 0.0 {
+                            let tr = transmittance_to(scene, p, &ls, medium, &lambda, sampler);
+                            radiance +=
+                                throughput * ls.radiance * tr * (phase * w / (pmf * ls.pdf));
+                        }
+                    }
+                }
+                let ps = m.phase.sample(wo, sampler.next_2d());
+                if !(ps.pdf > 0.0) {
+                    break;
+                }
+                (prev_p, prev_pdf, prev_delta) = (p, ps.pdf, !sample_lights);
+                ray = Ray::new(p, ps.wi);
+                continue;
             }
         }
 
@@ -211,8 +187,14 @@ pub fn estimate<S: RandomSource>(
                                 Some((inside, _)) => inside,
                                 None => medium,
                             };
-                            let tr =
-                                transmittance_to(scene, origin_side(ls.wi), &ls, start, &lambda);
+                            let tr = transmittance_to(
+                                scene,
+                                origin_side(ls.wi),
+                                &ls,
+                                start,
+                                &lambda,
+                                sampler,
+                            );
                             radiance += throughput
                                 * f
                                 * ls.radiance
@@ -249,6 +231,155 @@ pub fn estimate<S: RandomSource>(
     path.covered = covered;
 }
 
+/// What a segment through a medium did: the throughput factor, and where the path scatters
+/// (the ray parameter) if it does before `t_surface`.
+struct Flight {
+    weight: SampledSpectrum,
+    scatter_at: Option<f32>,
+}
+
+/// The mean of the first `channels` lanes.
+#[inline]
+fn mean(x: SampledSpectrum, channels: usize) -> f32 {
+    x.0.to_array()[..channels].iter().sum::<f32>() / channels as f32
+}
+
+/// Free flight along `ray` through the medium `m` up to the surface at `t_surface` (infinite
+/// if none), as the module documentation describes. Homogeneous: a distance drawn for a
+/// channel chosen uniformly, weighted by the channel-averaged density. Heterogeneous: delta
+/// tracking against the majorant `mu = max_k sigma_t,k * max density` inside the grid's box
+/// (Woodcock et al. 1965; as null-collision MIS by Miller, Georgiev & Jarosz 2019): tentative
+/// collisions at rate `mu`, each a scattering with probability `P_s = mean(sigma_s) /
+/// (mean(sigma_s) + mean(sigma_n))` (weight `sigma_s / (mu P_s)`) or a null collision
+/// (weight `sigma_n / (mu (1 - P_s))`, `sigma_n = mu - sigma_t`), absorption left to the
+/// weights; every channel's expected value is the RTE's.
+fn free_flight<S: RandomSource>(
+    m: &Medium,
+    ray: &Ray,
+    t_surface: f32,
+    lambda: &SampledWavelengths,
+    channels: usize,
+    sampler: &mut S,
+) -> Flight {
+    let (sigma_t, albedo) = m.coefficients(lambda);
+    let pass = |weight| Flight {
+        weight,
+        scatter_at: None,
+    };
+    let Some(density) = &m.density else {
+        if !m.scatters {
+            // Absorption only: the transmittance, the expected value of free flight.
+            return pass(transmittance(sigma_t, t_surface));
+        }
+        let channel = ((sampler.next_1d() * channels as f32) as usize).min(channels - 1);
+        let sigma_c = sigma_t.0[channel];
+        let u = sampler.next_1d();
+        let t = if sigma_c > 0.0 {
+            -(1.0 - u).ln() / sigma_c
+        } else {
+            f32::INFINITY
+        };
+        if t < t_surface {
+            // A scattering event: weight sigma_s T(t) / p(t).
+            let tr = transmittance(sigma_t, t);
+            let pdf = mean(sigma_t * tr, channels);
+            if !(pdf > 0.0) {
+                return pass(SampledSpectrum::ZERO);
+            }
+            return Flight {
+                weight: sigma_t * albedo * tr * (1.0 / pdf),
+                scatter_at: Some(t),
+            };
+        }
+        // Reaching the surface (or leaving the scene): weight T(t_s) / P(t > t_s).
+        let tr = transmittance(sigma_t, t_surface);
+        let p = mean(tr, channels);
+        return pass(if p > 0.0 {
+            tr * (1.0 / p)
+        } else {
+            SampledSpectrum::ZERO
+        });
+    };
+    let one = SampledSpectrum::splat(1.0);
+    let Some((t0, t1)) = density.clip(ray, t_surface) else {
+        return pass(one);
+    };
+    let mu = max_lane(sigma_t, channels) * density.max;
+    if !(mu > 0.0) {
+        return pass(one);
+    }
+    let mut weight = one;
+    let mut t = t0.max(0.0);
+    loop {
+        t -= (1.0 - sampler.next_1d()).ln() / mu;
+        if t >= t1 {
+            return pass(weight);
+        }
+        let st = sigma_t * density.at(ray.origin + ray.dir * t);
+        let ss = st * albedo;
+        let sn = SampledSpectrum(SampledSpectrum::splat(mu).0 - st.0);
+        let (ms, mn) = (mean(ss, channels), mean(sn, channels).max(0.0));
+        if !(ms + mn > 0.0) {
+            // Only absorption here, in every channel.
+            return pass(SampledSpectrum::ZERO);
+        }
+        let p_s = ms / (ms + mn);
+        if sampler.next_1d() < p_s {
+            return Flight {
+                weight: weight * ss * (1.0 / (mu * p_s)),
+                scatter_at: Some(t),
+            };
+        }
+        weight *= sn * (1.0 / (mu * (1.0 - p_s)));
+    }
+}
+
+/// The largest of the first `channels` lanes.
+#[inline]
+fn max_lane(x: SampledSpectrum, channels: usize) -> f32 {
+    x.0.to_array()[..channels]
+        .iter()
+        .copied()
+        .fold(0.0, f32::max)
+}
+
+/// The transmittance of `m` along `ray` over `[0, t]`: exact for a homogeneous medium; by
+/// ratio tracking (Novák, Selle & Jarosz 2014) inside a heterogeneous medium's box, the
+/// product of `1 - sigma_t(x) / mu` over tentative collisions at rate `mu` (unbiased).
+fn medium_transmittance<S: RandomSource>(
+    m: &Medium,
+    ray: &Ray,
+    t: f32,
+    lambda: &SampledWavelengths,
+    sampler: &mut S,
+) -> SampledSpectrum {
+    let Some(density) = &m.density else {
+        return m.transmittance(t, lambda);
+    };
+    let one = SampledSpectrum::splat(1.0);
+    let Some((t0, t1)) = density.clip(ray, t) else {
+        return one;
+    };
+    let sigma_t = m.sigma_t.at(lambda);
+    let mu = max_lane(sigma_t, SampledWavelengths::N) * density.max;
+    if !(mu > 0.0) {
+        return one;
+    }
+    let mut tr = one;
+    let mut x = t0.max(0.0);
+    loop {
+        x -= (1.0 - sampler.next_1d()).ln() / mu;
+        if x >= t1 {
+            return tr;
+        }
+        let st = sigma_t * density.at(ray.origin + ray.dir * x);
+        tr *= SampledSpectrum(one.0 - st.0 * (1.0 / mu));
+        if tr.is_black() {
+            return tr;
+        }
+    }
+}
+
 /// A light sample for the point `p` (the scene's light selection, then the light's own
 /// sampling) and the selection probability, if it carries light.
 #[inline]
@@ -280,12 +411,13 @@ fn nee_weight(s: &PathSettings, ls: &LightSample, pmf: f32, scatter_pdf: f32) ->
 /// off its surface, in `medium`): the product of the media's transmittances along the segment
 /// and of the straight-through transmission of each surface it crosses; 0 when an opaque
 /// surface blocks it.
-fn transmittance_to(
+fn transmittance_to<S: RandomSource>(
     scene: &Scene,
     origin: Vec3,
     ls: &LightSample,
     mut medium: Option<u32>,
     lambda: &SampledWavelengths,
+    sampler: &mut S,
 ) -> SampledSpectrum {
     // The far end: the light's point off its own surface, or infinitely far along `ls.wi`.
     let (dir, mut remaining) = if ls.dist.is_infinite() {
@@ -315,7 +447,7 @@ fn transmittance_to(
         let hit = scene.intersect(&ray);
         let t = hit.as_ref().map_or(remaining, |h| h.t);
         if let Some(m) = medium {
-            tr *= scene.media[m as usize].transmittance(t, lambda);
+            tr *= medium_transmittance(&scene.media[m as usize], &ray, t, lambda, sampler);
         }
         let Some(hit) = hit else {
             return tr;
@@ -352,4 +484,152 @@ fn transmittance_to(
 /// tracer renders).
 pub fn applies(scene: &Scene, s: &PathSettings) -> bool {
     s.media && scene.has_media()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use pt_math::Mat4;
+    use pt_render::medium::{Density, Phase};
+    use pt_render::sampler::Sampler;
+    use pt_render::texture::ConstantSpectrum;
+
+    /// A 4 x 3 x 5 grid with a ramp and a bump, stretched over [-1, 3] x [0, 1] x [0, 2] in
+    /// world space, in a grey medium of extinction factor `sigma` and albedo `albedo`.
+    fn grid_medium(sigma: f32, albedo: f32) -> Medium {
+        let res = [4u32, 3, 5];
+        let values: Vec<f32> = (0..60)
+            .map(|i| {
+                let (x, y, z) = (i % 4, (i / 4) % 3, i / 12);
+                0.2 + 0.3 * x as f32 + if (y, z) == (1, 2) { 1.5 } else { 0.0 }
+            })
+            .collect();
+        let to_world = Mat4::from_translation(pt_math::Vec3::new(-1.0, 0.0, 0.0))
+            * Mat4::from_scale(pt_math::Vec3::new(4.0, 1.0, 2.0));
+        let grey = |v| ConstantSpectrum::Rgb(SampledSpectrum::from_rgb([v; 3]));
+        Medium {
+            sigma_t: grey(sigma),
+            albedo: grey(albedo),
+            phase: Phase::Isotropic,
+            sample_emitters: true,
+            scatters: albedo > 0.0,
+            density: Some(Density::new(values, res, to_world, false)),
+        }
+    }
+
+    fn ray() -> Ray {
+        // Diagonally through the box from a point on its face x = -1: inside it for t < 4.3.
+        Ray::new(
+            Vec3::new(-1.0, 0.1, 0.2),
+            Vec3::new(1.0, 0.15, 0.35).normalize(),
+        )
+    }
+
+    /// The optical depth along `ray` over [0, t] by the midpoint rule on 200 000 steps (the
+    /// trilinear density is continuous: error far below 1e-4).
+    fn optical_depth(m: &Medium, ray: &Ray, t: f32) -> f64 {
+        let d = m.density.as_ref().unwrap();
+        let n = 200_000;
+        let h = f64::from(t) / n as f64;
+        let sigma = f64::from(m.sigma_t.at(&SampledWavelengths::sample_visible(0.5)).0.x);
+        (0..n)
+            .map(|i| {
+                let x = ((i as f64 + 0.5) * h) as f32;
+                sigma * f64::from(d.at(ray.origin + ray.dir * x)) * h
+            })
+            .sum()
+    }
+
+    /// Ratio tracking's transmittance through the grid averages to exp(-optical depth): the
+    /// mean of 200 000 estimates within 4.5 standard errors (estimated from the same samples)
+    /// of the quadrature, the standard error under 0.3% of the value so that a 2% error (say,
+    /// tracking against a majorant below the grid's maximum) fails.
+    #[test]
+    fn ratio_tracking_matches_the_line_integral() {
+        // Optical depth about 1.1 over the 4 units.
+        let m = grid_medium(0.4, 0.0);
+        let r = ray();
+        let t = 4.0;
+        let want = (-optical_depth(&m, &r, t)).exp();
+        let lambda = SampledWavelengths::sample_visible(0.5);
+        let mut sampler = Sampler::new(7, 1, 0);
+        let n = 200_000;
+        let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+        for _ in 0..n {
+            let tr = f64::from(medium_transmittance(&m, &r, t, &lambda, &mut sampler).0.x);
+            sum += tr;
+            sum2 += tr * tr;
+        }
+        let mean = sum / n as f64;
+        let se = ((sum2 / n as f64 - mean * mean) / n as f64).sqrt();
+        eprintln!("ratio tracking {mean:.5} vs exp(-tau) {want:.5}, se {se:.2e}");
+        assert!(se < 0.003 * want, "too noisy: {se}");
+        assert!((mean - want).abs() < 4.5 * se, "{mean} vs {want}");
+    }
+
+    /// Delta tracking in a grey medium of albedo 1 scatters at distances with the density
+    /// `sigma(t) exp(-int_0^t sigma)` (every weight is exactly 1 there): a chi-square test of
+    /// 100 000 free flights over 24 bins of the ray's first 4 units and one for "beyond", the
+    /// expected counts from the quadrature (24 degrees of freedom: the 0.1% critical value is
+    /// 51.2). A flight that scatters at every tentative collision (null collisions ignored)
+    /// fails it.
+    #[test]
+    fn delta_tracking_distances_follow_the_density() {
+        let m = grid_medium(1.3, 1.0);
+        let r = ray();
+        let t_end = 4.0f32;
+        let lambda = SampledWavelengths::sample_visible(0.5);
+        let mut sampler = Sampler::new(11, 2, 0);
+        let bins = 24;
+        let n = 100_000;
+        let mut counts = vec![0u32; bins + 1];
+        for _ in 0..n {
+            let f = free_flight(&m, &r, t_end, &lambda, 3, &mut sampler);
+            match f.scatter_at {
+                Some(t) => {
+                    assert!((f.weight.0.x - 1.0).abs() < 1e-5, "weight {:?}", f.weight);
+                    counts[((t / t_end * bins as f32) as usize).min(bins - 1)] += 1;
+                }
+                None => counts[bins] += 1,
+            }
+        }
+        let cdf = |t: f32| 1.0 - (-optical_depth(&m, &r, t)).exp();
+        let mut chi2 = 0.0;
+        for (b, &c) in counts.iter().enumerate() {
+            let p = if b == bins {
+                1.0 - cdf(t_end)
+            } else {
+                let (lo, hi) = (
+                    t_end * b as f32 / bins as f32,
+                    t_end * (b + 1) as f32 / bins as f32,
+                );
+                cdf(hi) - cdf(lo)
+            };
+            let e = n as f64 * p;
+            chi2 += (f64::from(c) - e).powi(2) / e;
+        }
+        eprintln!("delta tracking chi-square {chi2:.1} (24 dof)");
+        assert!(chi2 < 51.2, "chi-square {chi2}");
+    }
+
+    /// The density's lookups: cell centres give the cells' values, trilinear between them,
+    /// clamped to the outermost values up to the faces, 0 outside the box.
+    #[test]
+    fn density_lookups_are_cell_centred() {
+        let m = grid_medium(1.0, 0.0);
+        let d = m.density.as_ref().unwrap();
+        // Cell (x, y, z) centre in world space: x -1 + 4 (i + 0.5) / 4, y (j + 0.5) / 3,
+        // z 2 (k + 0.5) / 5.
+        let centre = |i: f32, j: f32, k: f32| {
+            Vec3::new(-1.0 + (i + 0.5), (j + 0.5) / 3.0, 2.0 * (k + 0.5) / 5.0)
+        };
+        assert!((d.at(centre(2.0, 0.0, 0.0)) - 0.8).abs() < 1e-5);
+        assert!((d.at(centre(1.0, 1.0, 2.0)) - 2.0).abs() < 1e-5);
+        // Halfway between x cells 0 and 1 (values 0.2 and 0.5).
+        assert!((d.at(centre(0.5, 0.0, 0.0)) - 0.35).abs() < 1e-5);
+        // Clamped between the first centre and the face.
+        assert!((d.at(Vec3::new(-0.9, 0.05, 0.1)) - 0.2).abs() < 1e-5);
+        assert_eq!(d.at(Vec3::new(-1.5, 0.5, 0.5)), 0.0);
+        assert_eq!(d.max, 0.2 + 0.9 + 1.5);
+    }
 }

@@ -14,7 +14,7 @@ use crate::camera::Camera;
 use crate::geometry::Primitive;
 use crate::light::{build_light, AreaLight, Light, LightShape};
 use crate::material::{build_material, SurfaceMaterial};
-use crate::medium::{Medium, Phase};
+use crate::medium::{Density, Medium, Phase};
 use crate::texture::{
     constant_spectrum, rgb_of, spectrum_for_role, DisplayPrimaries, Role, Texture, TextureBuilder,
 };
@@ -199,6 +199,14 @@ fn add_medium(
             phase,
             sample_emitters: m.sample_emitters,
             scatters,
+            density: m.density.as_ref().map(|g| {
+                Density::new(
+                    g.grid.values.clone(),
+                    g.grid.resolution,
+                    g.to_world,
+                    g.nearest,
+                )
+            }),
         },
     ));
     Ok((media.len() - 1) as u32)

@@ -12,7 +12,6 @@ mod texture;
 pub(crate) use bsdf::bsdf_from_properties;
 use integrator::default_integrator;
 use sensor::{default_camera, DEFAULT_FILTER};
-use shape::medium;
 use texture::Nested;
 
 use crate::error::{Result, SceneError};
@@ -51,9 +50,9 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "directionalarea", "sunsky",
     ]),
     ("texture", &["bitmap", "checkerboard", "mesh_attribute", "rawconstant", "d65"], &["volume"]),
-    ("medium", &["homogeneous"], &["heterogeneous"]),
+    ("medium", &["homogeneous", "heterogeneous"], &[]),
     ("phase", &["isotropic", "hg"], &["rayleigh", "sggx", "tabphase", "blendphase"]),
-    ("volume", &[], &["constvolume", "gridvolume"]),
+    ("volume", &["constvolume", "gridvolume"], &[]),
 ];
 
 /// The error for a plugin this loader does not build: "unsupported" for Mitsuba plugins not
@@ -150,6 +149,8 @@ struct Builder<'e> {
     bsdf_memo: HashMap<String, BsdfDesc>,
     /// Built textures by id, so that each is built once and shared images stay shared.
     texture_memo: HashMap<String, TextureDesc>,
+    /// Built media by id, so that each grid is read once.
+    medium_memo: HashMap<String, MediumDesc>,
     /// Ids of BSDFs and textures being built, to report reference cycles instead of
     /// recursing forever.
     visiting: Vec<String>,
@@ -179,6 +180,7 @@ impl<'e> Builder<'e> {
             bsdf_index: HashMap::new(),
             bsdf_memo: HashMap::new(),
             texture_memo: HashMap::new(),
+            medium_memo: HashMap::new(),
             visiting: Vec::new(),
             default_bsdf: [None, None],
             groups: Vec::new(),
@@ -237,7 +239,7 @@ impl<'e> Builder<'e> {
                 // Validated now; it enters `bsdfs` when a shape uses it.
                 "bsdf" => drop(self.bsdf_desc(el)?),
                 // Validated now; shapes and the sensor use it through <ref id="..."/>.
-                "medium" => drop(medium(el)?),
+                "medium" => drop(self.medium(el)?),
                 // Validated now; materials use it through <ref name="..." id="..."/>.
                 "texture" => drop(self.texture(el)?),
                 "emitter" if el.attr("type") == Some("area") => {

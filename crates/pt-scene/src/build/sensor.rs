@@ -21,7 +21,7 @@ impl<'e> Builder<'e> {
             match target.tag.as_str() {
                 "film" if film.is_none() => film = Some(self.film(target)?),
                 "sampler" if sampler.is_none() => sampler = Some(sampler_desc(target)?),
-                "medium" if medium.is_none() => medium = Some(super::shape::medium(target)?),
+                "medium" if medium.is_none() => medium = Some(self.medium(target)?),
                 "film" | "sampler" | "medium" => {
                     return Err(SceneError::at(
                         &child.written().loc,

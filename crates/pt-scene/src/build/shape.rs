@@ -356,9 +356,9 @@ impl<'e> Builder<'e> {
                     let written = child.written();
                     match written.attr("name") {
                         Some("interior") if interior.is_some() => return Err(once("interior medium")),
-                        Some("interior") => interior = Some(medium(target)?),
+                        Some("interior") => interior = Some(self.medium(target)?),
                         Some("exterior") if exterior.is_some() => return Err(once("exterior medium")),
-                        Some("exterior") => exterior = Some(medium(target)?),
+                        Some("exterior") => exterior = Some(self.medium(target)?),
                         other => {
                             return Err(SceneError::at(
                                 &written.loc,
@@ -377,99 +377,233 @@ impl<'e> Builder<'e> {
     }
 }
 
-/// `homogeneous` medium (Mitsuba 3.9.1): `sigma_t` (extinction per scene unit: float, rgb or
-/// spectrum; default 1), `scale` (multiplies sigma_t; default 1), `albedo` (single scattering
-/// albedo in [0, 1]: float, rgb or spectrum; Mitsuba's default 0.75), `sample_emitters`
-/// (default true), `has_spectral_extinction` (accepted: the estimate does not depend on it),
-/// and a nested phase function ([`phase`]; isotropic by default).
-pub(super) fn medium(el: &Element) -> Result<MediumDesc> {
-    let v = ObjectView::parse(el)?;
-    if v.plugin != "homogeneous" {
-        return Err(plugin_error(el));
+impl<'e> Builder<'e> {
+    /// `homogeneous` or `heterogeneous` medium (Mitsuba 3.9.1): `sigma_t` (extinction per
+    /// scene unit: float, rgb or spectrum, or for `heterogeneous` a nested `gridvolume` or
+    /// `constvolume` named sigma_t; default 1), `scale` (multiplies sigma_t; default 1),
+    /// `albedo` (single scattering albedo in [0, 1]: float, rgb, spectrum or a `constvolume`;
+    /// Mitsuba's default 0.75), `sample_emitters` (default true), `has_spectral_extinction`
+    /// (accepted: the estimate does not depend on it), and a nested phase function ([`phase`];
+    /// isotropic by default). A medium with an id is built once (its grid read once).
+    pub(super) fn medium(&mut self, el: &Element) -> Result<MediumDesc> {
+        if let Some(m) = el.attr("id").and_then(|id| self.medium_memo.get(id)) {
+            return Ok(m.clone());
+        }
+        let m = self.build_medium(el)?;
+        if let Some(id) = el.attr("id") {
+            self.medium_memo.insert(id.to_string(), m.clone());
+        }
+        Ok(m)
     }
-    let mut phase_fn = None;
-    for child in &v.children {
-        let what = child.written();
-        match what.tag.as_str() {
-            "phase" if phase_fn.is_none() => phase_fn = Some(phase(what)?),
-            "phase" => {
-                return Err(SceneError::at(
-                    &what.loc,
-                    "a medium takes only one phase function",
-                ))
-            }
-            "volume" => {
-                return Err(SceneError::at(
-                    &what.loc,
-                    "a <volume> in a homogeneous medium is not yet supported (not yet implemented): give sigma_t and albedo as float, rgb or spectrum",
-                ))
-            }
-            _ => {
-                return Err(SceneError::at(
-                    &what.loc,
-                    format!("a medium takes a <phase>, not <{}>", what.tag),
-                ))
+
+    fn build_medium(&mut self, el: &Element) -> Result<MediumDesc> {
+        let v = ObjectView::parse(el)?;
+        let heterogeneous = match v.plugin.as_str() {
+            "homogeneous" => false,
+            "heterogeneous" => true,
+            _ => return Err(plugin_error(el)),
+        };
+        let mut phase_fn = None;
+        let (mut sigma_volume, mut albedo_volume) = (None, None);
+        for child in &v.children {
+            let what = child.written();
+            match what.tag.as_str() {
+                "phase" if phase_fn.is_none() => phase_fn = Some(phase(what)?),
+                "phase" => {
+                    return Err(SceneError::at(
+                        &what.loc,
+                        "a medium takes only one phase function",
+                    ))
+                }
+                "volume" if !heterogeneous => {
+                    return Err(SceneError::at(
+                        &what.loc,
+                        "a homogeneous medium takes sigma_t and albedo as float, rgb or spectrum, not <volume> (use type=\"heterogeneous\" for grids)",
+                    ))
+                }
+                "volume" => match what.attr("name") {
+                    Some("sigma_t") if sigma_volume.is_none() => {
+                        sigma_volume = Some(self.volume(what)?)
+                    }
+                    Some("albedo") if albedo_volume.is_none() => {
+                        albedo_volume = Some(self.volume(what)?)
+                    }
+                    Some(n @ ("sigma_t" | "albedo")) => {
+                        return Err(SceneError::at(
+                            &what.loc,
+                            format!("a medium takes only one {n}"),
+                        ))
+                    }
+                    other => {
+                        return Err(SceneError::at(
+                            &what.loc,
+                            format!(
+                                "a medium's <volume> needs name=\"sigma_t\" or name=\"albedo\", got {}",
+                                other.map_or("none".to_string(), |n| format!("\"{n}\""))
+                            ),
+                        ))
+                    }
+                },
+                _ => {
+                    return Err(SceneError::at(
+                        &what.loc,
+                        format!("a medium takes a <phase> or <volume>, not <{}>", what.tag),
+                    ))
+                }
             }
         }
-    }
-    let sigma_t = v
-        .spectrum("sigma_t")?
-        .unwrap_or(SpectrumDesc::Constant(1.0));
-    let scale = v.float("scale")?.unwrap_or(1.0);
-    if !(scale.is_finite() && scale >= 0.0) {
-        return Err(v.prop_error(
-            "scale",
-            format!("scale must be finite and >= 0, got {scale}"),
-        ));
-    }
-    if sigma_t
-        .values()
-        .iter()
-        .any(|x| !(x.is_finite() && *x >= 0.0))
-    {
-        return Err(v.prop_error("sigma_t", "sigma_t must be finite and >= 0"));
-    }
-    // Mitsuba's default albedo.
-    let albedo = v
-        .spectrum("albedo")?
-        .unwrap_or(SpectrumDesc::Constant(0.75));
-    if albedo
-        .values()
-        .iter()
-        .any(|x| !(x.is_finite() && (0.0..=1.0).contains(x)))
-    {
-        return Err(v.prop_error("albedo", "albedo must lie in [0, 1]"));
-    }
-    if let s @ (SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. }) = &albedo {
-        return Err(v.prop_error(
-            "albedo",
-            format!("albedo cannot be an emission spectrum ({})", s.form_name()),
-        ));
-    }
-    let sample_emitters = v.boolean("sample_emitters")?.unwrap_or(true);
-    v.boolean("has_spectral_extinction")?;
-    v.finish()?;
-    let sigma_t = match sigma_t {
-        SpectrumDesc::Constant(c) => SpectrumDesc::Constant(c * scale),
-        SpectrumDesc::Uniform(c) => SpectrumDesc::Uniform(c * scale),
-        SpectrumDesc::Rgb(c) => SpectrumDesc::Rgb(c.map(|x| x * scale)),
-        SpectrumDesc::Tabulated(p) => SpectrumDesc::Tabulated(std::sync::Arc::new(
-            p.iter().map(|&(w, x)| (w, x * scale)).collect(),
-        )),
-        s @ (SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. }) => {
+        let (sigma_t, density) = match sigma_volume {
+            Some(Volume::Grid(g)) => {
+                if v.has("sigma_t") {
+                    return Err(
+                        v.prop_error("sigma_t", "sigma_t is given twice (a value and a <volume>)")
+                    );
+                }
+                (SpectrumDesc::Constant(1.0), Some(std::sync::Arc::new(g)))
+            }
+            Some(Volume::Constant(c)) => (c, None),
+            None => (
+                v.spectrum("sigma_t")?
+                    .unwrap_or(SpectrumDesc::Constant(1.0)),
+                None,
+            ),
+        };
+        let scale = v.float("scale")?.unwrap_or(1.0);
+        if !(scale.is_finite() && scale >= 0.0) {
             return Err(v.prop_error(
-                "sigma_t",
-                format!("sigma_t cannot be an emission spectrum ({})", s.form_name()),
+                "scale",
+                format!("scale must be finite and >= 0, got {scale}"),
             ));
         }
-    };
-    Ok(MediumDesc {
-        loc: el.loc.clone(),
-        sigma_t,
-        albedo,
-        phase: phase_fn.unwrap_or(PhaseDesc::Isotropic),
-        sample_emitters,
-    })
+        if sigma_t
+            .values()
+            .iter()
+            .any(|x| !(x.is_finite() && *x >= 0.0))
+        {
+            return Err(v.prop_error("sigma_t", "sigma_t must be finite and >= 0"));
+        }
+        // Mitsuba's default albedo.
+        let albedo = match albedo_volume {
+            Some(Volume::Constant(c)) => c,
+            Some(Volume::Grid(_)) => {
+                return Err(SceneError::at(
+                    &el.loc,
+                    "an albedo grid is not yet supported (not yet implemented): give albedo as float, rgb, spectrum or constvolume",
+                ))
+            }
+            None => v.spectrum("albedo")?.unwrap_or(SpectrumDesc::Constant(0.75)),
+        };
+        if albedo
+            .values()
+            .iter()
+            .any(|x| !(x.is_finite() && (0.0..=1.0).contains(x)))
+        {
+            return Err(v.prop_error("albedo", "albedo must lie in [0, 1]"));
+        }
+        if let s @ (SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. }) = &albedo {
+            return Err(v.prop_error(
+                "albedo",
+                format!("albedo cannot be an emission spectrum ({})", s.form_name()),
+            ));
+        }
+        let sample_emitters = v.boolean("sample_emitters")?.unwrap_or(true);
+        v.boolean("has_spectral_extinction")?;
+        v.finish()?;
+        let sigma_t = match sigma_t {
+            SpectrumDesc::Constant(c) => SpectrumDesc::Constant(c * scale),
+            SpectrumDesc::Uniform(c) => SpectrumDesc::Uniform(c * scale),
+            SpectrumDesc::Rgb(c) => SpectrumDesc::Rgb(c.map(|x| x * scale)),
+            SpectrumDesc::Tabulated(p) => SpectrumDesc::Tabulated(std::sync::Arc::new(
+                p.iter().map(|&(w, x)| (w, x * scale)).collect(),
+            )),
+            s @ (SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. }) => {
+                return Err(v.prop_error(
+                    "sigma_t",
+                    format!("sigma_t cannot be an emission spectrum ({})", s.form_name()),
+                ));
+            }
+        };
+        Ok(MediumDesc {
+            loc: el.loc.clone(),
+            sigma_t,
+            albedo,
+            phase: phase_fn.unwrap_or(PhaseDesc::Isotropic),
+            sample_emitters,
+            density,
+        })
+    }
+
+    /// A medium's `<volume>`: `constvolume` (`value`: float, rgb or spectrum; default 1) or
+    /// `gridvolume` (`filename` of a Mitsuba .vol file with one channel, `filter_type`
+    /// trilinear or nearest, `use_grid_bbox`, `to_world`; `raw` and `accel` accepted).
+    fn volume(&mut self, el: &Element) -> Result<Volume> {
+        let v = ObjectView::parse(el)?;
+        let err = |msg: String| SceneError::at(&el.loc, msg);
+        let out = match v.plugin.as_str() {
+            "constvolume" => {
+                Volume::Constant(v.spectrum("value")?.unwrap_or(SpectrumDesc::Constant(1.0)))
+            }
+            "gridvolume" => {
+                let name = v.string("filename")?.ok_or_else(|| {
+                    err("missing <string name=\"filename\" .../> (the grid's .vol file)".into())
+                })?;
+                let path = resolve_file(&name, &el.dir, &[self.base_dir], self.search_paths);
+                let grid = crate::volgrid::load_vol(&path, &name).map_err(err)?;
+                if grid.channels != 1 {
+                    return Err(err(format!(
+                        "grid '{name}' has {} channels; a medium's extinction grid with more than one is not yet supported (not yet implemented)",
+                        grid.channels
+                    )));
+                }
+                if let Some(bad) = grid.values.iter().find(|x| !(x.is_finite() && **x >= 0.0)) {
+                    return Err(err(format!(
+                        "grid '{name}' holds {bad}; extinction must be finite and >= 0"
+                    )));
+                }
+                let nearest = match v.string("filter_type")?.as_deref() {
+                    None | Some("trilinear") => false,
+                    Some("nearest") => true,
+                    Some(other) => {
+                        return Err(v.prop_error(
+                            "filter_type",
+                            format!("filter_type \"{other}\" is not one of: trilinear, nearest"),
+                        ))
+                    }
+                };
+                let mut to_world = v.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
+                if v.boolean("use_grid_bbox")?.unwrap_or(false) {
+                    let [lo, hi] = grid.bbox;
+                    let (lo, hi) = (Vec3::from(lo), Vec3::from(hi));
+                    to_world *= Mat4::from_translation(lo) * Mat4::from_scale(hi - lo);
+                }
+                if to_world.determinant().abs() < 1e-12 || !to_world.is_finite() {
+                    return Err(v.prop_error("to_world", "the grid's to_world is singular"));
+                }
+                v.boolean("raw")?;
+                v.boolean("accel")?;
+                Volume::Grid(DensityGridDesc {
+                    grid,
+                    to_world,
+                    nearest,
+                })
+            }
+            _ => return Err(plugin_error(el)),
+        };
+        if let Some(child) = v.children.first() {
+            return Err(SceneError::at(
+                &child.written().loc,
+                "a volume takes no nested objects",
+            ));
+        }
+        v.finish()?;
+        Ok(out)
+    }
+}
+
+/// A medium's `<volume>` as read.
+enum Volume {
+    Constant(SpectrumDesc),
+    Grid(DensityGridDesc),
 }
 
 /// A phase function: `isotropic`, or `hg` with `g` (default 0.8, Mitsuba's) in (-1, 1).

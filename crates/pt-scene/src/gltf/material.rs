@@ -554,6 +554,7 @@ fn volume_medium(mat: &Material, v: &gltf::material::Volume, r: &mut Report) -> 
         albedo: SpectrumDesc::Constant(0.0),
         phase: PhaseDesc::Isotropic,
         sample_emitters: true,
+        density: None,
     })
 }
 

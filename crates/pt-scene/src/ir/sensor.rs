@@ -323,8 +323,9 @@ impl SamplerKind {
 pub enum IntegratorKind {
     /// Unidirectional path tracing with NEE and MIS (Mitsuba `path`).
     Path,
-    /// Path tracing through media (Mitsuba `volpath`): as `Path`, and rays inside a shape with an
-    /// interior medium are attenuated by it. (`Path` ignores media, as Mitsuba's does.)
+    /// Path tracing through participating media (Mitsuba `volpath`): free flight, scattering
+    /// and light sampling through media and null surfaces; as `Path` where the scene has no
+    /// media. (`Path` ignores media, as Mitsuba's does.)
     VolPath,
     /// Direct illumination only (Mitsuba `direct`), with Mitsuba's numbers of emitter and BSDF
     /// samples per hit (`shading_samples` sets both; 1 and 1 by default; one may be 0).

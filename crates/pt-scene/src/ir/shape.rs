@@ -233,6 +233,22 @@ pub struct MediumDesc {
     /// Mitsuba's `sample_emitters` (default true): whether scattering in the medium samples
     /// the lights (next-event estimation); without it only phase sampling finds them.
     pub sample_emitters: bool,
+    /// `heterogeneous` with a `gridvolume` extinction: the extinction at a point is `sigma_t`
+    /// (which then holds Mitsuba's `scale`) times the grid's value there; zero outside the
+    /// grid's box. `None`: homogeneous.
+    pub density: Option<std::sync::Arc<DensityGridDesc>>,
+}
+
+/// A `gridvolume` as a medium's extinction: one value per cell, in the grid's unit cube.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DensityGridDesc {
+    /// The values (one channel, each finite and >= 0).
+    pub grid: crate::volgrid::VolumeGrid,
+    /// From the grid's unit cube [0, 1]^3 to world space (Mitsuba: the volume's `to_world`,
+    /// after the file's bounding box when `use_grid_bbox` is true).
+    pub to_world: Mat4,
+    /// Nearest-cell lookups (Mitsuba's `filter_type` "nearest") instead of trilinear ones.
+    pub nearest: bool,
 }
 
 /// A phase function (Mitsuba's `<phase>`).

@@ -291,14 +291,94 @@ fn bad_media_are_clear_errors() {
         r#"<shape type="sphere"><medium type="homogeneous" name="interior"><float name="albedo" value="0"/><float name="sigma_t" value="-1"/></medium></shape>"#,
     ));
     assert!(e.message.contains("sigma_t"), "{e}");
-    let e = fail(&scene(
-        r#"<shape type="sphere"><medium type="heterogeneous" name="interior"/></shape>"#,
-    ));
-    assert!(
-        e.message
-            .contains("unsupported plugin medium \"heterogeneous\""),
-        "{e}"
+}
+
+#[test]
+fn heterogeneous_medium_reads_its_grid_and_refuses_what_it_cannot_trace() {
+    use crate::volgrid::{write_vol, VolumeGrid};
+    let dir = temp_dir("heterogeneous");
+    let grid = |channels: u32, value: f32| VolumeGrid {
+        resolution: [2, 3, 2],
+        channels,
+        bbox: [[1.0, 2.0, 3.0], [2.0, 4.0, 7.0]],
+        values: vec![value; 12 * channels as usize],
+    };
+    for (name, g) in [
+        ("one.vol", grid(1, 0.5)),
+        ("rgb.vol", grid(3, 0.5)),
+        ("neg.vol", grid(1, -1.0)),
+    ] {
+        std::fs::write(dir.join(name), write_vol(&g)).unwrap();
+    }
+    let medium = |inner: &str| {
+        scene(&format!(
+            "<shape type=\"cube\"><bsdf type=\"null\"/><medium type=\"heterogeneous\" name=\"interior\">{inner}</medium></shape>"
+        ))
+    };
+    let load_in = |xml: &str| load_str(xml, Path::new("test.xml"), &dir, &[]);
+    let s = load_in(&medium(
+        r#"<volume type="gridvolume" name="sigma_t"><string name="filename" value="one.vol"/>
+           <transform name="to_world"><scale value="2"/></transform></volume>
+           <float name="scale" value="4"/>
+           <volume type="constvolume" name="albedo"><rgb name="value" value="0.5, 0.6, 0.7"/></volume>"#,
+    ))
+    .unwrap();
+    let m = s.shapes[0].interior.as_ref().unwrap();
+    // sigma_t holds the scale; the grid its spatial factor.
+    assert_eq!(m.sigma_t, SpectrumDesc::Constant(4.0));
+    assert_eq!(m.albedo, SpectrumDesc::Rgb([0.5, 0.6, 0.7]));
+    let d = m.density.as_ref().unwrap();
+    assert_eq!(d.grid.resolution, [2, 3, 2]);
+    assert_eq!(d.to_world, glam::Mat4::from_scale(Vec3::splat(2.0)));
+    assert!(!d.nearest);
+    // use_grid_bbox: the file's box, then to_world.
+    let s = load_in(&medium(
+        r#"<volume type="gridvolume" name="sigma_t"><string name="filename" value="one.vol"/>
+           <boolean name="use_grid_bbox" value="true"/><string name="filter_type" value="nearest"/></volume>"#,
+    ))
+    .unwrap();
+    let d = s.shapes[0]
+        .interior
+        .as_ref()
+        .unwrap()
+        .density
+        .clone()
+        .unwrap();
+    assert!(d.nearest);
+    assert_eq!(
+        d.to_world.transform_point3(Vec3::ONE),
+        Vec3::new(2.0, 4.0, 7.0)
     );
+    for (inner, want) in [
+        (
+            r#"<volume type="gridvolume" name="sigma_t"><string name="filename" value="rgb.vol"/></volume>"#,
+            "3 channels",
+        ),
+        (
+            r#"<volume type="gridvolume" name="sigma_t"><string name="filename" value="neg.vol"/></volume>"#,
+            "finite and >= 0",
+        ),
+        (
+            r#"<volume type="gridvolume" name="sigma_t"/>"#,
+            "missing <string name=\"filename\"",
+        ),
+        (
+            r#"<volume type="gridvolume" name="albedo"><string name="filename" value="one.vol"/></volume>"#,
+            "albedo grid is not yet supported",
+        ),
+        (
+            r#"<volume type="constvolume" name="density"/>"#,
+            "name=\"sigma_t\" or name=\"albedo\"",
+        ),
+    ] {
+        let e = load_in(&medium(inner)).unwrap_err();
+        assert!(e.message.contains(want), "{inner}: {e}");
+    }
+    let e = load_in(&scene(
+        r#"<shape type="sphere"><medium type="homogeneous" name="interior"><volume type="constvolume" name="albedo"/></medium></shape>"#,
+    ))
+    .unwrap_err();
+    assert!(e.message.contains("heterogeneous"), "{e}");
 }
 
 #[test]
