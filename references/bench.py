@@ -66,6 +66,10 @@ SUITE = [
      "ptracer: light paths through a glass ball, small sphere light, gaussian"),
     ("ptracer-point", "scenes/caustic-point-light.xml", 256, {},
      "ptracer: a point light's caustic through a glass ball, gaussian"),
+    ("fog-spot", "scenes/fog-spot.xml", 256, {},
+     "volpath: chromatic hg fog behind null walls, spot light shafts, sky"),
+    ("smoke-grid", "scenes/smoke-grid.xml", 256, {},
+     "volpath: 40^3 gridvolume smoke, delta and ratio tracking, sun and sky"),
 ]
 
 SEEDS = (1, 2)

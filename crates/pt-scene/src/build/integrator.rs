@@ -13,6 +13,16 @@ impl<'e> Builder<'e> {
                 kind: IntegratorKind::VolPath,
                 ..path_integrator(&v)?
             },
+            // Mitsuba's `volpathmis` differs from its `volpath` in weighting free flight over
+            // the channels by MIS, which pt's `volpath` already does: the same integrator
+            // (`use_spectral_mis` accepted).
+            "volpathmis" => {
+                v.boolean("use_spectral_mis")?;
+                IntegratorDesc {
+                    kind: IntegratorKind::VolPath,
+                    ..path_integrator(&v)?
+                }
+            }
             "direct" => direct_integrator(&v)?,
             "moment" => self.moment(&v)?,
             "aov" => self.aov(&v)?,

@@ -35,8 +35,8 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
     ("film", &["hdrfilm"], &["specfilm"]),
     ("sampler", &["independent", "stratified", "multijitter", "orthogonal", "ldsampler"], &[]),
     ("rfilter", &["box", "tent", "gaussian", "mitchell", "catmullrom", "lanczos"], &[]),
-    ("integrator", &["path", "volpath", "direct", "moment", "aov", "radiosity", "ptracer", "sppm"], &[
-        "volpathmis", "prb", "prb_basic", "prb_projective", "direct_projective",
+    ("integrator", &["path", "volpath", "volpathmis", "direct", "moment", "aov", "radiosity", "ptracer", "sppm"], &[
+        "prb", "prb_basic", "prb_projective", "direct_projective",
         "depth", "stokes", "prbvolpath",
     ]),
     ("shape", &["obj", "ply", "serialized", "gltf", "rectangle", "cube", "sphere", "disk", "cylinder", "sdfgrid", "shapegroup", "instance"], &[

@@ -415,10 +415,10 @@ impl<'e> Builder<'e> {
                         "a medium takes only one phase function",
                     ))
                 }
-                "volume" if !heterogeneous => {
+                "volume" if !heterogeneous && what.attr("name") != Some("albedo") => {
                     return Err(SceneError::at(
                         &what.loc,
-                        "a homogeneous medium takes sigma_t and albedo as float, rgb or spectrum, not <volume> (use type=\"heterogeneous\" for grids)",
+                        "a homogeneous medium takes sigma_t as float, rgb or spectrum, not <volume> (use type=\"heterogeneous\" for grids)",
                     ))
                 }
                 "volume" => match what.attr("name") {

@@ -375,7 +375,7 @@ fn heterogeneous_medium_reads_its_grid_and_refuses_what_it_cannot_trace() {
         assert!(e.message.contains(want), "{inner}: {e}");
     }
     let e = load_in(&scene(
-        r#"<shape type="sphere"><medium type="homogeneous" name="interior"><volume type="constvolume" name="albedo"/></medium></shape>"#,
+        r#"<shape type="sphere"><medium type="homogeneous" name="interior"><volume type="constvolume" name="sigma_t"/></medium></shape>"#,
     ))
     .unwrap_err();
     assert!(e.message.contains("heterogeneous"), "{e}");
