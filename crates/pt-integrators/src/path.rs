@@ -202,6 +202,25 @@ pub(crate) fn li_through_fluorescence<S: RandomSource>(
     trace_one(scene, s, path, sampler, lambda)
 }
 
+/// The camera side's share of fluorescence for the photon methods' camera paths:
+/// [`li_through_fluorescence`] along `ray` (with the path's throughput and the segments before
+/// it) the first time it is called on a path, while `*counted` is false; then 0. Called at the
+/// first hit, it counts every path through a fluorescent surface once.
+pub(crate) fn fluorescence_once<S: RandomSource>(
+    scene: &Scene,
+    (ray, throughput, segments): (Ray, SampledSpectrum, u32),
+    s: &PathSettings,
+    sampler: &mut S,
+    lambda: &SampledWavelengths,
+    counted: &mut bool,
+) -> SampledSpectrum {
+    if *counted {
+        return SampledSpectrum::ZERO;
+    }
+    *counted = true;
+    li_through_fluorescence(scene, ray, throughput, segments, s, sampler, lambda)
+}
+
 /// A path as [`trace_paths`] takes it and hands it back: the path, its random numbers, the
 /// wavelengths it started with (fluorescence may change the path's own) and a tag of the
 /// caller's choosing (which sample it is).

@@ -379,18 +379,14 @@ fn camera_sample(
         if segments >= max_segments {
             break;
         }
-        if !fluorescence_counted {
-            radiance += crate::path::li_through_fluorescence(
-                scene,
-                ray,
-                beta,
-                segments - 1,
-                s,
-                &mut sampler,
-                lambda,
-            );
-            fluorescence_counted = true;
-        }
+        radiance += crate::path::fluorescence_once(
+            scene,
+            (ray, beta, segments - 1),
+            s,
+            &mut sampler,
+            lambda,
+            &mut fluorescence_counted,
+        );
         if scene.material(hit.shape).fluorescent().is_some() {
             // Every path on from here scatters at a fluorescent surface: counted above.
             break;

@@ -164,18 +164,14 @@ fn camera_path(
             break;
         }
         let fluorescent = scene.material(hit.shape).fluorescent().is_some();
-        if !fluorescence_counted {
-            radiance += crate::path::li_through_fluorescence(
-                scene,
-                ray,
-                beta,
-                segments - 1,
-                s,
-                &mut sampler,
-                lambda,
-            );
-            fluorescence_counted = true;
-        }
+        radiance += crate::path::fluorescence_once(
+            scene,
+            (ray, beta, segments - 1),
+            s,
+            &mut sampler,
+            lambda,
+            &mut fluorescence_counted,
+        );
         if fluorescent {
             // Every path on from here scatters at a fluorescent surface: counted above.
             break;

@@ -119,6 +119,23 @@ impl SceneDesc {
                 return Some(format!("{}: {} spectrum in a BSDF", b.loc, s.form_name()));
             }
         }
+        let media = self
+            .shapes
+            .iter()
+            .flat_map(|s| s.interior.iter().chain(&s.exterior))
+            .chain(&self.camera_medium);
+        for m in media {
+            if let Some(sp) = [&m.sigma_t, &m.albedo]
+                .into_iter()
+                .find(|s| s.is_spectral())
+            {
+                return Some(format!(
+                    "{}: {} spectrum in a medium",
+                    m.loc,
+                    sp.form_name()
+                ));
+            }
+        }
         for s in &self.shapes {
             if let Some(e) = &s.emitter {
                 if let Some(sp) = e.radiance.spectra().into_iter().find(|s| s.is_spectral()) {

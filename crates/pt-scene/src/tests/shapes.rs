@@ -260,6 +260,19 @@ fn media_on_both_sides_the_sensor_and_phase_functions() {
     assert_eq!(outside.phase, PhaseDesc::Isotropic);
     assert_eq!(outside.sigma_t, SpectrumDesc::Constant(1.0));
     assert!(!outside.sample_emitters);
+    assert!(s.spectral_reason().is_none());
+    // A tabulated extinction selects spectral mode, as a tabulated BSDF spectrum does.
+    let s = load(&scene(
+        r#"<shape type="sphere"><medium type="homogeneous" name="exterior"><spectrum name="sigma_t" value="400:1, 700:2"/></medium></shape>"#,
+    ))
+    .unwrap();
+    assert!(
+        s.spectral_reason()
+            .unwrap()
+            .contains("spectrum in a medium"),
+        "{:?}",
+        s.spectral_reason()
+    );
 }
 
 #[test]
