@@ -170,6 +170,9 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
         dir.y,
         dir.z
     );
+    if let Some(m) = &desc.camera_medium {
+        out!("camera in   {}", medium_summary(m));
+    }
     out!(
         "geometry    {} shapes{}, {} triangles{}, {} spheres, {} cylinders{}",
         desc.shapes.len(),
@@ -240,10 +243,12 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
                     }
                 ))
                 .unwrap_or_default()
-                + &s.interior
-                    .as_ref()
-                    .map(|m| format!(" interior medium sigma_t {:?}", m.sigma_t))
-                    .unwrap_or_default(),
+                + &[("interior", &s.interior), ("exterior", &s.exterior)]
+                    .iter()
+                    .filter_map(|(side, m)| m
+                        .as_ref()
+                        .map(|m| format!(" {side} {}", medium_summary(m))))
+                    .collect::<String>(),
             s.id.as_deref()
                 .map(|id| format!(" id={id}"))
                 .unwrap_or_default(),
@@ -299,4 +304,19 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
         None => out!("mode        rgb (every input is RGB and no material depends on wavelength: RGB is exact)"),
     }
     Ok(ExitCode::SUCCESS)
+}
+
+/// One line's worth of a medium: its kind, coefficients and phase function.
+fn medium_summary(m: &pt_scene::MediumDesc) -> String {
+    format!(
+        "medium ({}) sigma_t {:?} albedo {:?} phase {:?}",
+        if m.density.is_some() {
+            "grid"
+        } else {
+            "homogeneous"
+        },
+        m.sigma_t,
+        m.albedo,
+        m.phase
+    )
 }
