@@ -18,6 +18,7 @@ mod aov;
 mod bad_input;
 mod bdpt;
 mod cameras;
+mod cluster;
 mod cornell_reference;
 mod determinism;
 mod direct_samples;

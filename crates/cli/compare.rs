@@ -35,6 +35,40 @@ pub(crate) struct CompareArgs {
     /// Write FLIP's per-pixel error (0 to 1, viridis) as a false-colour image (EXR or PNG).
     #[arg(long, value_name = "OUT")]
     flip_image: Option<PathBuf>,
+    /// Only check that the two EXRs hold the same channels with the same values, bit for bit
+    /// (headers such as the render time may differ): exit 0 when they do, 1 when not. For
+    /// checking that a merged split render equals the render on one machine.
+    #[arg(long, conflicts_with_all = ["variance", "image_variance", "error_image", "flip_image"])]
+    identical: bool,
+}
+
+/// `--identical`: every channel, bit for bit.
+fn identical(a: &Path, b: &Path) -> Result<ExitCode> {
+    let (wa, ha, ca) = pt_image::read_exr_channels(a)?;
+    let (wb, hb, cb) = pt_image::read_exr_channels(b)?;
+    if (wa, ha) != (wb, hb) {
+        out!("different sizes: {wa}x{ha} and {wb}x{hb}");
+        return Ok(ExitCode::from(1));
+    }
+    let names = |c: &pt_image::NamedChannels| c.iter().map(|(n, _)| n.clone()).collect::<Vec<_>>();
+    if names(&ca) != names(&cb) {
+        out!("different channels: {:?} and {:?}", names(&ca), names(&cb));
+        return Ok(ExitCode::from(1));
+    }
+    let mut same = true;
+    for ((name, x), (_, y)) in ca.iter().zip(&cb) {
+        let differ = x
+            .iter()
+            .zip(y)
+            .filter(|(p, q)| p.to_bits() != q.to_bits())
+            .count();
+        if differ > 0 {
+            same = false;
+        }
+        out!("channel {name}: {differ} of {} values differ", x.len());
+    }
+    out!("{}", if same { "identical" } else { "NOT identical" });
+    Ok(ExitCode::from(u8::from(!same)))
 }
 
 /// `a.exr` -> `a_var.exr` if that file exists.
@@ -44,6 +78,9 @@ fn sibling_variance(path: &Path) -> Option<PathBuf> {
 }
 
 pub(crate) fn run(args: CompareArgs) -> Result<ExitCode> {
+    if args.identical {
+        return identical(&args.image, &args.reference);
+    }
     // Output names are checked before any work, so a bad one fails fast with nothing written.
     for (flag, out) in [
         ("--error-image", &args.error_image),

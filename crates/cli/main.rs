@@ -18,7 +18,9 @@ mod compare;
 mod converge;
 mod info;
 mod lobes;
+mod merge;
 mod render;
+mod slurm;
 mod stability;
 
 use anyhow::{bail, Context, Result};
@@ -45,6 +47,12 @@ struct Cli {
 enum Command {
     /// Render a scene to an OpenEXR image (linear float32 RGB).
     Render(render::RenderArgs),
+    /// Combine the part files of a render split with `render --part K/N` into its EXR: the
+    /// image of the whole render, bit for bit.
+    Merge(merge::MergeArgs),
+    /// Split renders over a Slurm cluster: write (and with --submit, submit) a job array of
+    /// `render --part` tasks and a merge job that waits for it; --status DIR reports progress.
+    Slurm(slurm::SlurmArgs),
     /// Print what a scene contains: shapes, triangles, lights, materials, camera, colour mode.
     Info(info::InfoArgs),
     /// Compare an image with a reference: error metrics and, given variances, a block z-test.
@@ -96,6 +104,8 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render::run(args),
+        Command::Merge(args) => merge::run(args),
+        Command::Slurm(args) => slurm::run(args),
         Command::Info(args) => info::run(args),
         Command::Compare(args) => compare::run(args),
         Command::Converge(args) => converge::run(args),

@@ -5,8 +5,11 @@ use crate::{load_scene, thread_pool, variance_path, SceneArgs};
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use pt_cluster::part::PartFile;
 use pt_image::{ExrMeta, Image};
-use pt_integrators::{Integrator, Job, Overrides, Progress, Rendered, Run, Strategy};
+use pt_integrators::{
+    Checkpoint, Integrator, Job, Overrides, Progress, RenderState, Rendered, Run, Share, Strategy,
+};
 use pt_render::{BvhKind, LightSelection};
 use pt_scene::{IntegratorKind, RadiosityOptions, SceneDesc};
 use std::io::IsTerminal;
@@ -17,7 +20,19 @@ use std::process::ExitCode;
 pub(crate) struct RenderArgs {
     /// Mitsuba 3 XML scene, or a glTF 2.0 file (.gltf / .glb). Without it, the built-in Cornell
     /// box is rendered.
-    scene: Option<PathBuf>,
+    pub(crate) scene: Option<PathBuf>,
+    /// Render only the K-th of N equal shares of every pixel's samples (sample indices K-1,
+    /// K-1+N, K-1+2N ...) into a part file (-o, ending in .ptpart; default
+    /// SCENE.partKofN.ptpart) for `pt merge`, which combines the N parts into exactly the image
+    /// of the whole render. An unfinished part file of the same render is resumed; a finished
+    /// one is left as it is. Path tracers (path, volpath, direct) only.
+    #[arg(long, value_name = "K/N", value_parser = parse_part)]
+    part: Option<(u32, u32)>,
+    /// Save the render in progress every SECONDS (between passes): to the part file with
+    /// --part, else to --save-state, so that a render that is killed resumes from there
+    /// [default with --part: 60].
+    #[arg(long, value_name = "SECONDS")]
+    checkpoint: Option<u64>,
     /// Save the accumulated per-pixel sums here when the render ends or is interrupted (Ctrl-C),
     /// so that `--resume` can continue it.
     #[arg(long, value_name = "STATE")]
@@ -28,7 +43,7 @@ pub(crate) struct RenderArgs {
     resume: Option<PathBuf>,
     /// Output EXR path [default: the scene's file name with .exr, in the current folder].
     #[arg(short, long)]
-    output: Option<PathBuf>,
+    pub(crate) output: Option<PathBuf>,
     /// Samples per pixel [default: the scene's sampler sample_count].
     #[arg(long)]
     spp: Option<u32>,
@@ -41,7 +56,7 @@ pub(crate) struct RenderArgs {
     time: Option<f32>,
     /// Worker threads [default: all cores]. The image does not depend on it.
     #[arg(long)]
-    threads: Option<usize>,
+    pub(crate) threads: Option<usize>,
     /// Longest path in segments (1: emitters only, 2: direct light, -1: unlimited)
     /// [default: the scene's integrator max_depth].
     #[arg(long, allow_hyphen_values = true)]
@@ -58,7 +73,7 @@ pub(crate) struct RenderArgs {
     /// mean of a region larger than the filter has per pixel (block z-tests such as `pt
     /// compare`'s), above a single splatted pixel's variance.
     #[arg(long)]
-    variance: bool,
+    pub(crate) variance: bool,
     /// How samples become pixels: `splat` is Mitsuba's film (each sample placed uniformly in
     /// its pixel and added with the filter's weight to every pixel it reaches: Mitsuba's
     /// per-pixel noise, correlated between neighbours); `importance` draws each sample's offset
@@ -70,7 +85,7 @@ pub(crate) struct RenderArgs {
     reconstruction: Option<ReconstructionArg>,
     /// Also write a tone-mapped sRGB PNG preview to this path.
     #[arg(long, value_name = "PNG")]
-    png: Option<PathBuf>,
+    pub(crate) png: Option<PathBuf>,
     /// Exposure of the PNG preview, in stops.
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     exposure: f32,
@@ -114,7 +129,7 @@ pub(crate) struct RenderArgs {
     radiosity: RadiosityArgs,
     /// No progress bar or summary on stderr.
     #[arg(short, long)]
-    quiet: bool,
+    pub(crate) quiet: bool,
     #[command(flatten)]
     scene_args: SceneArgs,
 }
@@ -247,7 +262,7 @@ impl RenderArgs {
     }
 
     /// The scene with the command line's film size.
-    fn scene(&self) -> Result<SceneDesc> {
+    pub(crate) fn scene(&self) -> Result<SceneDesc> {
         let mut desc = load_scene(self.scene.as_deref(), &self.scene_args)?;
         if self.width.is_some() || self.height.is_some() {
             // The command line sizes the whole film: a crop window of the file's film no
@@ -329,6 +344,81 @@ impl Progress for Bar {
 }
 
 pub(crate) fn run(args: RenderArgs) -> Result<ExitCode> {
+    // The arguments after `pt render`, recorded in part files so that `pt merge` can finish
+    // the render as this command would.
+    let argv: Vec<String> = std::env::args().skip(2).collect();
+    execute(args, &argv, None)
+}
+
+/// Parses `K/N` (1 <= K <= N).
+fn parse_part(s: &str) -> Result<(u32, u32), String> {
+    let (k, n) = s
+        .split_once('/')
+        .ok_or_else(|| format!("expected K/N (such as 2/8), got '{s}'"))?;
+    let k: u32 = k
+        .trim()
+        .parse()
+        .map_err(|_| format!("K in K/N must be a whole number, got '{k}'"))?;
+    let n: u32 = n
+        .trim()
+        .parse()
+        .map_err(|_| format!("N in K/N must be a whole number, got '{n}'"))?;
+    if n == 0 || k == 0 || k > n {
+        return Err(format!("K/N needs 1 <= K <= N, got {k}/{n}"));
+    }
+    Ok((k, n))
+}
+
+/// `argv` without `--part K/N` and the output path (their forms `--part X`, `--part=X`,
+/// `-o X`, `-oX`, `--output X`, `--output=X`): the arguments every part of a render shares.
+fn shared_arguments(argv: &[String]) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut skip_next = false;
+    for a in argv {
+        if std::mem::take(&mut skip_next) {
+            continue;
+        }
+        match a.as_str() {
+            "--part" | "-o" | "--output" => skip_next = true,
+            _ if a.starts_with("--part=") || a.starts_with("--output=") => {}
+            _ if a.starts_with("-o") && a.len() > 2 && !a.starts_with("--") => {}
+            _ => out.push(a.clone()),
+        }
+    }
+    out
+}
+
+/// The `pt render` arguments alone (what a part file records), for `pt merge`.
+#[derive(clap::Parser)]
+#[command(name = "pt render", no_binary_name = true)]
+struct StoredRender {
+    #[command(flatten)]
+    args: RenderArgs,
+}
+
+/// Reads the render arguments a part file recorded; relative scene paths are taken from the
+/// part's working folder `cwd`.
+pub(crate) fn stored_arguments(argv: &[String], cwd: &Path) -> Result<RenderArgs> {
+    use clap::Parser as _;
+    let mut args = StoredRender::try_parse_from(argv)
+        .map_err(|e| anyhow::anyhow!("the part's render arguments do not parse: {e}"))?
+        .args;
+    if let Some(scene) = args.scene.as_mut() {
+        if scene.is_relative() {
+            *scene = cwd.join(&*scene);
+        }
+    }
+    Ok(args)
+}
+
+/// Renders `args` (`argv` being the command line it came from), or with `merge`, writes the
+/// outputs of the render whose parts these are (checked to be the whole render by
+/// `pt_cluster::part::check_set`): their sums added, no samples taken.
+pub(crate) fn execute(
+    args: RenderArgs,
+    argv: &[String],
+    merge: Option<Vec<(PathBuf, PartFile)>>,
+) -> Result<ExitCode> {
     let desc = args.scene()?;
     let integrator = Integrator::from_desc(&desc.integrator, &args.overrides())?;
     if args.spp == Some(0) {
@@ -348,6 +438,37 @@ pub(crate) fn run(args: RenderArgs) -> Result<ExitCode> {
             integrator.name()
         );
     }
+    let part = match (args.part, &merge) {
+        (Some(_), Some(_)) => bail!("a part file's arguments contain --part"),
+        (Some((k, n)), None) => {
+            if args.resume.is_some() || args.save_state.is_some() {
+                bail!("--part keeps its state in its part file: drop --resume and --save-state");
+            }
+            if args.variance || args.png.is_some() {
+                bail!("--part writes a part file, not an image: --variance and --png belong to `pt merge`");
+            }
+            if !integrator.takes_shares() {
+                bail!(
+                    "--part applies to path, volpath and direct, not to {} (not yet: its passes share light paths, photon maps or radii)",
+                    integrator.name()
+                );
+            }
+            Some(Share {
+                index: k - 1,
+                count: n,
+            })
+        }
+        (None, _) => None,
+    };
+    // A merge takes no samples: the parts' checkpoint setting does not apply.
+    let checkpoint = if merge.is_some() {
+        None
+    } else {
+        args.checkpoint
+    };
+    if checkpoint.is_some() && part.is_none() && args.save_state.is_none() {
+        bail!("--checkpoint saves to the part file (--part) or to --save-state: give one of them");
+    }
     let job = Job {
         spp: args.spp.unwrap_or(desc.sampler.sample_count),
         seed: args.seed.unwrap_or(desc.sampler.seed),
@@ -365,36 +486,105 @@ pub(crate) fn run(args: RenderArgs) -> Result<ExitCode> {
             ModeArg::Rgb => pt_spectrum::ColorMode::Rgb,
             ModeArg::Spectral => pt_spectrum::ColorMode::Spectral,
         }),
+        share: part.unwrap_or(Share::WHOLE),
         ..Job::new(&desc)
     };
-    let output = args
-        .output
-        .clone()
-        .unwrap_or_else(|| default_output(args.scene.as_deref()));
-    check_output_path(&output)?;
+    let output = match (&args.output, part) {
+        (Some(o), _) => o.clone(),
+        (None, Some(sh)) => default_part_output(args.scene.as_deref(), sh),
+        (None, None) => default_output(args.scene.as_deref()),
+    };
+    check_output_path(&output, if part.is_some() { "ptpart" } else { "exr" })?;
     let pool = thread_pool(args.threads)?;
     let key = state_key(&args, &desc, &job, &integrator);
-    let resume = match &args.resume {
-        Some(path) => {
-            let bytes = std::fs::read(path)
-                .with_context(|| format!("cannot read render state {}", path.display()))?;
-            let settings = pt_integrators::RenderSettings {
-                width: desc.film.width,
-                height: desc.film.height,
-                spp: job.spp,
-                seed: job.seed,
-                ..pt_integrators::RenderSettings::from_desc(&desc)
-            };
-            Some(
-                integrator
-                    .read_state(&bytes, key, &settings)
-                    .map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))?,
-            )
-        }
-        None => None,
+    let settings = pt_integrators::RenderSettings {
+        width: desc.film.width,
+        height: desc.film.height,
+        spp: job.share.samples_of(job.spp),
+        seed: job.seed,
+        ..pt_integrators::RenderSettings::from_desc(&desc)
     };
-    // Ctrl-C: finish the current pass, then write what was accumulated (image and, with
-    // --save-state, the sums) and exit with code 130.
+    let read_state = |bytes: &[u8], path: &Path| {
+        integrator
+            .read_state(bytes, key, &settings)
+            .map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))
+    };
+    // The part file this render writes, with the sums of `state`.
+    let part_file = |sh: Share, state: &RenderState| PartFile {
+        index: sh.index,
+        count: sh.count,
+        spp: job.spp,
+        share_spp: settings.spp,
+        done: state.spp_done,
+        key,
+        seed: job.seed,
+        width: settings.width,
+        height: settings.height,
+        cwd: std::env::current_dir()
+            .map(|d| d.display().to_string())
+            .unwrap_or_default(),
+        args: shared_arguments(argv),
+        state: state.to_bytes(key),
+    };
+    let resume = if let Some(parts) = merge {
+        // Sums are exact: the order of the additions does not matter (share order is used).
+        let mut total: Option<RenderState> = None;
+        for (path, p) in &parts {
+            if p.key != key {
+                bail!(
+                    "{}: the scene file or the options changed since the part was rendered (the render's key differs)",
+                    path.display()
+                );
+            }
+            let s = read_state(&p.state, path)?;
+            match total.as_mut() {
+                None => total = Some(s),
+                Some(t) => t
+                    .merge(&s)
+                    .map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))?,
+            }
+        }
+        total
+    } else if let Some(path) = &args.resume {
+        let bytes = std::fs::read(path)
+            .with_context(|| format!("cannot read render state {}", path.display()))?;
+        Some(read_state(&bytes, path)?)
+    } else if let (Some(sh), true) = (part, output.exists()) {
+        let p = PartFile::read(&output)?;
+        if (p.key, p.index, p.count, p.spp, p.seed) != (key, sh.index, sh.count, job.spp, job.seed)
+        {
+            bail!(
+                "{} exists and holds part {} of another render (scene, options, seed or sample count differ): delete it or write this part elsewhere (-o)",
+                output.display(),
+                p.label()
+            );
+        }
+        if p.complete() {
+            if !args.quiet {
+                eprintln!(
+                    "part {} is already complete ({} spp) in {}",
+                    p.label(),
+                    p.done,
+                    output.display()
+                );
+            }
+            return Ok(ExitCode::SUCCESS);
+        }
+        if !args.quiet {
+            eprintln!(
+                "resuming part {} from {} of {} spp in {}",
+                p.label(),
+                p.done,
+                p.share_spp,
+                output.display()
+            );
+        }
+        Some(read_state(&p.state, &output)?)
+    } else {
+        None
+    };
+    // Ctrl-C or SIGTERM: finish the current pass, then write what was accumulated (image and,
+    // with --save-state, the sums; or the part file) and exit with code 130.
     let cancel = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
     {
         let cancel = cancel.clone();
@@ -402,35 +592,71 @@ pub(crate) fn run(args: RenderArgs) -> Result<ExitCode> {
         let _ =
             ctrlc::set_handler(move || cancel.store(true, std::sync::atomic::Ordering::Relaxed));
     }
+    // Where checkpoints and the final state go.
+    let save_state = |state: &RenderState| -> Result<()> {
+        match (part, &args.save_state) {
+            (Some(sh), _) => {
+                pt_image::write_bytes_atomically(&output, &part_file(sh, state).to_bytes())?
+            }
+            (None, Some(path)) => pt_image::write_bytes_atomically(path, &state.to_bytes(key))?,
+            (None, None) => {}
+        }
+        Ok(())
+    };
+    let save_checkpoint = |state: &RenderState| {
+        if let Err(e) = save_state(state) {
+            eprintln!("warning: checkpoint not saved: {e:#}");
+        }
+    };
+    let every = checkpoint.or(part.map(|_| 60));
     let bar = Bar::new(!args.quiet && std::io::stderr().is_terminal());
     let run = Run {
         progress: &bar,
         cancel: &cancel,
         resume,
+        checkpoint: every.map(|secs| Checkpoint {
+            every: std::time::Duration::from_secs(secs),
+            save: &save_checkpoint,
+        }),
     };
     let rendered = pool.install(|| integrator.render(&job, run))?;
     bar.0.finish_and_clear();
-    if let (Some(path), Some(state)) = (&args.save_state, &rendered.state) {
-        pt_image::write_bytes_atomically(path, &state.to_bytes(key))?;
-    } else if args.save_state.is_some() {
-        bail!(
+    match (&rendered.state, part.is_some() || args.save_state.is_some()) {
+        (Some(state), true) => save_state(state)?,
+        (None, true) => bail!(
             "--save-state applies to path, ptracer, sppm, photonmapper, bdpt and vcm, not to {}",
             integrator.name()
-        );
+        ),
+        _ => {}
     }
-    write_outputs(&args, &desc, &job, &rendered, &output)?;
+    if let Some(sh) = part {
+        if !args.quiet {
+            eprintln!(
+                "part {}/{}: {} -> {}",
+                sh.index + 1,
+                sh.count,
+                rendered.summary,
+                output.display()
+            );
+        }
+    } else {
+        write_outputs(&args, &desc, &job, &rendered, &output)?;
+        if !args.quiet {
+            eprintln!("{} -> {}", rendered.summary, output.display());
+        }
+    }
     for w in &rendered.warnings {
         eprintln!("warning: {w}");
     }
-    if !args.quiet {
-        eprintln!("{} -> {}", rendered.summary, output.display());
-    }
     if !rendered.complete {
         eprintln!(
-            "interrupted: wrote the image of the {} of {} samples per pixel taken so far{}",
+            "interrupted: wrote the {} of the {} of {} samples per pixel taken so far{}",
+            if part.is_some() { "part file" } else { "image" },
             rendered.output.spp,
-            job.spp,
-            if args.save_state.is_some() {
+            settings.spp,
+            if part.is_some() {
+                " (run the same command again to resume it)"
+            } else if args.save_state.is_some() {
                 " and the state to continue it with --resume"
             } else {
                 " (add --save-state to be able to resume)"
@@ -456,7 +682,8 @@ fn state_key(args: &RenderArgs, desc: &SceneDesc, job: &Job, integrator: &Integr
         Err(_) => eat(desc.source.to_string_lossy().as_bytes()),
     }
     let text = format!(
-        "{:?}|{:?}|{:?}|{integrator:?}|{:?}|{:?}|{:?}",
+        "{:?}|{:?}|{:?}|{:?}|{integrator:?}|{:?}|{:?}|{:?}",
+        job.bvh,
         args.scene_args.defines,
         desc.film.filter,
         desc.film.reconstruction,
@@ -520,24 +747,39 @@ fn write_outputs(
     Ok(())
 }
 
-/// `scene.xml` -> `scene.exr` in the current folder; the built-in box -> `cornell-box.exr`.
-fn default_output(scene: Option<&Path>) -> PathBuf {
-    let stem = scene
+/// `scene.xml` -> `scene`; the built-in box -> `cornell-box`.
+fn scene_stem(scene: Option<&Path>) -> String {
+    scene
         .and_then(|p| p.file_stem())
         .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "cornell-box".into());
-    PathBuf::from(format!("{stem}.exr"))
+        .unwrap_or_else(|| "cornell-box".into())
 }
 
-/// Fails early (before rendering) when the output cannot be written.
-fn check_output_path(output: &Path) -> Result<()> {
+/// `scene.xml` -> `scene.exr` in the current folder; the built-in box -> `cornell-box.exr`.
+fn default_output(scene: Option<&Path>) -> PathBuf {
+    PathBuf::from(format!("{}.exr", scene_stem(scene)))
+}
+
+/// `scene.xml`, part 2 of 8 -> `scene.part2of8.ptpart` in the current folder.
+pub(crate) fn default_part_output(scene: Option<&Path>, share: Share) -> PathBuf {
+    PathBuf::from(format!(
+        "{}.part{}of{}.ptpart",
+        scene_stem(scene),
+        share.index + 1,
+        share.count
+    ))
+}
+
+/// Fails early (before rendering) when the output cannot be written: it must end in
+/// `.extension` and its folder must exist.
+pub(crate) fn check_output_path(output: &Path, extension: &str) -> Result<()> {
     if output
         .extension()
         .and_then(|e| e.to_str())
-        .map(|e| e.eq_ignore_ascii_case("exr"))
+        .map(|e| e.eq_ignore_ascii_case(extension))
         != Some(true)
     {
-        bail!("output '{}' must end in .exr", output.display());
+        bail!("output '{}' must end in .{extension}", output.display());
     }
     let dir = output
         .parent()

@@ -54,6 +54,7 @@ pub fn render_aovs(scene: &Scene, settings: &RenderSettings, aov: &AovDesc) -> V
                     }
                 }
             }
+            acc.commit();
         }
     });
     film.planes()

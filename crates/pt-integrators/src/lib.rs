@@ -40,7 +40,9 @@ pub mod vcm;
 pub mod volpath;
 
 pub use path::{Coverage, PathSettings, Strategy};
-pub use render::{render, render_passes, RenderSettings, RenderState};
+pub use render::{
+    render, render_passes, render_passes_saving, Checkpoint, RenderSettings, RenderState, Share,
+};
 
 use pt_radiosity::RadiosityParams;
 use pt_render::{BuildError, BvhKind, LightSelection, RenderOutput, Scene};
@@ -157,6 +159,9 @@ pub struct Job<'a> {
     pub selection: LightSelection,
     /// The colour mode, or `None` for the scene's own (spectral when it needs it).
     pub mode: Option<ColorMode>,
+    /// Which of the `spp` samples per pixel to take (all, or one share of a render split over
+    /// machines: camera-path methods only).
+    pub share: Share,
 }
 
 impl<'a> Job<'a> {
@@ -169,6 +174,7 @@ impl<'a> Job<'a> {
             bvh: BvhKind::Auto,
             selection: LightSelection::Power,
             mode: None,
+            share: Share::WHOLE,
         }
     }
 }
@@ -200,6 +206,8 @@ pub struct Run<'a> {
     pub cancel: &'a AtomicBool,
     /// A saved render to continue (path tracers only; see [`RenderState`]).
     pub resume: Option<RenderState>,
+    /// Save the render in progress now and then (camera-path methods; see [`Checkpoint`]).
+    pub checkpoint: Option<Checkpoint<'a>>,
 }
 
 impl Default for Run<'_> {
@@ -209,6 +217,7 @@ impl Default for Run<'_> {
             progress: &Silent,
             cancel: &NEVER,
             resume: None,
+            checkpoint: None,
         }
     }
 }
@@ -450,6 +459,15 @@ impl Integrator {
         }
     }
 
+    /// Whether the method's samples can be split between processes ([`Share`]) and
+    /// checkpointed: the camera-path methods, whose every sample is independent.
+    pub fn takes_shares(&self) -> bool {
+        matches!(
+            self,
+            Integrator::Path(_) | Integrator::Direct(_) | Integrator::Afterglow { .. }
+        )
+    }
+
     /// Whether the method traces camera paths: the path tracers do, and compute the alpha
     /// channel and AOVs; radiosity and the light tracer do neither.
     pub fn traces_camera_paths(&self) -> bool {
@@ -466,6 +484,18 @@ impl Integrator {
     /// Renders the job. Path tracers honour `run.cancel` between passes and continue
     /// `run.resume`; radiosity runs to the end.
     pub fn render(&self, job: &Job, run: Run) -> Result<Rendered, IntegratorError> {
+        if job.share != Share::WHOLE && !self.takes_shares() {
+            return Err(IntegratorError::Settings(format!(
+                "a render split into parts needs a method whose samples are independent camera paths (path, volpath, direct), not {} (not yet: its passes share light paths, photon maps or radii)",
+                self.name()
+            )));
+        }
+        if run.checkpoint.is_some() && !self.takes_shares() {
+            return Err(IntegratorError::Settings(format!(
+                "checkpoints apply to path, volpath and direct, not to {}",
+                self.name()
+            )));
+        }
         match self {
             Integrator::Path(p) => render_path(self.name(), p, job.desc, job, run),
             Integrator::Direct(p) => render_path(self.name(), p, job.desc, job, run),
@@ -615,10 +645,11 @@ fn render_path(
     let scene = Scene::build_with_mode(desc, job.bvh, job.selection, job.mode)?;
     let build_time = build_start.elapsed();
     let settings = RenderSettings {
-        spp: job.spp,
+        spp: job.share.samples_of(job.spp),
         seed: job.seed,
         path: p.settings,
         clamp: p.clamp,
+        share: job.share,
         ..RenderSettings::from_desc(desc)
     };
     let mut state = match run.resume {
@@ -641,13 +672,19 @@ fn render_path(
             pixels * u64::from(settings.spp),
             pixels * u64::from(state.spp_done),
         );
-        render_passes(&scene, &settings, &mut state, run.cancel, &|n| {
-            run.progress.samples(n)
-        })
+        render_passes_saving(
+            &scene,
+            &settings,
+            &mut state,
+            run.cancel,
+            run.checkpoint.as_ref(),
+            &|n| run.progress.samples(n),
+        )
     };
     let output = state.output();
     let mut extra_channels = Vec::new();
-    if let (Some(aov), true) = (aov, complete) {
+    // A share's AOVs are rendered when the shares are merged (their passes are not split).
+    if let (Some(aov), true, true) = (aov, complete, job.share == Share::WHOLE) {
         let mut planes: Vec<Vec<f32>> = Vec::new();
         if aov.image.is_some() {
             planes.extend((0..3).map(|c| output.mean.iter().map(|p| p[c]).collect()));

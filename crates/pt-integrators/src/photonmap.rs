@@ -525,65 +525,73 @@ pub fn render_photon_passes(
     let photons = pm.global_photons + pm.caustic_photons;
     // Progress counts pixels: the photons of an iteration as one half of them.
     let photon_progress = |n: u64| progress(n * pixels / (2 * photons.max(1)));
-    crate::render::in_passes(state, settings.spp, cancel, 1, 1, |state, its| {
-        let it = its.start;
-        let lambda = crate::render::iteration_wavelengths(scene, settings.seed, it);
-        let base = u64::from(it) * photons;
-        let global = trace_photons(
-            scene,
-            s,
-            settings.seed,
-            base,
-            pm.global_photons,
-            &lambda,
-            |_, _| true,
-            &photon_progress,
-        );
-        let caustic = trace_photons(
-            scene,
-            s,
-            settings.seed,
-            base + pm.global_photons,
-            pm.caustic_photons,
-            &lambda,
-            |depth, specular| depth >= 2 && specular,
-            &photon_progress,
-        );
-        let maps = Maps {
-            global: KdTree::new(global),
-            caustic: KdTree::new(caustic),
-            lookup: pm.lookup.max(1),
-            max_r: pm.max_radius.unwrap_or(0.05 * scene.bounds.1),
-            max_depth,
-        };
-        let rows: Vec<Vec<(SampledSpectrum, f32)>> = (0..h)
-            .into_par_iter()
-            .map(|y| {
-                let mut heap = BinaryHeap::with_capacity(maps.lookup + 1);
-                let row = (0..w)
-                    .map(|x| {
-                        camera_sample(
-                            scene,
-                            s,
-                            settings,
-                            pm,
-                            &maps,
-                            &lambda,
-                            (x, y),
-                            it,
-                            &mut heap,
-                        )
-                    })
-                    .collect();
-                progress(u64::from(w) - u64::from(w) / 2);
-                row
-            })
-            .collect();
-        for (stats, (l, weight)) in state.pixels.iter_mut().zip(rows.into_iter().flatten()) {
-            let rgb = to_rgb(scene, l, &lambda).map(|c| c * weight);
-            stats.add(rgb, 1.0);
-        }
-    })
+    crate::render::in_passes(
+        state,
+        settings.spp,
+        cancel,
+        &mut |_| {},
+        1,
+        1,
+        |state, its| {
+            let it = its.start;
+            let lambda = crate::render::iteration_wavelengths(scene, settings.seed, it);
+            let base = u64::from(it) * photons;
+            let global = trace_photons(
+                scene,
+                s,
+                settings.seed,
+                base,
+                pm.global_photons,
+                &lambda,
+                |_, _| true,
+                &photon_progress,
+            );
+            let caustic = trace_photons(
+                scene,
+                s,
+                settings.seed,
+                base + pm.global_photons,
+                pm.caustic_photons,
+                &lambda,
+                |depth, specular| depth >= 2 && specular,
+                &photon_progress,
+            );
+            let maps = Maps {
+                global: KdTree::new(global),
+                caustic: KdTree::new(caustic),
+                lookup: pm.lookup.max(1),
+                max_r: pm.max_radius.unwrap_or(0.05 * scene.bounds.1),
+                max_depth,
+            };
+            let rows: Vec<Vec<(SampledSpectrum, f32)>> = (0..h)
+                .into_par_iter()
+                .map(|y| {
+                    let mut heap = BinaryHeap::with_capacity(maps.lookup + 1);
+                    let row = (0..w)
+                        .map(|x| {
+                            camera_sample(
+                                scene,
+                                s,
+                                settings,
+                                pm,
+                                &maps,
+                                &lambda,
+                                (x, y),
+                                it,
+                                &mut heap,
+                            )
+                        })
+                        .collect();
+                    progress(u64::from(w) - u64::from(w) / 2);
+                    row
+                })
+                .collect();
+            for (stats, (l, weight)) in state.pixels.iter_mut().zip(rows.into_iter().flatten()) {
+                let rgb = to_rgb(scene, l, &lambda).map(|c| c * weight);
+                stats.add(rgb, 1.0);
+            }
+        },
+    )
 }
 
 /// Whether the photon mapper's settings are valid; the reason when they are not.

@@ -429,9 +429,15 @@ pub fn render_light_passes(
         .map_or([settings.width, settings.height], |c| c.film_size);
     let scale = (f64::from(fw) * f64::from(fh)) / per_batch as f64;
     let most = (MAX_PASS_PATHS / per_batch).max(1) as u32;
-    crate::render::in_passes(state, settings.spp, cancel, 2, most, |state, batches| {
-        light_pass(scene, settings, state, batches, scale, progress)
-    })
+    crate::render::in_passes(
+        state,
+        settings.spp,
+        cancel,
+        &mut |_| {},
+        2,
+        most,
+        |state, batches| light_pass(scene, settings, state, batches, scale, progress),
+    )
 }
 
 /// Traces the light paths of `batches` (in parallel, in chunks), then adds their splats in

@@ -3,6 +3,7 @@
 
 use crate::path::{trace_paths, PathSettings, PathStart, PathState};
 use pt_math::Vec2;
+use pt_render::film::exact::ExactSum;
 use pt_render::film::light::LightFilm;
 use pt_render::film::splat::{SplatFilm, SplatLayout, SplatTile};
 use pt_render::film::{filter_radius, sample_pixel_offset, Filter, PixelStats};
@@ -48,6 +49,44 @@ pub struct RenderSettings {
     /// samples legitimately exceed it: caustics, small bright lights); `pt stability` reports
     /// the bias on a test scene.
     pub clamp: Option<f32>,
+    /// Which of the render's sample indices this process takes (all, or one share of a render
+    /// split over machines); `spp` counts the share's samples.
+    pub share: Share,
+}
+
+/// Which of a render's sample indices one process takes: the `index`-th (from 0) of `count`
+/// interleaved shares, samples `index`, `index + count`, `index + 2 count` ... of every pixel
+/// (`pt render --part K/N` is share K - 1 of N). Interleaving gives every share the same cost
+/// however the cost varies with the sample index (structured samplers, progressive passes).
+/// Each sample keeps its random stream (keyed by its index in the whole render) and the film's
+/// sums are exact ([`pt_render::film::exact`]), so the shares' sums add up to the whole
+/// render's, bit for bit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Share {
+    /// Which share, from 0.
+    pub index: u32,
+    /// Number of shares (at least 1).
+    pub count: u32,
+}
+
+impl Share {
+    /// Every sample: a render on one machine.
+    pub const WHOLE: Share = Share { index: 0, count: 1 };
+
+    /// The render's index of the share's `local`-th sample.
+    #[inline]
+    pub fn sample(&self, local: u32) -> u32 {
+        local * self.count + self.index
+    }
+
+    /// How many of a render's `spp` samples per pixel the share takes.
+    pub fn samples_of(&self, spp: u32) -> u32 {
+        if spp > self.index {
+            (spp - self.index - 1) / self.count + 1
+        } else {
+            0
+        }
+    }
 }
 
 impl RenderSettings {
@@ -108,6 +147,7 @@ impl RenderSettings {
             moment: desc.integrator.moment.is_some(),
             path: PathSettings::from_desc(&desc.integrator),
             clamp: None,
+            share: Share::WHOLE,
         }
     }
 }
@@ -165,14 +205,17 @@ pub struct RenderState {
     pub light: Option<LightFilm>,
 }
 
-/// Bytes per pixel of a state file's statistics: two counts (u32) and seven f64 sums.
-const PIXEL_BYTES: usize = 8 + 7 * 8;
+/// Bytes per pixel of a state file's statistics: two counts (u32) and seven exact sums (i128).
+const PIXEL_BYTES: usize = 8 + 7 * 16;
+
+/// Bytes of one exact sum of the splatting film.
+const SPLAT_SUM_BYTES: usize = 16;
 
 /// First bytes of a state file (and its format version).
-const STATE_MAGIC: &[u8; 8] = b"PTSTATE3";
+const STATE_MAGIC: &[u8; 8] = b"PTSTATE4";
 
 /// First bytes of a light tracer's state file (its film's sums follow the pixels').
-const LIGHT_STATE_MAGIC: &[u8; 8] = b"PTLIGHT2";
+const LIGHT_STATE_MAGIC: &[u8; 8] = b"PTLIGHT3";
 
 impl RenderState {
     /// An empty state for `settings` (no samples yet).
@@ -186,7 +229,8 @@ impl RenderState {
             time: Duration::ZERO,
             pixels: vec![PixelStats::default(); n],
             splat: settings.splats().then(|| {
-                SplatFilm::new(
+                // A moment render's squared XYZ follow the image's RGB and alpha.
+                SplatFilm::with_squares(
                     SplatLayout::new(
                         &settings.filter.desc,
                         settings.width,
@@ -195,6 +239,7 @@ impl RenderState {
                         settings.sample_border,
                     ),
                     settings.splat_channels(),
+                    4,
                 )
             }),
             light: None,
@@ -279,6 +324,32 @@ impl RenderState {
         }
     }
 
+    /// Adds the sums of `other`, a state of the same render with other sample indices (another
+    /// [`Share`]): exact, so that shares merged in any order give the whole render's sums bit
+    /// for bit. The light tracer's film is not exact and is refused.
+    pub fn merge(&mut self, other: &RenderState) -> Result<(), String> {
+        if (self.width, self.height, self.seed) != (other.width, other.height, other.seed) {
+            return Err(format!(
+                "a state of seed {} at {}x{} cannot join one of seed {} at {}x{}",
+                other.seed, other.width, other.height, self.seed, self.width, self.height
+            ));
+        }
+        if self.light.is_some() || other.light.is_some() {
+            return Err("light-tracing states cannot be merged (not yet)".into());
+        }
+        match (&mut self.splat, &other.splat) {
+            (Some(a), Some(b)) if a.layout == b.layout && a.channels == b.channels => a.merge(b),
+            (None, None) => {}
+            _ => return Err("the states were rendered with different films".into()),
+        }
+        for (a, b) in self.pixels.iter_mut().zip(&other.pixels) {
+            a.merge(b);
+        }
+        self.spp_done += other.spp_done;
+        self.time += other.time;
+        Ok(())
+    }
+
     /// Serialises the state (little-endian; the sums as f64 bit patterns, so a resumed render
     /// continues from exactly these values). `scene_key` identifies the scene and settings the
     /// state belongs to (checked by [`RenderState::from_bytes`]).
@@ -302,13 +373,17 @@ impl RenderState {
         for p in &self.pixels {
             b.extend_from_slice(&p.n.to_le_bytes());
             b.extend_from_slice(&p.nonfinite.to_le_bytes());
-            for v in p.sum.iter().chain(&p.sum_sq).chain([&p.alpha]) {
-                b.extend_from_slice(&v.to_bits().to_le_bytes());
+            for v in p.sum {
+                b.extend_from_slice(&v.to_le_bytes());
             }
+            for v in p.sum_sq {
+                b.extend_from_slice(&v.to_le_bytes());
+            }
+            b.extend_from_slice(&p.alpha.to_le_bytes());
         }
         for t in self.splat.iter().flat_map(|f| &f.tiles) {
             for v in &t.sums {
-                b.extend_from_slice(&v.to_bits().to_le_bytes());
+                b.extend_from_slice(&v.to_le_bytes());
             }
         }
         if let Some(f) = &self.light {
@@ -366,7 +441,7 @@ impl RenderState {
         let light_sums = light
             .as_ref()
             .map_or(0, |f| f.sums.len() * 3 + f.camera.len() * 4);
-        let expected = header + n * PIXEL_BYTES + (splat_sums + light_sums) * 8;
+        let expected = header + n * PIXEL_BYTES + splat_sums * SPLAT_SUM_BYTES + light_sums * 8;
         if bytes.len() != expected {
             return Err(format!(
                 "the state has {} bytes, a {w}x{h} render with this film needs {expected} (truncated, or saved with another reconstruction or filter)",
@@ -379,26 +454,26 @@ impl RenderState {
             let u32_at =
                 |i: usize| u32::from_le_bytes(bytes[o + i..o + i + 4].try_into().expect("4 bytes"));
             let f = |i: usize| {
-                f64::from_bits(u64::from_le_bytes(
-                    bytes[o + 8 + 8 * i..o + 16 + 8 * i]
+                i128::from_le_bytes(
+                    bytes[o + 8 + 16 * i..o + 24 + 16 * i]
                         .try_into()
-                        .expect("8 bytes"),
-                ))
+                        .expect("16 bytes"),
+                )
             };
             pixels.push(PixelStats {
                 n: u32_at(0),
                 nonfinite: u32_at(4),
-                sum: [f(0), f(1), f(2)],
-                sum_sq: [f(3), f(4), f(5)],
-                alpha: f(6),
+                sum: [f(0), f(1), f(2)].map(ExactSum),
+                sum_sq: [f(3), f(4), f(5)].map(ExactSum),
+                alpha: ExactSum(f(6)),
             });
         }
         let mut o = header + n * PIXEL_BYTES;
         for t in splat.iter_mut().flat_map(|f| &mut f.tiles) {
             for v in t.sums.iter_mut() {
-                let b8 = bytes[o..o + 8].try_into().expect("8 bytes");
-                *v = f64::from_bits(u64::from_le_bytes(b8));
-                o += 8;
+                let b16 = bytes[o..o + 16].try_into().expect("16 bytes");
+                *v = i128::from_le_bytes(b16);
+                o += 16;
             }
         }
         for f in light.iter_mut() {
@@ -442,6 +517,37 @@ pub fn render_passes(
     cancel: &AtomicBool,
     progress: &(dyn Fn(u64) + Sync),
 ) -> bool {
+    render_passes_saving(scene, settings, state, cancel, None, progress)
+}
+
+/// Saves a render in progress every so often (a checkpoint, so that a render killed on a
+/// cluster resumes from it instead of starting over).
+pub struct Checkpoint<'a> {
+    /// Least time between two saves.
+    pub every: Duration,
+    /// Saves the state (called between passes, so every pixel has `spp_done` samples).
+    pub save: &'a (dyn Fn(&RenderState) + Sync),
+}
+
+/// [`render_passes`], calling `checkpoint.save` between passes at most every
+/// `checkpoint.every`.
+pub fn render_passes_saving(
+    scene: &Scene,
+    settings: &RenderSettings,
+    state: &mut RenderState,
+    cancel: &AtomicBool,
+    checkpoint: Option<&Checkpoint>,
+    progress: &(dyn Fn(u64) + Sync),
+) -> bool {
+    let mut last_save = Instant::now();
+    let mut after_pass = |state: &RenderState| {
+        if let Some(c) = checkpoint {
+            if last_save.elapsed() >= c.every {
+                (c.save)(state);
+                last_save = Instant::now();
+            }
+        }
+    };
     let most = if state.splat.is_some() {
         MAX_SPLAT_PASS
     } else {
@@ -451,6 +557,7 @@ pub fn render_passes(
         state,
         settings.spp,
         cancel,
+        &mut after_pass,
         4,
         most,
         |state, samples| match &mut state.splat {
@@ -464,12 +571,13 @@ pub fn render_passes(
 /// the samples `samples` of every pixel; `cancel` is checked between passes (returns false
 /// when it was set, with every pixel at `state.spp_done`). Passes start at one sample per
 /// pixel and grow by `growth` while a pass takes under a quarter of a second, up to `most`,
-/// so that a cancel is honoured within about a second. The one pass schedule of every
-/// sampling method.
+/// so that a cancel is honoured within about a second; `after_pass(state)` is called after
+/// each pass but the last. The one pass schedule of every sampling method.
 pub(crate) fn in_passes(
     state: &mut RenderState,
     spp: u32,
     cancel: &AtomicBool,
+    after_pass: &mut dyn FnMut(&RenderState),
     growth: u32,
     most: u32,
     mut pass: impl FnMut(&mut RenderState, std::ops::Range<u32>),
@@ -486,6 +594,9 @@ pub(crate) fn in_passes(
         let took = start.elapsed();
         state.time += took;
         state.spp_done = end;
+        if end < spp {
+            after_pass(state);
+        }
         if took < Duration::from_millis(250) {
             size = size.saturating_mul(growth).min(most.max(1));
         }
@@ -675,9 +786,7 @@ fn render_tile_portable(scene: &Scene, settings: &RenderSettings, target: Target
             for y in tile.y0..tile.y1 {
                 let row = &mut band[((y - tile.y0) as u32 * settings.width) as usize..]
                     [..settings.width as usize];
-                trace_row(scene, settings, y, tile, false, |x, _, rgb, alpha, _, w| {
-                    row[x as usize].add(rgb.map(|c| c * w), alpha * w);
-                });
+                trace_row(scene, settings, y, tile, false, &mut PixelRow(row));
             }
         }
         Target::Splat { stats, acc } => render_splat_tile(scene, settings, tile, stats, acc),
@@ -707,28 +816,20 @@ fn render_splat_tile(
         // The row's statistics (the tile's origins inside the image, from column ix0).
         let (ix0, ix1) = (tile.x0.max(0), tile.x1.min(w));
         let iy0 = tile.y0.max(0);
-        let mut row = ((0..h).contains(&y) && ix0 < ix1).then(|| {
+        let row = ((0..h).contains(&y) && ix0 < ix1).then(|| {
             let start = ((y - iy0) * (ix1 - ix0)) as usize;
             &mut stats[start..start + (ix1 - ix0) as usize]
         });
-        let first = (y - tile.y0) as usize * tw;
-        trace_row(
-            scene,
-            settings,
-            y,
-            tile,
-            true,
-            |x, k, rgb, alpha, offset, _| {
-                let q = first + (x - tile.x0) as usize;
-                // Exact: the offset is u - 1/2 for u a multiple of 2^-24 in [0, 1).
-                taken[q * ns + (k - s0) as usize] = (offset + Vec2::splat(0.5), rgb, alpha);
-                if let Some(r) = row.as_deref_mut() {
-                    if (ix0..ix1).contains(&x) {
-                        r[(x - ix0) as usize].add(rgb, alpha);
-                    }
-                }
-            },
-        );
+        let mut sink = SplatRow {
+            taken: &mut taken,
+            first: (y - tile.y0) as usize * tw,
+            x0: tile.x0,
+            samples: s0,
+            per_origin: ns,
+            stats: row,
+            inside: ix0..ix1,
+        };
+        trace_row(scene, settings, y, tile, true, &mut sink);
     }
     let radius = filter_radius(&settings.filter.desc);
     let channels = settings.splat_channels();
@@ -736,8 +837,9 @@ fn render_splat_tile(
         for q in 0..taken.len() / ns {
             let (u, rgb, alpha) = taken[q * ns + k];
             let origin = [tile.x0 + (q % tw) as i32, tile.y0 + (q / tw) as i32];
-            // Non-finite samples are counted by the statistics above and left out here.
-            if rgb.iter().all(|c| c.is_finite()) {
+            // Samples the film cannot add (non-finite or huge) are counted by the statistics
+            // above and left out here.
+            if pt_render::film::exact::fits(&rgb) {
                 let [r, g, b] = rgb;
                 // The squared XYZ only for moment renders (the film reads `channels` values).
                 let [x, y, z] = if channels > 4 {
@@ -758,10 +860,61 @@ fn render_splat_tile(
     }
 }
 
+/// Receives the samples of [`trace_row`]. A trait rather than a closure so that `put` is
+/// inlined into the render loop and compiled for its instruction sets ([`render_tile`]): an
+/// outlined closure is compiled for the baseline, where the film's exact sums cost more.
+trait SampleSink {
+    /// Sample `k` of pixel `x`: linear RGB radiance, alpha (0 or 1), film offset from the
+    /// pixel's centre, film weight.
+    fn put(&mut self, x: i32, k: u32, rgb: [f32; 3], alpha: f32, offset: Vec2, weight: f32);
+}
+
+/// Filter importance sampling: each sample into its own pixel of the row.
+struct PixelRow<'a>(&'a mut [PixelStats]);
+
+impl SampleSink for PixelRow<'_> {
+    #[inline(always)]
+    fn put(&mut self, x: i32, _: u32, rgb: [f32; 3], alpha: f32, _: Vec2, w: f32) {
+        self.0[x as usize].add(rgb.map(|c| c * w), alpha * w);
+    }
+}
+
+/// Splatting: each sample kept (per origin pixel, in sample order) until the tile splats them,
+/// and added to its origin's variance statistics.
+struct SplatRow<'a> {
+    /// The tile's samples: origin pixel (row-major over the tile) times `per_origin`.
+    taken: &'a mut [(Vec2, [f32; 3], f32)],
+    /// The row's first origin's index in the tile.
+    first: usize,
+    /// The tile's first column.
+    x0: i32,
+    /// The pass's first sample index (local).
+    samples: u32,
+    /// Samples per origin in the pass.
+    per_origin: usize,
+    /// The row's statistics for the columns `inside` (none for a border row).
+    stats: Option<&'a mut [PixelStats]>,
+    /// The columns inside the image.
+    inside: std::ops::Range<i32>,
+}
+
+impl SampleSink for SplatRow<'_> {
+    #[inline(always)]
+    fn put(&mut self, x: i32, k: u32, rgb: [f32; 3], alpha: f32, offset: Vec2, _: f32) {
+        let q = self.first + (x - self.x0) as usize;
+        // Exact: the offset is u - 1/2 for u a multiple of 2^-24 in [0, 1).
+        self.taken[q * self.per_origin + (k - self.samples) as usize] =
+            (offset + Vec2::splat(0.5), rgb, alpha);
+        if let Some(r) = self.stats.as_deref_mut() {
+            if self.inside.contains(&x) {
+                r[(x - self.inside.start) as usize].add(rgb, alpha);
+            }
+        }
+    }
+}
+
 /// Traces samples `tile.samples` of pixels `tile.x0..tile.x1` of row `y` and hands each
-/// result to `sink(x, k, rgb, alpha, offset, weight)` (pixel x, sample k, linear RGB radiance,
-/// alpha 0 or 1, film offset from the pixel's centre, film weight), pixel by pixel, each
-/// pixel's in sample order.
+/// result to `sink`, pixel by pixel, each pixel's in sample order.
 /// `splat`: the sample's position is uniform in its pixel (weight 1; the film weighs it),
 /// else it is drawn from the filter ([`sample_pixel_offset`]).
 #[inline(always)]
@@ -771,7 +924,7 @@ fn trace_row(
     y: i32,
     tile: &Tile,
     splat: bool,
-    mut sink: impl FnMut(i32, u32, [f32; 3], f32, Vec2, f32),
+    sink: &mut impl SampleSink,
 ) {
     // RGB mode draws no wavelength sample (its lanes are R, G, B), so its random sequence is the
     // same as before the spectral mode existed; these wavelengths are only carried along.
@@ -787,11 +940,11 @@ fn trace_row(
     // pay nothing for the structured patterns' dimension bookkeeping.
     let pattern = &settings.sampler;
     if pattern.is_independent() {
-        render_row_samples(scene, settings, args, &mut sink, |pixel, k| {
+        render_row_samples(scene, settings, args, sink, |pixel, k| {
             Sampler::new(settings.seed, pixel, k)
         });
     } else {
-        render_row_samples(scene, settings, args, &mut sink, |pixel, k| {
+        render_row_samples(scene, settings, args, sink, |pixel, k| {
             StructuredSampler::new(pattern, settings.seed, pixel, k).expect("a structured pattern")
         });
     }
@@ -817,7 +970,7 @@ fn render_row_samples<S: RandomSource>(
         &SampledWavelengths,
         bool,
     ),
-    sink: &mut impl FnMut(i32, u32, [f32; 3], f32, Vec2, f32),
+    sink: &mut impl SampleSink,
     new_sampler: impl Fn(u64, u64) -> S,
 ) {
     if samples.is_empty() || xs.is_empty() {
@@ -838,7 +991,7 @@ fn render_row_samples<S: RandomSource>(
                 return None;
             }
             let pixel = settings.pixel_key(x, y);
-            let mut sampler = new_sampler(pixel, u64::from(k));
+            let mut sampler = new_sampler(pixel, u64::from(settings.share.sample(k)));
             let lambda = if spectral {
                 SampledWavelengths::sample_visible(sampler.next_1d())
             } else {
@@ -895,7 +1048,7 @@ fn render_row_samples<S: RandomSource>(
         // order.
         let (mut px, mut pk) = (chunk_x, chunk_k);
         for ((rgb, alpha), (offset, w)) in results[..taken as usize].iter().zip(&offsets) {
-            sink(px, pk, *rgb, *alpha, *offset, *w);
+            sink.put(px, pk, *rgb, *alpha, *offset, *w);
             pk += 1;
             if pk == samples.end {
                 (px, pk) = (px + 1, samples.start);
@@ -908,6 +1061,26 @@ fn render_row_samples<S: RandomSource>(
 mod tests {
     use super::*;
     use pt_render::{BvhKind, LightSelection};
+
+    /// The shares of a split render take every sample index exactly once, interleaved, and
+    /// their sample counts are what `samples_of` says.
+    #[test]
+    fn shares_take_every_sample_once() {
+        for spp in [1, 2, 7, 64, 1000] {
+            for count in [1, 2, 3, 4, 8, 13] {
+                let mut seen = vec![0u32; spp as usize];
+                for index in 0..count {
+                    let share = Share { index, count };
+                    for local in 0..share.samples_of(spp) {
+                        seen[share.sample(local) as usize] += 1;
+                    }
+                }
+                assert!(seen.iter().all(|&n| n == 1), "spp {spp}, {count} shares");
+            }
+        }
+        assert_eq!(Share::WHOLE.samples_of(5), 5);
+        assert_eq!(Share { index: 2, count: 4 }.sample(3), 14);
+    }
 
     /// The x86-64-v3 variant of the render loop must give exactly the portable variant's pixel
     /// sums (the same arithmetic compiled with other instructions), on scenes that together use
@@ -959,24 +1132,10 @@ mod tests {
             unsafe {
                 render_tile_v3(&scene, &settings, Target::Pixels(&mut v3), &tile)
             };
-            let bits = |v: &[PixelStats]| {
-                v.iter()
-                    .flat_map(|p| {
-                        p.sum
-                            .iter()
-                            .chain(&p.sum_sq)
-                            .map(|x| x.to_bits())
-                            .chain([u64::from(p.n), u64::from(p.nonfinite)])
-                    })
-                    .collect::<Vec<u64>>()
-            };
-            assert_eq!(
-                bits(&portable),
-                bits(&v3),
-                "{name}: the x86-64-v3 variant differs"
-            );
+            // The exact sums hold every f32 sample above 2^-33 to its last bit.
+            assert!(portable == v3, "{name}: the x86-64-v3 variant differs");
             assert!(
-                portable.iter().any(|p| p.sum.iter().any(|&s| s > 0.0)),
+                portable.iter().any(|p| p.sum.iter().any(|s| s.0 > 0)),
                 "{name}: the tile is black, the test checks nothing"
             );
         }

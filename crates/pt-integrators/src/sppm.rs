@@ -280,97 +280,105 @@ pub fn render_sppm_passes(
     let r0 = sppm.initial_radius.unwrap_or(0.01 * scene.bounds.1);
     let s = &settings.path;
     // One iteration per pass: each builds its own grid of visible points.
-    crate::render::in_passes(state, settings.spp, cancel, 1, 1, |state, its| {
-        let it = its.start;
-        let r2 = radius_squared(r0, sppm.alpha, it);
-        let r = r2.sqrt() as f32;
-        let lambda = crate::render::iteration_wavelengths(scene, settings.seed, it);
-        // 1. Camera pass, row by row.
-        let rows: Vec<CameraRow> = (0..h)
-            .into_par_iter()
-            .map(|y| {
-                let mut points = Vec::new();
-                let direct = (0..w)
-                    .map(|x| camera_path(scene, s, settings, &lambda, (x, y), it, &mut points))
-                    .collect();
-                progress(u64::from(w) / 2);
-                (direct, points)
-            })
-            .collect();
-        let mut direct = Vec::with_capacity(pixels as usize);
-        let mut points = Vec::new();
-        for (d, p) in rows {
-            direct.extend(d);
-            points.extend(p);
-        }
-        // 2. Photon pass.
-        let grid = PointGrid::new(
-            points
-                .iter()
-                .enumerate()
-                .map(|(i, vp)| (vp.p, i as u32))
-                .collect(),
-            r,
-        );
-        let chunks = photons.div_ceil(CHUNK);
-        let max_depth = if s.max_depth < 0 {
-            u32::MAX
-        } else {
-            s.max_depth as u32
-        };
-        let deposits: Vec<Vec<(u32, SampledSpectrum)>> = (0..chunks)
-            .into_par_iter()
-            .map(|c| {
-                let mut out = Vec::new();
-                let first = c * CHUNK;
-                let end = (first + CHUNK).min(photons);
-                for k in first..end {
-                    let index = u64::from(it) * photons + k;
-                    let mut sampler = Sampler::new(settings.seed, PHOTON_STREAM, index);
-                    walk_light_path::<_, false>(
-                        scene,
-                        s,
-                        &mut sampler,
-                        &lambda,
-                        AtFluorescence::Absorb,
-                        |v, _| {
-                            if v.depth < 2 {
-                                return;
-                            }
-                            grid.within(v.hit.p, |&i| {
-                                let vp = &points[i as usize];
-                                if vp.ng.dot(v.hit.ng) <= 0.0
-                                    || vp.segments.saturating_add(v.depth) > max_depth
-                                {
+    crate::render::in_passes(
+        state,
+        settings.spp,
+        cancel,
+        &mut |_| {},
+        1,
+        1,
+        |state, its| {
+            let it = its.start;
+            let r2 = radius_squared(r0, sppm.alpha, it);
+            let r = r2.sqrt() as f32;
+            let lambda = crate::render::iteration_wavelengths(scene, settings.seed, it);
+            // 1. Camera pass, row by row.
+            let rows: Vec<CameraRow> = (0..h)
+                .into_par_iter()
+                .map(|y| {
+                    let mut points = Vec::new();
+                    let direct = (0..w)
+                        .map(|x| camera_path(scene, s, settings, &lambda, (x, y), it, &mut points))
+                        .collect();
+                    progress(u64::from(w) / 2);
+                    (direct, points)
+                })
+                .collect();
+            let mut direct = Vec::with_capacity(pixels as usize);
+            let mut points = Vec::new();
+            for (d, p) in rows {
+                direct.extend(d);
+                points.extend(p);
+            }
+            // 2. Photon pass.
+            let grid = PointGrid::new(
+                points
+                    .iter()
+                    .enumerate()
+                    .map(|(i, vp)| (vp.p, i as u32))
+                    .collect(),
+                r,
+            );
+            let chunks = photons.div_ceil(CHUNK);
+            let max_depth = if s.max_depth < 0 {
+                u32::MAX
+            } else {
+                s.max_depth as u32
+            };
+            let deposits: Vec<Vec<(u32, SampledSpectrum)>> = (0..chunks)
+                .into_par_iter()
+                .map(|c| {
+                    let mut out = Vec::new();
+                    let first = c * CHUNK;
+                    let end = (first + CHUNK).min(photons);
+                    for k in first..end {
+                        let index = u64::from(it) * photons + k;
+                        let mut sampler = Sampler::new(settings.seed, PHOTON_STREAM, index);
+                        walk_light_path::<_, false>(
+                            scene,
+                            s,
+                            &mut sampler,
+                            &lambda,
+                            AtFluorescence::Absorb,
+                            |v, _| {
+                                if v.depth < 2 {
                                     return;
                                 }
-                                let f = vp.bsdf.eval(vp.wo, vp.frame.to_local(v.w_light));
-                                if !f.is_black() {
-                                    out.push((i, f * v.beta));
-                                }
-                            });
-                        },
-                    );
-                }
-                progress(((end - first) * pixels / photons) / 2);
-                out
-            })
-            .collect();
-        // 3. The iteration's estimate per pixel.
-        let mut gathered = vec![SampledSpectrum::ZERO; points.len()];
-        for (i, phi) in deposits.iter().flatten() {
-            gathered[*i as usize] += *phi;
-        }
-        let norm = (1.0 / (photons as f64 * std::f64::consts::PI * r2)) as f32;
-        let mut indirect = vec![SampledSpectrum::ZERO; pixels as usize];
-        for (vp, g) in points.iter().zip(&gathered) {
-            indirect[vp.pixel as usize] += vp.beta * *g * norm;
-        }
-        for ((stats, (d, weight)), ind) in state.pixels.iter_mut().zip(&direct).zip(&indirect) {
-            let rgb = to_rgb(scene, *d + *ind, &lambda).map(|c| c * weight);
-            stats.add(rgb, 1.0);
-        }
-    })
+                                grid.within(v.hit.p, |&i| {
+                                    let vp = &points[i as usize];
+                                    if vp.ng.dot(v.hit.ng) <= 0.0
+                                        || vp.segments.saturating_add(v.depth) > max_depth
+                                    {
+                                        return;
+                                    }
+                                    let f = vp.bsdf.eval(vp.wo, vp.frame.to_local(v.w_light));
+                                    if !f.is_black() {
+                                        out.push((i, f * v.beta));
+                                    }
+                                });
+                            },
+                        );
+                    }
+                    progress(((end - first) * pixels / photons) / 2);
+                    out
+                })
+                .collect();
+            // 3. The iteration's estimate per pixel.
+            let mut gathered = vec![SampledSpectrum::ZERO; points.len()];
+            for (i, phi) in deposits.iter().flatten() {
+                gathered[*i as usize] += *phi;
+            }
+            let norm = (1.0 / (photons as f64 * std::f64::consts::PI * r2)) as f32;
+            let mut indirect = vec![SampledSpectrum::ZERO; pixels as usize];
+            for (vp, g) in points.iter().zip(&gathered) {
+                indirect[vp.pixel as usize] += vp.beta * *g * norm;
+            }
+            for ((stats, (d, weight)), ind) in state.pixels.iter_mut().zip(&direct).zip(&indirect) {
+                let rgb = to_rgb(scene, *d + *ind, &lambda).map(|c| c * weight);
+                stats.add(rgb, 1.0);
+            }
+        },
+    )
 }
 
 /// Whether `sppm` settings are valid; the reason when they are not.

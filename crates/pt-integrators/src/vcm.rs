@@ -839,114 +839,122 @@ pub fn render_vcm_passes(
     let chunks = paths.div_ceil(CHUNK);
     let range = |c: u64| c * CHUNK..((c + 1) * CHUNK).min(paths);
     let mut pool: Vec<LightChunk> = (0..chunks).map(|_| LightChunk::default()).collect();
-    crate::render::in_passes(state, settings.spp, cancel, 1, 1, |state, its| {
-        let iteration = its.start;
-        let radius = vcm.radius(iteration, scene.bounds.1);
-        let f = Factors::new(vcm, radius, paths as f32);
-        let it = Iteration {
-            scene,
-            s,
-            vcm,
-            f,
-            radius,
-            n: paths as f32,
-            scale: scale as f32,
-            chunks: &[],
-            grid: None,
-        };
-        // Light subpath k: its vertices and camera splats appended; returns its wavelengths.
-        let trace_light = |k: u64, vertices: &mut Vec<LightVertex>, splats: &mut Vec<Splat>| {
-            let lambda = wavelengths(scene, vcm, settings.seed, iteration, k);
-            let index = u64::from(iteration) * paths + k;
-            let mut sampler = Sampler::new(settings.seed, LIGHT_STREAM, index);
-            light_subpath(
+    crate::render::in_passes(
+        state,
+        settings.spp,
+        cancel,
+        &mut |_| {},
+        1,
+        1,
+        |state, its| {
+            let iteration = its.start;
+            let radius = vcm.radius(iteration, scene.bounds.1);
+            let f = Factors::new(vcm, radius, paths as f32);
+            let it = Iteration {
                 scene,
                 s,
                 vcm,
-                &f,
-                scale as f32,
-                &mut sampler,
-                &lambda,
-                vertices,
-                splats,
-            );
-            lambda
-        };
-        for c in pool.iter_mut() {
-            c.vertices.clear();
-            c.ends.clear();
-            c.splats.clear();
-        }
-        if !vcm.merging {
-            // Each light subpath is needed by its own camera subpath only: both in turn.
-            pool.par_iter_mut().enumerate().for_each(|(c, chunk)| {
-                let mut own = Vec::new();
-                for k in range(c as u64) {
-                    own.clear();
-                    let lambda = trace_light(k, &mut own, &mut chunk.splats);
-                    let index = u64::from(iteration) * paths + k;
-                    let mut sampler = Sampler::new(settings.seed, CAMERA_STREAM, index);
-                    chunk
-                        .splats
-                        .push(camera_sample(&it, &mut sampler, &lambda, k, w, &own));
-                }
-                progress(range(c as u64).count() as u64);
-            });
-        } else {
-            // 1. Every light subpath: vertices and t = 1 splats.
-            pool.par_iter_mut().enumerate().for_each(|(c, chunk)| {
-                for k in range(c as u64) {
-                    trace_light(k, &mut chunk.vertices, &mut chunk.splats);
-                    chunk.ends.push(chunk.vertices.len() as u32);
-                }
-                progress(range(c as u64).count() as u64 / 2);
-            });
-            // 2. The grid of all light vertices, then every camera subpath.
-            let photons = pool
-                .iter()
-                .flat_map(|c| &c.vertices)
-                .map(|v| {
-                    let ph = Photon {
-                        ng: v.ng,
-                        w_light: v.w_light,
-                        beta: v.beta,
-                        mis: v.mis,
-                        depth: v.depth,
-                    };
-                    (v.p, ph)
-                })
-                .collect();
-            let grid = PointGrid::new(photons, radius);
-            let camera: Vec<Vec<Splat>> = {
-                let it = Iteration {
-                    chunks: &pool,
-                    grid: Some(grid),
-                    ..it
-                };
-                (0..chunks)
-                    .into_par_iter()
-                    .map(|c| {
-                        let mut out = Vec::with_capacity(CHUNK as usize);
-                        for k in range(c) {
-                            let lambda = wavelengths(scene, vcm, settings.seed, iteration, k);
-                            let index = u64::from(iteration) * paths + k;
-                            let mut sampler = Sampler::new(settings.seed, CAMERA_STREAM, index);
-                            let own = it.subpath(k);
-                            out.push(camera_sample(&it, &mut sampler, &lambda, k, w, own));
-                        }
-                        let n = range(c).count() as u64;
-                        progress(n - n / 2);
-                        out
-                    })
-                    .collect()
+                f,
+                radius,
+                n: paths as f32,
+                scale: scale as f32,
+                chunks: &[],
+                grid: None,
             };
-            for (chunk, cam) in pool.iter_mut().zip(camera) {
-                chunk.splats.extend(cam);
+            // Light subpath k: its vertices and camera splats appended; returns its wavelengths.
+            let trace_light = |k: u64, vertices: &mut Vec<LightVertex>, splats: &mut Vec<Splat>| {
+                let lambda = wavelengths(scene, vcm, settings.seed, iteration, k);
+                let index = u64::from(iteration) * paths + k;
+                let mut sampler = Sampler::new(settings.seed, LIGHT_STREAM, index);
+                light_subpath(
+                    scene,
+                    s,
+                    vcm,
+                    &f,
+                    scale as f32,
+                    &mut sampler,
+                    &lambda,
+                    vertices,
+                    splats,
+                );
+                lambda
+            };
+            for c in pool.iter_mut() {
+                c.vertices.clear();
+                c.ends.clear();
+                c.splats.clear();
             }
-        }
-        let lists: Vec<&[Splat]> = pool.iter().map(|c| c.splats.as_slice()).collect();
-        add_batches(state, &lists, lists.len(), scale);
-    })
+            if !vcm.merging {
+                // Each light subpath is needed by its own camera subpath only: both in turn.
+                pool.par_iter_mut().enumerate().for_each(|(c, chunk)| {
+                    let mut own = Vec::new();
+                    for k in range(c as u64) {
+                        own.clear();
+                        let lambda = trace_light(k, &mut own, &mut chunk.splats);
+                        let index = u64::from(iteration) * paths + k;
+                        let mut sampler = Sampler::new(settings.seed, CAMERA_STREAM, index);
+                        chunk
+                            .splats
+                            .push(camera_sample(&it, &mut sampler, &lambda, k, w, &own));
+                    }
+                    progress(range(c as u64).count() as u64);
+                });
+            } else {
+                // 1. Every light subpath: vertices and t = 1 splats.
+                pool.par_iter_mut().enumerate().for_each(|(c, chunk)| {
+                    for k in range(c as u64) {
+                        trace_light(k, &mut chunk.vertices, &mut chunk.splats);
+                        chunk.ends.push(chunk.vertices.len() as u32);
+                    }
+                    progress(range(c as u64).count() as u64 / 2);
+                });
+                // 2. The grid of all light vertices, then every camera subpath.
+                let photons = pool
+                    .iter()
+                    .flat_map(|c| &c.vertices)
+                    .map(|v| {
+                        let ph = Photon {
+                            ng: v.ng,
+                            w_light: v.w_light,
+                            beta: v.beta,
+                            mis: v.mis,
+                            depth: v.depth,
+                        };
+                        (v.p, ph)
+                    })
+                    .collect();
+                let grid = PointGrid::new(photons, radius);
+                let camera: Vec<Vec<Splat>> = {
+                    let it = Iteration {
+                        chunks: &pool,
+                        grid: Some(grid),
+                        ..it
+                    };
+                    (0..chunks)
+                        .into_par_iter()
+                        .map(|c| {
+                            let mut out = Vec::with_capacity(CHUNK as usize);
+                            for k in range(c) {
+                                let lambda = wavelengths(scene, vcm, settings.seed, iteration, k);
+                                let index = u64::from(iteration) * paths + k;
+                                let mut sampler = Sampler::new(settings.seed, CAMERA_STREAM, index);
+                                let own = it.subpath(k);
+                                out.push(camera_sample(&it, &mut sampler, &lambda, k, w, own));
+                            }
+                            let n = range(c).count() as u64;
+                            progress(n - n / 2);
+                            out
+                        })
+                        .collect()
+                };
+                for (chunk, cam) in pool.iter_mut().zip(camera) {
+                    chunk.splats.extend(cam);
+                }
+            }
+            let lists: Vec<&[Splat]> = pool.iter().map(|c| c.splats.as_slice()).collect();
+            add_batches(state, &lists, lists.len(), scale);
+        },
+    )
 }
 
 /// Whether `vcm`/`bdpt` can render `scene` with `settings`; the reason when it cannot.

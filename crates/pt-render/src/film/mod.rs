@@ -18,6 +18,7 @@ use std::sync::Arc;
 
 use crate::sampler::RandomSource;
 
+pub mod exact;
 pub mod light;
 pub mod splat;
 
@@ -314,49 +315,66 @@ fn sample_tent(u: f32) -> f32 {
     }
 }
 
-/// Running sums of one pixel: count, sum and sum of squares per channel (f64, so that 1e6
-/// samples of values up to 1e4 keep full precision).
-#[derive(Clone, Copy, Debug, Default)]
+/// Running sums of one pixel: count, sum and sum of squares per channel, kept exactly
+/// ([`exact`]: fixed point, so that the sums do not depend on the order the samples came in and
+/// parts of a render merge bit for bit).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct PixelStats {
-    /// Number of finite samples.
+    /// Number of samples added.
     pub n: u32,
-    /// Samples whose value was NaN or infinite (left out of the sums and reported).
+    /// Samples whose value was NaN, infinite or beyond [`exact::LARGEST_SAMPLE`] (left out of
+    /// the sums and reported).
     pub nonfinite: u32,
     /// Sum of sample values per channel.
-    pub sum: [f64; 3],
+    pub sum: [exact::LinearSum; 3],
     /// Sum of squared sample values per channel.
-    pub sum_sq: [f64; 3],
+    pub sum_sq: [exact::SquareSum; 3],
     /// Sum of the samples' alpha (coverage, times the filter weight where samples carry one).
-    pub alpha: f64,
+    pub alpha: exact::LinearSum,
 }
 
 impl PixelStats {
     /// Adds one sample: RGB radiance `v` and its alpha (see [`RenderOutput::alpha`]). A sample
-    /// with a non-finite radiance is counted in `nonfinite` and left out of every sum.
-    #[inline]
+    /// the film cannot add ([`exact::fits`]: NaN, infinite, or huge) is counted in `nonfinite`
+    /// and left out of every sum. Inlined into the render loop (and so compiled for its
+    /// instruction sets, see pt-integrators' `render_tile`).
+    #[inline(always)]
     pub fn add(&mut self, v: [f32; 3], alpha: f32) {
-        if !v.iter().all(|c| c.is_finite()) {
+        if !exact::fits(&v) {
             self.nonfinite += 1;
             return;
         }
         self.n += 1;
         for c in 0..3 {
             let x = v[c] as f64;
-            self.sum[c] += x;
-            self.sum_sq[c] += x * x;
+            self.sum[c].add(x);
+            // Exact: the square of an f32 fits an f64's mantissa.
+            self.sum_sq[c].add(x * x);
         }
-        self.alpha += f64::from(alpha);
+        self.alpha.add(f64::from(alpha));
+    }
+
+    /// Adds another pixel's statistics (a part of the same render with other samples): exact,
+    /// so the result does not depend on how the samples were split.
+    pub fn merge(&mut self, other: &PixelStats) {
+        self.n += other.n;
+        self.nonfinite += other.nonfinite;
+        for c in 0..3 {
+            self.sum[c].merge(other.sum[c]);
+            self.sum_sq[c].merge(other.sum_sq[c]);
+        }
+        self.alpha.merge(other.alpha);
     }
 
     /// Mean per channel (the pixel value).
     pub fn mean(&self) -> [f32; 3] {
         let n = self.n.max(1) as f64;
-        self.sum.map(|s| (s / n) as f32)
+        self.sum.map(|s| (s.value() / n) as f32)
     }
 
     /// Mean alpha.
     pub fn mean_alpha(&self) -> f32 {
-        (self.alpha / self.n.max(1) as f64) as f32
+        (self.alpha.value() / self.n.max(1) as f64) as f32
     }
 
     /// Estimated variance of the mean per channel: unbiased sample variance / n.
@@ -366,8 +384,8 @@ impl PixelStats {
         }
         let n = self.n as f64;
         std::array::from_fn(|c| {
-            let m = self.sum[c] / n;
-            let var = ((self.sum_sq[c] / n - m * m) * n / (n - 1.0)).max(0.0);
+            let m = self.sum[c].value() / n;
+            let var = ((self.sum_sq[c].value() / n - m * m) * n / (n - 1.0)).max(0.0);
             (var / n) as f32
         })
     }

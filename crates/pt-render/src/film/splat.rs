@@ -7,14 +7,19 @@
 //!
 //! Determinism. Splats cross tile boundaries, so every tile of origin pixels keeps its own
 //! accumulator over the pixels its samples can reach (the tile grown by the filter's
-//! [`SplatLayout::margin`]), adds its samples to it sample index first, then origin pixel in
-//! row-major order, and the image is the sum of the accumulators taken in tile order
-//! ([`SplatFilm::resolve`]). That order depends on neither the number of threads nor the passes
-//! a render is split into (a pass of samples `a..b` followed by `b..c` adds in the order of one
-//! pass `a..c`), so resumed renders are bit-identical to uninterrupted ones. Tiles are aligned
-//! to the whole film's grid, so a crop window with `sample_border` adds each of its pixels'
-//! splats in the same order as the whole film's render: the same pixels, bit for bit.
+//! [`SplatLayout::margin`]). A tile adds the splats of one sample index at a time: the splats of
+//! all its origins' sample `k`, in row-major order, into a scratch image of f64 sums, which is
+//! then added to the tile's exact sums ([`super::exact`]) and cleared ([`SplatTile::commit`]).
+//! Each pixel's sum is then the exact sum over sample indices of numbers that depend on the
+//! sample index alone, so it depends on neither the number of threads, nor the passes a render
+//! is split into, nor which machine took which sample indices (`--part K/N`): resumed and
+//! merged renders are bit-identical to uninterrupted ones. (Rounding once per sample index and
+//! tile, not per splat, keeps the exact sums' cost at a few conversions per sample.) The image
+//! is the sum of the accumulators ([`SplatFilm::resolve`]). Tiles are aligned to the whole
+//! film's grid, so a crop window with `sample_border` adds each of its pixels' splats as the
+//! whole film's render does: the same pixels, bit for bit.
 
+use super::exact::{to_fixed, LINEAR_BITS, SQUARE_BITS};
 use super::{filter_profile, filter_radius};
 use pt_math::Vec2;
 use pt_scene::FilterDesc;
@@ -133,7 +138,7 @@ impl SplatLayout {
 
     /// The empty accumulator of tile (`i`, `j`) for `channels` values per sample: its origins
     /// grown by the margin, clipped to the image.
-    fn tile(&self, i: usize, j: usize, channels: usize) -> SplatTile {
+    fn tile(&self, i: usize, j: usize, channels: usize, squares_from: usize) -> SplatTile {
         let (xs, ys) = self.origins(i, j);
         let m = self.margin;
         let x0 = (xs.start - m).max(0);
@@ -147,14 +152,16 @@ impl SplatLayout {
             w,
             h,
             stride: channels + 1,
-            sums: vec![0.0; (w * h) as usize * (channels + 1)],
+            squares_from,
+            sums: vec![0; (w * h) as usize * (channels + 1)],
+            scratch: vec![0.0; (w * h) as usize * (channels + 1)],
         }
     }
 }
 
 /// The accumulator of one tile: per covered image pixel the weighted sums of each of a
 /// sample's values (filter weight times value: linear RGB radiance and alpha for the image,
-/// the requested quantities for AOVs), and the summed weight.
+/// then, in moment renders, the squared X, Y, Z), and the summed weight.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SplatTile {
     /// Image column of the accumulator's first pixel.
@@ -167,15 +174,55 @@ pub struct SplatTile {
     pub h: i32,
     /// Sums per pixel: one per value, then the weight.
     pub stride: usize,
-    /// Row-major sums, `stride` per pixel: weight times each value, and the weight.
-    pub sums: Vec<f64>,
+    /// The first value that is a square (kept on the finer grid of squares); `stride - 1`
+    /// when none is.
+    pub squares_from: usize,
+    /// Row-major exact sums ([`super::exact`]), `stride` per pixel: weight times each value,
+    /// and the weight; in units of 2^-[`SplatTile::frac_bits`] of the value's position.
+    pub sums: Vec<i128>,
+    /// The splats of the current sample index, not yet in `sums` (zero between
+    /// [`SplatTile::commit`]s; not part of the film's state).
+    scratch: Vec<f64>,
 }
 
 impl SplatTile {
+    /// Fractional bits of the exact sum at position `c` of a pixel's values: squared values
+    /// (positions from [`SplatTile::squares_from`] to the weight) on [`SQUARE_BITS`], the rest
+    /// on [`LINEAR_BITS`].
+    #[inline]
+    pub fn frac_bits(&self, c: usize) -> u32 {
+        if (self.squares_from..self.stride - 1).contains(&c) {
+            SQUARE_BITS
+        } else {
+            LINEAR_BITS
+        }
+    }
+
+    /// Adds the splats made since the last commit (one sample index's, see the module
+    /// documentation) to the exact sums and clears them.
+    pub fn commit(&mut self) {
+        let bits: Vec<u32> = (0..self.stride).map(|c| self.frac_bits(c)).collect();
+        for (i, (sum, s)) in self.sums.iter_mut().zip(&mut self.scratch).enumerate() {
+            if *s != 0.0 {
+                *sum = sum.wrapping_add(to_fixed(*s, bits[i % bits.len()]));
+                *s = 0.0;
+            }
+        }
+    }
+
+    /// The exact sums as f64 (resolved to the nearest), `stride` per pixel.
+    pub fn values(&self) -> impl Iterator<Item = f64> + '_ {
+        self.sums
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| v as f64 * f64::powi(2.0, -(self.frac_bits(i % self.stride) as i32)))
+    }
+
     /// Adds a sample's `values` (as many as the accumulator's channels) taken at `u` (in [0, 1)^2) within origin
     /// pixel `origin` (image pixels) to every covered pixel whose filter reaches it, with the
     /// separable weight f(X + 1/2 - x) f(Y + 1/2 - y) at the sample's position (x, y)
-    /// (Mitsuba's product of 1D profiles). The distances are computed from the whole-pixel
+    /// (Mitsuba's product of 1D profiles), into the scratch sums that [`SplatTile::commit`]
+    /// adds to the tile's. The distances are computed from the whole-pixel
     /// difference X - origin and `u`, so they are the same numbers whatever the image's place
     /// in the film (a crop window's pixels splat exactly as the whole film's).
     #[inline]
@@ -221,7 +268,7 @@ impl SplatTile {
                         weight(x - origin[0], u.x)
                     };
                 let w = f64::from(w);
-                let s = &mut self.sums[row + k * self.stride..][..self.stride];
+                let s = &mut self.scratch[row + k * self.stride..][..self.stride];
                 for (sum, v) in s.iter_mut().zip(values) {
                     *sum += w * f64::from(*v);
                 }
@@ -246,9 +293,15 @@ pub struct SplatFilm {
 impl SplatFilm {
     /// An empty film with `layout` for samples of `channels` values.
     pub fn new(layout: SplatLayout, channels: usize) -> SplatFilm {
+        SplatFilm::with_squares(layout, channels, channels)
+    }
+
+    /// An empty film with `layout` for samples of `channels` values, those from position
+    /// `squares_from` on being squares (kept on the grid of squares, [`SQUARE_BITS`]).
+    pub fn with_squares(layout: SplatLayout, channels: usize, squares_from: usize) -> SplatFilm {
         let tiles = (0..layout.tile_rows())
             .flat_map(|j| (0..layout.tile_columns()).map(move |i| (i, j)))
-            .map(|(i, j)| layout.tile(i, j, channels))
+            .map(|(i, j)| layout.tile(i, j, channels, squares_from.min(channels)))
             .collect();
         SplatFilm {
             layout,
@@ -258,11 +311,15 @@ impl SplatFilm {
     }
 
     /// The image's sums (per pixel, row-major: weight times each value, then the weight),
-    /// every pixel's accumulators added in tile order.
+    /// every pixel's accumulators added exactly.
     pub fn resolve(&self) -> Vec<f64> {
         let stride = self.channels + 1;
         let w = self.layout.width as usize;
-        let mut out = vec![0.0f64; w * self.layout.height as usize * stride];
+        let Some(first) = self.tiles.first() else {
+            return Vec::new();
+        };
+        let bits: Vec<u32> = (0..stride).map(|c| first.frac_bits(c)).collect();
+        let mut exact = vec![0i128; w * self.layout.height as usize * stride];
         for t in &self.tiles {
             for (r, row) in t
                 .sums
@@ -270,12 +327,26 @@ impl SplatFilm {
                 .enumerate()
             {
                 let start = ((t.y0 as usize + r) * w + t.x0 as usize) * stride;
-                for (o, s) in out[start..start + row.len()].iter_mut().zip(row) {
-                    *o += s;
+                for (o, s) in exact[start..start + row.len()].iter_mut().zip(row) {
+                    *o = o.wrapping_add(*s);
                 }
             }
         }
-        out
+        exact
+            .iter()
+            .enumerate()
+            .map(|(i, &v)| v as f64 * f64::powi(2.0, -(bits[i % stride] as i32)))
+            .collect()
+    }
+
+    /// Adds another film's sums (a part of the same render with other sample indices): exact.
+    /// The films must have the same layout and channels (checked by the caller).
+    pub fn merge(&mut self, other: &SplatFilm) {
+        for (a, b) in self.tiles.iter_mut().zip(&other.tiles) {
+            for (x, y) in a.sums.iter_mut().zip(&b.sums) {
+                *x = x.wrapping_add(*y);
+            }
+        }
     }
 
     /// The image, one row-major plane per value: each pixel's weighted sum over its summed
@@ -330,6 +401,7 @@ mod tests {
             Vec2::new(0.25, 0.5),
             &[2.0, 0.0, 0.0, 1.0],
         );
+        film.tiles[0].commit();
         let s = film.resolve();
         let at = |x: usize, y: usize, c: usize| s[(y * 4 + x) * 5 + c];
         assert!((at(1, 1, 4) - 0.25).abs() < 1e-7 && (at(2, 1, 4) - 0.75).abs() < 1e-7);
@@ -370,6 +442,7 @@ mod tests {
                                         0.25 + 0.5 * (k / 2) as f32,
                                     );
                                     t.splat(&f, r, [x, y], u, &[0.7, 0.2, 3.0, 0.6]);
+                                    t.commit();
                                 }
                             }
                         }
