@@ -162,7 +162,10 @@ pub(crate) fn run(a: SlurmArgs) -> Result<ExitCode> {
 /// Prints each task's part (complete, in progress with its samples, or not started) and each
 /// merged image.
 fn status(dir: &Path) -> Result<ExitCode> {
-    let (tasks, merges) = slurm::read_manifest(dir).map_err(|m| anyhow::anyhow!(m))?;
+    let slurm::Manifest {
+        tasks,
+        images: merges,
+    } = slurm::read_manifest(dir).map_err(|m| anyhow::anyhow!(m))?;
     if let Ok(jobs) = std::fs::read_to_string(slurm::jobs_path(dir)) {
         out!("jobs: {}", jobs.trim().replace('\n', ", "));
     }

@@ -242,8 +242,17 @@ impl Plan {
     }
 }
 
-/// A run folder's manifest, read back: its tasks and merges.
-pub fn read_manifest(dir: &Path) -> Result<(Vec<Task>, Vec<(PathBuf, PathBuf)>), String> {
+/// A run folder's manifest, read back.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Manifest {
+    /// The array's tasks, task id = position.
+    pub tasks: Vec<Task>,
+    /// Per scene: the scene file and its merged image.
+    pub images: Vec<(PathBuf, PathBuf)>,
+}
+
+/// Reads a run folder's manifest.
+pub fn read_manifest(dir: &Path) -> Result<Manifest, String> {
     let path = manifest_path(dir);
     let text = std::fs::read_to_string(&path).map_err(|e| {
         format!(
@@ -276,7 +285,10 @@ pub fn read_manifest(dir: &Path) -> Result<(Vec<Task>, Vec<(PathBuf, PathBuf)>),
             _ => return Err(bad()),
         }
     }
-    Ok((tasks, merges))
+    Ok(Manifest {
+        tasks,
+        images: merges,
+    })
 }
 
 /// Submits a written run: the array, then the merge job depending on it (`afterok`). Returns
@@ -370,11 +382,11 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("pt-cluster-test-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         std::fs::write(manifest_path(&dir), p.manifest()).unwrap();
-        let (tasks, merges) = read_manifest(&dir).unwrap();
+        let m = read_manifest(&dir).unwrap();
         std::fs::remove_dir_all(&dir).unwrap();
-        assert_eq!(tasks, p.tasks);
+        assert_eq!(m.tasks, p.tasks);
         assert_eq!(
-            merges,
+            m.images,
             vec![(p.merges[0].scene.clone(), p.merges[0].output.clone())]
         );
     }

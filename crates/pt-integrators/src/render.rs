@@ -857,6 +857,8 @@ fn render_splat_tile(
                 );
             }
         }
+        // The tile's splats of sample k, summed in a fixed order, join its exact sums.
+        acc.commit();
     }
 }
 

@@ -377,16 +377,24 @@ impl PixelStats {
         (self.alpha.value() / self.n.max(1) as f64) as f32
     }
 
-    /// Estimated variance of the mean per channel: unbiased sample variance / n.
+    /// Estimated variance of the mean per channel: unbiased sample variance / n. The mean
+    /// square is known to half a unit of the squares' grid (each square is rounded once:
+    /// 2^-(SQUARE_BITS + 1)), so a spread below that (plus the f64 rounding of the squared
+    /// mean) cannot be told from none and reads as 0: samples that are all equal have variance
+    /// exactly 0, as they would with exact squares.
     pub fn variance_of_mean(&self) -> [f32; 3] {
         if self.n < 2 {
             return [0.0; 3];
         }
         let n = self.n as f64;
+        let resolution = f64::powi(2.0, -(exact::SQUARE_BITS as i32 + 1));
         std::array::from_fn(|c| {
             let m = self.sum[c].value() / n;
-            let var = ((self.sum_sq[c].value() / n - m * m) * n / (n - 1.0)).max(0.0);
-            (var / n) as f32
+            let spread = self.sum_sq[c].value() / n - m * m;
+            if spread <= resolution + m * m * f64::EPSILON * 4.0 {
+                return 0.0;
+            }
+            ((spread * n / (n - 1.0)) / n) as f32
         })
     }
 }

@@ -199,23 +199,22 @@ impl SplatTile {
     }
 
     /// Adds the splats made since the last commit (one sample index's, see the module
-    /// documentation) to the exact sums and clears them.
+    /// documentation) to the exact sums and clears them. Inlined into the render loop (compiled
+    /// for its instruction sets: the conversions' variable shifts are single instructions there).
+    #[inline(always)]
     pub fn commit(&mut self) {
-        let bits: Vec<u32> = (0..self.stride).map(|c| self.frac_bits(c)).collect();
+        let (stride, squares) = (self.stride, self.squares_from..self.stride - 1);
         for (i, (sum, s)) in self.sums.iter_mut().zip(&mut self.scratch).enumerate() {
             if *s != 0.0 {
-                *sum = sum.wrapping_add(to_fixed(*s, bits[i % bits.len()]));
+                let bits = if squares.contains(&(i % stride)) {
+                    SQUARE_BITS
+                } else {
+                    LINEAR_BITS
+                };
+                *sum = sum.wrapping_add(to_fixed(*s, bits));
                 *s = 0.0;
             }
         }
-    }
-
-    /// The exact sums as f64 (resolved to the nearest), `stride` per pixel.
-    pub fn values(&self) -> impl Iterator<Item = f64> + '_ {
-        self.sums
-            .iter()
-            .enumerate()
-            .map(|(i, &v)| v as f64 * f64::powi(2.0, -(self.frac_bits(i % self.stride) as i32)))
     }
 
     /// Adds a sample's `values` (as many as the accumulator's channels) taken at `u` (in [0, 1)^2) within origin
