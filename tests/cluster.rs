@@ -5,7 +5,8 @@
 //!   and of its variance EXR), for N = 1, 3 and 4, parts on 1 or 2 threads, under filter
 //!   importance sampling with negative filter weights (Mitchell), Mitsuba's splatting film
 //!   (Gaussian) with the `moment` integrator's squared channels, and a structured sampler
-//!   (multijitter, whose samples depend on their index within blocks). A test of equality, not
+//!   (multijitter, whose samples depend on their index within blocks); and for the light
+//!   tracer, BDPT, VCM and the photon mapper. A test of equality, not
 //!   of statistics: any difference in the reduction (a float sum in another order, a sample
 //!   index drawn twice or skipped, a share's stream keyed by its local index) changes bits.
 //! - Parts that do not make one render are refused with exit code 2 and no output: a missing,
@@ -180,6 +181,35 @@ fn merged_parts_equal_the_whole_render() {
     }
 }
 
+/// The methods from the lights split as exactly: the light tracer's film (splats of light
+/// paths, a Gaussian filter), BDPT and VCM (light film plus camera samples, merging radii and
+/// wavelengths by iteration) and Jensen's photon mapper (maps per iteration), on the caustic
+/// scene.
+#[test]
+fn light_path_methods_merge_exactly() {
+    let dir = scratch("cluster_light");
+    let scene = s(&repo().join("scenes/caustic-sphere-light.xml"));
+    for (method, spp) in [
+        ("ptracer", "12"),
+        ("bdpt", "6"),
+        ("vcm", "6"),
+        ("photonmapper", "3"),
+    ] {
+        let args = [
+            scene.as_str(),
+            "--integrator",
+            method,
+            "--width",
+            "32",
+            "--height",
+            "24",
+            "--spp",
+            spp,
+        ];
+        check_merge_is_exact(&dir, method, &args, 3);
+    }
+}
+
 #[test]
 fn parts_that_are_not_one_render_are_refused() {
     let dir = scratch("cluster_refusals");
@@ -217,11 +247,11 @@ fn parts_that_are_not_one_render_are_refused() {
         assert!(err.contains(says), "expected '{says}' in: {err}");
         assert!(!out.exists(), "{says}: an output was written");
     }
-    // Methods whose passes are not independent are refused before rendering.
+    // SPPM's iterations depend on the ones before: refused before rendering.
     let o = pt(&[
         "render",
         "--integrator",
-        "ptracer",
+        "sppm",
         "--part",
         "1/2",
         "--spp",
@@ -231,7 +261,7 @@ fn parts_that_are_not_one_render_are_refused() {
         &s(&dir.join("pt.ptpart")),
     ]);
     assert_eq!(o.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&o.stderr).contains("--part applies to path"));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--part applies to every"));
     assert!(!dir.join("pt.ptpart").exists());
     let o = pt(&["render", "--part", "4/3", "--quiet"]);
     assert_eq!(o.status.code(), Some(2));
@@ -256,6 +286,7 @@ fn stopped_part_resumes_and_merges_exactly() {
     let mut child = Command::new(env!("CARGO_BIN_EXE_pt"))
         .args(&a)
         .current_dir(repo())
+        .stderr(std::process::Stdio::null())
         .spawn()
         .unwrap();
     // Wait for a first checkpoint, then stop the part as Slurm would.

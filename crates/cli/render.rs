@@ -25,7 +25,7 @@ pub(crate) struct RenderArgs {
     /// K-1+N, K-1+2N ...) into a part file (-o, ending in .ptpart; default
     /// SCENE.partKofN.ptpart) for `pt merge`, which combines the N parts into exactly the image
     /// of the whole render. An unfinished part file of the same render is resumed; a finished
-    /// one is left as it is. Path tracers (path, volpath, direct) only.
+    /// one is left as it is. Every method but sppm and radiosity.
     #[arg(long, value_name = "K/N", value_parser = parse_part)]
     part: Option<(u32, u32)>,
     /// Save the render in progress every SECONDS (between passes): to the part file with
@@ -449,8 +449,13 @@ pub(crate) fn execute(
             }
             if !integrator.takes_shares() {
                 bail!(
-                    "--part applies to path, volpath and direct, not to {} (not yet: its passes share light paths, photon maps or radii)",
-                    integrator.name()
+                    "--part applies to every sampling method but sppm and radiosity, not to {}: {}",
+                    integrator.name(),
+                    if integrator.name() == "sppm" {
+                        "each iteration's radii follow from the photons of those before"
+                    } else {
+                        "it does not sample pixels"
+                    }
                 );
             }
             Some(Share {

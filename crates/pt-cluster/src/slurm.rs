@@ -104,6 +104,18 @@ fn quoted(p: &Path) -> String {
 }
 
 impl Plan {
+    /// The `#SBATCH` lines both scripts share: cores, one task, partition and time limit.
+    fn resources(&self, s: &mut String) {
+        let _ = writeln!(s, "#SBATCH --cpus-per-task={}", self.cpus_per_task);
+        let _ = writeln!(s, "#SBATCH --ntasks=1");
+        if let Some(p) = &self.partition {
+            let _ = writeln!(s, "#SBATCH --partition={p}");
+        }
+        if let Some(t) = &self.time {
+            let _ = writeln!(s, "#SBATCH --time={t}");
+        }
+    }
+
     /// The job array's script (`sbatch parts.sbatch`).
     pub fn parts_script(&self) -> String {
         let mut s = String::new();
@@ -115,14 +127,7 @@ impl Plan {
         let _ = writeln!(s, "#SBATCH --requeue");
         let _ = writeln!(s, "#SBATCH --open-mode=append");
         let _ = writeln!(s, "#SBATCH --output={}/part-%a.log", logs.display());
-        let _ = writeln!(s, "#SBATCH --cpus-per-task={}", self.cpus_per_task);
-        let _ = writeln!(s, "#SBATCH --ntasks=1");
-        if let Some(p) = &self.partition {
-            let _ = writeln!(s, "#SBATCH --partition={p}");
-        }
-        if let Some(t) = &self.time {
-            let _ = writeln!(s, "#SBATCH --time={t}");
-        }
+        self.resources(&mut s);
         let _ = writeln!(s, "set -u");
         let _ = writeln!(s, "cd {} || exit 1", quoted(&self.cwd));
         let list = |items: Vec<String>| items.join(" ");
@@ -198,14 +203,7 @@ impl Plan {
             "#SBATCH --output={}/merge.log",
             self.dir.join("logs").display()
         );
-        let _ = writeln!(s, "#SBATCH --cpus-per-task={}", self.cpus_per_task);
-        let _ = writeln!(s, "#SBATCH --ntasks=1");
-        if let Some(p) = &self.partition {
-            let _ = writeln!(s, "#SBATCH --partition={p}");
-        }
-        if let Some(t) = &self.time {
-            let _ = writeln!(s, "#SBATCH --time={t}");
-        }
+        self.resources(&mut s);
         let _ = writeln!(s, "set -eu");
         let _ = writeln!(s, "cd {}", quoted(&self.cwd));
         for m in &self.merges {

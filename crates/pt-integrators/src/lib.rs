@@ -460,12 +460,11 @@ impl Integrator {
     }
 
     /// Whether the method's samples can be split between processes ([`Share`]) and
-    /// checkpointed: the camera-path methods, whose every sample is independent.
+    /// checkpointed: every method whose sample indices (iterations) are independent of each
+    /// other; not `sppm` (each iteration's radii follow from the photons of those before) or
+    /// radiosity (not sampled per pixel).
     pub fn takes_shares(&self) -> bool {
-        matches!(
-            self,
-            Integrator::Path(_) | Integrator::Direct(_) | Integrator::Afterglow { .. }
-        )
+        !matches!(self, Integrator::Sppm { .. } | Integrator::Radiosity(_))
     }
 
     /// Whether the method traces camera paths: the path tracers do, and compute the alpha
@@ -484,15 +483,9 @@ impl Integrator {
     /// Renders the job. Path tracers honour `run.cancel` between passes and continue
     /// `run.resume`; radiosity runs to the end.
     pub fn render(&self, job: &Job, run: Run) -> Result<Rendered, IntegratorError> {
-        if job.share != Share::WHOLE && !self.takes_shares() {
+        if (job.share != Share::WHOLE || run.checkpoint.is_some()) && !self.takes_shares() {
             return Err(IntegratorError::Settings(format!(
-                "a render split into parts needs a method whose samples are independent camera paths (path, volpath, direct), not {} (not yet: its passes share light paths, photon maps or radii)",
-                self.name()
-            )));
-        }
-        if run.checkpoint.is_some() && !self.takes_shares() {
-            return Err(IntegratorError::Settings(format!(
-                "checkpoints apply to path, volpath and direct, not to {}",
+                "{} cannot be split into parts or checkpointed: its iterations depend on the ones before (each shrinks the photon radii from the photons gathered so far)",
                 self.name()
             )));
         }
@@ -552,9 +545,14 @@ fn render_ptracer(
         paths_per_batch * u64::from(settings.spp),
         paths_per_batch * u64::from(state.spp_done),
     );
-    let complete = ptracer::render_light_passes(&scene, &settings, &mut state, run.cancel, &|n| {
-        run.progress.samples(n)
-    });
+    let complete = ptracer::render_light_passes(
+        &scene,
+        &settings,
+        &mut state,
+        run.cancel,
+        run.checkpoint.as_ref(),
+        &|n| run.progress.samples(n),
+    );
     let output = state.output();
     let (summary, warnings) = report(
         "ptracer",
@@ -799,9 +797,10 @@ fn prepare(
     let scene = Scene::build_with_mode(desc, job.bvh, job.selection, job.mode)?;
     let build_time = build_start.elapsed();
     let settings = RenderSettings {
-        spp: job.spp,
+        spp: job.share.samples_of(job.spp),
         seed: job.seed,
         path: *path,
+        share: job.share,
         ..RenderSettings::from_desc(desc)
     };
     if scene.has_media() {
@@ -847,10 +846,15 @@ fn render_photonmapper(
         pixels * u64::from(settings.spp),
         pixels * u64::from(state.spp_done),
     );
-    let complete =
-        photonmap::render_photon_passes(&scene, &settings, params, &mut state, run.cancel, &|n| {
-            run.progress.samples(n)
-        });
+    let complete = photonmap::render_photon_passes(
+        &scene,
+        &settings,
+        params,
+        &mut state,
+        run.cancel,
+        run.checkpoint.as_ref(),
+        &|n| run.progress.samples(n),
+    );
     let mut output = state.output();
     output.alpha = None;
     let what = format!(
@@ -909,10 +913,15 @@ fn render_vcm(
         pixels * u64::from(settings.spp),
         pixels * u64::from(state.spp_done),
     );
-    let complete =
-        vcm::render_vcm_passes(&scene, &settings, params, &mut state, run.cancel, &|n| {
-            run.progress.samples(n)
-        });
+    let complete = vcm::render_vcm_passes(
+        &scene,
+        &settings,
+        params,
+        &mut state,
+        run.cancel,
+        run.checkpoint.as_ref(),
+        &|n| run.progress.samples(n),
+    );
     let output = state.output();
     let what = "a sample being a camera and a light subpath per pixel; ";
     let (summary, warnings) = report(name, what, &output, build_time);

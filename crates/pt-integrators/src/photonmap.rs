@@ -512,6 +512,7 @@ pub fn render_photon_passes(
     pm: &PhotonMapSettings,
     state: &mut crate::RenderState,
     cancel: &AtomicBool,
+    checkpoint: Option<&crate::Checkpoint>,
     progress: &(dyn Fn(u64) + Sync),
 ) -> bool {
     let (w, h) = (settings.width, settings.height);
@@ -529,11 +530,12 @@ pub fn render_photon_passes(
         state,
         settings.spp,
         cancel,
-        &mut |_| {},
+        &mut crate::render::checkpointer(checkpoint),
         1,
         1,
         |state, its| {
-            let it = its.start;
+            // This process's iteration its.start is the render's share.sample(its.start).
+            let it = settings.share.sample(its.start);
             let lambda = crate::render::iteration_wavelengths(scene, settings.seed, it);
             let base = u64::from(it) * photons;
             let global = trace_photons(
@@ -625,6 +627,7 @@ pub fn render(
         pm,
         &mut state,
         &AtomicBool::new(false),
+        None,
         progress,
     );
     let mut out = state.output();

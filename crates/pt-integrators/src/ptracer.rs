@@ -421,6 +421,7 @@ pub fn render_light_passes(
     settings: &crate::RenderSettings,
     state: &mut crate::RenderState,
     cancel: &AtomicBool,
+    checkpoint: Option<&crate::Checkpoint>,
     progress: &(dyn Fn(u64) + Sync),
 ) -> bool {
     let per_batch = u64::from(settings.width) * u64::from(settings.height);
@@ -433,7 +434,7 @@ pub fn render_light_passes(
         state,
         settings.spp,
         cancel,
-        &mut |_| {},
+        &mut crate::render::checkpointer(checkpoint),
         2,
         most,
         |state, batches| light_pass(scene, settings, state, batches, scale, progress),
@@ -462,6 +463,8 @@ fn light_pass(
     let lists: Vec<Vec<Splat>> = items
         .par_iter()
         .map(|&(b, c)| {
+            // Batch b of this process is the render's batch share.sample(b) (a split render).
+            let b = settings.share.sample(b);
             let first = u64::from(b) * per_batch + c * CHUNK;
             let end = (u64::from(b) * per_batch + per_batch).min(first + CHUNK);
             let mut out = Vec::with_capacity(((end - first) * 4) as usize);
@@ -522,6 +525,8 @@ pub(crate) fn add_batches<L: AsRef<[Splat]>>(
         if !camera.is_empty() {
             light.add_camera_samples(&camera);
         }
+        // The batch joins the film's exact sums.
+        light.commit();
         for (stats, v) in state.pixels.iter_mut().zip(&batch) {
             stats.add(v.map(|c| c as f32), 0.0);
         }
@@ -550,6 +555,7 @@ pub fn render(
         settings,
         &mut state,
         &AtomicBool::new(false),
+        None,
         progress,
     );
     state.output()

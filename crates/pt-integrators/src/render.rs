@@ -208,7 +208,7 @@ pub struct RenderState {
 /// Bytes per pixel of a state file's statistics: two counts (u32) and seven exact sums (i128).
 const PIXEL_BYTES: usize = 8 + 7 * 16;
 
-/// Bytes of one exact sum of the splatting film.
+/// Bytes of one exact sum of the splatting or light film.
 const SPLAT_SUM_BYTES: usize = 16;
 
 /// First bytes of a state file (and its format version).
@@ -326,7 +326,7 @@ impl RenderState {
 
     /// Adds the sums of `other`, a state of the same render with other sample indices (another
     /// [`Share`]): exact, so that shares merged in any order give the whole render's sums bit
-    /// for bit. The light tracer's film is not exact and is refused.
+    /// for bit (the light tracer's film is exact too).
     pub fn merge(&mut self, other: &RenderState) -> Result<(), String> {
         if (self.width, self.height, self.seed) != (other.width, other.height, other.seed) {
             return Err(format!(
@@ -334,8 +334,10 @@ impl RenderState {
                 other.seed, other.width, other.height, self.seed, self.width, self.height
             ));
         }
-        if self.light.is_some() || other.light.is_some() {
-            return Err("light-tracing states cannot be merged (not yet)".into());
+        match (&mut self.light, &other.light) {
+            (Some(a), Some(b)) if (a.width, a.height) == (b.width, b.height) => a.merge(b),
+            (None, None) => {}
+            _ => return Err("the states were rendered by different methods".into()),
         }
         match (&mut self.splat, &other.splat) {
             (Some(a), Some(b)) if a.layout == b.layout && a.channels == b.channels => a.merge(b),
@@ -388,7 +390,7 @@ impl RenderState {
         }
         if let Some(f) = &self.light {
             for v in f.sums.iter().flatten().chain(f.camera.iter().flatten()) {
-                b.extend_from_slice(&v.to_bits().to_le_bytes());
+                b.extend_from_slice(&v.to_le_bytes());
             }
         }
         b
@@ -441,7 +443,7 @@ impl RenderState {
         let light_sums = light
             .as_ref()
             .map_or(0, |f| f.sums.len() * 3 + f.camera.len() * 4);
-        let expected = header + n * PIXEL_BYTES + splat_sums * SPLAT_SUM_BYTES + light_sums * 8;
+        let expected = header + n * PIXEL_BYTES + (splat_sums + light_sums) * SPLAT_SUM_BYTES;
         if bytes.len() != expected {
             return Err(format!(
                 "the state has {} bytes, a {w}x{h} render with this film needs {expected} (truncated, or saved with another reconstruction or filter)",
@@ -483,9 +485,9 @@ impl RenderState {
                 .flatten()
                 .chain(f.camera.iter_mut().flatten())
             {
-                let b8 = bytes[o..o + 8].try_into().expect("8 bytes");
-                *v = f64::from_bits(u64::from_le_bytes(b8));
-                o += 8;
+                let b16 = bytes[o..o + 16].try_into().expect("16 bytes");
+                *v = i128::from_le_bytes(b16);
+                o += 16;
             }
         }
         Ok(RenderState {
@@ -529,6 +531,22 @@ pub struct Checkpoint<'a> {
     pub save: &'a (dyn Fn(&RenderState) + Sync),
 }
 
+/// The `after_pass` of [`in_passes`] that calls `checkpoint.save` at most every
+/// `checkpoint.every` (nothing without a checkpoint).
+pub(crate) fn checkpointer<'a>(
+    checkpoint: Option<&'a Checkpoint<'a>>,
+) -> impl FnMut(&RenderState) + 'a {
+    let mut last_save = Instant::now();
+    move |state: &RenderState| {
+        if let Some(c) = checkpoint {
+            if last_save.elapsed() >= c.every {
+                (c.save)(state);
+                last_save = Instant::now();
+            }
+        }
+    }
+}
+
 /// [`render_passes`], calling `checkpoint.save` between passes at most every
 /// `checkpoint.every`.
 pub fn render_passes_saving(
@@ -539,15 +557,7 @@ pub fn render_passes_saving(
     checkpoint: Option<&Checkpoint>,
     progress: &(dyn Fn(u64) + Sync),
 ) -> bool {
-    let mut last_save = Instant::now();
-    let mut after_pass = |state: &RenderState| {
-        if let Some(c) = checkpoint {
-            if last_save.elapsed() >= c.every {
-                (c.save)(state);
-                last_save = Instant::now();
-            }
-        }
-    };
+    let mut after_pass = checkpointer(checkpoint);
     let most = if state.splat.is_some() {
         MAX_SPLAT_PASS
     } else {

@@ -829,6 +829,7 @@ pub fn render_vcm_passes(
     vcm: &VcmSettings,
     state: &mut crate::RenderState,
     cancel: &AtomicBool,
+    checkpoint: Option<&crate::Checkpoint>,
     progress: &(dyn Fn(u64) + Sync),
 ) -> bool {
     let (w, h) = (settings.width, settings.height);
@@ -843,11 +844,12 @@ pub fn render_vcm_passes(
         state,
         settings.spp,
         cancel,
-        &mut |_| {},
+        &mut crate::render::checkpointer(checkpoint),
         1,
         1,
         |state, its| {
-            let iteration = its.start;
+            // This process's iteration its.start is the render's share.sample(its.start).
+            let iteration = settings.share.sample(its.start);
             let radius = vcm.radius(iteration, scene.bounds.1);
             let f = Factors::new(vcm, radius, paths as f32);
             let it = Iteration {
@@ -998,6 +1000,7 @@ pub fn render(
         vcm,
         &mut state,
         &AtomicBool::new(false),
+        None,
         progress,
     );
     state.output()

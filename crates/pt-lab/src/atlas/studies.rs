@@ -468,7 +468,14 @@ pub fn transport(o: &AtlasSettings) -> Result<Study> {
             budget,
             pt_integrators::RenderState::for_light_paths(&settings),
             |rs, state| {
-                pt_integrators::ptracer::render_light_passes(&scene, rs, state, &never, &|_| {});
+                pt_integrators::ptracer::render_light_passes(
+                    &scene,
+                    rs,
+                    state,
+                    &never,
+                    None,
+                    &|_| {},
+                );
             },
         );
         let sppm = render_steps(
@@ -499,6 +506,7 @@ pub fn transport(o: &AtlasSettings) -> Result<Study> {
                         &params,
                         state,
                         &never,
+                        None,
                         &|_| {},
                     );
                 },
@@ -519,6 +527,7 @@ pub fn transport(o: &AtlasSettings) -> Result<Study> {
                     &maps,
                     state,
                     &never,
+                    None,
                     &|_| {},
                 );
             },

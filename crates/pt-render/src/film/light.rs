@@ -10,14 +10,18 @@
 //! the caller, with no division by summed weights (a light tracer's pixel is an integral over
 //! its footprint, not an average of samples).
 //!
-//! Splats are added in the order given: the caller keeps that order fixed (light path by light
-//! path), which makes the image independent of the number of threads.
+//! Splats are added in the order given into f64 sums of the current batch (one light path per
+//! pixel: one sample index), which the caller keeps fixed (light path by light path); at the
+//! batch's end [`LightFilm::commit`] adds them to the film's exact sums ([`super::exact`]).
+//! The image is then independent of the number of threads and of how batches were split into
+//! passes, resumes or the parts of a render split over machines.
 //!
 //! The bidirectional methods also add their camera samples here, each at its own film
 //! position: those are reconstructed as the path tracer's are (Mitsuba's `hdrfilm`): each
 //! pixel keeps the sum of the samples' filter weights `w` and of `w L`, and its value is their
 //! quotient ([`LightFilm::camera`]). The image is the light splats' sum plus that average.
 
+use super::exact::{to_fixed, LINEAR_BITS};
 use super::{filter_profile, filter_radius};
 use pt_math::Vec2;
 use pt_scene::FilterDesc;
@@ -35,11 +39,16 @@ pub struct LightFilm {
     pub height: u32,
     filter: FilterDesc,
     radius: f32,
-    /// Per pixel (row-major), the sum of the splats' weighted values (linear RGB).
-    pub sums: Vec<[f64; 3]>,
+    /// Per pixel (row-major), the exact sum of the splats' weighted values (linear RGB), in
+    /// units of 2^-[`LINEAR_BITS`] (committed batches).
+    pub sums: Vec<[i128; 3]>,
     /// Per pixel (row-major), the camera samples' filter-weighted sums (linear RGB) and the
-    /// sum of their weights (all zero for the light tracer).
-    pub camera: Vec<[f64; 4]>,
+    /// sum of their weights (all zero for the light tracer), exact as `sums`.
+    pub camera: Vec<[i128; 4]>,
+    /// The current batch's splats, not yet committed (zero between commits; not state).
+    batch: Vec<[f64; 3]>,
+    /// The current batch's camera samples, not yet committed.
+    camera_batch: Vec<[f64; 4]>,
 }
 
 impl LightFilm {
@@ -50,17 +59,59 @@ impl LightFilm {
             height,
             filter,
             radius: filter_radius(&filter),
-            sums: vec![[0.0; 3]; width as usize * height as usize],
-            camera: vec![[0.0; 4]; width as usize * height as usize],
+            sums: vec![[0; 3]; width as usize * height as usize],
+            camera: vec![[0; 4]; width as usize * height as usize],
+            batch: vec![[0.0; 3]; width as usize * height as usize],
+            camera_batch: vec![[0.0; 4]; width as usize * height as usize],
         }
+    }
+
+    /// Adds the current batch's splats and camera samples to the exact sums and clears them.
+    pub fn commit(&mut self) {
+        for (e, b) in self.sums.iter_mut().zip(&mut self.batch) {
+            for c in 0..3 {
+                e[c] = e[c].wrapping_add(to_fixed(b[c], LINEAR_BITS));
+            }
+            *b = [0.0; 3];
+        }
+        for (e, b) in self.camera.iter_mut().zip(&mut self.camera_batch) {
+            if *b != [0.0; 4] {
+                for c in 0..4 {
+                    e[c] = e[c].wrapping_add(to_fixed(b[c], LINEAR_BITS));
+                }
+                *b = [0.0; 4];
+            }
+        }
+    }
+
+    /// Adds another film's committed sums (a part of the same render with other batches):
+    /// exact. The films must have the same size (checked by the caller).
+    pub fn merge(&mut self, other: &LightFilm) {
+        for (a, b) in self.sums.iter_mut().zip(&other.sums) {
+            for c in 0..3 {
+                a[c] = a[c].wrapping_add(b[c]);
+            }
+        }
+        for (a, b) in self.camera.iter_mut().zip(&other.camera) {
+            for c in 0..4 {
+                a[c] = a[c].wrapping_add(b[c]);
+            }
+        }
+    }
+
+    /// Pixel `i`'s committed splat sum (linear RGB).
+    pub fn sum(&self, i: usize) -> [f64; 3] {
+        self.sums[i].map(|v| v as f64 * f64::powi(2.0, -(LINEAR_BITS as i32)))
     }
 
     /// Pixel `i`'s value (row-major): the light splats' sum over `n` plus the camera samples'
     /// weighted average.
     pub fn value(&self, i: usize, n: f64) -> [f32; 3] {
-        let c = self.camera[i];
+        let unit = f64::powi(2.0, -(LINEAR_BITS as i32));
+        let c = self.camera[i].map(|v| v as f64 * unit);
         let avg = if c[3] > 0.0 { 1.0 / c[3] } else { 0.0 };
-        [0, 1, 2].map(|k| (self.sums[i][k] / n + c[k] * avg) as f32)
+        let s = self.sum(i);
+        [0, 1, 2].map(|k| (s[k] / n + c[k] * avg) as f32)
     }
 
     /// Whether splats under `filter` fit the footprint this film computes at once.
@@ -69,7 +120,8 @@ impl LightFilm {
     }
 
     /// Adds `value` times `scale` at film position `pos` (pixels from the image's top-left
-    /// corner) with the normalised filter weights (see the module documentation).
+    /// corner) with the normalised filter weights (see the module documentation), to the
+    /// current batch.
     #[inline]
     pub fn splat(&mut self, pos: Vec2, value: [f32; 3], scale: f64) {
         let h = self.height as i32;
@@ -79,7 +131,7 @@ impl LightFilm {
             radius,
             (w, h),
             0..h,
-            &mut self.sums,
+            &mut self.batch,
             pos,
             value,
             scale,
@@ -93,7 +145,7 @@ impl LightFilm {
     pub fn splat_all(&mut self, splats: &[(Vec2, [f32; 3])], scale: f64) {
         let (filter, radius, w, h) = (self.filter, self.radius, self.width, self.height);
         in_bands(
-            &mut self.sums,
+            &mut self.batch,
             (w, h),
             radius,
             splats,
@@ -117,7 +169,7 @@ impl LightFilm {
     pub fn add_camera_samples(&mut self, samples: &[(Vec2, [f32; 3])]) {
         let (filter, radius, w, h) = (self.filter, self.radius, self.width, self.height);
         in_bands(
-            &mut self.camera,
+            &mut self.camera_batch,
             (w, h),
             radius,
             samples,
@@ -286,13 +338,14 @@ mod tests {
             ] {
                 let mut film = LightFilm::new(f, 10, 8);
                 film.splat(pos, [1.0, 2.0, 4.0], 0.5);
+                film.commit();
                 for c in 0..3 {
-                    let total: f64 = film.sums.iter().map(|s| s[c]).sum();
+                    let total: f64 = (0..80).map(|i| film.sum(i)[c]).sum();
                     let want = 0.5 * [1.0, 2.0, 4.0][c];
                     assert!((total - want).abs() < 1e-5, "{f:?} at {pos}: {total}");
                 }
                 if let FilterDesc::Box { .. } = f {
-                    let touched = film.sums.iter().filter(|s| s[0] != 0.0).count();
+                    let touched = film.sums.iter().filter(|s| s[0] != 0).count();
                     assert_eq!(touched, 1);
                 }
             }
@@ -305,9 +358,10 @@ mod tests {
     fn weights_are_the_filter_at_pixel_centres() {
         let mut film = LightFilm::new(FilterDesc::Tent { radius: 1.0 }, 4, 3);
         film.splat(Vec2::new(2.25, 1.5), [1.0, 0.0, 0.0], 1.0);
-        assert!((film.sums[4 + 1][0] - 0.25).abs() < 1e-7);
-        assert!((film.sums[4 + 2][0] - 0.75).abs() < 1e-7);
-        let total: f64 = film.sums.iter().map(|s| s[0]).sum();
+        film.commit();
+        assert!((film.sum(4 + 1)[0] - 0.25).abs() < 1e-7);
+        assert!((film.sum(4 + 2)[0] - 0.75).abs() < 1e-7);
+        let total: f64 = (0..12).map(|i| film.sum(i)[0]).sum();
         assert!((total - 1.0).abs() < 1e-7);
     }
 
@@ -337,9 +391,9 @@ mod tests {
             .unwrap()
             .install(|| banded.splat_all(&splats, 0.7));
         assert!(one
-            .sums
+            .batch
             .iter()
-            .zip(&banded.sums)
+            .zip(&banded.batch)
             .all(|(a, b)| a.map(f64::to_bits) == b.map(f64::to_bits)));
     }
 }
