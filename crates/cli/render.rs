@@ -675,17 +675,8 @@ pub(crate) fn execute(
 /// Identifies the scene and every option that changes the samples, so that `--resume` refuses a
 /// state made with anything else (FNV-1a over the scene file's bytes and the settings).
 fn state_key(args: &RenderArgs, desc: &SceneDesc, job: &Job, integrator: &Integrator) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    let mut eat = |bytes: &[u8]| {
-        for &b in bytes {
-            h ^= u64::from(b);
-            h = h.wrapping_mul(0x0100_0000_01b3);
-        }
-    };
-    match std::fs::read(&desc.source) {
-        Ok(b) => eat(&b),
-        Err(_) => eat(desc.source.to_string_lossy().as_bytes()),
-    }
+    let mut bytes = std::fs::read(&desc.source)
+        .unwrap_or_else(|_| desc.source.to_string_lossy().as_bytes().to_vec());
     let text = format!(
         "{:?}|{:?}|{:?}|{:?}|{integrator:?}|{:?}|{:?}|{:?}",
         job.bvh,
@@ -696,8 +687,8 @@ fn state_key(args: &RenderArgs, desc: &SceneDesc, job: &Job, integrator: &Integr
         job.selection,
         args.scene_args.camera
     );
-    eat(text.as_bytes());
-    h
+    bytes.extend_from_slice(text.as_bytes());
+    pt_cluster::part::fnv1a(&bytes)
 }
 
 /// Writes the EXR (and variance and PNG preview when asked), each atomically.
