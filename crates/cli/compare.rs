@@ -5,6 +5,7 @@ use crate::variance_path;
 use anyhow::{bail, Result};
 use clap::Args;
 use pt_image::{ExrMeta, Image};
+use pt_lab::compare::CompareSettings;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -111,7 +112,18 @@ pub(crate) fn run(args: CompareArgs) -> Result<ExitCode> {
             reference.height
         );
     }
-    let m = pt_image::metrics::compare(&img, &reference)?;
+    let variances = variances(&args)?;
+    let c = pt_lab::compare::compare(
+        &img,
+        &reference,
+        variances.as_ref().map(|(i, r)| (i, r)),
+        CompareSettings {
+            block: args.block,
+            alpha: args.alpha,
+            flip_exposure: args.flip_exposure,
+        },
+    )?;
+    let m = &c.metrics;
     let ch = |v: [f64; 3]| format!("{:>12.6e} {:>12.6e} {:>12.6e}", v[0], v[1], v[2]);
     out!("{:<22} {:>12} {:>12} {:>12}", "metric", "R", "G", "B");
     out!(
@@ -126,30 +138,53 @@ pub(crate) fn run(args: CompareArgs) -> Result<ExitCode> {
     out!(
         "{:<22} {} / {}",
         "non-finite pixels",
-        img.nonfinite_pixels(),
-        reference.nonfinite_pixels()
+        c.nonfinite.0,
+        c.nonfinite.1
     );
-    let flip = pt_image::flip::flip(&img, &reference, args.flip_exposure)?;
     out!(
         "{:<22} {:>12.6}   (mean, tone-mapped at {:+} stops, {} px/degree)",
         "FLIP",
-        flip.mean,
+        c.flip.mean,
         args.flip_exposure,
         pt_image::flip::DEFAULT_PIXELS_PER_DEGREE
     );
-    let ff = pt_image::fireflies::FireflyParams::default();
+    let ff = c.firefly_rule;
     out!(
         "{:<22} {} / {}   (image / reference: luminance > median + {} MAD-sigma of the {}x{} neighbourhood)",
         "fireflies",
-        pt_image::fireflies::count_fireflies(&img, ff),
-        pt_image::fireflies::count_fireflies(&reference, ff),
+        c.fireflies.0,
+        c.fireflies.1,
         ff.k,
         2 * ff.radius + 1,
         2 * ff.radius + 1
     );
-    // The z-tests run (and print) whether or not the image has non-finite pixels.
-    let z_pass = ztests(&args, &img, &reference)?;
-    let agree = img.nonfinite_pixels() == 0 && z_pass;
+    match &c.ztests {
+        Some(z) => {
+            let (b, pz) = (&z.block, &z.pixel);
+            out!(
+                "block z-test ({}x{} px, alpha {}): max |z| {:.2}, {} of {} block-channels fail (per-test p < {:.2e}), chi2 {:.1} on {} dof (p {:.3}): {}",
+                args.block,
+                args.block,
+                args.alpha,
+                b.max_abs_z,
+                b.failed,
+                b.tests,
+                b.p_threshold,
+                b.chi2,
+                b.tests,
+                b.chi2_p,
+                if b.pass { "PASS" } else { "FAIL" }
+            );
+            out!(
+                "pixel z-test: {:.3}% of pixel-channels fail at p < {}",
+                100.0 * pz.fraction_failed,
+                args.alpha
+            );
+        }
+        None => out!("no variance images: z-test skipped (give --variance and --image-variance, or put NAME_var.exr beside each)"),
+    }
+    let flip = c.flip;
+    let agree = c.agree;
     if let Some(out) = &args.error_image {
         let err = pt_image::colormap::relative_error_image(&img, &reference)?;
         let e = pt_image::colormap::false_colour(&err, img.width, img.height, 0.0, 0.2, false);
@@ -196,9 +231,9 @@ pub(crate) fn run(args: CompareArgs) -> Result<ExitCode> {
     })
 }
 
-/// The block and pixel z-tests when both variance images exist (prints them); whether the
-/// block test passes (true without variances: nothing to judge).
-fn ztests(args: &CompareArgs, img: &Image, reference: &Image) -> Result<bool> {
+/// The variance images of the image and the reference, when both exist (given, or beside
+/// each image as NAME_var.exr).
+fn variances(args: &CompareArgs) -> Result<Option<(Image, Image)>> {
     let img_var = args
         .image_variance
         .clone()
@@ -207,36 +242,8 @@ fn ztests(args: &CompareArgs, img: &Image, reference: &Image) -> Result<bool> {
         .variance
         .clone()
         .or_else(|| sibling_variance(&args.reference));
-    match (img_var, ref_var) {
-        (Some(iv), Some(rv)) => {
-            let (iv, _) = pt_image::read_exr(&iv)?;
-            let (rv, _) = pt_image::read_exr(&rv)?;
-            let z = pt_stats::block_ztest(img, &iv, reference, &rv, args.block, args.alpha)?;
-            out!(
-                "block z-test ({}x{} px, alpha {}): max |z| {:.2}, {} of {} block-channels fail (per-test p < {:.2e}), chi2 {:.1} on {} dof (p {:.3}): {}",
-                args.block,
-                args.block,
-                args.alpha,
-                z.max_abs_z,
-                z.failed,
-                z.tests,
-                z.p_threshold,
-                z.chi2,
-                z.tests,
-                z.chi2_p,
-                if z.pass { "PASS" } else { "FAIL" }
-            );
-            let pz = pt_stats::pixel_ztest(img, &iv, reference, &rv, args.alpha)?;
-            out!(
-                "pixel z-test: {:.3}% of pixel-channels fail at p < {}",
-                100.0 * pz.fraction_failed,
-                args.alpha
-            );
-            Ok(z.pass)
-        }
-        _ => {
-            out!("no variance images: z-test skipped (give --variance and --image-variance, or put NAME_var.exr beside each)");
-            Ok(true)
-        }
-    }
+    Ok(match (img_var, ref_var) {
+        (Some(iv), Some(rv)) => Some((pt_image::read_exr(&iv)?.0, pt_image::read_exr(&rv)?.0)),
+        _ => None,
+    })
 }

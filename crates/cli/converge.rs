@@ -24,7 +24,7 @@
 //!     --spp 4,16,64,256 --strategy mis,bsdf --mitsuba --out /tmp/converge-cb
 //! ```
 
-use anyhow::{anyhow, bail, Result};
+use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use pt_integrators::Strategy;
 use pt_lab::converge::{ConvergeSettings, MitsubaRun, MitsubaVariant as Variant};
@@ -212,7 +212,7 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
     let mitsuba = match args.mitsuba {
         false => None,
         true => {
-            let script = mitsuba_script()?;
+            let script = pt_lab::converge::mitsuba::script()?;
             let python = args
                 .python
                 .clone()
@@ -255,28 +255,6 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
     let result = pool.install(|| pt_lab::converge::run(&settings, &|line| eprintln!("{line}")))?;
     print!("{}", result.summary);
     Ok(ExitCode::SUCCESS)
-}
-
-/// `references/mitsuba_converge.py`: beside the current folder's `references/`, else in the
-/// source tree this binary was built from.
-fn mitsuba_script() -> Result<PathBuf> {
-    let rel = Path::new("references").join("mitsuba_converge.py");
-    let candidates = [
-        rel.clone(),
-        Path::new(env!("CARGO_MANIFEST_DIR")).join(&rel),
-    ];
-    candidates
-        .iter()
-        .find(|p| p.is_file())
-        .cloned()
-        .ok_or_else(|| {
-            anyhow!(
-                "--mitsuba needs references/mitsuba_converge.py; looked for {}",
-                candidates
-                    .map(|p| format!("'{}'", p.display()))
-                    .join(" and ")
-            )
-        })
 }
 
 /// The repository's `.venv/bin/python` beside the script's `references/` if it exists, else

@@ -29,9 +29,6 @@ use pt_scene::SceneDesc;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-/// The Cornell box rendered when no scene is given (scenes/cornell-box.xml, embedded).
-const BUILTIN_CORNELL: &str = include_str!("../../scenes/cornell-box.xml");
-
 #[derive(Parser)]
 #[command(
     name = "pt",
@@ -136,57 +133,19 @@ pub(crate) fn load_scene(path: Option<&Path>, args: &SceneArgs) -> Result<SceneD
     Ok(load_scene_with_summary(path, args)?.0)
 }
 
-/// [`load_scene`], and for a glTF file (`.gltf`, `.glb`) also its `pt info` listing; the glTF
-/// reader's warnings (defaults used, features ignored) go to stderr.
+/// [`load_scene`], and for a glTF file (`.gltf`, `.glb`) also its `pt info` listing; the
+/// loader's warnings (glTF defaults used or features ignored, media the path tracer skips) go
+/// to stderr.
 pub(crate) fn load_scene_with_summary(
     path: Option<&Path>,
     args: &SceneArgs,
 ) -> Result<(SceneDesc, Vec<String>)> {
-    if let Some(p) = path.filter(|p| pt_scene::gltf::is_gltf_path(p)) {
-        if !args.defines.is_empty() {
-            bail!("-D applies to Mitsuba XML scenes, not to glTF files");
-        }
-        let g = pt_scene::gltf::load(
-            p,
-            &pt_scene::gltf::LoadOptions {
-                camera: args.camera,
-            },
-        )?;
-        for w in &g.warnings {
-            eprintln!("warning: {w}");
-        }
-        return Ok((g.desc, g.summary));
-    }
-    if args.camera.is_some() {
-        bail!("--camera applies to glTF files (a Mitsuba XML scene has one sensor)");
-    }
     let defines = parse_defines(&args.defines)?;
-    let desc = match path {
-        Some(p) => pt_scene::load_file(p, &defines)?,
-        None => {
-            let cwd = std::env::current_dir().context("cannot read the current folder")?;
-            pt_scene::load_str(
-                BUILTIN_CORNELL,
-                Path::new("<built-in cornell-box.xml>"),
-                &cwd,
-                &defines,
-            )?
-        }
-    };
-    if desc.integrator.kind == pt_scene::IntegratorKind::Path {
-        let medium = desc.camera_medium.as_ref().or_else(|| {
-            desc.shapes
-                .iter()
-                .find_map(|s| s.interior.as_ref().or(s.exterior.as_ref()))
-        });
-        if let Some(m) = medium {
-            eprintln!(
-                "warning: {}: the `path` integrator ignores media, as Mitsuba's does; use <integrator type=\"volpath\"> to trace them",
-                m.loc
-            );
-        }
+    let opened = pt_scene::open(path, &defines, args.camera)?;
+    for w in &opened.warnings {
+        eprintln!("warning: {w}");
     }
-    Ok((desc, Vec::new()))
+    Ok((opened.desc, opened.summary))
 }
 
 /// The worker threads of a command: `--threads T` (at least 1), or rayon's default (one per

@@ -11,7 +11,7 @@ use pt_integrators::{
     Checkpoint, Integrator, Job, Overrides, Progress, RenderState, Rendered, Run, Share, Strategy,
 };
 use pt_render::{BvhKind, LightSelection};
-use pt_scene::{IntegratorKind, RadiosityOptions, SceneDesc};
+use pt_scene::{RadiosityOptions, SceneDesc};
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -123,8 +123,8 @@ pub(crate) struct RenderArgs {
     /// `photonmapper` is Jensen's photon mapping (`--spp` iterations, each with its own
     /// photon maps). Naming the
     /// scene's own method keeps its parameters.
-    #[arg(long, value_enum)]
-    integrator: Option<IntegratorArg>,
+    #[arg(long, value_parser = clap::builder::PossibleValuesParser::new(pt_integrators::METHODS))]
+    integrator: Option<String>,
     #[command(flatten)]
     radiosity: RadiosityArgs,
     /// No progress bar or summary on stderr.
@@ -167,19 +167,6 @@ enum ModeArg {
     Spectral,
 }
 
-#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
-enum IntegratorArg {
-    Path,
-    Volpath,
-    Direct,
-    Ptracer,
-    Sppm,
-    Bdpt,
-    Vcm,
-    Photonmapper,
-    Radiosity,
-}
-
 #[derive(Clone, Copy, ValueEnum)]
 enum StrategyArg {
     Mis,
@@ -212,35 +199,8 @@ impl RenderArgs {
     fn overrides(&self) -> Overrides {
         let r = &self.radiosity;
         Overrides {
-            kind: self.integrator.map(|i| match i {
-                IntegratorArg::Path => IntegratorKind::Path,
-                IntegratorArg::Volpath => IntegratorKind::VolPath,
-                IntegratorArg::Direct => IntegratorKind::Direct {
-                    emitter_samples: 1,
-                    bsdf_samples: 1,
-                },
-                IntegratorArg::Ptracer => IntegratorKind::PTracer {
-                    samples_per_pass: None,
-                },
-                IntegratorArg::Sppm => IntegratorKind::Sppm {
-                    photons_per_iteration: None,
-                    initial_radius: None,
-                    alpha: 2.0 / 3.0,
-                },
-                IntegratorArg::Bdpt => IntegratorKind::Bdpt,
-                IntegratorArg::Photonmapper => IntegratorKind::PhotonMapper {
-                    global_photons: 100_000,
-                    caustic_photons: 100_000,
-                    lookup_size: 50,
-                    lookup_radius: None,
-                    final_gather: true,
-                },
-                IntegratorArg::Vcm => IntegratorKind::Vcm {
-                    initial_radius: None,
-                    alpha: 0.75,
-                },
-                IntegratorArg::Radiosity => IntegratorKind::Radiosity,
-            }),
+            // The parser admits only the names of `METHODS`, each of which `method` knows.
+            kind: self.integrator.as_deref().and_then(pt_integrators::method),
             max_depth: self.max_depth,
             strategy: self.strategy.map(|s| match s {
                 StrategyArg::Mis => Strategy::Mis,
@@ -424,20 +384,7 @@ pub(crate) fn execute(
     if args.spp == Some(0) {
         bail!("--spp must be at least 1");
     }
-    if desc.film.pixel_format.has_alpha() && !integrator.traces_camera_paths() {
-        bail!(
-            "{}: the film's pixel_format has an alpha channel, which {} does not compute (use rgb, luminance or xyz)",
-            desc.source.display(),
-            integrator.name()
-        );
-    }
-    if desc.integrator.aov.is_some() && !integrator.traces_camera_paths() {
-        bail!(
-            "{}: the scene's aov integrator needs a path tracer, not {}",
-            desc.source.display(),
-            integrator.name()
-        );
-    }
+    integrator.check_scene(&desc)?;
     let part = match (args.part, &merge) {
         (Some(_), Some(_)) => bail!("a part file's arguments contain --part"),
         (Some((k, n)), None) => {
@@ -720,14 +667,10 @@ fn write_outputs(
         render_time_s: Some(out.time.as_secs_f64()),
         extra,
     };
-    let channels = out
+    let channels = r
         .channels(desc.film.pixel_format)
         .map_err(|m| anyhow::anyhow!("{}: {m}", desc.source.display()))?;
-    let planes: Vec<(&str, &[f32])> = channels
-        .iter()
-        .map(|(n, p)| (*n, &p[..]))
-        .chain(r.extra_channels.iter().map(|(n, p)| (n.as_str(), &p[..])))
-        .collect();
+    let planes: Vec<(&str, &[f32])> = channels.iter().map(|(n, p)| (n.as_str(), &p[..])).collect();
     pt_image::write_exr_channels(output, out.width, out.height, &planes, &meta)?;
     if args.variance {
         let var = Image {

@@ -65,6 +65,56 @@ pub enum IntegratorError {
     Settings(String),
 }
 
+/// The light transport methods a front end may ask for by name (`pt render --integrator`,
+/// the Python module's `integrator=`), as [`method`] reads them.
+pub const METHODS: &[&str] = &[
+    "path",
+    "volpath",
+    "direct",
+    "ptracer",
+    "sppm",
+    "bdpt",
+    "vcm",
+    "photonmapper",
+    "radiosity",
+];
+
+/// The method named `name` (one of [`METHODS`]) with its default settings, as the scene
+/// format's `<integrator type="name">` without properties reads it; `None` for another name.
+/// As an [`Overrides::kind`], naming the scene's own method keeps the scene's settings.
+pub fn method(name: &str) -> Option<IntegratorKind> {
+    Some(match name {
+        "path" => IntegratorKind::Path,
+        "volpath" => IntegratorKind::VolPath,
+        "direct" => IntegratorKind::Direct {
+            emitter_samples: 1,
+            bsdf_samples: 1,
+        },
+        "ptracer" => IntegratorKind::PTracer {
+            samples_per_pass: None,
+        },
+        "sppm" => IntegratorKind::Sppm {
+            photons_per_iteration: None,
+            initial_radius: None,
+            alpha: 2.0 / 3.0,
+        },
+        "bdpt" => IntegratorKind::Bdpt,
+        "photonmapper" => IntegratorKind::PhotonMapper {
+            global_photons: 100_000,
+            caustic_photons: 100_000,
+            lookup_size: 50,
+            lookup_radius: None,
+            final_gather: true,
+        },
+        "vcm" => IntegratorKind::Vcm {
+            initial_radius: None,
+            alpha: 0.75,
+        },
+        "radiosity" => IntegratorKind::Radiosity,
+        _ => return None,
+    })
+}
+
 /// Settings given on the command line that override the scene's `<integrator>`: each applies
 /// to the methods that have it, and is an error for the others.
 #[derive(Clone, Debug, Default)]
@@ -244,6 +294,25 @@ pub struct Rendered {
     /// Channels written besides the image's own (Mitsuba's `aov`: the nested integrator's
     /// image under its name, then the AOVs), each a row-major plane.
     pub extra_channels: Vec<(String, Vec<f32>)>,
+}
+
+impl Rendered {
+    /// Every channel of the image in `format` (see [`RenderOutput::channels`]: `R`, `G`, `B`,
+    /// or `Y`, or `X`, `Y`, `Z`, then `A`), followed by [`Rendered::extra_channels`]: what
+    /// `pt render` writes to its EXR, in that order, each a row-major plane.
+    pub fn channels(
+        &self,
+        format: pt_scene::PixelFormat,
+    ) -> Result<Vec<(String, Vec<f32>)>, String> {
+        let mut out: Vec<(String, Vec<f32>)> = self
+            .output
+            .channels(format)?
+            .into_iter()
+            .map(|(n, p)| (n.to_string(), p))
+            .collect();
+        out.extend(self.extra_channels.iter().cloned());
+        Ok(out)
+    }
 }
 
 impl Integrator {
@@ -457,6 +526,27 @@ impl Integrator {
             Integrator::Radiosity(_) => "radiosity",
             Integrator::Afterglow { .. } => "afterglow",
         }
+    }
+
+    /// Whether this method can render `desc` as its file asks: a film with an alpha channel
+    /// and Mitsuba's `aov` integrator need camera paths. Checked before any work, so that a
+    /// front end refuses the scene at once (the error names the scene file).
+    pub fn check_scene(&self, desc: &SceneDesc) -> Result<(), IntegratorError> {
+        if desc.film.pixel_format.has_alpha() && !self.traces_camera_paths() {
+            return Err(IntegratorError::Settings(format!(
+                "{}: the film's pixel_format has an alpha channel, which {} does not compute (use rgb, luminance or xyz)",
+                desc.source.display(),
+                self.name()
+            )));
+        }
+        if desc.integrator.aov.is_some() && !self.traces_camera_paths() {
+            return Err(IntegratorError::Settings(format!(
+                "{}: the scene's aov integrator needs a path tracer, not {}",
+                desc.source.display(),
+                self.name()
+            )));
+        }
+        Ok(())
     }
 
     /// Whether the method's samples can be split between processes ([`Share`]) and

@@ -450,18 +450,52 @@ pub fn bsdf_desc(spec: &BsdfSpec) -> Result<BsdfDesc, BsdfError> {
 /// The BSDF of `spec` (RGB mode: lanes r, g, b and an unused fourth lane), built as a scene
 /// file's `<bsdf>` with the same parameters would be (see the module doc).
 pub fn build_bsdf(spec: &BsdfSpec) -> Result<SurfaceBsdf, BsdfError> {
-    let desc = bsdf_desc(spec)?;
-    let invalid = |message: String| BsdfError::Invalid {
+    let model = build_model(spec, pt_spectrum::ColorMode::Rgb)?;
+    // Parameters given as values are constants, so in RGB mode the material is one BSDF
+    // everywhere.
+    model.material.fixed.ok_or_else(|| BsdfError::Invalid {
         label: spec.label(),
-        message,
-    };
-    let mut textures = pt_render::texture::TextureBuilder::new(pt_spectrum::ColorMode::Rgb);
-    let material = pt_render::material::build_material(&desc, &mut textures)
-        .map_err(|e| invalid(e.message))?;
-    // Parameters given as values are constants, so the material is one BSDF everywhere.
-    material
-        .fixed
-        .ok_or_else(|| invalid("the model's parameters must be constants".into()))
+        message: "the model's parameters must be constants".into(),
+    })
+}
+
+/// A BSDF model built for a colour mode: in RGB mode one BSDF, in spectral mode one per set of
+/// four wavelengths (its colours upsampled to spectra, named materials and indices read at
+/// the wavelengths), as a scene renders it in that mode.
+#[derive(Clone, Debug)]
+pub struct BsdfModel {
+    material: pt_render::material::SurfaceMaterial,
+}
+
+impl BsdfModel {
+    /// The colour mode it was built for.
+    pub fn mode(&self) -> pt_spectrum::ColorMode {
+        self.material.mode
+    }
+
+    /// The BSDF at the wavelengths `lambda` (nm, one per lane; ignored in RGB mode, whose lanes
+    /// are r, g, b and an unused fourth).
+    pub fn at(&self, lambda: pt_math::Vec4) -> SurfaceBsdf {
+        // Constant parameters read the same at any point of the surface.
+        let at = pt_render::texture::TexturePoint::uv(pt_math::Vec2::ZERO);
+        let hit = pt_render::geometry::Interaction::default();
+        let wavelengths = pt_spectrum::SampledWavelengths::sample_visible(0.5).with_lambda(lambda);
+        self.material.bsdf(&hit, &at, &wavelengths)
+    }
+}
+
+/// The model of `spec` in `mode` (see [`BsdfModel`]), built as a scene file's `<bsdf>` with the
+/// same parameters would be.
+pub fn build_model(spec: &BsdfSpec, mode: pt_spectrum::ColorMode) -> Result<BsdfModel, BsdfError> {
+    let desc = bsdf_desc(spec)?;
+    let mut textures = pt_render::texture::TextureBuilder::new(mode);
+    let material = pt_render::material::build_material(&desc, &mut textures).map_err(|e| {
+        BsdfError::Invalid {
+            label: spec.label(),
+            message: e.message,
+        }
+    })?;
+    Ok(BsdfModel { material })
 }
 
 #[cfg(test)]

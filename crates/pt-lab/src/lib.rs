@@ -10,6 +10,7 @@
 //! - [`stability`]: the numerical stress sweep of every BSDF model (`pt stability`), with
 //!   [`fireflies`], the bias of the firefly clamp.
 //! - [`atlas`]: the method failure atlas (`pt atlas`).
+//! - [`compare`]: the figures of an image against a reference (`pt compare`).
 //! - [`converge`]: error against render time per strategy, and Mitsuba 3 (`pt converge`).
 //! - [`chart`]: what the charts share (embedded font, SVG and PNG output, palettes, log ticks).
 //!
@@ -21,6 +22,7 @@
 pub mod atlas;
 pub mod bsdf;
 pub mod chart;
+pub mod compare;
 pub mod converge;
 mod error;
 pub mod fireflies;

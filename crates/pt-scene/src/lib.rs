@@ -48,6 +48,7 @@ pub mod gltf;
 pub mod ir;
 pub mod named;
 mod obj;
+mod open;
 mod ply;
 mod props;
 mod serialized;
@@ -62,6 +63,7 @@ mod tests;
 pub use error::SceneError;
 pub use ir::*;
 pub use named::{conductor_names, ior_names, named_conductor, named_ior, NamedConductor};
+pub use open::{open, Opened, BUILTIN_CORNELL, BUILTIN_CORNELL_NAME};
 pub use props::PropValue;
 pub use shapes::cylinder_bounds;
 

@@ -43,6 +43,30 @@ impl MitsubaVariant {
     }
 }
 
+/// `references/mitsuba_converge.py`: under the current folder's `references/`, else in the
+/// source tree this library was built from.
+pub fn script() -> Result<PathBuf> {
+    let rel = std::path::Path::new("references").join("mitsuba_converge.py");
+    let candidates = [
+        rel.clone(),
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("../..")
+            .join(&rel),
+    ];
+    candidates
+        .iter()
+        .find(|p| p.is_file())
+        .cloned()
+        .ok_or_else(|| {
+            LabError::Invalid(format!(
+                "Mitsuba's curve needs references/mitsuba_converge.py; looked for {}",
+                candidates
+                    .map(|p| format!("'{}'", p.display()))
+                    .join(" and ")
+            ))
+        })
+}
+
 /// Runs Mitsuba at every sample count of `spp`; returns its curve and a summary line.
 pub(super) fn run(
     m: &MitsubaRun,
