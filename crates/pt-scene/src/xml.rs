@@ -120,12 +120,31 @@ pub(crate) fn read_document(
     upgrade(&mut raw, version);
     let mut expander = Expander {
         params: params.to_vec(),
+        used: vec![false; params.len()],
         main_dir: dir.to_path_buf(),
         search_paths: Vec::new(),
         includes: 0,
     };
     let children = std::mem::take(&mut raw.children);
     raw.children = expander.expand_children(children, 1)?;
+    // Mitsuba 3 refuses a parameter given to the loader that the scene never substitutes
+    // (even one it declares with <default>): a misspelt -D name would otherwise change nothing.
+    let unused: Vec<String> = params
+        .iter()
+        .zip(&expander.used)
+        .filter(|(_, used)| !**used)
+        .map(|((k, v), _)| format!("${k}={v}"))
+        .collect();
+    if !unused.is_empty() {
+        return Err(SceneError::global(format!(
+            "{}: unused parameter{} {} (the scene never uses {}; Mitsuba 3 refuses {} too)",
+            file.display(),
+            if unused.len() == 1 { "" } else { "s" },
+            unused.join(", "),
+            if unused.len() == 1 { "it" } else { "them" },
+            if unused.len() == 1 { "it" } else { "them" },
+        )));
+    }
     Ok(Document {
         root: raw,
         search_paths: expander.search_paths,
@@ -333,6 +352,8 @@ pub(crate) fn camel_to_snake(name: &str) -> String {
 struct Expander {
     /// Known parameters, first definition wins (command line first, then `<default>`s).
     params: Vec<(String, String)>,
+    /// Whether each of `params` was substituted somewhere.
+    used: Vec<bool>,
     /// The main scene file's folder: where Mitsuba's file resolver starts.
     main_dir: PathBuf,
     /// Folders from `<path>`, most recent first.
@@ -389,10 +410,15 @@ impl Expander {
         Ok(out)
     }
 
-    fn substitute_attrs(&self, el: &mut Element) -> Result<()> {
+    fn substitute_attrs(&mut self, el: &mut Element) -> Result<()> {
         for (_, value) in el.attrs.iter_mut() {
             if value.contains('$') {
-                *value = substitute(value, &self.params).map_err(|m| SceneError::at(&el.loc, m))?;
+                let (text, used) =
+                    substitute(value, &self.params).map_err(|m| SceneError::at(&el.loc, m))?;
+                *value = text;
+                for i in used {
+                    self.used[i] = true;
+                }
             }
         }
         Ok(())
@@ -410,6 +436,7 @@ impl Expander {
         if !self.params.iter().any(|(k, _)| k == name) {
             let value = el.attr("value").unwrap_or_default();
             self.params.push((name.to_string(), value.to_string()));
+            self.used.push(false);
         }
         Ok(())
     }
@@ -485,12 +512,14 @@ impl Expander {
 
 /// Replaces each `$name` by its parameter value. Like Mitsuba, the longest defined name that
 /// follows the `$` wins (so `$spp` and `$spp_max` can coexist), `\$` stands for a `$`, and any
-/// other `$` left over is an error.
+/// other `$` left over is an error. Also returns the indices in `params` of the parameters
+/// used.
 pub(crate) fn substitute(
     value: &str,
     params: &[(String, String)],
-) -> std::result::Result<String, String> {
+) -> std::result::Result<(String, Vec<usize>), String> {
     let mut out = String::with_capacity(value.len());
+    let mut used = Vec::new();
     let mut rest = value;
     while let Some(pos) = rest.find('$') {
         // `\$` is a literal dollar sign (Mitsuba's escape).
@@ -504,10 +533,12 @@ pub(crate) fn substitute(
         let after = &rest[pos + 1..];
         let best = params
             .iter()
-            .filter(|(k, _)| after.starts_with(k.as_str()))
-            .max_by_key(|(k, _)| k.len());
+            .enumerate()
+            .filter(|(_, (k, _))| after.starts_with(k.as_str()))
+            .max_by_key(|(_, (k, _))| k.len());
         match best {
-            Some((k, v)) => {
+            Some((i, (k, v))) => {
+                used.push(i);
                 out.push_str(v);
                 rest = &after[k.len()..];
             }
@@ -524,7 +555,7 @@ pub(crate) fn substitute(
         }
     }
     out.push_str(rest);
-    Ok(out)
+    Ok((out, used))
 }
 
 /// Finds a file named in the scene: absolute names as they are; relative names in the
@@ -581,15 +612,15 @@ mod tests {
     #[test]
     fn substitution_prefers_the_longest_name() {
         let p = params(&[("spp", "16"), ("spp_max", "64")]);
-        assert_eq!(substitute("$spp", &p).unwrap(), "16");
-        assert_eq!(substitute("$spp_max", &p).unwrap(), "64");
-        assert_eq!(substitute("a $spp b $spp", &p).unwrap(), "a 16 b 16");
-        assert_eq!(substitute("no dollars", &p).unwrap(), "no dollars");
+        assert_eq!(substitute("$spp", &p).unwrap().0, "16");
+        assert_eq!(substitute("$spp_max", &p).unwrap().0, "64");
+        assert_eq!(substitute("a $spp b $spp", &p).unwrap().0, "a 16 b 16");
+        assert_eq!(substitute("no dollars", &p).unwrap().0, "no dollars");
         let err = substitute("$nope", &p).unwrap_err();
         assert!(err.contains("'$nope'"), "{err}");
         assert!(substitute("$", &p).is_err());
         assert_eq!(
-            substitute(r"cost \$5 at $spp", &p).unwrap(),
+            substitute(r"cost \$5 at $spp", &p).unwrap().0,
             "cost $5 at 16"
         );
     }

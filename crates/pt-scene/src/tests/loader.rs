@@ -250,6 +250,26 @@ fn undefined_parameter_is_an_error() {
 }
 
 #[test]
+fn parameters_the_scene_never_uses_are_errors() {
+    // Mitsuba 3.9.1 ("Found unused parameters"): a given parameter that no `$name` uses is
+    // refused, even when a <default> declares it; one that is used is fine.
+    let xml = "<scene version=\"3.0.0\">\n<default name=\"spp\" value=\"4\"/>\n<default name=\"decl\" value=\"1\"/>\n<sensor type=\"perspective\"><sampler type=\"independent\"><integer name=\"sample_count\" value=\"$spp\"/></sampler></sensor>\n</scene>";
+    let load = |defs: &[(&str, &str)]| {
+        let defs: Vec<(String, String)> = defs
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect();
+        crate::load_str(xml, Path::new("p.xml"), Path::new("."), &defs)
+    };
+    assert_eq!(load(&[("spp", "2")]).unwrap().sampler.sample_count, 2);
+    let e = load(&[("decl", "2"), ("spq", "3")]).unwrap_err();
+    assert_eq!(
+        e.to_string(),
+        "p.xml: unused parameters $decl=2, $spq=3 (the scene never uses them; Mitsuba 3 refuses them too)"
+    );
+}
+
+#[test]
 fn unknown_and_duplicate_ids_are_errors() {
     let e = fail(&scene(
         "<shape type=\"cube\">\n    <ref id=\"nope\"/>\n</shape>",
