@@ -26,7 +26,6 @@
 
 use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
-use pt_integrators::Strategy;
 use pt_lab::converge::{ConvergeSettings, MitsubaRun, MitsubaVariant as Variant};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -47,16 +46,16 @@ pub struct ConvergeArgs {
     )]
     pub spp: Vec<u32>,
     /// Direct-light strategies of pt's path tracer, comma separated: one curve each.
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "mis")]
-    pub strategy: Vec<ConvergeStrategy>,
+    #[arg(long, value_delimiter = ',', default_value = "mis", value_parser = clap::builder::PossibleValuesParser::new(pt_lab::converge::STRATEGIES))]
+    pub strategy: Vec<String>,
     /// Light transport methods of pt, comma separated: `path` (one curve per --strategy),
     /// `ptracer` (light tracing, curve `pt-ptracer`; its spp are light paths per pixel),
     /// `sppm` (photon mapping, curve `pt-sppm`; its spp are iterations), `photonmapper`
     /// (Jensen's, `pt-photonmapper`; spp are iterations), `bdpt`
     /// (bidirectional path tracing, `pt-bdpt`) and `vcm` (vertex connection and merging,
     /// `pt-vcm`; spp are iterations of a camera and a light subpath per pixel).
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "path")]
-    pub integrators: Vec<ConvergeIntegrator>,
+    #[arg(long, value_delimiter = ',', default_value = "path", value_parser = clap::builder::PossibleValuesParser::new(pt_lab::converge::Method::NAMES))]
+    pub integrators: Vec<String>,
     /// Colour modes of pt, comma separated (`rgb,spectral`): one curve per mode and strategy,
     /// named `pt-<mode>-<strategy>`, each timed with its own scene build [default: the scene's
     /// automatic mode only, curves named `pt-<strategy>`]. On a spectral scene, RGB converges
@@ -117,44 +116,6 @@ impl ConvergeMode {
             ConvergeMode::Spectral => pt_spectrum::ColorMode::Spectral,
         }
     }
-}
-
-/// pt's direct-light strategy of one curve.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum ConvergeStrategy {
-    /// MIS of light and BSDF sampling.
-    Mis,
-    /// BSDF sampling only.
-    Bsdf,
-    /// Light sampling only.
-    Light,
-}
-
-impl ConvergeStrategy {
-    fn strategy(self) -> Strategy {
-        match self {
-            ConvergeStrategy::Mis => Strategy::Mis,
-            ConvergeStrategy::Bsdf => Strategy::Bsdf,
-            ConvergeStrategy::Light => Strategy::Light,
-        }
-    }
-}
-
-/// A method of pt charted by `pt converge`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum ConvergeIntegrator {
-    /// The path tracer.
-    Path,
-    /// Light tracing (Mitsuba's `ptracer`).
-    Ptracer,
-    /// Stochastic progressive photon mapping (spp are iterations).
-    Sppm,
-    /// Jensen's photon mapping (spp are iterations).
-    Photonmapper,
-    /// Bidirectional path tracing.
-    Bdpt,
-    /// Vertex connection and merging (spp are iterations).
-    Vcm,
 }
 
 /// Mitsuba 3 variant used by `--mitsuba`.
@@ -230,18 +191,16 @@ pub fn run(args: ConvergeArgs) -> Result<ExitCode> {
         defines,
         reference: args.reference,
         spp: args.spp,
-        strategies: args.strategy.iter().map(|s| s.strategy()).collect(),
+        // The parsers admit only the names these functions know.
+        strategies: args
+            .strategy
+            .iter()
+            .filter_map(|s| pt_lab::converge::strategy_named(s))
+            .collect(),
         integrators: args
             .integrators
             .iter()
-            .map(|i| match i {
-                ConvergeIntegrator::Path => pt_lab::converge::Method::Path,
-                ConvergeIntegrator::Ptracer => pt_lab::converge::Method::PTracer,
-                ConvergeIntegrator::Sppm => pt_lab::converge::Method::Sppm,
-                ConvergeIntegrator::Photonmapper => pt_lab::converge::Method::PhotonMapper,
-                ConvergeIntegrator::Bdpt => pt_lab::converge::Method::Bdpt,
-                ConvergeIntegrator::Vcm => pt_lab::converge::Method::Vcm,
-            })
+            .filter_map(|m| pt_lab::converge::Method::named(m))
             .collect(),
         modes: args.modes.iter().map(|m| m.mode()).collect(),
         out,

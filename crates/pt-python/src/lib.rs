@@ -747,7 +747,6 @@ fn converge(
     mitsuba_python: Option<PathBuf>,
     log: Option<Py<PyAny>>,
 ) -> PyResult<(Vec<(String, Vec<(u32, f64, f64, f64, f32)>)>, String)> {
-    use pt_integrators::Strategy;
     use pt_lab::converge::{ConvergeSettings, Method, MitsubaRun, MitsubaVariant};
     if spp.is_empty() || spp.contains(&0) {
         return Err(PyValueError::new_err(
@@ -756,27 +755,24 @@ fn converge(
     }
     let strategies = strategies
         .iter()
-        .map(|s| match s.as_str() {
-            "mis" => Ok(Strategy::Mis),
-            "bsdf" => Ok(Strategy::Bsdf),
-            "light" => Ok(Strategy::Light),
-            o => Err(PyValueError::new_err(format!(
-                "unknown strategy '{o}' (mis, bsdf, light)"
-            ))),
+        .map(|s| {
+            pt_lab::converge::strategy_named(s).ok_or_else(|| {
+                PyValueError::new_err(format!(
+                    "unknown strategy '{s}' ({})",
+                    pt_lab::converge::STRATEGIES.join(", ")
+                ))
+            })
         })
         .collect::<PyResult<Vec<_>>>()?;
     let integrators = integrators
         .iter()
-        .map(|s| match s.as_str() {
-            "path" => Ok(Method::Path),
-            "ptracer" => Ok(Method::PTracer),
-            "sppm" => Ok(Method::Sppm),
-            "photonmapper" => Ok(Method::PhotonMapper),
-            "bdpt" => Ok(Method::Bdpt),
-            "vcm" => Ok(Method::Vcm),
-            o => Err(PyValueError::new_err(format!(
-                "unknown integrator '{o}' (path, ptracer, sppm, photonmapper, bdpt, vcm)"
-            ))),
+        .map(|s| {
+            Method::named(s).ok_or_else(|| {
+                PyValueError::new_err(format!(
+                    "unknown integrator '{s}' ({})",
+                    Method::NAMES.join(", ")
+                ))
+            })
         })
         .collect::<PyResult<Vec<_>>>()?;
     let modes = modes

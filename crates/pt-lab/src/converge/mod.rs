@@ -142,6 +142,38 @@ pub fn strategy_name(s: Strategy) -> &'static str {
     }
 }
 
+/// The strategies by name (`mis`, `bsdf`, `light`), as [`strategy_name`] writes them.
+pub const STRATEGIES: &[&str] = &["mis", "bsdf", "light"];
+
+/// The strategy named `name` (one of [`STRATEGIES`]).
+pub fn strategy_named(name: &str) -> Option<Strategy> {
+    [Strategy::Mis, Strategy::Bsdf, Strategy::Light]
+        .into_iter()
+        .find(|s| strategy_name(*s) == name)
+}
+
+impl Method {
+    /// Every method, in the order of [`Method::NAMES`].
+    pub const ALL: [Method; 6] = [
+        Method::Path,
+        Method::PTracer,
+        Method::Sppm,
+        Method::PhotonMapper,
+        Method::Bdpt,
+        Method::Vcm,
+    ];
+    /// The methods' names, as the scene format's `<integrator type>` spells them.
+    pub const NAMES: [&'static str; 6] = ["path", "ptracer", "sppm", "photonmapper", "bdpt", "vcm"];
+
+    /// The method named `name` (one of [`Method::NAMES`]).
+    pub fn named(name: &str) -> Option<Method> {
+        Self::NAMES
+            .iter()
+            .position(|n| *n == name)
+            .map(|i| Self::ALL[i])
+    }
+}
+
 /// Checks the settings (messages name their fields); returns the sorted sample counts.
 fn check(s: &ConvergeSettings) -> Result<Vec<u32>> {
     let mut spp = s.spp.clone();
