@@ -122,8 +122,12 @@ def test_ctrl_c_raises_keyboard_interrupt_promptly(tmp_path):
     """SIGINT during a long render (about half an hour at this spp on one thread) raises
     KeyboardInterrupt within a few seconds: the render stops after its current pass."""
     script = tmp_path / "long_render.py"
+    # A shell starts background jobs with SIGINT ignored, and Python then keeps it ignored: CI
+    # runs this suite that way. The child puts back Python's own handler, as an interactive
+    # session (a terminal, a Jupyter kernel) has it.
     script.write_text(textwrap.dedent("""
-        import sys, time
+        import signal, sys, time
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         import pt_renderer as pt
         scene = pt.cornell_box()
         print("start", flush=True)
