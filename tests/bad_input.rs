@@ -71,6 +71,25 @@ fn missing_mesh() {
 }
 
 #[test]
+fn malformed_ies_file() {
+    // The IES file lives outside the scene's folder, which must stay empty but for the scene.
+    let ies = scratch("bad_ies_file").join("short.ies");
+    std::fs::write(
+        &ies,
+        "IESNA:LM-63-2002\r\nTILT=NONE\r\n1 -1 1 3 1 1 2 0 0 0\r\n1 1 10\r\n0 45 90\r\n0\r\n100 -50 0\r\n",
+    )
+    .unwrap();
+    rejects(
+        "ies",
+        &format!(
+            "{HEAD}<emitter type=\"point\">\n<string name=\"ies\" value=\"{}\"/></emitter>\n</scene>",
+            ies.display()
+        ),
+        &["ies.xml:6:", "<string name=\"ies\">", "short.ies', line 7", "must not be negative"],
+    );
+}
+
+#[test]
 fn nan_parameter() {
     rejects(
         "nan",

@@ -3,7 +3,7 @@
 //!   on scenes whose camera sees no specular surface it agrees with the Mitsuba `path`
 //!   references (block z-test and mean ratio, `common::judge_against_reference_at`), over
 //!   every kind of light it emits from (area lights with textures, spot light with an image,
-//!   projector, directional light, environment map) and in spectral mode (fluorescence:
+//!   projector, directional light, environment map, IES profiles) and in spectral mode (fluorescence:
 //!   tests/fluorescence.rs, with every integrator); its own Mitsuba
 //!   `ptracer` references (the caustic scenes) are tested by tests/references.rs;
 //! - the caustic a point light throws through a glass ball onto a diffuse wall, which no camera
@@ -24,6 +24,7 @@ const SCENES: &[&str] = &[
     "directional-light",
     "envmap",
     "monitor-spectral",
+    "ies-room",
 ];
 
 /// Light paths per pixel. The judge's mean ratio tolerance (0.5%) is about five standard

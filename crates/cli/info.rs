@@ -65,6 +65,23 @@ fn describe_bsdf(kind: &pt_scene::BsdfKind) -> String {
     }
 }
 
+/// A light's intensity profile for `pt info`: its source, size and peak.
+fn describe_profile(p: Option<&pt_scene::IntensityProfile>) -> String {
+    use pt_scene::ProfileSource as S;
+    match p.map(|p| (&p.source, p.scale)) {
+        None => String::new(),
+        Some((S::Ies(t), scale)) => format!(
+            ", IES profile {} x {} angles, peak {} cd, scale {scale}",
+            t.theta.len(),
+            t.phi.len(),
+            t.values.iter().fold(0.0f32, |m, &v| m.max(v))
+        ),
+        Some((S::Image(path), scale)) => {
+            format!(", goniometric image {}, scale {scale}", path.display())
+        }
+    }
+}
+
 /// One line per light that is not on a shape: its plugin, where it is and what it emits.
 fn describe_light(k: &pt_scene::LightKind) -> String {
     use pt_scene::LightKind as L;
@@ -73,20 +90,26 @@ fn describe_light(k: &pt_scene::LightKind) -> String {
         L::Point {
             position,
             intensity,
-        } => format!("point at {position:.3}, intensity {intensity:?}"),
+            profile,
+        } => format!(
+            "point at {position:.3}, intensity {intensity:?}{}",
+            describe_profile(profile.as_deref())
+        ),
         L::Spot {
             to_world,
             intensity,
             cutoff_deg,
             beam_width_deg,
             texture,
+            profile,
         } => format!(
-            "spot at {:.3}, intensity {intensity:?}, cutoff {cutoff_deg} deg, beam {beam_width_deg} deg{}",
+            "spot at {:.3}, intensity {intensity:?}, cutoff {cutoff_deg} deg, beam {beam_width_deg} deg{}{}",
             at(to_world),
             texture
                 .as_ref()
                 .map(|t| format!(", texture {t:?}"))
-                .unwrap_or_default()
+                .unwrap_or_default(),
+            describe_profile(profile.as_deref())
         ),
         L::Projector {
             to_world,

@@ -45,6 +45,7 @@
 mod build;
 mod error;
 pub mod gltf;
+pub mod ies;
 pub mod ir;
 pub mod named;
 mod obj;

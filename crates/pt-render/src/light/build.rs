@@ -1,11 +1,11 @@
 //! Lights that are not attached to a shape, from their descriptions.
 
-use super::{EnvMap, Light, Projector, SpotCone, SpotTexture};
+use super::{envmap_table, EnvMap, IntensityProfile, Light, Projector, SpotCone, SpotTexture};
 use crate::camera::tan_half_x;
 use crate::scene::BuildError;
 use crate::texture::{constant_spectrum, Role, TextureBuilder};
 use pt_math::{Frame, Mat3, Mat4, Vec3};
-use pt_scene::{LightDesc, LightKind};
+use pt_scene::{LightDesc, LightKind, ProfileSource};
 use pt_spectrum::ColorMode;
 
 /// A light that is not attached to a shape, in the scene's colour mode (spectral mode: RGB
@@ -34,31 +34,50 @@ pub fn build_light(
         LightKind::Point {
             position,
             intensity,
-        } => Light::Point {
-            position: *position,
-            intensity: emission(intensity),
-        },
+            profile,
+        } => {
+            let intensity = emission(intensity);
+            let profile = match profile {
+                Some(p) => Some(Box::new(build_profile(p, &intensity, None).map_err(err)?)),
+                None => None,
+            };
+            Light::Point {
+                position: *position,
+                intensity,
+                profile,
+            }
+        }
         LightKind::Spot {
             to_world,
             intensity,
             cutoff_deg,
             beam_width_deg,
             texture,
+            profile,
         } => {
             let axis = to_world
                 .transform_vector3(Vec3::Z)
                 .try_normalize()
                 .ok_or_else(|| err("spot to_world has no direction".into()))?;
             let cutoff = cutoff_deg.to_radians();
+            let cone = SpotCone {
+                cos_cutoff: cutoff.cos(),
+                cutoff,
+                beam_width: beam_width_deg.to_radians(),
+            };
+            let intensity = emission(intensity);
+            let profile = match profile {
+                Some(p) => Some(Box::new(
+                    build_profile(p, &intensity, Some(&cone)).map_err(err)?,
+                )),
+                None => None,
+            };
             Light::Spot {
                 position: to_world.transform_point3(Vec3::ZERO),
                 frame: Frame::from_normal(axis),
-                intensity: emission(intensity),
-                cone: SpotCone {
-                    cos_cutoff: cutoff.cos(),
-                    cutoff,
-                    beam_width: beam_width_deg.to_radians(),
-                },
+                intensity,
+                cone,
+                profile,
                 texture: match texture {
                     Some(t) => Some(Box::new(SpotTexture {
                         texture: textures.build(t, Role::Albedo).map_err(err)?,
@@ -148,4 +167,47 @@ pub fn build_light(
             Light::EnvMap(e)
         }
     })
+}
+
+/// A light's intensity profile: an IES table (its values per unit luminance of the light's
+/// colour, so the colour's luminance is divided out) or an equirectangular EXR whose pixels'
+/// luminance multiplies the intensity; `cone` is a spot's falloff.
+fn build_profile(
+    p: &pt_scene::IntensityProfile,
+    intensity: &crate::texture::ConstantSpectrum,
+    cone: Option<&SpotCone>,
+) -> Result<IntensityProfile, String> {
+    let (table, scale) = match &p.source {
+        ProfileSource::Ies(table) => {
+            let lum = intensity.luminance();
+            if !(lum > 0.0) {
+                return Err("the intensity of a light with an IES profile sets its colour, which must not be black".into());
+            }
+            (std::borrow::Cow::Borrowed(table), p.scale / lum)
+        }
+        ProfileSource::Image(path) => {
+            let (img, _) =
+                pt_image::read_exr(path).map_err(|e| format!("goniometric image: {e}"))?;
+            if img.height < 2 {
+                return Err(format!(
+                    "goniometric image '{}' needs at least two rows (its poles)",
+                    path.display()
+                ));
+            }
+            let values: Vec<f32> = img
+                .data
+                .iter()
+                .map(|px| crate::texture::luminance(*px))
+                .collect();
+            if values.iter().any(|v| !(v.is_finite() && *v >= 0.0)) {
+                return Err(format!(
+                    "goniometric image '{}' has negative or non-finite pixels",
+                    path.display()
+                ));
+            }
+            let table = envmap_table(img.width as usize, img.height as usize, values);
+            (std::borrow::Cow::Owned(table), p.scale)
+        }
+    };
+    IntensityProfile::new(&table, scale, p.to_world, cone).map_err(|e| e.to_string())
 }

@@ -12,6 +12,7 @@
 //! |---|---|---|---|
 //! | area | uniform by area | cosine-weighted about the front normal | `pi A Le(uv)` |
 //! | point | the point | uniform over the sphere | `4 pi I` |
+//! | point, spot with a profile (IES, goniometric) | the point | the profile's cells (`profile.rs`) | `I P(d) falloff / p(d)` |
 //! | spot | the point | uniform in the cutoff cone | `2 pi (1 - cos c) I falloff T` |
 //! | projector | the point | uniform over the image on its plane z = 1 | `I(d) / p(d)` |
 //! | directional | uniform on a disk of the scene's bounding radius R, facing the light, behind the scene | the light's | `pi R^2 E` |
@@ -137,25 +138,50 @@ impl Light {
             Light::Point {
                 position,
                 intensity,
+                profile: None,
             } => point_like(
                 *position,
                 square_to_uniform_sphere(u_dir),
                 intensity.at(lambda) * (4.0 * PI),
                 UNIFORM_SPHERE_PDF,
             ),
+            Light::Point {
+                position,
+                intensity,
+                profile: Some(p),
+            } => {
+                let (dir, pdf) = p.sample(u_dir);
+                point_like(
+                    *position,
+                    dir,
+                    intensity.at(lambda) * (p.eval(dir) / pdf),
+                    pdf,
+                )
+            }
             Light::Spot {
                 position,
                 frame,
                 intensity,
                 cone,
                 texture,
+                profile,
             } => {
-                let one_minus_cos = 1.0 - cone.cos_cutoff;
-                let local = square_to_uniform_cone(u_dir, one_minus_cos);
-                let dir = frame.to_world(local).normalize();
-                let pdf = uniform_cone_pdf(one_minus_cos);
-                let mut w = intensity.at(lambda) * (cone.falloff(local.z) / pdf);
-                if let Some(t) = texture.as_deref() {
+                // Uniform in the cone, or by the profile (whose density knows the cone).
+                let (dir, pdf, shape) = match profile.as_deref() {
+                    Some(p) => {
+                        let (dir, pdf) = p.sample(u_dir);
+                        (dir, pdf, p.eval(dir))
+                    }
+                    None => {
+                        let one_minus_cos = 1.0 - cone.cos_cutoff;
+                        let local = square_to_uniform_cone(u_dir, one_minus_cos);
+                        let dir = frame.to_world(local).normalize();
+                        (dir, uniform_cone_pdf(one_minus_cos), 1.0)
+                    }
+                };
+                let fall = cone.falloff(frame.n.dot(dir)) * shape;
+                let mut w = intensity.at(lambda) * (fall / pdf);
+                if let Some(t) = texture.as_deref().filter(|_| fall > 0.0) {
                     w *= t.eval(dir, lambda);
                 }
                 point_like(*position, dir, w, pdf)
@@ -207,7 +233,13 @@ impl Light {
         let disk = 1.0 / (PI * bounds.1 * bounds.1);
         match self {
             Light::Area(a) => (1.0 / a.area, n.dot(dir).max(0.0) * FRAC_1_PI),
-            Light::Point { .. } => (1.0, UNIFORM_SPHERE_PDF),
+            Light::Point { profile: None, .. } => (1.0, UNIFORM_SPHERE_PDF),
+            Light::Point {
+                profile: Some(p), ..
+            }
+            | Light::Spot {
+                profile: Some(p), ..
+            } => (1.0, p.pdf(dir)),
             Light::Spot { frame, cone, .. } => {
                 let inside = frame.n.dot(dir) >= cone.cos_cutoff;
                 (

@@ -16,6 +16,7 @@ mod area;
 mod build;
 mod emit;
 mod envmap;
+mod profile;
 mod projected;
 #[cfg(test)]
 mod tests;
@@ -27,6 +28,7 @@ pub use area::{
 pub use build::build_light;
 pub use emit::{EmittedRay, LightPoint};
 pub use envmap::EnvMap;
+pub use profile::{envmap_table, IntensityProfile, ProfileError};
 pub use projected::{Projector, SpotTexture};
 
 use crate::texture::ConstantSpectrum;
@@ -90,12 +92,14 @@ impl SpotCone {
 pub enum Light {
     /// An emitting shape.
     Area(AreaLight),
-    /// Isotropic point light with intensity `intensity` (W/sr).
+    /// Point light with intensity `intensity` (W/sr), times its profile's value if it has one.
     Point {
         /// Position, world.
         position: Vec3,
         /// Radiant intensity, W/sr.
         intensity: ConstantSpectrum,
+        /// How the intensity varies over directions (IES, goniometric); isotropic without.
+        profile: Option<Box<IntensityProfile>>,
     },
     /// Spot light at `position` pointing along `frame.n`.
     Spot {
@@ -109,6 +113,8 @@ pub enum Light {
         cone: SpotCone,
         /// An image cast through the cone (Mitsuba's `texture`), multiplying the intensity.
         texture: Option<Box<SpotTexture>>,
+        /// An IES profile about the axis, multiplying the intensity.
+        profile: Option<Box<IntensityProfile>>,
     },
     /// An image cast through a perspective frustum (Mitsuba `projector`).
     Projector(Box<Projector>),
@@ -155,7 +161,14 @@ impl Light {
         let disk = PI * scene_radius * scene_radius;
         let p = match self {
             Light::Area(a) => a.power(),
-            Light::Point { intensity, .. } => 4.0 * PI * intensity.luminance(),
+            Light::Point {
+                intensity, profile, ..
+            } => intensity.luminance() * profile.as_ref().map_or(4.0 * PI, |p| p.integral()),
+            Light::Spot {
+                intensity,
+                profile: Some(p),
+                ..
+            } => intensity.luminance() * p.integral(),
             Light::Spot {
                 intensity,
                 cone,
@@ -194,6 +207,7 @@ impl Light {
             Light::Point {
                 position,
                 intensity,
+                profile,
             } => {
                 let to = *position - x;
                 let d2 = to.length_squared();
@@ -201,7 +215,8 @@ impl Light {
                 if !(dist > 0.0) {
                     return None;
                 }
-                let radiance = intensity.at(lambda) * (1.0 / d2);
+                let shape = profile.as_deref().map_or(1.0, |p| p.eval(-to / dist));
+                let radiance = intensity.at(lambda) * (shape / d2);
                 radiance.is_finite().then_some(LightSample {
                     p: *position,
                     n: Vec3::ZERO,
@@ -218,6 +233,7 @@ impl Light {
                 intensity,
                 cone,
                 texture,
+                profile,
             } => {
                 let to = *position - x;
                 let d2 = to.length_squared();
@@ -226,7 +242,8 @@ impl Light {
                     return None;
                 }
                 let wi = to / dist;
-                let fall = cone.falloff(frame.n.dot(-wi));
+                let shape = profile.as_deref().map_or(1.0, |p| p.eval(-wi));
+                let fall = cone.falloff(frame.n.dot(-wi)) * shape;
                 let mut radiance = intensity.at(lambda) * (fall / d2);
                 if let Some(t) = texture.as_deref().filter(|_| fall > 0.0) {
                     radiance *= t.eval(-to, lambda);

@@ -1,6 +1,7 @@
 //! Emitters: `area` on shapes, and the lights on their own.
 
 use super::*;
+use crate::error::io_message;
 
 impl<'e> Builder<'e> {
     pub(super) fn top_level_emitter(&self, el: &Element) -> SceneError {
@@ -20,7 +21,10 @@ impl<'e> Builder<'e> {
     /// `irradiance` 1, `direction`, `angular_diameter` 0.5338 degrees), `constant` (`radiance` 1),
     /// `envmap` (`filename`, `scale` 1, `to_world`), `projector` (`irradiance` 1 or a nested
     /// texture, `scale` 1, `fov`/`fov_axis`/`focal_length` as a camera's, `to_world`); a spot
-    /// may carry a nested `<texture name="texture">`.
+    /// may carry a nested `<texture name="texture">`. Photometric lights (pt extensions):
+    /// `point` and `spot` take `ies` (an IES file) and `scale`; `goniometric` takes `filename`
+    /// (an `.ies` file or an equirectangular EXR of intensity factors), `intensity`, `scale`,
+    /// `to_world`.
     pub(super) fn light(&mut self, el: &'e Element) -> Result<LightDesc> {
         let v = ObjectView::parse(el)?;
         let to_world = v.transform("to_world")?;
@@ -108,9 +112,33 @@ impl<'e> Builder<'e> {
                     (None, Some(m)) => m.transform_point3(Vec3::ZERO),
                     (None, None) => Vec3::ZERO,
                 };
+                let profile = self.ies_profile(&v, to_world)?;
                 LightKind::Point {
                     position,
                     intensity: spectrum("intensity")?,
+                    profile,
+                }
+            }
+            "goniometric" => {
+                let to_world = to_world.unwrap_or(Mat4::IDENTITY);
+                let name = v
+                    .string("filename")?
+                    .ok_or_else(|| SceneError::at(&el.loc, "goniometric needs a filename (an .ies file or an equirectangular EXR image)"))?;
+                let scale = self.profile_scale(&v)?;
+                let path = self.profile_file(&v, "filename", &name)?;
+                let source = if is_ies(&name) {
+                    ProfileSource::Ies(self.read_ies(&v, "filename", &name, &path)?)
+                } else {
+                    ProfileSource::Image(path)
+                };
+                LightKind::Point {
+                    position: to_world.transform_point3(Vec3::ZERO),
+                    intensity: spectrum("intensity")?,
+                    profile: Some(Box::new(IntensityProfile {
+                        source,
+                        to_world: profile_rotation(&v, &to_world)?,
+                        scale,
+                    })),
                 }
             }
             "spot" => {
@@ -142,6 +170,7 @@ impl<'e> Builder<'e> {
                     cutoff_deg,
                     beam_width_deg,
                     texture,
+                    profile: self.ies_profile(&v, to_world)?,
                 }
             }
             "projector" => {
@@ -219,6 +248,71 @@ impl<'e> Builder<'e> {
         Ok(LightDesc {
             loc: el.loc.clone(),
             kind,
+        })
+    }
+
+    /// A point or spot light's IES profile (pt extension: `<string name="ies" value="lamp.ies"/>`,
+    /// with `scale`, default 1), oriented by the light's `to_world`.
+    fn ies_profile(
+        &self,
+        v: &ObjectView<'e>,
+        to_world: Option<Mat4>,
+    ) -> Result<Option<Box<IntensityProfile>>> {
+        let Some(name) = v.string("ies")? else {
+            return Ok(None);
+        };
+        let scale = self.profile_scale(v)?;
+        let path = self.profile_file(v, "ies", &name)?;
+        let table = self.read_ies(v, "ies", &name, &path)?;
+        Ok(Some(Box::new(IntensityProfile {
+            source: ProfileSource::Ies(table),
+            to_world: profile_rotation(v, &to_world.unwrap_or(Mat4::IDENTITY))?,
+            scale,
+        })))
+    }
+
+    /// A profile's `scale`: finite, not negative, default 1.
+    fn profile_scale(&self, v: &ObjectView<'e>) -> Result<f32> {
+        let scale = v.float("scale")?.unwrap_or(1.0);
+        if !(scale >= 0.0 && scale.is_finite()) {
+            return Err(v.prop_error("scale", "scale must be finite and not negative"));
+        }
+        Ok(scale)
+    }
+
+    /// The file a profile parameter names, resolved as meshes are; an error if it is missing.
+    fn profile_file(&self, v: &ObjectView<'e>, prop: &str, name: &str) -> Result<PathBuf> {
+        let path = resolve_file(name, &v.el.dir, &[self.base_dir], self.search_paths);
+        if !path.is_file() {
+            return Err(v.prop_error(
+                prop,
+                format!("cannot open '{name}' (looked for {})", path.display()),
+            ));
+        }
+        Ok(path)
+    }
+
+    /// Reads and parses an IES file; its errors name the file's line and the property.
+    fn read_ies(
+        &self,
+        v: &ObjectView<'e>,
+        prop: &str,
+        name: &str,
+        path: &Path,
+    ) -> Result<IntensityTable> {
+        let bytes = std::fs::read(path).map_err(|e| {
+            v.prop_error(
+                prop,
+                format!("cannot read IES file '{name}': {}", io_message(&e)),
+            )
+        })?;
+        // Keyword lines may hold Latin-1 text; the numbers are ASCII either way.
+        let text = String::from_utf8_lossy(&bytes);
+        crate::ies::parse_ies(&text).map_err(|e| {
+            v.prop_error(
+                prop,
+                format!("IES file '{name}', line {}: {}", e.line, e.message),
+            )
         })
     }
 
@@ -301,4 +395,41 @@ impl<'e> Builder<'e> {
             primaries,
         })
     }
+}
+
+/// Whether a profile's file name is an IES file (by its extension, as photometric files are
+/// named).
+fn is_ies(name: &str) -> bool {
+    Path::new(name)
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("ies"))
+}
+
+/// The rotation of a profile's `to_world`: its linear part with the columns normalised, which
+/// must be orthogonal and of equal lengths (a rotation times a uniform scale), since a sheared
+/// or stretched profile has no agreed meaning.
+fn profile_rotation(v: &ObjectView<'_>, to_world: &Mat4) -> Result<Mat3> {
+    let m = Mat3::from_mat4(*to_world);
+    let cols = [m.x_axis, m.y_axis, m.z_axis];
+    let len = cols.map(|c| c.length());
+    let bad = || {
+        v.prop_error("to_world", "an intensity profile's to_world must be a rotation (with at most a uniform scale) and a translation")
+    };
+    if !(len[0] > 0.0 && len[0].is_finite()) {
+        return Err(bad());
+    }
+    let tol = 1e-3 * len[0];
+    if (len[1] - len[0]).abs() > tol
+        || (len[2] - len[0]).abs() > tol
+        || cols[0].dot(cols[1]).abs() > tol * len[0]
+        || cols[0].dot(cols[2]).abs() > tol * len[0]
+        || cols[1].dot(cols[2]).abs() > tol * len[0]
+    {
+        return Err(bad());
+    }
+    let r = m * (1.0 / len[0]);
+    if r.determinant() < 0.0 {
+        return Err(bad()); // a mirror image of the luminaire
+    }
+    Ok(r)
 }

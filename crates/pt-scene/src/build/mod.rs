@@ -46,7 +46,7 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
     ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "plastic", "roughplastic", "null", "fluorescent", "phosphorescent", "bumpmap", "principled", "principledthin", "pplastic", "polarizer"], &[
         "retarder", "circular", "measured", "hair",
     ]),
-    ("emitter", &["area", "point", "spot", "directional", "sun", "constant", "envmap", "projector"], &[
+    ("emitter", &["area", "point", "spot", "directional", "sun", "constant", "envmap", "projector", "goniometric"], &[
         "directionalarea", "sunsky",
     ]),
     ("texture", &["bitmap", "checkerboard", "mesh_attribute", "rawconstant", "d65"], &["volume"]),

@@ -57,6 +57,7 @@ pub(super) fn map_light(
         Kind::Point => LightKind::Point {
             position,
             intensity: value,
+            profile: None,
         },
         Kind::Directional => LightKind::Directional {
             direction: dir,
@@ -107,6 +108,7 @@ fn spot(
         cutoff_deg: outer.to_degrees(),
         beam_width_deg: inner.to_degrees(),
         texture: None,
+        profile: None,
     })
 }
 
@@ -116,6 +118,7 @@ fn describe_light(k: &LightKind) -> String {
         LightKind::Point {
             position,
             intensity,
+            ..
         } => format!("point at {position:.3}, intensity {intensity:?} (cd -> per sr, 1:1)"),
         LightKind::Spot {
             intensity,

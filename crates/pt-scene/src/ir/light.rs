@@ -2,7 +2,7 @@
 //! directional, sun, constant, environment map).
 
 use super::{SourceLoc, SpectrumDesc, TextureDesc};
-use glam::{Mat4, Vec3};
+use glam::{Mat3, Mat4, Vec3};
 use std::path::PathBuf;
 
 /// An area emitter attached to a shape: emits `radiance` from the shape's front side only
@@ -33,12 +33,16 @@ pub struct LightDesc {
 /// Emitters not attached to shapes. Directions are unit vectors in world space.
 #[derive(Clone, Debug)]
 pub enum LightKind {
-    /// Isotropic point light (Mitsuba `point`): `intensity` in W/sr, inverse-square falloff.
+    /// Point light (Mitsuba `point`): `intensity` in W/sr, inverse-square falloff; isotropic,
+    /// or shaped by an intensity profile (pt's `ies` parameter and `goniometric` plugin).
     Point {
         /// Position, world space.
         position: Vec3,
-        /// Radiant intensity, W/sr.
+        /// Radiant intensity, W/sr (with an IES profile: its colour only, see
+        /// [`IntensityProfile`]).
         intensity: SpectrumDesc,
+        /// How the intensity varies over directions, if it does.
+        profile: Option<Box<IntensityProfile>>,
     },
     /// Spot light (Mitsuba `spot`): intensity `intensity` (W/sr) on its axis (local +z of
     /// `to_world`), full until `beam_width_deg` off axis, falling linearly in angle to 0 at
@@ -57,6 +61,9 @@ pub enum LightKind {
         /// tan(cutoff))) for the direction (x, y, z) in the light's frame, so the cone's
         /// cross-section is the circle inscribed in the unit uv square.
         texture: Option<TextureDesc>,
+        /// An IES profile multiplying the cone's falloff (pt's `ies` parameter), its nadir
+        /// along the spot's axis.
+        profile: Option<Box<IntensityProfile>>,
     },
     /// A projector (Mitsuba `projector`): a pinhole at the origin of `to_world` casting an
     /// image along its +z axis through a perspective frustum. `irradiance` is the
@@ -104,4 +111,46 @@ pub enum LightKind {
         /// Factor applied to the image's values.
         scale: f32,
     },
+}
+
+/// A radiant intensity that varies over directions: an IES file's candelas
+/// (`crate::ies`) or an image's values (pbrt-v4's `goniometric` light), in the frame of the
+/// light that carries it.
+#[derive(Clone, Debug)]
+pub struct IntensityProfile {
+    /// Where the values come from.
+    pub source: ProfileSource,
+    /// Rotation from the light's local frame to world space (the linear part of its
+    /// `to_world`, checked to be a rotation times a uniform scale, then normalised).
+    pub to_world: Mat3,
+    /// Factor on the values (`scale`).
+    pub scale: f32,
+}
+
+/// The data of an [`IntensityProfile`].
+#[derive(Clone, Debug)]
+pub enum ProfileSource {
+    /// An IES file's table, in W/sr per unit of luminance of the light's colour (the light's
+    /// `intensity` then sets only the colour: the renderer divides it by its luminance).
+    Ies(IntensityTable),
+    /// An equirectangular image (EXR), laid out as Mitsuba's `envmap` in the light's frame: its
+    /// luminance at a direction multiplies the light's `intensity` (W/sr).
+    Image(PathBuf),
+}
+
+/// Values over a grid of directions: rows at polar angles `theta` from the table's pole, columns
+/// at azimuths `phi` around it, bilinear in (theta, phi) between nodes, zero beyond the first
+/// and last row, periodic in phi.
+#[derive(Clone, Debug, PartialEq)]
+pub struct IntensityTable {
+    /// Polar angles of the rows, radians, increasing, within [0, pi].
+    pub theta: Vec<f32>,
+    /// Azimuths of the columns, radians, increasing, within [0, 2 pi); one column means the
+    /// values do not depend on the azimuth.
+    pub phi: Vec<f32>,
+    /// `values[row * phi.len() + column]`, not negative.
+    pub values: Vec<f32>,
+    /// Linear map from the light's local frame to the table's axes (x', y', z'), where
+    /// theta = acos z' and phi = atan2(y', x'): orthogonal (identity for IES files).
+    pub axes: Mat3,
 }

@@ -235,6 +235,97 @@ fn emitters_outside_shapes() {
 }
 
 #[test]
+fn photometric_lights_read_ies_files_and_locate_their_errors() {
+    let dir = std::env::temp_dir().join(format!("pt-ies-loader-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let good = "IESNA:LM-63-2002\r\n[TEST] t\r\nTILT=NONE\r\n1 -1 1 3 1 1 2 0 0 0\r\n1 1 10\r\n0 45 90\r\n0\r\n100 50 0\r\n";
+    std::fs::write(dir.join("good.ies"), good).unwrap();
+    std::fs::write(dir.join("short.ies"), good.replace("100 50 0", "100 50")).unwrap();
+    let xml = scene(
+        r#"<emitter type="point"><string name="ies" value="good.ies"/><float name="scale" value="2"/>
+    <transform name="to_world"><lookat origin="0, 3, 0" target="0, 0, 0" up="0, 0, 1"/></transform></emitter>
+<emitter type="goniometric"><string name="filename" value="good.ies"/>
+    <transform name="to_world"><lookat origin="0, 3, 0" target="0, 0, 0" up="0, 0, 1"/></transform>
+    <float name="scale" value="2"/></emitter>
+<emitter type="spot"><string name="ies" value="good.ies"/></emitter>
+<emitter type="goniometric"><string name="filename" value="sky.exr"/></emitter>"#,
+    );
+    std::fs::write(dir.join("sky.exr"), b"not read by the loader").unwrap();
+    let s = load_str(&xml, Path::new("t.xml"), &dir, &[]).unwrap();
+    // The `ies` parameter of a point light and the goniometric plugin make the same light.
+    let (
+        LightKind::Point {
+            profile: Some(a),
+            position: pa,
+            ..
+        },
+        LightKind::Point {
+            profile: Some(b),
+            position: pb,
+            ..
+        },
+    ) = (&s.lights[0].kind, &s.lights[1].kind)
+    else {
+        panic!("{:?}", s.lights)
+    };
+    assert_eq!(pa, pb);
+    assert_eq!(a.scale, 2.0);
+    assert_eq!(a.to_world, b.to_world);
+    // The nadir (local +z) points down.
+    assert!((a.to_world * Vec3::Z - Vec3::new(0.0, -1.0, 0.0)).length() < 1e-6);
+    let (ProfileSource::Ies(ta), ProfileSource::Ies(tb)) = (&a.source, &b.source) else {
+        panic!()
+    };
+    assert_eq!(ta, tb);
+    assert_eq!(ta.values, vec![100.0, 50.0, 0.0]);
+    assert!(matches!(
+        &s.lights[2].kind,
+        LightKind::Spot {
+            profile: Some(_),
+            ..
+        }
+    ));
+    assert!(
+        matches!(&s.lights[3].kind, LightKind::Point { profile: Some(p), .. } if matches!(p.source, ProfileSource::Image(_)))
+    );
+    // Errors name the element, the file and the file's line.
+    for (body, line, what) in [
+        (
+            r#"<emitter type="point"><string name="ies" value="short.ies"/></emitter>"#,
+            2,
+            "IES file 'short.ies', line 8: the file ends before the 3 candela values",
+        ),
+        (
+            r#"<emitter type="spot"><string name="ies" value="none.ies"/></emitter>"#,
+            2,
+            "cannot open 'none.ies'",
+        ),
+        (r#"<emitter type="goniometric"/>"#, 2, "needs a filename"),
+        (
+            r#"<emitter type="goniometric"><string name="filename" value="good.ies"/>
+<transform name="to_world"><scale value="1, 1, 2"/></transform></emitter>"#,
+            3,
+            "must be a rotation",
+        ),
+        (
+            r#"<emitter type="point"><string name="ies" value="good.ies"/><float name="scale" value="-2"/></emitter>"#,
+            2,
+            "scale",
+        ),
+        (
+            r#"<emitter type="point"><float name="scale" value="2"/></emitter>"#,
+            2,
+            "scale",
+        ),
+    ] {
+        let e = load_str(&scene(body), Path::new("t.xml"), &dir, &[]).unwrap_err();
+        assert!(e.to_string().contains(what), "{body}: {e}");
+        assert_eq!(e.loc.as_ref().map(|l| l.line), Some(line), "{e}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
 fn projected_images_on_spots_and_projectors() {
     let s = load(&scene(
         r#"<emitter type="spot"><texture type="checkerboard" name="texture"/></emitter>
