@@ -148,7 +148,9 @@ pub fn d65_normalised(scene: &str) -> bool {
         // references/plugins/cie_illuminants.py) are all scaled to luminance Y = `scale` under
         // each renderer's own film normalisation.
         SpectrumDesc::Illuminant { .. } => true,
-        SpectrumDesc::Tabulated(_) | SpectrumDesc::Blackbody { .. } => false,
+        SpectrumDesc::Tabulated(_) | SpectrumDesc::Measured(_) | SpectrumDesc::Blackbody { .. } => {
+            false
+        }
     };
     let shapes = desc
         .shapes

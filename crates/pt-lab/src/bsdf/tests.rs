@@ -121,15 +121,17 @@ fn builder_gives_the_bsdf_a_scene_file_gives() {
 }
 
 /// Named materials come from pt-scene's tables: `material=Au` is Au's index from
-/// `named_conductor`, `int_ior=bk7` the number `named_ior` gives.
+/// `named_conductor` (in RGB mode its measured spectra's sRGB), `int_ior=bk7` the number
+/// `named_ior` gives.
 #[test]
 fn named_materials_are_the_scene_formats() {
     let au = pt_scene::named_conductor("Au").unwrap();
+    let rgb = |s| pt_render::texture::rgb_of(s, pt_render::texture::Role::Unbounded);
     let named = build_bsdf(&BsdfSpec::new("conductor").with("material", "Au")).unwrap();
     let given = build_bsdf(
         &BsdfSpec::new("conductor")
-            .with("eta", au.eta)
-            .with("k", au.k),
+            .with("eta", rgb(&au.eta))
+            .with("k", rgb(&au.k)),
     )
     .unwrap();
     assert_eq!(format!("{named:?}"), format!("{given:?}"));
@@ -214,7 +216,7 @@ fn errors_are_clear() {
         "minnaert k=0: k must be positive, got 0"
     );
     assert!(err("roughconductor material=unobtainium")
-        .contains("unknown conductor 'unobtainium' (known: none, a-C, Ag"));
+        .contains("unknown conductor 'unobtainium' (known: none, Ag, Al"));
     assert!(
         err("dielectric int_ior=unobtainium").contains("unknown index of refraction 'unobtainium'")
     );

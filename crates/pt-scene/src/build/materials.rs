@@ -121,10 +121,7 @@ impl<'e> Builder<'e> {
                         format!("unknown conductor '{name}' (known: {})", known.join(", ")),
                     )
                 })?;
-                Ok((
-                    TextureDesc::Constant(SpectrumDesc::Rgb(c.eta)),
-                    TextureDesc::Constant(SpectrumDesc::Rgb(c.k)),
-                ))
+                Ok((TextureDesc::Constant(c.eta), TextureDesc::Constant(c.k)))
             }
             (None, Some(e), Some(k)) => Ok((e, k)),
             (None, e, _) => Err(v.prop_error(

@@ -516,6 +516,9 @@ impl<'e> Builder<'e> {
             SpectrumDesc::Tabulated(p) => SpectrumDesc::Tabulated(std::sync::Arc::new(
                 p.iter().map(|&(w, x)| (w, x * scale)).collect(),
             )),
+            SpectrumDesc::Measured(p) => SpectrumDesc::Tabulated(std::sync::Arc::new(
+                p.iter().map(|&(w, x)| (w, x * scale)).collect(),
+            )),
             s @ (SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. }) => {
                 return Err(v.prop_error(
                     "sigma_t",

@@ -17,6 +17,11 @@ pub enum SpectrumDesc {
     /// Piecewise-linear (wavelength nm, value) pairs, increasing wavelengths; zero outside
     /// their range, as Mitsuba's `<spectrum value="400:0.1, 500:0.5"/>`.
     Tabulated(std::sync::Arc<Vec<(f32, f32)>>),
+    /// A material's measured spectrum (a named conductor's eta or k: Mitsuba's `data/ior`
+    /// tables), piecewise linear and zero outside its range like `Tabulated`, but one that does
+    /// not by itself make a scene spectral: RGB mode uses its linear sRGB, converted as Mitsuba's
+    /// RGB variants convert these tables (`ior_from_file`: no D65, not clamped).
+    Measured(&'static [(f32, f32)]),
     /// Planck's law at `temperature` K in W m^-2 sr^-1 nm^-1, unnormalised and zero outside
     /// 360-830 nm, as Mitsuba 3.9's `<spectrum type="blackbody">` (scene units must be metres).
     Blackbody {
@@ -52,6 +57,7 @@ impl SpectrumDesc {
             SpectrumDesc::Uniform(_) => "uniform".into(),
             SpectrumDesc::Rgb(_) => "RGB".into(),
             SpectrumDesc::Tabulated(_) => "tabulated".into(),
+            SpectrumDesc::Measured(_) => "measured".into(),
             SpectrumDesc::Blackbody { temperature } => format!("blackbody ({temperature} K)"),
             SpectrumDesc::Illuminant { name, .. } => format!("CIE {}", name.to_ascii_uppercase()),
         }
@@ -73,6 +79,7 @@ impl SpectrumDesc {
             SpectrumDesc::Constant(c) | SpectrumDesc::Uniform(c) => vec![*c],
             SpectrumDesc::Rgb(c) => c.to_vec(),
             SpectrumDesc::Tabulated(p) => p.iter().map(|e| e.1).collect(),
+            SpectrumDesc::Measured(p) => p.iter().map(|e| e.1).collect(),
             SpectrumDesc::Blackbody { .. } => vec![],
             SpectrumDesc::Illuminant { scale, .. } => vec![*scale],
         }
