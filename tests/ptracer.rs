@@ -3,7 +3,12 @@
 //!   on scenes whose camera sees no specular surface it agrees with the Mitsuba `path`
 //!   references (block z-test and mean ratio, `common::judge_against_reference_at`), over
 //!   every kind of light it emits from (area lights with textures, spot light with an image,
-//!   projector, directional light, environment map, IES profiles) and in spectral mode (fluorescence:
+//!   projector, directional light, environment map, IES profiles) and through participating
+//!   media (a fog behind null walls lit by a spot and the sky, a smoke grid: `fog-spot`,
+//!   `smoke-grid`). `camera-in-medium` (camera and emitter inside a haze) is not in the list:
+//!   there the light tracer sits 0.08-0.22% below the reference (block z down to -5.4 at 1024
+//!   spp, uniform over the image) where the volumetric path tracer sits 0-0.11% below it; the
+//!   cause is not found yet (issue 23) and in spectral mode (fluorescence:
 //!   tests/fluorescence.rs, with every integrator); its own Mitsuba
 //!   `ptracer` references (the caustic scenes) are tested by tests/references.rs;
 //! - the caustic a point light throws through a glass ball onto a diffuse wall, which no camera
@@ -25,6 +30,8 @@ const SCENES: &[&str] = &[
     "envmap",
     "monitor-spectral",
     "ies-room",
+    "fog-spot",
+    "smoke-grid",
 ];
 
 /// Light paths per pixel. The judge's mean ratio tolerance (0.5%) is about five standard

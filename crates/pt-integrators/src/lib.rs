@@ -621,7 +621,6 @@ fn render_ptracer(
         }
     }
     let (scene, settings, build_time, mut state) = prepare(
-        "ptracer",
         job,
         path,
         run.resume,
@@ -823,14 +822,13 @@ fn render_sppm(
     run: Run,
 ) -> Result<Rendered, IntegratorError> {
     let (scene, settings, build_time, mut state) = prepare(
-        "sppm",
         job,
         path,
         run.resume,
         |s| s.light.is_none() && s.splat.is_none(),
         "the saved state is not a photon mapper's",
         sppm::new_state,
-        |_, _| sppm::check(params),
+        |scene, _| refuse_media("sppm", scene).and_then(|_| sppm::check(params)),
     )?;
     let pixels = u64::from(settings.width) * u64::from(settings.height);
     run.progress.start_samples(
@@ -866,6 +864,18 @@ fn render_sppm(
     })
 }
 
+/// The refusal of the light-side methods that do not trace participating media (all but
+/// `ptracer`).
+fn refuse_media(name: &str, scene: &Scene) -> Result<(), String> {
+    if scene.has_media() {
+        return Err(format!(
+            "{name} does not yet trace participating media (not yet implemented): the scene has {} medium(s); render it with volpath or ptracer",
+            scene.media.len()
+        ));
+    }
+    Ok(())
+}
+
 /// What every sampling method does before it samples: builds the scene and the render
 /// settings (the job's spp and seed, `path`), runs the method's `check`, and takes the saved
 /// state to continue (refused with `wrong` unless `accepts` it, or holding more samples than
@@ -873,7 +883,6 @@ fn render_sppm(
 #[allow(clippy::type_complexity)]
 #[allow(clippy::too_many_arguments)]
 fn prepare(
-    name: &str,
     job: &Job,
     path: &PathSettings,
     resume: Option<RenderState>,
@@ -893,12 +902,6 @@ fn prepare(
         share: job.share,
         ..RenderSettings::from_desc(desc)
     };
-    if scene.has_media() {
-        return Err(IntegratorError::Settings(format!(
-            "{name} does not yet trace participating media (not yet implemented): the scene has {} medium(s); render it with volpath",
-            scene.media.len()
-        )));
-    }
     check(&scene, &settings).map_err(IntegratorError::Settings)?;
     let state = match resume {
         Some(s) if accepts(&s) => s,
@@ -922,14 +925,13 @@ fn render_photonmapper(
     run: Run,
 ) -> Result<Rendered, IntegratorError> {
     let (scene, settings, build_time, mut state) = prepare(
-        "photonmapper",
         job,
         path,
         run.resume,
         |s| s.light.is_none() && s.splat.is_none(),
         "the saved state is not a photon mapper's",
         sppm::new_state,
-        |_, _| photonmap::check(params),
+        |scene, _| refuse_media("photonmapper", scene).and_then(|_| photonmap::check(params)),
     )?;
     let pixels = u64::from(settings.width) * u64::from(settings.height);
     run.progress.start_samples(
@@ -989,14 +991,15 @@ fn render_vcm(
 ) -> Result<Rendered, IntegratorError> {
     let name = params.name();
     let (scene, settings, build_time, mut state) = prepare(
-        params.name(),
         job,
         path,
         run.resume,
         |s| s.light.is_some(),
         "the saved state is not a bidirectional render's (a light film)",
         RenderState::for_light_paths,
-        |scene, settings| vcm::check(scene, settings, params),
+        |scene, settings| {
+            refuse_media(params.name(), scene).and_then(|_| vcm::check(scene, settings, params))
+        },
     )?;
     let pixels = u64::from(settings.width) * u64::from(settings.height);
     run.progress.start_samples(

@@ -295,6 +295,8 @@ fn trace_photons(
                             ));
                         }
                     },
+                    // Scenes with media are refused before this method runs.
+                    |_, _| {},
                 );
             }
             progress(end - first);

@@ -19,6 +19,16 @@
 //!    transport (Veach 1997, sec. 5.2; pbrt-v4's `TransportMode::Importance`). Vertices and
 //!    directions where the shading and geometric normals disagree are dropped (light leaks).
 //!
+//! *Participating media* (Mitsuba's `ptracer` has none; pt's follows its `volpath`): a light
+//! path in a medium takes a free flight ([`crate::volpath::free_flight`]: the same sampling
+//! and weights, media being reciprocal) and, where it scatters, is connected to the camera with
+//! `beta phase(w_cam, w_light) W` and continues in a direction the phase function samples; a
+//! path changes medium where it crosses a medium boundary, a pass straight through a surface
+//! (a null wall) is not a bounce, and every connection to the camera (surface and medium
+//! vertices, emitters and distant lights seen directly) carries the transmittance of the media
+//! and null surfaces between ([`crate::volpath::transmittance_to`]). A light path starts in the
+//! medium its first medium boundary says it is in ([`light_medium`]).
+//!
 //! Fluorescent surfaces (a pt extension) scatter light paths by the adjoint of the camera
 //! paths' rule (`pt_render::fluorescence`): light arriving at `li` is reflected at `li` or
 //! re-emitted at a longer wavelength drawn from the emission spectrum over wavelength, with
@@ -43,11 +53,13 @@
 //! splats with their neighbours and would understate it.
 
 use crate::path::PathSettings;
+use crate::volpath::{free_flight, transmittance_to};
 use pt_bsdf::{Bsdf, Lambert, SurfaceBsdf};
 use pt_math::{offset_ray_origin, Frame, Ray, Vec2, Vec3};
 use pt_render::film::light::LightFilm;
 use pt_render::geometry::Interaction;
-use pt_render::light::Light;
+use pt_render::light::{Light, LightSample};
+use pt_render::medium::Phase;
 use pt_render::sampler::{RandomSource, Sampler};
 use pt_render::Scene;
 use pt_spectrum::{spectrum_to_srgb, ColorMode, SampledSpectrum, SampledWavelengths};
@@ -138,13 +150,20 @@ fn trace_light_path<S: RandomSource>(
                 if let Some(cc) = camera.connect(pt.p, u_lens) {
                     let cos = pt.n.dot(cc.dir);
                     let le = a.emitted(pt.n, cc.dir, pt.uv, &lambda);
-                    if cos > 0.0
-                        && !le.is_black()
-                        && scene.segment_unoccluded(offset_ray_origin(pt.p, pt.n), cc.camera_point)
-                    {
+                    let origin = offset_ray_origin(pt.p, pt.n);
+                    if cos > 0.0 && !le.is_black() {
+                        let seen = if scene.has_media() {
+                            // Through media and null surfaces, from the medium around the light.
+                            let start = light_medium(scene, &Ray::new(origin, cc.dir));
+                            camera_transmittance(scene, origin, &cc, start, &lambda, sampler)
+                        } else if scene.segment_unoccluded(origin, cc.camera_point) {
+                            one
+                        } else {
+                            SampledSpectrum::ZERO
+                        };
                         push(
                             cc.film,
-                            le * (cos * cc.weight / (pt.pdf_area * pmf)),
+                            le * seen * (cos * cc.weight / (pt.pdf_area * pmf)),
                             &lambda,
                         );
                     }
@@ -165,14 +184,41 @@ fn trace_light_path<S: RandomSource>(
                 film - Vec2::new(x + 0.5, y + 0.5),
                 u_lens,
             );
-            if scene.intersect(&ray).is_none() {
+            // What reaches the camera from beyond the scene: all of it without media when no
+            // surface is in the way; with media, through them and through null surfaces.
+            let seen = if scene.has_media() {
+                let far = LightSample {
+                    p: ray.origin,
+                    n: Vec3::ZERO,
+                    wi: ray.dir,
+                    dist: f32::INFINITY,
+                    radiance: SampledSpectrum::ZERO,
+                    pdf: 1.0,
+                    delta: false,
+                };
+                transmittance_to(
+                    scene,
+                    ray.origin,
+                    &far,
+                    scene.camera_medium,
+                    &lambda,
+                    sampler,
+                )
+            } else if scene.intersect(&ray).is_none() {
+                one
+            } else {
+                SampledSpectrum::ZERO
+            };
+            if !seen.is_black() {
                 let le = crate::path::escaped_radiance(scene, ray.dir, &lambda, one, |_| 1.0);
-                push(film, le * inv_scale, &lambda);
+                push(film, le * seen * inv_scale, &lambda);
             }
         }
     }
 
-    // A ray from a light, and every surface it meets connected to the camera.
+    // A ray from a light, and every surface and medium point it meets connected to the camera
+    // (the medium points' splats kept apart while the walk holds `out`).
+    let mut in_media = Vec::new();
     walk_light_path::<_, false>(
         scene,
         s,
@@ -180,11 +226,25 @@ fn trace_light_path<S: RandomSource>(
         &lambda,
         AtFluorescence::Adjoint,
         |v, sampler| {
-            if let Some(seen) = seen_by_camera(scene, v, sampler.next_2d()) {
-                push(seen.connection.film, seen.contribution, &v.lambda);
+            if let Some(seen) = seen_by_camera(scene, v, sampler) {
+                out.push(Splat {
+                    film: seen.connection.film,
+                    rgb: to_rgb(scene, seen.contribution, &v.lambda),
+                    camera: false,
+                });
+            }
+        },
+        |v, sampler| {
+            if let Some((film, c)) = medium_seen_by_camera(scene, v, sampler) {
+                in_media.push(Splat {
+                    film,
+                    rgb: to_rgb(scene, c, &v.lambda),
+                    camera: false,
+                });
             }
         },
     );
+    out.append(&mut in_media);
 }
 
 /// A light path's vertex seen by the camera ([`seen_by_camera`]).
@@ -202,8 +262,12 @@ pub(crate) struct CameraSight {
 
 /// Connects a light path's vertex to the camera (`u_lens` picks a thin lens's point): `None`
 /// when the camera cannot see it, the BSDF sends nothing that way, or the segment is blocked.
-pub(crate) fn seen_by_camera(scene: &Scene, v: &LightVertex, u_lens: Vec2) -> Option<CameraSight> {
-    let cc = scene.camera.connect(v.hit.p, u_lens)?;
+pub(crate) fn seen_by_camera<S: RandomSource>(
+    scene: &Scene,
+    v: &LightVertex,
+    sampler: &mut S,
+) -> Option<CameraSight> {
+    let cc = scene.camera.connect(v.hit.p, sampler.next_2d())?;
     let wc = v.frame.to_local(cc.dir);
     let ng_cam = v.hit.ng.dot(cc.dir);
     if ng_cam * wc.z <= 0.0 {
@@ -215,15 +279,88 @@ pub(crate) fn seen_by_camera(scene: &Scene, v: &LightVertex, u_lens: Vec2) -> Op
     }
     let adjoint = v.wl.z.abs() * ng_cam.abs() / v.ng_light.abs();
     let origin = offset_ray_origin(v.hit.p, v.hit.ng * ng_cam.signum());
-    scene
-        .segment_unoccluded(origin, cc.camera_point)
-        .then(|| CameraSight {
-            contribution: v.beta * f * (adjoint * cc.weight),
-            connection: cc,
-            wc,
-            cos: ng_cam.abs(),
-        })
+    let contribution = v.beta * f * (adjoint * cc.weight);
+    let contribution = if scene.has_media() {
+        // Through media and null surfaces: starting in the medium on the camera's side.
+        let start = match scene.medium_boundary(v.hit.shape) {
+            Some((_, outside)) if ng_cam > 0.0 => outside,
+            Some((inside, _)) => inside,
+            None => v.medium,
+        };
+        contribution * camera_transmittance(scene, origin, &cc, start, &v.lambda, sampler)
+    } else if scene.segment_unoccluded(origin, cc.camera_point) {
+        contribution
+    } else {
+        SampledSpectrum::ZERO
+    };
+    (!contribution.is_black()).then_some(CameraSight {
+        contribution,
+        connection: cc,
+        wc,
+        cos: ng_cam.abs(),
+    })
 }
+
+/// The transmittance from `origin` (in `medium`) to the camera point of `cc`: media and the
+/// straight-through transmission of the surfaces between (the volumetric path tracer's shadow
+/// rays, [`transmittance_to`]).
+fn camera_transmittance<S: RandomSource>(
+    scene: &Scene,
+    origin: Vec3,
+    cc: &pt_render::camera::CameraConnection,
+    medium: Option<u32>,
+    lambda: &SampledWavelengths,
+    sampler: &mut S,
+) -> SampledSpectrum {
+    let target = LightSample {
+        p: cc.camera_point,
+        n: Vec3::ZERO,
+        wi: cc.dir,
+        dist: cc.dist,
+        radiance: SampledSpectrum::ZERO,
+        pdf: 1.0,
+        delta: true,
+    };
+    transmittance_to(scene, origin, &target, medium, lambda, sampler)
+}
+
+/// A medium vertex seen by the camera: its contribution `beta phase(w_cam, w_light) W T` and
+/// where it lands, or `None` when nothing arrives.
+fn medium_seen_by_camera<S: RandomSource>(
+    scene: &Scene,
+    v: &MediumVertex,
+    sampler: &mut S,
+) -> Option<(Vec2, SampledSpectrum)> {
+    let cc = scene.camera.connect(v.p, sampler.next_2d())?;
+    let phase = v.phase.eval(cc.dir, v.w_light);
+    if !(phase > 0.0) {
+        return None;
+    }
+    let tr = camera_transmittance(scene, v.p, &cc, v.medium, &v.lambda, sampler);
+    let c = v.beta * tr * (phase * cc.weight);
+    (!c.is_black()).then_some((cc.film, c))
+}
+
+/// The medium a light's ray starts in, found by the first medium boundary the ray meets: the
+/// shape's interior when it meets the boundary from inside, its exterior otherwise; vacuum if
+/// it meets none. For a scene whose media agree with its geometry this is the medium around the
+/// light (an area light's declared exterior included), and it is the volumetric path tracer's
+/// view of a light inside a medium (its shadow rays carry the receiver's media up to the light).
+fn light_medium(scene: &Scene, ray: &Ray) -> Option<u32> {
+    let mut ray = *ray;
+    for _ in 0..MAX_MEDIUM_PROBES {
+        let hit = scene.intersect(&ray)?;
+        let ng_dir = hit.ng.dot(ray.dir);
+        if let Some((inside, outside)) = scene.medium_boundary(hit.shape) {
+            return if ng_dir > 0.0 { inside } else { outside };
+        }
+        ray = Ray::new(offset_ray_origin(hit.p, hit.ng * ng_dir.signum()), ray.dir);
+    }
+    None
+}
+
+/// Most surfaces [`light_medium`] passes on its way to a medium boundary.
+const MAX_MEDIUM_PROBES: u32 = 64;
 
 /// A surface a light path meets (see [`walk_light_path`]).
 pub(crate) struct LightVertex<'a> {
@@ -249,6 +386,25 @@ pub(crate) struct LightVertex<'a> {
     pub depth: u32,
     /// How the path arrived here (what the bidirectional methods weigh strategies with).
     pub arrival: Arrival,
+    /// The medium the path arrived through (index into the scene's media; `None`: vacuum).
+    pub medium: Option<u32>,
+}
+
+/// A point inside a medium where a light path scatters (see [`walk_light_path`]; only the
+/// light tracer walks scenes with media).
+pub(crate) struct MediumVertex<'a> {
+    /// The point, world space.
+    pub p: Vec3,
+    /// Unit direction towards the previous vertex (the light's side), world space.
+    pub w_light: Vec3,
+    /// The medium's phase function.
+    pub phase: &'a Phase,
+    /// The medium (index into the scene's media).
+    pub medium: Option<u32>,
+    /// The path's weight arriving here, times the free flight's `sigma_s T / p`.
+    pub beta: SampledSpectrum,
+    /// The wavelengths of the path.
+    pub lambda: SampledWavelengths,
 }
 
 /// How a light path reached a vertex ([`LightVertex::arrival`]).
@@ -312,6 +468,7 @@ pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
     lambda: &SampledWavelengths,
     fluorescence: AtFluorescence,
     mut visit: impl FnMut(&LightVertex, &mut S),
+    mut visit_medium: impl FnMut(&MediumVertex, &mut S),
 ) {
     let Some((li, pmf, u_sel)) = scene.sample_light(sampler.next_1d()) else {
         return;
@@ -324,6 +481,16 @@ pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
     let mut beta = emitted.weight * (1.0 / pmf);
     let rr_norm = if BIDIR { 1.0 / beta.max_value() } else { 1.0 };
     let mut ray = emitted.ray;
+    // The medium the ray starts in (only the light tracer walks scenes with media).
+    let mut medium = if scene.has_media() {
+        light_medium(scene, &emitted.ray)
+    } else {
+        None
+    };
+    let channels = match scene.mode {
+        ColorMode::Spectral => 4,
+        ColorMode::Rgb => 3,
+    };
     let mut arrival = Arrival::Emitted {
         light: li,
         pmf,
@@ -336,9 +503,51 @@ pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
     } else {
         s.max_depth as u32
     };
+    let medium_walk = scene.has_media();
     let mut depth = 1u32;
     while depth < max_depth {
-        let Some(hit) = scene.intersect(&ray) else {
+        let hit = scene.intersect(&ray);
+        // The segment through the current medium: free flight, as the volumetric path tracer
+        // samples it (media are reciprocal: the same weights carry importance).
+        if let Some(m) = medium.map(|i| &scene.media[i as usize]) {
+            let t_surface = hit.as_ref().map_or(f32::INFINITY, |h| h.t);
+            let flight = free_flight(m, &ray, t_surface, &lambda, channels, sampler);
+            beta *= flight.weight;
+            if beta.is_black() || !beta.is_finite() {
+                return;
+            }
+            if let Some(t) = flight.scatter_at {
+                let p = ray.origin + ray.dir * t;
+                let w_light = -ray.dir;
+                visit_medium(
+                    &MediumVertex {
+                        p,
+                        w_light,
+                        phase: &m.phase,
+                        medium,
+                        beta,
+                        lambda,
+                    },
+                    sampler,
+                );
+                // Phase sampling is exact: the weight is 1.
+                let ps = m.phase.sample(w_light, sampler.next_2d());
+                if !(ps.pdf > 0.0) {
+                    return;
+                }
+                ray = Ray::new(p, ps.wi);
+                depth += 1;
+                if depth > s.rr_depth {
+                    let q = (beta.max_value() * rr_norm * eta * eta).min(0.95);
+                    if !(sampler.next_1d() < q) {
+                        return;
+                    }
+                    beta *= 1.0 / q;
+                }
+                continue;
+            }
+        }
+        let Some(hit) = hit else {
             return;
         };
         let mut bsdf = scene.bsdf(&hit, &lambda);
@@ -371,6 +580,7 @@ pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
                 lambda,
                 depth,
                 arrival,
+                medium,
             },
             sampler,
         );
@@ -402,6 +612,14 @@ pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
             return;
         }
         ray = Ray::new(offset_ray_origin(hit.p, hit.ng * ng_next.signum()), dir);
+        if let Some((inside, outside)) = scene.medium_boundary(hit.shape) {
+            medium = if ng_next > 0.0 { outside } else { inside };
+        }
+        // With media, a pass straight through a surface (a null wall) is not a bounce, as in
+        // the volumetric path tracer (Mitsuba's volpath).
+        if medium_walk && bs.is_pass_through(wl) {
+            continue;
+        }
         depth += 1;
         if depth > s.rr_depth {
             let q = (beta.max_value() * rr_norm * eta * eta).min(0.95);

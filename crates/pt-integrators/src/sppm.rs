@@ -357,6 +357,8 @@ pub fn render_sppm_passes(
                                     }
                                 });
                             },
+                            // Scenes with media are refused before this method runs.
+                            |_, _| {},
                         );
                     }
                     progress(((end - first) * pixels / photons) / 2);

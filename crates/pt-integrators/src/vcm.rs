@@ -492,7 +492,7 @@ fn light_subpath(
                 return;
             }
             // t = 1: the vertex seen by the camera.
-            if let Some(seen) = seen_by_camera(scene, v, sampler.next_2d()) {
+            if let Some(seen) = seen_by_camera(scene, v, sampler) {
                 let weight = camera_weight(
                     &mis_state,
                     seen.connection.weight * seen.cos * scale,
@@ -506,6 +506,8 @@ fn light_subpath(
                 });
             }
         },
+        // Scenes with media are refused before this method runs.
+        |_, _| {},
     );
 }
 

@@ -233,9 +233,11 @@ pub fn estimate<S: RandomSource>(
 
 /// What a segment through a medium did: the throughput factor, and where the path scatters
 /// (the ray parameter) if it does before `t_surface`.
-struct Flight {
-    weight: SampledSpectrum,
-    scatter_at: Option<f32>,
+pub(crate) struct Flight {
+    /// The throughput factor.
+    pub weight: SampledSpectrum,
+    /// The ray parameter of the scattering event, if there is one.
+    pub scatter_at: Option<f32>,
 }
 
 /// The mean of the first `channels` lanes.
@@ -253,7 +255,7 @@ fn mean(x: SampledSpectrum, channels: usize) -> f32 {
 /// (mean(sigma_s) + mean(sigma_n))` (weight `sigma_s / (mu P_s)`) or a null collision
 /// (weight `sigma_n / (mu (1 - P_s))`, `sigma_n = mu - sigma_t`), absorption left to the
 /// weights; every channel's expected value is the RTE's.
-fn free_flight<S: RandomSource>(
+pub(crate) fn free_flight<S: RandomSource>(
     m: &Medium,
     ray: &Ray,
     t_surface: f32,
@@ -411,7 +413,7 @@ fn nee_weight(s: &PathSettings, ls: &LightSample, pmf: f32, scatter_pdf: f32) ->
 /// off its surface, in `medium`): the product of the media's transmittances along the segment
 /// and of the straight-through transmission of each surface it crosses; 0 when an opaque
 /// surface blocks it.
-fn transmittance_to<S: RandomSource>(
+pub(crate) fn transmittance_to<S: RandomSource>(
     scene: &Scene,
     origin: Vec3,
     ls: &LightSample,
