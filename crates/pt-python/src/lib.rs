@@ -334,6 +334,11 @@ fn render<'py>(
     if let Some(e) = stopped {
         return Err(e);
     }
+    // A cancelled render comes with the Python error returned above; this guard keeps a
+    // partial image from ever being returned as a whole one.
+    if !rendered.complete {
+        return Err(PyKeyboardInterrupt::new_err("render cancelled"));
+    }
     if let Some(cb) = &progress {
         let (done, total, stage) = counters.report();
         cb.call1(py, (done.max(total), total, stage))?;
@@ -349,9 +354,6 @@ fn render<'py>(
             .map_err(|e| PyRuntimeError::new_err(e.to_string()))?
             .into_pyarray(py);
     let names = channels.iter().map(|(n, _)| n.clone()).collect();
-    if !rendered.complete {
-        return Err(PyKeyboardInterrupt::new_err("render cancelled"));
-    }
     Ok((
         image,
         variance,
