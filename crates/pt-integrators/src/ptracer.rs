@@ -537,12 +537,8 @@ pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
                 }
                 ray = Ray::new(p, ps.wi);
                 depth += 1;
-                if depth > s.rr_depth {
-                    let q = (beta.max_value() * rr_norm * eta * eta).min(0.95);
-                    if !(sampler.next_1d() < q) {
-                        return;
-                    }
-                    beta *= 1.0 / q;
+                if depth > s.rr_depth && !roulette(&mut beta, rr_norm * eta * eta, sampler) {
+                    return;
                 }
                 continue;
             }
@@ -621,14 +617,23 @@ pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
             continue;
         }
         depth += 1;
-        if depth > s.rr_depth {
-            let q = (beta.max_value() * rr_norm * eta * eta).min(0.95);
-            if !(sampler.next_1d() < q) {
-                return;
-            }
-            beta *= 1.0 / q;
+        if depth > s.rr_depth && !roulette(&mut beta, rr_norm * eta * eta, sampler) {
+            return;
         }
     }
+}
+
+/// Russian roulette on a light path: keeps it with probability q = min(max(beta) `scale`, 0.95)
+/// (`scale` holds eta^2 and, for the bidirectional walk, the emitted weight's normalisation),
+/// dividing `beta` by q; false when the path ends.
+#[inline]
+fn roulette<S: RandomSource>(beta: &mut SampledSpectrum, scale: f32, sampler: &mut S) -> bool {
+    let q = (beta.max_value() * scale).min(0.95);
+    if !(sampler.next_1d() < q) {
+        return false;
+    }
+    *beta *= 1.0 / q;
+    true
 }
 
 /// Continues `state` (whose `light` film the light tracer fills) up to `settings.spp`

@@ -261,7 +261,7 @@ pub fn envmap_table(width: usize, height: usize, values: Vec<f32>) -> IntensityT
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use pt_scene::ies::parse_ies;
     use rand::{RngExt, SeedableRng};
@@ -270,6 +270,21 @@ mod tests {
     /// A quadrant-symmetric file with uneven angles (5 and 22.5 degree steps, as real files
     /// have) and a light rotated away from the identity.
     const QUADRANT: &str = "IESNA:LM-63-2002\n[TEST] quadrant\nTILT=NONE\n1 -1 1.5 6 3 1 2 0 0 0\n1 1 30\n0 5 10 30 60 90\n0 22.5 90\n1000 980 900 500 100 0\n1000 950 800 400 80 10\n1000 900 700 300 50 20\n";
+
+    /// The integral of `f` over the unit sphere by the midpoint rule on an n x 2n grid in
+    /// (z, phi), equal-area cells.
+    pub(crate) fn over_sphere(n: usize, f: impl Fn(Vec3) -> f32) -> f64 {
+        let mut sum = 0.0f64;
+        for a in 0..n {
+            for b in 0..2 * n {
+                let z = 1.0 - 2.0 * (a as f32 + 0.5) / n as f32;
+                let phi = TAU * (b as f32 + 0.5) / (2 * n) as f32;
+                let s = (1.0 - z * z).sqrt();
+                sum += f64::from(f(Vec3::new(s * phi.cos(), s * phi.sin(), z)));
+            }
+        }
+        sum * 4.0 * std::f64::consts::PI / (2 * n * n) as f64
+    }
 
     fn rotation() -> Mat3 {
         Mat3::from_axis_angle(Vec3::new(1.0, 2.0, 0.5).normalize(), 0.7)
@@ -331,17 +346,7 @@ mod tests {
         };
         for cone in [None, Some(&cone)] {
             let p = IntensityProfile::new(&table, 1.0, rotation(), cone).unwrap();
-            let n = 400;
-            let mut sum = 0.0f64;
-            for a in 0..n {
-                for b in 0..2 * n {
-                    let z = 1.0 - 2.0 * (a as f32 + 0.5) / n as f32;
-                    let phi = TAU * (b as f32 + 0.5) / (2 * n) as f32;
-                    let s = (1.0 - z * z).sqrt();
-                    let d = Vec3::new(s * phi.cos(), s * phi.sin(), z);
-                    sum += f64::from(p.pdf(d)) * (4.0 * std::f64::consts::PI) / (2 * n * n) as f64;
-                }
-            }
+            let sum = over_sphere(400, |d| p.pdf(d));
             assert!((sum - 1.0).abs() < 5e-3, "integral of the pdf {sum}");
             let mut rng = Pcg64Mcg::seed_from_u64(7);
             for _ in 0..2000 {
@@ -364,17 +369,7 @@ mod tests {
         // E[I(d) / p(d)] is the integral of I over the sphere; against quadrature of eval().
         let table = parse_ies(QUADRANT).unwrap();
         let p = IntensityProfile::new(&table, 1.0, rotation(), None).unwrap();
-        let n = 600;
-        let mut quad = 0.0f64;
-        for a in 0..n {
-            for b in 0..2 * n {
-                let z = 1.0 - 2.0 * (a as f32 + 0.5) / n as f32;
-                let phi = TAU * (b as f32 + 0.5) / (2 * n) as f32;
-                let s = (1.0 - z * z).sqrt();
-                let d = Vec3::new(s * phi.cos(), s * phi.sin(), z);
-                quad += f64::from(p.eval(d)) * (4.0 * std::f64::consts::PI) / (2 * n * n) as f64;
-            }
-        }
+        let quad = over_sphere(600, |d| p.eval(d));
         let mut rng = Pcg64Mcg::seed_from_u64(11);
         let m = 200_000;
         let (mut s, mut s2) = (0.0f64, 0.0f64);

@@ -395,7 +395,6 @@ fn emitted_rays_carry_the_lights_power() {
 /// falloff): 2^16 rays, five standard errors (the weights vary: about 0.5% here).
 #[test]
 fn profiled_lights_emit_their_power_with_consistent_densities() {
-    use std::f32::consts::PI;
     let text = "IESNA:LM-63-2002\nTILT=NONE\n1 -1 1 5 3 1 2 0 0 0\n1 1 10\n0 20 40 60 90\n0 45 90\n100 90 60 20 0\n100 80 40 10 0\n100 70 30 5 0\n";
     let table = pt_scene::ies::parse_ies(text).unwrap();
     let rot = pt_math::Mat3::from_rotation_x(2.5);
@@ -432,21 +431,12 @@ fn profiled_lights_emit_their_power_with_consistent_densities() {
     for light in &lights {
         // The power by quadrature over the sphere of what sample() returns towards each
         // direction (the falloff included).
-        let n = 500;
-        let mut quad = 0.0f64;
-        for a in 0..n {
-            for b in 0..2 * n {
-                let z = 1.0 - 2.0 * (a as f32 + 0.5) / n as f32;
-                let phi = 2.0 * PI * (b as f32 + 0.5) / (2 * n) as f32;
-                let s = (1.0 - z * z).sqrt();
-                let d = Vec3::new(s * phi.cos(), s * phi.sin(), z);
-                let ls = light
-                    .sample(Vec3::ONE - d, 0.5, Vec2::ZERO, &lambda)
-                    .unwrap();
-                quad +=
-                    f64::from(ls.radiance.0.x) * 4.0 * std::f64::consts::PI / (2 * n * n) as f64;
-            }
-        }
+        let quad = super::profile::tests::over_sphere(500, |d| {
+            let ls = light
+                .sample(Vec3::ONE - d, 0.5, Vec2::ZERO, &lambda)
+                .unwrap();
+            ls.radiance.0.x
+        });
         let mut u = lcg(5);
         let m = 1 << 16;
         let (mut s1, mut s2) = (0.0f64, 0.0f64);
