@@ -125,7 +125,7 @@ impl<'e> Builder<'e> {
                     .string("filename")?
                     .ok_or_else(|| SceneError::at(&el.loc, "goniometric needs a filename (an .ies file or an equirectangular EXR image)"))?;
                 let scale = self.profile_scale(&v)?;
-                let path = self.profile_file(&v, "filename", &name)?;
+                let path = self.light_file(&v, "filename", "", &name)?;
                 let source = if is_ies(&name) {
                     ProfileSource::Ies(self.read_ies(&v, "filename", &name, &path)?)
                 } else {
@@ -222,16 +222,7 @@ impl<'e> Builder<'e> {
                 let name = v
                     .string("filename")?
                     .ok_or_else(|| SceneError::at(&el.loc, "envmap needs a filename"))?;
-                let path = resolve_file(&name, &v.el.dir, &[self.base_dir], self.search_paths);
-                if !path.is_file() {
-                    return Err(v.prop_error(
-                        "filename",
-                        format!(
-                            "cannot open environment map '{name}' (looked for {})",
-                            path.display()
-                        ),
-                    ));
-                }
+                let path = self.light_file(&v, "filename", "environment map ", &name)?;
                 let scale = v.float("scale")?.unwrap_or(1.0);
                 if scale < 0.0 {
                     return Err(v.prop_error("scale", "scale must not be negative"));
@@ -262,7 +253,7 @@ impl<'e> Builder<'e> {
             return Ok(None);
         };
         let scale = self.profile_scale(v)?;
-        let path = self.profile_file(v, "ies", &name)?;
+        let path = self.light_file(v, "ies", "", &name)?;
         let table = self.read_ies(v, "ies", &name, &path)?;
         Ok(Some(Box::new(IntensityProfile {
             source: ProfileSource::Ies(table),
@@ -280,13 +271,21 @@ impl<'e> Builder<'e> {
         Ok(scale)
     }
 
-    /// The file a profile parameter names, resolved as meshes are; an error if it is missing.
-    fn profile_file(&self, v: &ObjectView<'e>, prop: &str, name: &str) -> Result<PathBuf> {
+    /// The file a light's parameter `prop` names (an environment map, an IES file, a
+    /// goniometric image), resolved as meshes are; an error naming the property if it is
+    /// missing. `what` (with a trailing space, or empty) says what the file is in the message.
+    fn light_file(
+        &self,
+        v: &ObjectView<'e>,
+        prop: &str,
+        what: &str,
+        name: &str,
+    ) -> Result<PathBuf> {
         let path = resolve_file(name, &v.el.dir, &[self.base_dir], self.search_paths);
         if !path.is_file() {
             return Err(v.prop_error(
                 prop,
-                format!("cannot open '{name}' (looked for {})", path.display()),
+                format!("cannot open {what}'{name}' (looked for {})", path.display()),
             ));
         }
         Ok(path)
