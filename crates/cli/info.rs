@@ -130,6 +130,19 @@ fn describe_light(k: &pt_scene::LightKind) -> String {
             angular_diameter_deg,
         } => format!("sun towards {direction:.3}, irradiance {irradiance:?}, diameter {angular_diameter_deg} deg"),
         L::Constant { radiance } => format!("constant, radiance {radiance:?}"),
+        L::SunSky(s) => {
+            let sun = s.to_world * s.sun_local;
+            format!(
+                "sunsky, sun towards {sun:.3} ({:.2} deg above the horizon), turbidity {}, albedo {:?}, sun x{}, sky x{}, aperture {} deg{}",
+                s.sun_local.z.clamp(-1.0, 1.0).asin().to_degrees(),
+                s.turbidity,
+                s.albedo,
+                s.sun_scale,
+                s.sky_scale,
+                s.sun_aperture_deg,
+                if s.complex_sun { ", limb darkening" } else { "" }
+            )
+        }
         L::EnvMap {
             filename, scale, ..
         } => format!("envmap {}, scale {scale}", filename.display()),

@@ -168,6 +168,8 @@ pub fn d65_normalised(scene: &str) -> bool {
         }
         LightKind::Constant { radiance } => white(radiance),
         LightKind::EnvMap { .. } => true,
+        // Absolute spectral radiance per nm, not a D65 white.
+        LightKind::SunSky(_) => false,
     });
     shapes && lights
 }

@@ -136,6 +136,7 @@ pub fn build_light(
                 one_minus_cos,
             }
         }
+        LightKind::SunSky(s) => build_sunsky(s, mode).map_err(err)?,
         LightKind::Constant { radiance } => Light::Constant {
             radiance: emission(radiance),
         },
@@ -210,4 +211,40 @@ fn build_profile(
         }
     };
     IntensityProfile::new(&table, scale, p.to_world, cone).map_err(|e| e.to_string())
+}
+
+/// The sun and sky: the model in the scene's colour mode (spectral mode: the albedo at the
+/// model's 11 wavelengths; RGB mode: its RGB reflectance), an RGB model for the sampling
+/// densities, and a black light when the sun is below the horizon (the model is 0 there, as
+/// Mitsuba's, which warns).
+fn build_sunsky(s: &pt_scene::SunSkyDesc, mode: ColorMode) -> Result<Light, String> {
+    use crate::texture::{rgb_of, spectrum_for_role};
+    let params = pt_sky::SkyParams {
+        turbidity: s.turbidity,
+        sun_dir: s.sun_local,
+        sun_half_aperture: (0.5 * s.sun_aperture_deg).to_radians(),
+        complex_sun: s.complex_sun,
+        sun_scale: s.sun_scale,
+        sky_scale: s.sky_scale,
+    };
+    let albedo_rgb = rgb_of(&s.albedo, Role::Albedo);
+    let rgb = pt_sky::SkyModel::rgb(&params, albedo_rgb);
+    let model = match mode {
+        ColorMode::Rgb => rgb.clone(),
+        ColorMode::Spectral => {
+            let spectrum = spectrum_for_role(&s.albedo, Role::Albedo);
+            let albedo = std::array::from_fn(|c| {
+                spectrum.eval(
+                    pt_sky::tables::WAVELENGTH_MIN + pt_sky::tables::WAVELENGTH_STEP * c as f32,
+                )
+            });
+            pt_sky::SkyModel::spectral(&params, albedo)
+        }
+    };
+    Ok(match super::SunSky::new(model, &rgb, s.to_world) {
+        Some(light) => Light::SunSky(Box::new(light)),
+        None => Light::Constant {
+            radiance: crate::texture::ConstantSpectrum::Rgb(pt_spectrum::SampledSpectrum::ZERO),
+        },
+    })
 }

@@ -198,7 +198,8 @@ impl Light {
             Light::Directional { .. }
             | Light::Sun { .. }
             | Light::Constant { .. }
-            | Light::EnvMap(_) => {
+            | Light::EnvMap(_)
+            | Light::SunSky(_) => {
                 let ls = self.sample(bounds.0, u_sel, u_dir, lambda)?;
                 if !(ls.pdf > 0.0) {
                     return None;
@@ -253,7 +254,7 @@ impl Light {
             }
             Light::Projector(p) => (1.0, p.direction_pdf(dir)),
             Light::Directional { .. } => (disk, 1.0),
-            Light::Sun { .. } | Light::Constant { .. } | Light::EnvMap(_) => {
+            Light::Sun { .. } | Light::Constant { .. } | Light::EnvMap(_) | Light::SunSky(_) => {
                 (disk, self.escaped_pdf(-dir))
             }
         }

@@ -18,6 +18,7 @@ mod emit;
 mod envmap;
 mod profile;
 mod projected;
+mod sunsky;
 #[cfg(test)]
 mod tests;
 
@@ -30,6 +31,7 @@ pub use emit::{EmittedRay, LightPoint};
 pub use envmap::EnvMap;
 pub use profile::{envmap_table, IntensityProfile, ProfileError};
 pub use projected::{Projector, SpotTexture};
+pub use sunsky::SunSky;
 
 use crate::texture::ConstantSpectrum;
 use pt_math::warp::{square_to_uniform_cone, square_to_uniform_sphere, uniform_cone_pdf};
@@ -144,6 +146,8 @@ pub enum Light {
     },
     /// Environment map.
     EnvMap(EnvMap),
+    /// The Hosek-Wilkie sun and sky (Mitsuba `sunsky`).
+    SunSky(Box<SunSky>),
 }
 
 impl Light {
@@ -151,7 +155,7 @@ impl Light {
     pub fn is_infinite(&self) -> bool {
         matches!(
             self,
-            Light::Sun { .. } | Light::Constant { .. } | Light::EnvMap(_)
+            Light::Sun { .. } | Light::Constant { .. } | Light::EnvMap(_) | Light::SunSky(_)
         )
     }
 
@@ -188,6 +192,7 @@ impl Light {
             Light::Sun { irradiance, .. } => disk * irradiance.luminance(),
             Light::Constant { radiance } => 4.0 * PI * disk * radiance.luminance(),
             Light::EnvMap(e) => 4.0 * PI * disk * e.mean_luminance(),
+            Light::SunSky(s) => disk * s.luminance_integral(),
         };
         p.max(0.0)
     }
@@ -313,6 +318,18 @@ impl Light {
                     delta: false,
                 })
             }
+            Light::SunSky(s) => {
+                let (wi, radiance, pdf) = s.sample(u, lambda)?;
+                Some(LightSample {
+                    p: x,
+                    n: Vec3::ZERO,
+                    wi,
+                    dist: f32::INFINITY,
+                    radiance,
+                    pdf,
+                    delta: false,
+                })
+            }
             Light::EnvMap(e) => {
                 let (wi, radiance, pdf) = e.sample(u, lambda)?;
                 Some(LightSample {
@@ -348,6 +365,7 @@ impl Light {
             }
             Light::Constant { radiance } => radiance.at(lambda),
             Light::EnvMap(e) => e.radiance(dir, lambda),
+            Light::SunSky(s) => s.radiance(dir, lambda),
             _ => SampledSpectrum::ZERO,
         }
     }
@@ -365,6 +383,7 @@ impl Light {
             }
             Light::Constant { .. } => pt_math::warp::UNIFORM_SPHERE_PDF,
             Light::EnvMap(e) => e.pdf(dir),
+            Light::SunSky(s) => s.pdf(dir),
             _ => 0.0,
         }
     }

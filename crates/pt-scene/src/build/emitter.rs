@@ -218,6 +218,7 @@ impl<'e> Builder<'e> {
             "constant" => LightKind::Constant {
                 radiance: spectrum("radiance")?,
             },
+            "sunsky" => LightKind::SunSky(Box::new(super::sunsky::sunsky(&v, to_world)?)),
             "envmap" => {
                 let name = v
                     .string("filename")?
@@ -404,15 +405,24 @@ fn is_ies(name: &str) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("ies"))
 }
 
-/// The rotation of a profile's `to_world`: its linear part with the columns normalised, which
-/// must be orthogonal and of equal lengths (a rotation times a uniform scale), since a sheared
-/// or stretched profile has no agreed meaning.
+/// The rotation of a profile's `to_world`.
 fn profile_rotation(v: &ObjectView<'_>, to_world: &Mat4) -> Result<Mat3> {
+    rotation_of(v, to_world, "an intensity profile's to_world")
+}
+
+/// The rotation of a `to_world` that orients a direction-dependent light (an intensity
+/// profile, a sky; `what` names it in the error): its linear part with the columns normalised,
+/// which must be orthogonal and of equal lengths (a rotation times a uniform scale), since a
+/// sheared or stretched one has no agreed meaning.
+pub(super) fn rotation_of(v: &ObjectView<'_>, to_world: &Mat4, what: &str) -> Result<Mat3> {
     let m = Mat3::from_mat4(*to_world);
     let cols = [m.x_axis, m.y_axis, m.z_axis];
     let len = cols.map(|c| c.length());
     let bad = || {
-        v.prop_error("to_world", "an intensity profile's to_world must be a rotation (with at most a uniform scale) and a translation")
+        v.prop_error(
+            "to_world",
+            format!("{what} must be a rotation (with at most a uniform scale) and a translation"),
+        )
     };
     if !(len[0] > 0.0 && len[0].is_finite()) {
         return Err(bad());
@@ -428,7 +438,7 @@ fn profile_rotation(v: &ObjectView<'_>, to_world: &Mat4) -> Result<Mat3> {
     }
     let r = m * (1.0 / len[0]);
     if r.determinant() < 0.0 {
-        return Err(bad()); // a mirror image of the luminaire
+        return Err(bad()); // a mirror image
     }
     Ok(r)
 }

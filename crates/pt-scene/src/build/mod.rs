@@ -7,6 +7,7 @@ mod integrator;
 mod materials;
 mod sensor;
 mod shape;
+mod sunsky;
 mod texture;
 
 pub(crate) use bsdf::bsdf_from_properties;

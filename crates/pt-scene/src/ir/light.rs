@@ -97,6 +97,9 @@ pub enum LightKind {
         /// Full angular diameter of the disk, degrees (the Sun's mean is 0.5338).
         angular_diameter_deg: f32,
     },
+    /// The Hosek-Wilkie sun and sky (Mitsuba `sunsky`): sky radiance over the upper hemisphere
+    /// of its frame and the sun's disc in it (crate pt-sky).
+    SunSky(Box<SunSkyDesc>),
     /// Uniform radiance from every direction (Mitsuba `constant`).
     Constant {
         /// Radiance, W sr^-1 m^-2.
@@ -153,4 +156,27 @@ pub struct IntensityTable {
     /// Linear map from the light's local frame to the table's axes (x', y', z'), where
     /// theta = acos z' and phi = atan2(y', x'): orthogonal (identity for IES files).
     pub axes: Mat3,
+}
+
+/// Mitsuba's `sunsky`, resolved: the sun's direction is computed from the date and place when
+/// those were given.
+#[derive(Clone, Debug)]
+pub struct SunSkyDesc {
+    /// Unit direction towards the sun's centre in the sky's frame (z the zenith; with a date
+    /// and place, x points south and y west).
+    pub sun_local: Vec3,
+    /// Sky-to-world rotation (Mitsuba's `to_world`).
+    pub to_world: glam::Mat3,
+    /// Atmospheric turbidity, 1 to 10.
+    pub turbidity: f32,
+    /// Ground albedo, each channel or wavelength in [0, 1].
+    pub albedo: SpectrumDesc,
+    /// Factor on the sun's radiance.
+    pub sun_scale: f32,
+    /// Factor on the sky's radiance.
+    pub sky_scale: f32,
+    /// Full angular diameter of the sun's disc, degrees (Mitsuba's default 0.5358).
+    pub sun_aperture_deg: f32,
+    /// The 2013 solar radiance function with limb darkening instead of a uniform disc.
+    pub complex_sun: bool,
 }

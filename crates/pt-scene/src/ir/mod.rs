@@ -164,6 +164,7 @@ impl SceneDesc {
                 }
                 LightKind::Projector { irradiance, .. } => irradiance.spectra(),
                 LightKind::Constant { radiance } => vec![radiance],
+                LightKind::SunSky(s) => vec![&s.albedo],
                 LightKind::EnvMap { .. } => Vec::new(),
             };
             if let Some(s) = spectra.into_iter().find(|s| s.is_spectral()) {

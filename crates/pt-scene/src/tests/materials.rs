@@ -706,3 +706,115 @@ fn properties_given_in_code_read_like_xml() {
     let e = bsdf_from_properties("minnaert", &[f("k", 0.0)]).unwrap_err();
     assert_eq!(e.loc.unwrap().file, PathBuf::from("<properties>"));
 }
+
+/// `sunsky`: Mitsuba's defaults (turbidity 3, albedo 0.3, Tokyo on 10 July 2010 at 15:00,
+/// scales 1, aperture 0.5358, uniform disc); a date and place give the same sun as the
+/// direction they resolve to, in the sky's frame; `sun_direction` is in world space and
+/// `to_world` turns it into the sky's frame.
+#[test]
+fn sunsky_parameters_and_sun_position() {
+    let s = load(&scene(
+        r#"<emitter type="sunsky"/>
+<emitter type="sunsky">
+    <float name="latitude" value="47.37"/><float name="longitude" value="8.54"/>
+    <float name="timezone" value="2"/><integer name="year" value="2026"/>
+    <integer name="month" value="8"/><integer name="day" value="14"/>
+    <float name="hour" value="17"/><integer name="minute" value="30"/>
+    <transform name="to_world"><rotate x="1" angle="-90"/></transform>
+</emitter>
+<emitter type="sunsky">
+    <vector name="sun_direction" x="0" y="2" z="0"/><float name="turbidity" value="7.5"/>
+    <rgb name="albedo" value="0.1, 0.2, 0.3"/><float name="sun_scale" value="0"/>
+    <float name="sky_scale" value="2"/><float name="sun_aperture" value="2"/>
+    <boolean name="complex_sun" value="true"/>
+    <transform name="to_world"><rotate x="1" angle="-90"/></transform>
+</emitter>"#,
+    ))
+    .unwrap();
+    let get = |i: usize| match &s.lights[i].kind {
+        LightKind::SunSky(d) => d.clone(),
+        k => panic!("{k:?}"),
+    };
+    let d = get(0);
+    assert_eq!(
+        (
+            d.turbidity,
+            d.sun_scale,
+            d.sky_scale,
+            d.sun_aperture_deg,
+            d.complex_sun
+        ),
+        (3.0, 1.0, 1.0, 0.5358, false)
+    );
+    assert!(matches!(d.albedo, SpectrumDesc::Constant(a) if a == 0.3));
+    let tokyo = pt_sky::solar::sun_direction(
+        &pt_sky::solar::DateTime {
+            year: 2010,
+            month: 7,
+            day: 10,
+            hour: 15.0,
+            minute: 0.0,
+            second: 0.0,
+        },
+        &pt_sky::solar::Location {
+            latitude: 35.6894,
+            longitude: 139.6917,
+            timezone: 9.0,
+        },
+    );
+    assert!((d.sun_local - tokyo).length() < 1e-6, "{:?} vs {tokyo}", d.sun_local);
+    // Zurich: the sun's direction in the sky's frame (z up, x south, y west) does not depend
+    // on to_world; in the world, z became y.
+    let z = get(1);
+    assert!(
+        (z.sun_local.z.asin().to_degrees() - 30.67).abs() < 0.05,
+        "{:?}",
+        z.sun_local
+    );
+    let world = z.to_world * z.sun_local;
+    assert!(
+        (world - Vec3::new(0.1916, 0.5102, -0.8385)).length() < 1e-3,
+        "{world}"
+    );
+    // A world direction straight up is the sky's zenith once to_world turns z to y.
+    let u = get(2);
+    assert!((u.sun_local - Vec3::Z).length() < 1e-6, "{:?}", u.sun_local);
+    assert_eq!(
+        (
+            u.turbidity,
+            u.sun_scale,
+            u.sky_scale,
+            u.sun_aperture_deg,
+            u.complex_sun
+        ),
+        (7.5, 0.0, 2.0, 2.0, true)
+    );
+}
+
+/// Bad `sunsky` parameters are located errors (Mitsuba's checks: turbidity, albedo, scales,
+/// aperture, the sun given twice; and pt's: a to_world that is not a rotation, a month 13).
+#[test]
+fn sunsky_errors() {
+    for (body, line, what) in [
+        (r#"<emitter type="sunsky"><float name="turbidity" value="0.5"/></emitter>"#, 2, "turbidity must be in [1, 10]"),
+        (r#"<emitter type="sunsky"><float name="albedo" value="1.5"/></emitter>"#, 2, "albedo must be in [0, 1]"),
+        (r#"<emitter type="sunsky"><float name="sky_scale" value="-1"/></emitter>"#, 2, "sky_scale must not be negative"),
+        (r#"<emitter type="sunsky"><float name="sun_aperture" value="0"/></emitter>"#, 2, "sun_aperture must be in (0, 180)"),
+        (
+            "<emitter type=\"sunsky\">\n<vector name=\"sun_direction\" x=\"0\" y=\"0\" z=\"1\"/>\n<float name=\"hour\" value=\"12\"/></emitter>",
+            4,
+            "either sun_direction or a date and place",
+        ),
+        (r#"<emitter type="sunsky"><vector name="sun_direction" x="0" y="0" z="0"/></emitter>"#, 2, "must not be zero"),
+        (r#"<emitter type="sunsky"><integer name="month" value="13"/></emitter>"#, 2, "month must be in [1, 12]"),
+        (
+            "<emitter type=\"sunsky\">\n<transform name=\"to_world\"><scale value=\"1, 2, 1\"/></transform></emitter>",
+            3,
+            "must be a rotation",
+        ),
+    ] {
+        let e = fail(&scene(body));
+        assert!(e.to_string().contains(what), "{body}: {e}");
+        assert_eq!(e.loc.as_ref().map(|l| l.line), Some(line), "{body}: {e}");
+    }
+}
