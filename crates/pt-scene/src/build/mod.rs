@@ -47,8 +47,8 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
     ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "plastic", "roughplastic", "null", "fluorescent", "phosphorescent", "bumpmap", "principled", "principledthin", "pplastic", "polarizer"], &[
         "retarder", "circular", "measured", "hair",
     ]),
-    ("emitter", &["area", "point", "spot", "directional", "sun", "constant", "envmap", "projector", "goniometric"], &[
-        "directionalarea", "sunsky",
+    ("emitter", &["area", "point", "spot", "directional", "sun", "sunsky", "constant", "envmap", "projector", "goniometric"], &[
+        "directionalarea",
     ]),
     ("texture", &["bitmap", "checkerboard", "mesh_attribute", "rawconstant", "d65"], &["volume"]),
     ("medium", &["homogeneous", "heterogeneous"], &[]),
