@@ -314,7 +314,7 @@ fn unknown_plugin_is_an_error() {
 fn unsupported_plugins_say_not_yet_implemented() {
     let cases = [
         "<bsdf type=\"retarder\"/>",
-        "<emitter type=\"sunsky\"/>",
+        "<emitter type=\"directionalarea\"/>",
         "<sensor type=\"perspective\"><sampler type=\"orthogonal\"><integer name=\"strength\" value=\"3\"/></sampler></sensor>",
         "<sensor type=\"radiancemeter\"/>",
         "<shape type=\"ellipsoids\"/>",
