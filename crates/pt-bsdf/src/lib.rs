@@ -29,6 +29,7 @@ pub mod conductor;
 pub mod dielectric;
 pub mod fresnel;
 pub mod gltf_pbr;
+pub mod hair;
 pub mod lambert;
 pub mod mask;
 pub mod microfacet;
@@ -49,6 +50,7 @@ pub mod thin_film;
 pub use conductor::{Conductor, RoughConductor};
 pub use dielectric::Dielectric;
 pub use gltf_pbr::GltfPbr;
+pub use hair::Hair;
 pub use lambert::Lambert;
 pub use microfacet::{Distribution, Microfacet};
 pub use minnaert::Minnaert;
@@ -144,6 +146,8 @@ pub enum Bsdf {
     /// Mitsuba's `principledthin`: the thin-sheet principled BSDF (two-sided, light passes
     /// without bending).
     PrincipledThin(PrincipledThin),
+    /// Mitsuba's `hair`: Chiang et al. 2016's fibre model (fibre along local y).
+    Hair(Hair),
 }
 
 impl Bsdf {
@@ -166,6 +170,7 @@ impl Bsdf {
             Bsdf::RoughThinFilm(m) => m.eval(wo, wi),
             Bsdf::Principled(m) => m.eval(wo, wi),
             Bsdf::PrincipledThin(m) => m.eval(wo, wi),
+            Bsdf::Hair(m) => m.eval(wo, wi),
             Bsdf::PPlastic(m) => m.eval(wo, wi),
             Bsdf::Polarizer(m) => m.eval(wo, wi),
         }
@@ -190,6 +195,7 @@ impl Bsdf {
             Bsdf::RoughThinFilm(m) => m.pdf(wo, wi),
             Bsdf::Principled(m) => m.pdf(wo, wi),
             Bsdf::PrincipledThin(m) => m.pdf(wo, wi),
+            Bsdf::Hair(m) => m.pdf(wo, wi),
             Bsdf::PPlastic(m) => m.pdf(wo, wi),
             Bsdf::Polarizer(m) => m.pdf(wo, wi),
         }
@@ -214,6 +220,7 @@ impl Bsdf {
             Bsdf::RoughThinFilm(m) => m.sample(wo, u_lobe, u),
             Bsdf::Principled(m) => m.sample(wo, u_lobe, u),
             Bsdf::PrincipledThin(m) => m.sample(wo, u_lobe, u),
+            Bsdf::Hair(m) => m.sample(wo, u_lobe, u),
             Bsdf::PPlastic(m) => m.sample(wo, u_lobe, u),
             Bsdf::Polarizer(m) => m.sample(wo, u),
         }
@@ -227,7 +234,7 @@ impl Bsdf {
             Bsdf::ThinFilm(m) => m.is_transmissive(),
             Bsdf::RoughThinFilm(m) => m.film.is_transmissive(),
             Bsdf::Principled(m) => m.transmissive,
-            Bsdf::PrincipledThin(_) | Bsdf::Polarizer(_) => true,
+            Bsdf::PrincipledThin(_) | Bsdf::Polarizer(_) | Bsdf::Hair(_) => true,
             _ => false,
         }
     }
@@ -247,7 +254,8 @@ impl Bsdf {
             | Bsdf::RoughThinFilm(_)
             | Bsdf::Principled(_)
             | Bsdf::PrincipledThin(_)
-            | Bsdf::PPlastic(_) => true,
+            | Bsdf::PPlastic(_)
+            | Bsdf::Hair(_) => true,
             Bsdf::Conductor(_)
             | Bsdf::Dielectric(_)
             | Bsdf::ThinDielectric(_)

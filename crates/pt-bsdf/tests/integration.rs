@@ -11,6 +11,7 @@ mod common;
 mod blend;
 mod diffuse;
 mod gltf_pbr;
+mod hair;
 mod normal_map;
 mod plastic;
 mod pplastic;

@@ -150,6 +150,21 @@ pub const MODELS: &[ModelInfo] = &[
         params: &["transmittance", "theta", "polarizing"],
     },
     ModelInfo {
+        name: "hair",
+        params: &[
+            "eumelanin",
+            "pheomelanin",
+            "sigma_a",
+            "scale",
+            "reflectance",
+            "int_ior",
+            "ext_ior",
+            "longitudinal_roughness",
+            "azimuthal_roughness",
+            "scale_tilt",
+        ],
+    },
+    ModelInfo {
         name: "thinfilm",
         params: &[
             "thickness",

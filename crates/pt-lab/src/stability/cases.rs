@@ -95,6 +95,7 @@ pub fn cases() -> Vec<Case> {
     principled(&mut g);
     principled_thin(&mut g);
     pplastic(&mut g);
+    hair(&mut g);
     // Every variant of `Bsdf` must be in the sweep: this match stops compiling when one is added.
     for c in &g.0 {
         match c.bsdf {
@@ -114,7 +115,8 @@ pub fn cases() -> Vec<Case> {
             | Bsdf::Principled(_)
             | Bsdf::PrincipledThin(_)
             | Bsdf::PPlastic(_)
-            | Bsdf::Polarizer(_) => {}
+            | Bsdf::Polarizer(_)
+            | Bsdf::Hair(_) => {}
         }
     }
     g.0
@@ -449,6 +451,30 @@ fn pplastic(g: &mut Grid) {
             0.5,
             Source::Scene(spec),
         );
+    }
+}
+
+/// Hair without absorption (a white furnace: every path leaves the fibre, albedo 1) over its
+/// roughness range [0, 1] (0 is clamped to the narrowest lobes the model holds), with the
+/// default and a steep scale tilt.
+fn hair(g: &mut Grid) {
+    for bm in [0.0f32, 0.05, 0.3, 1.0] {
+        for (bn, tilt) in [(0.0f32, 2.0f32), (0.3, 2.0), (1.0, 20.0)] {
+            let spec = BsdfSpec::new("hair")
+                .with("sigma_a", 0.0)
+                .with("longitudinal_roughness", bm)
+                .with("azimuthal_roughness", bn)
+                .with("scale_tilt", tilt);
+            g.push(
+                "hair",
+                "longitudinal_roughness",
+                bm,
+                format!("b_n={bn} tilt={tilt}"),
+                true,
+                1.0,
+                Source::Scene(spec),
+            );
+        }
     }
 }
 

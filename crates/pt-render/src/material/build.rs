@@ -384,6 +384,41 @@ impl Builder<'_> {
             BsdfKind::Polarizer { transmittance } => Material::Polarizer {
                 transmittance: self.tex("transmittance", transmittance, Role::Albedo)?,
             },
+            BsdfKind::Hair {
+                absorption,
+                eta,
+                longitudinal_roughness,
+                azimuthal_roughness,
+                scale_tilt_deg,
+            } => {
+                use pt_scene::HairAbsorption as A;
+                // Pigments: their RGB absorptions summed, then (spectral mode) upsampled as one
+                // unbounded colour; Mitsuba upsamples each pigment's and adds the two.
+                let (absorption, from_reflectance, scale) = match absorption {
+                    A::Pigments {
+                        eumelanin,
+                        pheomelanin,
+                    } => {
+                        let rgb = pt_bsdf::Hair::pigment_sigma_a_rgb(*eumelanin, *pheomelanin);
+                        let t = TextureDesc::Constant(pt_scene::SpectrumDesc::Rgb(rgb));
+                        (self.tex("eumelanin", &t, Role::Unbounded)?, false, 1.0)
+                    }
+                    A::SigmaA { sigma_a, scale } => (
+                        self.tex("sigma_a", sigma_a, Role::Unbounded)?,
+                        false,
+                        *scale,
+                    ),
+                    A::Reflectance(r) => (self.tex("reflectance", r, Role::Albedo)?, true, 1.0),
+                };
+                Material::Hair {
+                    absorption,
+                    from_reflectance,
+                    scale,
+                    eta: *eta,
+                    roughness: [*longitudinal_roughness, *azimuthal_roughness],
+                    scale_tilt_deg: *scale_tilt_deg,
+                }
+            }
             BsdfKind::RoughPlastic { .. } => self.rough_plastic(&d.kind)?,
             BsdfKind::ThinFilm {
                 thickness,

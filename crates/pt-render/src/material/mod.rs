@@ -16,7 +16,7 @@ use crate::fluorescence::Fluorescent;
 use crate::geometry::Interaction;
 use crate::texture::{Texture, TexturePoint};
 use pt_bsdf::{
-    Bsdf, CoatingTable, Conductor, Dielectric, Distribution, FilmBase, GltfPbr, Lambert,
+    Bsdf, CoatingTable, Conductor, Dielectric, Distribution, FilmBase, GltfPbr, Hair, Lambert,
     Microfacet, Minnaert, OrenNayar, OrenNayarVariant, PPlastic, Plastic, Polarizer, Principled,
     PrincipledThin, RoughConductor, RoughDielectric, RoughPlastic, RoughThinFilm, SurfaceBsdf,
     ThinDielectric, ThinFilm,
@@ -204,6 +204,22 @@ pub enum Material {
     Polarizer {
         /// Transmittance besides the polarizer's one half.
         transmittance: Texture,
+    },
+    /// Mitsuba `hair` (pt-bsdf `hair.rs`).
+    Hair {
+        /// Absorption per unit fibre radius, or with `from_reflectance` the fibres' colour.
+        absorption: Texture,
+        /// Whether `absorption` holds a colour to turn into an absorption (Chiang et al. 2016,
+        /// eq. 9).
+        from_reflectance: bool,
+        /// Factor on the absorption (Mitsuba's `scale`).
+        scale: f32,
+        /// Relative index, fibre over outside.
+        eta: f32,
+        /// Longitudinal and azimuthal roughness.
+        roughness: [f32; 2],
+        /// Cuticle scale angle, degrees.
+        scale_tilt_deg: f32,
     },
     /// Mitsuba `roughplastic`.
     RoughPlastic {
@@ -445,6 +461,35 @@ impl Material {
             Material::Polarizer { transmittance } => Bsdf::Polarizer(Polarizer {
                 transmittance: transmittance.eval(at, lambda),
             }),
+            Material::Hair {
+                absorption,
+                from_reflectance,
+                scale,
+                eta,
+                roughness,
+                scale_tilt_deg,
+            } => {
+                let a = absorption.eval(at, lambda);
+                let sigma_a = if *from_reflectance {
+                    Hair::sigma_a_from_reflectance(a, roughness[1])
+                } else {
+                    a * *scale
+                };
+                let luminance = match mode {
+                    ColorMode::Rgb => pt_math::Vec4::new(0.212_671, 0.715_160, 0.072_169, 0.0),
+                    ColorMode::Spectral => pt_math::Vec4::from_array(
+                        lambda.lambda().to_array().map(pt_spectrum::cie::cmf_y),
+                    ),
+                };
+                Bsdf::Hair(Hair::new(
+                    sigma_a,
+                    luminance,
+                    *eta,
+                    roughness[0],
+                    roughness[1],
+                    *scale_tilt_deg,
+                ))
+            }
             Material::Plastic {
                 diffuse_reflectance,
                 specular_reflectance,
@@ -747,6 +792,7 @@ impl Material {
                 &roughness.alpha_v,
             ],
             Material::Polarizer { transmittance } => vec![transmittance],
+            Material::Hair { absorption, .. } => vec![absorption],
             Material::ThinFilm(f) => film(f),
             Material::RoughThinFilm(b) => {
                 let mut v = film(&b.0);

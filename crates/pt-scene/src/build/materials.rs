@@ -171,6 +171,91 @@ impl<'e> Builder<'e> {
         Ok((int_ior, ext_ior, sr, st))
     }
 
+    /// `hair` (Mitsuba 3.9.1's parameters and checks): `eumelanin` 1.3 and `pheomelanin` 0.2,
+    /// or `sigma_a` (times `scale`, 1), or pt's `reflectance` (pbrt-v4's), only one of the
+    /// three; `int_ior` 1.55 (amber), `ext_ior` 1.000277, different and positive;
+    /// `longitudinal_roughness` and `azimuthal_roughness` 0.3 in [0, 1]; `scale_tilt` 2 degrees.
+    fn hair(&mut self, v: &ObjectView<'e>, n: &Nested<'e>) -> Result<BsdfKind> {
+        let roughness = |name: &str| -> Result<f32> {
+            let x = v.float(name)?.unwrap_or(0.3);
+            if !(0.0..=1.0).contains(&x) {
+                return Err(v.prop_error(name, format!("{name} must be in [0, 1]")));
+            }
+            Ok(x)
+        };
+        let longitudinal_roughness = roughness("longitudinal_roughness")?;
+        let azimuthal_roughness = roughness("azimuthal_roughness")?;
+        let scale_tilt_deg = v.float("scale_tilt")?.unwrap_or(2.0);
+        if !(scale_tilt_deg.abs() < 90.0) {
+            return Err(v.prop_error("scale_tilt", "scale_tilt must be in (-90, 90) degrees"));
+        }
+        let int_ior = ior(v, "int_ior", 1.55)?;
+        let ext_ior = ior(v, "ext_ior", 1.000277)?;
+        if int_ior == ext_ior {
+            return Err(v.prop_error(
+                "int_ior",
+                "the interior and exterior indices of refraction must differ",
+            ));
+        }
+        let pigments = v.has("eumelanin") || v.has("pheomelanin");
+        let sigma_a = self.texture_param(v, n, "sigma_a")?;
+        let reflectance = self.texture_param(v, n, "reflectance")?;
+        let given = [pigments, sigma_a.is_some(), reflectance.is_some()];
+        if given.iter().filter(|g| **g).count() > 1 {
+            let name = if reflectance.is_some() {
+                "reflectance"
+            } else {
+                "sigma_a"
+            };
+            return Err(v.prop_error(
+                name,
+                "give one of the pigments (eumelanin, pheomelanin), sigma_a or reflectance, not several",
+            ));
+        }
+        let absorption = match (sigma_a, reflectance) {
+            (Some(sigma_a), _) => {
+                for s in sigma_a.spectra() {
+                    if s.values().iter().any(|x| !(*x >= 0.0)) {
+                        return Err(v.prop_error("sigma_a", "sigma_a must not be negative"));
+                    }
+                }
+                let scale = v.float("scale")?.unwrap_or(1.0);
+                if !(scale >= 0.0) {
+                    return Err(v.prop_error("scale", "scale must not be negative"));
+                }
+                HairAbsorption::SigmaA { sigma_a, scale }
+            }
+            (None, Some(r)) => {
+                for s in r.spectra() {
+                    if s.values().iter().any(|x| !(*x > 0.0 && *x <= 1.0)) {
+                        return Err(v.prop_error("reflectance", "reflectance must be in (0, 1]"));
+                    }
+                }
+                HairAbsorption::Reflectance(r)
+            }
+            (None, None) => {
+                let conc = |name: &str, default: f32| -> Result<f32> {
+                    let x = v.float(name)?.unwrap_or(default);
+                    if !(x >= 0.0) {
+                        return Err(v.prop_error(name, format!("{name} must not be negative")));
+                    }
+                    Ok(x)
+                };
+                HairAbsorption::Pigments {
+                    eumelanin: conc("eumelanin", 1.3)?,
+                    pheomelanin: conc("pheomelanin", 0.2)?,
+                }
+            }
+        };
+        Ok(BsdfKind::Hair {
+            absorption,
+            eta: int_ior / ext_ior,
+            longitudinal_roughness,
+            azimuthal_roughness,
+            scale_tilt_deg,
+        })
+    }
+
     /// `thinfilm` and `roughthinfilm`: `thickness` (nm, 500), `film_ior` (1.33), `ext_ior` (1),
     /// and `int_ior` (a dielectric base) or `material` / `eta` + `k` (a conductor base).
     fn thin_film(&mut self, v: &ObjectView<'e>, n: &Nested<'e>) -> Result<BsdfKind> {
@@ -406,6 +491,7 @@ pub(super) fn bsdf_kind<'e>(
                 transmittance: b.factor(v, n, "transmittance")?,
             }
         }
+        "hair" => b.hair(v, n)?,
         "fluorescent" => {
             let (reflectance, absorption, emission, quantum_yield) = luminescent(v)?;
             BsdfKind::Fluorescent {

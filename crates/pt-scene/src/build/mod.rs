@@ -44,8 +44,8 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "bsplinecurve", "linearcurve",
         "ellipsoids", "ellipsoidsmesh",
     ]),
-    ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "plastic", "roughplastic", "null", "fluorescent", "phosphorescent", "bumpmap", "principled", "principledthin", "pplastic", "polarizer"], &[
-        "retarder", "circular", "measured", "hair",
+    ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "plastic", "roughplastic", "null", "fluorescent", "phosphorescent", "bumpmap", "principled", "principledthin", "pplastic", "polarizer", "hair"], &[
+        "retarder", "circular", "measured",
     ]),
     ("emitter", &["area", "point", "spot", "directional", "sun", "sunsky", "constant", "envmap", "projector", "goniometric"], &[
         "directionalarea",

@@ -253,6 +253,20 @@ pub enum BsdfKind {
         /// Transmittance besides the polarizer's one half.
         transmittance: TextureDesc,
     },
+    /// Mitsuba's `hair`: Chiang et al. 2016's fibre model (pt-bsdf `hair.rs`), the fibre along
+    /// the local frame's second tangent (`n x dp/du`).
+    Hair {
+        /// Where the absorption comes from.
+        absorption: HairAbsorption,
+        /// Relative index of refraction, fibre over outside.
+        eta: f32,
+        /// Longitudinal roughness b_m in [0, 1].
+        longitudinal_roughness: f32,
+        /// Azimuthal roughness b_n in [0, 1].
+        azimuthal_roughness: f32,
+        /// Angle of the cuticle scales, degrees.
+        scale_tilt_deg: f32,
+    },
     /// Rough plastic: rough dielectric coating over a diffuse base (Mitsuba `roughplastic`).
     RoughPlastic {
         /// Albedo of the diffuse base.
@@ -492,6 +506,11 @@ impl BsdfKind {
                 ("alpha_v", &microfacet.alpha_v),
             ],
             BsdfKind::Polarizer { transmittance } => vec![("transmittance", transmittance)],
+            BsdfKind::Hair { absorption, .. } => match absorption {
+                HairAbsorption::Pigments { .. } => Vec::new(),
+                HairAbsorption::SigmaA { sigma_a, .. } => vec![("sigma_a", sigma_a)],
+                HairAbsorption::Reflectance(r) => vec![("reflectance", r)],
+            },
             BsdfKind::Fluorescent { .. } | BsdfKind::Phosphorescent { .. } => Vec::new(),
             BsdfKind::GltfPbr {
                 base_color,
@@ -533,4 +552,27 @@ fn film_base_textures(b: &FilmBaseDesc) -> Vec<(&'static str, &TextureDesc)> {
         FilmBaseDesc::Dielectric { .. } => Vec::new(),
         FilmBaseDesc::Conductor { eta, k } => vec![("eta", eta), ("k", k)],
     }
+}
+
+/// The absorption inside a hair fibre (per unit fibre radius).
+#[derive(Clone, Debug, PartialEq)]
+pub enum HairAbsorption {
+    /// Pigment concentrations (Mitsuba's default: eumelanin 1.3, pheomelanin 0.2), with the
+    /// absorption spectra of d'Eon et al. 2011.
+    Pigments {
+        /// Eumelanin concentration.
+        eumelanin: f32,
+        /// Pheomelanin concentration.
+        pheomelanin: f32,
+    },
+    /// An absorption coefficient `sigma_a` times `scale` (Mitsuba).
+    SigmaA {
+        /// Absorption coefficient.
+        sigma_a: TextureDesc,
+        /// Factor on it.
+        scale: f32,
+    },
+    /// The colour the fibres should have, turned into an absorption by Chiang et al. 2016's
+    /// eq. 9 (pbrt-v4's `reflectance`; pt extension).
+    Reflectance(TextureDesc),
 }

@@ -762,7 +762,11 @@ fn sunsky_parameters_and_sun_position() {
             timezone: 9.0,
         },
     );
-    assert!((d.sun_local - tokyo).length() < 1e-6, "{:?} vs {tokyo}", d.sun_local);
+    assert!(
+        (d.sun_local - tokyo).length() < 1e-6,
+        "{:?} vs {tokyo}",
+        d.sun_local
+    );
     // Zurich: the sun's direction in the sky's frame (z up, x south, y west) does not depend
     // on to_world; in the world, z became y.
     let z = get(1);
