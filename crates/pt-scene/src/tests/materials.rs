@@ -822,3 +822,68 @@ fn sunsky_errors() {
         assert_eq!(e.loc.as_ref().map(|l| l.line), Some(line), "{body}: {e}");
     }
 }
+
+/// `hair`: Mitsuba's defaults (pigments 1.3 and 0.2, amber in air, roughness 0.3, tilt 2),
+/// `sigma_a` with `scale`, pt's `reflectance`; and its errors: two absorptions at once,
+/// roughness outside [0, 1], equal indices.
+#[test]
+fn hair_parameters_and_errors() {
+    let s = load(&scene(
+        r#"<shape type="sphere"><bsdf type="hair"/></shape>
+<shape type="sphere"><bsdf type="hair"><rgb name="sigma_a" value="0.2, 0.3, 0.4"/><float name="scale" value="3"/>
+    <float name="longitudinal_roughness" value="0.1"/><float name="scale_tilt" value="-3"/></bsdf></shape>
+<shape type="sphere"><bsdf type="hair"><rgb name="reflectance" value="0.6, 0.4, 0.2"/><string name="int_ior" value="water"/></bsdf></shape>"#,
+    ))
+    .unwrap();
+    let kind = |i: usize| &s.bsdfs[s.shapes[i].bsdf].kind;
+    let BsdfKind::Hair {
+        absorption,
+        eta,
+        longitudinal_roughness,
+        azimuthal_roughness,
+        scale_tilt_deg,
+    } = kind(0).clone()
+    else {
+        panic!("{:?}", kind(0))
+    };
+    assert_eq!(
+        absorption,
+        HairAbsorption::Pigments {
+            eumelanin: 1.3,
+            pheomelanin: 0.2
+        }
+    );
+    assert!((eta - 1.55 / 1.000277).abs() < 1e-6);
+    assert_eq!(
+        (longitudinal_roughness, azimuthal_roughness, scale_tilt_deg),
+        (0.3, 0.3, 2.0)
+    );
+    assert!(
+        matches!(kind(1), BsdfKind::Hair { absorption: HairAbsorption::SigmaA { scale, .. }, longitudinal_roughness, scale_tilt_deg, .. } if *scale == 3.0 && *longitudinal_roughness == 0.1 && *scale_tilt_deg == -3.0)
+    );
+    assert!(
+        matches!(kind(2), BsdfKind::Hair { absorption: HairAbsorption::Reflectance(_), eta, .. } if (*eta - 1.333 / 1.000277).abs() < 1e-3)
+    );
+    for (body, what) in [
+        (
+            r#"<shape type="sphere"><bsdf type="hair"><float name="eumelanin" value="1"/><rgb name="sigma_a" value="1, 1, 1"/></bsdf></shape>"#,
+            "not several",
+        ),
+        (
+            r#"<shape type="sphere"><bsdf type="hair"><float name="azimuthal_roughness" value="1.5"/></bsdf></shape>"#,
+            "azimuthal_roughness must be in [0, 1]",
+        ),
+        (
+            r#"<shape type="sphere"><bsdf type="hair"><float name="int_ior" value="1.3"/><float name="ext_ior" value="1.3"/></bsdf></shape>"#,
+            "must differ",
+        ),
+        (
+            r#"<shape type="sphere"><bsdf type="hair"><float name="pheomelanin" value="-1"/></bsdf></shape>"#,
+            "must not be negative",
+        ),
+    ] {
+        let e = fail(&scene(body));
+        assert!(e.to_string().contains(what), "{body}: {e}");
+        assert_eq!(e.loc.as_ref().map(|l| l.line), Some(2), "{body}: {e}");
+    }
+}
