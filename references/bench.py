@@ -70,6 +70,10 @@ SUITE = [
      "volpath: chromatic hg fog behind null walls, spot light shafts, sky"),
     ("smoke-grid", "scenes/smoke-grid.xml", 256, {},
      "volpath: 40^3 gridvolume smoke, delta and ratio tracking, sun and sky"),
+    ("sunsky", "scenes/sunsky.xml", 512, {}, "Hosek-Wilkie sun and sky, gold sphere, checkerboard ground"),
+    ("sunsky-spectral", "scenes/sunsky-spectral.xml", 256, {},
+     "spectral sun and sky, limb-darkened sun, measured albedo"),
+    ("hair-fibres", "scenes/hair-fibres.xml", 256, {}, "hair BSDF on 24 cylinder fibres, area light"),
 ]
 
 SEEDS = (1, 2)

@@ -61,6 +61,21 @@ pub struct LightSample {
     pub delta: bool,
 }
 
+/// A light sample from infinitely far away (an environment): `(direction towards it, radiance,
+/// solid-angle pdf)` as seen from `x`.
+#[inline]
+fn from_infinity(x: Vec3, (wi, radiance, pdf): (Vec3, SampledSpectrum, f32)) -> LightSample {
+    LightSample {
+        p: x,
+        n: Vec3::ZERO,
+        wi,
+        dist: f32::INFINITY,
+        radiance,
+        pdf,
+        delta: false,
+    }
+}
+
 /// Spot light falloff: 1 inside `beam_width`, 0 beyond `cutoff`, linear in angle between
 /// (Mitsuba 3 `spot`).
 #[derive(Clone, Copy, Debug)]
@@ -318,30 +333,8 @@ impl Light {
                     delta: false,
                 })
             }
-            Light::SunSky(s) => {
-                let (wi, radiance, pdf) = s.sample(u, lambda)?;
-                Some(LightSample {
-                    p: x,
-                    n: Vec3::ZERO,
-                    wi,
-                    dist: f32::INFINITY,
-                    radiance,
-                    pdf,
-                    delta: false,
-                })
-            }
-            Light::EnvMap(e) => {
-                let (wi, radiance, pdf) = e.sample(u, lambda)?;
-                Some(LightSample {
-                    p: x,
-                    n: Vec3::ZERO,
-                    wi,
-                    dist: f32::INFINITY,
-                    radiance,
-                    pdf,
-                    delta: false,
-                })
-            }
+            Light::SunSky(s) => s.sample(u, lambda).map(|d| from_infinity(x, d)),
+            Light::EnvMap(e) => e.sample(u, lambda).map(|d| from_infinity(x, d)),
         }
     }
 
