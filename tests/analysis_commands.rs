@@ -61,7 +61,7 @@ fn lobes_refuses_bad_input_with_exit_code_2_and_writes_nothing() {
     let dir = scratch("analysis_lobes_bad");
     let out = dir.join("x.svg");
     for (args, message) in [
-        (vec!["hair"], "unknown model 'hair'"),
+        (vec!["velvet"], "unknown model 'velvet'"),
         (
             vec!["orennayar foo=1"],
             "orennayar: unknown parameter 'foo' (parameters: reflectance, sigma, variant)",
@@ -117,8 +117,8 @@ fn stability_writes_the_csv_report_and_charts() {
     assert!(o.status.success(), "{}", stderr(&o));
     let csv = std::fs::read_to_string(dir.join("stability.csv")).unwrap();
     assert!(csv.starts_with("family,param_name,param,detail,in_range,energy_bound,theta_deg,side,"));
-    // 675 configurations x 8 angles, both sides for transmissive models: 7296 probes.
-    assert_eq!(csv.lines().count(), 1 + 7296);
+    // 687 configurations x 8 angles, both sides for transmissive models: 7488 probes.
+    assert_eq!(csv.lines().count(), 1 + 7488);
     let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
     for section in [
         "# BSDF stability report",

@@ -72,8 +72,8 @@ def test_image_errors(tmp_path):
 
 
 def test_bsdf_errors():
-    with pytest.raises(pt.SceneError, match="unknown model 'hair'"):
-        pt.bsdf("hair")
+    with pytest.raises(pt.SceneError, match="unknown model 'velvet'"):
+        pt.bsdf("velvet")
     with pytest.raises(pt.SceneError, match="alphaa"):
         pt.bsdf("roughconductor", alphaa=0.1)
     with pytest.raises(pt.SceneError, match="unobtainium"):
