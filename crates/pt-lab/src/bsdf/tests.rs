@@ -192,7 +192,7 @@ fn errors_are_clear() {
             .unwrap_err()
             .to_string()
     };
-    assert!(err("hair").starts_with("unknown model 'hair' (known: diffuse, orennayar"));
+    assert!(err("velvet").starts_with("unknown model 'velvet' (known: diffuse, orennayar"));
     assert_eq!(
         err("orennayar foo=1"),
         "orennayar: unknown parameter 'foo' (parameters: reflectance, sigma, variant)"

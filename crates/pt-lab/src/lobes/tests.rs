@@ -70,7 +70,7 @@ fn parse_errors_are_clear() {
             .unwrap_err()
             .to_string()
     };
-    assert!(err("hair").contains("unknown model 'hair'"));
+    assert!(err("velvet").contains("unknown model 'velvet'"));
     assert!(err("orennayar foo=1").contains("unknown parameter 'foo'"));
     assert!(err("orennayar sigma").contains("expected NAME=VALUE"));
     assert!(err("orennayar sigma=-1").contains("sigma"));

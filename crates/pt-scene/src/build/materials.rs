@@ -212,16 +212,17 @@ impl<'e> Builder<'e> {
                 "give one of the pigments (eumelanin, pheomelanin), sigma_a or reflectance, not several",
             ));
         }
+        // Read whatever the absorption, as Mitsuba reads it; it scales only `sigma_a`.
+        let scale = v.float("scale")?.unwrap_or(1.0);
+        if !(scale >= 0.0) {
+            return Err(v.prop_error("scale", "scale must not be negative"));
+        }
         let absorption = match (sigma_a, reflectance) {
             (Some(sigma_a), _) => {
                 for s in sigma_a.spectra() {
                     if s.values().iter().any(|x| !(*x >= 0.0)) {
                         return Err(v.prop_error("sigma_a", "sigma_a must not be negative"));
                     }
-                }
-                let scale = v.float("scale")?.unwrap_or(1.0);
-                if !(scale >= 0.0) {
-                    return Err(v.prop_error("scale", "scale must not be negative"));
                 }
                 HairAbsorption::SigmaA { sigma_a, scale }
             }
