@@ -700,7 +700,7 @@ fn properties_given_in_code_read_like_xml() {
         vec![f("reflectance", 0.5), f("reflectance", 0.6)]
     )
     .contains("given twice"));
-    assert!(err("hair", vec![]).contains("hair"));
+    assert!(err("velvet", vec![]).contains("velvet"));
     assert!(err("plastic", vec![f("int_ior", -1.5)]).contains("int_ior must be positive"));
     assert!(err("twosided", vec![]).contains("wraps other BSDFs"));
     let e = bsdf_from_properties("minnaert", &[f("k", 0.0)]).unwrap_err();
