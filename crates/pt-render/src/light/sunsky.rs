@@ -44,6 +44,15 @@ pub struct SunSky {
     luminance_integral: f32,
 }
 
+/// The local direction at `(phi / 2 pi, cos theta)` of the sky table (upper hemisphere).
+#[inline]
+fn table_dir(uv: Vec2) -> Vec3 {
+    let phi = 2.0 * PI * uv.x;
+    let z = uv.y.clamp(0.0, 1.0);
+    let s = (1.0 - z * z).max(0.0).sqrt();
+    Vec3::new(s * phi.cos(), s * phi.sin(), z)
+}
+
 /// Luminance of a linear sRGB colour.
 fn luminance(c: [f32; 3]) -> f32 {
     crate::texture::luminance(c)
@@ -79,11 +88,7 @@ impl SunSky {
             return None;
         }
         // Sky table: corner values on a (TABLE_PHI + 1) x (TABLE_COS + 1) grid, centres.
-        let dir = |u: f32, v: f32| {
-            let phi = 2.0 * PI * u;
-            let s = (1.0 - v * v).max(0.0).sqrt();
-            Vec3::new(s * phi.cos(), s * phi.sin(), v)
-        };
+        let dir = |u: f32, v: f32| table_dir(Vec2::new(u, v));
         let sky = |d: Vec3| luminance(rgb.sky_rgb(d)).max(0.0);
         let corners: Vec<f32> = (0..=TABLE_COS)
             .flat_map(|j| {
@@ -191,10 +196,7 @@ impl SunSky {
     ) -> Option<(Vec3, SampledSpectrum, f32)> {
         let dir = if u.x < self.w_sky {
             let (uv, _) = self.distr.sample(Vec2::new(u.x / self.w_sky, u.y));
-            let phi = 2.0 * PI * uv.x;
-            let z = uv.y.clamp(0.0, 1.0);
-            let s = (1.0 - z * z).max(0.0).sqrt();
-            self.to_world * Vec3::new(s * phi.cos(), s * phi.sin(), z)
+            self.to_world * table_dir(uv)
         } else {
             let v = ((u.x - self.w_sky) / (1.0 - self.w_sky)).min(1.0 - f32::EPSILON / 2.0);
             self.sun_frame.to_world(square_to_uniform_cone(

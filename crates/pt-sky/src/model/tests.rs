@@ -35,6 +35,15 @@ fn params(p: &Value) -> (SkyParams, f32) {
     )
 }
 
+/// The largest magnitude in a table of rows of numbers.
+fn largest(rows: &Value) -> f32 {
+    rows.as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|r| r.as_array().unwrap().iter().map(f))
+        .fold(0.0f32, |m, v| m.max(v.abs()))
+}
+
 /// Relative difference, with a floor of 1e-6 of the case's largest value so that values that
 /// are zero up to rounding compare absolutely.
 fn rel(a: f32, b: f32, scale: f32) -> f32 {
@@ -85,18 +94,7 @@ fn radiance_matches_mitsuba() {
             .map(f)
             .collect();
         let dirs = case["directions"].as_array().unwrap();
-        let scale_rgb = case["rgb"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .flat_map(|r| r.as_array().unwrap().iter().map(f))
-            .fold(0.0f32, |m, v| m.max(v.abs()));
-        let scale_spec = case["spectral"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .flat_map(|r| r.as_array().unwrap().iter().map(f))
-            .fold(0.0f32, |m, v| m.max(v.abs()));
+        let (scale_rgb, scale_spec) = (largest(&case["rgb"]), largest(&case["spectral"]));
         for (i, d) in dirs.iter().enumerate() {
             // As Mitsuba receives it: the f32 direction, not renormalised.
             let d = vec3(d);
