@@ -248,6 +248,15 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
             Geometry::Cylinder { radius, length, .. } => {
                 format!("cylinder r={radius} length={length}")
             }
+            Geometry::Curves(c) => format!(
+                "{} curve, {} control points, {} segments",
+                match c.basis {
+                    pt_scene::CurveBasis::Linear => "linear",
+                    pt_scene::CurveBasis::BSpline => "B-spline",
+                },
+                c.points.len(),
+                c.segments.len()
+            ),
             Geometry::SdfGrid(g) => format!(
                 "sdf grid {}x{}x{}, {} voxels on the surface, {} normals",
                 g.resolution[0],

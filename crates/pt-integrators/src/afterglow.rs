@@ -167,6 +167,12 @@ pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, 
                 primaries: None,
             })
         };
+        if matches!(shape.geometry, Geometry::Curves(_)) {
+            return Err(BuildError {
+                loc: shape.loc.clone(),
+                message: "a phosphorescent curve cannot glow: curves cannot be emitters".into(),
+            });
+        }
         if matches!(shape.geometry, Geometry::SdfGrid(_)) {
             // Its afterglow would make it an emitter, and an sdfgrid cannot emit (no point
             // on it can be sampled, as in Mitsuba).
@@ -260,7 +266,7 @@ pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, 
                 dark.emitter = emitter(phi);
                 out.shapes.push(dark);
             }
-            Geometry::SdfGrid(_) => unreachable!("refused above"),
+            Geometry::SdfGrid(_) | Geometry::Curves(_) => unreachable!("refused above"),
         }
     }
     Ok(out)

@@ -184,6 +184,11 @@ fn scene_bounds(desc: &SceneDesc) -> (Vec3, Vec3) {
                 lo = lo.min(g.origin);
                 hi = hi.max(g.origin + g.extent);
             }
+            Geometry::Curves(c) => {
+                let (a, b) = c.bounds();
+                lo = lo.min(a);
+                hi = hi.max(b);
+            }
         }
     }
     if lo.x > hi.x {
@@ -406,8 +411,8 @@ impl PatchMesh {
                         });
                     }
                 }
-                Geometry::Cylinder { .. } | Geometry::SdfGrid(_) => {
-                    unreachable!("count_shape refuses cylinders and SDF grids")
+                Geometry::Cylinder { .. } | Geometry::SdfGrid(_) | Geometry::Curves(_) => {
+                    unreachable!("count_shape refuses cylinders, SDF grids and curves")
                 }
             }
             if degenerate > 0 {
@@ -465,6 +470,12 @@ impl PatchMesh {
                 &s.loc,
                 "the radiosity solver meshes triangles and spheres; an sdfgrid is not supported \
                  by it (the path tracer renders it)"
+                    .to_string(),
+            )),
+            Geometry::Curves(_) => Err(RadiosityError::scene(
+                &s.loc,
+                "the radiosity solver meshes triangles and spheres; curves are not supported \
+                 by it (fibres scatter, they do not diffuse; the path tracer renders them)"
                     .to_string(),
             )),
         }

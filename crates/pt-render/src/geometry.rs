@@ -1,4 +1,5 @@
-//! Primitives (triangles, parallelograms, analytic spheres and cylinders, SDF voxels), their ray intersection, and the surface
+//! Primitives (triangles, parallelograms, analytic spheres and cylinders, SDF voxels, curve
+//! segments), their ray intersection, and the surface
 //! interaction recorded at a hit. Everything in world space.
 
 use obvhs::aabb::Aabb;
@@ -66,6 +67,31 @@ pub enum Primitive {
         /// The distances at the corners, corner `i` at offset (i & 1, (i >> 1) & 1, i >> 2).
         f: [f32; 8],
     },
+    /// One segment of a `linearcurve`: the round cone from the sphere of radius `r0` at `p0`
+    /// to the sphere of radius `r1` at `p1` (see [`crate::curve`]); back faces are culled.
+    RoundCone {
+        /// First control point.
+        p0: Vec3A,
+        /// Second control point.
+        p1: Vec3A,
+        /// Radius at `p0` (>= 0).
+        r0: f32,
+        /// Radius at `p1` (>= 0).
+        r1: f32,
+    },
+    /// One segment of a `bsplinecurve`: the tube around the uniform cubic B-spline of the four
+    /// control points `p` (see [`crate::curve`]); back faces are culled. The radii are stored
+    /// as fractions of the largest, `r_max * r[i] / 65535` (a relative error of at most
+    /// 8e-6 of the largest radius, exact where the radius is constant), so that the segment
+    /// fits the 64 bytes of a primitive.
+    BSpline {
+        /// The control points.
+        p: [Vec3; 4],
+        /// The largest of the four radii (>= 0).
+        r_max: f32,
+        /// The radii as fractions of `r_max`, in units of 1 / 65535.
+        r: [u16; 4],
+    },
 }
 
 // Every variant fits the 64 bytes the BVH's primitive array is laid out for.
@@ -108,16 +134,51 @@ impl Primitive {
                 let (min, max) = crate::sdf::voxel_bounds(lo, size, f);
                 Aabb::new(min.into(), max.into())
             }
+            Primitive::RoundCone { p0, p1, r0, r1 } => {
+                let (min, max) = crate::curve::round_cone_bounds(p0, p1, r0, r1);
+                Aabb::new(min, max)
+            }
+            Primitive::BSpline { .. } => {
+                let (p, r) = self.bspline_segment().unwrap_or_default();
+                let (min, max) = crate::curve::bspline_bounds(&p, &r);
+                Aabb::new(min, max)
+            }
         }
     }
 
-    /// Whether this is an analytic primitive (sphere, cylinder, SDF voxel), which the flat
+    /// A B-spline segment from its four control points and radii (radii >= 0).
+    pub fn new_bspline(p: [Vec3; 4], radii: [f32; 4]) -> Primitive {
+        let r_max = radii.iter().fold(0.0f32, |m, &x| m.max(x));
+        let r = radii.map(|x| {
+            if r_max > 0.0 {
+                (x / r_max * 65535.0).round().clamp(0.0, 65535.0) as u16
+            } else {
+                0
+            }
+        });
+        Primitive::BSpline { p, r_max, r }
+    }
+
+    /// A [`Primitive::BSpline`]'s control points and decoded radii; `None` for other
+    /// primitives.
+    #[inline(always)]
+    pub fn bspline_segment(&self) -> Option<([Vec3A; 4], [f32; 4])> {
+        match *self {
+            Primitive::BSpline { p, r_max, r } => Some((
+                p.map(Vec3A::from),
+                r.map(|q| r_max * (q as f32 * (1.0 / 65535.0))),
+            )),
+            _ => None,
+        }
+    }
+
+    /// Whether this is an analytic primitive (sphere, cylinder, SDF voxel, curve segment), which the flat
     /// SIMD blocks of triangles and parallelograms leave out.
     #[inline]
     pub fn is_analytic(&self) -> bool {
-        matches!(
+        !matches!(
             self,
-            Primitive::Sphere { .. } | Primitive::Cylinder { .. } | Primitive::SdfVoxel { .. }
+            Primitive::Triangle { .. } | Primitive::Parallelogram { .. }
         )
     }
 
@@ -147,11 +208,15 @@ impl Primitive {
             Primitive::SdfVoxel { lo, size, ref f } => {
                 crate::sdf::intersect_voxel(lo, size, f, origin.into(), dir.into(), tmin, tmax)
             }
+            Primitive::RoundCone { .. } | Primitive::BSpline { .. } => {
+                self.intersect_bary(origin, dir, tmin, tmax).0
+            }
         }
     }
 
     /// [`Primitive::intersect`] with the hit's barycentrics `(t, b1, b2)` (the weights of
-    /// `v0 + e1` and `v0 + e2`; 0 for spheres); `t` is +inf on a miss.
+    /// `v0 + e1` and `v0 + e2`; for curve segments `b1` is the curve parameter of the hit;
+    /// 0 for other primitives); `t` is +inf on a miss.
     #[inline(always)]
     pub fn intersect_bary(
         &self,
@@ -171,6 +236,16 @@ impl Primitive {
             .unwrap_or((f32::INFINITY, 0.0, 0.0)),
             Primitive::Sphere { .. } | Primitive::Cylinder { .. } | Primitive::SdfVoxel { .. } => {
                 (self.intersect(origin, dir, tmin, tmax), 0.0, 0.0)
+            }
+            Primitive::RoundCone { p0, p1, r0, r1 } => {
+                let (t, v) =
+                    crate::curve::intersect_round_cone(origin, dir, p0, p1, r0, r1, tmin, tmax);
+                (t, v, 0.0)
+            }
+            Primitive::BSpline { .. } => {
+                let (p, r) = self.bspline_segment().unwrap_or_default();
+                let (t, u) = crate::curve::intersect_bspline(origin, dir, &p, &r, tmin, tmax);
+                (t, u, 0.0)
             }
         }
     }

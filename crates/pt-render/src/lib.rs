@@ -19,6 +19,7 @@
 
 pub mod accel;
 pub mod camera;
+pub mod curve;
 pub mod film;
 pub mod fluorescence;
 pub mod geometry;

@@ -43,6 +43,7 @@
 #![forbid(unsafe_code)]
 
 mod build;
+mod curves;
 mod error;
 pub mod gltf;
 pub mod ies;

@@ -151,6 +151,16 @@ fn check_usable(desc: &SceneDesc) -> Result<(), String> {
                     }
                 }
             }
+            Geometry::Curves(c) => {
+                let need = c.basis.points_per_segment();
+                if c.points.iter().any(|p| !p.is_finite() || p.w < 0.0)
+                    || c.segments
+                        .iter()
+                        .any(|&s| s as usize + need > c.points.len())
+                {
+                    return Err(format!("shape {k}: curves with bad points or segments"));
+                }
+            }
             Geometry::SdfGrid(g) => {
                 let n: usize = g.resolution.iter().map(|&r| r as usize).product();
                 if g.resolution.iter().any(|&r| r < 2)

@@ -52,9 +52,7 @@ impl Block {
             let (v0, e1, e2, k1) = match *p {
                 Primitive::Triangle { v0, e1, e2 } => (v0, e1, e2, 1.0),
                 Primitive::Parallelogram { v0, e1, e2 } => (v0, e1, e2, 0.0),
-                Primitive::Sphere { .. }
-                | Primitive::Cylinder { .. }
-                | Primitive::SdfVoxel { .. } => {
+                _ => {
                     unreachable!("analytic primitives are kept out of blocks")
                 }
             };

@@ -249,9 +249,7 @@ impl Accel {
                 Primitive::Triangle { e1, e2, .. } | Primitive::Parallelogram { e1, e2, .. } => {
                     pt_math::Vec3::from(e1.cross(e2)).normalize()
                 }
-                Primitive::Sphere { .. }
-                | Primitive::Cylinder { .. }
-                | Primitive::SdfVoxel { .. } => pt_math::Vec3::ZERO,
+                _ => pt_math::Vec3::ZERO,
             })
             .collect();
         Accel {

@@ -247,6 +247,8 @@ fn flat_blocks_match_the_scalar_tests() {
                         (c, 1.0)
                     }
                     Primitive::SdfVoxel { lo, .. } => (lo.into(), 1.0),
+                    Primitive::RoundCone { p0: c, .. } => (c, 1.0),
+                    Primitive::BSpline { p, .. } => (p[0].into(), 1.0),
                 };
                 let tol = 1e-6 / cos;
                 let scale = t + (Vec3A::from(o) - v0).length();

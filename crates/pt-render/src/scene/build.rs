@@ -442,6 +442,18 @@ fn geometry(
             data.sdf = Some(g.clone());
             None
         }
+        Geometry::Curves(c) => {
+            // One primitive per segment, referenced by its index. The loader refuses
+            // emitters on curves.
+            for i in 0..c.segments.len() as u32 {
+                let r = PrimRef::single(si, i);
+                prims.push(primitive_of_geometry(&shape.geometry, r));
+                refs.push(r);
+            }
+            stats.curve_segments += c.segments.len();
+            data.curve_segments = c.segments.len() as u32;
+            None
+        }
     })
 }
 

@@ -310,6 +310,21 @@ pub(super) fn primitive_of_geometry(geometry: &Geometry, r: PrimRef) -> Primitiv
             flip: flip_normals,
         },
         Geometry::SdfGrid(g) => sdf_voxel(g, r.local),
+        Geometry::Curves(c) => {
+            let cp = c.segment(r.local as usize);
+            match c.basis {
+                pt_scene::CurveBasis::Linear => Primitive::RoundCone {
+                    p0: cp[0].truncate().into(),
+                    p1: cp[1].truncate().into(),
+                    r0: cp[0].w,
+                    r1: cp[1].w,
+                },
+                pt_scene::CurveBasis::BSpline => Primitive::new_bspline(
+                    [0, 1, 2, 3].map(|i| cp[i].truncate()),
+                    [0, 1, 2, 3].map(|i| cp[i].w),
+                ),
+            }
+        }
     }
 }
 

@@ -62,6 +62,9 @@ struct ShapeData {
     frame: Option<Mat3>,
     /// `sdfgrid` shapes: the grid, for smooth shading normals.
     sdf: Option<std::sync::Arc<pt_scene::SdfGrid>>,
+    /// Curves: how many segments the shape has (the texture coordinate along a curve runs
+    /// over all of them, as in Mitsuba).
+    curve_segments: u32,
     /// The instanced group the shape belongs to (its primitives are in that group's
     /// [`Group::accel`], in the group's space), or `None` for a shape of the scene itself.
     group: Option<u32>,
@@ -82,6 +85,7 @@ impl ShapeData {
             attributes: Vec::new(),
             frame: None,
             sdf: None,
+            curve_segments: 0,
             group,
         }
     }
@@ -141,6 +145,8 @@ pub struct SceneStats {
     pub cylinders: usize,
     /// Voxels of `sdfgrid` shapes that the surface passes through (one primitive each).
     pub sdf_voxels: usize,
+    /// Segments of `linearcurve` and `bsplinecurve` shapes (one primitive each).
+    pub curve_segments: usize,
     /// Zero-area triangles left out of the BVH (they can neither be hit nor emit).
     pub degenerate_triangles: usize,
 }
@@ -404,6 +410,29 @@ impl Scene {
                     }
                 }
                 it
+            }
+            Primitive::RoundCone { p0, p1, r0, r1 } => {
+                let h = crate::curve::round_cone_hit(
+                    [p0, p1],
+                    [r0, r1],
+                    b1,
+                    ray.at(t),
+                    r.local,
+                    shape.curve_segments,
+                );
+                Interaction::analytic(h.p, h.n, h.uv, [h.dpdu, h.dpdv], t, r.shape, id as u32)
+            }
+            Primitive::BSpline { .. } => {
+                let (p, radii) = accel.prims[id].bspline_segment().unwrap_or_default();
+                let h = crate::curve::bspline_hit(
+                    &p,
+                    &radii,
+                    b1,
+                    ray.at(t),
+                    r.local,
+                    shape.curve_segments,
+                );
+                Interaction::analytic(h.p, h.n, h.uv, [h.dpdu, h.dpdv], t, r.shape, id as u32)
             }
         }
     }

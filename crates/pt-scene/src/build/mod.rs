@@ -40,8 +40,7 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
         "prb", "prb_basic", "prb_projective", "direct_projective",
         "depth", "stokes", "prbvolpath",
     ]),
-    ("shape", &["obj", "ply", "serialized", "gltf", "rectangle", "cube", "sphere", "disk", "cylinder", "sdfgrid", "shapegroup", "instance"], &[
-        "bsplinecurve", "linearcurve",
+    ("shape", &["obj", "ply", "serialized", "gltf", "rectangle", "cube", "sphere", "disk", "cylinder", "sdfgrid", "linearcurve", "bsplinecurve", "shapegroup", "instance"], &[
         "ellipsoids", "ellipsoidsmesh",
     ]),
     ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "plastic", "roughplastic", "null", "fluorescent", "phosphorescent", "bumpmap", "principled", "principledthin", "pplastic", "polarizer", "hair"], &[

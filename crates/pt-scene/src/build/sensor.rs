@@ -386,6 +386,11 @@ pub(super) fn bounds(shapes: &[ShapeDesc]) -> Option<(Vec3, Vec3)> {
                 add(g.origin);
                 add(g.origin + g.extent);
             }
+            Geometry::Curves(c) => {
+                let (lo, hi) = c.bounds();
+                add(lo);
+                add(hi);
+            }
         }
     }
     acc

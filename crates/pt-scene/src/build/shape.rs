@@ -44,6 +44,8 @@ impl<'e> Builder<'e> {
                 }
                 self.sdfgrid(&v, &to_world)?
             }
+            "linearcurve" => self.curves(&v, CurveBasis::Linear, &to_world)?,
+            "bsplinecurve" => self.curves(&v, CurveBasis::BSpline, &to_world)?,
             _ => return Err(plugin_error(el)),
         };
         let (bsdf, emitter, [interior, exterior]) = self.shape_children(&v)?;
@@ -51,6 +53,18 @@ impl<'e> Builder<'e> {
             return Err(SceneError::at(
                 &el.loc,
                 "an sdfgrid cannot be an area emitter (as in Mitsuba, which samples no point on it)",
+            ));
+        }
+        if emitter.is_some() && matches!(geometry, Geometry::Curves(_)) {
+            return Err(SceneError::at(
+                &el.loc,
+                format!("a {} cannot be an area emitter (not implemented: no sampling of points on curves)", v.plugin),
+            ));
+        }
+        if (interior.is_some() || exterior.is_some()) && matches!(geometry, Geometry::Curves(_)) {
+            return Err(SceneError::at(
+                &el.loc,
+                format!("a {} cannot bound a medium (its back faces are culled, so rays could not leave it)", v.plugin),
             ));
         }
         v.finish()?;
@@ -269,6 +283,35 @@ impl<'e> Builder<'e> {
     /// for `obj`) over the object space's unit cube; `normals` `smooth` (default) or
     /// `analytic`. `to_world` must be scales and a translation: Mitsuba warns against
     /// rotations (and asks for an `instance` instead), and pt refuses them and mirrors.
+    /// `linearcurve` and `bsplinecurve`: the curve file `filename` (see [`crate::curves`]),
+    /// positions through `to_world`.
+    pub(super) fn curves(
+        &self,
+        v: &ObjectView<'_>,
+        basis: CurveBasis,
+        m: &Mat4,
+    ) -> Result<Geometry> {
+        let err = |msg: String| SceneError::at(&v.el.loc, msg);
+        if v.has("flip_normals") {
+            return Err(v.prop_error(
+                "flip_normals",
+                format!(
+                    "a {} has no flip_normals (as in Mitsuba: its back faces are culled)",
+                    v.plugin
+                ),
+            ));
+        }
+        let name = v.string("filename")?.ok_or_else(|| {
+            err(
+                "missing <string name=\"filename\" .../> (the curve file: x y z radius per line)"
+                    .into(),
+            )
+        })?;
+        let path = resolve_file(&name, &v.el.dir, &[self.base_dir], self.search_paths);
+        let curves = crate::curves::load_curves(&path, &name, basis, m).map_err(err)?;
+        Ok(Geometry::Curves(std::sync::Arc::new(curves)))
+    }
+
     pub(super) fn sdfgrid(&self, v: &ObjectView<'_>, m: &Mat4) -> Result<Geometry> {
         let err = |msg: String| SceneError::at(&v.el.loc, msg);
         let smooth_normals = match v.string("normals")?.as_deref() {

@@ -175,7 +175,10 @@ pub fn load_mesh(path: &Path) -> Result<TriangleMesh, String> {
         .iter()
         .filter_map(|s| match &s.geometry {
             Geometry::Mesh(m) => Some(m),
-            Geometry::Sphere { .. } | Geometry::Cylinder { .. } | Geometry::SdfGrid(_) => None,
+            Geometry::Sphere { .. }
+            | Geometry::Cylinder { .. }
+            | Geometry::SdfGrid(_)
+            | Geometry::Curves(_) => None,
         })
         .collect();
     if meshes.is_empty() {
@@ -562,7 +565,10 @@ fn summarise_meshes(cx: &mut Ctx, desc: &SceneDesc, lines: Vec<String>) {
         .iter()
         .map(|s| match &s.geometry {
             Geometry::Mesh(m) => m.indices.len(),
-            Geometry::Sphere { .. } | Geometry::Cylinder { .. } | Geometry::SdfGrid(_) => 0,
+            Geometry::Sphere { .. }
+            | Geometry::Cylinder { .. }
+            | Geometry::SdfGrid(_)
+            | Geometry::Curves(_) => 0,
         })
         .sum();
     cx.summary.push(format!(

@@ -101,6 +101,61 @@ pub enum Geometry {
     },
     /// Mitsuba's `sdfgrid` (shared: the shape's primitives are its occupied voxels).
     SdfGrid(std::sync::Arc<SdfGrid>),
+    /// Mitsuba's `linearcurve` and `bsplinecurve` (shared: the shape's primitives are its
+    /// segments).
+    Curves(std::sync::Arc<Curves>),
+}
+
+/// How a curve's control points make the curve.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CurveBasis {
+    /// `linearcurve`: straight segments between consecutive control points, joined by spheres
+    /// and ended by spheres (round cones).
+    Linear,
+    /// `bsplinecurve`: uniform cubic B-spline segments over each four consecutive control
+    /// points, with open ends.
+    BSpline,
+}
+
+impl CurveBasis {
+    /// Control points per segment (2 or 4); a curve needs at least this many.
+    pub fn points_per_segment(self) -> usize {
+        match self {
+            CurveBasis::Linear => 2,
+            CurveBasis::BSpline => 4,
+        }
+    }
+}
+
+/// Curves, world space: tubes around polylines or B-splines, with a radius per control point.
+#[derive(Clone, Debug)]
+pub struct Curves {
+    /// Linear or B-spline.
+    pub basis: CurveBasis,
+    /// Control points: xyz the position (world space, `to_world` applied), w the radius (scene
+    /// units; `to_world` does not scale it, as in Mitsuba).
+    pub points: Vec<glam::Vec4>,
+    /// For each segment, the index of its first control point (the segment uses that point
+    /// and the next one or three).
+    pub segments: Vec<u32>,
+}
+
+impl Curves {
+    /// The control points of segment `i`: two for linear curves, four for B-splines.
+    pub fn segment(&self, i: usize) -> &[glam::Vec4] {
+        let first = self.segments[i] as usize;
+        &self.points[first..first + self.basis.points_per_segment()]
+    }
+
+    /// A box (min, max corners, world space) around every tube: the control points grown by
+    /// their radii (a B-spline lies in the hull of its control points, its radius is a convex
+    /// combination of theirs).
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        self.points.iter().fold(
+            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+            |(lo, hi), p| (lo.min(p.truncate() - p.w), hi.max(p.truncate() + p.w)),
+        )
+    }
 }
 
 /// Mitsuba's `sdfgrid`: a signed distance function sampled at the vertices of a regular grid

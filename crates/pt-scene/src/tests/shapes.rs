@@ -493,3 +493,81 @@ fn sdfgrid_loads_its_grid_and_refuses_what_it_cannot_render() {
         assert!(e.message.contains(want), "{want}: {e}");
     }
 }
+
+/// `linearcurve` and `bsplinecurve` read their curve files (positions through `to_world`,
+/// radii not), and refuse what they cannot be: bad files with the file's line, emitters,
+/// media, `flip_normals`.
+#[test]
+fn curves_load_their_files_and_refuse_what_they_cannot_render() {
+    let dir = temp_dir("curves");
+    std::fs::write(
+        dir.join("strands.txt"),
+        "0 0 0 0.1\n0 1 0 0.1\n0 2 0 0.05\n0 3 0 0.05\n\n1 0 0 0.1\n1 1 0 0.1\n1 2 0 0.1\n1 3 0 0.1\n1 4 0 0.1\n",
+    )
+    .unwrap();
+    std::fs::write(dir.join("bad.txt"), "0 0 0 0.1\n0 1 0 0.1\n0 2 0\n").unwrap();
+    let shape = |plugin: &str, file: &str, inner: &str| {
+        scene(&format!(
+            "<shape type=\"{plugin}\">\n<string name=\"filename\" value=\"{file}\"/>\n{inner}</shape>"
+        ))
+    };
+    let load_in = |xml: &str| load_str(xml, Path::new("test.xml"), &dir, &[]);
+    let moved =
+        "<transform name=\"to_world\"><scale value=\"2\"/><translate x=\"1\"/></transform>\n";
+    let s = load_in(&shape("linearcurve", "strands.txt", moved)).unwrap();
+    let Geometry::Curves(c) = &s.shapes[0].geometry else {
+        panic!("not curves")
+    };
+    assert_eq!(c.basis, CurveBasis::Linear);
+    assert_eq!(c.segments, vec![0, 1, 2, 4, 5, 6, 7]);
+    assert_eq!(c.points[2], glam::Vec4::new(1.0, 4.0, 0.0, 0.05));
+    let s = load_in(&shape("bsplinecurve", "strands.txt", "")).unwrap();
+    let Geometry::Curves(c) = &s.shapes[0].geometry else {
+        panic!("not curves")
+    };
+    assert_eq!(
+        (c.basis, c.segments.clone()),
+        (CurveBasis::BSpline, vec![0, 4, 5])
+    );
+    let cases = [
+        (
+            shape("linearcurve", "missing.txt", ""),
+            "cannot open curve file 'missing.txt'",
+            2,
+        ),
+        (
+            shape("linearcurve", "bad.txt", ""),
+            "curve file 'bad.txt', line 3: expected four numbers",
+            2,
+        ),
+        (
+            shape("bsplinecurve", "strands.txt", "<emitter type=\"area\"/>\n"),
+            "cannot be an area emitter",
+            2,
+        ),
+        (
+            shape(
+                "linearcurve",
+                "strands.txt",
+                "<boolean name=\"flip_normals\" value=\"true\"/>\n",
+            ),
+            "has no flip_normals",
+            4,
+        ),
+        (
+            shape(
+                "linearcurve",
+                "strands.txt",
+                "<medium type=\"homogeneous\" name=\"interior\"/>\n",
+            ),
+            "cannot bound a medium",
+            2,
+        ),
+    ];
+    for (xml, want, line) in cases {
+        let e = load_in(&xml).expect_err(&xml);
+        let loc = e.loc.as_ref().expect("located");
+        assert_eq!(loc.line, line, "{e}");
+        assert!(e.message.contains(want), "expected '{want}' in: {e}");
+    }
+}
