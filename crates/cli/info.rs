@@ -210,7 +210,7 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
         out!("camera in   {}", medium_summary(m));
     }
     out!(
-        "geometry    {} shapes{}, {} triangles{}, {} spheres, {} cylinders{}",
+        "geometry    {} shapes{}, {} triangles{}, {} spheres, {} cylinders{}{}",
         desc.shapes.len(),
         if desc.instances.is_empty() {
             String::new()
@@ -232,6 +232,11 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
         },
         scene.stats.spheres,
         scene.stats.cylinders,
+        if scene.stats.curve_segments > 0 {
+            format!(", {} curve segments", scene.stats.curve_segments)
+        } else {
+            String::new()
+        },
         if scene.stats.degenerate_triangles > 0 {
             format!(
                 " ({} zero-area triangles skipped)",

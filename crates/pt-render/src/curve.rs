@@ -108,6 +108,130 @@ pub fn bspline_bounds(p: &[Vec3A; 4], r: &[f32; 4]) -> (Vec3A, Vec3A) {
     (lo - grow, hi + grow)
 }
 
+/// A part of a B-spline segment: piece `index` of `2^log2_count` equal ranges of its
+/// parameter. The BVH holds a long segment as several pieces, each with its own four control
+/// points (the same cubic over the piece's range), so that each box is tight around its part
+/// of a thin strand.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Piece {
+    /// Which piece, from the segment's start (< `2^log2_count`).
+    pub index: u8,
+    /// The segment is cut into `2^log2_count` pieces (at most [`Piece::MAX_LOG2`]).
+    pub log2_count: u8,
+}
+
+/// A segment is cut into pieces about this many radii long (measured along its Bézier
+/// control polygon): a piece's box is then a few radii across, whatever its orientation.
+const PIECE_LENGTH_IN_RADII: f32 = 8.0;
+
+impl Piece {
+    /// A whole segment.
+    pub const WHOLE: Piece = Piece {
+        index: 0,
+        log2_count: 0,
+    };
+    /// At most 2^4 = 16 pieces per segment.
+    pub const MAX_LOG2: u8 = 4;
+
+    /// The piece as one byte (count in the high nibble, index in the low one).
+    pub fn code(self) -> u8 {
+        (self.log2_count << 4) | self.index
+    }
+
+    /// The piece [`Piece::code`] made.
+    pub fn from_code(code: u8) -> Piece {
+        let log2_count = (code >> 4).min(Piece::MAX_LOG2);
+        Piece {
+            index: (code & 15) & ((1u8 << log2_count) - 1),
+            log2_count,
+        }
+    }
+
+    /// The piece's range of the segment's parameter.
+    pub fn range(self) -> (f32, f32) {
+        let n = (1u32 << self.log2_count) as f32;
+        (self.index as f32 / n, (self.index as f32 + 1.0) / n)
+    }
+
+    /// The pieces a segment (control points xyz, radius w) is cut into: enough (a power of two,
+    /// at most 16) that each is about [`PIECE_LENGTH_IN_RADII`] of its largest radius long.
+    pub fn split(cp: [pt_math::Vec4; 4]) -> impl Iterator<Item = Piece> {
+        let b = bspline_to_bezier(cp.map(|p| p.truncate()));
+        let length = (b[1] - b[0]).length() + (b[2] - b[1]).length() + (b[3] - b[2]).length();
+        let r_max = bspline_to_bezier(cp.map(|p| p.w))
+            .iter()
+            .fold(0.0f32, |m, &x| m.max(x));
+        let want = length / (PIECE_LENGTH_IN_RADII * r_max);
+        let log2_count = if want > 1.0 {
+            (want.log2().ceil() as u8).min(Piece::MAX_LOG2)
+        } else {
+            0
+        };
+        (0..1u8 << log2_count).map(move |index| Piece { index, log2_count })
+    }
+
+    /// The piece's own control points and radii, from the segment's: the same cubic over the
+    /// piece's range with its parameter running from 0 to 1. Computed in f64 (the conversion
+    /// back to B-spline points amplifies rounding tenfold).
+    pub fn of(self, p: [Vec3; 4], r: [f32; 4]) -> ([Vec3; 4], [f32; 4]) {
+        if self.log2_count == 0 {
+            return (p, r);
+        }
+        let (u0, u1) = self.range();
+        let (u0, u1) = (u0 as f64, u1 as f64);
+        let xyzr: [[f64; 4]; 4] =
+            std::array::from_fn(|i| [p[i].x, p[i].y, p[i].z, r[i]].map(f64::from));
+        let out = sub_bspline(xyzr, u0, u1);
+        (
+            out.map(|q| Vec3::new(q[0] as f32, q[1] as f32, q[2] as f32)),
+            out.map(|q| (q[3] as f32).max(0.0)),
+        )
+    }
+}
+
+/// The B-spline control points (per coordinate) of the cubic that the segment `p` traces over
+/// [u0, u1], reparameterised to [0, 1]: its Bézier points restricted by blossoming (the
+/// sub-curve's Bézier points are the blossom at (u0, u0, u0), (u0, u0, u1), (u0, u1, u1),
+/// (u1, u1, u1); de Casteljau with one parameter per level), then converted back to B-spline
+/// points (the inverse of [`bspline_to_bezier`]).
+fn sub_bspline(p: [[f64; 4]; 4], u0: f64, u1: f64) -> [[f64; 4]; 4] {
+    let lerp = |a: [f64; 4], b: [f64; 4], t: f64| std::array::from_fn(|k| a[k] + (b[k] - a[k]) * t);
+    let bez: [[f64; 4]; 4] = {
+        let (third, sixth) = (1.0 / 3.0, 1.0 / 6.0);
+        let f = |w: [f64; 4]| -> [f64; 4] {
+            std::array::from_fn(|k| {
+                w[0] * p[0][k] + w[1] * p[1][k] + w[2] * p[2][k] + w[3] * p[3][k]
+            })
+        };
+        [
+            f([sixth, 4.0 * sixth, sixth, 0.0]),
+            f([0.0, 2.0 * third, third, 0.0]),
+            f([0.0, third, 2.0 * third, 0.0]),
+            f([0.0, sixth, 4.0 * sixth, sixth]),
+        ]
+    };
+    let blossom = |x: f64, y: f64, z: f64| {
+        let l1 = [
+            lerp(bez[0], bez[1], x),
+            lerp(bez[1], bez[2], x),
+            lerp(bez[2], bez[3], x),
+        ];
+        let l2 = [lerp(l1[0], l1[1], y), lerp(l1[1], l1[2], y)];
+        lerp(l2[0], l2[1], z)
+    };
+    let b = [
+        blossom(u0, u0, u0),
+        blossom(u0, u0, u1),
+        blossom(u0, u1, u1),
+        blossom(u1, u1, u1),
+    ];
+    let p1: [f64; 4] = std::array::from_fn(|k| 2.0 * b[1][k] - b[2][k]);
+    let p2: [f64; 4] = std::array::from_fn(|k| 2.0 * b[2][k] - b[1][k]);
+    let p0 = std::array::from_fn(|k| 6.0 * b[0][k] - 4.0 * p1[k] - p2[k]);
+    let p3 = std::array::from_fn(|k| 6.0 * b[3][k] - p1[k] - 4.0 * p2[k]);
+    [p0, p1, p2, p3]
+}
+
 /// The outward normal (not normalised) of a B-spline tube at `p`, on the circle at the
 /// evaluated point `e` (Mitsuba's formula, see the module documentation).
 #[inline(always)]
@@ -115,6 +239,10 @@ pub fn bspline_normal(e: &CurvePoint, p: Vec3A) -> Vec3A {
     let rad = p - e.c;
     (e.dc.length_squared() - rad.dot(e.ddc)) * rad - (e.r * e.dr) * e.dc
 }
+
+/// How far (in the parameter) beyond its range a piece still counts a hit: rounding at the
+/// seam between two pieces, far below a radius.
+const SEAM: f32 = 1e-5;
 
 /// Most phantom iterations from one starting parameter: the iteration converges in a handful
 /// from an end of a hair-like segment; one that has not settled after this many is taken as a
@@ -144,12 +272,26 @@ pub fn intersect_bspline(
     if !ray_near_bspline(d, &q, r_max, tmin, tmax) {
         return best;
     }
+    // A piece no longer than a few radii (as `Piece::split` makes them) is nearly straight:
+    // a ray enters it at most once, so the first hit found is the hit, and where the ray
+    // passes closest to it without meeting it, it misses it.
+    let b = bspline_to_bezier(q);
+    let polygon = (b[1] - b[0]).length() + (b[2] - b[1]).length() + (b[3] - b[2]).length();
+    let short = polygon <= 2.0 * PIECE_LENGTH_IN_RADII * r_max;
+    let mut settled_miss = false;
     // From both ends, and from the middle for strongly bent segments that the ray crosses
     // nearly along (from the ends, the iteration can leave the segment before it settles).
     for start in [0.0f32, 1.0, 0.5] {
+        // The middle only when the ends found nothing; nothing more once a short piece's hit
+        // is found.
+        if (start == 0.5 || short) && best.0.is_finite() || short && settled_miss {
+            break;
+        }
         let mut u = start;
         // The last parameter whose cone the ray met.
         let mut last_hit: Option<f32> = None;
+        // Whether the last step was stopped at an end of the piece.
+        let mut at_end = false;
         for _ in 0..PHANTOM_ITERATIONS {
             let e = bspline_eval(&q, r, u);
             let len = e.dc.length();
@@ -160,10 +302,19 @@ pub fn intersect_bspline(
             let (hit, s, dz) = cone_step(d, axis, e.c, e.r, e.dr / len);
             if hit && dz.abs() <= tolerance {
                 let front = bspline_normal(&e, d * s).dot(d) < 0.0;
+                // Pieces and segments share their end circles; a hit on the seam may come out
+                // a rounding error beyond either piece's range, so both accept that margin.
                 #[allow(clippy::manual_range_contains)]
-                if front && s > tmin && s < tmax.min(best.0) && u >= 0.0 && u <= 1.0 {
-                    best = (s, u);
+                if front && s > tmin && s < tmax.min(best.0) && u >= -SEAM && u <= 1.0 + SEAM {
+                    best = (s, u.clamp(0.0, 1.0));
                 }
+                break;
+            }
+            // Settled where the ray passes closest to the curve without meeting the cone
+            // there, and no cone met before: the ray misses the tube (from this start).
+            if !hit && last_hit.is_none() && dz.abs() <= tolerance {
+                // A short piece's closest approach is the only one: no other start can hit.
+                settled_miss = true;
                 break;
             }
             u = match (hit, last_hit) {
@@ -185,10 +336,16 @@ pub fn intersect_bspline(
                     u + dz / len
                 }
             };
-            // Beyond the segment (with a margin for the step back) the hit belongs to the
-            // neighbour or to nothing.
-            if !(-0.5..=1.5).contains(&u) {
-                break;
+            // Beyond the piece the hit belongs to the neighbour or to nothing: the iteration
+            // stops at the end, and gives up when it is pushed out again from there.
+            if !(0.0..=1.0).contains(&u) {
+                if at_end {
+                    break;
+                }
+                u = u.clamp(0.0, 1.0);
+                at_end = true;
+            } else {
+                at_end = false;
             }
         }
     }
@@ -197,24 +354,39 @@ pub fn intersect_bspline(
 
 /// Whether the ray from the origin along `d` (unit length) may meet the tube of the
 /// B-spline segment `q` (control points relative to the ray origin) whose radius is at most
-/// `r_max` within `(tmin, tmax)`: the box of the segment's Bézier points in the ray's own frame
-/// (two axes across the ray, one along it), grown by `r_max`, must hold the ray. Much tighter
-/// than a world box for a thin strand the ray crosses obliquely, and it rejects most of what
-/// the BVH hands over before any iteration.
+/// `r_max` within `(tmin, tmax)`. In the ray's own frame (two axes across it, one along it) the
+/// ray is the origin of the plane across it; the projected curve lies in the hull of its
+/// projected Bézier points, so within `dev` of the projected chord between its ends, `dev`
+/// the larger distance of the two inner Bézier points from that chord (distance to a segment
+/// is convex: its largest over a hull is at a corner). The ray can meet the tube only if the
+/// origin lies within `dev + r_max` of the projected chord, and the segment's extent along the
+/// ray overlaps `(tmin, tmax)`. For a thin, nearly straight piece this is a tight capsule, and
+/// it rejects most of what the BVH hands over before any iteration.
 #[inline(always)]
 fn ray_near_bspline(d: Vec3A, q: &[Vec3A; 4], r_max: f32, tmin: f32, tmax: f32) -> bool {
     let f = pt_math::Frame::from_normal(d.into());
     let (x, y) = (Vec3A::from(f.s), Vec3A::from(f.t));
     let b = bspline_to_bezier(*q);
-    let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
-    for p in b {
-        let l = Vec3A::new(p.dot(x), p.dot(y), p.dot(d));
-        lo = lo.min(l);
-        hi = hi.max(l);
+    let flat = b.map(|p| Vec2::new(p.dot(x), p.dot(y)));
+    let along = b.map(|p| p.dot(d));
+    let lo = along.iter().fold(f32::INFINITY, |m, &z| m.min(z)) - r_max;
+    let hi = along.iter().fold(f32::NEG_INFINITY, |m, &z| m.max(z)) + r_max;
+    if !(hi > tmin && lo < tmax) {
+        return false;
     }
-    let g = Vec3A::splat(r_max);
-    let (lo, hi) = (lo - g, hi + g);
-    lo.x <= 0.0 && hi.x >= 0.0 && lo.y <= 0.0 && hi.y >= 0.0 && hi.z > tmin && lo.z < tmax
+    // Distance of a point from the projected chord flat[0] -> flat[3].
+    let chord = flat[3] - flat[0];
+    let len2 = chord.length_squared();
+    let dist = |p: Vec2| {
+        let t = if len2 > 0.0 {
+            ((p - flat[0]).dot(chord) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (p - flat[0] - chord * t).length()
+    };
+    let dev = dist(flat[1]).max(dist(flat[2]));
+    dist(Vec2::ZERO) <= dev + r_max
 }
 
 /// One phantom step: the line `s d` (from the origin, `d` unit length) against the cone with
@@ -440,17 +612,21 @@ pub fn round_cone_hit(
     }
 }
 
-/// The surface of a B-spline segment (control points `cp`, radii `r`) at `p`, the hit at
-/// curve parameter `u` (as [`intersect_bspline`] returns it); `segment` of the shape's
-/// `segments`.
+/// The surface of a B-spline piece (its own control points `cp` and radii `r`) at `p`, the
+/// hit at the piece's parameter `u` (as [`intersect_bspline`] returns it); the piece covers
+/// `range` of segment `segment` of the shape's `segments`.
 pub fn bspline_hit(
     cp: &[Vec3A; 4],
     r: &[f32; 4],
     u: f32,
     p: Vec3,
+    range: (f32, f32),
     segment: u32,
     segments: u32,
 ) -> CurveHit {
+    // The piece's derivatives per unit of the segment's parameter, and where u falls in it.
+    let per_segment = 1.0 / (range.1 - range.0);
+    let u_segment = range.0 + (range.1 - range.0) * u;
     let e = bspline_eval(cp, r, u);
     let c = Vec3::from(e.c);
     let axis = Vec3::from(e.dc).normalize_or(Vec3::Z);
@@ -461,10 +637,10 @@ pub fn bspline_hit(
         n,
         uv: Vec2::new(
             around(axis, radial),
-            (u + segment as f32) / segments.max(1) as f32,
+            (u_segment + segment as f32) / segments.max(1) as f32,
         ),
         dpdu: std::f32::consts::TAU * e.r * axis.cross(radial),
-        dpdv: segments as f32 * (Vec3::from(e.dc) + radial * e.dr),
+        dpdv: segments as f32 * per_segment * (Vec3::from(e.dc) + radial * e.dr),
     }
 }
 

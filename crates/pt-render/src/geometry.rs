@@ -79,11 +79,12 @@ pub enum Primitive {
         /// Radius at `p1` (>= 0).
         r1: f32,
     },
-    /// One segment of a `bsplinecurve`: the tube around the uniform cubic B-spline of the four
-    /// control points `p` (see [`crate::curve`]); back faces are culled. The radii are stored
-    /// as fractions of the largest, `r_max * r[i] / 65535` (a relative error of at most
-    /// 8e-6 of the largest radius, exact where the radius is constant), so that the segment
-    /// fits the 64 bytes of a primitive.
+    /// A piece of a segment of a `bsplinecurve`: the tube around the uniform cubic B-spline of
+    /// the four control points `p` (see [`crate::curve`]), the part `piece` of its segment
+    /// (the control points are the piece's own, its parameter runs over [0, 1]); back faces
+    /// are culled. The radii are stored as fractions of the largest, `r_max * r[i] / 65535`
+    /// (a relative error of at most 8e-6 of the largest radius, exact where the radius is
+    /// constant), so that the piece fits the 64 bytes of a primitive.
     BSpline {
         /// The control points.
         p: [Vec3; 4],
@@ -91,6 +92,8 @@ pub enum Primitive {
         r_max: f32,
         /// The radii as fractions of `r_max`, in units of 1 / 65535.
         r: [u16; 4],
+        /// Which part of its segment this is ([`crate::curve::Piece::code`]).
+        piece: u8,
     },
 }
 
@@ -146,8 +149,9 @@ impl Primitive {
         }
     }
 
-    /// A B-spline segment from its four control points and radii (radii >= 0).
-    pub fn new_bspline(p: [Vec3; 4], radii: [f32; 4]) -> Primitive {
+    /// A B-spline segment's `piece` from the piece's own four control points and radii (radii
+    /// >= 0).
+    pub fn new_bspline(p: [Vec3; 4], radii: [f32; 4], piece: crate::curve::Piece) -> Primitive {
         let r_max = radii.iter().fold(0.0f32, |m, &x| m.max(x));
         let r = radii.map(|x| {
             if r_max > 0.0 {
@@ -156,7 +160,12 @@ impl Primitive {
                 0
             }
         });
-        Primitive::BSpline { p, r_max, r }
+        Primitive::BSpline {
+            p,
+            r_max,
+            r,
+            piece: piece.code(),
+        }
     }
 
     /// A [`Primitive::BSpline`]'s control points and decoded radii; `None` for other
@@ -164,7 +173,7 @@ impl Primitive {
     #[inline(always)]
     pub fn bspline_segment(&self) -> Option<([Vec3A; 4], [f32; 4])> {
         match *self {
-            Primitive::BSpline { p, r_max, r } => Some((
+            Primitive::BSpline { p, r_max, r, .. } => Some((
                 p.map(Vec3A::from),
                 r.map(|q| r_max * (q as f32 * (1.0 / 65535.0))),
             )),

@@ -446,9 +446,25 @@ fn geometry(
             // One primitive per segment, referenced by its index. The loader refuses
             // emitters on curves.
             for i in 0..c.segments.len() as u32 {
-                let r = PrimRef::single(si, i);
-                prims.push(primitive_of_geometry(&shape.geometry, r));
-                refs.push(r);
+                // B-spline segments in pieces short enough for tight boxes.
+                let pieces = match c.basis {
+                    pt_scene::CurveBasis::Linear => vec![None],
+                    pt_scene::CurveBasis::BSpline => {
+                        let cp = c.segment(i as usize);
+                        crate::curve::Piece::split(std::array::from_fn(|k| cp[k]))
+                            .map(|p| Some(p.code()))
+                            .collect()
+                    }
+                };
+                for part in pieces {
+                    let r = PrimRef {
+                        shape: si,
+                        local: i,
+                        part,
+                    };
+                    prims.push(primitive_of_geometry(&shape.geometry, r));
+                    refs.push(r);
+                }
             }
             stats.curve_segments += c.segments.len();
             data.curve_segments = c.segments.len() as u32;

@@ -14,9 +14,11 @@ pub(super) struct PrimRef {
     /// Triangle index within the shape's mesh (0 for spheres); for a parallelogram, the first
     /// of its two triangles (`local + 1` is the other).
     pub(super) local: u32,
-    /// For a parallelogram: which vertex of triangle `local` is its corner `v0` (its edges run
-    /// to the next two vertices in winding order). `None` for a triangle or sphere.
-    pub(super) corner: Option<u8>,
+    /// Which part of element `local` the primitive is. For a parallelogram: which vertex of
+    /// triangle `local` is its corner `v0` (its edges run to the next two vertices in winding
+    /// order). For a piece of B-spline segment `local`: which piece
+    /// ([`crate::curve::Piece::code`]). `None` for a whole triangle, sphere or segment.
+    pub(super) part: Option<u8>,
 }
 
 impl PrimRef {
@@ -25,7 +27,7 @@ impl PrimRef {
         PrimRef {
             shape,
             local,
-            corner: None,
+            part: None,
         }
     }
 
@@ -39,7 +41,7 @@ impl PrimRef {
             .get(self.local as usize)
             .copied()
             .unwrap_or([0, 0, 0]);
-        match self.corner {
+        match self.part {
             Some(c) => rotate(t, c),
             None => t,
         }
@@ -118,7 +120,7 @@ pub(super) fn add_mesh(
             let r = PrimRef {
                 shape,
                 local: k as u32,
-                corner: Some(corner),
+                part: Some(corner),
             };
             prims.push(parallelogram_primitive(mesh, r));
             refs.push(r);
@@ -194,7 +196,7 @@ pub(super) fn parallelogram_light(
 }
 
 /// The parallelogram whose corner and edges are the vertices of triangle `r.local` of `mesh`,
-/// rotated by `r.corner` (see [`parallelogram_corner`]).
+/// rotated by `r.part` (see [`parallelogram_corner`]).
 fn parallelogram_primitive(mesh: &TriangleMesh, r: PrimRef) -> Primitive {
     let [v0, v1, v2] = r
         .vertices(&mesh.indices)
@@ -282,7 +284,7 @@ pub(super) fn primitive_of(desc: &SceneDesc, r: PrimRef) -> Primitive {
 /// The BVH primitive `r` refers to in the shape `geometry`.
 pub(super) fn primitive_of_geometry(geometry: &Geometry, r: PrimRef) -> Primitive {
     match geometry {
-        Geometry::Mesh(m) if r.corner.is_some() => parallelogram_primitive(m, r),
+        Geometry::Mesh(m) if r.part.is_some() => parallelogram_primitive(m, r),
         Geometry::Mesh(m) => {
             triangle_primitive(m.indices[r.local as usize].map(|i| m.positions[i as usize]))
         }
@@ -319,10 +321,14 @@ pub(super) fn primitive_of_geometry(geometry: &Geometry, r: PrimRef) -> Primitiv
                     r0: cp[0].w,
                     r1: cp[1].w,
                 },
-                pt_scene::CurveBasis::BSpline => Primitive::new_bspline(
-                    [0, 1, 2, 3].map(|i| cp[i].truncate()),
-                    [0, 1, 2, 3].map(|i| cp[i].w),
-                ),
+                pt_scene::CurveBasis::BSpline => {
+                    let piece = crate::curve::Piece::from_code(r.part.unwrap_or(0));
+                    let (p, radii) = piece.of(
+                        [0, 1, 2, 3].map(|i| cp[i].truncate()),
+                        [0, 1, 2, 3].map(|i| cp[i].w),
+                    );
+                    Primitive::new_bspline(p, radii, piece)
+                }
             }
         }
     }

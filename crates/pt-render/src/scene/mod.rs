@@ -422,13 +422,14 @@ impl Scene {
                 );
                 Interaction::analytic(h.p, h.n, h.uv, [h.dpdu, h.dpdv], t, r.shape, id as u32)
             }
-            Primitive::BSpline { .. } => {
+            Primitive::BSpline { piece, .. } => {
                 let (p, radii) = accel.prims[id].bspline_segment().unwrap_or_default();
                 let h = crate::curve::bspline_hit(
                     &p,
                     &radii,
                     b1,
                     ray.at(t),
+                    crate::curve::Piece::from_code(piece).range(),
                     r.local,
                     shape.curve_segments,
                 );
@@ -523,7 +524,7 @@ impl Scene {
         };
         let r = refs[hit.prim as usize];
         // A parallelogram's barycentrics span both triangles: beyond b1 + b2 = 1 is the second.
-        r.local + u32::from(r.corner.is_some() && hit.b.x + hit.b.y > 1.0)
+        r.local + u32::from(r.part.is_some() && hit.b.x + hit.b.y > 1.0)
     }
 
     /// The BSDF at a hit, at the path's wavelengths ([`SurfaceMaterial::bsdf`]).
