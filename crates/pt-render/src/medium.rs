@@ -29,7 +29,22 @@ pub enum Phase {
         /// Mean cosine of the scattering angle.
         g: f32,
     },
+    /// Mitsuba's `blendphase`, nested blends flattened: `sum_i weights[i] HG(g[i])` over the
+    /// first `count` lobes (isotropic is HG with g = 0), weights summing to one. Sampled by
+    /// choosing a lobe by its weight, then sampling it exactly; the density of that is the
+    /// mixture itself.
+    Mixture {
+        /// Each lobe's share.
+        weights: [f32; MAX_PHASE_LOBES],
+        /// Each lobe's mean cosine.
+        g: [f32; MAX_PHASE_LOBES],
+        /// Lobes in use (at least 1).
+        count: u8,
+    },
 }
+
+/// Most lobes a blend of phase functions may have after nested blends are flattened.
+pub const MAX_PHASE_LOBES: usize = 4;
 
 /// A direction drawn from a phase function.
 #[derive(Clone, Copy, Debug)]
@@ -53,6 +68,14 @@ impl Phase {
                 let mu = -wo.dot(wi);
                 hg(g, mu)
             }
+            Phase::Mixture {
+                ref weights,
+                ref g,
+                count,
+            } => {
+                let mu = -wo.dot(wi);
+                (0..count as usize).map(|i| weights[i] * hg(g[i], mu)).sum()
+            }
         }
     }
 
@@ -64,6 +87,27 @@ impl Phase {
         let mu = match *self {
             Phase::Isotropic => 1.0 - 2.0 * u.x,
             Phase::HenyeyGreenstein { g } => sample_hg_cosine(g, u.x),
+            Phase::Mixture {
+                ref weights,
+                ref g,
+                count,
+            } => {
+                // Pick the lobe whose share of [0, 1) holds u.x and reuse u.x, rescaled
+                // within that share, to sample it.
+                let mut start = 0.0;
+                let last = count as usize - 1;
+                let mut mu = 0.0;
+                for i in 0..=last {
+                    let end = start + weights[i];
+                    if u.x < end || i == last {
+                        let v = ((u.x - start) / weights[i].max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
+                        mu = sample_hg_cosine(g[i], v);
+                        break;
+                    }
+                    start = end;
+                }
+                mu
+            }
         };
         let sin = (1.0 - mu * mu).max(0.0).sqrt();
         let phi = 2.0 * PI * u.y;
@@ -244,6 +288,11 @@ mod tests {
             Phase::HenyeyGreenstein { g: 0.7 },
             Phase::HenyeyGreenstein { g: -0.4 },
             Phase::HenyeyGreenstein { g: 0.0 },
+            Phase::Mixture {
+                weights: [0.25, 0.75, 0.0, 0.0],
+                g: [0.0, 0.6, 0.0, 0.0],
+                count: 2,
+            },
         ] {
             let (n_mu, n_phi) = (4000, 16);
             let (mut total, mut mean) = (0.0f64, 0.0f64);
@@ -263,6 +312,12 @@ mod tests {
             let g = match phase {
                 Phase::Isotropic => 0.0,
                 Phase::HenyeyGreenstein { g } => f64::from(g),
+                // The mean cosine of a mixture is the weighted mean of its lobes'.
+                Phase::Mixture {
+                    weights, g, count, ..
+                } => (0..count as usize)
+                    .map(|i| f64::from(weights[i]) * f64::from(g[i]))
+                    .sum(),
             };
             assert!((total - 1.0).abs() < 1e-3, "{phase:?}: integral {total}");
             assert!((mean - g).abs() < 1e-3, "{phase:?}: mean cosine {mean}");
@@ -277,9 +332,18 @@ mod tests {
     fn sampling_matches_the_density() {
         let wo = Vec3::new(-0.2, 0.5, -0.84).normalize();
         let forward = -wo;
+        // A blend of a forward and a backward lobe with an isotropic one: its sampler must
+        // pick each lobe in proportion (a blend sampled as its first lobe only, or with its
+        // weights swapped, gives chi-square in the thousands too).
+        let blend = Phase::Mixture {
+            weights: [0.5, 0.3, 0.2, 0.0],
+            g: [0.8, -0.5, 0.0, 0.0],
+            count: 3,
+        };
         for phase in [
             Phase::HenyeyGreenstein { g: 0.6 },
             Phase::HenyeyGreenstein { g: -0.3 },
+            blend,
         ] {
             let bins = 20;
             let n = 50_000;
@@ -297,14 +361,29 @@ mod tests {
                 let mu = forward.dot(s.wi).clamp(-1.0, 1.0 - 1e-7);
                 counts[((mu + 1.0) / 2.0 * bins as f32) as usize] += 1;
             }
-            let Phase::HenyeyGreenstein { g } = phase else {
-                unreachable!()
+            let lobes: Vec<(f64, f64)> = match phase {
+                Phase::HenyeyGreenstein { g } => vec![(1.0, f64::from(g))],
+                Phase::Mixture {
+                    weights, g, count, ..
+                } => (0..count as usize)
+                    .map(|i| (f64::from(weights[i]), f64::from(g[i])))
+                    .collect(),
+                Phase::Isotropic => unreachable!(),
             };
-            // Cumulative in mu: 2 pi int_{-1}^{mu} hg dmu.
+            // Cumulative in mu: 2 pi int_{-1}^{mu} hg dmu (uniform for g = 0), summed over
+            // the lobes by their weights.
             let cdf = |mu: f64| {
-                let g = f64::from(g);
-                (1.0 - g * g) / (2.0 * g)
-                    * (1.0 / (1.0 + g * g - 2.0 * g * mu).sqrt() - 1.0 / (1.0 + g))
+                lobes
+                    .iter()
+                    .map(|&(w, g)| {
+                        w * if g == 0.0 {
+                            (mu + 1.0) / 2.0
+                        } else {
+                            (1.0 - g * g) / (2.0 * g)
+                                * (1.0 / (1.0 + g * g - 2.0 * g * mu).sqrt() - 1.0 / (1.0 + g))
+                        }
+                    })
+                    .sum::<f64>()
             };
             let mut chi2 = 0.0;
             for (b, &c) in counts.iter().enumerate() {

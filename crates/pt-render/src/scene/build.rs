@@ -187,10 +187,10 @@ fn add_medium(
             pt_scene::SpectrumDesc::Constant(a) | pt_scene::SpectrumDesc::Uniform(a) => *a > 0.0,
             _ => albedo_rgb.iter().any(|&x| x > 0.0),
         };
-    let phase = match m.phase {
-        pt_scene::PhaseDesc::Isotropic => Phase::Isotropic,
-        pt_scene::PhaseDesc::HenyeyGreenstein { g } => Phase::HenyeyGreenstein { g },
-    };
+    let phase = phase_of(&m.phase).map_err(|message| BuildError {
+        loc: m.loc.clone(),
+        message,
+    })?;
     media.push((
         m.clone(),
         Medium {
@@ -600,4 +600,89 @@ fn power_selection(lights: &[Light], scene_radius: f32) -> Vec<f32> {
             }
         })
         .collect()
+}
+
+/// The render-side phase function of `desc`: a `blendphase` (nested ones too) becomes the
+/// mixture of its Henyey-Greenstein lobes (isotropic is g = 0).
+fn phase_of(desc: &pt_scene::PhaseDesc) -> Result<Phase, String> {
+    use pt_scene::PhaseDesc;
+    fn lobes(desc: &PhaseDesc, share: f32, out: &mut Vec<(f32, f32)>) {
+        match desc {
+            PhaseDesc::Isotropic => out.push((share, 0.0)),
+            &PhaseDesc::HenyeyGreenstein { g } => out.push((share, g)),
+            PhaseDesc::Blend {
+                weight,
+                first,
+                second,
+            } => {
+                lobes(first, share * (1.0 - weight), out);
+                lobes(second, share * weight, out);
+            }
+        }
+    }
+    Ok(match desc {
+        PhaseDesc::Isotropic => Phase::Isotropic,
+        &PhaseDesc::HenyeyGreenstein { g } => Phase::HenyeyGreenstein { g },
+        PhaseDesc::Blend { .. } => {
+            let mut all = Vec::new();
+            lobes(desc, 1.0, &mut all);
+            all.retain(|&(w, _)| w > 0.0);
+            if all.len() > crate::medium::MAX_PHASE_LOBES {
+                return Err(format!(
+                    "a blendphase of {} phase functions (after nested blends) is more than the {} supported",
+                    all.len(),
+                    crate::medium::MAX_PHASE_LOBES
+                ));
+            }
+            let (mut weights, mut g) = (
+                [0.0; crate::medium::MAX_PHASE_LOBES],
+                [0.0; crate::medium::MAX_PHASE_LOBES],
+            );
+            for (i, &(w, gi)) in all.iter().enumerate() {
+                weights[i] = w;
+                g[i] = gi;
+            }
+            Phase::Mixture {
+                weights,
+                g,
+                count: all.len().max(1) as u8,
+            }
+        }
+    })
+}
+
+#[cfg(test)]
+mod phase_tests {
+    use super::*;
+    use pt_scene::PhaseDesc;
+
+    /// A blend of an isotropic phase (share 1 - 0.25) and a blend of two lobes (0.25, split
+    /// evenly) flattens to the three lobes with shares 0.75, 0.125, 0.125 (the second
+    /// function gets `weight`, as in Mitsuba); five lobes are refused.
+    #[test]
+    fn nested_blends_flatten_to_weighted_lobes() {
+        let hg = |g| Box::new(PhaseDesc::HenyeyGreenstein { g });
+        let blend = |weight, first, second| PhaseDesc::Blend {
+            weight,
+            first,
+            second,
+        };
+        let desc = blend(
+            0.25,
+            Box::new(PhaseDesc::Isotropic),
+            Box::new(blend(0.5, hg(0.5), hg(-0.5))),
+        );
+        assert_eq!(
+            phase_of(&desc).unwrap(),
+            Phase::Mixture {
+                weights: [0.75, 0.125, 0.125, 0.0],
+                g: [0.0, 0.5, -0.5, 0.0],
+                count: 3,
+            }
+        );
+        let four = blend(0.5, Box::new(desc.clone()), hg(0.1));
+        assert!(phase_of(&four).is_ok());
+        let five = blend(0.5, Box::new(four), hg(0.2));
+        assert!(phase_of(&five).unwrap_err().contains("more than the 4"));
+    }
 }

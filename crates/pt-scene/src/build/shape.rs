@@ -652,7 +652,8 @@ enum Volume {
     Grid(DensityGridDesc),
 }
 
-/// A phase function: `isotropic`, or `hg` with `g` (default 0.8, Mitsuba's) in (-1, 1).
+/// A phase function: `isotropic`, `hg` with `g` (default 0.8, Mitsuba's) in (-1, 1), or
+/// `blendphase` of two nested ones with a constant `weight` (default 0.5) in [0, 1].
 fn phase(el: &Element) -> Result<PhaseDesc> {
     let v = ObjectView::parse(el)?;
     let p = match v.plugin.as_str() {
@@ -663,6 +664,43 @@ fn phase(el: &Element) -> Result<PhaseDesc> {
                 return Err(v.prop_error("g", format!("g must lie in (-1, 1), got {g}")));
             }
             PhaseDesc::HenyeyGreenstein { g }
+        }
+        "blendphase" => {
+            let weight = v.float("weight")?.unwrap_or(0.5);
+            if !(0.0..=1.0).contains(&weight) {
+                return Err(
+                    v.prop_error("weight", format!("weight must lie in [0, 1], got {weight}"))
+                );
+            }
+            let [first, second] = v.children.as_slice() else {
+                return Err(SceneError::at(
+                    &el.loc,
+                    format!(
+                        "a blendphase needs exactly two nested phase functions, found {} (a textured weight is not supported: give a float)",
+                        v.children.len()
+                    ),
+                ));
+            };
+            let nested = |c: &Child<'_>| -> Result<PhaseDesc> {
+                match *c {
+                    Child::Object(e) if e.tag == "phase" => phase(e),
+                    Child::Object(e) => Err(SceneError::at(
+                        &e.loc,
+                        format!("a blendphase nests phase functions, not <{}>", e.tag),
+                    )),
+                    Child::Ref(e) => Err(SceneError::at(
+                        &e.loc,
+                        "a blendphase's phase functions are written inside it (a <ref> to one is not supported)",
+                    )),
+                }
+            };
+            let (first, second) = (nested(first)?, nested(second)?);
+            v.finish()?;
+            return Ok(PhaseDesc::Blend {
+                weight,
+                first: Box::new(first),
+                second: Box::new(second),
+            });
         }
         _ => return Err(plugin_error(el)),
     };

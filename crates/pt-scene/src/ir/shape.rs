@@ -307,7 +307,7 @@ pub struct DensityGridDesc {
 }
 
 /// A phase function (Mitsuba's `<phase>`).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum PhaseDesc {
     /// `isotropic`: 1 / (4 pi).
     Isotropic,
@@ -315,5 +315,14 @@ pub enum PhaseDesc {
     HenyeyGreenstein {
         /// Mean cosine of the scattering angle.
         g: f32,
+    },
+    /// `blendphase`: `(1 - weight) first + weight second`.
+    Blend {
+        /// The second phase function's share, in [0, 1].
+        weight: f32,
+        /// The first nested phase function.
+        first: Box<PhaseDesc>,
+        /// The second nested phase function.
+        second: Box<PhaseDesc>,
     },
 }

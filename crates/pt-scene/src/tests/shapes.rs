@@ -571,3 +571,53 @@ fn curves_load_their_files_and_refuse_what_they_cannot_render() {
         assert!(e.message.contains(want), "expected '{want}' in: {e}");
     }
 }
+
+/// `blendphase` nests two phase functions (blends of blends too) with a constant weight, the
+/// second's share as in Mitsuba; a missing or third phase, a texture, a `<ref>`, a weight out
+/// of [0, 1] are located errors.
+#[test]
+fn blendphase_nests_two_phase_functions() {
+    let medium = |phase: &str| {
+        scene(&format!(
+            "<integrator type=\"volpath\"/>\n<sensor type=\"perspective\"><medium type=\"homogeneous\">\n{phase}\n</medium></sensor>"
+        ))
+    };
+    let s = load(&medium(
+        r#"<phase type="blendphase"><float name="weight" value="0.25"/><phase type="isotropic"/><phase type="blendphase"><phase type="hg"><float name="g" value="0.5"/></phase><phase type="hg"><float name="g" value="-0.5"/></phase></phase></phase>"#,
+    ))
+    .unwrap();
+    let hg = |g| Box::new(PhaseDesc::HenyeyGreenstein { g });
+    assert_eq!(
+        s.camera_medium.as_ref().unwrap().phase,
+        PhaseDesc::Blend {
+            weight: 0.25,
+            first: Box::new(PhaseDesc::Isotropic),
+            second: Box::new(PhaseDesc::Blend {
+                weight: 0.5,
+                first: hg(0.5),
+                second: hg(-0.5),
+            }),
+        }
+    );
+    for (phase, want) in [
+        (
+            r#"<phase type="blendphase"><phase type="isotropic"/></phase>"#,
+            "exactly two nested phase functions, found 1",
+        ),
+        (
+            r#"<phase type="blendphase"><float name="weight" value="1.5"/><phase type="isotropic"/><phase type="isotropic"/></phase>"#,
+            "weight must lie in [0, 1]",
+        ),
+        (
+            r#"<phase type="blendphase"><texture type="bitmap" name="weight"/><phase type="isotropic"/><phase type="isotropic"/></phase>"#,
+            "blendphase",
+        ),
+        (
+            r#"<phase type="blendphase"><phase type="isotropic"/><bsdf type="diffuse"/></phase>"#,
+            "nests phase functions, not <bsdf>",
+        ),
+    ] {
+        let e = fail(&medium(phase));
+        assert!(e.loc.is_some() && e.message.contains(want), "{phase}: {e}");
+    }
+}
