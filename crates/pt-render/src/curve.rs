@@ -269,13 +269,13 @@ pub fn intersect_bspline(
     // is off by the square of that (times the curvature), far below rounding.
     let tolerance = 1e-4 * r_max;
     let mut best = (f32::INFINITY, 0.0);
-    if !ray_near_bspline(d, &q, r_max, tmin, tmax) {
+    let b = bspline_to_bezier(q);
+    if !ray_near_bspline(d, &b, r_max, tmin, tmax) {
         return best;
     }
     // A piece no longer than a few radii (as `Piece::split` makes them) is nearly straight:
     // a ray enters it at most once, so the first hit found is the hit, and where the ray
     // passes closest to it without meeting it, it misses it.
-    let b = bspline_to_bezier(q);
     let polygon = (b[1] - b[0]).length() + (b[2] - b[1]).length() + (b[3] - b[2]).length();
     let short = polygon <= 2.0 * PIECE_LENGTH_IN_RADII * r_max;
     let mut settled_miss = false;
@@ -353,7 +353,7 @@ pub fn intersect_bspline(
 }
 
 /// Whether the ray from the origin along `d` (unit length) may meet the tube of the
-/// B-spline segment `q` (control points relative to the ray origin) whose radius is at most
+/// B-spline segment with Bézier points `b` (relative to the ray origin) whose radius is at most
 /// `r_max` within `(tmin, tmax)`. In the ray's own frame (two axes across it, one along it) the
 /// ray is the origin of the plane across it; the projected curve lies in the hull of its
 /// projected Bézier points, so within `dev` of the projected chord between its ends, `dev`
@@ -363,10 +363,9 @@ pub fn intersect_bspline(
 /// ray overlaps `(tmin, tmax)`. For a thin, nearly straight piece this is a tight capsule, and
 /// it rejects most of what the BVH hands over before any iteration.
 #[inline(always)]
-fn ray_near_bspline(d: Vec3A, q: &[Vec3A; 4], r_max: f32, tmin: f32, tmax: f32) -> bool {
+fn ray_near_bspline(d: Vec3A, b: &[Vec3A; 4], r_max: f32, tmin: f32, tmax: f32) -> bool {
     let f = pt_math::Frame::from_normal(d.into());
     let (x, y) = (Vec3A::from(f.s), Vec3A::from(f.t));
-    let b = bspline_to_bezier(*q);
     let flat = b.map(|p| Vec2::new(p.dot(x), p.dot(y)));
     let along = b.map(|p| p.dot(d));
     let lo = along.iter().fold(f32::INFINITY, |m, &z| m.min(z)) - r_max;
