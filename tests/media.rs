@@ -37,6 +37,17 @@
 //!    forward-scattering phase value is 0.477/sr against 0.018/sr backwards: a phase function
 //!    evaluated the wrong way round, or a missing transmittance on either leg, fails by far.
 //!
+//! 7. Volume emission (pt's `emission`, the source term j of the transfer equation): a camera
+//!    at the centre of a black sphere of radius 30 filled with a glowing, scattering medium
+//!    (chromatic extinction 1-4 per unit, albedo 0.6, Henyey-Greenstein g = 0.5). At 30 mean
+//!    free paths or more from the walls the medium is infinite to e^-30, and the transfer
+//!    equation's solution there is uniform and isotropic, L sigma_t = j + sigma_s L, so
+//!    L = j / sigma_a. The same as a heterogeneous medium of constant RGB grids (extinction,
+//!    albedo and emission each a gridvolume: delta tracking's collision estimator of emission,
+//!    RGB grids, an albedo grid), and in spectral mode (against an emitting sphere in vacuum:
+//!    the same spectrum). Emission counted once per segment instead of per scattering event,
+//!    or divided by sigma_t instead of gathered along the path, misses by the albedo's factor.
+//!
 //! Threshold: the image mean (16x16 pixels, 1024 spp: 262144 paths; the furnaces 16384 spp) must lie within 4.5 of its
 //! standard errors (from the variance image) plus 2e-4 (float32 accumulation) of the closed form,
 //! and the standard error must be below 0.25% of the value, so that a 2% bias (say, sigma used
@@ -246,6 +257,165 @@ fn absorbing_medium_around_the_camera_attenuates_by_the_radius() {
         r#"<lookat origin="0, 0, 0""#,
     );
     check_mean("absorbing_centre", &xml, sigma.map(|s| (-s).exp()));
+}
+
+/// The glowing medium of the module doc (item 7): `medium` (the XML of a `<medium ...
+/// id="m">`) fills a black sphere of radius 30 and holds the camera at its centre.
+fn glowing_scene(medium: &str) -> String {
+    furnace_scene(medium)
+        .replace(
+            r#"<lookat origin="0.1, 0.2, 0""#,
+            r#"<lookat origin="0, 0, 0""#,
+        )
+        .replace(
+            r#"<emitter type="area"><rgb name="radiance" value="1, 1, 1"/></emitter>"#,
+            r#"<float name="radius" value="30"/>"#,
+        )
+}
+
+/// Extinction, albedo and emission of the glowing medium (module doc, 7).
+const GLOW_SIGMA: [f64; 3] = [1.0, 2.0, 4.0];
+const GLOW_ALBEDO: f64 = 0.6;
+const GLOW_J: [f64; 3] = [0.3, 0.5, 0.8];
+
+/// The grid medium's extinction: less chromatic than [`GLOW_SIGMA`], since delta tracking
+/// against the largest channel's majorant gives the others noisy null-collision weights.
+const GLOW_GRID_SIGMA: [f64; 3] = [2.0, 2.5, 3.0];
+
+/// L = j / sigma_a of a glowing medium of extinction `sigma`.
+fn glow_radiance(sigma: [f64; 3]) -> [f64; 3] {
+    std::array::from_fn(|c| GLOW_J[c] / ((1.0 - GLOW_ALBEDO) * sigma[c]))
+}
+
+#[test]
+fn infinite_glowing_medium_has_radiance_j_over_sigma_a() {
+    let [s0, s1, s2] = GLOW_SIGMA;
+    let [j0, j1, j2] = GLOW_J;
+    let medium = format!(
+        r#"<medium type="homogeneous" id="m">
+        <rgb name="sigma_t" value="{s0}, {s1}, {s2}"/>
+        <float name="albedo" value="{GLOW_ALBEDO}"/>
+        <rgb name="emission" value="{j0}, {j1}, {j2}"/>
+        <phase type="hg"><float name="g" value="0.5"/></phase>
+    </medium>"#
+    );
+    check_mean(
+        "glow_homogeneous",
+        &glowing_scene(&medium),
+        glow_radiance(GLOW_SIGMA),
+    );
+}
+
+#[test]
+fn infinite_glowing_grid_medium_has_radiance_j_over_sigma_a() {
+    use pt_scene::volgrid::{write_vol, VolumeGrid};
+    let dir = scratch("media_glow_grid_files");
+    let constant = |values: &[f64]| VolumeGrid {
+        resolution: [2, 2, 2],
+        channels: values.len() as u32,
+        bbox: [[0.0; 3], [1.0; 3]],
+        values: (0..8)
+            .flat_map(|_| values.iter().map(|&v| v as f32))
+            .collect(),
+    };
+    for (name, g) in [
+        ("sigma.vol", constant(&GLOW_GRID_SIGMA)),
+        ("albedo.vol", constant(&[GLOW_ALBEDO])),
+        ("emission.vol", constant(&GLOW_J)),
+    ] {
+        std::fs::write(dir.join(name), write_vol(&g)).unwrap();
+    }
+    // The grids fill a cube of side 60 around the camera (the medium ends at the extinction
+    // grid's box; the walls are the cube's, black).
+    let to_world = r#"<transform name="to_world"><translate value="-0.5, -0.5, -0.5"/><scale value="60"/></transform>"#;
+    let grid = |name: &str, file: &str| {
+        format!(
+            r#"<volume type="gridvolume" name="{name}"><string name="filename" value="{}"/>{to_world}</volume>"#,
+            dir.join(file).display()
+        )
+    };
+    let medium = format!(
+        r#"<medium type="heterogeneous" id="m">
+        {}{}{}
+        <phase type="hg"><float name="g" value="0.5"/></phase>
+    </medium>"#,
+        grid("sigma_t", "sigma.vol"),
+        grid("albedo", "albedo.vol"),
+        grid("emission", "emission.vol")
+    );
+    let xml = glowing_scene(&medium).replace(
+        r#"<shape type="sphere">"#,
+        r#"<shape type="cube"><transform name="to_world"><scale value="30"/></transform>"#,
+    );
+    let xml = xml.replace(r#"<float name="radius" value="30"/>"#, "");
+    check_mean_at(
+        "glow_grids",
+        &xml,
+        glow_radiance(GLOW_GRID_SIGMA),
+        FURNACE_SPP,
+    );
+}
+
+#[test]
+fn infinite_glowing_medium_spectrally() {
+    // Equal-energy emission j = 0.4 in a grey medium with sigma_a = 1: L = 0.4 E, the radiance
+    // of a sphere emitting 0.4 E seen in vacuum (rendered with as many samples; both means'
+    // standard errors in the threshold).
+    let spectral = r#"<spectrum name="radiance" value="400:0.4, 700:0.4"/>"#;
+    let vacuum = furnace_scene("").replace(r#"<rgb name="radiance" value="1, 1, 1"/>"#, spectral);
+    let medium = r#"<medium type="homogeneous" id="m">
+        <float name="sigma_t" value="2"/>
+        <float name="albedo" value="0.5"/>
+        <spectrum name="emission" value="400:0.4, 700:0.4"/>
+    </medium>"#;
+    let glowing = glowing_scene(medium);
+    let mut means = Vec::new();
+    for (name, xml) in [("vacuum", vacuum), ("medium", glowing)] {
+        let dir = scratch(&format!("media_glow_spectral_{name}"));
+        let path = dir.join("scene.xml");
+        std::fs::write(&path, &xml).unwrap();
+        let (img, var) = render(&path, &dir, "out", &["--spp", SPP]);
+        means.push(mean_and_stderr(&img, &var));
+    }
+    let ((want, se_want), (got, se_got)) = (means[0], means[1]);
+    for c in 0..3 {
+        let se = se_want[c].hypot(se_got[c]);
+        eprintln!(
+            "glow_spectral channel {c}: medium {:.5} vacuum {:.5} (stderr {se:.2e})",
+            got[c], want[c]
+        );
+        assert!(se < 0.0025 * want[c], "standard error {se} too large");
+        assert!(
+            (got[c] - want[c]).abs() <= 4.5 * se + 2e-4,
+            "channel {c}: {} in the glowing medium, {} from the sphere",
+            got[c],
+            want[c]
+        );
+    }
+}
+
+/// The light tracer does not start paths in glowing media: a located refusal, no output.
+#[test]
+fn light_tracer_refuses_glowing_media() {
+    let dir = scratch("media_glow_refused");
+    let path = dir.join("scene.xml");
+    let medium = r#"<medium type="homogeneous" id="m"><float name="emission" value="1"/></medium>"#;
+    std::fs::write(&path, glowing_scene(medium)).unwrap();
+    let out = dir.join("out.exr");
+    let o = pt(&[
+        "render",
+        path.to_str().unwrap(),
+        "--integrator",
+        "ptracer",
+        "--spp",
+        "1",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("glowing media"), "{err}");
+    assert!(!out.exists(), "ptracer wrote an image");
 }
 
 /// The light-side methods that do not trace media (all but `ptracer`, which does: its images

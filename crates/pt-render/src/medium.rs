@@ -3,17 +3,23 @@
 //!
 //! A medium has the extinction `sigma_t` (per scene unit of length) and the single scattering
 //! albedo `a`: scattering `sigma_s = a sigma_t`, absorption `sigma_a = (1 - a) sigma_t`. In a
-//! heterogeneous medium the extinction is a constant spectrum times a density grid's value at
-//! the point ([`Density`]; zero outside the grid's box). Light travelling a distance `d` keeps the fraction `exp(-sigma_t d)`
+//! heterogeneous medium the extinction is a constant spectrum times an extinction grid's value
+//! at the point ([`Grid`]; the medium ends at the grid's box), and the albedo may be a grid too
+//! ([`VolumeSpectrum`]). Light travelling a distance `d` keeps the fraction `exp(-sigma_t d)`
 //! (Beer-Lambert); at a scattering event it leaves in a direction drawn from the phase function.
+//! A medium may also emit (a pt extension, [`Medium::emission`]).
 //! The integrators that use them are in `pt-integrators` (`volpath.rs`).
 //!
 //! Direction convention (Mitsuba's): `wo` points back along the path (towards the camera or the
 //! previous vertex, `-ray.dir`), `wi` is the direction the light is exchanged with (the next
 //! segment, or towards a light); both unit vectors, world space.
 
+mod grid;
+
+pub use grid::{Grid, VolumeSpectrum};
+
 use crate::texture::ConstantSpectrum;
-use pt_math::{Frame, Mat4, Ray, Vec2, Vec3};
+use pt_math::{Frame, Vec2, Vec3};
 use pt_spectrum::{SampledSpectrum, SampledWavelengths};
 use std::f32::consts::PI;
 
@@ -141,13 +147,14 @@ fn sample_hg_cosine(g: f32, u: f32) -> f32 {
     ((1.0 + g * g - s * s) / (2.0 * g)).clamp(-1.0, 1.0)
 }
 
-/// A homogeneous medium in the scene's colour mode.
+/// A medium in the scene's colour mode: homogeneous (`density` is `None`) or heterogeneous.
 #[derive(Clone, Debug)]
 pub struct Medium {
-    /// Extinction per scene unit of length.
+    /// Extinction per scene unit of length; in a heterogeneous medium the factor that scales
+    /// the extinction grid's value (Mitsuba's `scale`).
     pub sigma_t: ConstantSpectrum,
-    /// Single scattering albedo, in [0, 1].
-    pub albedo: ConstantSpectrum,
+    /// Single scattering albedo, in [0, 1]: a constant, or a grid looked up at the point.
+    pub albedo: VolumeSpectrum,
     /// The phase function.
     pub phase: Phase,
     /// Whether scattering events sample the lights (Mitsuba's `sample_emitters`).
@@ -155,103 +162,36 @@ pub struct Medium {
     /// Whether light can scatter in it at all (some albedo and extinction above zero): a medium
     /// that only absorbs is crossed with its transmittance instead of sampled distances.
     pub scatters: bool,
-    /// The density grid of a heterogeneous medium (`sigma_t` is then the factor it scales),
-    /// `None` for a homogeneous one.
-    pub density: Option<Density>,
-}
-
-/// A heterogeneous medium's density: a grid of values at cell centres over the grid's unit
-/// cube, looked up trilinearly (or at the nearest cell) and clamped at the faces, as Mitsuba's
-/// `gridvolume` does; zero outside the cube.
-#[derive(Clone, Debug)]
-pub struct Density {
-    values: Vec<f32>,
-    resolution: [usize; 3],
-    nearest: bool,
-    /// World space to the grid's unit cube.
-    world_to_grid: Mat4,
-    /// The largest value: with the extinction factor, the majorant of delta and ratio
-    /// tracking.
-    pub max: f32,
-}
-
-impl Density {
-    /// A density over the grid `values` (x fastest) of `resolution` cells, placed by
-    /// `to_world` (the unit cube to world space; invertible).
-    pub fn new(values: Vec<f32>, resolution: [u32; 3], to_world: Mat4, nearest: bool) -> Self {
-        let max = values.iter().copied().fold(0.0f32, f32::max);
-        Density {
-            values,
-            resolution: resolution.map(|r| r as usize),
-            nearest,
-            world_to_grid: to_world.inverse(),
-            max,
-        }
-    }
-
-    /// The density at the world point `p` (0 outside the grid's cube).
-    #[inline]
-    pub fn at(&self, p: Vec3) -> f32 {
-        let g = self.world_to_grid.transform_point3(p);
-        if !(g.cmpge(Vec3::ZERO).all() && g.cmple(Vec3::ONE).all()) {
-            return 0.0;
-        }
-        let [nx, ny, nz] = self.resolution;
-        let value = |x: usize, y: usize, z: usize| self.values[(z * ny + y) * nx + x];
-        let res = Vec3::new(nx as f32, ny as f32, nz as f32);
-        if self.nearest {
-            let c = (g * res).floor().min(res - Vec3::ONE).max(Vec3::ZERO);
-            return value(c.x as usize, c.y as usize, c.z as usize);
-        }
-        // Cell centres at (i + 0.5) / n: the continuous index of p is g n - 0.5, clamped.
-        let f = (g * res - Vec3::splat(0.5))
-            .max(Vec3::ZERO)
-            .min(res - Vec3::ONE);
-        let i = f.floor();
-        let w = f - i;
-        let (x0, y0, z0) = (i.x as usize, i.y as usize, i.z as usize);
-        let (x1, y1, z1) = (
-            (x0 + 1).min(nx - 1),
-            (y0 + 1).min(ny - 1),
-            (z0 + 1).min(nz - 1),
-        );
-        let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
-        let c00 = lerp(value(x0, y0, z0), value(x1, y0, z0), w.x);
-        let c10 = lerp(value(x0, y1, z0), value(x1, y1, z0), w.x);
-        let c01 = lerp(value(x0, y0, z1), value(x1, y0, z1), w.x);
-        let c11 = lerp(value(x0, y1, z1), value(x1, y1, z1), w.x);
-        lerp(lerp(c00, c10, w.y), lerp(c01, c11, w.y), w.z)
-    }
-
-    /// The interval of `ray`'s parameter in which it is inside the grid's cube, clipped to
-    /// `[ray.tmin, tmax]`; `None` if it misses. The parameter is the world one (an affine map
-    /// keeps it).
-    #[inline]
-    pub fn clip(&self, ray: &Ray, tmax: f32) -> Option<(f32, f32)> {
-        let o = self.world_to_grid.transform_point3(ray.origin);
-        let d = self.world_to_grid.transform_vector3(ray.dir);
-        let inv = d.recip();
-        let (a, b) = ((Vec3::ZERO - o) * inv, (Vec3::ONE - o) * inv);
-        let (lo, hi) = (a.min(b), a.max(b));
-        // NaN (a zero direction component with o on a face) counts as no bound.
-        let t0 = [lo.x, lo.y, lo.z, ray.tmin]
-            .into_iter()
-            .fold(f32::NEG_INFINITY, |m, x| if x > m { x } else { m });
-        let t1 = [hi.x, hi.y, hi.z, tmax]
-            .into_iter()
-            .fold(f32::INFINITY, |m, x| if x < m { x } else { m });
-        (t0 < t1).then_some((t0, t1))
-    }
+    /// The extinction grid of a heterogeneous medium (one channel, or three: RGB), which
+    /// `sigma_t` scales; the medium exists only inside the grid's box. `None`: homogeneous.
+    pub density: Option<Grid>,
+    /// Volume emission (a pt extension): radiance emitted per scene unit of path length at each
+    /// point, the source term `j` of the radiative transfer equation
+    /// `dL/ds = -sigma_t L + sigma_s (phase * L) + j`; an infinite homogeneous medium then
+    /// glows with `L = j / sigma_a`. Inside a heterogeneous medium's box only. `None`: dark.
+    pub emission: Option<VolumeSpectrum>,
 }
 
 impl Medium {
-    /// Extinction and albedo at the path's wavelengths (RGB mode: per channel).
+    /// The extinction at the world point `p` (inside the grid's box for a heterogeneous
+    /// medium) at the path's wavelengths (RGB mode: per channel).
     #[inline]
-    pub fn coefficients(&self, lambda: &SampledWavelengths) -> (SampledSpectrum, SampledSpectrum) {
-        (self.sigma_t.at(lambda), self.albedo.at(lambda))
+    pub fn sigma_t_at(&self, p: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
+        match &self.density {
+            None => self.sigma_t.at(lambda),
+            Some(g) if g.is_scalar() => self.sigma_t.at(lambda) * g.scalar_at(p),
+            Some(g) => self.sigma_t.at(lambda) * g.at(p, lambda),
+        }
     }
 
-    /// Transmittance `exp(-sigma_t d)` over the distance `d` at the path's wavelengths.
+    /// The single scattering albedo at the world point `p`.
+    #[inline]
+    pub fn albedo_at(&self, p: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
+        self.albedo.at(p, lambda)
+    }
+
+    /// Transmittance `exp(-sigma_t d)` over the distance `d` at the path's wavelengths
+    /// (homogeneous media).
     #[inline]
     pub fn transmittance(&self, d: f32, lambda: &SampledWavelengths) -> SampledSpectrum {
         transmittance(self.sigma_t.at(lambda), d)

@@ -14,7 +14,7 @@ use crate::camera::Camera;
 use crate::geometry::Primitive;
 use crate::light::{build_light, AreaLight, Light, LightShape};
 use crate::material::{build_material, SurfaceMaterial};
-use crate::medium::{Density, Medium, Phase};
+use crate::medium::{Grid, Medium, Phase, VolumeSpectrum};
 use crate::texture::{
     constant_spectrum, rgb_of, spectrum_for_role, DisplayPrimaries, Role, Texture, TextureBuilder,
 };
@@ -174,39 +174,68 @@ fn add_medium(
     if let Some(i) = media.iter().position(|(d, _)| d == m) {
         return Ok(i as u32);
     }
-    let sigma_rgb = rgb_of(&m.sigma_t, Role::Unbounded);
-    let albedo_rgb = rgb_of(&m.albedo, Role::Albedo);
-    if sigma_rgb.iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
-        return Err(BuildError {
-            loc: m.loc.clone(),
-            message: "sigma_t must be finite and non-negative".into(),
-        });
-    }
-    let scatters = sigma_rgb.iter().any(|&x| x > 0.0)
-        && match &m.albedo {
-            pt_scene::SpectrumDesc::Constant(a) | pt_scene::SpectrumDesc::Uniform(a) => *a > 0.0,
-            _ => albedo_rgb.iter().any(|&x| x > 0.0),
-        };
-    let phase = phase_of(&m.phase).map_err(|message| BuildError {
+    let err = |message: String| BuildError {
         loc: m.loc.clone(),
         message,
-    })?;
+    };
+    let sigma_rgb = rgb_of(&m.sigma_t, Role::Unbounded);
+    if sigma_rgb.iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
+        return Err(err("sigma_t must be finite and non-negative".into()));
+    }
+    let spectral = mode == ColorMode::Spectral;
+    let grid = |g: &pt_scene::GridDesc, emission: bool| {
+        Grid::new(
+            &g.grid.values,
+            g.grid.channels,
+            g.grid.resolution,
+            g.to_world,
+            g.nearest,
+            spectral,
+            emission,
+        )
+        .ok_or_else(|| {
+            err(format!(
+                "a grid with {} channels (1 or 3 are read)",
+                g.grid.channels
+            ))
+        })
+    };
+    let volume = |v: &pt_scene::VolumeDesc, role: Role| -> Result<VolumeSpectrum, BuildError> {
+        Ok(match v {
+            pt_scene::VolumeDesc::Constant(c) => {
+                VolumeSpectrum::Constant(constant_spectrum(c, role, mode))
+            }
+            pt_scene::VolumeDesc::Grid(g) => VolumeSpectrum::Grid(grid(g, role == Role::Emission)?),
+        })
+    };
+    let density = m.density.as_ref().map(|g| grid(g, false)).transpose()?;
+    let albedo = volume(&m.albedo, Role::Albedo)?;
+    let extinct =
+        sigma_rgb.iter().all(|&x| x == 0.0) || density.as_ref().is_some_and(|d| d.max == 0.0);
+    let scatters = !extinct
+        && match &m.albedo {
+            pt_scene::VolumeDesc::Constant(
+                pt_scene::SpectrumDesc::Constant(a) | pt_scene::SpectrumDesc::Uniform(a),
+            ) => *a > 0.0,
+            pt_scene::VolumeDesc::Constant(a) => rgb_of(a, Role::Albedo).iter().any(|&x| x > 0.0),
+            pt_scene::VolumeDesc::Grid(g) => g.grid.values.iter().any(|&x| x > 0.0),
+        };
+    let emission = m
+        .emission
+        .as_ref()
+        .map(|e| volume(e, Role::Emission))
+        .transpose()?;
+    let phase = phase_of(&m.phase).map_err(err)?;
     media.push((
         m.clone(),
         Medium {
             sigma_t: constant_spectrum(&m.sigma_t, Role::Unbounded, mode),
-            albedo: constant_spectrum(&m.albedo, Role::Albedo, mode),
+            albedo,
             phase,
             sample_emitters: m.sample_emitters,
             scatters,
-            density: m.density.as_ref().map(|g| {
-                Density::new(
-                    g.grid.values.clone(),
-                    g.grid.resolution,
-                    g.to_world,
-                    g.nearest,
-                )
-            }),
+            density,
+            emission,
         },
     ));
     Ok((media.len() - 1) as u32)

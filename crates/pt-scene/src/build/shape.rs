@@ -422,12 +422,15 @@ impl<'e> Builder<'e> {
 
 impl<'e> Builder<'e> {
     /// `homogeneous` or `heterogeneous` medium (Mitsuba 3.9.1): `sigma_t` (extinction per
-    /// scene unit: float, rgb or spectrum, or for `heterogeneous` a nested `gridvolume` or
-    /// `constvolume` named sigma_t; default 1), `scale` (multiplies sigma_t; default 1),
-    /// `albedo` (single scattering albedo in [0, 1]: float, rgb, spectrum or a `constvolume`;
-    /// Mitsuba's default 0.75), `sample_emitters` (default true), `has_spectral_extinction`
-    /// (accepted: the estimate does not depend on it), and a nested phase function ([`phase`];
-    /// isotropic by default). A medium with an id is built once (its grid read once).
+    /// scene unit: float, rgb or spectrum, or for `heterogeneous` a nested `gridvolume` (one or
+    /// three channels) or `constvolume` named sigma_t; default 1), `scale` (multiplies sigma_t;
+    /// default 1), `albedo` (single scattering albedo in [0, 1]: float, rgb, spectrum, or a
+    /// `constvolume` or `gridvolume` named albedo; Mitsuba's default 0.75), `sample_emitters`
+    /// (default true), `has_spectral_extinction` (accepted: the estimate does not depend on
+    /// it), a nested phase function ([`phase`]; isotropic by default), and pt's `emission`
+    /// (volume emission, [`MediumDesc::emission`]: a spectrum, or a volume named emission; a
+    /// grid only in a heterogeneous medium). A medium with an id is built once (its grids read
+    /// once).
     pub(super) fn medium(&mut self, el: &Element) -> Result<MediumDesc> {
         if let Some(m) = el.attr("id").and_then(|id| self.medium_memo.get(id)) {
             return Ok(m.clone());
@@ -447,7 +450,7 @@ impl<'e> Builder<'e> {
             _ => return Err(plugin_error(el)),
         };
         let mut phase_fn = None;
-        let (mut sigma_volume, mut albedo_volume) = (None, None);
+        let (mut sigma_volume, mut albedo_volume, mut emission_volume) = (None, None, None);
         for child in &v.children {
             let what = child.written();
             match what.tag.as_str() {
@@ -458,35 +461,47 @@ impl<'e> Builder<'e> {
                         "a medium takes only one phase function",
                     ))
                 }
-                "volume" if !heterogeneous && what.attr("name") != Some("albedo") => {
-                    return Err(SceneError::at(
-                        &what.loc,
-                        "a homogeneous medium takes sigma_t as float, rgb or spectrum, not <volume> (use type=\"heterogeneous\" for grids)",
-                    ))
+                "volume" => {
+                    let (slot, role) = match what.attr("name") {
+                        Some("sigma_t") => (&mut sigma_volume, GridRole::Extinction),
+                        Some("albedo") => (&mut albedo_volume, GridRole::Albedo),
+                        Some("emission") => (&mut emission_volume, GridRole::Emission),
+                        other => {
+                            return Err(SceneError::at(
+                                &what.loc,
+                                format!(
+                                    "a medium's <volume> needs name=\"sigma_t\", name=\"albedo\" or name=\"emission\", got {}",
+                                    other.map_or("none".to_string(), |n| format!("\"{n}\""))
+                                ),
+                            ))
+                        }
+                    };
+                    if slot.is_some() {
+                        return Err(SceneError::at(
+                            &what.loc,
+                            format!("a medium takes only one {}", role.name()),
+                        ));
+                    }
+                    let volume = self.volume(what, role)?;
+                    if !heterogeneous && matches!(volume, Volume::Grid(_)) {
+                        match role {
+                            GridRole::Albedo => {}
+                            GridRole::Extinction => {
+                                return Err(SceneError::at(
+                                    &what.loc,
+                                    "a homogeneous medium takes sigma_t as float, rgb, spectrum or constvolume, not a grid (use type=\"heterogeneous\" for grids)",
+                                ))
+                            }
+                            GridRole::Emission => {
+                                return Err(SceneError::at(
+                                    &what.loc,
+                                    "an emission grid needs a heterogeneous medium with an extinction grid (emission is confined to its box)",
+                                ))
+                            }
+                        }
+                    }
+                    *slot = Some(volume);
                 }
-                "volume" => match what.attr("name") {
-                    Some("sigma_t") if sigma_volume.is_none() => {
-                        sigma_volume = Some(self.volume(what)?)
-                    }
-                    Some("albedo") if albedo_volume.is_none() => {
-                        albedo_volume = Some(self.volume(what)?)
-                    }
-                    Some(n @ ("sigma_t" | "albedo")) => {
-                        return Err(SceneError::at(
-                            &what.loc,
-                            format!("a medium takes only one {n}"),
-                        ))
-                    }
-                    other => {
-                        return Err(SceneError::at(
-                            &what.loc,
-                            format!(
-                                "a medium's <volume> needs name=\"sigma_t\" or name=\"albedo\", got {}",
-                                other.map_or("none".to_string(), |n| format!("\"{n}\""))
-                            ),
-                        ))
-                    }
-                },
                 _ => {
                     return Err(SceneError::at(
                         &what.loc,
@@ -495,15 +510,15 @@ impl<'e> Builder<'e> {
                 }
             }
         }
+        let twice = |name: &str| {
+            v.prop_error(
+                name,
+                format!("{name} is given twice (a value and a <volume>)"),
+            )
+        };
         let (sigma_t, density) = match sigma_volume {
-            Some(Volume::Grid(g)) => {
-                if v.has("sigma_t") {
-                    return Err(
-                        v.prop_error("sigma_t", "sigma_t is given twice (a value and a <volume>)")
-                    );
-                }
-                (SpectrumDesc::Constant(1.0), Some(std::sync::Arc::new(g)))
-            }
+            Some(_) if v.has("sigma_t") => return Err(twice("sigma_t")),
+            Some(Volume::Grid(g)) => (SpectrumDesc::Constant(1.0), Some(g)),
             Some(Volume::Constant(c)) => (c, None),
             None => (
                 v.spectrum("sigma_t")?
@@ -527,27 +542,44 @@ impl<'e> Builder<'e> {
         }
         // Mitsuba's default albedo.
         let albedo = match albedo_volume {
-            Some(Volume::Constant(c)) => c,
+            Some(_) if v.has("albedo") => return Err(twice("albedo")),
+            Some(Volume::Constant(c)) => VolumeDesc::Constant(c),
+            Some(Volume::Grid(g)) => VolumeDesc::Grid(g),
+            None => VolumeDesc::Constant(
+                v.spectrum("albedo")?
+                    .unwrap_or(SpectrumDesc::Constant(0.75)),
+            ),
+        };
+        if let VolumeDesc::Constant(a) = &albedo {
+            if a.values()
+                .iter()
+                .any(|x| !(x.is_finite() && (0.0..=1.0).contains(x)))
+            {
+                return Err(v.prop_error("albedo", "albedo must lie in [0, 1]"));
+            }
+            if let s @ (SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. }) = a {
+                return Err(v.prop_error(
+                    "albedo",
+                    format!("albedo cannot be an emission spectrum ({})", s.form_name()),
+                ));
+            }
+        }
+        let emission = match emission_volume {
+            Some(_) if v.has("emission") => return Err(twice("emission")),
+            Some(Volume::Constant(c)) => Some(VolumeDesc::Constant(c)),
+            Some(Volume::Grid(g)) if density.is_some() => Some(VolumeDesc::Grid(g)),
             Some(Volume::Grid(_)) => {
                 return Err(SceneError::at(
                     &el.loc,
-                    "an albedo grid is not yet supported (not yet implemented): give albedo as float, rgb, spectrum or constvolume",
+                    "an emission grid needs an extinction grid (a <volume type=\"gridvolume\" name=\"sigma_t\">): emission is confined to its box",
                 ))
             }
-            None => v.spectrum("albedo")?.unwrap_or(SpectrumDesc::Constant(0.75)),
+            None => v.spectrum("emission")?.map(VolumeDesc::Constant),
         };
-        if albedo
-            .values()
-            .iter()
-            .any(|x| !(x.is_finite() && (0.0..=1.0).contains(x)))
-        {
-            return Err(v.prop_error("albedo", "albedo must lie in [0, 1]"));
-        }
-        if let s @ (SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. }) = &albedo {
-            return Err(v.prop_error(
-                "albedo",
-                format!("albedo cannot be an emission spectrum ({})", s.form_name()),
-            ));
+        if let Some(VolumeDesc::Constant(e)) = &emission {
+            if e.values().iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
+                return Err(v.prop_error("emission", "emission must be finite and >= 0"));
+            }
         }
         let sample_emitters = v.boolean("sample_emitters")?.unwrap_or(true);
         v.boolean("has_spectral_extinction")?;
@@ -576,13 +608,15 @@ impl<'e> Builder<'e> {
             phase: phase_fn.unwrap_or(PhaseDesc::Isotropic),
             sample_emitters,
             density,
+            emission,
         })
     }
 
     /// A medium's `<volume>`: `constvolume` (`value`: float, rgb or spectrum; default 1) or
-    /// `gridvolume` (`filename` of a Mitsuba .vol file with one channel, `filter_type`
-    /// trilinear or nearest, `use_grid_bbox`, `to_world`; `raw` and `accel` accepted).
-    fn volume(&mut self, el: &Element) -> Result<Volume> {
+    /// `gridvolume` (`filename` of a Mitsuba .vol file with one or three channels,
+    /// `filter_type` trilinear or nearest, `use_grid_bbox`, `to_world`; `raw` (false) and
+    /// `accel` accepted). Values are checked for the parameter's `role`.
+    fn volume(&mut self, el: &Element, role: GridRole) -> Result<Volume> {
         let v = ObjectView::parse(el)?;
         let err = |msg: String| SceneError::at(&el.loc, msg);
         let out = match v.plugin.as_str() {
@@ -595,15 +629,22 @@ impl<'e> Builder<'e> {
                 })?;
                 let path = resolve_file(&name, &el.dir, &[self.base_dir], self.search_paths);
                 let grid = crate::volgrid::load_vol(&path, &name).map_err(err)?;
-                if grid.channels != 1 {
+                if !matches!(grid.channels, 1 | 3) {
                     return Err(err(format!(
-                        "grid '{name}' has {} channels; a medium's extinction grid with more than one is not yet supported (not yet implemented)",
-                        grid.channels
+                        "grid '{name}' has {} channels; a medium's {} grid needs 1 or 3 (RGB)",
+                        grid.channels,
+                        role.name()
                     )));
                 }
-                if let Some(bad) = grid.values.iter().find(|x| !(x.is_finite() && **x >= 0.0)) {
+                let (lo, hi, range) = role.range();
+                if let Some(bad) = grid
+                    .values
+                    .iter()
+                    .find(|x| !(x.is_finite() && **x >= lo && **x <= hi))
+                {
                     return Err(err(format!(
-                        "grid '{name}' holds {bad}; extinction must be finite and >= 0"
+                        "grid '{name}' holds {bad}; {} must be {range}",
+                        role.name()
                     )));
                 }
                 let nearest = match v.string("filter_type")?.as_deref() {
@@ -616,6 +657,15 @@ impl<'e> Builder<'e> {
                         ))
                     }
                 };
+                match v.string("wrap_mode")?.as_deref() {
+                    None | Some("clamp") => {}
+                    Some(other) => {
+                        return Err(v.prop_error(
+                            "wrap_mode",
+                            format!("wrap_mode \"{other}\" is not supported (only clamp, Mitsuba's default, is implemented)"),
+                        ))
+                    }
+                }
                 let mut to_world = v.transform("to_world")?.unwrap_or(Mat4::IDENTITY);
                 if v.boolean("use_grid_bbox")?.unwrap_or(false) {
                     let [lo, hi] = grid.bbox;
@@ -625,13 +675,18 @@ impl<'e> Builder<'e> {
                 if to_world.determinant().abs() < 1e-12 || !to_world.is_finite() {
                     return Err(v.prop_error("to_world", "the grid's to_world is singular"));
                 }
-                v.boolean("raw")?;
+                if v.boolean("raw")?.unwrap_or(false) && grid.channels == 3 {
+                    return Err(v.prop_error(
+                        "raw",
+                        "raw=\"true\" keeps three channels as data, which no medium parameter reads (Mitsuba refuses it too)",
+                    ));
+                }
                 v.boolean("accel")?;
-                Volume::Grid(DensityGridDesc {
+                Volume::Grid(std::sync::Arc::new(GridDesc {
                     grid,
                     to_world,
                     nearest,
-                })
+                }))
             }
             _ => return Err(plugin_error(el)),
         };
@@ -649,7 +704,34 @@ impl<'e> Builder<'e> {
 /// A medium's `<volume>` as read.
 enum Volume {
     Constant(SpectrumDesc),
-    Grid(DensityGridDesc),
+    Grid(std::sync::Arc<GridDesc>),
+}
+
+/// Which medium parameter a `<volume>` gives.
+#[derive(Clone, Copy)]
+enum GridRole {
+    Extinction,
+    Albedo,
+    Emission,
+}
+
+impl GridRole {
+    /// The parameter's name.
+    fn name(self) -> &'static str {
+        match self {
+            GridRole::Extinction => "sigma_t",
+            GridRole::Albedo => "albedo",
+            GridRole::Emission => "emission",
+        }
+    }
+
+    /// The values a grid may hold, and how an error says it.
+    fn range(self) -> (f32, f32, &'static str) {
+        match self {
+            GridRole::Albedo => (0.0, 1.0, "in [0, 1]"),
+            GridRole::Extinction | GridRole::Emission => (0.0, f32::INFINITY, "finite and >= 0"),
+        }
+    }
 }
 
 /// A phase function: `isotropic`, `hg` with `g` (default 0.8, Mitsuba's) in (-1, 1), or

@@ -7,6 +7,7 @@ use super::{Ctx, GltfError};
 use crate::ir::{
     BitmapDesc, BsdfDesc, BsdfKind, FilmBaseDesc, MediumDesc, MicrofacetDesc,
     MicrofacetDistribution, PhaseDesc, SourceLoc, SpectrumDesc, TextureChannel, TextureDesc,
+    VolumeDesc,
 };
 use gltf::material::AlphaMode;
 use std::sync::Arc;
@@ -551,10 +552,11 @@ fn volume_medium(mat: &Material, v: &gltf::material::Volume, r: &mut Report) -> 
     Some(MediumDesc {
         loc: mat.loc.clone(),
         sigma_t: SpectrumDesc::Rgb(sigma),
-        albedo: SpectrumDesc::Constant(0.0),
+        albedo: VolumeDesc::Constant(SpectrumDesc::Constant(0.0)),
         phase: PhaseDesc::Isotropic,
         sample_emitters: true,
         density: None,
+        emission: None,
     })
 }
 

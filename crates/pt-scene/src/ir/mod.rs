@@ -125,8 +125,17 @@ impl SceneDesc {
             .flat_map(|s| s.interior.iter().chain(&s.exterior))
             .chain(&self.camera_medium);
         for m in media {
-            if let Some(sp) = [&m.sigma_t, &m.albedo]
+            /// A parameter's spectrum when it is one (grids are RGB data).
+            fn constant(v: &VolumeDesc) -> Option<&SpectrumDesc> {
+                match v {
+                    VolumeDesc::Constant(s) => Some(s),
+                    VolumeDesc::Grid(_) => None,
+                }
+            }
+            if let Some(sp) = [Some(&m.sigma_t), constant(&m.albedo)]
                 .into_iter()
+                .chain([m.emission.as_ref().and_then(constant)])
+                .flatten()
                 .find(|s| s.is_spectral())
             {
                 return Some(format!(

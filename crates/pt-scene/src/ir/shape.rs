@@ -271,33 +271,51 @@ pub struct InstanceDesc {
     pub to_world: Mat4,
 }
 
-/// A homogeneous participating medium (Mitsuba `homogeneous`): extinction `sigma_t`, single
-/// scattering albedo `albedo` (sigma_s = albedo sigma_t, sigma_a = (1 - albedo) sigma_t) and a
-/// phase function.
+/// A participating medium (Mitsuba `homogeneous` or `heterogeneous`): extinction `sigma_t`,
+/// single scattering albedo `albedo` (sigma_s = albedo sigma_t, sigma_a = (1 - albedo)
+/// sigma_t), a phase function, and (a pt extension) volume emission.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MediumDesc {
     /// Where it was defined.
     pub loc: SourceLoc,
     /// Extinction coefficient per scene unit of length, Mitsuba's `sigma_t` already multiplied by
-    /// its `scale`. Linear RGB, a constant or a tabulated spectrum, each value >= 0.
+    /// its `scale` (with an extinction grid: `scale` alone, the factor of the grid's values).
+    /// Linear RGB, a constant or a tabulated spectrum, each value >= 0.
     pub sigma_t: SpectrumDesc,
-    /// Single scattering albedo, each value in [0, 1] (Mitsuba's default 0.75).
-    pub albedo: SpectrumDesc,
+    /// Single scattering albedo, each value in [0, 1] (Mitsuba's default 0.75): a spectrum or
+    /// (Mitsuba's `<volume name="albedo">`) a grid.
+    pub albedo: VolumeDesc,
     /// The phase function (Mitsuba's default: isotropic).
     pub phase: PhaseDesc,
     /// Mitsuba's `sample_emitters` (default true): whether scattering in the medium samples
     /// the lights (next-event estimation); without it only phase sampling finds them.
     pub sample_emitters: bool,
     /// `heterogeneous` with a `gridvolume` extinction: the extinction at a point is `sigma_t`
-    /// (which then holds Mitsuba's `scale`) times the grid's value there; zero outside the
-    /// grid's box. `None`: homogeneous.
-    pub density: Option<std::sync::Arc<DensityGridDesc>>,
+    /// (which then holds Mitsuba's `scale`) times the grid's value there (one channel, or
+    /// three: RGB); the medium ends at the grid's box. `None`: homogeneous.
+    pub density: Option<std::sync::Arc<GridDesc>>,
+    /// pt's `emission` (not in Mitsuba 3.9.1): radiance emitted per scene unit of path length,
+    /// the source term of the transfer equation (W m^-3 sr^-1 for scenes in metres); a spectrum
+    /// (an emission: times D65 in spectral mode) or, in a heterogeneous medium, a grid. `None`:
+    /// the medium does not glow.
+    pub emission: Option<VolumeDesc>,
 }
 
-/// A `gridvolume` as a medium's extinction: one value per cell, in the grid's unit cube.
+/// A medium parameter that may vary in space: Mitsuba's spectrum or `constvolume` (the same
+/// everywhere), or a `gridvolume`.
 #[derive(Clone, Debug, PartialEq)]
-pub struct DensityGridDesc {
-    /// The values (one channel, each finite and >= 0).
+pub enum VolumeDesc {
+    /// The same value everywhere.
+    Constant(SpectrumDesc),
+    /// A grid's value at the point (clamped to the grid's border outside its box, as Mitsuba's
+    /// default wrap mode does).
+    Grid(std::sync::Arc<GridDesc>),
+}
+
+/// A `gridvolume`: one or three (RGB) values per cell, in the grid's unit cube.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GridDesc {
+    /// The values (one channel or three, each finite and >= 0).
     pub grid: crate::volgrid::VolumeGrid,
     /// From the grid's unit cube [0, 1]^3 to world space (Mitsuba: the volume's `to_world`,
     /// after the file's bounding box when `use_grid_bbox` is true).

@@ -251,12 +251,18 @@ fn media_on_both_sides_the_sensor_and_phase_functions() {
     .unwrap();
     let fog = s.camera_medium.as_ref().unwrap();
     // Mitsuba's default albedo, and the phase function given.
-    assert_eq!(fog.albedo, SpectrumDesc::Constant(0.75));
+    assert_eq!(
+        fog.albedo,
+        VolumeDesc::Constant(SpectrumDesc::Constant(0.75))
+    );
     assert_eq!(fog.phase, PhaseDesc::HenyeyGreenstein { g: 0.3 });
     assert!(fog.sample_emitters);
     assert_eq!(s.shapes[0].interior.as_ref(), Some(fog));
     let outside = s.shapes[0].exterior.as_ref().unwrap();
-    assert_eq!(outside.albedo, SpectrumDesc::Rgb([0.2, 0.4, 0.6]));
+    assert_eq!(
+        outside.albedo,
+        VolumeDesc::Constant(SpectrumDesc::Rgb([0.2, 0.4, 0.6]))
+    );
     assert_eq!(outside.phase, PhaseDesc::Isotropic);
     assert_eq!(outside.sigma_t, SpectrumDesc::Constant(1.0));
     assert!(!outside.sample_emitters);
@@ -320,6 +326,8 @@ fn heterogeneous_medium_reads_its_grid_and_refuses_what_it_cannot_trace() {
         ("one.vol", grid(1, 0.5)),
         ("rgb.vol", grid(3, 0.5)),
         ("neg.vol", grid(1, -1.0)),
+        ("six.vol", grid(6, 0.5)),
+        ("bright.vol", grid(3, 1.5)),
     ] {
         std::fs::write(dir.join(name), write_vol(&g)).unwrap();
     }
@@ -339,7 +347,10 @@ fn heterogeneous_medium_reads_its_grid_and_refuses_what_it_cannot_trace() {
     let m = s.shapes[0].interior.as_ref().unwrap();
     // sigma_t holds the scale; the grid its spatial factor.
     assert_eq!(m.sigma_t, SpectrumDesc::Constant(4.0));
-    assert_eq!(m.albedo, SpectrumDesc::Rgb([0.5, 0.6, 0.7]));
+    assert_eq!(
+        m.albedo,
+        VolumeDesc::Constant(SpectrumDesc::Rgb([0.5, 0.6, 0.7]))
+    );
     let d = m.density.as_ref().unwrap();
     assert_eq!(d.grid.resolution, [2, 3, 2]);
     assert_eq!(d.to_world, glam::Mat4::from_scale(Vec3::splat(2.0)));
@@ -362,10 +373,41 @@ fn heterogeneous_medium_reads_its_grid_and_refuses_what_it_cannot_trace() {
         d.to_world.transform_point3(Vec3::ONE),
         Vec3::new(2.0, 4.0, 7.0)
     );
+    // Three-channel (RGB) grids for extinction, albedo and emission, each with its own
+    // transform; a constant emission.
+    let s = load_in(&medium(
+        r#"<volume type="gridvolume" name="sigma_t"><string name="filename" value="rgb.vol"/></volume>
+           <volume type="gridvolume" name="albedo"><string name="filename" value="rgb.vol"/>
+               <transform name="to_world"><translate value="1, 0, 0"/></transform></volume>
+           <volume type="gridvolume" name="emission"><string name="filename" value="one.vol"/></volume>"#,
+    ))
+    .unwrap();
+    let m = s.shapes[0].interior.as_ref().unwrap();
+    assert_eq!(m.density.as_ref().unwrap().grid.channels, 3);
+    let VolumeDesc::Grid(albedo) = &m.albedo else {
+        panic!("albedo grid: {:?}", m.albedo)
+    };
+    assert_eq!(albedo.grid.channels, 3);
+    assert_eq!(
+        albedo.to_world,
+        glam::Mat4::from_translation(Vec3::new(1.0, 0.0, 0.0))
+    );
+    assert!(matches!(m.emission, Some(VolumeDesc::Grid(_))));
+    let s = load_in(&scene(
+        r#"<shape type="sphere"><medium type="homogeneous" name="interior"><rgb name="emission" value="1, 2, 3"/>
+           <volume type="gridvolume" name="albedo"><string name="filename" value="one.vol"/></volume></medium></shape>"#,
+    ))
+    .unwrap();
+    let m = s.shapes[0].interior.as_ref().unwrap();
+    assert_eq!(
+        m.emission,
+        Some(VolumeDesc::Constant(SpectrumDesc::Rgb([1.0, 2.0, 3.0])))
+    );
+    assert!(matches!(m.albedo, VolumeDesc::Grid(_)));
     for (inner, want) in [
         (
-            r#"<volume type="gridvolume" name="sigma_t"><string name="filename" value="rgb.vol"/></volume>"#,
-            "3 channels",
+            r#"<volume type="gridvolume" name="sigma_t"><string name="filename" value="six.vol"/></volume>"#,
+            "has 6 channels; a medium's sigma_t grid needs 1 or 3",
         ),
         (
             r#"<volume type="gridvolume" name="sigma_t"><string name="filename" value="neg.vol"/></volume>"#,
@@ -376,22 +418,57 @@ fn heterogeneous_medium_reads_its_grid_and_refuses_what_it_cannot_trace() {
             "missing <string name=\"filename\"",
         ),
         (
-            r#"<volume type="gridvolume" name="albedo"><string name="filename" value="one.vol"/></volume>"#,
-            "albedo grid is not yet supported",
+            r#"<volume type="gridvolume" name="albedo"><string name="filename" value="bright.vol"/></volume>"#,
+            "holds 1.5; albedo must be in [0, 1]",
+        ),
+        (
+            r#"<volume type="gridvolume" name="emission"><string name="filename" value="one.vol"/></volume>"#,
+            "an emission grid needs an extinction grid",
+        ),
+        (
+            r#"<volume type="gridvolume" name="sigma_t"><string name="filename" value="rgb.vol"/><boolean name="raw" value="true"/></volume>"#,
+            "raw",
+        ),
+        (
+            r#"<volume type="gridvolume" name="sigma_t"><string name="filename" value="one.vol"/><string name="wrap_mode" value="repeat"/></volume>"#,
+            "wrap_mode \"repeat\" is not supported",
+        ),
+        (
+            r#"<float name="emission" value="-1"/>"#,
+            "emission must be finite and >= 0",
+        ),
+        (
+            r#"<float name="albedo" value="0.5"/><volume type="constvolume" name="albedo"/>"#,
+            "albedo is given twice",
         ),
         (
             r#"<volume type="constvolume" name="density"/>"#,
-            "name=\"sigma_t\" or name=\"albedo\"",
+            "name=\"sigma_t\", name=\"albedo\" or name=\"emission\"",
         ),
     ] {
         let e = load_in(&medium(inner)).unwrap_err();
         assert!(e.message.contains(want), "{inner}: {e}");
     }
-    let e = load_in(&scene(
-        r#"<shape type="sphere"><medium type="homogeneous" name="interior"><volume type="constvolume" name="sigma_t"/></medium></shape>"#,
-    ))
-    .unwrap_err();
-    assert!(e.message.contains("heterogeneous"), "{e}");
+    // A homogeneous medium reads constant volumes, and refuses extinction and emission grids.
+    let homogeneous = |inner: &str| {
+        load_in(&scene(&format!(
+            "<shape type=\"sphere\"><medium type=\"homogeneous\" name=\"interior\">{inner}</medium></shape>"
+        )))
+    };
+    homogeneous(r#"<volume type="constvolume" name="sigma_t"/>"#).unwrap();
+    for (inner, want) in [
+        (
+            r#"<volume type="gridvolume" name="sigma_t"><string name="filename" value="one.vol"/></volume>"#,
+            "use type=\"heterogeneous\" for grids",
+        ),
+        (
+            r#"<volume type="gridvolume" name="emission"><string name="filename" value="one.vol"/></volume>"#,
+            "an emission grid needs a heterogeneous medium",
+        ),
+    ] {
+        let e = homogeneous(inner).unwrap_err();
+        assert!(e.message.contains(want), "{inner}: {e}");
+    }
 }
 
 #[test]
