@@ -867,9 +867,10 @@ fn render_sppm(
 /// The refusal of the light-side methods that do not trace participating media (all but
 /// `ptracer`).
 fn refuse_media(name: &str, scene: &Scene) -> Result<(), String> {
-    if scene.has_media() {
+    if let Some(m) = scene.media.first() {
         return Err(format!(
-            "{name} does not yet trace participating media (not yet implemented): the scene has {} medium(s); render it with volpath or ptracer",
+            "{}: {name} does not yet trace participating media (not yet implemented): the scene has {} medium(s); render it with volpath or ptracer",
+            m.loc,
             scene.media.len()
         ));
     }
@@ -879,10 +880,11 @@ fn refuse_media(name: &str, scene: &Scene) -> Result<(), String> {
 /// The light tracer's refusal of glowing media: it starts paths on the lights only, and a
 /// medium's emission (a pt extension) is not one of them.
 fn refuse_glowing_media(scene: &Scene) -> Result<(), String> {
-    if scene.media.iter().any(|m| m.emission.is_some()) {
-        return Err(
-            "ptracer does not start light paths in glowing media (a medium with emission is not yet a light source; not yet implemented): render the scene with volpath".into(),
-        );
+    if let Some(m) = scene.media.iter().find(|m| m.emission.is_some()) {
+        return Err(format!(
+            "{}: ptracer does not start light paths in glowing media (a medium with emission is not yet a light source; not yet implemented): render the scene with volpath",
+            m.loc
+        ));
     }
     Ok(())
 }

@@ -558,6 +558,7 @@ mod tests {
             * Mat4::from_scale(pt_math::Vec3::new(4.0, 1.0, 2.0));
         let grey = |v| ConstantSpectrum::Rgb(SampledSpectrum::from_rgb([v; 3]));
         Medium {
+            loc: Default::default(),
             sigma_t: grey(sigma),
             albedo: VolumeSpectrum::Constant(grey(albedo)),
             phase: Phase::Isotropic,

@@ -150,6 +150,8 @@ fn sample_hg_cosine(g: f32, u: f32) -> f32 {
 /// A medium in the scene's colour mode: homogeneous (`density` is `None`) or heterogeneous.
 #[derive(Clone, Debug)]
 pub struct Medium {
+    /// Where the scene defines it (for errors that concern the medium).
+    pub loc: pt_scene::SourceLoc,
     /// Extinction per scene unit of length; in a heterogeneous medium the factor that scales
     /// the extinction grid's value (Mitsuba's `scale`).
     pub sigma_t: ConstantSpectrum,

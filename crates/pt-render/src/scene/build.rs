@@ -229,6 +229,7 @@ fn add_medium(
     media.push((
         m.clone(),
         Medium {
+            loc: m.loc.clone(),
             sigma_t: constant_spectrum(&m.sigma_t, Role::Unbounded, mode),
             albedo,
             phase,
