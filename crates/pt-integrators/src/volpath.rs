@@ -353,6 +353,8 @@ pub(crate) fn free_flight<S: RandomSource>(
         };
         return pass(one, emitted);
     }
+    // A constant albedo is looked up once, not at every collision.
+    let albedo = m.albedo.constant().map(|a| a.at(lambda));
     let mut weight = one;
     let mut emitted = zero;
     let mut t = t0;
@@ -365,8 +367,8 @@ pub(crate) fn free_flight<S: RandomSource>(
         if let Some(e) = &m.emission {
             emitted += weight * e.at(p, lambda) * (1.0 / mu);
         }
-        let st = m.sigma_t_at(p, lambda);
-        let ss = st * m.albedo_at(p, lambda);
+        let st = sigma_t * density.at(p, lambda);
+        let ss = st * albedo.unwrap_or_else(|| m.albedo_at(p, lambda));
         let sn = SampledSpectrum(SampledSpectrum::splat(mu).0 - st.0);
         let (ms, mn) = (mean(ss, channels), mean(sn, channels).max(0.0));
         if !(ms + mn > 0.0) {
@@ -411,7 +413,8 @@ fn medium_transmittance<S: RandomSource>(
     let Some((t0, t1)) = density.clip(ray, t) else {
         return one;
     };
-    let mu = max_lane(m.sigma_t.at(lambda), SampledWavelengths::N) * density.max;
+    let sigma_t = m.sigma_t.at(lambda);
+    let mu = max_lane(sigma_t, SampledWavelengths::N) * density.max;
     if !(mu > 0.0) {
         return one;
     }
@@ -422,7 +425,7 @@ fn medium_transmittance<S: RandomSource>(
         if x >= t1 {
             return tr;
         }
-        let st = m.sigma_t_at(ray.origin + ray.dir * x, lambda);
+        let st = sigma_t * density.at(ray.origin + ray.dir * x, lambda);
         tr *= SampledSpectrum(one.0 - st.0 * (1.0 / mu));
         if tr.is_black() {
             return tr;
@@ -561,7 +564,7 @@ mod tests {
             loc: Default::default(),
             sigma_t: grey(sigma),
             albedo: VolumeSpectrum::Constant(grey(albedo)),
-            phase: Phase::Isotropic,
+            phase: Phase::ISOTROPIC,
             sample_emitters: true,
             scatters: albedo > 0.0,
             density: Grid::new(&values, 1, res, to_world, false, false, false),

@@ -27,23 +27,16 @@ use std::f32::consts::PI;
 /// (its value is its own sampling density per unit solid angle).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Phase {
-    /// Uniform over the sphere: 1 / (4 pi).
-    Isotropic,
-    /// Henyey & Greenstein 1941 ("Diffuse radiation in the galaxy", ApJ 93, eq. 3), with the
-    /// mean cosine `g` of the scattering angle in (-1, 1): `g > 0` scatters forwards.
-    HenyeyGreenstein {
-        /// Mean cosine of the scattering angle.
-        g: f32,
-    },
-    /// Mitsuba's `blendphase`, nested blends flattened: `sum_i weights[i] HG(g[i])` over the
-    /// first `count` lobes (isotropic is HG with g = 0), weights summing to one. Sampled by
-    /// choosing a lobe by its weight, then sampling it exactly; the density of that is the
-    /// mixture itself.
+    /// One phase function.
+    Single(Lobe),
+    /// Mitsuba's `blendphase`, nested blends flattened: `sum_i weights[i] lobes[i]` over the
+    /// first `count` lobes, weights summing to one. Sampled by choosing a lobe by its weight,
+    /// then sampling it exactly; the density of that is the mixture itself.
     Mixture {
         /// Each lobe's share.
         weights: [f32; MAX_PHASE_LOBES],
-        /// Each lobe's mean cosine.
-        g: [f32; MAX_PHASE_LOBES],
+        /// The lobes.
+        lobes: [Lobe; MAX_PHASE_LOBES],
         /// Lobes in use (at least 1).
         count: u8,
     },
@@ -51,6 +44,43 @@ pub enum Phase {
 
 /// Most lobes a blend of phase functions may have after nested blends are flattened.
 pub const MAX_PHASE_LOBES: usize = 4;
+
+/// A phase function of the scattering angle alone, as a density over the sphere at the
+/// cosine `mu` between the propagation direction and the scattered one (`mu = 1`: forward).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Lobe {
+    /// Uniform over the sphere: 1 / (4 pi).
+    Isotropic,
+    /// Henyey & Greenstein 1941 ("Diffuse radiation in the galaxy", ApJ 93, eq. 3), with the
+    /// mean cosine `g` of the scattering angle in (-1, 1): `g > 0` scatters forwards.
+    HenyeyGreenstein(f32),
+    /// Rayleigh scattering by particles much smaller than the wavelength, unpolarised light
+    /// (Chandrasekhar 1960, "Radiative Transfer", sec. 17): `3 / (16 pi) (1 + mu^2)`.
+    Rayleigh,
+}
+
+impl Lobe {
+    /// The density over the sphere at the scattering cosine `mu`.
+    #[inline]
+    fn eval(self, mu: f32) -> f32 {
+        match self {
+            Lobe::Isotropic => 1.0 / (4.0 * PI),
+            Lobe::HenyeyGreenstein(g) => hg(g, mu),
+            Lobe::Rayleigh => 3.0 / (16.0 * PI) * (1.0 + mu * mu),
+        }
+    }
+
+    /// A scattering cosine drawn from the uniform `u` by the inverse of the lobe's cumulative
+    /// distribution in `mu` (increasing in `u`).
+    #[inline]
+    fn sample_cosine(self, u: f32) -> f32 {
+        match self {
+            Lobe::Isotropic => 1.0 - 2.0 * u,
+            Lobe::HenyeyGreenstein(g) => sample_hg_cosine(g, u),
+            Lobe::Rayleigh => sample_rayleigh_cosine(u),
+        }
+    }
+}
 
 /// A direction drawn from a phase function.
 #[derive(Clone, Copy, Debug)]
@@ -63,25 +93,24 @@ pub struct PhaseSample {
 }
 
 impl Phase {
+    /// The isotropic phase function (Mitsuba's default).
+    pub const ISOTROPIC: Phase = Phase::Single(Lobe::Isotropic);
+
     /// The phase function's value for light scattered between `wo` and `wi` (see the module
     /// doc), per steradian; also the density of [`Phase::sample`] choosing `wi`.
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> f32 {
+        // mu: the cosine between the propagation direction (-wo) and wi.
+        let mu = -wo.dot(wi);
         match *self {
-            Phase::Isotropic => 1.0 / (4.0 * PI),
-            Phase::HenyeyGreenstein { g } => {
-                // mu: the cosine between the propagation direction (-wo) and wi.
-                let mu = -wo.dot(wi);
-                hg(g, mu)
-            }
+            Phase::Single(lobe) => lobe.eval(mu),
             Phase::Mixture {
                 ref weights,
-                ref g,
+                ref lobes,
                 count,
-            } => {
-                let mu = -wo.dot(wi);
-                (0..count as usize).map(|i| weights[i] * hg(g[i], mu)).sum()
-            }
+            } => (0..count as usize)
+                .map(|i| weights[i] * lobes[i].eval(mu))
+                .sum(),
         }
     }
 
@@ -91,11 +120,10 @@ impl Phase {
     pub fn sample(&self, wo: Vec3, u: Vec2) -> PhaseSample {
         let forward = -wo;
         let mu = match *self {
-            Phase::Isotropic => 1.0 - 2.0 * u.x,
-            Phase::HenyeyGreenstein { g } => sample_hg_cosine(g, u.x),
+            Phase::Single(lobe) => lobe.sample_cosine(u.x),
             Phase::Mixture {
                 ref weights,
-                ref g,
+                ref lobes,
                 count,
             } => {
                 // Pick the lobe whose share of [0, 1) holds u.x and reuse u.x, rescaled
@@ -107,7 +135,7 @@ impl Phase {
                     let end = start + weights[i];
                     if u.x < end || i == last {
                         let v = ((u.x - start) / weights[i].max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
-                        mu = sample_hg_cosine(g[i], v);
+                        mu = lobes[i].sample_cosine(v);
                         break;
                     }
                     start = end;
@@ -147,6 +175,17 @@ fn sample_hg_cosine(g: f32, u: f32) -> f32 {
     ((1.0 + g * g - s * s) / (2.0 * g)).clamp(-1.0, 1.0)
 }
 
+/// The cosine `mu` of a Rayleigh scattering angle from a uniform `u`. The cumulative
+/// distribution of the density `3/8 (1 + mu^2)` over [-1, 1] is `(mu^3 + 3 mu + 4) / 8`, so
+/// `mu` is the one real root of the depressed cubic `mu^3 + 3 mu + (4 - 8 u) = 0`, by
+/// Cardano's formula `mu = cbrt(z + sqrt(z^2 + 1)) + cbrt(z - sqrt(z^2 + 1))`, `z = 4 u - 2`.
+#[inline]
+fn sample_rayleigh_cosine(u: f32) -> f32 {
+    let z = 4.0 * u - 2.0;
+    let r = (z * z + 1.0).sqrt();
+    ((z + r).cbrt() + (z - r).cbrt()).clamp(-1.0, 1.0)
+}
+
 /// A medium in the scene's colour mode: homogeneous (`density` is `None`) or heterogeneous.
 #[derive(Clone, Debug)]
 pub struct Medium {
@@ -175,17 +214,6 @@ pub struct Medium {
 }
 
 impl Medium {
-    /// The extinction at the world point `p` (inside the grid's box for a heterogeneous
-    /// medium) at the path's wavelengths (RGB mode: per channel).
-    #[inline]
-    pub fn sigma_t_at(&self, p: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
-        match &self.density {
-            None => self.sigma_t.at(lambda),
-            Some(g) if g.is_scalar() => self.sigma_t.at(lambda) * g.scalar_at(p),
-            Some(g) => self.sigma_t.at(lambda) * g.at(p, lambda),
-        }
-    }
-
     /// The single scattering albedo at the world point `p`.
     #[inline]
     pub fn albedo_at(&self, p: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
@@ -226,13 +254,19 @@ mod tests {
         let forward = -wo;
         let frame = Frame::from_normal(forward);
         for phase in [
-            Phase::Isotropic,
-            Phase::HenyeyGreenstein { g: 0.7 },
-            Phase::HenyeyGreenstein { g: -0.4 },
-            Phase::HenyeyGreenstein { g: 0.0 },
+            Phase::ISOTROPIC,
+            Phase::Single(Lobe::HenyeyGreenstein(0.7)),
+            Phase::Single(Lobe::HenyeyGreenstein(-0.4)),
+            Phase::Single(Lobe::HenyeyGreenstein(0.0)),
+            Phase::Single(Lobe::Rayleigh),
             Phase::Mixture {
                 weights: [0.25, 0.75, 0.0, 0.0],
-                g: [0.0, 0.6, 0.0, 0.0],
+                lobes: [
+                    Lobe::Isotropic,
+                    Lobe::HenyeyGreenstein(0.6),
+                    Lobe::Isotropic,
+                    Lobe::Isotropic,
+                ],
                 count: 2,
             },
         ] {
@@ -251,14 +285,19 @@ mod tests {
                     mean += w * f64::from(mu);
                 }
             }
+            // Rayleigh's is 0 (symmetric); a mixture's the weighted mean of its lobes'.
+            let lobe_g = |lobe: Lobe| match lobe {
+                Lobe::Isotropic | Lobe::Rayleigh => 0.0,
+                Lobe::HenyeyGreenstein(g) => f64::from(g),
+            };
             let g = match phase {
-                Phase::Isotropic => 0.0,
-                Phase::HenyeyGreenstein { g } => f64::from(g),
-                // The mean cosine of a mixture is the weighted mean of its lobes'.
+                Phase::Single(lobe) => lobe_g(lobe),
                 Phase::Mixture {
-                    weights, g, count, ..
+                    weights,
+                    lobes,
+                    count,
                 } => (0..count as usize)
-                    .map(|i| f64::from(weights[i]) * f64::from(g[i]))
+                    .map(|i| f64::from(weights[i]) * lobe_g(lobes[i]))
                     .sum(),
             };
             assert!((total - 1.0).abs() < 1e-3, "{phase:?}: integral {total}");
@@ -279,13 +318,31 @@ mod tests {
         // weights swapped, gives chi-square in the thousands too).
         let blend = Phase::Mixture {
             weights: [0.5, 0.3, 0.2, 0.0],
-            g: [0.8, -0.5, 0.0, 0.0],
+            lobes: [
+                Lobe::HenyeyGreenstein(0.8),
+                Lobe::HenyeyGreenstein(-0.5),
+                Lobe::Isotropic,
+                Lobe::Isotropic,
+            ],
             count: 3,
         };
+        // Rayleigh with a forward lobe, as an atmosphere's molecules and aerosols blend.
+        let sky = Phase::Mixture {
+            weights: [0.7, 0.3, 0.0, 0.0],
+            lobes: [
+                Lobe::Rayleigh,
+                Lobe::HenyeyGreenstein(0.76),
+                Lobe::Isotropic,
+                Lobe::Isotropic,
+            ],
+            count: 2,
+        };
         for phase in [
-            Phase::HenyeyGreenstein { g: 0.6 },
-            Phase::HenyeyGreenstein { g: -0.3 },
+            Phase::Single(Lobe::HenyeyGreenstein(0.6)),
+            Phase::Single(Lobe::HenyeyGreenstein(-0.3)),
+            Phase::Single(Lobe::Rayleigh),
             blend,
+            sky,
         ] {
             let bins = 20;
             let n = 50_000;
@@ -303,26 +360,30 @@ mod tests {
                 let mu = forward.dot(s.wi).clamp(-1.0, 1.0 - 1e-7);
                 counts[((mu + 1.0) / 2.0 * bins as f32) as usize] += 1;
             }
-            let lobes: Vec<(f64, f64)> = match phase {
-                Phase::HenyeyGreenstein { g } => vec![(1.0, f64::from(g))],
+            let lobes: Vec<(f64, Lobe)> = match phase {
+                Phase::Single(lobe) => vec![(1.0, lobe)],
                 Phase::Mixture {
-                    weights, g, count, ..
+                    weights,
+                    lobes,
+                    count,
                 } => (0..count as usize)
-                    .map(|i| (f64::from(weights[i]), f64::from(g[i])))
+                    .map(|i| (f64::from(weights[i]), lobes[i]))
                     .collect(),
-                Phase::Isotropic => unreachable!(),
             };
-            // Cumulative in mu: 2 pi int_{-1}^{mu} hg dmu (uniform for g = 0), summed over
-            // the lobes by their weights.
+            // Cumulative in mu: 2 pi int_{-1}^{mu} p dmu in closed form per lobe (uniform
+            // for g = 0; Rayleigh's (mu^3 + 3 mu + 4) / 8), summed by the lobes' weights.
             let cdf = |mu: f64| {
                 lobes
                     .iter()
-                    .map(|&(w, g)| {
-                        w * if g == 0.0 {
-                            (mu + 1.0) / 2.0
-                        } else {
-                            (1.0 - g * g) / (2.0 * g)
-                                * (1.0 / (1.0 + g * g - 2.0 * g * mu).sqrt() - 1.0 / (1.0 + g))
+                    .map(|&(w, lobe)| {
+                        w * match lobe {
+                            Lobe::Rayleigh => (mu * mu * mu + 3.0 * mu + 4.0) / 8.0,
+                            Lobe::HenyeyGreenstein(g) if g != 0.0 => {
+                                let g = f64::from(g);
+                                (1.0 - g * g) / (2.0 * g)
+                                    * (1.0 / (1.0 + g * g - 2.0 * g * mu).sqrt() - 1.0 / (1.0 + g))
+                            }
+                            _ => (mu + 1.0) / 2.0,
                         }
                     })
                     .sum::<f64>()

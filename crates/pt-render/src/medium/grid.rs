@@ -117,11 +117,6 @@ impl Grid {
         })
     }
 
-    /// Whether the grid holds one value per cell (the same in every channel).
-    pub fn is_scalar(&self) -> bool {
-        matches!(self.cells, Cells::Scalar(_))
-    }
-
     /// The cells blended at the world point `p` and their weights.
     #[inline]
     fn stencil(&self, p: Vec3) -> Stencil {
@@ -183,27 +178,57 @@ impl Grid {
     /// mean of its channels' values in RGB mode, 0 in spectral mode: use [`Grid::at`]).
     #[inline]
     pub fn scalar_at(&self, p: Vec3) -> f32 {
-        let s = self.stencil(p);
         match &self.cells {
-            Cells::Scalar(c) => (0..s.count).map(|k| c[s.index[k]] * s.weight[k]).sum(),
-            Cells::Rgb(c) => (0..s.count)
-                .map(|k| (c[s.index[k]].iter().sum::<f32>() / 3.0) * s.weight[k])
-                .sum(),
+            Cells::Scalar(c) => self.lookup_scalar(c, p),
+            Cells::Rgb(c) => {
+                let s = self.stencil(p);
+                (0..s.count)
+                    .map(|k| (c[s.index[k]].iter().sum::<f32>() / 3.0) * s.weight[k])
+                    .sum()
+            }
             Cells::Spectral(_) => 0.0,
         }
+    }
+
+    /// A one-channel lookup written out (the hot path of delta and ratio tracking through
+    /// density grids: the same blend as [`Grid::stencil`]'s, without its arrays).
+    #[inline]
+    fn lookup_scalar(&self, c: &[f32], p: Vec3) -> f32 {
+        let g = self.world_to_grid.transform_point3(p);
+        let [nx, ny, nz] = self.resolution;
+        let value = |x: usize, y: usize, z: usize| c[(z * ny + y) * nx + x];
+        let res = Vec3::new(nx as f32, ny as f32, nz as f32);
+        if self.nearest {
+            let i = (g * res).floor().min(res - Vec3::ONE).max(Vec3::ZERO);
+            return value(i.x as usize, i.y as usize, i.z as usize);
+        }
+        let f = (g * res - Vec3::splat(0.5))
+            .max(Vec3::ZERO)
+            .min(res - Vec3::ONE);
+        let i = f.floor();
+        let w = f - i;
+        let (x0, y0, z0) = (i.x as usize, i.y as usize, i.z as usize);
+        let (x1, y1, z1) = (
+            (x0 + 1).min(nx - 1),
+            (y0 + 1).min(ny - 1),
+            (z0 + 1).min(nz - 1),
+        );
+        let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
+        let c00 = lerp(value(x0, y0, z0), value(x1, y0, z0), w.x);
+        let c10 = lerp(value(x0, y1, z0), value(x1, y1, z0), w.x);
+        let c01 = lerp(value(x0, y0, z1), value(x1, y0, z1), w.x);
+        let c11 = lerp(value(x0, y1, z1), value(x1, y1, z1), w.x);
+        lerp(lerp(c00, c10, w.y), lerp(c01, c11, w.y), w.z)
     }
 
     /// The value at the world point `p` at the path's wavelengths (RGB mode: per channel,
     /// fourth lane 0; a one-channel grid: the same value in every lane).
     #[inline]
     pub fn at(&self, p: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
-        let s = self.stencil(p);
         let v = match &self.cells {
-            Cells::Scalar(c) => {
-                let x: f32 = (0..s.count).map(|k| c[s.index[k]] * s.weight[k]).sum();
-                return SampledSpectrum::splat(x);
-            }
+            Cells::Scalar(c) => return SampledSpectrum::splat(self.lookup_scalar(c, p)),
             Cells::Rgb(c) => {
+                let s = self.stencil(p);
                 let mut sum = Vec4::ZERO;
                 for k in 0..s.count {
                     let [r, g, b] = c[s.index[k]];
@@ -212,6 +237,7 @@ impl Grid {
                 sum
             }
             Cells::Spectral(c) => {
+                let s = self.stencil(p);
                 let l = lambda.lambda();
                 let (mut spectrum, mut scale) = (Vec4::ZERO, 0.0f32);
                 for k in 0..s.count {

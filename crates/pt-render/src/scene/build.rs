@@ -14,7 +14,7 @@ use crate::camera::Camera;
 use crate::geometry::Primitive;
 use crate::light::{build_light, AreaLight, Light, LightShape};
 use crate::material::{build_material, SurfaceMaterial};
-use crate::medium::{Grid, Medium, Phase, VolumeSpectrum};
+use crate::medium::{Grid, Lobe, Medium, Phase, VolumeSpectrum};
 use crate::texture::{
     constant_spectrum, rgb_of, spectrum_for_role, DisplayPrimaries, Role, Texture, TextureBuilder,
 };
@@ -636,10 +636,11 @@ fn power_selection(lights: &[Light], scene_radius: f32) -> Vec<f32> {
 /// mixture of its Henyey-Greenstein lobes (isotropic is g = 0).
 fn phase_of(desc: &pt_scene::PhaseDesc) -> Result<Phase, String> {
     use pt_scene::PhaseDesc;
-    fn lobes(desc: &PhaseDesc, share: f32, out: &mut Vec<(f32, f32)>) {
+    fn lobes(desc: &PhaseDesc, share: f32, out: &mut Vec<(f32, Lobe)>) {
         match desc {
-            PhaseDesc::Isotropic => out.push((share, 0.0)),
-            &PhaseDesc::HenyeyGreenstein { g } => out.push((share, g)),
+            PhaseDesc::Isotropic => out.push((share, Lobe::Isotropic)),
+            &PhaseDesc::HenyeyGreenstein { g } => out.push((share, Lobe::HenyeyGreenstein(g))),
+            PhaseDesc::Rayleigh => out.push((share, Lobe::Rayleigh)),
             PhaseDesc::Blend {
                 weight,
                 first,
@@ -651,8 +652,9 @@ fn phase_of(desc: &pt_scene::PhaseDesc) -> Result<Phase, String> {
         }
     }
     Ok(match desc {
-        PhaseDesc::Isotropic => Phase::Isotropic,
-        &PhaseDesc::HenyeyGreenstein { g } => Phase::HenyeyGreenstein { g },
+        PhaseDesc::Isotropic => Phase::ISOTROPIC,
+        &PhaseDesc::HenyeyGreenstein { g } => Phase::Single(Lobe::HenyeyGreenstein(g)),
+        PhaseDesc::Rayleigh => Phase::Single(Lobe::Rayleigh),
         PhaseDesc::Blend { .. } => {
             let mut all = Vec::new();
             lobes(desc, 1.0, &mut all);
@@ -664,17 +666,17 @@ fn phase_of(desc: &pt_scene::PhaseDesc) -> Result<Phase, String> {
                     crate::medium::MAX_PHASE_LOBES
                 ));
             }
-            let (mut weights, mut g) = (
+            let (mut weights, mut lobe) = (
                 [0.0; crate::medium::MAX_PHASE_LOBES],
-                [0.0; crate::medium::MAX_PHASE_LOBES],
+                [Lobe::Isotropic; crate::medium::MAX_PHASE_LOBES],
             );
-            for (i, &(w, gi)) in all.iter().enumerate() {
+            for (i, &(w, l)) in all.iter().enumerate() {
                 weights[i] = w;
-                g[i] = gi;
+                lobe[i] = l;
             }
             Phase::Mixture {
                 weights,
-                g,
+                lobes: lobe,
                 count: all.len().max(1) as u8,
             }
         }
@@ -686,7 +688,7 @@ mod phase_tests {
     use super::*;
     use pt_scene::PhaseDesc;
 
-    /// A blend of an isotropic phase (share 1 - 0.25) and a blend of two lobes (0.25, split
+    /// A blend of a Rayleigh phase (share 1 - 0.25) and a blend of two lobes (0.25, split
     /// evenly) flattens to the three lobes with shares 0.75, 0.125, 0.125 (the second
     /// function gets `weight`, as in Mitsuba); five lobes are refused.
     #[test]
@@ -699,14 +701,19 @@ mod phase_tests {
         };
         let desc = blend(
             0.25,
-            Box::new(PhaseDesc::Isotropic),
+            Box::new(PhaseDesc::Rayleigh),
             Box::new(blend(0.5, hg(0.5), hg(-0.5))),
         );
         assert_eq!(
             phase_of(&desc).unwrap(),
             Phase::Mixture {
                 weights: [0.75, 0.125, 0.125, 0.0],
-                g: [0.0, 0.5, -0.5, 0.0],
+                lobes: [
+                    Lobe::Rayleigh,
+                    Lobe::HenyeyGreenstein(0.5),
+                    Lobe::HenyeyGreenstein(-0.5),
+                    Lobe::Isotropic
+                ],
                 count: 3,
             }
         );

@@ -51,7 +51,7 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
     ]),
     ("texture", &["bitmap", "checkerboard", "mesh_attribute", "rawconstant", "d65"], &["volume"]),
     ("medium", &["homogeneous", "heterogeneous"], &[]),
-    ("phase", &["isotropic", "hg", "blendphase"], &["rayleigh", "sggx", "tabphase"]),
+    ("phase", &["isotropic", "hg", "rayleigh", "blendphase"], &["sggx", "tabphase"]),
     ("volume", &["constvolume", "gridvolume"], &[]),
 ];
 

@@ -734,12 +734,14 @@ impl GridRole {
     }
 }
 
-/// A phase function: `isotropic`, `hg` with `g` (default 0.8, Mitsuba's) in (-1, 1), or
-/// `blendphase` of two nested ones with a constant `weight` (default 0.5) in [0, 1].
+/// A phase function: `isotropic`, `hg` with `g` (default 0.8, Mitsuba's) in (-1, 1),
+/// `rayleigh` (no parameters), or `blendphase` of two nested ones with a constant `weight`
+/// (default 0.5) in [0, 1].
 fn phase(el: &Element) -> Result<PhaseDesc> {
     let v = ObjectView::parse(el)?;
     let p = match v.plugin.as_str() {
         "isotropic" => PhaseDesc::Isotropic,
+        "rayleigh" => PhaseDesc::Rayleigh,
         "hg" => {
             let g = v.float("g")?.unwrap_or(0.8);
             if !(g > -1.0 && g < 1.0) {

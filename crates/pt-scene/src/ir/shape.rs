@@ -334,6 +334,8 @@ pub enum PhaseDesc {
         /// Mean cosine of the scattering angle.
         g: f32,
     },
+    /// `rayleigh`: `3 / (16 pi) (1 + cos^2 theta)` (Rayleigh scattering, unpolarised).
+    Rayleigh,
     /// `blendphase`: `(1 - weight) first + weight second`.
     Blend {
         /// The second phase function's share, in [0, 1].

@@ -292,12 +292,16 @@ fn bad_media_are_clear_errors() {
     ));
     assert!(e.message.contains("g must lie in (-1, 1)"), "{e}");
     let e = fail(&scene(
-        r#"<shape type="sphere"><medium type="homogeneous" name="interior"><phase type="rayleigh"/></medium></shape>"#,
+        r#"<shape type="sphere"><medium type="homogeneous" name="interior"><phase type="tabphase"/></medium></shape>"#,
     ));
     assert!(
-        e.message.contains("unsupported plugin phase \"rayleigh\""),
+        e.message.contains("unsupported plugin phase \"tabphase\""),
         "{e}"
     );
+    let e = fail(&scene(
+        r#"<shape type="sphere"><medium type="homogeneous" name="interior"><phase type="rayleigh"><float name="g" value="0.5"/></phase></medium></shape>"#,
+    ));
+    assert!(e.message.contains("unused property 'g'"), "{e}");
     let e = fail(&scene(
         r#"<shape type="sphere"><medium type="homogeneous" name="exterior"/><medium type="homogeneous" name="exterior"/></shape>"#,
     ));
