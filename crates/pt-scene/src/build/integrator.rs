@@ -23,6 +23,18 @@ impl<'e> Builder<'e> {
                     ..path_integrator(&v)?
                 }
             }
+            // Mitsuba's differentiable path tracers render, in a forward (primal) render, what
+            // `path` and `volpath` render: only their defaults differ (max_depth 6), and prb
+            // starts Russian roulette one vertex later than path (its test comes before the
+            // depth's increment), which rr_depth + 1 reproduces. Their gradient-only options
+            // (projective sampling) are accepted and have no effect on the image.
+            "prb" | "prb_projective" => {
+                if v.plugin == "prb_projective" {
+                    projective_options(&v)?;
+                }
+                differentiable(IntegratorKind::Path, &v)?
+            }
+            "prbvolpath" => differentiable(IntegratorKind::VolPath, &v)?,
             "direct" => direct_integrator(&v)?,
             "moment" => self.moment(&v)?,
             "aov" => self.aov(&v)?,
@@ -181,6 +193,32 @@ pub(super) fn path_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
         radiosity: RadiosityOptions::default(),
         loc: SourceLoc::default(),
     })
+}
+
+/// Mitsuba's `prb`, `prb_projective` (`kind` Path) and `prbvolpath` (VolPath) in a forward
+/// render: `path`'s parameters with `max_depth` 6 by default, Russian roulette from `rr_depth`
+/// (default 5) + 1 in pt's counting.
+fn differentiable(kind: IntegratorKind, v: &ObjectView<'_>) -> Result<IntegratorDesc> {
+    let max_depth = int_in(v, "max_depth", 6, -1, i32::MAX as i64)? as i32;
+    let path = path_integrator(v)?;
+    Ok(IntegratorDesc {
+        kind,
+        max_depth,
+        rr_depth: path.rr_depth.saturating_add(1),
+        ..path
+    })
+}
+
+/// `prb_projective`'s options for its gradients' projective sampling (Mitsuba 3.9.1: sample
+/// counts `sppc`, `sppp`, `sppi`, the guiding settings), read and checked for their types only:
+/// a forward render does not use them.
+fn projective_options(v: &ObjectView<'_>) -> Result<()> {
+    for name in ["sppc", "sppp", "sppi", "guiding_rounds"] {
+        v.integer(name)?;
+    }
+    v.string("guiding")?;
+    v.boolean("guiding_proj")?;
+    Ok(())
 }
 
 /// Mitsuba's `ptracer`: `max_depth`, `rr_depth` and `hide_emitters` as `path`, and

@@ -174,11 +174,31 @@ fn integrators() {
         (IntegratorKind::Path, 3, Some("_arg_0"))
     );
 
+    // Mitsuba's differentiable integrators: path or volpath with their own defaults (depth 6)
+    // and roulette one vertex later; prb_projective's gradient options accepted.
+    let i = integrator("<integrator type=\"prb\"/>").unwrap();
+    assert_eq!(
+        (i.kind, i.max_depth, i.rr_depth),
+        (IntegratorKind::Path, 6, 6)
+    );
+    let i = integrator("<integrator type=\"prbvolpath\"><integer name=\"max_depth\" value=\"-1\"/><integer name=\"rr_depth\" value=\"3\"/></integrator>").unwrap();
+    assert_eq!(
+        (i.kind, i.max_depth, i.rr_depth),
+        (IntegratorKind::VolPath, -1, 4)
+    );
+    let i = integrator("<integrator type=\"prb_projective\"><integer name=\"sppc\" value=\"32\"/><integer name=\"sppp\" value=\"16\"/><integer name=\"sppi\" value=\"64\"/><string name=\"guiding\" value=\"octree\"/><boolean name=\"guiding_proj\" value=\"true\"/><integer name=\"guiding_rounds\" value=\"1\"/></integrator>").unwrap();
+    assert_eq!((i.kind, i.max_depth), (IntegratorKind::Path, 6));
+
     let cases = [
         (
             "<integer name=\"max_depth\" value=\"-2\"/>",
             "path",
             "at least -1",
+        ),
+        (
+            "<integer name=\"sppc\" value=\"8\"/>",
+            "prb",
+            "unused property 'sppc'",
         ),
         (
             "<integer name=\"rr_depth\" value=\"0\"/>",
