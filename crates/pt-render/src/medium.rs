@@ -22,10 +22,11 @@ use crate::texture::ConstantSpectrum;
 use pt_math::{Frame, Vec2, Vec3};
 use pt_spectrum::{SampledSpectrum, SampledWavelengths};
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 /// A phase function: the angular distribution of scattered light, normalised over the sphere
 /// (its value is its own sampling density per unit solid angle).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Phase {
     /// One phase function.
     Single(Lobe),
@@ -47,7 +48,7 @@ pub const MAX_PHASE_LOBES: usize = 4;
 
 /// A phase function of the scattering angle alone, as a density over the sphere at the
 /// cosine `mu` between the propagation direction and the scattered one (`mu = 1`: forward).
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Lobe {
     /// Uniform over the sphere: 1 / (4 pi).
     Isotropic,
@@ -57,28 +58,111 @@ pub enum Lobe {
     /// Rayleigh scattering by particles much smaller than the wavelength, unpolarised light
     /// (Chandrasekhar 1960, "Radiative Transfer", sec. 17): `3 / (16 pi) (1 + mu^2)`.
     Rayleigh,
+    /// Mitsuba's `tabphase`: a table over `mu`, linear between its points.
+    Tabulated(Arc<TabulatedPhase>),
 }
 
 impl Lobe {
     /// The density over the sphere at the scattering cosine `mu`.
     #[inline]
-    fn eval(self, mu: f32) -> f32 {
-        match self {
+    fn eval(&self, mu: f32) -> f32 {
+        match *self {
             Lobe::Isotropic => 1.0 / (4.0 * PI),
             Lobe::HenyeyGreenstein(g) => hg(g, mu),
             Lobe::Rayleigh => 3.0 / (16.0 * PI) * (1.0 + mu * mu),
+            Lobe::Tabulated(ref t) => t.eval(mu),
         }
     }
 
     /// A scattering cosine drawn from the uniform `u` by the inverse of the lobe's cumulative
     /// distribution in `mu` (increasing in `u`).
     #[inline]
-    fn sample_cosine(self, u: f32) -> f32 {
-        match self {
+    fn sample_cosine(&self, u: f32) -> f32 {
+        match *self {
             Lobe::Isotropic => 1.0 - 2.0 * u,
             Lobe::HenyeyGreenstein(g) => sample_hg_cosine(g, u),
             Lobe::Rayleigh => sample_rayleigh_cosine(u),
+            Lobe::Tabulated(ref t) => t.sample_cosine(u),
         }
+    }
+}
+
+/// A phase function tabulated over the scattering cosine (Mitsuba's `tabphase`): values at
+/// `n >= 2` points spaced evenly over [-1, 1] (`mu = 1` forward), linear between them, and
+/// normalised, so that the density over the sphere is `f(mu) / (2 pi int f dmu)`. Sampled
+/// exactly: the interval by its share of the integral, then the point inside it by inverting
+/// the quadratic cumulative distribution of the linear piece.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TabulatedPhase {
+    /// The values divided by `2 pi int f dmu`: the density over the sphere at the points.
+    density: Vec<f32>,
+    /// The cumulative distribution in `mu` at the points (0 first, 1 last).
+    cdf: Vec<f32>,
+}
+
+impl TabulatedPhase {
+    /// The phase function through `values` (non-negative, finite, at least two, not all 0);
+    /// `None` otherwise.
+    pub fn new(values: &[f32]) -> Option<Self> {
+        if values.len() < 2 || values.iter().any(|v| !(v.is_finite() && *v >= 0.0)) {
+            return None;
+        }
+        let step = 2.0 / (values.len() - 1) as f64;
+        let mut cdf = vec![0.0f64; values.len()];
+        for i in 1..values.len() {
+            cdf[i] = cdf[i - 1] + 0.5 * step * f64::from(values[i - 1] + values[i]);
+        }
+        let total = *cdf.last()?;
+        if !(total > 0.0) {
+            return None;
+        }
+        Some(TabulatedPhase {
+            density: values
+                .iter()
+                .map(|&v| (f64::from(v) / (2.0 * std::f64::consts::PI * total)) as f32)
+                .collect(),
+            cdf: cdf.iter().map(|&c| (c / total) as f32).collect(),
+        })
+    }
+
+    /// The interval holding `mu` and the position in it, in [0, 1].
+    #[inline]
+    fn locate(&self, mu: f32) -> (usize, f32) {
+        let last = self.density.len() - 1;
+        let x = ((mu + 1.0) * 0.5 * last as f32).clamp(0.0, last as f32);
+        let i = (x as usize).min(last - 1);
+        (i, x - i as f32)
+    }
+
+    /// The density over the sphere at the scattering cosine `mu`.
+    #[inline]
+    fn eval(&self, mu: f32) -> f32 {
+        let (i, t) = self.locate(mu);
+        self.density[i] + (self.density[i + 1] - self.density[i]) * t
+    }
+
+    /// A scattering cosine from the uniform `u`.
+    #[inline]
+    fn sample_cosine(&self, u: f32) -> f32 {
+        let last = self.density.len() - 1;
+        // The interval whose cumulative range holds u.
+        let i = self.cdf[1..last].partition_point(|&c| c <= u);
+        let (d0, d1) = (self.density[i], self.density[i + 1]);
+        let width = 2.0 / last as f32;
+        // The share of the interval's mass still to cover, as density x width: with the
+        // density d0 + (d1 - d0) t across it, the mass up to t is (d0 t + (d1 - d0) t^2 / 2)
+        // times the width (and 2 pi, which the cdf's scale absorbs).
+        let mass = self.cdf[i + 1] - self.cdf[i];
+        let c = ((u - self.cdf[i]) / mass.max(f32::MIN_POSITIVE)).clamp(0.0, 1.0) * (d0 + d1) * 0.5;
+        // The root of (d1 - d0) t^2 / 2 + d0 t - c = 0 in [0, 1], written without the
+        // cancellation of the textbook form (exact for d1 = d0 too).
+        let disc = (d0 * d0 + 2.0 * (d1 - d0) * c).max(0.0);
+        let t = if c > 0.0 {
+            2.0 * c / (d0 + disc.sqrt())
+        } else {
+            0.0
+        };
+        (-1.0 + (i as f32 + t.clamp(0.0, 1.0)) * width).clamp(-1.0, 1.0)
     }
 }
 
@@ -103,7 +187,7 @@ impl Phase {
         // mu: the cosine between the propagation direction (-wo) and wi.
         let mu = -wo.dot(wi);
         match *self {
-            Phase::Single(lobe) => lobe.eval(mu),
+            Phase::Single(ref lobe) => lobe.eval(mu),
             Phase::Mixture {
                 ref weights,
                 ref lobes,
@@ -120,7 +204,7 @@ impl Phase {
     pub fn sample(&self, wo: Vec3, u: Vec2) -> PhaseSample {
         let forward = -wo;
         let mu = match *self {
-            Phase::Single(lobe) => lobe.sample_cosine(u.x),
+            Phase::Single(ref lobe) => lobe.sample_cosine(u.x),
             Phase::Mixture {
                 ref weights,
                 ref lobes,
@@ -245,6 +329,35 @@ pub fn transmittance(sigma_t: SampledSpectrum, d: f32) -> SampledSpectrum {
 mod tests {
     use super::*;
 
+    /// The table of the tests' tabulated phase function: strongly forward, with a bump
+    /// backwards and a zero in between (an interval of no mass).
+    const TABLE: [f32; 7] = [0.6, 0.2, 0.0, 0.0, 0.5, 2.0, 9.0];
+
+    /// The tabulated phase function of [`TABLE`].
+    fn tabulated() -> Lobe {
+        Lobe::Tabulated(Arc::new(TabulatedPhase::new(&TABLE).unwrap()))
+    }
+
+    /// Exact integrals over [-1, x] of the piecewise-linear `values` (evenly spaced over
+    /// [-1, 1]) and of mu times it: `(int f, int mu f)`, in f64.
+    fn table_integrals(values: &[f32], x: f64) -> (f64, f64) {
+        let step = 2.0 / (values.len() - 1) as f64;
+        let (mut m0, mut m1) = (0.0, 0.0);
+        for i in 0..values.len() - 1 {
+            let a = -1.0 + i as f64 * step;
+            if a >= x {
+                break;
+            }
+            let (fa, fb) = (f64::from(values[i]), f64::from(values[i + 1]));
+            // The piece up to min(x, its end), f linear in between.
+            let b = (a + step).min(x);
+            let fb = fa + (fb - fa) * (b - a) / step;
+            m0 += (fa + fb) * (b - a) / 2.0;
+            m1 += (b - a) / 6.0 * (fa * (2.0 * a + b) + fb * (a + 2.0 * b));
+        }
+        (m0, m1)
+    }
+
     /// The phase functions integrate to one over the sphere (midpoint rule on a fine grid in
     /// mu and phi), and the Henyey-Greenstein mean cosine is g: both to 1e-3, far inside what
     /// a wrong normalisation or a sign error in mu (mean -g) would give.
@@ -259,6 +372,7 @@ mod tests {
             Phase::Single(Lobe::HenyeyGreenstein(-0.4)),
             Phase::Single(Lobe::HenyeyGreenstein(0.0)),
             Phase::Single(Lobe::Rayleigh),
+            Phase::Single(tabulated()),
             Phase::Mixture {
                 weights: [0.25, 0.75, 0.0, 0.0],
                 lobes: [
@@ -270,7 +384,7 @@ mod tests {
                 count: 2,
             },
         ] {
-            let (n_mu, n_phi) = (4000, 16);
+            let (n_mu, n_phi) = (6000, 16);
             let (mut total, mut mean) = (0.0f64, 0.0f64);
             for i in 0..n_mu {
                 let mu = -1.0 + 2.0 * (i as f32 + 0.5) / n_mu as f32;
@@ -285,19 +399,24 @@ mod tests {
                     mean += w * f64::from(mu);
                 }
             }
-            // Rayleigh's is 0 (symmetric); a mixture's the weighted mean of its lobes'.
-            let lobe_g = |lobe: Lobe| match lobe {
+            // Rayleigh's is 0 (symmetric), a table's its exact moment ratio; a mixture's the
+            // weighted mean of its lobes'.
+            let lobe_g = |lobe: &Lobe| match *lobe {
                 Lobe::Isotropic | Lobe::Rayleigh => 0.0,
                 Lobe::HenyeyGreenstein(g) => f64::from(g),
+                Lobe::Tabulated(_) => {
+                    let (m0, m1) = table_integrals(&TABLE, 1.0);
+                    m1 / m0
+                }
             };
-            let g = match phase {
+            let g = match &phase {
                 Phase::Single(lobe) => lobe_g(lobe),
                 Phase::Mixture {
                     weights,
                     lobes,
                     count,
-                } => (0..count as usize)
-                    .map(|i| f64::from(weights[i]) * lobe_g(lobes[i]))
+                } => (0..*count as usize)
+                    .map(|i| f64::from(weights[i]) * lobe_g(&lobes[i]))
                     .sum(),
             };
             assert!((total - 1.0).abs() < 1e-3, "{phase:?}: integral {total}");
@@ -337,12 +456,25 @@ mod tests {
             ],
             count: 2,
         };
+        // A table with a blend around it.
+        let table_blend = Phase::Mixture {
+            weights: [0.6, 0.4, 0.0, 0.0],
+            lobes: [
+                tabulated(),
+                Lobe::HenyeyGreenstein(-0.2),
+                Lobe::Isotropic,
+                Lobe::Isotropic,
+            ],
+            count: 2,
+        };
         for phase in [
             Phase::Single(Lobe::HenyeyGreenstein(0.6)),
             Phase::Single(Lobe::HenyeyGreenstein(-0.3)),
             Phase::Single(Lobe::Rayleigh),
+            Phase::Single(tabulated()),
             blend,
             sky,
+            table_blend,
         ] {
             let bins = 20;
             let n = 50_000;
@@ -360,14 +492,14 @@ mod tests {
                 let mu = forward.dot(s.wi).clamp(-1.0, 1.0 - 1e-7);
                 counts[((mu + 1.0) / 2.0 * bins as f32) as usize] += 1;
             }
-            let lobes: Vec<(f64, Lobe)> = match phase {
-                Phase::Single(lobe) => vec![(1.0, lobe)],
+            let lobes: Vec<(f64, Lobe)> = match &phase {
+                Phase::Single(lobe) => vec![(1.0, lobe.clone())],
                 Phase::Mixture {
                     weights,
                     lobes,
                     count,
-                } => (0..count as usize)
-                    .map(|i| (f64::from(weights[i]), lobes[i]))
+                } => (0..*count as usize)
+                    .map(|i| (f64::from(weights[i]), lobes[i].clone()))
                     .collect(),
             };
             // Cumulative in mu: 2 pi int_{-1}^{mu} p dmu in closed form per lobe (uniform
@@ -375,9 +507,12 @@ mod tests {
             let cdf = |mu: f64| {
                 lobes
                     .iter()
-                    .map(|&(w, lobe)| {
-                        w * match lobe {
+                    .map(|(w, lobe)| {
+                        w * match *lobe {
                             Lobe::Rayleigh => (mu * mu * mu + 3.0 * mu + 4.0) / 8.0,
+                            Lobe::Tabulated(_) => {
+                                table_integrals(&TABLE, mu).0 / table_integrals(&TABLE, 1.0).0
+                            }
                             Lobe::HenyeyGreenstein(g) if g != 0.0 => {
                                 let g = f64::from(g);
                                 (1.0 - g * g) / (2.0 * g)
@@ -393,6 +528,11 @@ mod tests {
                 let lo = -1.0 + 2.0 * b as f64 / bins as f64;
                 let hi = lo + 2.0 / bins as f64;
                 let expected = n as f64 * (cdf(hi) - cdf(lo));
+                if expected < 1e-9 {
+                    // Where the density is 0 (the table's gap) no sample may land.
+                    assert_eq!(c, 0, "{phase:?}: samples where the density is 0");
+                    continue;
+                }
                 chi2 += (f64::from(c) - expected).powi(2) / expected;
             }
             assert!(chi2 < 43.8, "{phase:?}: chi-square {chi2}");

@@ -14,7 +14,7 @@ use crate::camera::Camera;
 use crate::geometry::Primitive;
 use crate::light::{build_light, AreaLight, Light, LightShape};
 use crate::material::{build_material, SurfaceMaterial};
-use crate::medium::{Grid, Lobe, Medium, Phase, VolumeSpectrum};
+use crate::medium::{Grid, Lobe, Medium, Phase, TabulatedPhase, VolumeSpectrum};
 use crate::texture::{
     constant_spectrum, rgb_of, spectrum_for_role, DisplayPrimaries, Role, Texture, TextureBuilder,
 };
@@ -633,31 +633,36 @@ fn power_selection(lights: &[Light], scene_radius: f32) -> Vec<f32> {
 }
 
 /// The render-side phase function of `desc`: a `blendphase` (nested ones too) becomes the
-/// mixture of its Henyey-Greenstein lobes (isotropic is g = 0).
+/// mixture of its lobes (isotropic, Henyey-Greenstein, Rayleigh, tabulated).
 fn phase_of(desc: &pt_scene::PhaseDesc) -> Result<Phase, String> {
     use pt_scene::PhaseDesc;
-    fn lobes(desc: &PhaseDesc, share: f32, out: &mut Vec<(f32, Lobe)>) {
-        match desc {
-            PhaseDesc::Isotropic => out.push((share, Lobe::Isotropic)),
-            &PhaseDesc::HenyeyGreenstein { g } => out.push((share, Lobe::HenyeyGreenstein(g))),
-            PhaseDesc::Rayleigh => out.push((share, Lobe::Rayleigh)),
+    /// Appends the lobes of `desc` with their shares of the whole (`share` for `desc`).
+    fn lobes(desc: &PhaseDesc, share: f32, out: &mut Vec<(f32, Lobe)>) -> Result<(), String> {
+        let lobe = match desc {
             PhaseDesc::Blend {
                 weight,
                 first,
                 second,
             } => {
-                lobes(first, share * (1.0 - weight), out);
-                lobes(second, share * weight, out);
+                lobes(first, share * (1.0 - weight), out)?;
+                return lobes(second, share * weight, out);
             }
-        }
+            PhaseDesc::Isotropic => Lobe::Isotropic,
+            &PhaseDesc::HenyeyGreenstein { g } => Lobe::HenyeyGreenstein(g),
+            PhaseDesc::Rayleigh => Lobe::Rayleigh,
+            PhaseDesc::Tabulated(values) => {
+                Lobe::Tabulated(Arc::new(TabulatedPhase::new(values).ok_or_else(|| {
+                    "a tabphase needs at least two finite values >= 0, not all 0".to_string()
+                })?))
+            }
+        };
+        out.push((share, lobe));
+        Ok(())
     }
+    let mut all = Vec::new();
+    lobes(desc, 1.0, &mut all)?;
     Ok(match desc {
-        PhaseDesc::Isotropic => Phase::ISOTROPIC,
-        &PhaseDesc::HenyeyGreenstein { g } => Phase::Single(Lobe::HenyeyGreenstein(g)),
-        PhaseDesc::Rayleigh => Phase::Single(Lobe::Rayleigh),
         PhaseDesc::Blend { .. } => {
-            let mut all = Vec::new();
-            lobes(desc, 1.0, &mut all);
             all.retain(|&(w, _)| w > 0.0);
             if all.len() > crate::medium::MAX_PHASE_LOBES {
                 return Err(format!(
@@ -666,20 +671,22 @@ fn phase_of(desc: &pt_scene::PhaseDesc) -> Result<Phase, String> {
                     crate::medium::MAX_PHASE_LOBES
                 ));
             }
-            let (mut weights, mut lobe) = (
-                [0.0; crate::medium::MAX_PHASE_LOBES],
-                [Lobe::Isotropic; crate::medium::MAX_PHASE_LOBES],
-            );
-            for (i, &(w, l)) in all.iter().enumerate() {
+            let count = all.len().max(1) as u8;
+            let mut weights = [0.0; crate::medium::MAX_PHASE_LOBES];
+            let mut lobe: [Lobe; crate::medium::MAX_PHASE_LOBES] =
+                std::array::from_fn(|_| Lobe::Isotropic);
+            for (i, (w, l)) in all.into_iter().enumerate() {
                 weights[i] = w;
                 lobe[i] = l;
             }
             Phase::Mixture {
                 weights,
                 lobes: lobe,
-                count: all.len().max(1) as u8,
+                count,
             }
         }
+        // One phase function: one lobe of share 1.
+        _ => Phase::Single(all.pop().map_or(Lobe::Isotropic, |(_, l)| l)),
     })
 }
 

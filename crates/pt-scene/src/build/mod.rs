@@ -50,7 +50,7 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
     ]),
     ("texture", &["bitmap", "checkerboard", "mesh_attribute", "rawconstant", "d65"], &["volume"]),
     ("medium", &["homogeneous", "heterogeneous"], &[]),
-    ("phase", &["isotropic", "hg", "rayleigh", "blendphase"], &["sggx", "tabphase"]),
+    ("phase", &["isotropic", "hg", "rayleigh", "tabphase", "blendphase"], &["sggx"]),
     ("volume", &["constvolume", "gridvolume"], &[]),
 ];
 

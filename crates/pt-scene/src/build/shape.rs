@@ -735,13 +735,40 @@ impl GridRole {
 }
 
 /// A phase function: `isotropic`, `hg` with `g` (default 0.8, Mitsuba's) in (-1, 1),
-/// `rayleigh` (no parameters), or `blendphase` of two nested ones with a constant `weight`
-/// (default 0.5) in [0, 1].
+/// `rayleigh` (no parameters), `tabphase` (`values`: a string of numbers), or `blendphase` of
+/// two nested ones with a constant `weight` (default 0.5) in [0, 1].
 fn phase(el: &Element) -> Result<PhaseDesc> {
     let v = ObjectView::parse(el)?;
     let p = match v.plugin.as_str() {
         "isotropic" => PhaseDesc::Isotropic,
         "rayleigh" => PhaseDesc::Rayleigh,
+        "tabphase" => {
+            let text = v
+                .string("values")?
+                .ok_or_else(|| SceneError::at(&el.loc, "a tabphase needs <string name=\"values\" value=\"...\"/> (the phase function at evenly spaced cosines from -1 to 1)"))?;
+            let values = text
+                .split([',', ' ', '\t', '\n', '\r'])
+                .filter(|t| !t.is_empty())
+                .map(|t| t.parse::<f32>().map_err(|_| t.to_string()))
+                .collect::<std::result::Result<Vec<f32>, String>>()
+                .map_err(|t| v.prop_error("values", format!("'{t}' is not a number")))?;
+            if values.len() < 2 {
+                return Err(v.prop_error(
+                    "values",
+                    format!("a tabphase needs at least two values, got {}", values.len()),
+                ));
+            }
+            if let Some(bad) = values.iter().find(|x| !(x.is_finite() && **x >= 0.0)) {
+                return Err(v.prop_error(
+                    "values",
+                    format!("values must be finite and >= 0, got {bad}"),
+                ));
+            }
+            if values.iter().all(|&x| x == 0.0) {
+                return Err(v.prop_error("values", "values are all 0: no phase function"));
+            }
+            PhaseDesc::Tabulated(values)
+        }
         "hg" => {
             let g = v.float("g")?.unwrap_or(0.8);
             if !(g > -1.0 && g < 1.0) {

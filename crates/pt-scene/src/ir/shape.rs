@@ -336,6 +336,9 @@ pub enum PhaseDesc {
     },
     /// `rayleigh`: `3 / (16 pi) (1 + cos^2 theta)` (Rayleigh scattering, unpolarised).
     Rayleigh,
+    /// `tabphase`: values at points spaced evenly over the scattering cosine's [-1, 1] (1:
+    /// forward), linear between them, normalised when built (at least two, each >= 0).
+    Tabulated(Vec<f32>),
     /// `blendphase`: `(1 - weight) first + weight second`.
     Blend {
         /// The second phase function's share, in [0, 1].

@@ -292,10 +292,10 @@ fn bad_media_are_clear_errors() {
     ));
     assert!(e.message.contains("g must lie in (-1, 1)"), "{e}");
     let e = fail(&scene(
-        r#"<shape type="sphere"><medium type="homogeneous" name="interior"><phase type="tabphase"/></medium></shape>"#,
+        r#"<shape type="sphere"><medium type="homogeneous" name="interior"><phase type="sggx"/></medium></shape>"#,
     ));
     assert!(
-        e.message.contains("unsupported plugin phase \"tabphase\""),
+        e.message.contains("unsupported plugin phase \"sggx\""),
         "{e}"
     );
     let e = fail(&scene(
@@ -314,6 +314,40 @@ fn bad_media_are_clear_errors() {
         r#"<shape type="sphere"><medium type="homogeneous" name="interior"><float name="albedo" value="0"/><float name="sigma_t" value="-1"/></medium></shape>"#,
     ));
     assert!(e.message.contains("sigma_t"), "{e}");
+}
+
+/// `tabphase` reads its values (commas or spaces) and refuses tables it cannot normalise.
+#[test]
+fn tabphase_reads_its_table() {
+    let phase = |inner: &str| {
+        load(&scene(&format!(
+            "<shape type=\"sphere\"><medium type=\"homogeneous\" name=\"interior\"><phase type=\"tabphase\">{inner}</phase></medium></shape>"
+        )))
+        .map(|s| s.shapes[0].interior.as_ref().unwrap().phase.clone())
+    };
+    assert_eq!(
+        phase(r#"<string name="values" value="0.5, 1 2,3"/>"#).unwrap(),
+        PhaseDesc::Tabulated(vec![0.5, 1.0, 2.0, 3.0])
+    );
+    for (inner, want) in [
+        ("", "a tabphase needs <string name=\"values\""),
+        (
+            r#"<string name="values" value="1"/>"#,
+            "at least two values",
+        ),
+        (
+            r#"<string name="values" value="1, x"/>"#,
+            "'x' is not a number",
+        ),
+        (
+            r#"<string name="values" value="1, -2"/>"#,
+            "finite and >= 0, got -2",
+        ),
+        (r#"<string name="values" value="0 0 0"/>"#, "all 0"),
+    ] {
+        let e = phase(inner).unwrap_err();
+        assert!(e.message.contains(want), "{inner}: {e}");
+    }
 }
 
 #[test]
