@@ -349,7 +349,7 @@ impl Integrator {
         let path = |max_depth: i32| PathTracer {
             settings: PathSettings {
                 max_depth: o.max_depth.unwrap_or(max_depth),
-                strategy: o.strategy.unwrap_or_default(),
+                strategy: o.strategy.unwrap_or(scene_settings.strategy),
                 ..scene_settings
             },
             clamp: o.clamp,

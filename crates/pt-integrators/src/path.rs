@@ -57,7 +57,11 @@ impl PathSettings {
             max_depth: i.max_depth,
             rr_depth: i.rr_depth,
             hide_emitters: i.hide_emitters,
-            strategy: Strategy::Mis,
+            strategy: if i.light_sampling {
+                Strategy::Mis
+            } else {
+                Strategy::Bsdf
+            },
             media: i.kind == K::VolPath,
             coverage: Coverage::of(i.kind),
             direct: match i.kind {

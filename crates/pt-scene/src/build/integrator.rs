@@ -35,6 +35,21 @@ impl<'e> Builder<'e> {
                 differentiable(IntegratorKind::Path, &v)?
             }
             "prbvolpath" => differentiable(IntegratorKind::VolPath, &v)?,
+            // Mitsuba's `prb_basic`: BSDF sampling alone, no Russian roulette, emitters always
+            // seen (its forward render reads no hide_emitters); max_depth 6 by default.
+            "prb_basic" => IntegratorDesc {
+                // Read by Mitsuba's base class, unused by prb_basic.
+                hide_emitters: {
+                    v.boolean("hide_emitters")?;
+                    int_in(&v, "rr_depth", 5, 1, u32::MAX as i64)?;
+                    false
+                },
+                kind: IntegratorKind::Path,
+                max_depth: int_in(&v, "max_depth", 6, -1, i32::MAX as i64)? as i32,
+                rr_depth: u32::MAX,
+                light_sampling: false,
+                ..default_integrator()
+            },
             "direct" => direct_integrator(&v)?,
             "moment" => self.moment(&v)?,
             "aov" => self.aov(&v)?,
@@ -188,6 +203,7 @@ pub(super) fn path_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
         max_depth: int_in(v, "max_depth", -1, -1, i32::MAX as i64)? as i32,
         rr_depth: int_in(v, "rr_depth", 5, 1, u32::MAX as i64)? as u32,
         hide_emitters: v.boolean("hide_emitters")?.unwrap_or(false),
+        light_sampling: true,
         moment: None,
         aov: None,
         radiosity: RadiosityOptions::default(),
@@ -364,6 +380,7 @@ pub(super) fn radiosity_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc>
         max_depth: -1,
         rr_depth: 5,
         hide_emitters: false,
+        light_sampling: true,
         moment: None,
         aov: None,
         radiosity,
@@ -405,6 +422,7 @@ pub(super) fn direct_integrator(v: &ObjectView<'_>) -> Result<IntegratorDesc> {
         max_depth: 2,
         rr_depth: 5,
         hide_emitters: v.boolean("hide_emitters")?.unwrap_or(false),
+        light_sampling: true,
         moment: None,
         aov: None,
         radiosity: RadiosityOptions::default(),
@@ -420,6 +438,7 @@ pub(super) fn default_integrator() -> IntegratorDesc {
         max_depth: -1,
         rr_depth: 5,
         hide_emitters: false,
+        light_sampling: true,
         moment: None,
         aov: None,
     }

@@ -36,8 +36,8 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
     ("film", &["hdrfilm"], &["specfilm"]),
     ("sampler", &["independent", "stratified", "multijitter", "orthogonal", "ldsampler"], &[]),
     ("rfilter", &["box", "tent", "gaussian", "mitchell", "catmullrom", "lanczos"], &[]),
-    ("integrator", &["path", "volpath", "volpathmis", "direct", "moment", "aov", "radiosity", "ptracer", "sppm", "prb", "prb_projective", "prbvolpath"], &[
-        "prb_basic", "direct_projective", "depth", "stokes",
+    ("integrator", &["path", "volpath", "volpathmis", "direct", "moment", "aov", "radiosity", "ptracer", "sppm", "prb", "prb_basic", "prb_projective", "prbvolpath"], &[
+        "direct_projective", "depth", "stokes",
     ]),
     ("shape", &["obj", "ply", "serialized", "gltf", "rectangle", "cube", "sphere", "disk", "cylinder", "sdfgrid", "linearcurve", "bsplinecurve", "shapegroup", "instance"], &[
         "ellipsoids", "ellipsoidsmesh",

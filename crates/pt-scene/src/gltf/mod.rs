@@ -386,6 +386,7 @@ fn default_desc(cx: &Ctx) -> SceneDesc {
             max_depth: -1,
             rr_depth: 5,
             hide_emitters: false,
+            light_sampling: true,
             moment: None,
             aov: None,
             radiosity: RadiosityOptions::default(),

@@ -581,6 +581,10 @@ pub struct IntegratorDesc {
     pub rr_depth: u32,
     /// Whether directly visible emitters are hidden (black).
     pub hide_emitters: bool,
+    /// Whether paths sample the lights at each vertex (next-event estimation, joined to BSDF
+    /// sampling by MIS); false for Mitsuba's `prb_basic`, which finds emitters by BSDF sampling
+    /// alone.
+    pub light_sampling: bool,
     /// Mitsuba's `moment`: when the scene wrapped the integrator in it, the nested integrator's
     /// name (`_arg_0` when it has none): the image's XYZ is also written as `name.X/Y/Z` and the
     /// per-pixel mean of the samples' squared XYZ as `m2_name.X/Y/Z`.

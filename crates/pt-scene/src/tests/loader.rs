@@ -318,7 +318,7 @@ fn unsupported_plugins_say_not_yet_implemented() {
         "<sensor type=\"perspective\"><sampler type=\"orthogonal\"><integer name=\"strength\" value=\"3\"/></sampler></sensor>",
         "<sensor type=\"radiancemeter\"/>",
         "<shape type=\"ellipsoids\"/>",
-        "<integrator type=\"prb_basic\"/>",
+        "<integrator type=\"direct_projective\"/>",
         "<shape type=\"cube\"><bsdf type=\"circular\"/></shape>",
         "<shape type=\"cube\"><bsdf type=\"diffuse\"><texture type=\"volume\" name=\"reflectance\"/></bsdf></shape>",
         "<sensor type=\"perspective\"><film type=\"specfilm\"/></sensor>",

@@ -188,6 +188,18 @@ fn integrators() {
     );
     let i = integrator("<integrator type=\"prb_projective\"><integer name=\"sppc\" value=\"32\"/><integer name=\"sppp\" value=\"16\"/><integer name=\"sppi\" value=\"64\"/><string name=\"guiding\" value=\"octree\"/><boolean name=\"guiding_proj\" value=\"true\"/><integer name=\"guiding_rounds\" value=\"1\"/></integrator>").unwrap();
     assert_eq!((i.kind, i.max_depth), (IntegratorKind::Path, 6));
+    assert!(i.light_sampling);
+    let i = integrator("<integrator type=\"prb_basic\"><boolean name=\"hide_emitters\" value=\"true\"/></integrator>").unwrap();
+    assert_eq!(
+        (
+            i.kind,
+            i.max_depth,
+            i.rr_depth,
+            i.hide_emitters,
+            i.light_sampling
+        ),
+        (IntegratorKind::Path, 6, u32::MAX, false, false)
+    );
 
     let cases = [
         (
