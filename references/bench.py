@@ -70,6 +70,8 @@ SUITE = [
      "volpath: chromatic hg fog behind null walls, spot light shafts, sky"),
     ("smoke-grid", "scenes/smoke-grid.xml", 256, {},
      "volpath: 40^3 gridvolume smoke, delta and ratio tracking, sun and sky"),
+    ("dye-plume", "scenes/dye-plume.xml", 512, {},
+     "volpath: RGB extinction and albedo gridvolumes, hg, area light"),
     ("sunsky", "scenes/sunsky.xml", 512, {}, "Hosek-Wilkie sun and sky, gold sphere, checkerboard ground"),
     ("sunsky-spectral", "scenes/sunsky-spectral.xml", 256, {},
      "spectral sun and sky, limb-darkened sun, measured albedo"),
