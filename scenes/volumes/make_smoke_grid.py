@@ -23,25 +23,11 @@ is the value at the cell centre ((x + 0.5) / xres, ...), as Dr.Jit's texture loo
 """
 
 import argparse
-import struct
 from pathlib import Path
 
 import numpy as np
 
-
-def value_noise(rng, res, cells):
-    """Smooth noise in [0, 1]: random values on a (cells+1)^3 lattice, cubic-smoothstep
-    interpolated to res^3 samples."""
-    lattice = rng.random((cells + 1,) * 3)
-    t = (np.arange(res) + 0.5) / res * cells
-    i0 = np.minimum(t.astype(int), cells - 1)
-    f = t - i0
-    f = f * f * (3 - 2 * f)
-    # interpolate along each axis in turn (array axes are z, y, x)
-    a = lattice[i0] * (1 - f)[:, None, None] + lattice[i0 + 1] * f[:, None, None]
-    a = a[:, i0] * (1 - f)[None, :, None] + a[:, i0 + 1] * f[None, :, None]
-    a = a[:, :, i0] * (1 - f)[None, None, :] + a[:, :, i0 + 1] * f[None, None, :]
-    return a
+from volfile import value_noise, write_vol
 
 
 def smoke_density(res, seed):
@@ -75,17 +61,6 @@ def smoke_density(res, seed):
     return d.astype(np.float32)
 
 
-def write_vol(path, data, bbox=(0, 0, 0, 1, 1, 1)):
-    zres, yres, xres = data.shape
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with open(path, "wb") as f:
-        f.write(b"VOL")
-        f.write(struct.pack("<B", 3))
-        f.write(struct.pack("<iiiii", 1, xres, yres, zres, 1))
-        f.write(struct.pack("<6f", *bbox))
-        f.write(np.ascontiguousarray(data, dtype="<f4").tobytes())  # [z, y, x]: x fastest
-
-
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("out", nargs="?", default=str(Path(__file__).resolve().parent / "smoke.vol"))
@@ -93,7 +68,7 @@ def main():
     ap.add_argument("--seed", type=int, default=7)
     a = ap.parse_args()
     d = smoke_density(a.res, a.seed)
-    write_vol(Path(a.out), d)
+    write_vol(Path(a.out), d[..., None])
     print(f"{a.out}: {a.res}^3 float32, mean {d.mean():.4f}, max {d.max():.1f}, "
           f"boundary max {max(d[0].max(), d[-1].max(), d[:, 0].max(), d[:, -1].max(), d[:, :, 0].max(), d[:, :, -1].max()):.2e}")
 

@@ -46,6 +46,13 @@ enum Cells {
     Spectral(Vec<(RgbSigmoid, f32)>),
 }
 
+/// Where a lookup falls: the nearest cell, or the eight cells around the point (x fastest, then
+/// y, then z) and the point's position between them, each in [0, 1].
+enum Footprint {
+    Cell(usize),
+    Trilinear { corner: [usize; 8], w: Vec3 },
+}
+
 /// The cells a lookup blends and their weights (trilinear: eight; nearest: one, weight 1).
 struct Stencil {
     index: [usize; 8],
@@ -117,23 +124,16 @@ impl Grid {
         })
     }
 
-    /// The cells blended at the world point `p` and their weights.
+    /// The cells a lookup at the world point `p` reads.
     #[inline]
-    fn stencil(&self, p: Vec3) -> Stencil {
+    fn footprint(&self, p: Vec3) -> Footprint {
         let g = self.world_to_grid.transform_point3(p);
         let [nx, ny, nz] = self.resolution;
         let res = Vec3::new(nx as f32, ny as f32, nz as f32);
         let at = |x: usize, y: usize, z: usize| (z * ny + y) * nx + x;
         if self.nearest {
             let c = (g * res).floor().min(res - Vec3::ONE).max(Vec3::ZERO);
-            let mut s = Stencil {
-                index: [0; 8],
-                weight: [0.0; 8],
-                count: 1,
-            };
-            s.index[0] = at(c.x as usize, c.y as usize, c.z as usize);
-            s.weight[0] = 1.0;
-            return s;
+            return Footprint::Cell(at(c.x as usize, c.y as usize, c.z as usize));
         }
         // Cell centres at (i + 0.5) / n: the continuous index of p is g n - 0.5, clamped (also
         // for points outside the cube: Mitsuba's clamp). NaN clamps to 0.
@@ -141,16 +141,14 @@ impl Grid {
             .max(Vec3::ZERO)
             .min(res - Vec3::ONE);
         let i = f.floor();
-        let w = f - i;
         let (x0, y0, z0) = (i.x as usize, i.y as usize, i.z as usize);
         let (x1, y1, z1) = (
             (x0 + 1).min(nx - 1),
             (y0 + 1).min(ny - 1),
             (z0 + 1).min(nz - 1),
         );
-        let (u, v, t) = (w.x, w.y, w.z);
-        Stencil {
-            index: [
+        Footprint::Trilinear {
+            corner: [
                 at(x0, y0, z0),
                 at(x1, y0, z0),
                 at(x0, y1, z0),
@@ -160,17 +158,36 @@ impl Grid {
                 at(x0, y1, z1),
                 at(x1, y1, z1),
             ],
-            weight: [
-                (1.0 - u) * (1.0 - v) * (1.0 - t),
-                u * (1.0 - v) * (1.0 - t),
-                (1.0 - u) * v * (1.0 - t),
-                u * v * (1.0 - t),
-                (1.0 - u) * (1.0 - v) * t,
-                u * (1.0 - v) * t,
-                (1.0 - u) * v * t,
-                u * v * t,
-            ],
-            count: 8,
+            w: f - i,
+        }
+    }
+
+    /// The cells blended at the world point `p` and their weights.
+    #[inline]
+    fn stencil(&self, p: Vec3) -> Stencil {
+        match self.footprint(p) {
+            Footprint::Cell(i) => Stencil {
+                index: [i; 8],
+                weight: [1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+                count: 1,
+            },
+            Footprint::Trilinear { corner, w } => {
+                let (u, v, t) = (w.x, w.y, w.z);
+                Stencil {
+                    index: corner,
+                    weight: [
+                        (1.0 - u) * (1.0 - v) * (1.0 - t),
+                        u * (1.0 - v) * (1.0 - t),
+                        (1.0 - u) * v * (1.0 - t),
+                        u * v * (1.0 - t),
+                        (1.0 - u) * (1.0 - v) * t,
+                        u * (1.0 - v) * t,
+                        (1.0 - u) * v * t,
+                        u * v * t,
+                    ],
+                    count: 8,
+                }
+            }
         }
     }
 
@@ -190,35 +207,20 @@ impl Grid {
         }
     }
 
-    /// A one-channel lookup written out (the hot path of delta and ratio tracking through
-    /// density grids: the same blend as [`Grid::stencil`]'s, without its arrays).
+    /// A one-channel lookup as nested lerps (the hot path of delta and ratio tracking through
+    /// density grids: the stencil's blend without its weight arrays).
     #[inline]
     fn lookup_scalar(&self, c: &[f32], p: Vec3) -> f32 {
-        let g = self.world_to_grid.transform_point3(p);
-        let [nx, ny, nz] = self.resolution;
-        let value = |x: usize, y: usize, z: usize| c[(z * ny + y) * nx + x];
-        let res = Vec3::new(nx as f32, ny as f32, nz as f32);
-        if self.nearest {
-            let i = (g * res).floor().min(res - Vec3::ONE).max(Vec3::ZERO);
-            return value(i.x as usize, i.y as usize, i.z as usize);
+        match self.footprint(p) {
+            Footprint::Cell(i) => c[i],
+            Footprint::Trilinear { corner, w } => {
+                let v = corner.map(|i| c[i]);
+                let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
+                let (c00, c10) = (lerp(v[0], v[1], w.x), lerp(v[2], v[3], w.x));
+                let (c01, c11) = (lerp(v[4], v[5], w.x), lerp(v[6], v[7], w.x));
+                lerp(lerp(c00, c10, w.y), lerp(c01, c11, w.y), w.z)
+            }
         }
-        let f = (g * res - Vec3::splat(0.5))
-            .max(Vec3::ZERO)
-            .min(res - Vec3::ONE);
-        let i = f.floor();
-        let w = f - i;
-        let (x0, y0, z0) = (i.x as usize, i.y as usize, i.z as usize);
-        let (x1, y1, z1) = (
-            (x0 + 1).min(nx - 1),
-            (y0 + 1).min(ny - 1),
-            (z0 + 1).min(nz - 1),
-        );
-        let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
-        let c00 = lerp(value(x0, y0, z0), value(x1, y0, z0), w.x);
-        let c10 = lerp(value(x0, y1, z0), value(x1, y1, z0), w.x);
-        let c01 = lerp(value(x0, y0, z1), value(x1, y0, z1), w.x);
-        let c11 = lerp(value(x0, y1, z1), value(x1, y1, z1), w.x);
-        lerp(lerp(c00, c10, w.y), lerp(c01, c11, w.y), w.z)
     }
 
     /// The value at the world point `p` at the path's wavelengths (RGB mode: per channel,
