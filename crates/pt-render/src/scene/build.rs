@@ -100,7 +100,15 @@ impl Scene {
             shapes.push(data);
         }
 
-        let instancing = instancing(desc, &materials, &mut shapes, &mut stats, bvh)?;
+        let instancing = instancing(
+            desc,
+            &materials,
+            &mut shapes,
+            &mut stats,
+            bvh,
+            &mut media,
+            mode,
+        )?;
         let instance_boxes = instancing
             .iter()
             .flat_map(|i| &i.instances)
@@ -265,6 +273,8 @@ fn instancing(
     shapes: &mut Vec<ShapeData>,
     stats: &mut SceneStats,
     bvh: BvhKind,
+    media: &mut Vec<(pt_scene::MediumDesc, Medium)>,
+    mode: ColorMode,
 ) -> Result<Option<BuiltInstancing>, BuildError> {
     let mut groups = Vec::with_capacity(desc.groups.len());
     let mut group_boxes = Vec::with_capacity(desc.groups.len());
@@ -280,6 +290,14 @@ fn instancing(
             let si = shapes.len() as u32;
             let mut data = ShapeData::new(shape.bsdf as u32, Some(gi as u32));
             geometry(shape, si, &mut prims, &mut refs, stats, &mut data)?;
+            // A group shape's media are those of every instance of it (the media themselves
+            // stay in world space, as Mitsuba's do).
+            if let Some(m) = &shape.interior {
+                data.interior = Some(add_medium(media, m, mode)?);
+            }
+            if let Some(m) = &shape.exterior {
+                data.exterior = Some(add_medium(media, m, mode)?);
+            }
             shapes.push(data);
         }
         let bounds = prims

@@ -116,12 +116,6 @@ impl<'e> Builder<'e> {
                     "a shape in a shapegroup cannot emit (Mitsuba refuses instanced emitters too)",
                 ));
             }
-            if let Some(m) = shape.interior.as_ref().or(shape.exterior.as_ref()) {
-                return Err(SceneError::at(
-                    &m.loc,
-                    "media on shapes in a shapegroup are not supported (not yet implemented)",
-                ));
-            }
             shapes.push(shape);
         }
         v.finish()?;

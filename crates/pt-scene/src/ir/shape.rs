@@ -247,8 +247,8 @@ pub struct ShapeDesc {
 
 /// Mitsuba's `shapegroup`: shapes stored once and placed any number of times by
 /// [`InstanceDesc`]s. Its shapes' geometry is in the group's own space (each shape's
-/// `to_world` applied, no instance's); they have no emitters and no media (Mitsuba refuses
-/// emitters in groups; media are not implemented in groups).
+/// `to_world` applied, no instance's); they have no emitters (Mitsuba refuses emitters in
+/// groups). Their media, if any, bound every instance of them and stay in world space.
 #[derive(Clone, Debug)]
 pub struct ShapeGroupDesc {
     /// Where it was defined.
