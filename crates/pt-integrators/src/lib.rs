@@ -627,7 +627,11 @@ fn render_ptracer(
         |s| s.light.is_some(),
         "the saved state is a path tracer's, not a light tracer's",
         RenderState::for_light_paths,
-        |scene, settings| refuse_glowing_media(scene).and_then(|_| ptracer::check(settings)),
+        |scene, settings| {
+            refuse_glowing_media(scene)
+                .and_then(|_| refuse_radiancemeter("ptracer", scene))
+                .and_then(|_| ptracer::check(settings))
+        },
     )?;
     let paths_per_batch = u64::from(settings.width) * u64::from(settings.height);
     run.progress.start_samples(
@@ -872,6 +876,18 @@ fn refuse_media(name: &str, scene: &Scene) -> Result<(), String> {
             "{}: {name} does not yet trace participating media (not yet implemented): the scene has {} medium(s); render it with volpath or ptracer",
             m.loc,
             scene.media.len()
+        ));
+    }
+    Ok(())
+}
+
+/// The refusal of the methods that connect light paths to the camera when the sensor is a
+/// radiancemeter (one ray, which a connection meets with probability zero).
+pub(crate) fn refuse_radiancemeter(name: &str, scene: &Scene) -> Result<(), String> {
+    if scene.camera.is_radiancemeter() {
+        return Err(format!(
+            "{}: {name} cannot render for a radiancemeter (light paths cannot connect to its single ray); use path or volpath",
+            scene.camera.loc()
         ));
     }
     Ok(())

@@ -981,9 +981,11 @@ pub fn check(
     }
     if scene.camera.is_orthographic() {
         return Err(format!(
-            "{name}: an orthographic sensor is not yet supported (not yet implemented); use path or ptracer"
+            "{}: {name}: an orthographic sensor is not yet supported (not yet implemented); use path or ptracer",
+            scene.camera.loc()
         ));
     }
+    crate::refuse_radiancemeter(name, scene)?;
     crate::ptracer::check(settings).map_err(|e| e.replace("ptracer", name))
 }
 

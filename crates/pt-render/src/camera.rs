@@ -11,6 +11,8 @@ use pt_scene::{CameraDesc, FovAxis, Projection};
 /// (0, 0) is the top-left corner of the top-left pixel; (width, height) the bottom-right corner.
 #[derive(Clone, Debug)]
 pub struct Camera {
+    /// Where the scene defines the sensor (for errors about it).
+    loc: pt_scene::SourceLoc,
     to_world: Mat4,
     /// The inverse of `to_world`.
     to_camera: Mat4,
@@ -43,6 +45,8 @@ enum Kind {
         focus: f32,
     },
     Orthographic,
+    /// One ray, camera +z from the origin (Mitsuba's `radiancemeter`).
+    Radiancemeter,
 }
 
 /// tan(half fov) along x for a `fov_deg` spanning `fov_axis` of a `w` x `h` film (Mitsuba's
@@ -96,8 +100,10 @@ impl Camera {
                 (kind, tan_half_x(fov_deg, fov_axis, w, h))
             }
             Projection::Orthographic => (Kind::Orthographic, 1.0),
+            Projection::Radiancemeter => (Kind::Radiancemeter, 1.0),
         };
         Camera {
+            loc: desc.loc.clone(),
             to_world: desc.to_world,
             to_camera: desc.to_world.inverse(),
             origin: desc.to_world.transform_point3(Vec3::ZERO),
@@ -196,6 +202,14 @@ impl Camera {
                     tmax: self.far * len,
                 }
             }
+            // The same ray for every film point (Mitsuba's radiancemeter ignores the film
+            // sample); no clip planes.
+            Kind::Radiancemeter => Ray {
+                origin: self.origin,
+                dir: self.to_world.transform_vector3(Vec3::Z).normalize(),
+                tmin: 0.0,
+                tmax: f32::INFINITY,
+            },
         }
     }
 }
@@ -233,6 +247,10 @@ impl Camera {
     /// [`Camera::generate_ray`]: the camera ray through it passes through `p`.
     #[inline]
     pub fn connect(&self, p: Vec3, u_lens: Vec2) -> Option<CameraConnection> {
+        if self.kind == Kind::Radiancemeter {
+            // One ray: a point meets it with probability zero.
+            return None;
+        }
         let local = self.to_camera.transform_point3(p);
         if !(local.z >= self.near && local.z <= self.far) {
             return None;
@@ -255,7 +273,7 @@ impl Camera {
                 let q = (lens.truncate() + d.truncate() * (focus / d.z)) / focus;
                 (q, self.to_world.transform_point3(lens), d)
             }
-            Kind::Orthographic => (
+            Kind::Orthographic | Kind::Radiancemeter => (
                 Vec2::new(local.x, local.y),
                 self.to_world
                     .transform_point3(Vec3::new(local.x, local.y, 0.0)),
@@ -280,7 +298,7 @@ impl Camera {
                 let cos = cam_dir.z / cam_dir.length();
                 1.0 / (area * cos * cos * cos * dist * dist)
             }
-            Kind::Orthographic => {
+            Kind::Orthographic | Kind::Radiancemeter => {
                 let sx = self.to_world.transform_vector3(Vec3::X).length();
                 let sy = self.to_world.transform_vector3(Vec3::Y).length();
                 1.0 / (area * sx * sy)
@@ -302,7 +320,7 @@ impl Camera {
     /// [`CameraConnection::weight`]). Orthographic cameras have a delta direction: 0. The
     /// bidirectional methods weigh the camera's strategies with it.
     pub fn direction_pdf(&self, dir: Vec3) -> f32 {
-        if self.kind == Kind::Orthographic {
+        if matches!(self.kind, Kind::Orthographic | Kind::Radiancemeter) {
             return 0.0;
         }
         let local = self.to_camera.transform_vector3(dir);
@@ -328,6 +346,16 @@ impl Camera {
     /// camera cannot see a distant light by a connection from the light.
     pub fn is_orthographic(&self) -> bool {
         self.kind == Kind::Orthographic
+    }
+
+    /// Where the scene defines the sensor.
+    pub fn loc(&self) -> &pt_scene::SourceLoc {
+        &self.loc
+    }
+
+    /// Whether the camera is a radiancemeter: one ray, which no light path can connect to.
+    pub fn is_radiancemeter(&self) -> bool {
+        self.kind == Kind::Radiancemeter
     }
 }
 

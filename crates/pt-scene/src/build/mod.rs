@@ -30,8 +30,8 @@ use std::path::{Path, PathBuf};
 /// Plugins per object tag: (tag, supported, known to Mitsuba 3 but not implemented here).
 #[rustfmt::skip]
 const PLUGINS: &[(&str, &[&str], &[&str])] = &[
-    ("sensor", &["perspective", "thinlens", "orthographic"], &[
-        "radiancemeter", "irradiancemeter", "distant", "batch",
+    ("sensor", &["perspective", "thinlens", "orthographic", "radiancemeter"], &[
+        "irradiancemeter", "distant", "batch",
     ]),
     ("film", &["hdrfilm"], &["specfilm"]),
     ("sampler", &["independent", "stratified", "multijitter", "orthogonal", "ldsampler"], &[]),

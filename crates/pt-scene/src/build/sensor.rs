@@ -13,6 +13,7 @@ impl<'e> Builder<'e> {
         let camera = match v.plugin.as_str() {
             "perspective" | "thinlens" => perspective(&v)?,
             "orthographic" => orthographic(&v)?,
+            "radiancemeter" => radiancemeter(&v)?,
             _ => return Err(plugin_error(el)),
         };
         let (mut film, mut sampler, mut medium) = (None, None, None);
@@ -32,6 +33,18 @@ impl<'e> Builder<'e> {
             }
         }
         v.finish()?;
+        if camera.projection == Projection::Radiancemeter {
+            // Mitsuba throws for any other film size.
+            match &film {
+                Some(f) if f.width == 1 && f.height == 1 => {}
+                _ => {
+                    return Err(SceneError::at(
+                        &el.loc,
+                        "a radiancemeter needs a 1 x 1 film (<film type=\"hdrfilm\"> with width and height 1), as in Mitsuba",
+                    ))
+                }
+            }
+        }
         Ok((
             camera,
             film.unwrap_or_else(default_film),
@@ -192,6 +205,56 @@ pub(super) fn orthographic(v: &ObjectView<'_>) -> Result<CameraDesc> {
         to_world,
         near_clip,
         far_clip,
+        principal_point_offset: [0.0; 2],
+    })
+}
+
+/// `radiancemeter`: the ray from `origin` along `direction` (points; default the origin and
+/// +z), or, instead of them, `to_world` (rotation and translation: the ray is camera +z from its
+/// origin), as Mitsuba reads it.
+pub(super) fn radiancemeter(v: &ObjectView<'_>) -> Result<CameraDesc> {
+    let to_world = match v.transform("to_world")? {
+        Some(m) => {
+            if v.has("origin") || v.has("direction") {
+                return Err(v.prop_error(
+                    "to_world",
+                    "give either to_world or origin and direction, not both (Mitsuba refuses both)",
+                ));
+            }
+            if !is_affine(&m) || has_scale(&m) || Mat3::from_mat4(m).determinant() == 0.0 {
+                return Err(v.prop_error(
+                    "to_world",
+                    "a radiancemeter's to_world may only rotate and translate",
+                ));
+            }
+            m
+        }
+        None => {
+            let origin = v.vec3("origin")?.unwrap_or(Vec3::ZERO);
+            let dir = v.vec3("direction")?.unwrap_or(Vec3::Z);
+            if !(dir.length_squared() > 0.0 && dir.is_finite() && origin.is_finite()) {
+                return Err(v.prop_error(
+                    "direction",
+                    "a radiancemeter's direction must be a finite, non-zero vector",
+                ));
+            }
+            let z = dir.normalize();
+            // Any frame whose +z is the direction: the sensor sees one ray.
+            let (x, y) = z.any_orthonormal_pair();
+            Mat4::from_cols(
+                x.extend(0.0),
+                y.extend(0.0),
+                z.extend(0.0),
+                origin.extend(1.0),
+            )
+        }
+    };
+    Ok(CameraDesc {
+        loc: v.el.loc.clone(),
+        projection: Projection::Radiancemeter,
+        to_world,
+        near_clip: 0.0,
+        far_clip: f32::INFINITY,
         principal_point_offset: [0.0; 2],
     })
 }

@@ -44,6 +44,9 @@ pub enum Projection {
     /// rectangle x in [-1, 1], y in [-1/aspect, 1/aspect] of camera space (aspect = width /
     /// height), which `to_world` may scale.
     Orthographic,
+    /// Mitsuba's `radiancemeter`: the radiance arriving at the camera's origin along one ray,
+    /// camera +z (a 1 x 1 film).
+    Radiancemeter,
 }
 
 /// A camera. Camera space follows Mitsuba: it looks along +z, +y is up, +x is *left* in the image

@@ -316,7 +316,7 @@ fn unsupported_plugins_say_not_yet_implemented() {
         "<bsdf type=\"retarder\"/>",
         "<emitter type=\"directionalarea\"/>",
         "<sensor type=\"perspective\"><sampler type=\"orthogonal\"><integer name=\"strength\" value=\"3\"/></sampler></sensor>",
-        "<sensor type=\"radiancemeter\"/>",
+        "<sensor type=\"irradiancemeter\"/>",
         "<shape type=\"ellipsoids\"/>",
         "<integrator type=\"direct_projective\"/>",
         "<shape type=\"cube\"><bsdf type=\"circular\"/></shape>",

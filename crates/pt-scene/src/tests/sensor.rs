@@ -370,6 +370,42 @@ fn thin_lens_and_orthographic_sensors() {
     assert!(e.message.contains("invertible"), "{e}");
 }
 
+/// `radiancemeter`: origin and direction (or to_world) make a camera looking along +z; it
+/// needs a 1 x 1 film and refuses both ways of placing it at once.
+#[test]
+fn radiancemeter_is_one_ray() {
+    let film = r#"<film type="hdrfilm"><integer name="width" value="1"/><integer name="height" value="1"/></film>"#;
+    let sensor = |inner: &str| {
+        load(&format!(
+            "<scene version=\"3.0.0\"><sensor type=\"radiancemeter\">{inner}</sensor></scene>"
+        ))
+    };
+    let s = sensor(&format!(
+        r#"<point name="origin" value="1, 2, 3"/><vector name="direction" value="0, 0, -2"/>{film}"#
+    ))
+    .unwrap();
+    assert_eq!(s.camera.projection, Projection::Radiancemeter);
+    let m = s.camera.to_world;
+    assert!((m.transform_point3(Vec3::ZERO) - Vec3::new(1.0, 2.0, 3.0)).length() < 1e-6);
+    assert!((m.transform_vector3(Vec3::Z) - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-6);
+    for (inner, want) in [
+        (String::new(), "needs a 1 x 1 film"),
+        (
+            format!(
+                r#"<point name="origin" value="0, 0, 0"/><transform name="to_world"><translate value="1, 0, 0"/></transform>{film}"#
+            ),
+            "not both",
+        ),
+        (
+            format!(r#"<vector name="direction" value="0, 0, 0"/>{film}"#),
+            "non-zero",
+        ),
+    ] {
+        let e = sensor(&inner).unwrap_err();
+        assert!(e.message.contains(want), "{inner}: {e}");
+    }
+}
+
 #[test]
 fn samplers_and_their_rounded_counts() {
     for (plugin, extra, asked, count, kind) in [
