@@ -537,3 +537,43 @@ fn compare_prints_firefly_counts() {
         "{line}"
     );
 }
+
+/// Media with nothing in them: an all-zero extinction grid, a homogeneous medium of zero
+/// extinction, and a medium of zero albedo with grids, each glowing, all under `volpath`.
+/// They must render finite: no 0/0 in free flight, ratio tracking or the emission integrals
+/// (a majorant of 0, an albedo of 0 at every collision, an infinite free path).
+#[test]
+fn empty_and_zero_media_render_finite() {
+    let vol = |values: &[f32]| {
+        let mut b = b"VOL\x03".to_vec();
+        for v in [1i32, 2, 2, 2, 1] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        for v in [0.0f32, 0.0, 0.0, 1.0, 1.0, 1.0].iter().chain(values) {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+        b
+    };
+    let zero = vol(&[0.0; 8]);
+    let media = r#"<integrator type="volpath"/>
+    <medium type="heterogeneous" id="empty">
+        <volume type="gridvolume" name="sigma_t"><string name="filename" value="zero.vol"/>
+            <transform name="to_world"><translate value="-0.5, 0, -0.5"/><scale value="2"/></transform></volume>
+        <volume type="gridvolume" name="albedo"><string name="filename" value="zero.vol"/></volume>
+        <float name="emission" value="0.5"/>
+    </medium>
+    <medium type="homogeneous" id="nothing">
+        <float name="sigma_t" value="0"/><float name="emission" value="0.3"/>
+    </medium>
+    <shape type="cube"><transform name="to_world"><translate value="0, 1, 0"/></transform>
+        <bsdf type="null"/><ref name="interior" id="empty"/></shape>
+    <shape type="sphere"><point name="center" value="1.2, 0.4, 1"/><float name="radius" value="0.3"/>
+        <bsdf type="null"/><ref name="interior" id="nothing"/></shape>"#;
+    let img = rendered(
+        "empty_media",
+        &scene(1.0, 16, media),
+        &[("zero.vol", &zero)],
+        &["--spp", "16"],
+    );
+    assert!(mean(&img).iter().all(|&m| m > 0.0));
+}
