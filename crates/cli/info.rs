@@ -172,11 +172,20 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
     );
     let i = &desc.integrator;
     out!(
-        "integrator  {:?}, max_depth {}, rr_depth {}, hide_emitters {}{}",
+        "integrator  {:?}, max_depth {}, rr_depth {}, hide_emitters {}{}{}",
         i.kind,
         i.max_depth,
-        i.rr_depth,
+        if i.rr_depth == u32::MAX {
+            "none (no Russian roulette)".to_string()
+        } else {
+            i.rr_depth.to_string()
+        },
         i.hide_emitters,
+        if i.light_sampling {
+            ""
+        } else {
+            ", BSDF sampling only"
+        },
         match &i.moment {
             Some(name) => format!(" (moment: writes {name}.X/Y/Z and m2_{name}.X/Y/Z)"),
             None => String::new(),
