@@ -572,6 +572,11 @@ mod tests {
         }
     }
 
+    /// A one-channel grid's value at `p`.
+    fn density_at(d: &Grid, p: Vec3) -> f32 {
+        d.at(p, &SampledWavelengths::sample_visible(0.5)).0.x
+    }
+
     fn ray() -> Ray {
         // Diagonally through the box from a point on its face x = -1: inside it for t < 4.3.
         Ray::new(
@@ -590,7 +595,7 @@ mod tests {
         (0..n)
             .map(|i| {
                 let x = ((i as f64 + 0.5) * h) as f32;
-                sigma * f64::from(d.scalar_at(ray.origin + ray.dir * x)) * h
+                sigma * f64::from(density_at(d, ray.origin + ray.dir * x)) * h
             })
             .sum()
     }
@@ -679,13 +684,13 @@ mod tests {
         let centre = |i: f32, j: f32, k: f32| {
             Vec3::new(-1.0 + (i + 0.5), (j + 0.5) / 3.0, 2.0 * (k + 0.5) / 5.0)
         };
-        assert!((d.scalar_at(centre(2.0, 0.0, 0.0)) - 0.8).abs() < 1e-5);
-        assert!((d.scalar_at(centre(1.0, 1.0, 2.0)) - 2.0).abs() < 1e-5);
+        assert!((density_at(d, centre(2.0, 0.0, 0.0)) - 0.8).abs() < 1e-5);
+        assert!((density_at(d, centre(1.0, 1.0, 2.0)) - 2.0).abs() < 1e-5);
         // Halfway between x cells 0 and 1 (values 0.2 and 0.5).
-        assert!((d.scalar_at(centre(0.5, 0.0, 0.0)) - 0.35).abs() < 1e-5);
+        assert!((density_at(d, centre(0.5, 0.0, 0.0)) - 0.35).abs() < 1e-5);
         // Clamped between the first centre and the face, and outside the box.
-        assert!((d.scalar_at(Vec3::new(-0.9, 0.05, 0.1)) - 0.2).abs() < 1e-5);
-        assert!((d.scalar_at(Vec3::new(-1.5, 0.5, 0.5)) - 0.2).abs() < 1e-5);
+        assert!((density_at(d, Vec3::new(-0.9, 0.05, 0.1)) - 0.2).abs() < 1e-5);
+        assert!((density_at(d, Vec3::new(-1.5, 0.5, 0.5)) - 0.2).abs() < 1e-5);
         assert_eq!(d.max, 0.2 + 0.9 + 1.5);
     }
 
@@ -713,7 +718,7 @@ mod tests {
         let (mut tau, mut want) = (0.0f64, 0.0f64);
         for i in 0..n_quad {
             let x = ((i as f64 + 0.5) * h) as f32;
-            let step = sigma * f64::from(d.scalar_at(r.origin + r.dir * x)) * h;
+            let step = sigma * f64::from(density_at(d, r.origin + r.dir * x)) * h;
             want += f64::from(j) * (-(tau + 0.5 * step)).exp() * h;
             tau += step;
         }

@@ -180,6 +180,26 @@ impl Phase {
     /// The isotropic phase function (Mitsuba's default).
     pub const ISOTROPIC: Phase = Phase::Single(Lobe::Isotropic);
 
+    /// The blend of `lobes` (each with its share; the shares sum to one), or `None` when there
+    /// are none or more than [`MAX_PHASE_LOBES`].
+    pub fn mixture(lobes: Vec<(f32, Lobe)>) -> Option<Phase> {
+        if lobes.is_empty() || lobes.len() > MAX_PHASE_LOBES {
+            return None;
+        }
+        let count = lobes.len() as u8;
+        let mut weights = [0.0; MAX_PHASE_LOBES];
+        let mut all: [Lobe; MAX_PHASE_LOBES] = std::array::from_fn(|_| Lobe::Isotropic);
+        for (i, (w, l)) in lobes.into_iter().enumerate() {
+            weights[i] = w;
+            all[i] = l;
+        }
+        Some(Phase::Mixture {
+            weights,
+            lobes: all,
+            count,
+        })
+    }
+
     /// The phase function's value for light scattered between `wo` and `wi` (see the module
     /// doc), per steradian; also the density of [`Phase::sample`] choosing `wi`.
     #[inline]
@@ -373,16 +393,11 @@ mod tests {
             Phase::Single(Lobe::HenyeyGreenstein(0.0)),
             Phase::Single(Lobe::Rayleigh),
             Phase::Single(tabulated()),
-            Phase::Mixture {
-                weights: [0.25, 0.75, 0.0, 0.0],
-                lobes: [
-                    Lobe::Isotropic,
-                    Lobe::HenyeyGreenstein(0.6),
-                    Lobe::Isotropic,
-                    Lobe::Isotropic,
-                ],
-                count: 2,
-            },
+            Phase::mixture(vec![
+                (0.25, Lobe::Isotropic),
+                (0.75, Lobe::HenyeyGreenstein(0.6)),
+            ])
+            .unwrap(),
         ] {
             let (n_mu, n_phi) = (6000, 16);
             let (mut total, mut mean) = (0.0f64, 0.0f64);
@@ -435,38 +450,24 @@ mod tests {
         // A blend of a forward and a backward lobe with an isotropic one: its sampler must
         // pick each lobe in proportion (a blend sampled as its first lobe only, or with its
         // weights swapped, gives chi-square in the thousands too).
-        let blend = Phase::Mixture {
-            weights: [0.5, 0.3, 0.2, 0.0],
-            lobes: [
-                Lobe::HenyeyGreenstein(0.8),
-                Lobe::HenyeyGreenstein(-0.5),
-                Lobe::Isotropic,
-                Lobe::Isotropic,
-            ],
-            count: 3,
-        };
+        let blend = Phase::mixture(vec![
+            (0.5, Lobe::HenyeyGreenstein(0.8)),
+            (0.3, Lobe::HenyeyGreenstein(-0.5)),
+            (0.2, Lobe::Isotropic),
+        ])
+        .unwrap();
         // Rayleigh with a forward lobe, as an atmosphere's molecules and aerosols blend.
-        let sky = Phase::Mixture {
-            weights: [0.7, 0.3, 0.0, 0.0],
-            lobes: [
-                Lobe::Rayleigh,
-                Lobe::HenyeyGreenstein(0.76),
-                Lobe::Isotropic,
-                Lobe::Isotropic,
-            ],
-            count: 2,
-        };
+        let sky = Phase::mixture(vec![
+            (0.7, Lobe::Rayleigh),
+            (0.3, Lobe::HenyeyGreenstein(0.76)),
+        ])
+        .unwrap();
         // A table with a blend around it.
-        let table_blend = Phase::Mixture {
-            weights: [0.6, 0.4, 0.0, 0.0],
-            lobes: [
-                tabulated(),
-                Lobe::HenyeyGreenstein(-0.2),
-                Lobe::Isotropic,
-                Lobe::Isotropic,
-            ],
-            count: 2,
-        };
+        let table_blend = Phase::mixture(vec![
+            (0.6, tabulated()),
+            (0.4, Lobe::HenyeyGreenstein(-0.2)),
+        ])
+        .unwrap();
         for phase in [
             Phase::Single(Lobe::HenyeyGreenstein(0.6)),
             Phase::Single(Lobe::HenyeyGreenstein(-0.3)),

@@ -191,22 +191,6 @@ impl Grid {
         }
     }
 
-    /// The value at the world point `p` of a one-channel grid (for a three-channel grid, the
-    /// mean of its channels' values in RGB mode, 0 in spectral mode: use [`Grid::at`]).
-    #[inline]
-    pub fn scalar_at(&self, p: Vec3) -> f32 {
-        match &self.cells {
-            Cells::Scalar(c) => self.lookup_scalar(c, p),
-            Cells::Rgb(c) => {
-                let s = self.stencil(p);
-                (0..s.count)
-                    .map(|k| (c[s.index[k]].iter().sum::<f32>() / 3.0) * s.weight[k])
-                    .sum()
-            }
-            Cells::Spectral(_) => 0.0,
-        }
-    }
-
     /// A one-channel lookup as nested lerps (the hot path of delta and ratio tracking through
     /// density grids: the stencil's blend without its weight arrays).
     #[inline]
@@ -385,9 +369,11 @@ mod tests {
             false,
         )
         .unwrap();
-        assert_eq!(g.scalar_at(Vec3::new(0.1, 0.5, 0.5)), 1.0);
-        assert_eq!(g.scalar_at(Vec3::new(0.5, 0.5, 0.5)), 2.0);
-        assert_eq!(g.scalar_at(Vec3::new(0.99, 0.5, 0.5)), 3.0);
+        let l = SampledWavelengths::sample_visible(0.5);
+        let at = |x: f32| g.at(Vec3::new(x, 0.5, 0.5), &l).0.x;
+        assert_eq!(at(0.1), 1.0);
+        assert_eq!(at(0.5), 2.0);
+        assert_eq!(at(0.99), 3.0);
         assert!(Grid::new(&[1.0; 6], 6, [1, 1, 1], Mat4::IDENTITY, true, false, false).is_none());
         assert!(Grid::new(&[1.0; 5], 1, [2, 2, 1], Mat4::IDENTITY, true, false, false).is_none());
     }

@@ -682,26 +682,13 @@ fn phase_of(desc: &pt_scene::PhaseDesc) -> Result<Phase, String> {
     Ok(match desc {
         PhaseDesc::Blend { .. } => {
             all.retain(|&(w, _)| w > 0.0);
-            if all.len() > crate::medium::MAX_PHASE_LOBES {
-                return Err(format!(
-                    "a blendphase of {} phase functions (after nested blends) is more than the {} supported",
-                    all.len(),
+            let n = all.len();
+            Phase::mixture(all).ok_or_else(|| {
+                format!(
+                    "a blendphase of {n} phase functions (after nested blends) is more than the {} supported",
                     crate::medium::MAX_PHASE_LOBES
-                ));
-            }
-            let count = all.len().max(1) as u8;
-            let mut weights = [0.0; crate::medium::MAX_PHASE_LOBES];
-            let mut lobe: [Lobe; crate::medium::MAX_PHASE_LOBES] =
-                std::array::from_fn(|_| Lobe::Isotropic);
-            for (i, (w, l)) in all.into_iter().enumerate() {
-                weights[i] = w;
-                lobe[i] = l;
-            }
-            Phase::Mixture {
-                weights,
-                lobes: lobe,
-                count,
-            }
+                )
+            })?
         }
         // One phase function: one lobe of share 1.
         _ => Phase::Single(all.pop().map_or(Lobe::Isotropic, |(_, l)| l)),
