@@ -184,19 +184,27 @@ fn read_mesh(mut z: impl Read, version: u16) -> std::result::Result<LocalMesh, S
             values: colors.into_iter().flatten().collect(),
         });
     }
+    // Read through a buffer of many triangles: a 12-byte read per triangle from the
+    // decompressor cost more than the decompression (5M triangles: 0.2 s of 0.5).
     let mut indices = Vec::with_capacity(triangles.min(PREALLOCATE));
-    let mut buf = [0u8; 12];
-    for t in 0..triangles {
-        z.read_exact(&mut buf).map_err(io)?;
-        let tri = [0, 1, 2].map(|k| {
-            u32::from_le_bytes([buf[4 * k], buf[4 * k + 1], buf[4 * k + 2], buf[4 * k + 3]])
-        });
-        if let Some(&bad) = tri.iter().find(|&&i| i as usize >= vertices) {
-            return Err(format!(
-                "triangle {t} names vertex {bad}, but the mesh has {vertices} vertices"
-            ));
+    let mut buf = vec![0u8; 12 << 11];
+    let mut left = triangles;
+    while left > 0 {
+        let k = left.min(buf.len() / 12);
+        let chunk = &mut buf[..12 * k];
+        z.read_exact(chunk).map_err(io)?;
+        for b in chunk.chunks_exact(12) {
+            let tri = [0, 1, 2]
+                .map(|k| u32::from_le_bytes([b[4 * k], b[4 * k + 1], b[4 * k + 2], b[4 * k + 3]]));
+            if let Some(&bad) = tri.iter().find(|&&i| i as usize >= vertices) {
+                return Err(format!(
+                    "triangle {} names vertex {bad}, but the mesh has {vertices} vertices",
+                    indices.len()
+                ));
+            }
+            indices.push(tri);
         }
-        indices.push(tri);
+        left -= k;
     }
     Ok(LocalMesh {
         positions,

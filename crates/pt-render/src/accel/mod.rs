@@ -22,6 +22,7 @@ use obvhs::{Boundable, BvhBuildParams};
 // The `traverse!` macro of obvhs names `UVec2` unqualified.
 use glam::UVec2;
 use pt_math::{Ray, Vec3A};
+use rayon::prelude::*;
 use std::time::Duration;
 
 /// Which BVH layout to build.
@@ -47,9 +48,6 @@ pub const FLAT_MAX: usize = 32;
 
 enum Tree {
     Cw(CwBvh),
-    /// Large scenes: several CWBVHs over spatially separate groups of primitives (see
-    /// [`Accel::build_compact`]).
-    CwChunks(Vec<Chunk>),
     Two(Bvh2),
     /// No tree: `prims[..blocks.len() * LANES]` (at most) are the triangles and parallelograms,
     /// also held in `blocks`; the analytic primitives follow them and are tested one by one.
@@ -60,21 +58,14 @@ enum Tree {
     Empty,
 }
 
-/// One CWBVH of a chunked tree: its primitives are `prims[base..]`, in its traversal order.
-struct Chunk {
-    bvh: CwBvh,
-    base: usize,
-    bounds: Aabb,
-}
-
 /// Largest number of primitives built as one CWBVH by [`Accel::build_compact`]: above it, the
-/// primitives are split into 2, 4 or 8 spatial groups built one after the other, because
-/// obvhs's CWBVH conversion holds 208 bytes per primitive of temporaries (binary nodes and cost
-/// table). 2^18 keeps those under 60 MB per group; traversal then tests each group's box first.
+/// primitives are split into 2, 4 or 8 spatial groups, because obvhs's CWBVH conversion holds
+/// 208 bytes per primitive of temporaries (binary nodes and cost table). 2^18 keeps those under
+/// 60 MB per group. The groups are built two at a time (rayon) and joined under one root node
+/// ([`merge_groups`]).
 const CHUNK_PRIMS: usize = 1 << 18;
 
-/// Most groups a chunked tree has (a fixed array orders them per ray); larger scenes make larger
-/// groups.
+/// Most groups (the children of the joining root node); larger scenes make larger groups.
 const MAX_CHUNKS: usize = 8;
 
 /// A BVH over primitives stored in traversal order.
@@ -157,7 +148,7 @@ impl Accel {
     pub fn build_compact(
         prims: Vec<Primitive>,
         kind: BvhKind,
-        remake: impl Fn(usize) -> Primitive,
+        remake: impl Fn(usize) -> Primitive + Sync,
     ) -> Self {
         Self::build_compact_chunked(prims, kind, remake, CHUNK_PRIMS)
     }
@@ -167,7 +158,7 @@ impl Accel {
     fn build_compact_chunked(
         prims: Vec<Primitive>,
         kind: BvhKind,
-        remake: impl Fn(usize) -> Primitive,
+        remake: impl Fn(usize) -> Primitive + Sync,
         chunk_prims: usize,
     ) -> Self {
         let prims = match Accel::without_tree(prims, kind) {
@@ -192,23 +183,25 @@ impl Accel {
                     .min(MAX_CHUNKS);
                 let mut ids: Vec<u32> = (0..boxes.len() as u32).collect();
                 split_median(&mut ids, &boxes, parts);
-                let mut order = Vec::with_capacity(ids.len());
-                let mut chunks = Vec::with_capacity(parts);
                 let size = ids.len().div_ceil(parts);
-                for group in ids.chunks(size) {
-                    let group_boxes: Vec<BuildBox> =
-                        group.iter().map(|&i| boxes[i as usize]).collect();
-                    let bvh = build_cw_low_memory(group_boxes, &params);
-                    let base = order.len();
+                let built: Vec<CwBvh> = ids
+                    .par_chunks(size)
+                    .map(|group| {
+                        let group_boxes: Vec<BuildBox> =
+                            group.iter().map(|&i| boxes[i as usize]).collect();
+                        build_cw_low_memory(group_boxes, &params)
+                    })
+                    .collect();
+                let mut order = Vec::with_capacity(ids.len());
+                let mut groups = Vec::with_capacity(parts);
+                for (group, bvh) in ids.chunks(size).zip(built) {
+                    let base = order.len() as u32;
                     order.extend(bvh.primitive_indices.iter().map(|&k| group[k as usize]));
-                    chunks.push(Chunk {
-                        bounds: bvh.total_aabb,
-                        bvh,
-                        base,
-                    });
+                    groups.push((bvh, base));
                 }
                 drop(boxes);
-                (Tree::CwChunks(chunks), order)
+                let bvh = merge_groups(groups, order.clone());
+                (Tree::Cw(bvh), order)
             }
             BvhKind::Bvh2 => {
                 let bvh = build_bvh2(&boxes, params, &mut Duration::default());
@@ -218,7 +211,10 @@ impl Accel {
             }
         };
         let mut prims = Vec::with_capacity(order.len());
-        prims.extend(order.iter().map(|&i| remake(i as usize)));
+        order
+            .par_iter()
+            .map(|&i| remake(i as usize))
+            .collect_into_vec(&mut prims);
         Accel {
             small_stack: fits_small_stack(&tree),
             tree,
@@ -291,7 +287,6 @@ impl Accel {
         let found = match &self.tree {
             Tree::Cw(b) if self.small_stack => cw_closest::<SMALL_STACK>(b, r, &mut hit, &mut f),
             Tree::Cw(b) => cw_closest::<LARGE_STACK>(b, r, &mut hit, &mut f),
-            Tree::CwChunks(chunks) => chunks_closest(chunks, r, &mut hit, &mut f),
             Tree::Two(b) => b.ray_traverse(r, &mut hit, &mut f),
             Tree::Flat { .. } => unreachable!("handled above"),
             Tree::Empty => false,
@@ -321,10 +316,6 @@ impl Accel {
         match &self.tree {
             Tree::Cw(b) if self.small_stack => cw_any::<SMALL_STACK>(b, r, prims),
             Tree::Cw(b) => cw_any::<LARGE_STACK>(b, r, prims),
-            Tree::CwChunks(chunks) => chunks.iter().any(|c| {
-                c.bounds.intersect_ray(&r) < r.tmax
-                    && cw_any::<LARGE_STACK>(&c.bvh, r, &prims[c.base..])
-            }),
             Tree::Two(b) => !b.ray_traverse_miss(r, f),
             Tree::Flat { .. } => unreachable!("handled above"),
             Tree::Empty => false,

@@ -303,8 +303,8 @@ fn flat_blocks_match_the_scalar_tests() {
 #[test]
 fn matches_brute_force() {
     let prims = grid(8);
-    // The last three: CWBVH in 2 and 4 groups (129 primitives, at most 80 and 40 per group),
-    // as large scenes are built.
+    // The last three: CWBVH in 2, 4 and 8 groups (129 primitives, at most 80, 40 and 16 per
+    // group) joined under one root, as large scenes are built.
     let builds = [
         (BvhKind::CwBvh, usize::MAX),
         (BvhKind::Bvh2, usize::MAX),
@@ -317,11 +317,12 @@ fn matches_brute_force() {
             Accel::build(prims.clone(), kind)
         } else {
             let accel = Accel::build_compact_chunked(prims.clone(), kind, |i| prims[i], chunk);
-            let Tree::CwChunks(c) = &accel.tree else {
-                panic!("{chunk}: not chunked")
+            // One tree whose root joins the groups.
+            let Tree::Cw(b) = &accel.tree else {
+                panic!("{chunk}: not a CWBVH")
             };
             assert_eq!(
-                c.len(),
+                b.nodes[0].imask.count_ones() as usize,
                 prims
                     .len()
                     .div_ceil(chunk)
