@@ -167,8 +167,11 @@ impl AreaLight {
         } = &self.shape
         {
             if let Some(cone) = SphereCone::new(*center, *radius, x) {
+                // The texture coordinates (an atan2 and an acos) only for a textured light.
                 return cone.sample(u, *flip, x, |p| {
-                    self.radiance_at(sphere_uv(*frame, (p - *center) / *radius), lambda)
+                    self.radiance.constant_at(lambda).unwrap_or_else(|| {
+                        self.radiance_at(sphere_uv(*frame, (p - *center) / *radius), lambda)
+                    })
                 });
             }
         }
