@@ -6,6 +6,8 @@ sitting, by time to equal noise (issue 22).
     .venv/bin/python references/bench.py --scenes staircase,mesh-1m
     .venv/bin/python references/bench.py --write             # also replaces the table in
                                                              # references/performance.md
+    .venv/bin/python references/bench.py --scaling [--write]  # thread scaling instead: 1 and
+                                                             # 2 threads, both renderers
 
 Needs a release build (`cargo build --release`) and the virtual environment of
 references/README.md (Mitsuba 3.9.1 with the LLVM backend: DRJIT_LIBLLVM_PATH is set to
@@ -25,7 +27,14 @@ and peak resident memory (pt: the process; Mitsuba: its process after loading an
 Python and the Dr.Jit runtime included). RGB scenes run against llvm_ad_rgb, spectral ones
 (detected as references/make_references.py detects them) against llvm_ad_spectral.
 
-Output: the table (markdown) on stdout, and every figure in target/bench/results.json.
+Thread scaling (--scaling): each scene at a quarter of its spp (at least 4), rendered by pt with
+`--threads 1` and `--threads 2` (pt's own render time, load excluded) and by Mitsuba with
+`dr.set_thread_count(1)` and `(2)` (after a warm-up render at each count); the table gives
+samples per second at each count and the speed-up 2 threads / 1 thread of each renderer, and
+`--write` puts it between the scaling markers of references/performance.md.
+
+Output: the table (markdown) on stdout, and every figure in target/bench/results.json
+(target/bench/scaling.json with --scaling).
 """
 
 import argparse
@@ -111,10 +120,12 @@ def read_rgb(path):
     return np.array(mi.Bitmap(str(path)), dtype=np.float64)[..., :3]
 
 
-def run_pt(pt, scene, spp, params, seed, out):
+def run_pt(pt, scene, spp, params, seed, out, threads=None):
     """Whole-process wall time, render time, samples/s and peak memory of one pt render."""
     cmd = ["/usr/bin/time", "-f", "TIME %e %M", str(pt), "render", str(scene), "-o", str(out),
            "--spp", str(spp), "--seed", str(seed)]
+    if threads:
+        cmd += ["--threads", str(threads)]
     for k, v in params.items():
         cmd += ["-D", f"{k}={v}"]
     t = time.perf_counter()
@@ -142,6 +153,8 @@ def mitsuba_worker(args):
     import mitsuba as mi
 
     mi.set_variant(args.variant)
+    if args.worker_threads:
+        dr.set_thread_count(args.worker_threads)
     params = json.loads(args.params)
     t = time.perf_counter()
     scene = mi.load_file(args.scene, **params)
@@ -170,10 +183,12 @@ def mitsuba_worker(args):
     }))
 
 
-def run_mitsuba(scene, variant, spp, params, outs):
+def run_mitsuba(scene, variant, spp, params, outs, threads=None):
     cmd = [sys.executable, __file__, "--mitsuba-worker", "--scene", str(scene), "--variant",
            variant, "--spp", str(spp), "--params", json.dumps(params), "--outputs",
            *map(str, outs)]
+    if threads:
+        cmd += ["--worker-threads", str(threads)]
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:
         raise RuntimeError(f"Mitsuba failed on {scene}: {r.stderr.strip()[-2000:]}")
@@ -207,6 +222,75 @@ def table(rows, meta):
     return "\n".join(out)
 
 
+def machine_meta():
+    """Date, processor, core count and pt's commit, for a table's first line."""
+    commit = subprocess.run(["git", "-C", str(REPO), "rev-parse", "--short", "HEAD"],
+                            capture_output=True, text=True).stdout.strip()
+    meta = {
+        "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
+        "machine": platform.processor() or platform.machine(),
+        "cpus": os.cpu_count(),
+        "pt_commit": commit,
+    }
+    try:
+        model = next(l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo")
+                     if l.startswith("model name"))
+        meta["machine"] = model
+    except (OSError, StopIteration):
+        pass
+    return meta
+
+
+def write_section(text, name):
+    """Replaces the text between `<!-- NAME:begin -->` and `<!-- NAME:end -->` in
+    references/performance.md (written atomically)."""
+    perf = REPO / "references" / "performance.md"
+    doc = perf.read_text()
+    begin, end = f"<!-- {name}:begin -->", f"<!-- {name}:end -->"
+    if begin not in doc:
+        sys.exit(f"{perf} has no {begin} ... {end} section to replace")
+    head, rest = doc.split(begin, 1)
+    _, tail = rest.split(end, 1)
+    tmp = perf.with_suffix(".tmp")
+    tmp.write_text(head + begin + "\n" + text + "\n" + end + tail)
+    os.replace(tmp, perf)
+
+
+def scaling(args, chosen, images):
+    """The thread-scaling table (see the module documentation)."""
+    rows = []
+    for name, spec, spp, params, what in chosen:
+        scene = scene_path(spec)
+        variant = f"llvm_ad_{colour_mode(scene)}"
+        spp = max(4, spp // 4)
+        row = {"name": name, "spp": spp, "variant": variant}
+        for threads in (1, 2):
+            print(f"{name}: pt, {threads} thread(s) ...", file=sys.stderr)
+            r = run_pt(args.pt, scene, spp, params, SEEDS[0], images / f"{name}-scaling.exr", threads)
+            row[f"pt_{threads}"] = r["msamples_per_s"]
+            print(f"{name}: Mitsuba {variant}, {threads} thread(s) ...", file=sys.stderr)
+            mi = run_mitsuba(scene, variant, spp, params, [images / f"{name}-scaling-mi.exr"], threads)
+            row[f"mi_{threads}"] = mi["pixels"] * spp / mi["render_s"][0] / 1e6
+        rows.append(row)
+    meta = machine_meta()
+    out = [f"Machine: {meta['machine']}, {meta['cpus']} cores; pt {meta['pt_commit']}; Mitsuba "
+           f"3.9.1; {meta['date']}. Command: `.venv/bin/python references/bench.py --scaling`.", "",
+           "| scene, spp | variant | pt M samples/s, 1 / 2 threads | pt speed-up | Mitsuba M "
+           "samples/s, 1 / 2 threads | Mitsuba speed-up | pt / Mitsuba samples/s, 1 thread |",
+           "|---|---|---|---|---|---|---|"]
+    for r in rows:
+        out.append(f"| `{r['name']}`, {r['spp']} | {r['variant']} | {r['pt_1']:.2f} / {r['pt_2']:.2f} "
+                   f"| {r['pt_2'] / r['pt_1']:.2f} | {r['mi_1']:.2f} / {r['mi_2']:.2f} | "
+                   f"{r['mi_2'] / r['mi_1']:.2f} | {r['pt_1'] / r['mi_1']:.2f} |")
+    out += ["", f"Geometric mean speed-up from 1 to 2 threads: pt **{geomean([r['pt_2'] / r['pt_1'] for r in rows]):.2f}**, "
+            f"Mitsuba **{geomean([r['mi_2'] / r['mi_1'] for r in rows]):.2f}**, over {len(rows)} scenes."]
+    text = "\n".join(out)
+    print(text)
+    (BENCH / "scaling.json").write_text(json.dumps({"meta": meta, "rows": rows}, indent=1))
+    if args.write:
+        write_section(text, "scaling")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--scenes", help="comma-separated names (default: all)")
@@ -214,7 +298,10 @@ def main():
     ap.add_argument("--regenerate", action="store_true", help="write the generated scenes again")
     ap.add_argument("--write", action="store_true",
                     help="replace the suite's table in references/performance.md")
+    ap.add_argument("--scaling", action="store_true",
+                    help="measure thread scaling (1 and 2 threads) instead of time to equal noise")
     ap.add_argument("--mitsuba-worker", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--worker-threads", type=int, help=argparse.SUPPRESS)
     ap.add_argument("--scene", help=argparse.SUPPRESS)
     ap.add_argument("--variant", help=argparse.SUPPRESS)
     ap.add_argument("--spp", type=int, help=argparse.SUPPRESS)
@@ -241,6 +328,8 @@ def main():
                         str(GENERATED)], check=True)
     images = BENCH / "images"
     images.mkdir(parents=True, exist_ok=True)
+    if args.scaling:
+        return scaling(args, chosen, images)
     rows = []
     for name, spec, spp, params, what in chosen:
         scene = scene_path(spec)
@@ -270,34 +359,12 @@ def main():
         rows.append(row)
         print(f"{name}: ratio {row['ratio']:.2f} (pt {pt_s:.2f} s noise {pt_noise:.3g}; Mitsuba "
               f"{mi_s:.2f} s noise {mi_noise:.3g})", file=sys.stderr)
-    commit = subprocess.run(["git", "-C", str(REPO), "rev-parse", "--short", "HEAD"],
-                            capture_output=True, text=True).stdout.strip()
-    meta = {
-        "date": datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC"),
-        "machine": platform.processor() or platform.machine(),
-        "cpus": os.cpu_count(),
-        "pt_commit": commit,
-    }
-    try:
-        model = next(l.split(":", 1)[1].strip() for l in open("/proc/cpuinfo")
-                     if l.startswith("model name"))
-        meta["machine"] = model
-    except (OSError, StopIteration):
-        pass
+    meta = machine_meta()
     text = table(rows, meta)
     print(text)
     (BENCH / "results.json").write_text(json.dumps({"meta": meta, "rows": rows}, indent=1))
     if args.write:
-        perf = REPO / "references" / "performance.md"
-        doc = perf.read_text()
-        begin, end = "<!-- bench:begin -->", "<!-- bench:end -->"
-        if begin not in doc:
-            sys.exit(f"{perf} has no {begin} ... {end} section to replace")
-        head, rest = doc.split(begin, 1)
-        _, tail = rest.split(end, 1)
-        tmp = perf.with_suffix(".tmp")
-        tmp.write_text(head + begin + "\n" + text + "\n" + end + tail)
-        os.replace(tmp, perf)
+        write_section(text, "bench")
 
 
 if __name__ == "__main__":
