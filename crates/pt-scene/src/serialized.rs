@@ -184,8 +184,8 @@ fn read_mesh(mut z: impl Read, version: u16) -> std::result::Result<LocalMesh, S
             values: colors.into_iter().flatten().collect(),
         });
     }
-    // Read through a buffer of many triangles: a 12-byte read per triangle from the
-    // decompressor cost more than the decompression (5M triangles: 0.2 s of 0.5).
+    // Read through a buffer of many triangles rather than 12 bytes at a time from the
+    // decompressor (5M triangles: the whole load 0.49 -> 0.45 s).
     let mut indices = Vec::with_capacity(triangles.min(PREALLOCATE));
     let mut buf = vec![0u8; 12 << 11];
     let mut left = triangles;

@@ -215,8 +215,8 @@ pub(super) fn split_median(ids: &mut [u32], boxes: &[BuildBox], parts: usize) {
 /// roots (at most eight), with every group's nodes and primitive ranges moved behind it.
 /// `groups` holds each tree with the offset of its primitives in the merged primitive order
 /// (`order`, which becomes the tree's `primitive_indices`). Traversal then sorts the groups
-/// per ray like any node's children, where a loop over the groups' boxes had cost 20% of the
-/// render on a 5M-triangle mesh in eight groups.
+/// per ray like any node's children, where a loop over the groups' boxes came first: a
+/// 5M-triangle mesh in eight groups renders 14% faster so.
 ///
 /// The root is written as obvhs's converter writes a node (Ylitie et al. 2017, sec. 3.1): its
 /// box origin `p`, power-of-two scales `e` with `255 e` covering the box, each child's box in
