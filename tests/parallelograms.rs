@@ -9,8 +9,7 @@
 //!
 //! The scene: the Cornell box's kinds of shapes (rectangles, rotated and scaled cubes, one
 //! lifted 1 cm off the floor so that no faces overlap, where either could win) plus a flipped
-//! rectangle (reversed winding) and a disk, whose triangle fan shares edges but forms no
-//! parallelograms. The same description with every triangle given its own vertices ("unwelded":
+//! rectangle (reversed winding) and an (analytic) disk. The same description with every triangle given its own vertices ("unwelded":
 //! no shared indices, so nothing merges) is the reference. Rays from many points in every
 //! direction; where both report a hit, the results must agree to float rounding (1e-5 relative
 //! in distance and position, 1e-5 in normal and uv, 1e-4 relative in dp/du); a merged pair that
@@ -76,7 +75,7 @@ fn parallelograms_hit_like_their_triangles() {
     .unwrap();
     let merged = Scene::build(&desc, BvhKind::default(), LightSelection::Power).unwrap();
     let split = Scene::build(&unwelded(&desc), BvhKind::default(), LightSelection::Power).unwrap();
-    // 3 x 2 rectangle triangles, 2 x 12 cube triangles; the disk's fan stays triangles.
+    // 3 x 2 rectangle triangles, 2 x 12 cube triangles; the disk is analytic.
     assert_eq!(merged.stats.parallelograms, 3 + 12, "{:?}", merged.stats);
     // The rectangle light is sampled as one parallelogram (its sampling is tested in
     // pt-render's light tests), unwelded as two triangles.

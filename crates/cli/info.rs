@@ -259,6 +259,7 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
         let geo = match &s.geometry {
             Geometry::Mesh(m) => format!("{} triangles", m.indices.len()),
             Geometry::Sphere { radius, .. } => format!("sphere r={radius}"),
+            Geometry::Disk(d) => format!("disk, area {}", d.area()),
             Geometry::Cylinder { radius, length, .. } => {
                 format!("cylinder r={radius} length={length}")
             }

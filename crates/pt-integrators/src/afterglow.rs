@@ -52,7 +52,8 @@
 //! light and emitter is off and each phosphorescent triangle emits its afterglow.
 
 use crate::path::{li, PathSettings};
-use pt_math::{offset_ray_origin, warp::square_to_cosine_hemisphere, Frame, Ray, Vec2, Vec3};
+use pt_math::warp::{square_to_cosine_hemisphere, square_to_disk_concentric};
+use pt_math::{offset_ray_origin, Frame, Ray, Vec2, Vec3};
 use pt_render::sampler::Sampler;
 use pt_render::texture::{spectrum_for_role, Role};
 use pt_render::{BuildError, BvhKind, LightSelection, Scene};
@@ -262,6 +263,15 @@ pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, 
                         u,
                     );
                     (p, n)
+                });
+                dark.emitter = emitter(phi);
+                out.shapes.push(dark);
+            }
+            Geometry::Disk(d) => {
+                // One glow over the whole disk, as for spheres and cylinders.
+                let mut s = next();
+                let phi = absorbed(&lit, &a, &mut s, &settings, |u| {
+                    (d.point(square_to_disk_concentric(u)), d.normal)
                 });
                 dark.emitter = emitter(phi);
                 out.shapes.push(dark);

@@ -17,6 +17,7 @@ use crate::RadiosityError;
 use glam::Vec3;
 use pt_render::texture::Role;
 use pt_scene::{BsdfDesc, BsdfKind, Geometry, SceneDesc, ShapeDesc, SpectrumDesc};
+use std::borrow::Cow;
 use std::collections::HashMap;
 
 /// Marks "no patch" (the back of a one-sided surface) in [`Triangle::back`].
@@ -150,6 +151,15 @@ impl Welder {
     }
 }
 
+/// The geometry with a disk turned into its triangle fan (the solver's patches are triangles),
+/// other geometry as it is.
+fn meshed(g: &Geometry) -> Cow<'_, Geometry> {
+    match g {
+        Geometry::Disk(d) => Cow::Owned(Geometry::Mesh(d.to_mesh())),
+        _ => Cow::Borrowed(g),
+    }
+}
+
 /// Scene bounds over meshes and spheres.
 fn scene_bounds(desc: &SceneDesc) -> (Vec3, Vec3) {
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
@@ -160,6 +170,11 @@ fn scene_bounds(desc: &SceneDesc) -> (Vec3, Vec3) {
                     lo = lo.min(*p);
                     hi = hi.max(*p);
                 }
+            }
+            Geometry::Disk(d) => {
+                let (a, b) = d.bounds();
+                lo = lo.min(a);
+                hi = hi.max(b);
             }
             &Geometry::Sphere { center, radius, .. } => {
                 if center.is_finite() && radius.is_finite() {
@@ -385,7 +400,7 @@ impl PatchMesh {
                     back,
                 });
             };
-            match &s.geometry {
+            match &*meshed(&s.geometry) {
                 Geometry::Mesh(m) => {
                     for idx in &m.indices {
                         let p = idx.map(|i| m.positions[i as usize]);
@@ -411,6 +426,7 @@ impl PatchMesh {
                         });
                     }
                 }
+                Geometry::Disk(_) => unreachable!("meshed"),
                 Geometry::Cylinder { .. } | Geometry::SdfGrid(_) | Geometry::Curves(_) => {
                     unreachable!("count_shape refuses cylinders, SDF grids and curves")
                 }
@@ -427,7 +443,7 @@ impl PatchMesh {
 
     /// Checks a shape's geometry and returns how many triangles it will make.
     fn count_shape(s: &ShapeDesc, h: f32) -> Result<u64, RadiosityError> {
-        match &s.geometry {
+        match &*meshed(&s.geometry) {
             Geometry::Mesh(m) => {
                 let n = m.positions.len();
                 let mut count = 0u64;
@@ -460,6 +476,7 @@ impl PatchMesh {
                 let k = sphere_subdivisions_f(radius, h);
                 Ok((20.0 * k * k).min(u64::MAX as f64 / 4.0) as u64)
             }
+            Geometry::Disk(_) => unreachable!("meshed"),
             Geometry::Cylinder { .. } => Err(RadiosityError::scene(
                 &s.loc,
                 "the radiosity solver meshes triangles and spheres; a cylinder is not supported \

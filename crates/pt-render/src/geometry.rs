@@ -1,4 +1,4 @@
-//! Primitives (triangles, parallelograms, analytic spheres and cylinders, SDF voxels, curve
+//! Primitives (triangles, parallelograms, analytic disks, spheres and cylinders, SDF voxels, curve
 //! segments), their ray intersection, and the surface
 //! interaction recorded at a hit. Everything in world space.
 
@@ -31,6 +31,17 @@ pub enum Primitive {
         e1: Vec3A,
         /// Second edge.
         e2: Vec3A,
+    },
+    /// A disk (Mitsuba's `disk`, see `pt_scene::Disk`): the points `center + x a + y b` with
+    /// x^2 + y^2 <= 1. Its front side is the shape's (kept with the shape, not here: it need
+    /// not be the side `a x b` points to).
+    Disk {
+        /// Centre.
+        center: Vec3A,
+        /// The image of the object-space x axis.
+        a: Vec3A,
+        /// The image of the object-space y axis.
+        b: Vec3A,
     },
     /// A sphere; `flip` makes the front side (normal) face inwards.
     Sphere {
@@ -120,6 +131,10 @@ impl Primitive {
                 let (v1, v2, v3) = (v0 + e1, v0 + e2, v0 + e1 + e2);
                 Aabb::new(v0.min(v1).min(v2).min(v3), v0.max(v1).max(v2).max(v3))
             }
+            Primitive::Disk { center, a, b } => {
+                let reach = (a * a + b * b).map(f32::sqrt);
+                Aabb::new(center - reach, center + reach)
+            }
             Primitive::Sphere { center, radius, .. } => {
                 Aabb::new(center - Vec3A::splat(radius), center + Vec3A::splat(radius))
             }
@@ -181,7 +196,7 @@ impl Primitive {
         }
     }
 
-    /// Whether this is an analytic primitive (sphere, cylinder, SDF voxel, curve segment), which the flat
+    /// Whether this is an analytic primitive (disk, sphere, cylinder, SDF voxel, curve segment), which the flat
     /// SIMD blocks of triangles and parallelograms leave out.
     #[inline]
     pub fn is_analytic(&self) -> bool {
@@ -203,6 +218,9 @@ impl Primitive {
             Primitive::Parallelogram { v0, e1, e2 } => {
                 intersect_parallelogram(origin, dir, v0, e1, e2, tmin, tmax)
                     .map_or(f32::INFINITY, |h| h.0)
+            }
+            Primitive::Disk { center, a, b } => {
+                intersect_disk(origin, dir, center, a, b, tmin, tmax).map_or(f32::INFINITY, |h| h.0)
             }
             Primitive::Sphere { center, radius, .. } => {
                 intersect_sphere(origin, dir, center, radius, tmin, tmax)
@@ -243,6 +261,10 @@ impl Primitive {
                 origin, dir, v0, e1, e2, tmin, tmax,
             )
             .unwrap_or((f32::INFINITY, 0.0, 0.0)),
+            Primitive::Disk { center, a, b } => intersect_disk(
+                origin, dir, center, a, b, tmin, tmax,
+            )
+            .unwrap_or((f32::INFINITY, 0.0, 0.0)),
             Primitive::Sphere { .. } | Primitive::Cylinder { .. } | Primitive::SdfVoxel { .. } => {
                 (self.intersect(origin, dir, tmin, tmax), 0.0, 0.0)
             }
@@ -272,7 +294,7 @@ pub fn intersect_triangle(
     tmin: f32,
     tmax: f32,
 ) -> Option<(f32, f32, f32)> {
-    moller_trumbore::<false>(o, d, v0, e1, e2, tmin, tmax)
+    moller_trumbore::<TRIANGLE>(o, d, v0, e1, e2, tmin, tmax)
 }
 
 /// The parallelogram `v0 + b1 e1 + b2 e2`, `b1, b2` in [0, 1]: Möller-Trumbore's
@@ -288,13 +310,38 @@ pub fn intersect_parallelogram(
     tmin: f32,
     tmax: f32,
 ) -> Option<(f32, f32, f32)> {
-    moller_trumbore::<true>(o, d, v0, e1, e2, tmin, tmax)
+    moller_trumbore::<PARALLELOGRAM>(o, d, v0, e1, e2, tmin, tmax)
 }
 
-/// Möller & Trumbore's test over the triangle (`PARALLELOGRAM` false) or the parallelogram
-/// spanned by `e1` and `e2` at `v0`.
+/// The disk `c + x a + y b`, x^2 + y^2 <= 1 (an ellipse when `a` and `b` differ in length or
+/// are not orthogonal): Möller-Trumbore's coordinates over the edges `a` and `b` from `c` are
+/// the disk's object-space x and y, so the plane test is the triangle's and only the bound
+/// changes. Returns `(t, x, y)`.
 #[inline(always)]
-fn moller_trumbore<const PARALLELOGRAM: bool>(
+pub fn intersect_disk(
+    o: Vec3A,
+    d: Vec3A,
+    c: Vec3A,
+    a: Vec3A,
+    b: Vec3A,
+    tmin: f32,
+    tmax: f32,
+) -> Option<(f32, f32, f32)> {
+    moller_trumbore::<DISK>(o, d, c, a, b, tmin, tmax)
+}
+
+/// The region of the plane `v0 + b1 e1 + b2 e2` that [`moller_trumbore`] accepts.
+const TRIANGLE: u8 = 0;
+/// See [`TRIANGLE`].
+const PARALLELOGRAM: u8 = 1;
+/// See [`TRIANGLE`].
+const DISK: u8 = 2;
+
+/// Möller & Trumbore's test over the triangle (`REGION` = [`TRIANGLE`]), the parallelogram
+/// ([`PARALLELOGRAM`]) spanned by `e1` and `e2` at `v0`, or the disk ([`DISK`]) `v0 + b1 e1 +
+/// b2 e2` with b1^2 + b2^2 <= 1.
+#[inline(always)]
+fn moller_trumbore<const REGION: u8>(
     o: Vec3A,
     d: Vec3A,
     v0: Vec3A,
@@ -314,16 +361,15 @@ fn moller_trumbore<const PARALLELOGRAM: bool>(
     let qvec = tvec.cross(e1);
     let b2 = d.dot(qvec) * inv_det;
     let t = e2.dot(qvec) * inv_det;
-    let inside = if PARALLELOGRAM {
-        b2 <= 1.0
-    } else {
-        b1 + b2 <= 1.0
-    };
     // `&` rather than `&&` (or `contains`, which short-circuits): evaluate every comparison,
     // branch once.
     #[allow(clippy::manual_range_contains)]
-    let hit =
-        (det != 0.0) & (b1 >= 0.0) & (b1 <= 1.0) & (b2 >= 0.0) & inside & (t > tmin) & (t < tmax);
+    let inside = match REGION {
+        TRIANGLE => (b1 >= 0.0) & (b1 <= 1.0) & (b2 >= 0.0) & (b1 + b2 <= 1.0),
+        PARALLELOGRAM => (b1 >= 0.0) & (b1 <= 1.0) & (b2 >= 0.0) & (b2 <= 1.0),
+        _ => b1 * b1 + b2 * b2 <= 1.0,
+    };
+    let hit = (det != 0.0) & inside & (t > tmin) & (t < tmax);
     hit.then_some((t, b1, b2))
 }
 
@@ -525,6 +571,43 @@ mod tests {
                     .is_none()
             );
         }
+    }
+
+    /// The disk test accepts exactly the ellipse: for the disk with axes a = (2, 0.5, 0) and
+    /// b = (0, 1, 0.3) (sheared and tilted) at c, rays towards the points c + x a + y b hit at
+    /// the right distance with coordinates (x, y) inside the unit circle, and miss just
+    /// outside it (by 1e-3 in radius), from either side; a parallel ray and NaN miss.
+    #[test]
+    fn disk_hits_inside_the_ellipse_only() {
+        let (c, a, b) = (
+            Vec3A::new(0.3, -0.2, 1.0),
+            Vec3A::new(2.0, 0.5, 0.0),
+            Vec3A::new(0.0, 1.0, 0.3),
+        );
+        let n = a.cross(b).normalize();
+        let inf = f32::INFINITY;
+        for k in 0..64 {
+            let phi = k as f32 * 0.37;
+            for (r, inside) in [(0.0, true), (0.5, true), (0.999, true), (1.001, false)] {
+                let target = c + a * (r * phi.cos()) + b * (r * phi.sin());
+                for side in [1.0, -1.0] {
+                    let d = (n * -side + Vec3A::new(0.1, -0.2, 0.05)).normalize();
+                    let o = target - d * 3.0;
+                    match intersect_disk(o, d, c, a, b, 0.0, inf) {
+                        Some((t, x, y)) => {
+                            assert!(inside, "r {r} phi {phi}: hit");
+                            assert!((t - 3.0).abs() < 1e-4, "{t}");
+                            let (ex, ey) = (r * phi.cos(), r * phi.sin());
+                            assert!((x - ex).abs() < 1e-4 && (y - ey).abs() < 1e-4);
+                        }
+                        None => assert!(!inside, "r {r} phi {phi} side {side}: miss"),
+                    }
+                }
+            }
+        }
+        assert!(intersect_disk(c + n, a.normalize(), c, a, b, -inf, inf).is_none());
+        let nan = Vec3A::splat(f32::NAN);
+        assert!(intersect_disk(nan, -n, c, a, b, 0.0, inf).is_none());
     }
 
     /// The open cylinder against closed forms: the cylinder of radius 1 around the z axis, z in

@@ -5,14 +5,14 @@
 //! |-------------|------------------------------------------------|----------------------------------|
 //! | `rectangle` | [-1, 1]^2 in z = 0, normal +z, uv (0,0)..(1,1) | `to_world`, `flip_normals`       |
 //! | `cube`      | [-1, 1]^3, outward normals, uv per face        | `to_world`, `flip_normals`       |
-//! | `disk`      | unit disk in z = 0, normal +z                  | `to_world`, `flip_normals`       |
+//! | `disk`      | unit disk in z = 0, normal +z (analytic)       | `to_world`, `flip_normals`       |
 //! | `sphere`    | `center` (point, 0), `radius` (float, 1)       | `to_world` (similarity only)     |
 //! | `obj`       | the file's coordinates                         | `filename`, `face_normals` (false), `flip_tex_coords` (true) |
 //!
 //! Meshes carry no vertex normals unless the shape is smooth (OBJ), so the renderer shades
 //! them flat with the geometric normal `(p1 - p0) x (p2 - p0)`.
 
-use crate::ir::{Geometry, MeshAttribute, TriangleMesh};
+use crate::ir::{Disk, Geometry, MeshAttribute, TriangleMesh};
 use crate::transform::is_affine;
 use glam::{Mat3, Mat4, Vec2, Vec3};
 
@@ -95,6 +95,62 @@ pub(crate) fn cube() -> LocalMesh {
         mesh.indices.push([base + 3, base, base + 2]);
     }
     mesh
+}
+
+/// Mitsuba's `disk` through `to_world` = `m` (any affine map: a non-uniform scale makes an
+/// ellipse), its front side turned by `flip`. The normal is Mitsuba's, +z through the inverse
+/// transpose: the cofactor identity M^-T e_z = (M e_x x M e_y) / det M gives its direction
+/// without inverting.
+pub(crate) fn disk_shape(m: &Mat4, flip: bool) -> std::result::Result<Geometry, String> {
+    check_affine(m)?;
+    let center = m.transform_point3(Vec3::ZERO);
+    let axes = [m.transform_vector3(Vec3::X), m.transform_vector3(Vec3::Y)];
+    let det = Mat3::from_mat4(*m).determinant();
+    let normal = axes[0].cross(axes[1]).normalize_or_zero() * det.signum();
+    if !(center.is_finite() && normal != Vec3::ZERO && normal.is_finite() && det != 0.0) {
+        return Err("a disk's to_world must be finite and keep the disk a surface (it maps the disk to a point or a line)".into());
+    }
+    Ok(Geometry::Disk(Disk {
+        center,
+        axes,
+        normal: if flip { -normal } else { normal },
+    }))
+}
+
+impl Disk {
+    /// Surface area, scene units squared: pi |a x b| for the axes a, b.
+    pub fn area(&self) -> f32 {
+        std::f32::consts::PI * self.axes[0].cross(self.axes[1]).length()
+    }
+
+    /// The world-space point at object-space coordinates `local` (x, y), x^2 + y^2 <= 1.
+    #[inline]
+    pub fn point(&self, local: Vec2) -> Vec3 {
+        self.center + self.axes[0] * local.x + self.axes[1] * local.y
+    }
+
+    /// Axis-aligned bounds, world space: along each world axis the ellipse reaches
+    /// sqrt(a_i^2 + b_i^2) from its centre.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let [a, b] = self.axes;
+        let reach = (a * a + b * b).map(f32::sqrt);
+        (self.center - reach, self.center + reach)
+    }
+
+    /// The disk as a fan of [`DISK_SEGMENTS`] triangles with the same texture coordinates and
+    /// front side, for the consumers that need triangles (the radiosity solver's patches).
+    pub fn to_mesh(&self) -> TriangleMesh {
+        let [a, b] = self.axes;
+        let m = Mat4::from_cols(
+            a.extend(0.0),
+            b.extend(0.0),
+            self.normal.extend(0.0),
+            self.center.extend(1.0),
+        );
+        // The fan winds towards a x b; the front side may be the other one.
+        let flip = a.cross(b).dot(self.normal) < 0.0;
+        to_world(disk(), &m, flip).unwrap_or_default()
+    }
 }
 
 /// Mitsuba's `disk` (unit radius, z = 0, facing +z) as a fan of [`DISK_SEGMENTS`] triangles.
@@ -480,6 +536,34 @@ mod tests {
             area(&m)
         );
         assert!((face_normal(&m, 0) - Vec3::Z).length() < 1e-5);
+    }
+
+    /// The disk's front normal is Mitsuba's: +z through the inverse transpose, so a mirror in z
+    /// turns it (a x b does not turn), a mirror in x turns a x b but not the normal, and
+    /// `flip_normals` negates it; a non-uniform scale makes an ellipse of area pi s_x s_y whose
+    /// bounds reach s_x and s_y; a singular to_world is an error.
+    #[test]
+    fn disk_normal_is_mitsubas() {
+        let normal = |m: Mat4, flip: bool| match disk_shape(&m, flip).unwrap() {
+            Geometry::Disk(d) => d.normal,
+            _ => panic!("not a disk"),
+        };
+        let s = |x: f32, y: f32, z: f32| Mat4::from_scale(Vec3::new(x, y, z));
+        assert_eq!(normal(Mat4::IDENTITY, false), Vec3::Z);
+        assert_eq!(normal(Mat4::IDENTITY, true), -Vec3::Z);
+        assert_eq!(normal(s(1.0, 1.0, -1.0), false), -Vec3::Z);
+        assert_eq!(normal(s(-1.0, 1.0, 1.0), false), Vec3::Z);
+        let r = Mat4::from_rotation_x(-std::f32::consts::FRAC_PI_2);
+        assert!((normal(r, false) - Vec3::Y).length() < 1e-6);
+        let Geometry::Disk(d) = disk_shape(&s(3.0, 0.5, 1.0), false).unwrap() else {
+            panic!("not a disk")
+        };
+        assert!((d.area() - 1.5 * std::f32::consts::PI).abs() < 1e-5);
+        assert_eq!(
+            d.bounds(),
+            (Vec3::new(-3.0, -0.5, 0.0), Vec3::new(3.0, 0.5, 0.0))
+        );
+        assert!(disk_shape(&s(1.0, 0.0, 1.0), false).is_err());
     }
 
     #[test]

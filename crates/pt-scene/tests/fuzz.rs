@@ -181,6 +181,14 @@ fn check_usable(desc: &SceneDesc) -> Result<(), String> {
                     return Err(format!("shape {k}: sphere at {center:?} radius {radius}"));
                 }
             }
+            Geometry::Disk(d) => {
+                let area = d.area();
+                if !(d.center.is_finite() && area > 0.0 && area.is_finite())
+                    || (d.normal.length() - 1.0).abs() > 1e-4
+                {
+                    return Err(format!("shape {k}: disk {d:?}"));
+                }
+            }
             Geometry::Cylinder {
                 p0,
                 frame,

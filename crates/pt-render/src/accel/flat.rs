@@ -183,13 +183,15 @@ pub(super) fn flat_closest(
     };
     let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
     for (j, s) in analytic.iter().enumerate() {
-        let t = s.intersect(o, d, ray.tmin, hit.t);
+        // With the coordinates the hit's surface interaction needs (a disk's object-space
+        // point, a curve's parameter).
+        let (t, b1, b2) = s.intersect_bary(o, d, ray.tmin, hit.t);
         if t < hit.t {
             hit = AccelHit {
                 index: analytic_from + j,
                 t,
-                b1: 0.0,
-                b2: 0.0,
+                b1,
+                b2,
             };
         }
     }

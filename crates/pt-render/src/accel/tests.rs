@@ -194,6 +194,14 @@ fn flat_blocks_match_the_scalar_tests() {
                 flip: false,
             });
         }
+        if k % 20 == 3 {
+            // Its hit coordinates are the disk's object-space point: checked below.
+            prims.push(Primitive::Disk {
+                center: v0,
+                a: e1,
+                b: e2,
+            });
+        }
         if k % 20 == 13 {
             prims.push(Primitive::Cylinder {
                 p0: v0,
@@ -242,6 +250,9 @@ fn flat_blocks_match_the_scalar_tests() {
                     Primitive::Triangle { v0, e1, e2 }
                     | Primitive::Parallelogram { v0, e1, e2 } => {
                         (v0, e1.cross(e2).normalize().dot(d.into()).abs())
+                    }
+                    Primitive::Disk { center, a, b } => {
+                        (center, a.cross(b).normalize().dot(d.into()).abs())
                     }
                     Primitive::Sphere { center: c, .. } | Primitive::Cylinder { p0: c, .. } => {
                         (c, 1.0)

@@ -1,9 +1,12 @@
-//! Area lights: emitting meshes, parallelograms, spheres and cylinders.
+//! Area lights: emitting meshes, parallelograms, disks, spheres and cylinders.
 
 use super::LightSample;
 use crate::texture::{Texture, TexturePoint};
 use pt_math::lanes::V3;
-use pt_math::warp::{square_to_uniform_sphere, square_to_uniform_triangle, uniform_cone_pdf};
+use pt_math::warp::{
+    square_to_disk_concentric, square_to_uniform_sphere, square_to_uniform_triangle,
+    uniform_cone_pdf,
+};
 use pt_math::{Distribution1D, Frame, Mat3, Vec2, Vec3};
 use pt_spectrum::{SampledSpectrum, SampledWavelengths};
 use std::f32::consts::PI;
@@ -44,6 +47,10 @@ pub enum LightShape {
         /// Texture coordinates at `v0`, and their change along `e1` and along `e2`.
         uv: [Vec2; 3],
     },
+    /// A disk (an ellipse under non-uniform scale), sampled uniformly by area as Mitsuba
+    /// samples it: Shirley and Chiu's concentric map, through the affine map of the disk (which
+    /// keeps the density uniform), pdf 1 / area.
+    Disk(pt_scene::Disk),
     /// A sphere (normal inwards when `flip`).
     Sphere {
         /// Centre.
@@ -138,6 +145,11 @@ impl AreaLight {
                 length,
                 flip,
             } => cylinder_point(p0, frame, radius, length, flip, u),
+            LightShape::Disk(d) => {
+                let local = square_to_disk_concentric(u);
+                let (uv, _) = disk_uv(d.axes[0], d.axes[1], local);
+                (d.point(local), d.normal, uv)
+            }
         }
     }
 
@@ -373,6 +385,29 @@ pub fn sphere_uv(frame: Mat3, d: Vec3) -> Vec2 {
         u += 1.0;
     }
     Vec2::new(u, local.z.clamp(-1.0, 1.0).acos() / PI)
+}
+
+/// Mitsuba's disk texture coordinates at the object-space point `local` = (x, y) of the disk
+/// `c + x a + y b`: u = r = |local|, v = phi / 2 pi with phi = atan2(y, x) in [0, 2 pi); and
+/// the derivatives of the position, dp/du = cos(phi) a + sin(phi) b (radial, the direction
+/// that orients anisotropic BSDFs, as Mitsuba's) and dp/dv = 2 pi r (-sin(phi) a + cos(phi) b)
+/// (Mitsuba leaves out the factor 2 pi r, the length of the true derivative, which bump maps
+/// scale their slopes by). At the centre phi is taken as 0.
+#[inline]
+pub fn disk_uv(a: Vec3, b: Vec3, local: Vec2) -> (Vec2, [Vec3; 2]) {
+    let r = local.length();
+    let (cos_phi, sin_phi) = if r > 0.0 {
+        (local.x / r, local.y / r)
+    } else {
+        (1.0, 0.0)
+    };
+    let mut v = local.y.atan2(local.x) * (0.5 / PI);
+    if v < 0.0 {
+        v += 1.0;
+    }
+    let dpdu = a * cos_phi + b * sin_phi;
+    let dpdv = (b * cos_phi - a * sin_phi) * (2.0 * PI * r);
+    (Vec2::new(r, v), [dpdu, dpdv])
 }
 
 /// Points of parallelograms, `v0 + e1 u + e2 v` per lane (uniform by area for uniform `u`,

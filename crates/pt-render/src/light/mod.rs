@@ -23,8 +23,8 @@ mod sunsky;
 mod tests;
 
 pub use area::{
-    cylinder_point, parallelogram_points, sphere_uv, to_solid_angle, AreaLight, LightShape,
-    LightTriangle, SolidAngle,
+    cylinder_point, disk_uv, parallelogram_points, sphere_uv, to_solid_angle, AreaLight,
+    LightShape, LightTriangle, SolidAngle,
 };
 pub use build::build_light;
 pub use emit::{EmittedRay, LightPoint};

@@ -414,6 +414,16 @@ fn geometry(
                 })
             })
         }
+        Geometry::Disk(d) => {
+            prims.push(primitive_of_geometry(
+                &shape.geometry,
+                PrimRef::single(si, 0),
+            ));
+            refs.push(PrimRef::single(si, 0));
+            stats.disks += 1;
+            data.frame = Some(Mat3::from_cols(d.axes[0], d.axes[1], d.normal));
+            Some((LightShape::Disk(*d), d.area()))
+        }
         &Geometry::Sphere {
             center,
             radius,

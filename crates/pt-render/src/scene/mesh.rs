@@ -288,6 +288,11 @@ pub(super) fn primitive_of_geometry(geometry: &Geometry, r: PrimRef) -> Primitiv
         Geometry::Mesh(m) => {
             triangle_primitive(m.indices[r.local as usize].map(|i| m.positions[i as usize]))
         }
+        Geometry::Disk(d) => Primitive::Disk {
+            center: d.center.into(),
+            a: d.axes[0].into(),
+            b: d.axes[1].into(),
+        },
         &Geometry::Sphere {
             center,
             radius,

@@ -58,7 +58,8 @@ struct ShapeData {
     indices: Vec<[u32; 3]>,
     /// Mesh attributes by slot (`texture::AttributeSlots`), for `mesh_attribute` textures.
     attributes: Vec<Option<Attribute>>,
-    /// Spheres: the object-to-world rotation (uv and dp/du follow its z axis).
+    /// Spheres and cylinders: the object-to-world rotation (uv and dp/du follow its z axis);
+    /// disks: the two axes and the unit front normal as columns.
     frame: Option<Mat3>,
     /// `sdfgrid` shapes: the grid, for smooth shading normals.
     sdf: Option<std::sync::Arc<pt_scene::SdfGrid>>,
@@ -143,6 +144,8 @@ pub struct SceneStats {
     pub spheres: usize,
     /// Analytic cylinders in the BVH.
     pub cylinders: usize,
+    /// Analytic disks.
+    pub disks: usize,
     /// Voxels of `sdfgrid` shapes that the surface passes through (one primitive each).
     pub sdf_voxels: usize,
     /// Segments of `linearcurve` and `bsplinecurve` shapes (one primitive each).
@@ -327,6 +330,15 @@ impl Scene {
                     prim: id as u32,
                     b: Vec2::new(b1, b2),
                 }
+            }
+            Primitive::Disk { center, a, b } => {
+                // The hit's object-space coordinates are its barycentrics; the shape's frame
+                // holds the front normal (column 2).
+                let (a, b) = (Vec3::from(a), Vec3::from(b));
+                let n = shape.frame.map_or(a.cross(b).normalize(), |f| f.z_axis);
+                let p = Vec3::from(center) + a * b1 + b * b2;
+                let (uv, dp) = crate::light::disk_uv(a, b, Vec2::new(b1, b2));
+                Interaction::analytic(p, n, uv, dp, t, r.shape, id as u32)
             }
             Primitive::Sphere {
                 center,

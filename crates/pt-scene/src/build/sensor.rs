@@ -430,6 +430,11 @@ pub(super) fn bounds(shapes: &[ShapeDesc]) -> Option<(Vec3, Vec3)> {
     for shape in shapes {
         match &shape.geometry {
             Geometry::Mesh(m) => m.positions.iter().for_each(|&p| add(p)),
+            Geometry::Disk(d) => {
+                let (lo, hi) = d.bounds();
+                add(lo);
+                add(hi);
+            }
             Geometry::Sphere { center, radius, .. } => {
                 add(*center - *radius);
                 add(*center + *radius);

@@ -10,7 +10,9 @@ impl<'e> Builder<'e> {
         let flip = v.boolean("flip_normals")?.unwrap_or(false);
         let geometry = match v.plugin.as_str() {
             "rectangle" => self.mesh(&v, shapes::rectangle(), &to_world, flip)?,
-            "disk" => self.mesh(&v, shapes::disk(), &to_world, flip)?,
+            "disk" => {
+                shapes::disk_shape(&to_world, flip).map_err(|m| SceneError::at(&el.loc, m))?
+            }
             "cube" => {
                 // Mitsuba's cube is a mesh and takes the mesh option; flat faces either way.
                 v.boolean("face_normals")?;

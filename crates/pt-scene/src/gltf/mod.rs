@@ -176,6 +176,7 @@ pub fn load_mesh(path: &Path) -> Result<TriangleMesh, String> {
         .filter_map(|s| match &s.geometry {
             Geometry::Mesh(m) => Some(m),
             Geometry::Sphere { .. }
+            | Geometry::Disk(_)
             | Geometry::Cylinder { .. }
             | Geometry::SdfGrid(_)
             | Geometry::Curves(_) => None,
@@ -567,6 +568,7 @@ fn summarise_meshes(cx: &mut Ctx, desc: &SceneDesc, lines: Vec<String>) {
         .map(|s| match &s.geometry {
             Geometry::Mesh(m) => m.indices.len(),
             Geometry::Sphere { .. }
+            | Geometry::Disk(_)
             | Geometry::Cylinder { .. }
             | Geometry::SdfGrid(_)
             | Geometry::Curves(_) => 0,

@@ -1,5 +1,5 @@
 //! Shapes in world space: triangle meshes (with their vertex and face attributes) and
-//! analytic spheres, with their material, emitter and interior medium.
+//! analytic spheres, disks, cylinders, SDF grids and curves, with their material, emitter and interior medium.
 
 use super::{AreaEmitterDesc, SourceLoc, SpectrumDesc};
 use glam::{Mat3, Mat4, Vec2, Vec3};
@@ -66,8 +66,10 @@ impl MeshAttribute {
 /// Geometry of a shape, in world space.
 #[derive(Clone, Debug)]
 pub enum Geometry {
-    /// Triangles (obj, rectangle, cube, disk are all turned into this).
+    /// Triangles (obj, ply, serialized, rectangle and cube are turned into this).
     Mesh(TriangleMesh),
+    /// Mitsuba's `disk`, intersected analytically (see [`Disk`]).
+    Disk(Disk),
     /// An analytic sphere. `flip_normals` makes its normal point inwards.
     Sphere {
         /// Centre, world space.
@@ -104,6 +106,23 @@ pub enum Geometry {
     /// Mitsuba's `linearcurve` and `bsplinecurve` (shared: the shape's primitives are its
     /// segments).
     Curves(std::sync::Arc<Curves>),
+}
+
+/// Mitsuba's `disk` in world space: the points `center + x axes[0] + y axes[1]` with
+/// x^2 + y^2 <= 1, the image of the unit disk in object space's z = 0 plane under `to_world`
+/// (an ellipse under non-uniform scale or shear). Texture coordinates are Mitsuba's polar ones,
+/// u = r = sqrt(x^2 + y^2) and v = phi / 2 pi, phi = atan2(y, x) in [0, 2 pi).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Disk {
+    /// Centre, world space (the image of the object-space origin).
+    pub center: Vec3,
+    /// The images of the object-space x and y unit vectors under `to_world` (scene units;
+    /// not necessarily orthogonal nor of equal length).
+    pub axes: [Vec3; 2],
+    /// Unit normal of the front side, world space: Mitsuba's, the object-space +z normal
+    /// through `to_world`'s inverse transpose (so a mirroring `to_world` turns it), negated by
+    /// `flip_normals`.
+    pub normal: Vec3,
 }
 
 /// How a curve's control points make the curve.

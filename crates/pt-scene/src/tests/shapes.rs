@@ -170,14 +170,24 @@ fn disk_and_rectangle_geometry() {
         "<shape type=\"disk\"><transform name=\"to_world\"><scale value=\"3\"/></transform></shape>\n<shape type=\"rectangle\"/>",
     ))
     .unwrap();
-    let disk = mesh(&s.shapes[0]);
-    let area: f32 = (0..disk.indices.len())
+    let Geometry::Disk(disk) = &s.shapes[0].geometry else {
+        panic!("a disk is analytic");
+    };
+    assert!(
+        (disk.area() - 9.0 * std::f32::consts::PI).abs() < 1e-4,
+        "{disk:?}"
+    );
+    assert!(close(disk.normal, Vec3::Z) && close(disk.axes[1], 3.0 * Vec3::Y));
+    // Its triangle fan (for the radiosity solver) has the same area and front side.
+    let fan = disk.to_mesh();
+    let area: f32 = (0..fan.indices.len())
         .map(|t| {
-            let p = disk.indices[t].map(|i| disk.positions[i as usize]);
+            let p = fan.indices[t].map(|i| fan.positions[i as usize]);
             0.5 * (p[1] - p[0]).cross(p[2] - p[0]).length()
         })
         .sum();
     assert!((area - 9.0 * std::f32::consts::PI).abs() < 1e-3, "{area}");
+    assert!(close(face_normal(&fan, 7), Vec3::Z));
     let rect = mesh(&s.shapes[1]);
     assert_eq!(rect.indices.len(), 2);
     assert_eq!(rect.uvs.as_ref().unwrap()[2], Vec2::ONE);
