@@ -326,18 +326,20 @@ impl SkyModel {
             return [0.0; 3];
         };
         let s = self.sky_scale * CIE_Y_NORMALIZATION;
-        std::array::from_fn(|c| s * eval_sky(ct, g, &sky.params[c], sky.radiance[c]))
+        let a = SkyAngles::new(ct, g);
+        std::array::from_fn(|c| s * eval_sky(&a, &sky.params[c], sky.radiance[c]))
     }
 
     /// The sun's RGB radiance in direction `d` (unit, local): 0 outside its disc.
     #[inline]
     pub fn sun_rgb(&self, d: Vec3) -> [f32; 3] {
-        let (Channels::Rgb(_, sun), Some((ct, g))) = (&self.channels, self.angles(d)) else {
-            return [0.0; 3];
-        };
+        // The disc test first: it is cheaper than the angles, and most directions miss.
         if !self.in_sun(d) {
             return [0.0; 3];
         }
+        let (Channels::Rgb(_, sun), Some((ct, g))) = (&self.channels, self.angles(d)) else {
+            return [0.0; 3];
+        };
         match sun {
             Sun::Disc(v) => *v,
             Sun::Limb { poly, factor, .. } => {
@@ -371,10 +373,11 @@ impl SkyModel {
             return [0.0; 4];
         };
         let sky = &data.0;
+        let a = SkyAngles::new(ct, g);
         let mut cache = [f32::NAN; tables::WAVELENGTHS];
         let mut value = |c: usize| {
             if cache[c].is_nan() {
-                cache[c] = eval_sky(ct, g, &sky.params[c], sky.radiance[c]);
+                cache[c] = eval_sky(&a, &sky.params[c], sky.radiance[c]);
             }
             cache[c]
         };
@@ -384,13 +387,14 @@ impl SkyModel {
     /// The sun's spectral radiance at four wavelengths `lambda` (nm): 0 outside its disc.
     #[inline]
     pub fn sun_spectral(&self, d: Vec3, lambda: [f32; 4]) -> [f32; 4] {
+        // The disc test first: it is cheaper than the angles, and most directions miss.
+        if !self.in_sun(d) {
+            return [0.0; 4];
+        }
         let (Channels::Spectral(data), Some((ct, g))) = (&self.channels, self.angles(d)) else {
             return [0.0; 4];
         };
         let sun = &data.1;
-        if !self.in_sun(d) {
-            return [0.0; 4];
-        }
         match sun {
             Sun::Disc(v) => lambda.map(|l| lerp_channels(l, &mut |c| v[c])),
             Sun::Limb { poly, limb, factor } => {
@@ -433,20 +437,52 @@ impl SkyModel {
     }
 }
 
+/// The terms of Hosek and Wilkie's sky function (2012, eq. 9) that depend on the direction
+/// alone, shared by every channel of one lookup (the cosine, the division and the square root
+/// ran once per channel, up to eight times per spectral lookup).
+#[derive(Clone, Copy)]
+struct SkyAngles {
+    /// gamma, the angle to the sun (radians).
+    gamma: f32,
+    /// cos gamma.
+    cos_gamma: f32,
+    /// 1 + cos^2 gamma, the numerator of the circumsolar term chi.
+    one_plus_cos2: f32,
+    /// cos^2 gamma.
+    cos2: f32,
+    /// 1 / (cos theta + 0.01), the exponent's scale of the horizon term.
+    inv_cos_theta: f32,
+    /// sqrt(cos theta) (theta the zenith angle; 0 below the horizon).
+    sqrt_cos_theta: f32,
+}
+
+impl SkyAngles {
+    #[inline]
+    fn new(cos_theta: f32, gamma: f32) -> Self {
+        let cos_gamma = gamma.cos();
+        let cos2 = cos_gamma * cos_gamma;
+        SkyAngles {
+            gamma,
+            cos_gamma,
+            one_plus_cos2: 1.0 + cos2,
+            cos2,
+            inv_cos_theta: 1.0 / (cos_theta + 0.01),
+            sqrt_cos_theta: cos_theta.max(0.0).sqrt(),
+        }
+    }
+}
+
 /// The sky's radiance of one channel (Hosek and Wilkie 2012, eq. 9; coefficients in the
-/// file's order A B C D E F G I H).
+/// file's order A B C D E F G I H), for the direction terms `a`.
 #[inline]
-fn eval_sky(cos_theta: f32, gamma: f32, p: &[f32; tables::SKY_PARAMS], mean: f32) -> f32 {
-    let cos_gamma = gamma.cos();
-    let cos2 = cos_gamma * cos_gamma;
+fn eval_sky(a: &SkyAngles, p: &[f32; tables::SKY_PARAMS], mean: f32) -> f32 {
     let h = p[8];
-    let chi = (1.0 + cos2) / (1.0 + h * h - 2.0 * h * cos_gamma).powf(1.5);
-    let c1 = 1.0 + p[0] * (p[1] / (cos_theta + 0.01)).exp();
-    let c2 = p[2]
-        + p[3] * (p[4] * gamma).exp()
-        + p[5] * cos2
-        + p[6] * chi
-        + p[7] * cos_theta.max(0.0).sqrt();
+    // chi = (1 + cos^2 gamma) / (1 + H^2 - 2 H cos gamma)^(3/2); x^(3/2) as x sqrt(x).
+    let base = 1.0 + h * h - 2.0 * h * a.cos_gamma;
+    let chi = a.one_plus_cos2 / (base * base.sqrt());
+    let c1 = 1.0 + p[0] * (p[1] * a.inv_cos_theta).exp();
+    let c2 =
+        p[2] + p[3] * (p[4] * a.gamma).exp() + p[5] * a.cos2 + p[6] * chi + p[7] * a.sqrt_cos_theta;
     c1 * c2 * mean
 }
 
