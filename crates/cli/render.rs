@@ -100,8 +100,10 @@ pub(crate) struct RenderArgs {
     clamp: Option<f32>,
     /// How next-event estimation picks a light: `power` gives each distant light
     /// (environment, sun, directional) its uniform share and splits the rest among the other
-    /// lights by power; `uniform` is Mitsuba's choice.
-    #[arg(long, value_enum, default_value_t = SelectionArg::Power)]
+    /// lights by power; `tree` (the default) keeps the distant lights' shares and chooses among
+    /// the others with a light tree, by power, distance and orientation from the shading point
+    /// (Conty Estevez and Kulla 2018); `uniform` is Mitsuba's choice.
+    #[arg(long, value_enum, default_value_t = SelectionArg::Tree)]
     light_selection: SelectionArg,
     /// Acceleration structure: `auto` tests scenes of at most 32 primitives without a tree
     /// (SIMD, faster at that size) and builds a CWBVH for larger ones; `cwbvh` and `bvh2` are
@@ -182,6 +184,7 @@ enum ReconstructionArg {
 
 #[derive(Clone, Copy, ValueEnum)]
 enum SelectionArg {
+    Tree,
     Power,
     Uniform,
 }
@@ -431,6 +434,7 @@ pub(crate) fn execute(
             BvhArg::Flat => BvhKind::Flat,
         },
         selection: match args.light_selection {
+            SelectionArg::Tree => LightSelection::Tree,
             SelectionArg::Power => LightSelection::Power,
             SelectionArg::Uniform => LightSelection::Uniform,
         },

@@ -301,7 +301,7 @@ fn absorbed(
         let origin = offset_ray_origin(p, n);
         // Direct: one light sample.
         let mut e = pt_spectrum::SampledSpectrum::ZERO;
-        if let Some((i, pmf, u_sel)) = scene.sample_light(sampler.next_1d()) {
+        if let Some((i, pmf, u_sel)) = scene.sample_light_at(p, sampler.next_1d()) {
             let u = sampler.next_2d();
             if let Some(ls) = scene.lights[i].sample(p, u_sel, u, &lambda) {
                 let cos = ls.wi.dot(n);

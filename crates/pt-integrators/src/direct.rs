@@ -83,7 +83,7 @@ pub(crate) fn estimate<S: RandomSource>(
     if counts.emitter > 0 && bsdf.has_smooth_lobe() {
         let mut lights = SampledSpectrum::ZERO;
         for _ in 0..counts.emitter {
-            let Some((li, pmf, u_sel)) = scene.sample_light(sampler.next_1d()) else {
+            let Some((li, pmf, u_sel)) = scene.sample_light_at(hit.p, sampler.next_1d()) else {
                 let _ = sampler.next_2d();
                 continue;
             };
@@ -135,7 +135,7 @@ pub(crate) fn estimate<S: RandomSource>(
                 })
                 .unwrap_or(SampledSpectrum::ZERO),
                 None => escaped_radiance(scene, dir, &lambda, bs.weight, |i| {
-                    weight(scene.light_pmf(i) * scene.lights[i].escaped_pdf(dir))
+                    weight(scene.light_pmf_at(hit.p, i) * scene.lights[i].escaped_pdf(dir))
                 }),
             };
         }

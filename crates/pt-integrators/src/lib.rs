@@ -222,7 +222,7 @@ impl<'a> Job<'a> {
             spp: desc.sampler.sample_count,
             seed: desc.sampler.seed,
             bvh: BvhKind::Auto,
-            selection: LightSelection::Power,
+            selection: LightSelection::default(),
             mode: None,
             share: Share::WHOLE,
         }
@@ -1082,7 +1082,8 @@ fn render_radiosity(
             "--resume applies to the path tracer, not to radiosity".into(),
         ));
     }
-    if job.mode.is_some() || job.selection != LightSelection::Power || job.bvh != BvhKind::Auto {
+    if job.mode.is_some() || job.selection != LightSelection::default() || job.bvh != BvhKind::Auto
+    {
         return Err(IntegratorError::Settings(
             "--mode, --light-selection and --bvh apply to the path tracer, not to radiosity".into(),
         ));

@@ -422,11 +422,12 @@ fn arrive(
         ..
     } = path;
     let (depth_now, prev_delta_now, prev_pdf_now) = (*depth, *prev_delta, *prev_pdf);
+    let prev = *prev_p;
     let Some(hit) = hit else {
         // The ray left the scene: environment and sun.
         *radiance += escaped_radiance(scene, ray.dir, lambda, *throughput, |i| {
             emission_weight(s, depth_now, prev_delta_now, prev_pdf_now, || {
-                scene.light_pmf(i) * scene.lights[i].escaped_pdf(ray.dir)
+                scene.light_pmf_at(prev, i) * scene.lights[i].escaped_pdf(ray.dir)
             })
         });
         *alive = false;
@@ -442,9 +443,8 @@ fn arrive(
     if let Some((li_idx, light)) = scene.shape_light(hit.shape) {
         let le = light.emitted(hit.ns, wo_world, hit.uv, lambda);
         if !le.is_black() {
-            let prev = *prev_p;
             let w = emission_weight(s, depth_now, prev_delta_now, prev_pdf_now, || {
-                scene.light_pmf(li_idx) * light.pdf(prev, hit.p, hit.ns)
+                scene.light_pmf_at(prev, li_idx) * light.pdf(prev, hit.p, hit.ns)
             });
             *radiance += *throughput * le * w;
         }
@@ -526,7 +526,7 @@ impl HitLightPdf<'_> {
     /// point `x` (world space) picks the hit point.
     #[inline(always)]
     pub(crate) fn from(&self, x: Vec3) -> f32 {
-        self.scene.light_pmf(self.index) * self.light.pdf(x, self.hit.p, self.hit.ns)
+        self.scene.light_pmf_at(x, self.index) * self.light.pdf(x, self.hit.p, self.hit.ns)
     }
 }
 

@@ -379,7 +379,7 @@ fn draw<'a, S: RandomSource>(
             }
         }
         if use_light && bsdf.has_smooth_lobe() {
-            match scene.sample_light(sampler.next_1d()) {
+            match scene.sample_light_at(h.p, sampler.next_1d()) {
                 Some((li, pmf, u_sel)) => {
                     let u = sampler.next_2d();
                     d.pmf[k] = pmf;

@@ -193,7 +193,7 @@ fn camera_path(
             });
             // Direct light by light sampling (the camera path does not go on through this
             // lobe, so nothing else finds the light from here).
-            if let Some((li, pmf, u_sel)) = scene.sample_light(sampler.next_1d()) {
+            if let Some((li, pmf, u_sel)) = scene.sample_light_at(hit.p, sampler.next_1d()) {
                 let u = sampler.next_2d();
                 if let Some(ls) = scene.lights[li].sample(hit.p, u_sel, u, lambda) {
                     let wi = frame.to_local(ls.wi);

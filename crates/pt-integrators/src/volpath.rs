@@ -139,7 +139,7 @@ pub fn estimate<S: RandomSource>(
         let Some(hit) = hit else {
             radiance += escaped_radiance(scene, ray.dir, &lambda, throughput, |i| {
                 emission_weight(s, depth, prev_delta, prev_pdf, || {
-                    scene.light_pmf(i) * scene.lights[i].escaped_pdf(ray.dir)
+                    scene.light_pmf_at(prev_p, i) * scene.lights[i].escaped_pdf(ray.dir)
                 })
             });
             break;
@@ -149,7 +149,7 @@ pub fn estimate<S: RandomSource>(
             let le = light.emitted(hit.ns, wo_world, hit.uv, &lambda);
             if !le.is_black() {
                 let w = emission_weight(s, depth, prev_delta, prev_pdf, || {
-                    scene.light_pmf(li) * light.pdf(prev_p, hit.p, hit.ns)
+                    scene.light_pmf_at(prev_p, li) * light.pdf(prev_p, hit.p, hit.ns)
                 });
                 radiance += throughput * le * w;
             }
@@ -443,7 +443,7 @@ fn sample_light(
     u_light: f32,
     u_pos: pt_math::Vec2,
 ) -> Option<(LightSample, f32)> {
-    let (li, pmf, u_sel) = scene.sample_light(u_light)?;
+    let (li, pmf, u_sel) = scene.sample_light_at(p, u_light)?;
     let ls = scene.lights[li].sample(p, u_sel, u_pos, lambda)?;
     (!ls.radiance.is_black() && ls.pdf > 0.0).then_some((ls, pmf))
 }

@@ -21,6 +21,7 @@ mod projected;
 mod sunsky;
 #[cfg(test)]
 mod tests;
+mod tree;
 
 pub use area::{
     cylinder_point, disk_uv, parallelogram_points, sphere_uv, to_solid_angle, AreaLight,
@@ -32,6 +33,7 @@ pub use envmap::EnvMap;
 pub use profile::{envmap_table, IntensityProfile, ProfileError};
 pub use projected::{Projector, SpotTexture};
 pub use sunsky::SunSky;
+pub use tree::LightTree;
 
 use crate::texture::ConstantSpectrum;
 use pt_math::warp::{square_to_uniform_cone, square_to_uniform_sphere, uniform_cone_pdf};

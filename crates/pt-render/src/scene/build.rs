@@ -12,7 +12,7 @@ use crate::accel::top::TopLevel;
 use crate::accel::{Accel, BvhKind};
 use crate::camera::Camera;
 use crate::geometry::Primitive;
-use crate::light::{build_light, AreaLight, Light, LightShape};
+use crate::light::{build_light, AreaLight, Light, LightShape, LightTree};
 use crate::material::{build_material, SurfaceMaterial};
 use crate::medium::{Grid, Lobe, Medium, Phase, TabulatedPhase, VolumeSpectrum};
 use crate::texture::{
@@ -144,10 +144,14 @@ impl Scene {
             .filter(|&i| lights[i].is_infinite())
             .collect();
         let weights: Vec<f32> = match selection {
-            LightSelection::Power => power_selection(&lights, bounds.1),
+            LightSelection::Tree | LightSelection::Power => power_selection(&lights, bounds.1),
             LightSelection::Uniform => vec![1.0; lights.len()],
         };
         let light_distr = Distribution1D::new(&weights);
+        let light_tree = match selection {
+            LightSelection::Tree => LightTree::build(&lights, &weights, bounds.1),
+            LightSelection::Power | LightSelection::Uniform => None,
+        };
         let camera = Camera::for_film(&desc.camera, &desc.film);
         let camera_medium = match &desc.camera_medium {
             Some(m) => Some(add_medium(&mut media, m, mode)?),
@@ -164,6 +168,7 @@ impl Scene {
             lights,
             infinite_lights,
             light_distr,
+            light_tree,
             bounds,
             camera,
             mode,

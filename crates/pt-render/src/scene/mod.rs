@@ -34,9 +34,14 @@ pub struct BuildError {
 /// How lights are chosen for next-event estimation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum LightSelection {
-    /// Each distant light its uniform share, the others the rest in proportion to their
-    /// emitted power (default; see `power_selection` in build.rs).
+    /// As [`LightSelection::Power`] for the distant lights' shares and for light paths; from
+    /// a shading point, the lights at a finite distance are chosen with a light tree by power,
+    /// distance and orientation (Conty Estevez and Kulla 2018; [`crate::light::LightTree`]).
+    /// The default.
     #[default]
+    Tree,
+    /// Each distant light its uniform share, the others the rest in proportion to their
+    /// emitted power (see `power_selection` in build.rs), wherever the shading point is.
     Power,
     /// Uniform over lights (Mitsuba 3's choice), for comparison.
     Uniform,
@@ -171,7 +176,10 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// Indices into `lights` of lights that rays leaving the scene can see.
     pub infinite_lights: Vec<usize>,
+    /// Light choice by power alone (light paths; NEE without a tree).
     light_distr: Option<Distribution1D>,
+    /// Light choice from a shading point ([`LightSelection::Tree`]).
+    light_tree: Option<crate::light::LightTree>,
     /// Centre and radius of the scene's bounding sphere.
     pub bounds: (Vec3, f32),
     /// The camera.
@@ -585,16 +593,37 @@ impl Scene {
         }
     }
 
-    /// Chooses a light for NEE: `(index, probability, u rescaled)`.
+    /// Chooses a light by power alone, wherever it will be seen from (the start of a light
+    /// path): `(index, probability, u rescaled)`.
     #[inline(always)]
     pub fn sample_light(&self, u: f32) -> Option<(usize, f32, f32)> {
         self.light_distr.as_ref().map(|d| d.sample(u))
     }
 
-    /// Probability that NEE chooses light `i`.
+    /// Probability that [`Scene::sample_light`] chooses light `i`.
     #[inline]
     pub fn light_pmf(&self, i: usize) -> f32 {
         self.light_distr.as_ref().map_or(0.0, |d| d.pmf(i))
+    }
+
+    /// Chooses a light for next-event estimation from the point `p` (world space):
+    /// `(index, probability, u rescaled)`, by the scene's [`LightSelection`].
+    #[inline(always)]
+    pub fn sample_light_at(&self, p: Vec3, u: f32) -> Option<(usize, f32, f32)> {
+        match &self.light_tree {
+            Some(t) => t.sample(p, u),
+            None => self.sample_light(u),
+        }
+    }
+
+    /// Probability that [`Scene::sample_light_at`] chooses light `i` from the point `p` (for
+    /// MIS weights of emission that a scattered ray found).
+    #[inline]
+    pub fn light_pmf_at(&self, p: Vec3, i: usize) -> f32 {
+        match &self.light_tree {
+            Some(t) => t.pmf(p, i),
+            None => self.light_pmf(i),
+        }
     }
 }
 
