@@ -176,6 +176,16 @@ impl Bsdf {
         }
     }
 
+    /// [`Bsdf::eval`] and [`Bsdf::pdf`] of one pair of directions, sharing what the model can
+    /// share (the rough conductor's D and G1(wo)); the same values as the two calls.
+    #[inline(always)]
+    pub fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (SampledSpectrum, f32) {
+        match self {
+            Bsdf::RoughConductor(m) => m.eval_pdf(wo, wi),
+            _ => (self.eval(wo, wi), self.pdf(wo, wi)),
+        }
+    }
+
     /// Solid-angle pdf of sampling `wi` given `wo`, local frame.
     #[inline(always)]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
@@ -364,6 +374,27 @@ impl SurfaceBsdf {
         }
     }
 
+    /// [`SurfaceBsdf::eval_of`] and [`SurfaceBsdf::pdf_of`] together (the normal map's
+    /// frame built once).
+    #[inline(always)]
+    fn eval_pdf_of(&self, bsdf: &Bsdf, wo: Vec3, wi: Vec3) -> (SampledSpectrum, f32) {
+        let s = self.side(bsdf, wo);
+        let (wo, wi) = (flip_z(wo, s), flip_z(wi, s));
+        match self.normal {
+            None => bsdf.eval_pdf(wo, wi),
+            Some(n) => match normal_map::perturb(n, wo, wi) {
+                Some((f, pwo, pwi)) => {
+                    let (value, pdf) = bsdf.eval_pdf(pwo, pwi);
+                    (
+                        value * (pwi.z.abs() * normal_map::shadowing(f.n, wi) / wi.z.abs()),
+                        pdf,
+                    )
+                }
+                None => (SampledSpectrum::ZERO, 0.0),
+            },
+        }
+    }
+
     /// One model's pdf with sides and normal map applied, without the opacity.
     #[inline(always)]
     fn pdf_of(&self, bsdf: &Bsdf, wo: Vec3, wi: Vec3) -> f32 {
@@ -417,6 +448,26 @@ impl SurfaceBsdf {
             Some((w, b)) => model(&self.bsdf) * (1.0 - w) + model(b) * *w,
         };
         through * self.opacity + SampledSpectrum::splat(1.0 - self.opacity)
+    }
+
+    /// [`SurfaceBsdf::eval`] and [`SurfaceBsdf::pdf`] together: the same values, with what
+    /// the model shares computed once (light sampling under MIS needs both).
+    #[inline(always)]
+    pub fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (SampledSpectrum, f32) {
+        match &self.blend {
+            None => {
+                let (f, pdf) = self.eval_pdf_of(&self.bsdf, wo, wi);
+                (f * self.opacity, pdf * self.opacity)
+            }
+            Some((w, b)) => {
+                let (f1, p1) = self.eval_pdf_of(&self.bsdf, wo, wi);
+                let (f2, p2) = self.eval_pdf_of(b, wo, wi);
+                (
+                    (f1 * (1.0 - w) + f2 * *w) * self.opacity,
+                    ((1.0 - w) * p1 + w * p2) * self.opacity,
+                )
+            }
+        }
     }
 
     /// Solid-angle pdf of `wi`, local frame.

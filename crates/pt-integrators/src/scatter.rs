@@ -504,14 +504,12 @@ fn other_bsdfs(
         (out.f[k], out.bsdf_pdf[k]) = (SampledSpectrum::ZERO, 0.0);
         if l.have[k] {
             let w = wi.get(k);
-            out.f[k] = b.eval(wo, w);
-            // Only MIS needs the BSDF's pdf of the light's direction.
-            if s.strategy != Strategy::Light
-                && !l.delta[k]
-                && !l.radiance[k].is_black()
-                && !out.f[k].is_black()
-            {
-                out.bsdf_pdf[k] = b.pdf(wo, w);
+            // Only MIS needs the BSDF's pdf of the light's direction; with it, both from one
+            // call (the models share terms between the two).
+            if s.strategy != Strategy::Light && !l.delta[k] && !l.radiance[k].is_black() {
+                (out.f[k], out.bsdf_pdf[k]) = b.eval_pdf(wo, w);
+            } else {
+                out.f[k] = b.eval(wo, w);
             }
         }
         if let Some(bs) = b.sample(wo, d.u_lobe[k], Vec2::new(d.ub[0][k], d.ub[1][k])) {
