@@ -315,6 +315,28 @@ impl Microfacet {
         }
     }
 
+    /// [`Microfacet::dielectric_reflection`] and [`Microfacet::reflection_pdf`] of the same
+    /// pair, the same values (the same operations in the same order) with the half vector,
+    /// D(h) and G1(wo) computed once.
+    pub fn dielectric_reflection_pdf(&self, wo: Vec3, wi: Vec3, eta: f32) -> (f32, f32) {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return (0.0, 0.0);
+        }
+        let h = (wo + wi).normalize_or_zero();
+        let woh = wo.dot(h);
+        if h.z <= 0.0 || woh <= 0.0 {
+            return (0.0, 0.0);
+        }
+        let (d, g1_o) = (self.d(h), self.g1(wo));
+        let v = fresnel_dielectric(woh, eta) * d * (g1_o * self.g1(wi)) / (4.0 * wo.z * wi.z);
+        // As pdf_m(wo, h) / (4 wo.h).
+        let p = g1_o * woh.max(0.0) * d / wo.z / (4.0 * woh);
+        (
+            if v.is_finite() { v } else { 0.0 },
+            if p.is_finite() { p } else { 0.0 },
+        )
+    }
+
     /// Draws a normal for `wo` (`wo.z > 0`) and reflects `wo` about it: the direction whose
     /// density is [`Microfacet::reflection_pdf`], or `None` when it falls below the surface.
     pub fn sample_reflection(&self, wo: Vec3, u: Vec2) -> Option<Vec3> {

@@ -271,8 +271,13 @@ impl RoughPlastic {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return SampledSpectrum::ZERO;
         }
-        let mut result =
-            self.specular_reflectance * self.mf.dielectric_reflection(wo, wi, self.eta);
+        self.eval_with(wo, wi, self.mf.dielectric_reflection(wo, wi, self.eta))
+    }
+
+    /// The value for `wo`, `wi` above the surface, given the coating's reflection there.
+    #[inline]
+    fn eval_with(&self, wo: Vec3, wi: Vec3, reflection: f32) -> SampledSpectrum {
+        let mut result = self.specular_reflectance * reflection;
         let r_i = self.table.internal_reflectance;
         let rho = self.diffuse_reflectance;
         let denom = if self.nonlinear {
@@ -290,6 +295,20 @@ impl RoughPlastic {
             }
         });
         result
+    }
+
+    /// [`RoughPlastic::eval`] and [`RoughPlastic::pdf`] together: the same values, with the
+    /// coating's half vector, D and G1(wo) computed once
+    /// ([`Microfacet::dielectric_reflection_pdf`]).
+    pub fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (SampledSpectrum, f32) {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return (SampledSpectrum::ZERO, 0.0);
+        }
+        let (reflection, pdf) = self.mf.dielectric_reflection_pdf(wo, wi, self.eta);
+        (
+            self.eval_with(wo, wi, reflection),
+            self.pdf_with(wo, wi, pdf),
+        )
     }
 
     /// Probability of sampling the specular lobe for the viewer `wo`.
@@ -310,8 +329,14 @@ impl RoughPlastic {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return 0.0;
         }
+        self.pdf_with(wo, wi, self.mf.reflection_pdf(wo, wi))
+    }
+
+    /// The pdf for `wo`, `wi` above the surface, given the coating lobe's density there.
+    #[inline]
+    fn pdf_with(&self, wo: Vec3, wi: Vec3, specular_pdf: f32) -> f32 {
         let ps = self.prob_specular(wo);
-        let p = ps * self.mf.reflection_pdf(wo, wi) + (1.0 - ps) * cosine_hemisphere_pdf(wi);
+        let p = ps * specular_pdf + (1.0 - ps) * cosine_hemisphere_pdf(wi);
         if p.is_finite() {
             p
         } else {
@@ -332,11 +357,11 @@ impl RoughPlastic {
         if wi.z <= 0.0 {
             return None;
         }
-        let pdf = self.pdf(wo, wi);
+        let (f, pdf) = self.eval_pdf(wo, wi);
         if !(pdf > 0.0) {
             return None;
         }
-        let weight = self.eval(wo, wi) * (wi.z / pdf);
+        let weight = f * (wi.z / pdf);
         Some(BsdfSample {
             wi,
             weight,
@@ -350,6 +375,39 @@ impl RoughPlastic {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `eval_pdf` gives exactly `eval` and `pdf`, for both distributions and both forms of the
+    /// diffuse term, over directions in every quadrant, grazing and below the surface.
+    #[test]
+    fn eval_pdf_is_eval_and_pdf() {
+        let mut s = 0x2545_f491_4f6c_dd1du64;
+        let mut rnd = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 40) as f32 / (1u64 << 24) as f32
+        };
+        for (dist, nonlinear) in [(Distribution::Beckmann, false), (Distribution::Ggx, true)] {
+            let p = RoughPlastic::new(
+                SampledSpectrum::splat(0.6),
+                SampledSpectrum::splat(1.0),
+                1.5,
+                Microfacet::new(dist, 0.2, 0.2),
+                nonlinear,
+                0.5,
+                CoatingTable::get(dist, 0.2, 1.5),
+            );
+            for _ in 0..20_000 {
+                let mut dir = || {
+                    Vec3::new(rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 1.2 - 0.1).normalize()
+                };
+                let (wo, wi) = (dir(), dir());
+                let (f, pdf) = p.eval_pdf(wo, wi);
+                assert_eq!(f.0, p.eval(wo, wi).0, "{wo} {wi}");
+                assert_eq!(pdf.to_bits(), p.pdf(wo, wi).to_bits(), "{wo} {wi}");
+            }
+        }
+    }
 
     #[test]
     fn smooth_limit_of_the_table_is_fresnel() {
