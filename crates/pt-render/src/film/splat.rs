@@ -204,15 +204,23 @@ impl SplatTile {
     #[inline(always)]
     pub fn commit(&mut self) {
         let (stride, squares) = (self.stride, self.squares_from..self.stride - 1);
-        for (i, (sum, s)) in self.sums.iter_mut().zip(&mut self.scratch).enumerate() {
-            if *s != 0.0 {
-                let bits = if squares.contains(&(i % stride)) {
-                    SQUARE_BITS
-                } else {
-                    LINEAR_BITS
-                };
-                *sum = sum.wrapping_add(to_fixed(*s, bits));
-                *s = 0.0;
+        // Pixel by pixel, so that a value's position in its pixel is the inner index (a
+        // remainder per value, a division, cost more than the conversion it chose for).
+        for (sums, scratch) in self
+            .sums
+            .chunks_exact_mut(stride)
+            .zip(self.scratch.chunks_exact_mut(stride))
+        {
+            for (c, (sum, s)) in sums.iter_mut().zip(scratch.iter_mut()).enumerate() {
+                if *s != 0.0 {
+                    let bits = if squares.contains(&c) {
+                        SQUARE_BITS
+                    } else {
+                        LINEAR_BITS
+                    };
+                    *sum = sum.wrapping_add(to_fixed(*s, bits));
+                    *s = 0.0;
+                }
             }
         }
     }
