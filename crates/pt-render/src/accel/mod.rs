@@ -28,8 +28,9 @@ use std::time::Duration;
 /// Which BVH layout to build.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum BvhKind {
-    /// [`BvhKind::Flat`] for scenes of at most [`FLAT_MAX`] primitives, [`BvhKind::CwBvh`] for
-    /// larger ones (default).
+    /// [`BvhKind::Flat`] for scenes of at most [`FLAT_MAX`] primitives (of them at most 8
+    /// analytic ones, which are tested one by one), [`BvhKind::CwBvh`] for larger ones
+    /// (default).
     #[default]
     Auto,
     /// Compressed wide BVH8.
@@ -95,7 +96,7 @@ impl Accel {
                 original_index: Vec::new(),
                 unit_normals: Vec::new(),
             })
-        } else if use_flat(kind, prims.len()) {
+        } else if use_flat(kind, &prims) {
             Ok(Accel::build_flat(prims))
         } else {
             Err(prims)
