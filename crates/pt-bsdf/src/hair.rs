@@ -308,6 +308,17 @@ impl Hair {
         self.value_pdf(&self.setup(wo), wi).1
     }
 
+    /// [`Hair::eval`] and [`Hair::pdf`] from one setup for `wo` and one pass over the lobes
+    /// (each call alone does both): the same values.
+    pub fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (SampledSpectrum, f32) {
+        let (value, pdf) = self.value_pdf(&self.setup(wo), wi);
+        let cos = wi.z.abs();
+        if !(cos > 0.0) {
+            return (SampledSpectrum::ZERO, pdf);
+        }
+        (value * (1.0 / cos), pdf)
+    }
+
     /// Samples `wi`: `u_lobe` picks the segment count (and is reused for the azimuth), `u` the
     /// longitudinal angle and its azimuth about the tilted cone.
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
@@ -438,6 +449,34 @@ fn sample_trimmed_logistic(u: f32, s: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `eval_pdf` gives exactly `eval` and `pdf` over random directions on both sides.
+    #[test]
+    fn eval_pdf_is_eval_and_pdf() {
+        let rgb = Vec4::new(0.212_671, 0.715_160, 0.072_169, 0.0);
+        let h = Hair::new(
+            SampledSpectrum::from_rgb(Hair::pigment_sigma_a_rgb(1.3, 0.2)),
+            rgb,
+            1.55,
+            0.3,
+            0.3,
+            2.0,
+        );
+        let mut s = 0x1234_5678_9abc_def1u64;
+        let mut rnd = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 40) as f32 / (1u64 << 24) as f32
+        };
+        for _ in 0..5_000 {
+            let mut dir = || Vec3::new(rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0);
+            let (wo, wi) = (dir().normalize(), dir().normalize());
+            let (f, pdf) = h.eval_pdf(wo, wi);
+            assert_eq!(f.0, h.eval(wo, wi).0, "{wo} {wi}");
+            assert_eq!(pdf.to_bits(), h.pdf(wo, wi).to_bits(), "{wo} {wi}");
+        }
+    }
 
     /// The trimmed logistic integrates to 1 on [-pi, pi] and its sampler inverts its CDF.
     #[test]

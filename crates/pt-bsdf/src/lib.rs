@@ -177,13 +177,14 @@ impl Bsdf {
     }
 
     /// [`Bsdf::eval`] and [`Bsdf::pdf`] of one pair of directions, sharing what the model can
-    /// share (the rough conductor's and rough plastic's D and G1(wo)); the same values as the
-    /// two calls.
+    /// share (the rough conductor's and rough plastic's D and G1(wo), the hair model's setup
+    /// and lobes); the same values as the two calls.
     #[inline(always)]
     pub fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (SampledSpectrum, f32) {
         match self {
             Bsdf::RoughConductor(m) => m.eval_pdf(wo, wi),
             Bsdf::RoughPlastic(m) => m.eval_pdf(wo, wi),
+            Bsdf::Hair(m) => m.eval_pdf(wo, wi),
             _ => (self.eval(wo, wi), self.pdf(wo, wi)),
         }
     }
