@@ -17,7 +17,9 @@ Scenes (each `NAME.xml` with its data files):
 - instances: 1,000 instances of a 100k-triangle shapegroup (the PLY of mesh-100k's sphere),
   each turned and coloured by its group, under a constant sky and a rectangle light.
 - many-lights: 144 small sphere lights of four colours over a plane with rough plastic and
-  conductor objects (light selection matters here).
+  conductor objects.
+- street (not in the suite): 64 sphere lamps along a street, where choosing lights by distance
+  matters.
 """
 
 import math
@@ -216,6 +218,22 @@ def main():
         <bsdf type="roughplastic"><rgb name="diffuse_reflectance" value="0.5"/><float name="alpha" value="0.1"/></bsdf></shape>
     <shape type="cube"><transform name="to_world"><scale value="0.5"/><rotate y="1" angle="30"/><translate value="1, -0.6, -1"/></transform>
         <bsdf type="roughconductor"><string name="material" value="Al"/><float name="alpha" value="0.15"/></bsdf></shape>"""
+    # Not in the suite (bench.py does not list it): the case light trees are for, lamps spread
+    # along a street, each point near a few of them. `pt render target/bench/scenes/street.xml
+    # --light-selection tree|power` compares the two selections (references/performance.md).
+    lamps = "\n".join(
+        f"""    <shape type="sphere"><point name="center" value="{-2 + (k % 2) * 4}, 3, {-k * 3.0}"/><float name="radius" value="0.1"/>
+        <emitter type="area"><rgb name="radiance" value="60, 50, 40"/></emitter></shape>""" for k in range(64))
+    street = """    <shape type="rectangle">
+        <transform name="to_world"><scale x="20" y="120"/><rotate x="1" angle="-90"/><translate z="-90"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf>
+    </shape>
+    <shape type="cube"><transform name="to_world"><scale value="0.5, 1, 0.5"/><translate value="0.5, 1, -8"/></transform></shape>"""
+    atomic_write(path("street.xml"), scene(
+        "64 sphere lamps 3 m apart along a 190 m street (not in the suite: light selection by "
+        "distance).", street + "\n" + lamps, fov=50, origin="0, 2, 6", target="0, 0.5, -20",
+        width=256, height=160, max_depth=6).encode())
+
     atomic_write(path("many-lights.xml"), scene(
         "144 small sphere lights of four colours over a floor with a rough plastic sphere and "
         "an aluminium cube; the default gaussian filter.",

@@ -454,28 +454,15 @@ mod tests {
     #[test]
     fn eval_pdf_is_eval_and_pdf() {
         let rgb = Vec4::new(0.212_671, 0.715_160, 0.072_169, 0.0);
-        let h = Hair::new(
-            SampledSpectrum::from_rgb(Hair::pigment_sigma_a_rgb(1.3, 0.2)),
-            rgb,
-            1.55,
-            0.3,
-            0.3,
-            2.0,
+        let sigma_a = SampledSpectrum::from_rgb(Hair::pigment_sigma_a_rgb(1.3, 0.2));
+        let h = Hair::new(sigma_a, rgb, 1.55, 0.3, 0.3, 2.0);
+        crate::check_eval_pdf(
+            31,
+            5_000,
+            |a, b| h.eval_pdf(a, b),
+            |a, b| h.eval(a, b),
+            |a, b| h.pdf(a, b),
         );
-        let mut s = 0x1234_5678_9abc_def1u64;
-        let mut rnd = || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 40) as f32 / (1u64 << 24) as f32
-        };
-        for _ in 0..5_000 {
-            let mut dir = || Vec3::new(rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0);
-            let (wo, wi) = (dir().normalize(), dir().normalize());
-            let (f, pdf) = h.eval_pdf(wo, wi);
-            assert_eq!(f.0, h.eval(wo, wi).0, "{wo} {wi}");
-            assert_eq!(pdf.to_bits(), h.pdf(wo, wi).to_bits(), "{wo} {wi}");
-        }
     }
 
     /// The trimmed logistic integrates to 1 on [-pi, pi] and its sampler inverts its CDF.

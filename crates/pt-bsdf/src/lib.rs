@@ -543,6 +543,34 @@ fn flip_z(v: Vec3, s: f32) -> Vec3 {
 // must not make the enum larger unnoticed (112 bytes: `RoughThinFilm` and `Principled`).
 const _: () = assert!(std::mem::size_of::<Bsdf>() <= 112);
 
+/// Test support: that a model's `eval_pdf` gives exactly its `eval` and `pdf` (to the bit:
+/// MIS weights computed from either must agree) over `n` random pairs of directions, in every
+/// quadrant, grazing and below the surface.
+#[cfg(test)]
+pub(crate) fn check_eval_pdf(
+    seed: u64,
+    n: usize,
+    eval_pdf: impl Fn(Vec3, Vec3) -> (SampledSpectrum, f32),
+    eval: impl Fn(Vec3, Vec3) -> SampledSpectrum,
+    pdf: impl Fn(Vec3, Vec3) -> f32,
+) {
+    // xorshift64: reproducible and dependency-free.
+    let mut s = seed | 1;
+    let mut rnd = || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 40) as f32 / (1u64 << 24) as f32
+    };
+    for _ in 0..n {
+        let mut dir = || Vec3::new(rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 1.2 - 0.2);
+        let (wo, wi) = (dir().normalize(), dir().normalize());
+        let (f, p) = eval_pdf(wo, wi);
+        assert_eq!(f.0, eval(wo, wi).0, "{wo} {wi}");
+        assert_eq!(p.to_bits(), pdf(wo, wi).to_bits(), "{wo} {wi}");
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -4,8 +4,8 @@ use super::*;
 use pt_math::{Distribution1D, Mat3};
 
 /// Uniform numbers in [0, 1) from a 64-bit LCG (Knuth's MMIX constants) seeded with `seed`:
-/// deterministic streams for the sampling tests.
-fn lcg(mut s: u64) -> impl FnMut() -> f32 {
+/// deterministic streams for the sampling tests (the light tree's too).
+pub(super) fn lcg(mut s: u64) -> impl FnMut() -> f32 {
     move || {
         s = s
             .wrapping_mul(6364136223846793005)

@@ -445,17 +445,9 @@ const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::light::tests::lcg;
     use crate::light::AreaLight;
     use crate::texture::Texture;
-
-    fn lcg(mut s: u64) -> impl FnMut() -> f32 {
-        move || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((s >> 40) as f32) / (1u64 << 24) as f32
-        }
-    }
 
     fn sphere(center: Vec3, radius: f32, radiance: f32) -> Light {
         Light::Area(AreaLight {
