@@ -290,9 +290,10 @@ pub struct LightTree {
 }
 
 impl LightTree {
-    /// The tree over `lights`, with the shares `weights` of [`LightSelection::Power`]
-    /// (crate::LightSelection) for the lights outside it; `None` when no light with power
-    /// lies at a finite distance. `scene_radius` as for [`Light::power`].
+    /// The tree over `lights`, with the selection weights `weights` (those of
+    /// [`LightSelection::Power`](crate::LightSelection)) giving the lights outside it their
+    /// shares and the tree the rest; `None` when no light with power lies at a finite
+    /// distance. `scene_radius` as for [`Light::power`].
     pub fn build(lights: &[Light], weights: &[f32], scene_radius: f32) -> Option<LightTree> {
         let bounds: Vec<Option<Bounds>> = lights
             .iter()
