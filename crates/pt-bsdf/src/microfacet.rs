@@ -141,19 +141,40 @@ pub fn erf_inv_giles(y: f64) -> f64 {
 }
 
 /// Visible slopes of the Beckmann distribution of roughness 1 seen from incidence `cos_theta`
-/// (in the xz-plane): `(slope_x, slope_y)` from two uniform numbers (see the module doc).
+/// (in the xz-plane): `(slope_x, slope_y)` from two uniform numbers (see the module doc). Away
+/// from normal incidence the two are separable: slope_x depends on `u1` and the angle alone
+/// ([`beckmann_slope_x`]), slope_y on `u2` alone ([`beckmann_slope_y`]).
 fn beckmann_visible_slopes_11(cos_theta: f64, u1: f64, u2: f64) -> (f64, f64) {
-    let u1 = u1.clamp(1e-9, 1.0 - 1e-9);
-    // Giles' approximation to 1e-7 (the slopes become f32 normals): the full-precision
-    // inverse's Newton steps on erf made Beckmann sampling, and the coating tables of a
-    // Beckmann `roughplastic`, several times slower.
-    let slope_y = erf_inv_giles((2.0 * u2 - 1.0).clamp(-1.0 + 1e-12, 1.0 - 1e-12));
-    if cos_theta > 0.9999 {
+    let slope_y = beckmann_slope_y(u2);
+    if beckmann_normal_incidence(cos_theta) {
         // Normal incidence: every facet is visible, the slopes are the plain Gaussian.
+        let u1 = u1.clamp(1e-9, 1.0 - 1e-9);
         let r = (-(1.0 - u1).ln()).sqrt();
         let phi = 2.0 * std::f64::consts::PI * u2;
         return (r * phi.cos(), r * phi.sin());
     }
+    (beckmann_slope_x(cos_theta, u1), slope_y)
+}
+
+/// Whether [`beckmann_visible_slopes_11`] takes its normal-incidence branch (not separable).
+#[inline]
+fn beckmann_normal_incidence(cos_theta: f64) -> bool {
+    cos_theta > 0.9999
+}
+
+/// The visible slope across the viewing plane: the standard Gaussian's, Giles' inverse error
+/// function to 1e-7 (the slopes become f32 normals: the full-precision inverse's Newton steps
+/// on erf made Beckmann sampling, and the coating tables of a Beckmann `roughplastic`, several
+/// times slower).
+#[inline]
+fn beckmann_slope_y(u2: f64) -> f64 {
+    erf_inv_giles((2.0 * u2 - 1.0).clamp(-1.0 + 1e-12, 1.0 - 1e-12))
+}
+
+/// The visible slope in the viewing plane for incidence `cos_theta` (below normal incidence):
+/// the inverse of its CDF at `u1` by Newton's method in a bracket.
+fn beckmann_slope_x(cos_theta: f64, u1: f64) -> f64 {
+    let u1 = u1.clamp(1e-9, 1.0 - 1e-9);
     let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
     let tan_theta = sin_theta / cos_theta;
     let cot_theta = cos_theta / sin_theta;
@@ -186,7 +207,7 @@ fn beckmann_visible_slopes_11(cos_theta: f64, u1: f64, u2: f64) -> (f64, f64) {
         // Newton where it stays inside the bracket, bisection otherwise (the check at the top).
         b -= value / derivative;
     }
-    (x, slope_y)
+    x
 }
 
 impl Microfacet {
@@ -349,6 +370,70 @@ impl Microfacet {
         (wi.z > 0.0).then_some(wi)
     }
 
+    /// The viewer direction stretched to roughness 1 (Beckmann sampling).
+    #[inline]
+    fn beckmann_stretched(&self, wo: Vec3) -> Vec3 {
+        Vec3::new(self.alpha_u * wo.x, self.alpha_v * wo.y, wo.z).normalize()
+    }
+
+    /// The microfacet normal of the roughness-1 slopes (`sx`, `sy`) drawn for the stretched
+    /// viewer `ws`: rotated to the viewer's azimuth, unstretched; the normal is
+    /// (-slope_x, -slope_y, 1), +z where that is not finite.
+    #[inline]
+    fn beckmann_normal(&self, ws: Vec3, sx: f64, sy: f64) -> Vec3 {
+        let (ax, ay) = (self.alpha_u, self.alpha_v);
+        let r = f64::from(ws.x.hypot(ws.y));
+        let (cos_phi, sin_phi) = if r > 0.0 {
+            (f64::from(ws.x) / r, f64::from(ws.y) / r)
+        } else {
+            (1.0, 0.0)
+        };
+        let (rx, ry) = (cos_phi * sx - sin_phi * sy, sin_phi * sx + cos_phi * sy);
+        let m = Vec3::new(
+            (-rx * f64::from(ax)) as f32,
+            (-ry * f64::from(ay)) as f32,
+            1.0,
+        )
+        .normalize();
+        if m.is_finite() {
+            m
+        } else {
+            Vec3::Z
+        }
+    }
+
+    /// [`Microfacet::sample_m`] for every pair of a grid of uniform numbers: the normal for
+    /// (`us[i]`, `vs[j]`) at `[j * us.len() + i]`, the same normals. A Beckmann distribution
+    /// away from normal incidence draws its two slopes from one number each, so each is solved
+    /// once per row or column (the Newton iterations for slope_x once per `us[i]`, not per
+    /// pair: the coating tables of `roughplastic` integrate over such grids).
+    pub fn sample_m_grid(&self, wo: Vec3, us: &[f32], vs: &[f32]) -> Vec<Vec3> {
+        let per_pair = || {
+            vs.iter()
+                .flat_map(|&v| us.iter().map(move |&u| (u, v)))
+                .map(|(u, v)| self.sample_m(wo, Vec2::new(u, v)))
+                .collect()
+        };
+        if self.dist != Distribution::Beckmann {
+            return per_pair();
+        }
+        let ws = self.beckmann_stretched(wo);
+        let cos_theta = f64::from(ws.z.clamp(0.0, 1.0));
+        if beckmann_normal_incidence(cos_theta) {
+            return per_pair();
+        }
+        let sx: Vec<f64> = us
+            .iter()
+            .map(|&u| beckmann_slope_x(cos_theta, f64::from(u)))
+            .collect();
+        vs.iter()
+            .flat_map(|&v| {
+                let sy = beckmann_slope_y(f64::from(v));
+                sx.iter().map(move |&sx| self.beckmann_normal(ws, sx, sy))
+            })
+            .collect()
+    }
+
     /// Samples a microfacet normal (upper hemisphere) for the viewer direction `wo` (`wo.z > 0`).
     pub fn sample_m(&self, wo: Vec3, u: Vec2) -> Vec3 {
         let (ax, ay) = (self.alpha_u, self.alpha_v);
@@ -374,29 +459,12 @@ impl Microfacet {
             }
             Distribution::Beckmann => {
                 // Heitz & d'Eon 2014: stretch to roughness 1, sample visible slopes, rotate to
-                // the viewer's azimuth, unstretch; the normal is (-slope_x, -slope_y, 1).
-                let ws = Vec3::new(ax * wo.x, ay * wo.y, wo.z).normalize();
+                // the viewer's azimuth, unstretch.
+                let ws = self.beckmann_stretched(wo);
                 let cos_theta = f64::from(ws.z.clamp(0.0, 1.0));
                 let (sx, sy) =
                     beckmann_visible_slopes_11(cos_theta, f64::from(u.x), f64::from(u.y));
-                let r = f64::from(ws.x.hypot(ws.y));
-                let (cos_phi, sin_phi) = if r > 0.0 {
-                    (f64::from(ws.x) / r, f64::from(ws.y) / r)
-                } else {
-                    (1.0, 0.0)
-                };
-                let (rx, ry) = (cos_phi * sx - sin_phi * sy, sin_phi * sx + cos_phi * sy);
-                let m = Vec3::new(
-                    (-rx * f64::from(ax)) as f32,
-                    (-ry * f64::from(ay)) as f32,
-                    1.0,
-                )
-                .normalize();
-                if m.is_finite() {
-                    m
-                } else {
-                    Vec3::Z
-                }
+                self.beckmann_normal(ws, sx, sy)
             }
         }
     }
@@ -463,6 +531,36 @@ pub fn interface_pdf(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The grid sampler draws exactly `sample_m`'s normals (bit for bit: the coating tables
+    /// built from it must not change), for both distributions, isotropic and anisotropic, at
+    /// grazing, oblique and normal incidence (the Beckmann normal-incidence branch is not
+    /// separable and is taken per pair).
+    #[test]
+    fn grid_sampling_is_sample_m() {
+        let us: Vec<f32> = (0..37).map(|k| (k as f32 + 0.5) / 37.0).collect();
+        let vs: Vec<f32> = (0..23).map(|k| (k as f32 + 0.25) / 23.0).collect();
+        for dist in [Distribution::Beckmann, Distribution::Ggx] {
+            for (au, av) in [(0.3, 0.3), (0.05, 0.6)] {
+                let mf = Microfacet::new(dist, au, av);
+                for wo in [
+                    Vec3::new(0.999, 0.0, 0.02),
+                    Vec3::new(0.5, 0.3, 0.8),
+                    Vec3::new(-0.2, 0.7, 0.4),
+                    Vec3::Z,
+                ] {
+                    let wo = wo.normalize();
+                    let grid = mf.sample_m_grid(wo, &us, &vs);
+                    for (j, &v) in vs.iter().enumerate() {
+                        for (i, &u) in us.iter().enumerate() {
+                            let m = mf.sample_m(wo, Vec2::new(u, v));
+                            assert_eq!(grid[j * us.len() + i], m, "{dist:?} {wo} {u} {v}");
+                        }
+                    }
+                }
+            }
+        }
+    }
 
     #[test]
     fn erf_inv_inverts_erf() {

@@ -150,12 +150,15 @@ fn interface_albedo(
 ) -> f32 {
     let (nodes, weights) = rule;
     let wo = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+    // The normals of the whole grid at once: a Beckmann surface solves each slope once per
+    // row or column rather than per node (Microfacet::sample_m_grid; the same normals).
+    let us: Vec<f32> = nodes.iter().map(|&x| (0.5 * x + 0.5) as f32).collect();
+    let normals = mf.sample_m_grid(wo, &us, &us);
     let mut sum = 0.0f64;
-    for (&yj, &wj) in nodes.iter().zip(weights) {
-        for (&xi, &wi_) in nodes.iter().zip(weights) {
-            let u = Vec2::new((0.5 * xi + 0.5) as f32, (0.5 * yj + 0.5) as f32);
+    for (j, &wj) in weights.iter().enumerate() {
+        for (i, &wi_) in weights.iter().enumerate() {
             let q = 0.25 * wi_ * wj;
-            let m = mf.sample_m(wo, u);
+            let m = normals[j * us.len() + i];
             let wom = wo.dot(m);
             if wom <= 0.0 {
                 continue;
