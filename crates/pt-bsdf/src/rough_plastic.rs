@@ -70,18 +70,18 @@ pub struct CoatingTable {
 }
 
 impl CoatingTable {
-    /// Computes the table (about 2 M microfacet samples and Fresnel evaluations: 20 ms for GGX,
-    /// 0.7 s of one core for Beckmann, whose visible-normal sampling evaluates erf and its
-    /// inverse; call once per material, see [`CoatingTable::get`]).
+    /// Computes the table (about 2 M microfacet normals and Fresnel evaluations: 20 ms for GGX;
+    /// for Beckmann, whose visible-normal sampling solves for a slope with erf and its inverse,
+    /// 0.7 s of one core per node and about 0.1 s with the slopes solved per row and column of
+    /// the grid; call once per material, see [`CoatingTable::get`]).
     pub fn compute(dist: Distribution, alpha: f32, eta: f32) -> CoatingTable {
         let mf = Microfacet::new(dist, alpha, alpha);
         // The quadrature rules once per table (Newton's iterations for 128 nodes cost more than
         // the integrals themselves when they were redone for every cosine).
         let (outside, inside) = (gauss_legendre(32), gauss_legendre(128));
         let rule = |eta: f32| if eta > 1.0 { &outside } else { &inside };
-        // Each cosine's two integrals on their own (in parallel: a Beckmann coating's ~2 M
-        // visible-normal samples took 0.7 s on one core); summed in order, so the table does
-        // not depend on the thread count.
+        // Each cosine's two integrals on their own, in parallel; summed in order, so the table
+        // does not depend on the thread count.
         use rayon::prelude::*;
         let rows: Vec<(f32, f64)> = (0..TABLE_SIZE)
             .into_par_iter()
