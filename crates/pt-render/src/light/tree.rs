@@ -27,11 +27,11 @@ struct Bounds {
     hi: Vec3,
     /// Axis of the cone that holds every emitter's normal (unit; arbitrary when `cos_o` is -1).
     axis: Vec3,
-    /// cos theta_o: the normals lie within theta_o of `axis`.
+    /// cos theta_o: the normals lie within theta_o of `axis` (spheres and point lights emit
+    /// everywhere: theta_o = pi). Every emitter here sends light within theta_e = pi / 2 of
+    /// its normal (one-sided surfaces; a spot's cone is its normal cone), so theta_e is not
+    /// stored.
     cos_o: f32,
-    /// cos theta_e: each emitter sends light within theta_e of its normal (pi / 2 for
-    /// one-sided surfaces; spheres and point lights emit everywhere, theta_o = pi).
-    cos_e: f32,
     /// Power (W, luminance; [`Light::power`]).
     phi: f32,
 }
@@ -45,7 +45,6 @@ impl Bounds {
             hi: self.hi.max(o.hi),
             axis,
             cos_o,
-            cos_e: self.cos_e.min(o.cos_e),
             phi: self.phi + o.phi,
         }
     }
@@ -63,7 +62,6 @@ impl Bounds {
             axis: self.axis,
             cos_o: self.cos_o,
             sin_o: (1.0 - self.cos_o * self.cos_o).max(0.0).sqrt(),
-            cos_e: self.cos_e,
             phi: self.phi,
         }
     }
@@ -82,8 +80,6 @@ struct Packed {
     cos_o: f32,
     /// sin theta_o.
     sin_o: f32,
-    /// cos theta_e.
-    cos_e: f32,
     /// Power.
     phi: f32,
 }
@@ -94,7 +90,7 @@ impl Packed {
     /// the distance to the box's centre (at least the radius r of the box's bounding sphere,
     /// since the emitters may lie anywhere within it) and theta' = max(0, theta - theta_o -
     /// theta_u), theta the angle between the axis and the direction to `p`, theta_u the half
-    /// angle the bounding sphere subtends at `p` (pi inside it). 0 when theta' >= theta_e:
+    /// angle the bounding sphere subtends at `p` (pi inside it). 0 when theta' >= theta_e = pi / 2:
     /// no emitter in the node sends light towards `p`. Angle differences by the sine and
     /// cosine subtraction formulas, without inverse trigonometry.
     #[inline(always)]
@@ -121,7 +117,7 @@ impl Packed {
             if cos_x < cos_u {
                 cos_t = cos_x * cos_u + sin_x * sin_u2.sqrt();
             }
-            if cos_t <= self.cos_e {
+            if cos_t <= 0.0 {
                 return (0.0, 1.0);
             }
         }
@@ -175,24 +171,16 @@ fn light_bounds(light: &Light, scene_radius: f32) -> Option<Bounds> {
     if !(phi > 0.0 && phi.is_finite()) {
         return None;
     }
-    // Emitting in every direction: the cone is the whole sphere.
-    let everywhere = |lo: Vec3, hi: Vec3| Bounds {
-        lo,
-        hi,
-        axis: Vec3::Z,
-        cos_o: -1.0,
-        cos_e: 0.0,
-        phi,
-    };
-    // One-sided surfaces emit within 90 degrees of their normals.
+    // Emitters in the box `lo`-`hi` whose normals lie within the cone (`axis`, `cos_o`).
     let one_sided = |lo: Vec3, hi: Vec3, axis: Vec3, cos_o: f32| Bounds {
         lo,
         hi,
         axis,
         cos_o,
-        cos_e: 0.0,
         phi,
     };
+    // Emitting in every direction: the cone is the whole sphere.
+    let everywhere = |lo: Vec3, hi: Vec3| one_sided(lo, hi, Vec3::Z, -1.0);
     Some(match light {
         Light::Area(a) => match &a.shape {
             LightShape::Mesh { tris, .. } => {
@@ -400,7 +388,8 @@ impl LightTree {
         let mut node = &self.nodes[0];
         loop {
             if let Some(light) = node.leaf_light() {
-                // A tree of one light chooses it without a test, as power selection does.
+                // Its importance was weighed at its parent (a tree of one light has no parent
+                // and chooses it without a test, as power selection does).
                 return Some((light, pmf, u));
             }
             let (pa, pb) = self.child_probs(node, p);

@@ -343,7 +343,9 @@ impl Scene {
                 // The hit's object-space coordinates are its barycentrics; the shape's frame
                 // holds the front normal (column 2).
                 let (a, b) = (Vec3::from(a), Vec3::from(b));
-                let n = shape.frame.map_or(a.cross(b).normalize(), |f| f.z_axis);
+                let n = shape
+                    .frame
+                    .map_or_else(|| a.cross(b).normalize(), |f| f.z_axis);
                 let p = Vec3::from(center) + a * b1 + b * b2;
                 let (uv, dp) = crate::light::disk_uv(a, b, Vec2::new(b1, b2));
                 Interaction::analytic(p, n, uv, dp, t, r.shape, id as u32)
