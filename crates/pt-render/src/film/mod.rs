@@ -22,6 +22,10 @@ pub mod exact;
 pub mod light;
 pub mod splat;
 
+/// exp(-8), the Gaussian filter's value at its radius of 4 standard deviations, rounded to f32
+/// (equal to `(-8f32).exp()`, by test).
+const GAUSSIAN_TAIL: f32 = 3.354_626_3e-4;
+
 /// The 1D profile of a separable filter at offset `x` (pixels), as Mitsuba 3.9.1 evaluates it
 /// (`eval`; its Gaussian with the exact exp), even in x; 0 outside the radius.
 pub fn filter_profile(filter: &FilterDesc, x: f32) -> f32 {
@@ -29,10 +33,9 @@ pub fn filter_profile(filter: &FilterDesc, x: f32) -> f32 {
     match *filter {
         FilterDesc::Box { radius } => f32::from(u8::from(x <= radius)),
         FilterDesc::Tent { radius } => (1.0 - x / radius).max(0.0),
+        // Cut at radius 4 stddev and lowered by its value there, exp(-4^2 / 2) = exp(-8).
         FilterDesc::Gaussian { stddev } => {
-            let r = 4.0 * stddev;
-            let g = |x: f32| (-(x * x) / (2.0 * stddev * stddev)).exp();
-            (g(x) - g(r)).max(0.0)
+            ((-(x * x) / (2.0 * stddev * stddev)).exp() - GAUSSIAN_TAIL).max(0.0)
         }
         // Mitchell & Netravali 1988, eq. 8, on radius 2.
         FilterDesc::Mitchell { b, c } => {
@@ -403,6 +406,18 @@ impl PixelStats {
 mod tests {
     use super::*;
     use crate::sampler::Sampler;
+
+    /// The Gaussian's tail constant is exp(-8) in f32, and the profile vanishes at its radius
+    /// (4 standard deviations) and is positive just inside it.
+    #[test]
+    fn gaussian_tail_is_its_value_at_the_radius() {
+        assert_eq!(GAUSSIAN_TAIL, (-8f32).exp());
+        for stddev in [0.5f32, 0.3, 1.0] {
+            let f = FilterDesc::Gaussian { stddev };
+            assert_eq!(filter_profile(&f, 4.0 * stddev), 0.0);
+            assert!(filter_profile(&f, 3.9 * stddev) > 0.0);
+        }
+    }
 
     #[test]
     fn filter_samples_have_the_filter_moments() {
