@@ -397,15 +397,10 @@ pub(crate) fn execute(
             if args.variance || args.png.is_some() {
                 bail!("--part writes a part file, not an image: --variance and --png belong to `pt merge`");
             }
-            if !integrator.takes_shares() {
+            if let Some(why) = integrator.unshared_because() {
                 bail!(
-                    "--part applies to every sampling method but sppm and radiosity, not to {}: {}",
+                    "--part applies to every sampling method but sppm, radiosity and depth, not to {}: {why}",
                     integrator.name(),
-                    if integrator.name() == "sppm" {
-                        "each iteration's radii follow from the photons of those before"
-                    } else {
-                        "it does not sample pixels"
-                    }
                 );
             }
             Some(Share {

@@ -9,15 +9,17 @@
 //! stream for the same pixel and sample index (with an independent sampler these are the
 //! image's own camera rays), and the camera ray stops at the first surface it meets, masks
 //! and `null` surfaces included (Mitsuba's `aov` intersects once).
+//!
+//! Mitsuba's `depth` integrator is the `depth` quantity as the image ([`render_depth`]).
 
 use crate::render::RenderSettings;
 use pt_math::{Frame, Ray, Vec2, Vec3};
-use pt_render::film::filter_radius;
 use pt_render::film::splat::{SplatFilm, SplatLayout};
+use pt_render::film::{filter_radius, Filter};
 use pt_render::geometry::Interaction;
 use pt_render::sampler::Sampler;
 use pt_render::Scene;
-use pt_scene::{AovDesc, AovKind};
+use pt_scene::{AovDesc, AovKind, FilterDesc};
 use pt_spectrum::{spectrum_to_srgb, ColorMode, SampledWavelengths};
 use rayon::prelude::*;
 
@@ -25,6 +27,50 @@ use rayon::prelude::*;
 /// channel, in the order of [`AovDesc::channel_names`] after the nested integrator's image.
 pub fn render_aovs(scene: &Scene, settings: &RenderSettings, aov: &AovDesc) -> Vec<Vec<f32>> {
     let channels: usize = aov.outputs.iter().map(|(_, k)| k.suffixes().len()).sum();
+    splat_first_hits(scene, settings, channels, |hit, lambda, values| {
+        aov_values(scene, &aov.outputs, hit, lambda, values)
+    })
+}
+
+/// Mitsuba's `depth` integrator at `settings.spp` samples per pixel: per pixel the
+/// filter-weighted mean of the samples' distance to the first hit (0 where a sample hits
+/// nothing; measured as the `aov` integrator's `depth`), the variance of that mean, and the
+/// alpha (the weighted fraction of samples that hit something). The variance is that of the
+/// mean of the pixel's own samples (those whose film position falls in it), as the image film
+/// keeps it under every filter: the same samples splatted a second time with a one-pixel box.
+pub fn render_depth(scene: &Scene, settings: &RenderSettings) -> (Vec<f32>, Vec<f32>, Vec<f32>) {
+    let depth = |hit: Option<(&Interaction, &Ray)>| hit.map_or(0.0, |(h, ray)| h.t - ray.tmin);
+    let planes = splat_first_hits(scene, settings, 2, |hit, _, values| {
+        values.copy_from_slice(&[depth(hit), f32::from(u8::from(hit.is_some()))]);
+    });
+    let [mean, alpha]: [Vec<f32>; 2] = planes.try_into().expect("two planes");
+    let own_pixel = RenderSettings {
+        filter: Filter::new(FilterDesc::Box { radius: 0.5 }),
+        ..settings.clone()
+    };
+    let planes = splat_first_hits(scene, &own_pixel, 2, |hit, _, values| {
+        let t = depth(hit);
+        values.copy_from_slice(&[t, t * t]);
+    });
+    let [own_mean, own_second]: [Vec<f32>; 2] = planes.try_into().expect("two planes");
+    let n = settings.spp.max(1) as f32;
+    let variance = own_mean
+        .iter()
+        .zip(&own_second)
+        .map(|(m, m2)| (m2 - m * m).max(0.0) / n)
+        .collect();
+    (mean, variance, alpha)
+}
+
+/// Splats `channels` values per sample, written by `values` from the sample's first hit (with
+/// the camera ray that found it) and wavelengths, over the film of `settings`: one row-major
+/// plane per channel, normalised by the filter weights as the image film is.
+fn splat_first_hits(
+    scene: &Scene,
+    settings: &RenderSettings,
+    channels: usize,
+    values: impl Fn(Option<(&Interaction, &Ray)>, &SampledWavelengths, &mut [f32]) + Sync,
+) -> Vec<Vec<f32>> {
     if channels == 0 {
         return Vec::new();
     }
@@ -41,16 +87,15 @@ pub fn render_aovs(scene: &Scene, settings: &RenderSettings, aov: &AovDesc) -> V
     let radius = filter_radius(&settings.filter.desc);
     film.tiles.par_iter_mut().enumerate().for_each(|(t, acc)| {
         let (xs, ys) = layout.origins(t % columns, t / columns);
-        let mut values = vec![0.0f32; channels];
+        let mut out = vec![0.0f32; channels];
         // Sample index first, then origin pixel row by row: a fixed order of additions.
         for k in 0..settings.spp {
             for y in ys.clone() {
                 for x in xs.clone() {
                     let (u, ray, hit, lambda) = trace(scene, settings, x, y, k);
-                    let hit = hit.as_ref().map(|h| (h, &ray));
-                    aov_values(scene, &aov.outputs, hit, &lambda, &mut values);
-                    if values.iter().all(|v| v.is_finite()) {
-                        acc.splat(&settings.filter.desc, radius, [x, y], u, &values);
+                    values(hit.as_ref().map(|h| (h, &ray)), &lambda, &mut out);
+                    if out.iter().all(|v| v.is_finite()) {
+                        acc.splat(&settings.filter.desc, radius, [x, y], u, &out);
                     }
                 }
             }

@@ -9,6 +9,7 @@
 //! | [`Integrator::PTracer`] | `ptracer` | light tracing: paths from the lights, every vertex connected to the camera and splatted ([`ptracer`]) |
 //! | [`Integrator::Sppm`] | `sppm` (pt) | stochastic progressive photon mapping with Knaus & Zwicker's radius schedule ([`sppm`]) |
 //! | [`Integrator::Radiosity`] | `radiosity` (pt) | finite-element radiosity (crate `pt-radiosity`) |
+//! | [`Integrator::Depth`] | `depth` | the distance to the first hit as the image ([`aov::render_depth`]) |
 //! | [`Integrator::Afterglow`] | (pt, `--time`) | phosphorescent afterglow: a first pass with the lights on, then the path tracer in the dark ([`afterglow`]) |
 //!
 //! ```no_run
@@ -182,6 +183,8 @@ pub enum Integrator {
         /// Merging on or off, radius schedule.
         vcm: vcm::VcmSettings,
     },
+    /// Mitsuba's `depth`: the distance to the first hit ([`aov::render_depth`]).
+    Depth,
     /// Radiosity (project extension).
     Radiosity(RadiosityParams),
     /// The afterglow of phosphorescent materials `time` seconds after the lights went out,
@@ -358,6 +361,7 @@ impl Integrator {
             if matches!(
                 kind,
                 IntegratorKind::Radiosity
+                    | IntegratorKind::Depth
                     | IntegratorKind::PTracer { .. }
                     | IntegratorKind::Sppm { .. }
                     | IntegratorKind::Bdpt
@@ -481,6 +485,15 @@ impl Integrator {
                     vcm: params,
                 }
             }
+            IntegratorKind::Depth => {
+                if o.max_depth.is_some() || o.strategy.is_some() || o.clamp.is_some() {
+                    return bad(
+                        "--max-depth, --strategy and --clamp apply to the path tracers, not to depth"
+                            .into(),
+                    );
+                }
+                Integrator::Depth
+            }
             IntegratorKind::Radiosity => {
                 if o.max_depth.is_some() || o.clamp.is_some() || o.strategy.is_some() {
                     return bad("--max-depth, --clamp and --strategy apply to the path tracer, not to radiosity".into());
@@ -524,6 +537,7 @@ impl Integrator {
             Integrator::Vcm { vcm, .. } => vcm.name(),
             Integrator::PhotonMapper { .. } => "photonmapper",
             Integrator::Radiosity(_) => "radiosity",
+            Integrator::Depth => "depth",
             Integrator::Afterglow { .. } => "afterglow",
         }
     }
@@ -551,10 +565,22 @@ impl Integrator {
 
     /// Whether the method's samples can be split between processes ([`Share`]) and
     /// checkpointed: every method whose sample indices (iterations) are independent of each
-    /// other; not `sppm` (each iteration's radii follow from the photons of those before) or
-    /// radiosity (not sampled per pixel).
+    /// other ([`Integrator::unshared_because`] says why the others are not).
     pub fn takes_shares(&self) -> bool {
-        !matches!(self, Integrator::Sppm { .. } | Integrator::Radiosity(_))
+        self.unshared_because().is_none()
+    }
+
+    /// Why the method's samples cannot be split between processes or checkpointed, or `None`
+    /// when they can.
+    pub fn unshared_because(&self) -> Option<&'static str> {
+        match self {
+            Integrator::Sppm { .. } => Some(
+                "its iterations depend on the ones before (each shrinks the photon radii from the photons gathered so far)",
+            ),
+            Integrator::Radiosity(_) => Some("it is not sampled per pixel"),
+            Integrator::Depth => Some("it renders in one pass"),
+            _ => None,
+        }
     }
 
     /// Whether the method traces camera paths: the path tracers do, and compute the alpha
@@ -573,9 +599,12 @@ impl Integrator {
     /// Renders the job. Path tracers honour `run.cancel` between passes and continue
     /// `run.resume`; radiosity runs to the end.
     pub fn render(&self, job: &Job, run: Run) -> Result<Rendered, IntegratorError> {
-        if (job.share != Share::WHOLE || run.checkpoint.is_some()) && !self.takes_shares() {
+        if let (true, Some(why)) = (
+            job.share != Share::WHOLE || run.checkpoint.is_some(),
+            self.unshared_because(),
+        ) {
             return Err(IntegratorError::Settings(format!(
-                "{} cannot be split into parts or checkpointed: its iterations depend on the ones before (each shrinks the photon radii from the photons gathered so far)",
+                "{} cannot be split into parts or checkpointed: {why}",
                 self.name()
             )));
         }
@@ -600,6 +629,7 @@ impl Integrator {
                 render_photonmapper(settings, photons, job, run)
             }
             Integrator::Radiosity(params) => render_radiosity(params, job, run),
+            Integrator::Depth => render_depth(job, run),
         }
     }
 }
@@ -1066,6 +1096,51 @@ fn render_vcm(
         warnings,
         state: Some(state),
         complete,
+        build_time,
+        extra_channels: Vec::new(),
+    })
+}
+
+/// Mitsuba's `depth` integrator ([`aov::render_depth`]): the distance to the first hit as the
+/// image, in one pass (not resumable or split into parts).
+fn render_depth(job: &Job, run: Run) -> Result<Rendered, IntegratorError> {
+    if run.resume.is_some() {
+        return Err(IntegratorError::Settings(
+            "--resume applies to the path tracers, not to depth".into(),
+        ));
+    }
+    let build_start = Instant::now();
+    let scene = Scene::build_with_mode(job.desc, job.bvh, job.selection, job.mode)?;
+    let build_time = build_start.elapsed();
+    let settings = RenderSettings {
+        spp: job.spp,
+        seed: job.seed,
+        ..RenderSettings::from_desc(job.desc)
+    };
+    let start = Instant::now();
+    run.progress.stage("depth", 0.0);
+    let (depth, variance, alpha) = aov::render_depth(&scene, &settings);
+    run.progress.stage("depth", 1.0);
+    let output = RenderOutput {
+        width: settings.width,
+        height: settings.height,
+        mean: depth.iter().map(|&t| [t; 3]).collect(),
+        variance: variance.iter().map(|&v| [v; 3]).collect(),
+        spp: settings.spp,
+        time: start.elapsed(),
+        nonfinite_samples: 0,
+        alpha: Some(alpha),
+        second_moment: None,
+    };
+    let (summary, warnings) = report("depth", "", &output, build_time);
+    Ok(Rendered {
+        output,
+        mode: scene.mode,
+        header: vec![("integrator".into(), "depth".into())],
+        summary,
+        warnings,
+        state: None,
+        complete: true,
         build_time,
         extra_channels: Vec::new(),
     })

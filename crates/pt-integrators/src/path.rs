@@ -100,7 +100,9 @@ impl Coverage {
     /// The rule of a scene's integrator.
     pub fn of(kind: pt_scene::IntegratorKind) -> Coverage {
         match kind {
-            pt_scene::IntegratorKind::Direct { .. } => Coverage::AnyHit,
+            pt_scene::IntegratorKind::Direct { .. } | pt_scene::IntegratorKind::Depth => {
+                Coverage::AnyHit
+            }
             pt_scene::IntegratorKind::VolPath => Coverage::VolPath,
             pt_scene::IntegratorKind::Path
             | pt_scene::IntegratorKind::Radiosity

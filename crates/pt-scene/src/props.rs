@@ -230,6 +230,9 @@ impl<'e> ObjectView<'e> {
             self.children.push(Child::Ref(child));
         } else if PROPERTY_TAGS.contains(&tag) {
             self.add_prop(child)?;
+        } else if tag == "alias" {
+            // A second name for an object, registered with the ids before building
+            // (`build::collect_ids`); nothing of its own here.
         } else {
             return Err(misplaced(child));
         }
@@ -441,7 +444,6 @@ fn misplaced(el: &Element) -> SceneError {
     let message = match tag {
         t if TRANSFORM_OPS.contains(&t) => format!("<{t}> can only occur inside a <transform>"),
         "default" | "include" | "path" => format!("<{tag}> cannot occur inside a property"),
-        "alias" => "unsupported element <alias> (not yet implemented)".to_string(),
         "lookAt" => "unknown element <lookAt> (write <lookat>; camelCase is only \
                      accepted in scenes with version < 2.0.0)"
             .to_string(),

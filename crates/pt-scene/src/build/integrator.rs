@@ -50,6 +50,15 @@ impl<'e> Builder<'e> {
                 light_sampling: false,
                 ..default_integrator()
             },
+            // Mitsuba's `depth` reads nothing but its base class's `hide_emitters` (no
+            // effect on a depth image).
+            "depth" => {
+                v.boolean("hide_emitters")?;
+                IntegratorDesc {
+                    kind: IntegratorKind::Depth,
+                    ..default_integrator()
+                }
+            }
             "direct" => direct_integrator(&v)?,
             "moment" => self.moment(&v)?,
             "aov" => self.aov(&v)?,
@@ -123,6 +132,7 @@ impl<'e> Builder<'e> {
                 && !matches!(
                     d.kind,
                     IntegratorKind::Radiosity
+                        | IntegratorKind::Depth
                         | IntegratorKind::PTracer { .. }
                         | IntegratorKind::Sppm { .. }
                         | IntegratorKind::Bdpt
@@ -179,6 +189,7 @@ impl<'e> Builder<'e> {
                 && !matches!(
                     d.kind,
                     IntegratorKind::Radiosity
+                        | IntegratorKind::Depth
                         | IntegratorKind::PTracer { .. }
                         | IntegratorKind::Sppm { .. }
                         | IntegratorKind::Bdpt

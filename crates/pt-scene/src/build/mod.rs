@@ -36,8 +36,8 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
     ("film", &["hdrfilm"], &["specfilm"]),
     ("sampler", &["independent", "stratified", "multijitter", "orthogonal", "ldsampler"], &[]),
     ("rfilter", &["box", "tent", "gaussian", "mitchell", "catmullrom", "lanczos"], &[]),
-    ("integrator", &["path", "volpath", "volpathmis", "direct", "moment", "aov", "radiosity", "ptracer", "sppm", "prb", "prb_basic", "prb_projective", "prbvolpath"], &[
-        "direct_projective", "depth", "stokes",
+    ("integrator", &["path", "volpath", "volpathmis", "direct", "moment", "aov", "radiosity", "ptracer", "sppm", "prb", "prb_basic", "prb_projective", "prbvolpath", "depth"], &[
+        "direct_projective", "stokes",
     ]),
     ("shape", &["obj", "ply", "serialized", "gltf", "rectangle", "cube", "sphere", "disk", "cylinder", "sdfgrid", "linearcurve", "bsplinecurve", "shapegroup", "instance"], &[
         "ellipsoids", "ellipsoidsmesh",
@@ -105,13 +105,57 @@ fn misplaced(
 /// Builds a [`SceneDesc`] from a preprocessed document.
 pub(crate) fn build(doc: &Document, source: &Path, base_dir: &Path) -> Result<SceneDesc> {
     let mut ids = HashMap::new();
-    collect_ids(&doc.root, &mut ids)?;
+    let mut aliases = Vec::new();
+    collect_ids(&doc.root, &mut ids, &mut aliases)?;
+    for alias in aliases {
+        add_alias(alias, &mut ids)?;
+    }
     Builder::new(ids, &doc.search_paths, base_dir).scene(&doc.root, source)
 }
 
+/// Mitsuba's `<alias id="A" as="B"/>`: `B` names the object `A` names (the same object, built
+/// once). `A` must exist (an object's id or an earlier alias) and `B` must be new.
+fn add_alias<'e>(alias: &'e Element, ids: &mut HashMap<&'e str, &'e Element>) -> Result<()> {
+    alias.check_attrs(&["id", "as"], &["id", "as"])?;
+    if let Some(c) = alias.children.first() {
+        return Err(SceneError::at(&c.loc, "<alias> cannot contain elements"));
+    }
+    let (from, to) = (
+        alias.attr("id").unwrap_or_default(),
+        alias.attr("as").unwrap_or_default(),
+    );
+    let target = *ids
+        .get(from)
+        .ok_or_else(|| SceneError::at(&alias.loc, format!("<alias>: unknown id \"{from}\"")))?;
+    if to.is_empty() {
+        return Err(SceneError::at(&alias.loc, "<alias>: empty 'as'"));
+    }
+    if let Some(first) = ids.insert(to, target) {
+        let l = &first.loc;
+        return Err(SceneError::at(
+            &alias.loc,
+            format!(
+                "<alias>: duplicate id \"{to}\" (already names the object at {}:{}:{})",
+                l.file.display(),
+                l.line,
+                l.col
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Registers every object that has an `id`; ids are global to the scene, like Mitsuba's.
-fn collect_ids<'e>(el: &'e Element, ids: &mut HashMap<&'e str, &'e Element>) -> Result<()> {
+/// `<alias>` elements are gathered in document order into `aliases`.
+fn collect_ids<'e>(
+    el: &'e Element,
+    ids: &mut HashMap<&'e str, &'e Element>,
+    aliases: &mut Vec<&'e Element>,
+) -> Result<()> {
     for child in &el.children {
+        if child.tag == "alias" {
+            aliases.push(child);
+        }
         if child.is_object() {
             if let Some(id) = child.attr("id") {
                 if id.is_empty() {
@@ -131,7 +175,7 @@ fn collect_ids<'e>(el: &'e Element, ids: &mut HashMap<&'e str, &'e Element>) -> 
                 }
             }
         }
-        collect_ids(child, ids)?;
+        collect_ids(child, ids, aliases)?;
     }
     Ok(())
 }

@@ -340,6 +340,9 @@ pub enum IntegratorKind {
     },
     /// Radiosity (project extension `radiosity`): finite elements for diffuse scenes.
     Radiosity,
+    /// Mitsuba's `depth`: each pixel the filter-weighted mean distance from the camera ray's
+    /// start (its near clip plane) to the first surface, 0 where it hits nothing.
+    Depth,
     /// Light tracing (Mitsuba `ptracer`): paths from the lights, each vertex connected to the
     /// camera. `samples_per_pass` splits the samples into passes of that many per pixel
     /// (Mitsuba requires the sample count to be a multiple of it); it does not change the

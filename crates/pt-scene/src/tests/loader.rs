@@ -281,6 +281,28 @@ fn unknown_and_duplicate_ids_are_errors() {
     assert_error(&e, 3, "bsdf type=\"diffuse\"", "duplicate id \"a\"");
 }
 
+/// Mitsuba's `<alias>`: a second name for the same object (one BSDF shared by both shapes,
+/// an alias of an alias too); an unknown source or a taken name is a located error.
+#[test]
+fn aliases_name_the_same_object() {
+    let d = load(&scene(
+        "<bsdf type=\"diffuse\" id=\"white\"><rgb name=\"reflectance\" value=\"0.8\"/></bsdf>\n\
+         <alias id=\"white\" as=\"paper\"/>\n<alias id=\"paper\" as=\"wall\"/>\n\
+         <shape type=\"cube\"><ref id=\"white\"/></shape>\n\
+         <shape type=\"sphere\"><ref id=\"paper\"/></shape>\n\
+         <shape type=\"sphere\"><ref id=\"wall\"/></shape>",
+    ))
+    .unwrap();
+    assert_eq!(d.shapes.len(), 3);
+    assert!(d.shapes.iter().all(|s| s.bsdf == d.shapes[0].bsdf));
+    let e = fail(&scene("<alias id=\"nope\" as=\"b\"/>"));
+    assert_error(&e, 2, "alias", "unknown id \"nope\"");
+    let e = fail(&scene(
+        "<bsdf type=\"diffuse\" id=\"a\"/>\n<bsdf type=\"diffuse\" id=\"b\"/>\n<alias id=\"a\" as=\"b\"/>",
+    ));
+    assert_error(&e, 4, "alias", "duplicate id \"b\"");
+}
+
 #[test]
 fn bsdf_reference_cycles_are_errors() {
     let e = fail(&scene(
