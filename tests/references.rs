@@ -4,7 +4,9 @@
 //! libtest-mimic, so a new scene with a reference is tested without touching this file;
 //! `cargo test --test references -- NAME` runs one.
 //!
-//! Sample counts: 1024 spp (the scenes here are 128x96). The z-scores use variances estimated
+//! Sample counts: 1024 spp (the scenes here are 128x96), or for a smaller image (a 1 x 1
+//! irradiancemeter's) the same number of samples in all, so that its pixels are measured as
+//! precisely as the mean of a whole image is. The z-scores use variances estimated
 //! from the samples themselves; where the per-sample distribution is heavy-tailed (low-noise
 //! scenes lit by delta lights, whose variance comes from rare indirect paths and edge pixels)
 //! those estimates scatter, and the chi-square of all blocks is then wider than chi-square: at
@@ -33,16 +35,21 @@ use libtest_mimic::{Arguments, Failed, Trial};
 
 /// Scenes tested elsewhere, with their own negative checks.
 const DEDICATED: &[&str] = &["cornell-box"];
-/// Samples per pixel for the comparison renders.
-const SPP: &str = "1024";
+/// Samples per pixel for the comparison renders of the usual image size, [`PIXELS`].
+const SPP: u32 = 1024;
+/// The usual image size in pixels (128 x 96).
+const PIXELS: u32 = 128 * 96;
 
 fn check(scene: String, alpha: f64) -> Result<(), Failed> {
     let dir = scratch(&format!("ref_{scene}"));
+    let (reference_img, _) = reference(&scene);
+    let pixels = reference_img.width * reference_img.height;
+    let spp = (SPP * PIXELS / pixels.max(1)).max(SPP);
     let (img, var) = render(
         &repo().join("scenes").join(format!("{scene}.xml")),
         &dir,
         &scene,
-        &["--spp", SPP],
+        &["--spp", &spp.to_string()],
     );
     if img.nonfinite_pixels() > 0 {
         return Err(format!(
@@ -51,7 +58,7 @@ fn check(scene: String, alpha: f64) -> Result<(), Failed> {
         )
         .into());
     }
-    let v = judge_against_reference_at(&img, &var, &scene, "1024spp", alpha);
+    let v = judge_against_reference_at(&img, &var, &scene, &format!("{spp}spp"), alpha);
     if v.agrees() {
         Ok(())
     } else {

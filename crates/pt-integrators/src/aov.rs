@@ -121,12 +121,9 @@ fn trace(
         ColorMode::Rgb => SampledWavelengths::sample_visible(0.5),
     };
     let u = sampler.next_2d();
-    let u_lens = if scene.camera.needs_lens_sample() {
-        sampler.next_2d()
-    } else {
-        Vec2::splat(0.5)
-    };
-    let ray = scene.camera.pixel_ray(x, y, u - Vec2::splat(0.5), u_lens);
+    let ray = scene
+        .camera
+        .sample_ray(x, y, u - Vec2::splat(0.5), || sampler.next_2d());
     (u, ray, scene.intersect(&ray), lambda)
 }
 

@@ -553,6 +553,19 @@ impl Integrator {
                 self.name()
             )));
         }
+        if let pt_scene::Projection::Irradiancemeter { .. } = desc.camera.projection {
+            let by_path = matches!(
+                self,
+                Integrator::Path(_) | Integrator::Direct(_) | Integrator::Afterglow { .. }
+            );
+            if !by_path || desc.integrator.aov.is_some() || desc.integrator.moment.is_some() {
+                return Err(IntegratorError::Settings(format!(
+                    "{}: an irradiancemeter is rendered by path, volpath or direct (without aov or moment), not by {}",
+                    desc.camera.loc,
+                    self.name()
+                )));
+            }
+        }
         if desc.integrator.aov.is_some() && !self.traces_camera_paths() {
             return Err(IntegratorError::Settings(format!(
                 "{}: the scene's aov integrator needs a path tracer, not {}",
@@ -659,7 +672,7 @@ fn render_ptracer(
         RenderState::for_light_paths,
         |scene, settings| {
             refuse_glowing_media(scene)
-                .and_then(|_| refuse_radiancemeter("ptracer", scene))
+                .and_then(|_| refuse_meters("ptracer", scene))
                 .and_then(|_| ptracer::check(settings))
         },
     )?;
@@ -912,11 +925,12 @@ fn refuse_media(name: &str, scene: &Scene) -> Result<(), String> {
 }
 
 /// The refusal of the methods that connect light paths to the camera when the sensor is a
-/// radiancemeter (one ray, which a connection meets with probability zero).
-pub(crate) fn refuse_radiancemeter(name: &str, scene: &Scene) -> Result<(), String> {
-    if scene.camera.is_radiancemeter() {
+/// radiancemeter (one ray, which a connection meets with probability zero) or an
+/// irradiancemeter (whose importance pt does not evaluate).
+pub(crate) fn refuse_meters(name: &str, scene: &Scene) -> Result<(), String> {
+    if scene.camera.is_meter() {
         return Err(format!(
-            "{}: {name} cannot render for a radiancemeter (light paths cannot connect to its single ray); use path or volpath",
+            "{}: {name} cannot render for a radiancemeter or irradiancemeter (light paths do not connect to them); use path or volpath",
             scene.camera.loc()
         ));
     }

@@ -283,9 +283,11 @@ impl PathState {
     /// A path starting with the camera ray `ray` at wavelengths `lambda`.
     #[inline(always)]
     pub fn new(scene: &Scene, ray: Ray, lambda: &SampledWavelengths) -> Self {
+        // The camera's weight of its ray (pi for an irradiancemeter, otherwise 1).
+        let w = scene.camera.ray_weight();
         let throughput = match scene.mode {
-            ColorMode::Rgb => SampledSpectrum::from_rgb([1.0; 3]),
-            ColorMode::Spectral => SampledSpectrum::splat(1.0),
+            ColorMode::Rgb => SampledSpectrum::from_rgb([w; 3]),
+            ColorMode::Spectral => SampledSpectrum::splat(w),
         };
         PathState {
             ray,

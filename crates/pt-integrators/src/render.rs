@@ -1020,12 +1020,7 @@ fn render_row_samples<S: RandomSource>(
                     settings.sample_border,
                 )
             };
-            let u_lens = if scene.camera.needs_lens_sample() {
-                sampler.next_2d()
-            } else {
-                Vec2::splat(0.5)
-            };
-            let ray = scene.camera.pixel_ray(x, y, offset, u_lens);
+            let ray = scene.camera.sample_ray(x, y, offset, || sampler.next_2d());
             let path = PathState::new(scene, ray, &lambda);
             let tag = taken;
             offsets[tag as usize] = (offset, weight);

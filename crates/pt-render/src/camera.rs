@@ -1,9 +1,12 @@
 //! The cameras, with Mitsuba 3's conventions: the pinhole perspective camera, the thin-lens
-//! camera and the orthographic camera.
+//! camera and the orthographic camera, and the measuring sensors `radiancemeter` and
+//! `irradiancemeter`.
 
-use pt_math::warp::square_to_disk_concentric;
-use pt_math::{Mat4, Ray, Vec2, Vec3};
+use crate::light::LightShape;
+use pt_math::warp::{square_to_cosine_hemisphere, square_to_disk_concentric};
+use pt_math::{offset_ray_origin, Frame, Mat4, Ray, Vec2, Vec3};
 use pt_scene::{CameraDesc, FovAxis, Projection};
+use std::sync::Arc;
 
 /// A camera producing world-space rays for film positions in pixels.
 ///
@@ -33,6 +36,8 @@ pub struct Camera {
     image_size: Vec2,
     near: f32,
     far: f32,
+    /// The irradiancemeter's shape (attached by the scene, [`Camera::attach_surface`]).
+    surface: Option<Arc<LightShape>>,
 }
 
 /// What a camera's rays look like.
@@ -47,6 +52,9 @@ enum Kind {
     Orthographic,
     /// One ray, camera +z from the origin (Mitsuba's `radiancemeter`).
     Radiancemeter,
+    /// Rays from points on a shape, cosine-distributed about its normal (Mitsuba's
+    /// `irradiancemeter`).
+    Irradiancemeter,
 }
 
 /// tan(half fov) along x for a `fov_deg` spanning `fov_axis` of a `w` x `h` film (Mitsuba's
@@ -101,6 +109,7 @@ impl Camera {
             }
             Projection::Orthographic => (Kind::Orthographic, 1.0),
             Projection::Radiancemeter => (Kind::Radiancemeter, 1.0),
+            Projection::Irradiancemeter { .. } => (Kind::Irradiancemeter, 1.0),
         };
         Camera {
             loc: desc.loc.clone(),
@@ -115,7 +124,13 @@ impl Camera {
             image_size: Vec2::new(w, h),
             near: desc.near_clip,
             far: desc.far_clip,
+            surface: None,
         }
+    }
+
+    /// Gives an irradiancemeter the shape it measures (sampled by area, as a light is).
+    pub fn attach_surface(&mut self, shape: LightShape) {
+        self.surface = Some(Arc::new(shape));
     }
 
     /// The camera for `film`: projecting onto the whole film; [`Camera::pixel_ray`] places the
@@ -148,6 +163,68 @@ impl Camera {
     #[inline]
     pub fn needs_lens_sample(&self) -> bool {
         matches!(self.kind, Kind::ThinLens { .. })
+    }
+
+    /// The camera ray of a sample of the image's pixel (x, y) at `offset` (pixels) from its
+    /// centre ([`Camera::pixel_ray`]), drawing from `next_2d` the numbers the camera needs
+    /// beyond the film position: a thin lens's aperture point, or an irradiancemeter's point
+    /// and direction (which ignore the film position, as Mitsuba's do); nothing for the
+    /// others, whose images keep their random numbers.
+    #[inline]
+    pub fn sample_ray(
+        &self,
+        x: i32,
+        y: i32,
+        offset: Vec2,
+        mut next_2d: impl FnMut() -> Vec2,
+    ) -> Ray {
+        match self.kind {
+            Kind::ThinLens { .. } => self.pixel_ray(x, y, offset, next_2d()),
+            Kind::Irradiancemeter => {
+                let u_point = next_2d();
+                self.surface_ray(u_point, next_2d())
+            }
+            _ => self.pixel_ray(x, y, offset, Vec2::splat(0.5)),
+        }
+    }
+
+    /// An irradiancemeter's ray (Mitsuba's `irradiancemeter::sample_ray`): from a point
+    /// uniform by area on its shape (`u_point`: x picks a mesh's triangle and is reused
+    /// within it) in a cosine-distributed direction about the point's front normal (`u_dir`).
+    /// Each such ray's radiance counts [`Camera::ray_weight`] = pi times, so that the mean is
+    /// the area-averaged irradiance (pi times the mean of L over the cosine density). The
+    /// origin is moved off the surface along the normal.
+    fn surface_ray(&self, u_point: Vec2, u_dir: Vec2) -> Ray {
+        let surface = self
+            .surface
+            .as_ref()
+            .expect("an irradiancemeter has its shape");
+        let (u_sel, u) = match &**surface {
+            LightShape::Mesh { distr, .. } => {
+                let (_, _, reused) = distr.sample(u_point.x);
+                (u_point.x, Vec2::new(reused, u_point.y))
+            }
+            _ => (0.0, u_point),
+        };
+        let (p, n, _) = surface.sample_point(u_sel, u);
+        let dir = Frame::from_normal(n).to_world(square_to_cosine_hemisphere(u_dir));
+        Ray {
+            origin: offset_ray_origin(p, n),
+            dir,
+            tmin: 0.0,
+            tmax: f32::INFINITY,
+        }
+    }
+
+    /// The factor every camera ray's radiance is counted with: pi for an irradiancemeter
+    /// (its cosine-weighted directions measure irradiance), 1 for the others.
+    #[inline]
+    pub fn ray_weight(&self) -> f32 {
+        if self.kind == Kind::Irradiancemeter {
+            std::f32::consts::PI
+        } else {
+            1.0
+        }
     }
 
     /// The primary ray through film position `film` (pixels of the whole film: (0, 0) its
@@ -202,6 +279,9 @@ impl Camera {
                     tmax: self.far * len,
                 }
             }
+            // Its rays come from the shape ([`Camera::sample_ray`]); the film position alone
+            // (the film's centre) gives one of them.
+            Kind::Irradiancemeter => self.surface_ray(Vec2::splat(0.5), Vec2::splat(0.5)),
             // The same ray for every film point (Mitsuba's radiancemeter ignores the film
             // sample); no clip planes.
             Kind::Radiancemeter => Ray {
@@ -247,8 +327,9 @@ impl Camera {
     /// [`Camera::generate_ray`]: the camera ray through it passes through `p`.
     #[inline]
     pub fn connect(&self, p: Vec3, u_lens: Vec2) -> Option<CameraConnection> {
-        if self.kind == Kind::Radiancemeter {
-            // One ray: a point meets it with probability zero.
+        if matches!(self.kind, Kind::Radiancemeter | Kind::Irradiancemeter) {
+            // One ray, or rays from a surface whose importance pt does not evaluate: light paths
+            // do not connect to them (the methods that need it refuse these sensors).
             return None;
         }
         let local = self.to_camera.transform_point3(p);
@@ -273,7 +354,7 @@ impl Camera {
                 let q = (lens.truncate() + d.truncate() * (focus / d.z)) / focus;
                 (q, self.to_world.transform_point3(lens), d)
             }
-            Kind::Orthographic | Kind::Radiancemeter => (
+            Kind::Orthographic | Kind::Radiancemeter | Kind::Irradiancemeter => (
                 Vec2::new(local.x, local.y),
                 self.to_world
                     .transform_point3(Vec3::new(local.x, local.y, 0.0)),
@@ -298,7 +379,7 @@ impl Camera {
                 let cos = cam_dir.z / cam_dir.length();
                 1.0 / (area * cos * cos * cos * dist * dist)
             }
-            Kind::Orthographic | Kind::Radiancemeter => {
+            Kind::Orthographic | Kind::Radiancemeter | Kind::Irradiancemeter => {
                 let sx = self.to_world.transform_vector3(Vec3::X).length();
                 let sy = self.to_world.transform_vector3(Vec3::Y).length();
                 1.0 / (area * sx * sy)
@@ -320,7 +401,10 @@ impl Camera {
     /// [`CameraConnection::weight`]). Orthographic cameras have a delta direction: 0. The
     /// bidirectional methods weigh the camera's strategies with it.
     pub fn direction_pdf(&self, dir: Vec3) -> f32 {
-        if matches!(self.kind, Kind::Orthographic | Kind::Radiancemeter) {
+        if matches!(
+            self.kind,
+            Kind::Orthographic | Kind::Radiancemeter | Kind::Irradiancemeter
+        ) {
             return 0.0;
         }
         let local = self.to_camera.transform_vector3(dir);
@@ -353,9 +437,10 @@ impl Camera {
         &self.loc
     }
 
-    /// Whether the camera is a radiancemeter: one ray, which no light path can connect to.
-    pub fn is_radiancemeter(&self) -> bool {
-        self.kind == Kind::Radiancemeter
+    /// Whether the camera is a radiancemeter (one ray) or an irradiancemeter: sensors that
+    /// light paths do not connect to.
+    pub fn is_meter(&self) -> bool {
+        matches!(self.kind, Kind::Radiancemeter | Kind::Irradiancemeter)
     }
 }
 

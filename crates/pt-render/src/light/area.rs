@@ -79,31 +79,15 @@ pub enum LightShape {
     },
 }
 
-/// An area light attached to one shape.
-#[derive(Clone, Debug)]
-pub struct AreaLight {
-    /// Emitted radiance (W sr^-1 m^-2) over the shape's texture coordinates: a constant, or
-    /// an image (a monitor), built for the emission role (spectral mode: times D65).
-    pub radiance: Texture,
-    /// The emitting geometry.
-    pub shape: LightShape,
-    /// Total surface area, scene units squared.
-    pub area: f32,
-}
-
-impl AreaLight {
-    /// Total emitted power estimate (for light selection): pi * area * luminance.
-    pub fn power(&self) -> f32 {
-        PI * self.area * crate::texture::luminance(self.radiance.mean_rgb()).max(0.0)
-    }
-
-    /// A point uniformly distributed by area over the whole light (density `1 / area`): its
+impl LightShape {
+    /// A point uniformly distributed by area over the whole shape (density `1 / area`): its
     /// position, its front-side unit normal and its texture coordinates (world space). `u_sel`
     /// picks a mesh's triangle (by area), `u` the point on it. The one area sampling of every
-    /// light shape, used by light sampling seen from a point and by light paths.
+    /// shape, used by light sampling seen from a point, by light paths and by the
+    /// irradiancemeter.
     #[inline(always)]
     pub fn sample_point(&self, u_sel: f32, u: Vec2) -> (Vec3, Vec3, Vec2) {
-        match &self.shape {
+        match self {
             LightShape::Mesh { tris, distr } => {
                 let (i, _, _) = distr.sample(u_sel);
                 let t = &tris[i];
@@ -151,6 +135,33 @@ impl AreaLight {
                 (d.point(local), d.normal, uv)
             }
         }
+    }
+}
+
+/// An area light attached to one shape.
+#[derive(Clone, Debug)]
+pub struct AreaLight {
+    /// Emitted radiance (W sr^-1 m^-2) over the shape's texture coordinates: a constant, or
+    /// an image (a monitor), built for the emission role (spectral mode: times D65).
+    pub radiance: Texture,
+    /// The emitting geometry.
+    pub shape: LightShape,
+    /// Total surface area, scene units squared.
+    pub area: f32,
+}
+
+impl AreaLight {
+    /// Total emitted power estimate (for light selection): pi * area * luminance.
+    pub fn power(&self) -> f32 {
+        PI * self.area * crate::texture::luminance(self.radiance.mean_rgb()).max(0.0)
+    }
+
+    /// A point uniformly distributed by area over the whole light (density `1 / area`): its
+    /// position, its front-side unit normal and its texture coordinates (world space), from
+    /// [`LightShape::sample_point`].
+    #[inline(always)]
+    pub fn sample_point(&self, u_sel: f32, u: Vec2) -> (Vec3, Vec3, Vec2) {
+        self.shape.sample_point(u_sel, u)
     }
 
     /// The emitted radiance at texture coordinates `uv` (front side), before the one-sided test,

@@ -21,7 +21,7 @@ use crate::texture::{
 use obvhs::aabb::Aabb;
 use pt_math::glam::{Affine3A, Mat3, Vec3A};
 use pt_math::Distribution1D;
-use pt_scene::{AreaEmitterDesc, Geometry, SceneDesc, ShapeDesc, TextureDesc};
+use pt_scene::{AreaEmitterDesc, Geometry, Projection, SceneDesc, ShapeDesc, TextureDesc};
 use pt_spectrum::ColorMode;
 use std::sync::Arc;
 
@@ -61,6 +61,12 @@ impl Scene {
         let mut lights = Vec::new();
         let mut stats = SceneStats::default();
         let mut media = Vec::new();
+        // The irradiancemeter's shape, sampled by area as an emitter's is.
+        let meter_shape = match desc.camera.projection {
+            Projection::Irradiancemeter { shape } => Some(shape),
+            _ => None,
+        };
+        let mut meter_surface = None;
         for (si, shape) in desc.shapes.iter().enumerate() {
             if shape.bsdf >= materials.len() {
                 return Err(BuildError {
@@ -69,9 +75,27 @@ impl Scene {
                 });
             }
             let mut data = ShapeData::new(shape.bsdf as u32, None);
+            let measured = meter_shape == Some(si);
             let light_shape = geometry(
-                shape, si as u32, &mut prims, &mut refs, &mut stats, &mut data,
+                shape,
+                si as u32,
+                shape.emitter.is_some() || measured,
+                &mut prims,
+                &mut refs,
+                &mut stats,
+                &mut data,
             )?;
+            if measured {
+                meter_surface = match &light_shape {
+                    Some((surface, area)) if *area > 0.0 => Some(surface.clone()),
+                    _ => {
+                        return Err(BuildError {
+                            loc: desc.camera.loc.clone(),
+                            message: "an irradiancemeter on a shape with zero area".into(),
+                        })
+                    }
+                };
+            }
             if let Some(m) = &shape.interior {
                 data.interior = Some(add_medium(&mut media, m, mode)?);
             }
@@ -152,7 +176,10 @@ impl Scene {
             LightSelection::Tree => LightTree::build(&lights, &weights, bounds.1),
             LightSelection::Power | LightSelection::Uniform => None,
         };
-        let camera = Camera::for_film(&desc.camera, &desc.film);
+        let mut camera = Camera::for_film(&desc.camera, &desc.film);
+        if let Some(surface) = meter_surface {
+            camera.attach_surface(surface);
+        }
         let camera_medium = match &desc.camera_medium {
             Some(m) => Some(add_medium(&mut media, m, mode)?),
             None => None,
@@ -294,7 +321,7 @@ fn instancing(
             }
             let si = shapes.len() as u32;
             let mut data = ShapeData::new(shape.bsdf as u32, Some(gi as u32));
-            geometry(shape, si, &mut prims, &mut refs, stats, &mut data)?;
+            geometry(shape, si, false, &mut prims, &mut refs, stats, &mut data)?;
             // A group shape's media are those of every instance of it (the media themselves
             // stay in world space, as Mitsuba's do).
             if let Some(m) = &shape.interior {
@@ -369,9 +396,12 @@ fn instancing(
     }))
 }
 
+/// A shape's primitives (added to `prims` and `refs`) and, for shapes that are `sampled` by
+/// area (emitters, the irradiancemeter's shape) or analytic, its area-sampling form and area.
 fn geometry(
     shape: &ShapeDesc,
     si: u32,
+    sampled: bool,
     prims: &mut Vec<Primitive>,
     refs: &mut Vec<PrimRef>,
     stats: &mut SceneStats,
@@ -379,15 +409,7 @@ fn geometry(
 ) -> Result<Option<(LightShape, f32)>, BuildError> {
     Ok(match &shape.geometry {
         Geometry::Mesh(mesh) => {
-            let tris = add_mesh(
-                mesh,
-                si,
-                shape.emitter.is_some(),
-                prims,
-                refs,
-                stats,
-                &shape.loc,
-            )?;
+            let tris = add_mesh(mesh, si, sampled, prims, refs, stats, &shape.loc)?;
             if let Some(ts) = &mesh.tangents {
                 if ts.len() != mesh.positions.len() {
                     return Err(BuildError {

@@ -30,8 +30,8 @@ use std::path::{Path, PathBuf};
 /// Plugins per object tag: (tag, supported, known to Mitsuba 3 but not implemented here).
 #[rustfmt::skip]
 const PLUGINS: &[(&str, &[&str], &[&str])] = &[
-    ("sensor", &["perspective", "thinlens", "orthographic", "radiancemeter"], &[
-        "irradiancemeter", "distant", "batch",
+    ("sensor", &["perspective", "thinlens", "orthographic", "radiancemeter", "irradiancemeter"], &[
+        "distant", "batch",
     ]),
     ("film", &["hdrfilm"], &["specfilm"]),
     ("sampler", &["independent", "stratified", "multijitter", "orthogonal", "ldsampler"], &[]),
@@ -205,6 +205,9 @@ struct Builder<'e> {
     /// Index in `groups` of each group by its element's address, so that each is built once
     /// however many instances name it.
     group_index: HashMap<*const Element, usize>,
+    /// The sensor nested in the shape built last (an `irradiancemeter`), for the scene to
+    /// take with the shape's number.
+    shape_sensor: Option<(CameraDesc, FilmDesc, SamplerDesc)>,
 }
 
 impl<'e> Builder<'e> {
@@ -228,6 +231,7 @@ impl<'e> Builder<'e> {
             default_bsdf: [None, None],
             groups: Vec::new(),
             group_index: HashMap::new(),
+            shape_sensor: None,
         }
     }
 
@@ -265,7 +269,7 @@ impl<'e> Builder<'e> {
                 "sensor" if sensor.is_some() => {
                     return Err(SceneError::at(&el.loc, "only one <sensor> is supported"))
                 }
-                "sensor" => sensor = Some(self.sensor(el)?),
+                "sensor" => sensor = Some(self.sensor(el, false)?),
                 "integrator" if integrator.is_some() => {
                     return Err(SceneError::at(
                         &el.loc,
@@ -278,7 +282,29 @@ impl<'e> Builder<'e> {
                 "shape" if el.attr("type") == Some("instance") => {
                     instances.push(self.instance(el)?)
                 }
-                "shape" => shapes.push(self.shape(el)?),
+                "shape" => {
+                    shapes.push(self.shape(el)?);
+                    if let Some((camera, film, sampler)) = self.shape_sensor.take() {
+                        if sensor.is_some() {
+                            return Err(SceneError::at(
+                                &camera.loc,
+                                "only one <sensor> is supported",
+                            ));
+                        }
+                        let projection = Projection::Irradiancemeter {
+                            shape: shapes.len() - 1,
+                        };
+                        sensor = Some((
+                            CameraDesc {
+                                projection,
+                                ..camera
+                            },
+                            film,
+                            sampler,
+                            None,
+                        ));
+                    }
+                }
                 // Validated now; it enters `bsdfs` when a shape uses it.
                 "bsdf" => drop(self.bsdf_desc(el)?),
                 // Validated now; shapes and the sensor use it through <ref id="..."/>.

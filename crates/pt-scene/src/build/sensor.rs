@@ -3,19 +3,44 @@
 use super::*;
 
 impl<'e> Builder<'e> {
-    /// `perspective`, `thinlens` (see [`perspective`]) or `orthographic` (see
-    /// [`orthographic`]) with its film, sampler and the medium it sits in.
+    /// `perspective`, `thinlens` (see [`perspective`]), `orthographic` (see
+    /// [`orthographic`]) or `radiancemeter` at the top level, or `irradiancemeter` nested in a
+    /// shape (`in_shape`), with its film, sampler and the medium it sits in.
     pub(super) fn sensor(
         &mut self,
         el: &'e Element,
+        in_shape: bool,
     ) -> Result<(CameraDesc, FilmDesc, SamplerDesc, Option<MediumDesc>)> {
         let v = ObjectView::parse(el)?;
-        let camera = match v.plugin.as_str() {
-            "perspective" | "thinlens" => perspective(&v)?,
-            "orthographic" => orthographic(&v)?,
-            "radiancemeter" => radiancemeter(&v)?,
-            _ => return Err(plugin_error(el)),
-        };
+        let camera =
+            match v.plugin.as_str() {
+                "irradiancemeter" if !in_shape => return Err(SceneError::at(
+                    &el.loc,
+                    "an irradiancemeter must be nested in the <shape> it measures, as in Mitsuba",
+                )),
+                // The scene numbers the shape, when it knows where the shape goes.
+                "irradiancemeter" => CameraDesc {
+                    loc: el.loc.clone(),
+                    projection: Projection::Irradiancemeter { shape: usize::MAX },
+                    to_world: Mat4::IDENTITY,
+                    near_clip: 0.0,
+                    far_clip: f32::INFINITY,
+                    principal_point_offset: [0.0; 2],
+                },
+                _ if in_shape => {
+                    return Err(SceneError::at(
+                        &el.loc,
+                        format!(
+                            "a <shape> can hold an irradiancemeter sensor, not a {}",
+                            v.plugin
+                        ),
+                    ))
+                }
+                "perspective" | "thinlens" => perspective(&v)?,
+                "orthographic" => orthographic(&v)?,
+                "radiancemeter" => radiancemeter(&v)?,
+                _ => return Err(plugin_error(el)),
+            };
         let (mut film, mut sampler, mut medium) = (None, None, None);
         for child in &v.children {
             let target = self.resolve(child)?;
@@ -33,17 +58,26 @@ impl<'e> Builder<'e> {
             }
         }
         v.finish()?;
-        if camera.projection == Projection::Radiancemeter {
+        if matches!(
+            camera.projection,
+            Projection::Radiancemeter | Projection::Irradiancemeter { .. }
+        ) {
             // Mitsuba throws for any other film size.
             match &film {
                 Some(f) if f.width == 1 && f.height == 1 => {}
                 _ => {
                     return Err(SceneError::at(
                         &el.loc,
-                        "a radiancemeter needs a 1 x 1 film (<film type=\"hdrfilm\"> with width and height 1), as in Mitsuba",
+                        format!("the {} sensor needs a 1 x 1 film (<film type=\"hdrfilm\"> with width and height 1), as in Mitsuba", v.plugin),
                     ))
                 }
             }
+        }
+        if medium.is_some() && matches!(camera.projection, Projection::Irradiancemeter { .. }) {
+            return Err(SceneError::at(
+                &el.loc,
+                "an irradiancemeter sits on its shape: give the shape an exterior medium instead",
+            ));
         }
         Ok((
             camera,

@@ -112,6 +112,12 @@ impl<'e> Builder<'e> {
                 _ => {}
             }
             let shape = self.shape(target)?;
+            if let Some((camera, ..)) = self.shape_sensor.take() {
+                return Err(SceneError::at(
+                    &camera.loc,
+                    "a shape in a shapegroup cannot hold a sensor (Mitsuba's instances cannot either)",
+                ));
+            }
             if let Some(e) = &shape.emitter {
                 return Err(SceneError::at(
                     &e.loc,
@@ -391,6 +397,11 @@ impl<'e> Builder<'e> {
                 "bsdf" => bsdf = Some(self.bsdf_for_shape(target)?),
                 "emitter" if emitter.is_some() => return Err(once("emitter")),
                 "emitter" => emitter = Some(self.area_emitter(target)?),
+                "sensor" if self.shape_sensor.is_some() => return Err(once("sensor")),
+                "sensor" => {
+                    let (camera, film, sampler, _) = self.sensor(target, true)?;
+                    self.shape_sensor = Some((camera, film, sampler));
+                }
                 "medium" => {
                     let written = child.written();
                     match written.attr("name") {
@@ -409,7 +420,14 @@ impl<'e> Builder<'e> {
                         }
                     }
                 }
-                _ => return Err(misplaced(child, target, v, "bsdf, emitter or medium")),
+                _ => {
+                    return Err(misplaced(
+                        child,
+                        target,
+                        v,
+                        "bsdf, emitter, medium or sensor",
+                    ))
+                }
             }
         }
         Ok((bsdf, emitter, [interior, exterior]))

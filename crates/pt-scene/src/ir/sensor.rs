@@ -47,6 +47,14 @@ pub enum Projection {
     /// Mitsuba's `radiancemeter`: the radiance arriving at the camera's origin along one ray,
     /// camera +z (a 1 x 1 film).
     Radiancemeter,
+    /// Mitsuba's `irradiancemeter`, nested in a shape: the irradiance (W m^-2) arriving at the
+    /// shape's front side, averaged over its area (a 1 x 1 film). Rays leave points uniform
+    /// by area in cosine-distributed directions about the normal, each weighted by pi. The
+    /// camera's `to_world` is unused.
+    Irradiancemeter {
+        /// The shape it measures ([`crate::SceneDesc::shapes`]).
+        shape: usize,
+    },
 }
 
 /// A camera. Camera space follows Mitsuba: it looks along +z, +y is up, +x is *left* in the image

@@ -406,6 +406,46 @@ fn radiancemeter_is_one_ray() {
     }
 }
 
+/// `irradiancemeter`: nested in a shape it becomes the scene's sensor, numbered with that
+/// shape (after the shapes before it); it needs a 1 x 1 film, a shape, and a scene without
+/// another sensor; a shape holds no other kind of sensor.
+#[test]
+fn irradiancemeter_measures_its_shape() {
+    let film = r#"<film type="hdrfilm"><integer name="width" value="1"/><integer name="height" value="1"/></film>"#;
+    let meter = format!(r#"<sensor type="irradiancemeter">{film}</sensor>"#);
+    let s = load(&format!(
+        r#"<scene version="3.0.0"><shape type="sphere"/><shape type="rectangle">{meter}</shape><shape type="cube"/></scene>"#
+    ))
+    .unwrap();
+    assert_eq!(
+        s.camera.projection,
+        Projection::Irradiancemeter { shape: 1 }
+    );
+    assert_eq!((s.film.width, s.film.height), (1, 1));
+    for (xml, want) in [
+        (format!("<scene version=\"3.0.0\">{meter}</scene>"), "must be nested in the <shape>"),
+        (
+            r#"<scene version="3.0.0"><shape type="sphere"><sensor type="irradiancemeter"/></shape></scene>"#.to_string(),
+            "needs a 1 x 1 film",
+        ),
+        (
+            r#"<scene version="3.0.0"><shape type="sphere"><sensor type="perspective"/></shape></scene>"#.to_string(),
+            "not a perspective",
+        ),
+        (
+            format!(r#"<scene version="3.0.0"><sensor type="perspective"/><shape type="sphere">{meter}</shape></scene>"#),
+            "only one <sensor>",
+        ),
+        (
+            format!(r#"<scene version="3.0.0"><shape type="shapegroup" id="g"><shape type="sphere">{meter}</shape></shape></scene>"#),
+            "shapegroup cannot hold a sensor",
+        ),
+    ] {
+        let e = load(&xml).unwrap_err();
+        assert!(e.message.contains(want), "{xml}: {e}");
+    }
+}
+
 #[test]
 fn samplers_and_their_rounded_counts() {
     for (plugin, extra, asked, count, kind) in [
