@@ -78,6 +78,7 @@ pub const METHODS: &[&str] = &[
     "vcm",
     "photonmapper",
     "radiosity",
+    "depth",
 ];
 
 /// The method named `name` (one of [`METHODS`]) with its default settings, as the scene
@@ -112,6 +113,7 @@ pub fn method(name: &str) -> Option<IntegratorKind> {
             alpha: 0.75,
         },
         "radiosity" => IntegratorKind::Radiosity,
+        "depth" => IntegratorKind::Depth,
         _ => return None,
     })
 }
@@ -553,14 +555,31 @@ impl Integrator {
                 self.name()
             )));
         }
-        if let pt_scene::Projection::Irradiancemeter { .. } = desc.camera.projection {
-            let by_path = matches!(
-                self,
-                Integrator::Path(_) | Integrator::Direct(_) | Integrator::Afterglow { .. }
-            );
-            if !by_path || desc.integrator.aov.is_some() || desc.integrator.moment.is_some() {
+        // The measuring sensors that sample a surface or a target draw their rays in the
+        // camera-path loops only; the irradiancemeter's weight (pi) is the image's alone.
+        let (meter, by) = match desc.camera.projection {
+            pt_scene::Projection::Irradiancemeter { .. } => (
+                "an irradiancemeter",
+                "path, volpath or direct (without aov or moment)",
+            ),
+            pt_scene::Projection::Distant { .. } => {
+                ("a distant sensor", "path, volpath, direct or depth")
+            }
+            _ => ("", ""),
+        };
+        if !meter.is_empty() {
+            let irradiance = meter == "an irradiancemeter";
+            let renders = match self {
+                Integrator::Path(_) | Integrator::Direct(_) | Integrator::Afterglow { .. } => {
+                    !irradiance
+                        || (desc.integrator.aov.is_none() && desc.integrator.moment.is_none())
+                }
+                Integrator::Depth => !irradiance,
+                _ => false,
+            };
+            if !renders {
                 return Err(IntegratorError::Settings(format!(
-                    "{}: an irradiancemeter is rendered by path, volpath or direct (without aov or moment), not by {}",
+                    "{}: {meter} is rendered by {by}, not by {}",
                     desc.camera.loc,
                     self.name()
                 )));

@@ -36,8 +36,23 @@ pub struct Camera {
     image_size: Vec2,
     near: f32,
     far: f32,
-    /// The irradiancemeter's shape (attached by the scene, [`Camera::attach_surface`]).
+    /// The irradiancemeter's shape, or the distant sensor's target shape (attached by the
+    /// scene, [`Camera::attach_surface`]).
     surface: Option<Arc<LightShape>>,
+    /// Where a distant sensor's rays aim, and the scene's bounding sphere (centre, radius)
+    /// they start outside of ([`Camera::aim`]).
+    aim: Option<(Aim, Vec3, f32)>,
+}
+
+/// Where a distant sensor's rays aim (world space).
+#[derive(Clone, Copy, Debug)]
+enum Aim {
+    /// Through one point.
+    Point(Vec3),
+    /// Through points uniform on a disk perpendicular to the direction.
+    Disk { centre: Vec3, radius: f32 },
+    /// Through points uniform by area on the attached surface.
+    Surface,
 }
 
 /// What a camera's rays look like.
@@ -55,6 +70,8 @@ enum Kind {
     /// Rays from points on a shape, cosine-distributed about its normal (Mitsuba's
     /// `irradiancemeter`).
     Irradiancemeter,
+    /// Parallel rays along camera +z aimed at a target (Mitsuba's `distant`).
+    Distant,
 }
 
 /// tan(half fov) along x for a `fov_deg` spanning `fov_axis` of a `w` x `h` film (Mitsuba's
@@ -110,6 +127,7 @@ impl Camera {
             Projection::Orthographic => (Kind::Orthographic, 1.0),
             Projection::Radiancemeter => (Kind::Radiancemeter, 1.0),
             Projection::Irradiancemeter { .. } => (Kind::Irradiancemeter, 1.0),
+            Projection::Distant { .. } => (Kind::Distant, 1.0),
         };
         Camera {
             loc: desc.loc.clone(),
@@ -125,12 +143,25 @@ impl Camera {
             near: desc.near_clip,
             far: desc.far_clip,
             surface: None,
+            aim: None,
         }
     }
 
-    /// Gives an irradiancemeter the shape it measures (sampled by area, as a light is).
+    /// Gives an irradiancemeter the shape it measures, or a distant sensor the shape it aims at
+    /// (sampled by area, as a light is).
     pub fn attach_surface(&mut self, shape: LightShape) {
         self.surface = Some(Arc::new(shape));
+    }
+
+    /// Gives a distant sensor its target and the scene's bounding sphere (`centre`, `radius`):
+    /// its rays start outside the sphere, so that they meet every surface along their line.
+    pub fn aim(&mut self, target: pt_scene::DistantTarget, centre: Vec3, radius: f32) {
+        let aim = match target {
+            pt_scene::DistantTarget::Point(p) => Aim::Point(p),
+            pt_scene::DistantTarget::BoundingDisk => Aim::Disk { centre, radius },
+            pt_scene::DistantTarget::Shape => Aim::Surface,
+        };
+        self.aim = Some((aim, centre, radius));
     }
 
     /// The camera for `film`: projecting onto the whole film; [`Camera::pixel_ray`] places the
@@ -184,6 +215,10 @@ impl Camera {
                 let u_point = next_2d();
                 self.surface_ray(u_point, next_2d())
             }
+            Kind::Distant => match self.aim {
+                Some((Aim::Point(_), ..)) | None => self.distant_ray(Vec2::splat(0.5)),
+                Some(_) => self.distant_ray(next_2d()),
+            },
             _ => self.pixel_ray(x, y, offset, Vec2::splat(0.5)),
         }
     }
@@ -195,21 +230,49 @@ impl Camera {
     /// the area-averaged irradiance (pi times the mean of L over the cosine density). The
     /// origin is moved off the surface along the normal.
     fn surface_ray(&self, u_point: Vec2, u_dir: Vec2) -> Ray {
-        let surface = self
-            .surface
-            .as_ref()
-            .expect("an irradiancemeter has its shape");
-        let (u_sel, u) = match &**surface {
-            LightShape::Mesh { distr, .. } => {
-                let (_, _, reused) = distr.sample(u_point.x);
-                (u_point.x, Vec2::new(reused, u_point.y))
-            }
-            _ => (0.0, u_point),
-        };
-        let (p, n, _) = surface.sample_point(u_sel, u);
+        let (p, n) = self.surface_point(u_point);
         let dir = Frame::from_normal(n).to_world(square_to_cosine_hemisphere(u_dir));
         Ray {
             origin: offset_ray_origin(p, n),
+            dir,
+            tmin: 0.0,
+            tmax: f32::INFINITY,
+        }
+    }
+
+    /// A point uniform by area on the attached surface and its front normal (`u`: x picks a
+    /// mesh's triangle and is reused within it).
+    fn surface_point(&self, u: Vec2) -> (Vec3, Vec3) {
+        let surface = self.surface.as_ref().expect("the sensor has its shape");
+        let (u_sel, u) = match &**surface {
+            LightShape::Mesh { distr, .. } => {
+                let (_, _, reused) = distr.sample(u.x);
+                (u.x, Vec2::new(reused, u.y))
+            }
+            _ => (0.0, u),
+        };
+        let (p, n, _) = surface.sample_point(u_sel, u);
+        (p, n)
+    }
+
+    /// A distant sensor's ray (Mitsuba's `distant`): along camera +z through a point of its
+    /// target (`u` picks it on a disk or shape), starting outside the scene's bounding sphere
+    /// (back along the direction by the target point's distance from the centre plus the
+    /// radius).
+    fn distant_ray(&self, u: Vec2) -> Ray {
+        let dir = self.to_world.transform_vector3(Vec3::Z).normalize();
+        let (aim, centre, radius) = self.aim.expect("a distant sensor has its target");
+        let through = match aim {
+            Aim::Point(p) => p,
+            Aim::Disk { centre, radius } => {
+                let d = square_to_disk_concentric(u) * radius;
+                centre + Frame::from_normal(dir).to_world(Vec3::new(d.x, d.y, 0.0))
+            }
+            Aim::Surface => self.surface_point(u).0,
+        };
+        let back = (through - centre).length() + radius;
+        Ray {
+            origin: through - dir * back,
             dir,
             tmin: 0.0,
             tmax: f32::INFINITY,
@@ -282,6 +345,7 @@ impl Camera {
             // Its rays come from the shape ([`Camera::sample_ray`]); the film position alone
             // (the film's centre) gives one of them.
             Kind::Irradiancemeter => self.surface_ray(Vec2::splat(0.5), Vec2::splat(0.5)),
+            Kind::Distant => self.distant_ray(Vec2::splat(0.5)),
             // The same ray for every film point (Mitsuba's radiancemeter ignores the film
             // sample); no clip planes.
             Kind::Radiancemeter => Ray {
@@ -327,7 +391,10 @@ impl Camera {
     /// [`Camera::generate_ray`]: the camera ray through it passes through `p`.
     #[inline]
     pub fn connect(&self, p: Vec3, u_lens: Vec2) -> Option<CameraConnection> {
-        if matches!(self.kind, Kind::Radiancemeter | Kind::Irradiancemeter) {
+        if matches!(
+            self.kind,
+            Kind::Radiancemeter | Kind::Irradiancemeter | Kind::Distant
+        ) {
             // One ray, or rays from a surface whose importance pt does not evaluate: light paths
             // do not connect to them (the methods that need it refuse these sensors).
             return None;
@@ -354,7 +421,7 @@ impl Camera {
                 let q = (lens.truncate() + d.truncate() * (focus / d.z)) / focus;
                 (q, self.to_world.transform_point3(lens), d)
             }
-            Kind::Orthographic | Kind::Radiancemeter | Kind::Irradiancemeter => (
+            Kind::Orthographic | Kind::Radiancemeter | Kind::Irradiancemeter | Kind::Distant => (
                 Vec2::new(local.x, local.y),
                 self.to_world
                     .transform_point3(Vec3::new(local.x, local.y, 0.0)),
@@ -379,7 +446,7 @@ impl Camera {
                 let cos = cam_dir.z / cam_dir.length();
                 1.0 / (area * cos * cos * cos * dist * dist)
             }
-            Kind::Orthographic | Kind::Radiancemeter | Kind::Irradiancemeter => {
+            Kind::Orthographic | Kind::Radiancemeter | Kind::Irradiancemeter | Kind::Distant => {
                 let sx = self.to_world.transform_vector3(Vec3::X).length();
                 let sy = self.to_world.transform_vector3(Vec3::Y).length();
                 1.0 / (area * sx * sy)
@@ -403,7 +470,7 @@ impl Camera {
     pub fn direction_pdf(&self, dir: Vec3) -> f32 {
         if matches!(
             self.kind,
-            Kind::Orthographic | Kind::Radiancemeter | Kind::Irradiancemeter
+            Kind::Orthographic | Kind::Radiancemeter | Kind::Irradiancemeter | Kind::Distant
         ) {
             return 0.0;
         }
@@ -437,10 +504,13 @@ impl Camera {
         &self.loc
     }
 
-    /// Whether the camera is a radiancemeter (one ray) or an irradiancemeter: sensors that
-    /// light paths do not connect to.
+    /// Whether the camera is a radiancemeter (one ray), an irradiancemeter or a distant
+    /// sensor: sensors that light paths do not connect to.
     pub fn is_meter(&self) -> bool {
-        matches!(self.kind, Kind::Radiancemeter | Kind::Irradiancemeter)
+        matches!(
+            self.kind,
+            Kind::Radiancemeter | Kind::Irradiancemeter | Kind::Distant
+        )
     }
 }
 

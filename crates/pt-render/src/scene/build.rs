@@ -180,6 +180,32 @@ impl Scene {
         if let Some(surface) = meter_surface {
             camera.attach_surface(surface);
         }
+        if let Projection::Distant { target } = desc.camera.projection {
+            if let Some(shape) = &desc.sensor_target {
+                // Sampled by area only: its primitives go nowhere.
+                let (mut prims, mut refs) = (Vec::new(), Vec::new());
+                let mut data = ShapeData::new(0, None);
+                let mut scratch_stats = SceneStats::default();
+                match geometry(
+                    shape,
+                    0,
+                    true,
+                    &mut prims,
+                    &mut refs,
+                    &mut scratch_stats,
+                    &mut data,
+                )? {
+                    Some((surface, area)) if area > 0.0 => camera.attach_surface(surface),
+                    _ => {
+                        return Err(BuildError {
+                            loc: shape.loc.clone(),
+                            message: "a distant sensor's target shape has zero area".into(),
+                        })
+                    }
+                }
+            }
+            camera.aim(target, bounds.0, bounds.1);
+        }
         let camera_medium = match &desc.camera_medium {
             Some(m) => Some(add_medium(&mut media, m, mode)?),
             None => None,

@@ -30,8 +30,8 @@ use std::path::{Path, PathBuf};
 /// Plugins per object tag: (tag, supported, known to Mitsuba 3 but not implemented here).
 #[rustfmt::skip]
 const PLUGINS: &[(&str, &[&str], &[&str])] = &[
-    ("sensor", &["perspective", "thinlens", "orthographic", "radiancemeter", "irradiancemeter"], &[
-        "distant", "batch",
+    ("sensor", &["perspective", "thinlens", "orthographic", "radiancemeter", "irradiancemeter", "distant"], &[
+        "batch",
     ]),
     ("film", &["hdrfilm"], &["specfilm"]),
     ("sampler", &["independent", "stratified", "multijitter", "orthogonal", "ldsampler"], &[]),
@@ -208,6 +208,8 @@ struct Builder<'e> {
     /// The sensor nested in the shape built last (an `irradiancemeter`), for the scene to
     /// take with the shape's number.
     shape_sensor: Option<(CameraDesc, FilmDesc, SamplerDesc)>,
+    /// The shape a `distant` sensor aims at ([`SceneDesc::sensor_target`]).
+    sensor_target: Option<ShapeDesc>,
 }
 
 impl<'e> Builder<'e> {
@@ -232,6 +234,7 @@ impl<'e> Builder<'e> {
             groups: Vec::new(),
             group_index: HashMap::new(),
             shape_sensor: None,
+            sensor_target: None,
         }
     }
 
@@ -351,6 +354,7 @@ impl<'e> Builder<'e> {
             lights,
             groups: std::mem::take(&mut self.groups),
             instances,
+            sensor_target: self.sensor_target.take(),
         })
     }
 }

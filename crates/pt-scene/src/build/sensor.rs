@@ -39,12 +39,23 @@ impl<'e> Builder<'e> {
                 "perspective" | "thinlens" => perspective(&v)?,
                 "orthographic" => orthographic(&v)?,
                 "radiancemeter" => radiancemeter(&v)?,
+                "distant" => distant(&v)?,
                 _ => return Err(plugin_error(el)),
             };
         let (mut film, mut sampler, mut medium) = (None, None, None);
+        let mut target_shape = None;
         for child in &v.children {
             let target = self.resolve(child)?;
             match target.tag.as_str() {
+                "shape" if v.plugin == "distant" && target_shape.is_none() => {
+                    if v.has("target") {
+                        return Err(SceneError::at(
+                            &child.written().loc,
+                            "give the distant sensor's target as a point or a shape, not both",
+                        ));
+                    }
+                    target_shape = Some(self.shape(target)?);
+                }
                 "film" if film.is_none() => film = Some(self.film(target)?),
                 "sampler" if sampler.is_none() => sampler = Some(sampler_desc(target)?),
                 "medium" if medium.is_none() => medium = Some(self.medium(target)?),
@@ -58,9 +69,23 @@ impl<'e> Builder<'e> {
             }
         }
         v.finish()?;
+        let camera = match (camera, target_shape) {
+            (c, None) => c,
+            (c, Some(shape)) => {
+                self.sensor_target = Some(shape);
+                CameraDesc {
+                    projection: Projection::Distant {
+                        target: DistantTarget::Shape,
+                    },
+                    ..c
+                }
+            }
+        };
         if matches!(
             camera.projection,
-            Projection::Radiancemeter | Projection::Irradiancemeter { .. }
+            Projection::Radiancemeter
+                | Projection::Irradiancemeter { .. }
+                | Projection::Distant { .. }
         ) {
             // Mitsuba throws for any other film size.
             match &film {
@@ -286,6 +311,59 @@ pub(super) fn radiancemeter(v: &ObjectView<'_>) -> Result<CameraDesc> {
     Ok(CameraDesc {
         loc: v.el.loc.clone(),
         projection: Projection::Radiancemeter,
+        to_world,
+        near_clip: 0.0,
+        far_clip: f32::INFINITY,
+        principal_point_offset: [0.0; 2],
+    })
+}
+
+/// Mitsuba's `distant`: parallel rays along `direction` (a vector; default +z), or instead
+/// along `to_world`'s +z (rotation and translation only), aimed at `target` (a point; a nested
+/// shape is read by the sensor; default the scene's bounding disk, [`DistantTarget`]).
+pub(super) fn distant(v: &ObjectView<'_>) -> Result<CameraDesc> {
+    let to_world = match v.transform("to_world")? {
+        Some(m) => {
+            if v.has("direction") {
+                return Err(v.prop_error(
+                    "to_world",
+                    "give either to_world or direction, not both (Mitsuba refuses both)",
+                ));
+            }
+            if !is_affine(&m) || has_scale(&m) || Mat3::from_mat4(m).determinant() == 0.0 {
+                return Err(v.prop_error(
+                    "to_world",
+                    "a distant sensor's to_world may only rotate and translate",
+                ));
+            }
+            m
+        }
+        None => {
+            let dir = v.vec3("direction")?.unwrap_or(Vec3::Z);
+            if !(dir.length_squared() > 0.0 && dir.is_finite()) {
+                return Err(v.prop_error(
+                    "direction",
+                    "a distant sensor's direction must be a finite, non-zero vector",
+                ));
+            }
+            let z = dir.normalize();
+            let (x, y) = z.any_orthonormal_pair();
+            Mat4::from_cols(
+                x.extend(0.0),
+                y.extend(0.0),
+                z.extend(0.0),
+                Vec3::ZERO.extend(1.0),
+            )
+        }
+    };
+    let target = match v.vec3("target")? {
+        Some(p) if p.is_finite() => DistantTarget::Point(p),
+        Some(_) => return Err(v.prop_error("target", "the target must be a finite point")),
+        None => DistantTarget::BoundingDisk,
+    };
+    Ok(CameraDesc {
+        loc: v.el.loc.clone(),
+        projection: Projection::Distant { target },
         to_world,
         near_clip: 0.0,
         far_clip: f32::INFINITY,

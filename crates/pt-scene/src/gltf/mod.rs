@@ -398,6 +398,7 @@ fn default_desc(cx: &Ctx) -> SceneDesc {
         lights: Vec::new(),
         groups: Vec::new(),
         instances: Vec::new(),
+        sensor_target: None,
     }
 }
 

@@ -75,6 +75,9 @@ pub struct SceneDesc {
     pub groups: Vec<ShapeGroupDesc>,
     /// Mitsuba `instance`s: a group placed by a transform.
     pub instances: Vec<InstanceDesc>,
+    /// The shape a `distant` sensor aims its rays at ([`DistantTarget::Shape`]): sampled by
+    /// area, not part of the scene.
+    pub sensor_target: Option<ShapeDesc>,
 }
 
 impl SceneDesc {

@@ -55,6 +55,27 @@ pub enum Projection {
         /// The shape it measures ([`crate::SceneDesc::shapes`]).
         shape: usize,
     },
+    /// Mitsuba's `distant`: the radiance leaving the scene along one direction (camera -z of
+    /// `to_world`, rays travel along camera +z), averaged over where its parallel rays aim (a
+    /// 1 x 1 film).
+    Distant {
+        /// Where the rays aim.
+        target: DistantTarget,
+    },
+}
+
+/// Where the parallel rays of Mitsuba's `distant` sensor aim: each passes through a point of
+/// the target, coming from outside the scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum DistantTarget {
+    /// Points uniform on the disk through the scene's bounding sphere's centre, perpendicular
+    /// to the direction, of its radius (Mitsuba's default).
+    BoundingDisk,
+    /// One point, world space.
+    Point(glam::Vec3),
+    /// Points uniform by area on the shape [`crate::SceneDesc::sensor_target`] (not
+    /// rendered).
+    Shape,
 }
 
 /// A camera. Camera space follows Mitsuba: it looks along +z, +y is up, +x is *left* in the image

@@ -446,6 +446,59 @@ fn irradiancemeter_measures_its_shape() {
     }
 }
 
+/// `distant`: its direction (default +z) and target (the bounding disk, a point, or a nested
+/// shape kept apart from the scene's shapes); a 1 x 1 film; not a point and a shape at once.
+#[test]
+fn distant_sensor_reads_its_direction_and_target() {
+    let film = r#"<film type="hdrfilm"><integer name="width" value="1"/><integer name="height" value="1"/></film>"#;
+    let sensor = |inner: &str| {
+        load(&format!(
+            r#"<scene version="3.0.0"><shape type="sphere"/><sensor type="distant">{inner}</sensor></scene>"#
+        ))
+    };
+    let s = sensor(&format!(
+        r#"<vector name="direction" value="0, -2, 0"/>{film}"#
+    ))
+    .unwrap();
+    assert_eq!(
+        s.camera.projection,
+        Projection::Distant {
+            target: DistantTarget::BoundingDisk
+        }
+    );
+    let z = s.camera.to_world.transform_vector3(Vec3::Z);
+    assert!((z - Vec3::new(0.0, -1.0, 0.0)).length() < 1e-6);
+    let s = sensor(&format!(r#"<point name="target" value="1, 2, 3"/>{film}"#)).unwrap();
+    assert_eq!(
+        s.camera.projection,
+        Projection::Distant {
+            target: DistantTarget::Point(Vec3::new(1.0, 2.0, 3.0))
+        }
+    );
+    let s = sensor(&format!(r#"<shape type="rectangle" name="target"/>{film}"#)).unwrap();
+    assert_eq!(
+        s.camera.projection,
+        Projection::Distant {
+            target: DistantTarget::Shape
+        }
+    );
+    assert!(s.sensor_target.is_some() && s.shapes.len() == 1);
+    for (inner, want) in [
+        (String::new(), "needs a 1 x 1 film"),
+        (
+            format!(r#"<point name="target" value="0, 0, 0"/><shape type="disk"/>{film}"#),
+            "not both",
+        ),
+        (
+            format!(r#"<vector name="direction" value="0, 0, 0"/>{film}"#),
+            "non-zero",
+        ),
+    ] {
+        let e = sensor(&inner).unwrap_err();
+        assert!(e.message.contains(want), "{inner}: {e}");
+    }
+}
+
 #[test]
 fn samplers_and_their_rounded_counts() {
     for (plugin, extra, asked, count, kind) in [
