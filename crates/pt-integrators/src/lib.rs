@@ -565,6 +565,10 @@ impl Integrator {
             pt_scene::Projection::Distant { .. } => {
                 ("a distant sensor", "path, volpath, direct or depth")
             }
+            pt_scene::Projection::Batch => (
+                "a batch sensor",
+                "path, volpath, direct, depth, sppm or photonmapper",
+            ),
             _ => ("", ""),
         };
         if !meter.is_empty() {
@@ -575,6 +579,9 @@ impl Integrator {
                         || (desc.integrator.aov.is_none() && desc.integrator.moment.is_none())
                 }
                 Integrator::Depth => !irradiance,
+                Integrator::Sppm { .. } | Integrator::PhotonMapper { .. } => {
+                    meter == "a batch sensor"
+                }
                 _ => false,
             };
             if !renders {
@@ -944,12 +951,12 @@ fn refuse_media(name: &str, scene: &Scene) -> Result<(), String> {
 }
 
 /// The refusal of the methods that connect light paths to the camera when the sensor is a
-/// radiancemeter (one ray, which a connection meets with probability zero) or an
-/// irradiancemeter (whose importance pt does not evaluate).
+/// radiancemeter (one ray, which a connection meets with probability zero), an
+/// irradiancemeter, a distant sensor or a batch (whose importance pt does not evaluate).
 pub(crate) fn refuse_meters(name: &str, scene: &Scene) -> Result<(), String> {
-    if scene.camera.is_meter() {
+    if scene.camera.refuses_light_paths() {
         return Err(format!(
-            "{}: {name} cannot render for a radiancemeter or irradiancemeter (light paths do not connect to them); use path or volpath",
+            "{}: {name} cannot render for a radiancemeter, irradiancemeter, distant or batch sensor (light paths do not connect to them); use path or volpath",
             scene.camera.loc()
         ));
     }

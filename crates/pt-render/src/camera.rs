@@ -42,6 +42,9 @@ pub struct Camera {
     /// Where a distant sensor's rays aim, and the scene's bounding sphere (centre, radius)
     /// they start outside of ([`Camera::aim`]).
     aim: Option<(Aim, Vec3, f32)>,
+    /// A batch's sensors, left to right, and the width in pixels of each one's strip of the
+    /// film ([`Camera::set_batch`]).
+    batch: Option<(Arc<[Camera]>, u32)>,
 }
 
 /// Where a distant sensor's rays aim (world space).
@@ -72,6 +75,8 @@ enum Kind {
     Irradiancemeter,
     /// Parallel rays along camera +z aimed at a target (Mitsuba's `distant`).
     Distant,
+    /// Other cameras side by side, each on its strip of the film (Mitsuba's `batch`).
+    Batch,
 }
 
 /// tan(half fov) along x for a `fov_deg` spanning `fov_axis` of a `w` x `h` film (Mitsuba's
@@ -128,6 +133,7 @@ impl Camera {
             Projection::Radiancemeter => (Kind::Radiancemeter, 1.0),
             Projection::Irradiancemeter { .. } => (Kind::Irradiancemeter, 1.0),
             Projection::Distant { .. } => (Kind::Distant, 1.0),
+            Projection::Batch => (Kind::Batch, 1.0),
         };
         Camera {
             loc: desc.loc.clone(),
@@ -144,7 +150,25 @@ impl Camera {
             far: desc.far_clip,
             surface: None,
             aim: None,
+            batch: None,
         }
+    }
+
+    /// Gives a batch its sensors (left to right; each already built for its strip of the
+    /// film, `strip` pixels wide and the film's height).
+    pub fn set_batch(&mut self, cameras: Vec<Camera>, strip: u32) {
+        self.batch = Some((cameras.into(), strip.max(1)));
+    }
+
+    /// For a batch, the sensor whose strip holds the film column `x` (columns left and right of
+    /// the film go to the first and last) and `x` within its strip.
+    #[inline]
+    fn batch_member(&self, x: i32) -> Option<(&Camera, i32)> {
+        let (cameras, strip) = self.batch.as_ref()?;
+        let k = x
+            .div_euclid(*strip as i32)
+            .clamp(0, cameras.len() as i32 - 1);
+        Some((&cameras[k as usize], x - k * *strip as i32))
     }
 
     /// Gives an irradiancemeter the shape it measures, or a distant sensor the shape it aims at
@@ -182,6 +206,9 @@ impl Camera {
     /// Pixels outside the image (negative or beyond its size: the border a splatting film
     /// samples with `sample_border`) continue the film's grid.
     pub fn pixel_ray(&self, x: i32, y: i32, offset: Vec2, u_lens: Vec2) -> Ray {
+        if let Some((member, x)) = self.batch_member(x) {
+            return member.pixel_ray(x, y, offset, u_lens);
+        }
         let centre = Vec2::new(
             (i64::from(x) + i64::from(self.crop_offset[0])) as f32 + 0.5,
             (i64::from(y) + i64::from(self.crop_offset[1])) as f32 + 0.5,
@@ -194,6 +221,10 @@ impl Camera {
     #[inline]
     pub fn needs_lens_sample(&self) -> bool {
         matches!(self.kind, Kind::ThinLens { .. })
+            || self
+                .batch
+                .as_ref()
+                .is_some_and(|(cameras, _)| cameras.iter().any(Camera::needs_lens_sample))
     }
 
     /// The camera ray of a sample of the image's pixel (x, y) at `offset` (pixels) from its
@@ -210,6 +241,10 @@ impl Camera {
         mut next_2d: impl FnMut() -> Vec2,
     ) -> Ray {
         match self.kind {
+            Kind::Batch => match self.batch_member(x) {
+                Some((member, x)) => member.sample_ray(x, y, offset, next_2d),
+                None => self.pixel_ray(x, y, offset, Vec2::splat(0.5)),
+            },
             Kind::ThinLens { .. } => self.pixel_ray(x, y, offset, next_2d()),
             Kind::Irradiancemeter => {
                 let u_point = next_2d();
@@ -296,6 +331,10 @@ impl Camera {
     /// planes perpendicular to the view axis, as in Mitsuba.
     #[inline]
     pub fn generate_ray(&self, film: Vec2, u_lens: Vec2) -> Ray {
+        if let Some((member, x)) = self.batch_member(film.x.floor() as i32) {
+            let local = Vec2::new(film.x - (film.x.floor() - x as f32), film.y);
+            return member.generate_ray(local, u_lens);
+        }
         let ndc = (film + self.film_offset) * self.inv_size; // [0,1]^2 on the film, y down
                                                              // The film point in camera space: at z = 1 for the perspective cameras (the direction
                                                              // of the pinhole ray), at z = 0 for the orthographic one (the ray's origin).
@@ -346,6 +385,8 @@ impl Camera {
             // (the film's centre) gives one of them.
             Kind::Irradiancemeter => self.surface_ray(Vec2::splat(0.5), Vec2::splat(0.5)),
             Kind::Distant => self.distant_ray(Vec2::splat(0.5)),
+            // Without its sensors (not given yet): the view axis.
+            Kind::Batch => Ray::new(self.origin, self.to_world.transform_vector3(Vec3::Z)),
             // The same ray for every film point (Mitsuba's radiancemeter ignores the film
             // sample); no clip planes.
             Kind::Radiancemeter => Ray {
@@ -421,7 +462,11 @@ impl Camera {
                 let q = (lens.truncate() + d.truncate() * (focus / d.z)) / focus;
                 (q, self.to_world.transform_point3(lens), d)
             }
-            Kind::Orthographic | Kind::Radiancemeter | Kind::Irradiancemeter | Kind::Distant => (
+            Kind::Orthographic
+            | Kind::Radiancemeter
+            | Kind::Irradiancemeter
+            | Kind::Distant
+            | Kind::Batch => (
                 Vec2::new(local.x, local.y),
                 self.to_world
                     .transform_point3(Vec3::new(local.x, local.y, 0.0)),
@@ -446,7 +491,11 @@ impl Camera {
                 let cos = cam_dir.z / cam_dir.length();
                 1.0 / (area * cos * cos * cos * dist * dist)
             }
-            Kind::Orthographic | Kind::Radiancemeter | Kind::Irradiancemeter | Kind::Distant => {
+            Kind::Orthographic
+            | Kind::Radiancemeter
+            | Kind::Irradiancemeter
+            | Kind::Distant
+            | Kind::Batch => {
                 let sx = self.to_world.transform_vector3(Vec3::X).length();
                 let sy = self.to_world.transform_vector3(Vec3::Y).length();
                 1.0 / (area * sx * sy)
@@ -470,7 +519,11 @@ impl Camera {
     pub fn direction_pdf(&self, dir: Vec3) -> f32 {
         if matches!(
             self.kind,
-            Kind::Orthographic | Kind::Radiancemeter | Kind::Irradiancemeter | Kind::Distant
+            Kind::Orthographic
+                | Kind::Radiancemeter
+                | Kind::Irradiancemeter
+                | Kind::Distant
+                | Kind::Batch
         ) {
             return 0.0;
         }
@@ -504,12 +557,12 @@ impl Camera {
         &self.loc
     }
 
-    /// Whether the camera is a radiancemeter (one ray), an irradiancemeter or a distant
-    /// sensor: sensors that light paths do not connect to.
-    pub fn is_meter(&self) -> bool {
+    /// Whether the camera is a radiancemeter (one ray), an irradiancemeter, a distant sensor
+    /// or a batch: sensors that light paths do not connect to.
+    pub fn refuses_light_paths(&self) -> bool {
         matches!(
             self.kind,
-            Kind::Radiancemeter | Kind::Irradiancemeter | Kind::Distant
+            Kind::Radiancemeter | Kind::Irradiancemeter | Kind::Distant | Kind::Batch
         )
     }
 }

@@ -180,6 +180,26 @@ impl Scene {
         if let Some(surface) = meter_surface {
             camera.attach_surface(surface);
         }
+        if desc.camera.projection == Projection::Batch {
+            let n = desc.batch.len().max(1) as u32;
+            // The loader checks the file's width; a width set afterwards (--width) here.
+            if desc.film.width % n != 0 {
+                return Err(BuildError {
+                    loc: desc.camera.loc.clone(),
+                    message: format!(
+                        "the film width ({}) must be divisible by the batch's number of sensors ({n}), as in Mitsuba",
+                        desc.film.width
+                    ),
+                });
+            }
+            let strip = desc.film.width / n;
+            let members = desc
+                .batch
+                .iter()
+                .map(|c| Camera::new(c, strip, desc.film.height))
+                .collect();
+            camera.set_batch(members, strip);
+        }
         if let Projection::Distant { target } = desc.camera.projection {
             if let Some(shape) = &desc.sensor_target {
                 // Sampled by area only: its primitives go nowhere.

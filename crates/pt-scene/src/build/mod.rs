@@ -30,9 +30,7 @@ use std::path::{Path, PathBuf};
 /// Plugins per object tag: (tag, supported, known to Mitsuba 3 but not implemented here).
 #[rustfmt::skip]
 const PLUGINS: &[(&str, &[&str], &[&str])] = &[
-    ("sensor", &["perspective", "thinlens", "orthographic", "radiancemeter", "irradiancemeter", "distant"], &[
-        "batch",
-    ]),
+    ("sensor", &["perspective", "thinlens", "orthographic", "radiancemeter", "irradiancemeter", "distant", "batch"], &[]),
     ("film", &["hdrfilm"], &["specfilm"]),
     ("sampler", &["independent", "stratified", "multijitter", "orthogonal", "ldsampler"], &[]),
     ("rfilter", &["box", "tent", "gaussian", "mitchell", "catmullrom", "lanczos"], &[]),
@@ -210,6 +208,8 @@ struct Builder<'e> {
     shape_sensor: Option<(CameraDesc, FilmDesc, SamplerDesc)>,
     /// The shape a `distant` sensor aims at ([`SceneDesc::sensor_target`]).
     sensor_target: Option<ShapeDesc>,
+    /// The sensors of a `batch` sensor ([`SceneDesc::batch`]).
+    batch: Vec<CameraDesc>,
 }
 
 impl<'e> Builder<'e> {
@@ -235,6 +235,7 @@ impl<'e> Builder<'e> {
             group_index: HashMap::new(),
             shape_sensor: None,
             sensor_target: None,
+            batch: Vec::new(),
         }
     }
 
@@ -355,6 +356,7 @@ impl<'e> Builder<'e> {
             groups: std::mem::take(&mut self.groups),
             instances,
             sensor_target: self.sensor_target.take(),
+            batch: std::mem::take(&mut self.batch),
         })
     }
 }

@@ -40,6 +40,14 @@ impl<'e> Builder<'e> {
                 "orthographic" => orthographic(&v)?,
                 "radiancemeter" => radiancemeter(&v)?,
                 "distant" => distant(&v)?,
+                "batch" => CameraDesc {
+                    loc: el.loc.clone(),
+                    projection: Projection::Batch,
+                    to_world: Mat4::IDENTITY,
+                    near_clip: 0.0,
+                    far_clip: f32::INFINITY,
+                    principal_point_offset: [0.0; 2],
+                },
                 _ => return Err(plugin_error(el)),
             };
         let (mut film, mut sampler, mut medium) = (None, None, None);
@@ -47,6 +55,24 @@ impl<'e> Builder<'e> {
         for child in &v.children {
             let target = self.resolve(child)?;
             match target.tag.as_str() {
+                "sensor" if v.plugin == "batch" => {
+                    // Its film, sampler and medium are not read: the batch's film is split
+                    // among its sensors (as in Mitsuba).
+                    let (inner, _, _, medium) = self.sensor(target, false)?;
+                    let projective = matches!(
+                        inner.projection,
+                        Projection::Perspective { .. }
+                            | Projection::ThinLens { .. }
+                            | Projection::Orthographic
+                    );
+                    if !projective || medium.is_some() {
+                        return Err(SceneError::at(
+                            &child.written().loc,
+                            "a batch holds perspective, thinlens and orthographic sensors without media (not yet implemented otherwise)",
+                        ));
+                    }
+                    self.batch.push(inner);
+                }
                 "shape" if v.plugin == "distant" && target_shape.is_none() => {
                     if v.has("target") {
                         return Err(SceneError::at(
@@ -69,6 +95,30 @@ impl<'e> Builder<'e> {
             }
         }
         v.finish()?;
+        if camera.projection == Projection::Batch {
+            let width = film.as_ref().map_or(default_film().width, |f| f.width);
+            let n = self.batch.len() as u32;
+            if n == 0 {
+                return Err(SceneError::at(
+                    &el.loc,
+                    "a batch sensor needs nested sensors",
+                ));
+            }
+            if width % n != 0 {
+                return Err(SceneError::at(
+                    &el.loc,
+                    format!(
+                        "the batch's film width ({width}) must be divisible by its number of sensors ({n}), as in Mitsuba"
+                    ),
+                ));
+            }
+            if film.as_ref().is_some_and(|f| f.crop.is_some()) || medium.is_some() {
+                return Err(SceneError::at(
+                    &el.loc,
+                    "a batch sensor with a crop window or a medium is not yet supported (not yet implemented)",
+                ));
+            }
+        }
         let camera = match (camera, target_shape) {
             (c, None) => c,
             (c, Some(shape)) => {

@@ -399,6 +399,7 @@ fn default_desc(cx: &Ctx) -> SceneDesc {
         groups: Vec::new(),
         instances: Vec::new(),
         sensor_target: None,
+        batch: Vec::new(),
     }
 }
 

@@ -78,6 +78,9 @@ pub struct SceneDesc {
     /// The shape a `distant` sensor aims its rays at ([`DistantTarget::Shape`]): sampled by
     /// area, not part of the scene.
     pub sensor_target: Option<ShapeDesc>,
+    /// The sensors of Mitsuba's `batch` ([`Projection::Batch`]), left to right on the film;
+    /// empty otherwise.
+    pub batch: Vec<CameraDesc>,
 }
 
 impl SceneDesc {

@@ -62,6 +62,10 @@ pub enum Projection {
         /// Where the rays aim.
         target: DistantTarget,
     },
+    /// Mitsuba's `batch`: the sensors of [`crate::SceneDesc::batch`] side by side, each
+    /// rendering its equal vertical strip of the film, left to right. The camera's own
+    /// `to_world` is unused.
+    Batch,
 }
 
 /// Where the parallel rays of Mitsuba's `distant` sensor aim: each passes through a point of

@@ -499,6 +499,38 @@ fn distant_sensor_reads_its_direction_and_target() {
     }
 }
 
+/// `batch`: its nested sensors in order, the film's width divisible by their number; sensors
+/// it cannot hold are located errors.
+#[test]
+fn batch_holds_its_sensors_in_order() {
+    let batch = |inner: &str, width: u32| {
+        load(&format!(
+            r#"<scene version="3.0.0"><sensor type="batch">{inner}<film type="hdrfilm"><integer name="width" value="{width}"/><integer name="height" value="8"/></film></sensor></scene>"#
+        ))
+    };
+    let two = r#"<sensor type="perspective"><float name="fov" value="30"/></sensor><sensor type="orthographic"/>"#;
+    let s = batch(two, 16).unwrap();
+    assert_eq!(s.camera.projection, Projection::Batch);
+    assert_eq!(s.batch.len(), 2);
+    assert!(matches!(
+        s.batch[0].projection,
+        Projection::Perspective { .. }
+    ));
+    assert_eq!(s.batch[1].projection, Projection::Orthographic);
+    for (inner, width, want) in [
+        (two, 15, "must be divisible"),
+        ("", 16, "needs nested sensors"),
+        (
+            r#"<sensor type="batch"><sensor type="perspective"/></sensor>"#,
+            16,
+            "a batch holds perspective",
+        ),
+    ] {
+        let e = batch(inner, width).unwrap_err();
+        assert!(e.message.contains(want), "{inner}: {e}");
+    }
+}
+
 #[test]
 fn samplers_and_their_rounded_counts() {
     for (plugin, extra, asked, count, kind) in [
