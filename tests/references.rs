@@ -4,9 +4,9 @@
 //! libtest-mimic, so a new scene with a reference is tested without touching this file;
 //! `cargo test --test references -- NAME` runs one.
 //!
-//! Sample counts: 1024 spp (the scenes here are 128x96), or for a smaller image (a 1 x 1
-//! irradiancemeter's) the same number of samples in all, so that its pixels are measured as
-//! precisely as the mean of a whole image is. The z-scores use variances estimated
+//! Sample counts: 1024 spp (the scenes here are about 128x96), or for a tiny image (below 768
+//! pixels: a 1 x 1 irradiancemeter's) as many samples in all as a 128x96 image takes, so that
+//! its pixel is measured as precisely as the mean of a whole image is. The z-scores use variances estimated
 //! from the samples themselves; where the per-sample distribution is heavy-tailed (low-noise
 //! scenes lit by delta lights, whose variance comes from rare indirect paths and edge pixels)
 //! those estimates scatter, and the chi-square of all blocks is then wider than chi-square: at
@@ -44,7 +44,12 @@ fn check(scene: String, alpha: f64) -> Result<(), Failed> {
     let dir = scratch(&format!("ref_{scene}"));
     let (reference_img, _) = reference(&scene);
     let pixels = reference_img.width * reference_img.height;
-    let spp = (SPP * PIXELS / pixels.max(1)).max(SPP);
+    // Tiny images (a meter's one pixel) get the samples of a usual image; the others 1024 spp.
+    let spp = if pixels < PIXELS / 16 {
+        SPP * PIXELS / pixels.max(1)
+    } else {
+        SPP
+    };
     let (img, var) = render(
         &repo().join("scenes").join(format!("{scene}.xml")),
         &dir,

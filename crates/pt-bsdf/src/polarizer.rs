@@ -1,12 +1,14 @@
-//! Mitsuba's `polarizer` (a linear polarizer) as its unpolarized variants render it: a
-//! surface that light crosses straight, from either side, keeping half of it times the
-//! `transmittance` (unpolarized light loses half its intensity in an ideal linear polarizer,
-//! Malus's law averaged over the polarization angle). Its orientation `theta` and
-//! `polarizing` change nothing without polarization. It is a null lobe in Mitsuba: shadow rays
-//! are blocked by it, and a pixel seen only through it is not covered (alpha).
+//! Mitsuba's polarizing elements as its unpolarized variants render them: `polarizer` (a
+//! linear polarizer), `circular` (a circular polarizer) and `retarder` (a wave plate). Light
+//! crosses the surface straight, from either side, keeping the element's fraction of
+//! unpolarized light times the `transmittance`: half for the polarizers (Malus's law averaged
+//! over the polarization angle), all for a retarder, which changes only the polarization.
+//! Their orientation, retardance and handedness change nothing without polarization. Each is a
+//! null lobe in Mitsuba: shadow rays are blocked by it, and a pixel seen only through it is not
+//! covered (alpha).
 //!
-//! `sample`: `wi = -wo`, weight `transmittance / 2`, discrete probability 1, delta; `eval` and
-//! `pdf` are 0.
+//! `sample`: `wi = -wo`, weight `kept * transmittance`, discrete probability 1, delta; `eval`
+//! and `pdf` are 0.
 //!
 //! | parameter | type | default | unit |
 //! |---|---|---|---|
@@ -18,10 +20,13 @@ use crate::BsdfSample;
 use pt_math::{Vec2, Vec3};
 use pt_spectrum::SampledSpectrum;
 
-/// An ideal linear polarizer for unpolarized light (see the module documentation).
+/// An ideal polarizing element for unpolarized light (see the module documentation).
 #[derive(Clone, Copy, Debug)]
 pub struct Polarizer {
-    /// Transmittance per lane, besides the polarizer's factor 1/2.
+    /// The fraction of unpolarized light the element keeps: 1/2 for linear and circular
+    /// polarizers, 1 for a retarder (`pt_scene::PolarizingElement::unpolarized_fraction`).
+    pub kept: f32,
+    /// Transmittance per lane, besides `kept`.
     pub transmittance: SampledSpectrum,
 }
 
@@ -40,7 +45,7 @@ impl Polarizer {
     pub fn sample(&self, wo: Vec3, _u: Vec2) -> Option<BsdfSample> {
         Some(BsdfSample {
             wi: -wo,
-            weight: self.transmittance * 0.5,
+            weight: self.transmittance * self.kept,
             pdf: 1.0,
             delta: true,
             eta: 1.0,

@@ -132,6 +132,7 @@ fn pplastic_sample_weights_match_eval() {
 #[test]
 fn polarizer_passes_half() {
     let p = Bsdf::Polarizer(Polarizer {
+        kept: 0.5,
         transmittance: SampledSpectrum::from_rgb([0.8, 0.6, 1.0]),
     });
     for wo in [dir_deg(30.0, 40.0), dir_deg(150.0, 200.0), Vec3::Z] {

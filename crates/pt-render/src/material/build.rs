@@ -381,7 +381,11 @@ impl Builder<'_> {
                     specular_sampling_weight: weight,
                 }
             }
-            BsdfKind::Polarizer { transmittance } => Material::Polarizer {
+            BsdfKind::Polarizer {
+                element,
+                transmittance,
+            } => Material::Polarizer {
+                kept: element.unpolarized_fraction(),
                 transmittance: self.tex("transmittance", transmittance, Role::Albedo)?,
             },
             BsdfKind::Hair {

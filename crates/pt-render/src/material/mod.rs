@@ -200,9 +200,11 @@ pub enum Material {
         /// Share of specular samples, from the textures' means (Mitsuba).
         specular_sampling_weight: f32,
     },
-    /// Mitsuba `polarizer` without polarization.
+    /// Mitsuba `polarizer`, `retarder` and `circular` without polarization.
     Polarizer {
-        /// Transmittance besides the polarizer's one half.
+        /// The fraction of unpolarized light the element keeps.
+        kept: f32,
+        /// Transmittance besides that fraction.
         transmittance: Texture,
     },
     /// Mitsuba `hair` (pt-bsdf `hair.rs`).
@@ -458,7 +460,11 @@ impl Material {
                 roughness.at(at),
                 *specular_sampling_weight,
             )),
-            Material::Polarizer { transmittance } => Bsdf::Polarizer(Polarizer {
+            Material::Polarizer {
+                kept,
+                transmittance,
+            } => Bsdf::Polarizer(Polarizer {
+                kept: *kept,
                 transmittance: transmittance.eval(at, lambda),
             }),
             Material::Hair {
@@ -791,7 +797,7 @@ impl Material {
                 &roughness.alpha_u,
                 &roughness.alpha_v,
             ],
-            Material::Polarizer { transmittance } => vec![transmittance],
+            Material::Polarizer { transmittance, .. } => vec![transmittance],
             Material::Hair { absorption, .. } => vec![absorption],
             Material::ThinFilm(f) => film(f),
             Material::RoughThinFilm(b) => {

@@ -484,11 +484,28 @@ pub(super) fn bsdf_kind<'e>(
                 microfacet: b.microfacet(v, n)?,
             }
         }
+        // Without polarization an element's orientation, retardance and handedness change
+        // nothing.
         "polarizer" => {
-            // Without polarization the polarizer's orientation changes nothing.
             b.texture_param(v, n, "theta")?;
             v.boolean("polarizing")?;
             BsdfKind::Polarizer {
+                element: PolarizingElement::LinearPolarizer,
+                transmittance: b.factor(v, n, "transmittance")?,
+            }
+        }
+        "retarder" => {
+            b.texture_param(v, n, "theta")?;
+            b.texture_param(v, n, "delta")?;
+            BsdfKind::Polarizer {
+                element: PolarizingElement::Retarder,
+                transmittance: b.factor(v, n, "transmittance")?,
+            }
+        }
+        "circular" => {
+            v.boolean("left_handed")?;
+            BsdfKind::Polarizer {
+                element: PolarizingElement::CircularPolarizer,
                 transmittance: b.factor(v, n, "transmittance")?,
             }
         }

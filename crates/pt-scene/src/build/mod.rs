@@ -40,8 +40,8 @@ const PLUGINS: &[(&str, &[&str], &[&str])] = &[
     ("shape", &["obj", "ply", "serialized", "gltf", "rectangle", "cube", "sphere", "disk", "cylinder", "sdfgrid", "linearcurve", "bsplinecurve", "shapegroup", "instance"], &[
         "ellipsoids", "ellipsoidsmesh",
     ]),
-    ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "plastic", "roughplastic", "null", "fluorescent", "phosphorescent", "bumpmap", "principled", "principledthin", "pplastic", "polarizer", "hair"], &[
-        "retarder", "circular", "measured",
+    ("bsdf", &["diffuse", "twosided", "mask", "normalmap", "blendbsdf", "orennayar", "minnaert", "dielectric", "thindielectric", "roughdielectric", "conductor", "roughconductor", "thinfilm", "roughthinfilm", "plastic", "roughplastic", "null", "fluorescent", "phosphorescent", "bumpmap", "principled", "principledthin", "pplastic", "polarizer", "retarder", "circular", "hair"], &[
+        "measured",
     ]),
     ("emitter", &["area", "point", "spot", "directional", "sun", "sunsky", "constant", "envmap", "projector", "goniometric"], &[
         "directionalarea",

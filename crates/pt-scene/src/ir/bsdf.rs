@@ -247,10 +247,13 @@ pub enum BsdfKind {
         /// Distribution and roughness of the reflection.
         microfacet: MicrofacetDesc,
     },
-    /// Mitsuba's `polarizer` as its unpolarized variants render it: half the light passes
-    /// straight through, times `transmittance`.
+    /// Mitsuba's polarizing elements (`polarizer`, `retarder`, `circular`) as its unpolarized
+    /// variants render them: light passes straight through, keeping the element's fraction of
+    /// unpolarized light ([`PolarizingElement::unpolarized_fraction`]) times `transmittance`.
     Polarizer {
-        /// Transmittance besides the polarizer's one half.
+        /// Which element.
+        element: PolarizingElement,
+        /// Transmittance besides the element's own fraction.
         transmittance: TextureDesc,
     },
     /// Mitsuba's `hair`: Chiang et al. 2016's fibre model (pt-bsdf `hair.rs`), the fibre along
@@ -505,7 +508,7 @@ impl BsdfKind {
                 ("alpha_u", &microfacet.alpha_u),
                 ("alpha_v", &microfacet.alpha_v),
             ],
-            BsdfKind::Polarizer { transmittance } => vec![("transmittance", transmittance)],
+            BsdfKind::Polarizer { transmittance, .. } => vec![("transmittance", transmittance)],
             BsdfKind::Hair { absorption, .. } => match absorption {
                 HairAbsorption::Pigments { .. } => Vec::new(),
                 HairAbsorption::SigmaA { sigma_a, .. } => vec![("sigma_a", sigma_a)],
@@ -575,4 +578,28 @@ pub enum HairAbsorption {
     /// The colour the fibres should have, turned into an absorption by Chiang et al. 2016's
     /// eq. 9 (pbrt-v4's `reflectance`; pt extension).
     Reflectance(TextureDesc),
+}
+
+/// Mitsuba's ideal polarizing elements, which its unpolarized variants render as straight
+/// transmission of a fixed fraction of the light.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PolarizingElement {
+    /// `polarizer`: a linear polarizer.
+    LinearPolarizer,
+    /// `retarder`: a linear retarder (wave plate), which changes only the polarization.
+    Retarder,
+    /// `circular`: a circular polarizer (a linear polarizer and a quarter-wave plate).
+    CircularPolarizer,
+}
+
+impl PolarizingElement {
+    /// The fraction of unpolarized light the ideal element transmits: the first entry of its
+    /// Mueller matrix (1/2 for the polarizers: Malus's law averaged over the angle; 1 for a
+    /// retarder). Mitsuba 3.9.1's `llvm_ad_rgb` gives 0.5, 1 and 0.5 through each, measured.
+    pub fn unpolarized_fraction(self) -> f32 {
+        match self {
+            PolarizingElement::LinearPolarizer | PolarizingElement::CircularPolarizer => 0.5,
+            PolarizingElement::Retarder => 1.0,
+        }
+    }
 }
