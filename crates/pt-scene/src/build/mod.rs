@@ -128,19 +128,24 @@ fn add_alias<'e>(alias: &'e Element, ids: &mut HashMap<&'e str, &'e Element>) ->
     if to.is_empty() {
         return Err(SceneError::at(&alias.loc, "<alias>: empty 'as'"));
     }
-    if let Some(first) = ids.insert(to, target) {
-        let l = &first.loc;
-        return Err(SceneError::at(
-            &alias.loc,
-            format!(
-                "<alias>: duplicate id \"{to}\" (already names the object at {}:{}:{})",
-                l.file.display(),
-                l.line,
-                l.col
-            ),
-        ));
+    match ids.insert(to, target) {
+        Some(first) => Err(duplicate_id(alias, to, first)),
+        None => Ok(()),
     }
-    Ok(())
+}
+
+/// The error for `el` giving the name `id` that `first` already has.
+fn duplicate_id(el: &Element, id: &str, first: &Element) -> SceneError {
+    let l = &first.loc;
+    SceneError::at(
+        &el.loc,
+        format!(
+            "duplicate id \"{id}\" (first used at {}:{}:{})",
+            l.file.display(),
+            l.line,
+            l.col
+        ),
+    )
 }
 
 /// Registers every object that has an `id`; ids are global to the scene, like Mitsuba's.
@@ -160,16 +165,7 @@ fn collect_ids<'e>(
                     return Err(SceneError::at(&child.loc, "empty 'id'"));
                 }
                 if let Some(first) = ids.insert(id, child) {
-                    let l = &first.loc;
-                    return Err(SceneError::at(
-                        &child.loc,
-                        format!(
-                            "duplicate id \"{id}\" (first used at {}:{}:{})",
-                            l.file.display(),
-                            l.line,
-                            l.col
-                        ),
-                    ));
+                    return Err(duplicate_id(child, id, first));
                 }
             }
         }

@@ -27,15 +27,6 @@ impl<'e> Builder<'e> {
                     far_clip: f32::INFINITY,
                     principal_point_offset: [0.0; 2],
                 },
-                _ if in_shape => {
-                    return Err(SceneError::at(
-                        &el.loc,
-                        format!(
-                            "a <shape> can hold an irradiancemeter sensor, not a {}",
-                            v.plugin
-                        ),
-                    ))
-                }
                 "perspective" | "thinlens" => perspective(&v)?,
                 "orthographic" => orthographic(&v)?,
                 "radiancemeter" => radiancemeter(&v)?,
@@ -322,90 +313,73 @@ pub(super) fn orthographic(v: &ObjectView<'_>) -> Result<CameraDesc> {
 /// +z), or, instead of them, `to_world` (rotation and translation: the ray is camera +z from its
 /// origin), as Mitsuba reads it.
 pub(super) fn radiancemeter(v: &ObjectView<'_>) -> Result<CameraDesc> {
-    let to_world = match v.transform("to_world")? {
-        Some(m) => {
-            if v.has("origin") || v.has("direction") {
-                return Err(v.prop_error(
-                    "to_world",
-                    "give either to_world or origin and direction, not both (Mitsuba refuses both)",
-                ));
-            }
-            if !is_affine(&m) || has_scale(&m) || Mat3::from_mat4(m).determinant() == 0.0 {
-                return Err(v.prop_error(
-                    "to_world",
-                    "a radiancemeter's to_world may only rotate and translate",
-                ));
-            }
-            m
-        }
-        None => {
-            let origin = v.vec3("origin")?.unwrap_or(Vec3::ZERO);
-            let dir = v.vec3("direction")?.unwrap_or(Vec3::Z);
-            if !(dir.length_squared() > 0.0 && dir.is_finite() && origin.is_finite()) {
-                return Err(v.prop_error(
-                    "direction",
-                    "a radiancemeter's direction must be a finite, non-zero vector",
-                ));
-            }
-            let z = dir.normalize();
-            // Any frame whose +z is the direction: the sensor sees one ray.
-            let (x, y) = z.any_orthonormal_pair();
-            Mat4::from_cols(
-                x.extend(0.0),
-                y.extend(0.0),
-                z.extend(0.0),
-                origin.extend(1.0),
-            )
-        }
-    };
     Ok(CameraDesc {
         loc: v.el.loc.clone(),
         projection: Projection::Radiancemeter,
-        to_world,
+        to_world: ray_frame(v, "a radiancemeter", true)?,
         near_clip: 0.0,
         far_clip: f32::INFINITY,
         principal_point_offset: [0.0; 2],
     })
 }
 
-/// Mitsuba's `distant`: parallel rays along `direction` (a vector; default +z), or instead
-/// along `to_world`'s +z (rotation and translation only), aimed at `target` (a point; a nested
-/// shape is read by the sensor; default the scene's bounding disk, [`DistantTarget`]).
-pub(super) fn distant(v: &ObjectView<'_>) -> Result<CameraDesc> {
-    let to_world = match v.transform("to_world")? {
+/// The frame of a sensor that looks along one direction, its +z (Mitsuba's `radiancemeter` and
+/// `distant`): `to_world` (rotation and translation only), or instead `direction` (a finite,
+/// non-zero vector; default +z) from `origin` (a point; default the origin; read only
+/// `with_origin`). `sensor` names it in errors.
+fn ray_frame(v: &ObjectView<'_>, sensor: &str, with_origin: bool) -> Result<Mat4> {
+    let placed = v.has("direction") || (with_origin && v.has("origin"));
+    match v.transform("to_world")? {
         Some(m) => {
-            if v.has("direction") {
+            if placed {
                 return Err(v.prop_error(
                     "to_world",
-                    "give either to_world or direction, not both (Mitsuba refuses both)",
+                    if with_origin {
+                        "give either to_world or origin and direction, not both (Mitsuba refuses both)"
+                    } else {
+                        "give either to_world or direction, not both (Mitsuba refuses both)"
+                    },
                 ));
             }
             if !is_affine(&m) || has_scale(&m) || Mat3::from_mat4(m).determinant() == 0.0 {
                 return Err(v.prop_error(
                     "to_world",
-                    "a distant sensor's to_world may only rotate and translate",
+                    format!("{sensor}'s to_world may only rotate and translate"),
                 ));
             }
-            m
+            Ok(m)
         }
         None => {
+            let origin = if with_origin {
+                v.vec3("origin")?.unwrap_or(Vec3::ZERO)
+            } else {
+                Vec3::ZERO
+            };
             let dir = v.vec3("direction")?.unwrap_or(Vec3::Z);
-            if !(dir.length_squared() > 0.0 && dir.is_finite()) {
+            if !(dir.length_squared() > 0.0 && dir.is_finite() && origin.is_finite()) {
                 return Err(v.prop_error(
                     "direction",
-                    "a distant sensor's direction must be a finite, non-zero vector",
+                    format!("{sensor}'s direction must be a finite, non-zero vector"),
                 ));
             }
             let z = dir.normalize();
+            // Any frame whose +z is the direction: the sensor's rays depend on it alone.
             let (x, y) = z.any_orthonormal_pair();
-            Mat4::from_cols(
+            Ok(Mat4::from_cols(
                 x.extend(0.0),
                 y.extend(0.0),
                 z.extend(0.0),
-                Vec3::ZERO.extend(1.0),
-            )
+                origin.extend(1.0),
+            ))
         }
-    };
+    }
+}
+
+/// Mitsuba's `distant`: parallel rays along `direction` (a vector; default +z), or instead
+/// along `to_world`'s +z (rotation and translation only), aimed at `target` (a point; a nested
+/// shape is read by the sensor; default the scene's bounding disk, [`DistantTarget`]).
+pub(super) fn distant(v: &ObjectView<'_>) -> Result<CameraDesc> {
+    let to_world = ray_frame(v, "a distant sensor", false)?;
     let target = match v.vec3("target")? {
         Some(p) if p.is_finite() => DistantTarget::Point(p),
         Some(_) => return Err(v.prop_error("target", "the target must be a finite point")),

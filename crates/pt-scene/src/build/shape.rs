@@ -397,6 +397,9 @@ impl<'e> Builder<'e> {
                 "bsdf" => bsdf = Some(self.bsdf_for_shape(target)?),
                 "emitter" if emitter.is_some() => return Err(once("emitter")),
                 "emitter" => emitter = Some(self.area_emitter(target)?),
+                "sensor" if target.attr("type") != Some("irradiancemeter") => {
+                    return Err(misplaced(child, target, v, "an irradiancemeter sensor"))
+                }
                 "sensor" if self.shape_sensor.is_some() => return Err(once("sensor")),
                 "sensor" => {
                     let (camera, film, sampler, _) = self.sensor(target, true)?;

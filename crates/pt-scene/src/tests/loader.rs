@@ -335,13 +335,13 @@ fn unknown_plugin_is_an_error() {
 #[test]
 fn unsupported_plugins_say_not_yet_implemented() {
     let cases = [
-        "<bsdf type=\"retarder\"/>",
+        "<bsdf type=\"measured\"/>",
         "<emitter type=\"directionalarea\"/>",
         "<sensor type=\"perspective\"><sampler type=\"orthogonal\"><integer name=\"strength\" value=\"3\"/></sampler></sensor>",
-        "<sensor type=\"irradiancemeter\"/>",
+        "<integrator type=\"stokes\"/>",
         "<shape type=\"ellipsoids\"/>",
-        "<integrator type=\"direct_projective\"/>",
-        "<shape type=\"cube\"><bsdf type=\"circular\"/></shape>",
+        "<shape type=\"ellipsoidsmesh\"/>",
+        "<shape type=\"cube\"><bsdf type=\"measured\"/></shape>",
         "<shape type=\"cube\"><bsdf type=\"diffuse\"><texture type=\"volume\" name=\"reflectance\"/></bsdf></shape>",
         "<sensor type=\"perspective\"><film type=\"specfilm\"/></sensor>",
     ];

@@ -430,7 +430,7 @@ fn irradiancemeter_measures_its_shape() {
         ),
         (
             r#"<scene version="3.0.0"><shape type="sphere"><sensor type="perspective"/></shape></scene>"#.to_string(),
-            "not a perspective",
+            "cannot be nested in shape",
         ),
         (
             format!(r#"<scene version="3.0.0"><sensor type="perspective"/><shape type="sphere">{meter}</shape></scene>"#),
