@@ -985,7 +985,7 @@ pub fn check(
             scene.camera.loc()
         ));
     }
-    crate::refuse_meters(name, scene)?;
+    crate::methods::refuse_meters(name, scene)?;
     crate::ptracer::check(settings).map_err(|e| e.replace("ptracer", name))
 }
 
