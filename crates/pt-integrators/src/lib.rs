@@ -24,7 +24,7 @@
 //! ```
 #![warn(missing_docs)]
 // One exception, allowed where it is: calling the render loop's x86-64-v3 variant after the
-// processor was checked for those features (render.rs, `render_tile`).
+// processor was checked for those features (render/tile.rs, `render_tile`).
 #![deny(unsafe_code)]
 
 pub mod afterglow;
