@@ -58,7 +58,8 @@ use pt_render::sampler::Sampler;
 use pt_render::texture::{spectrum_for_role, Role};
 use pt_render::{BuildError, BvhKind, LightSelection, Scene};
 use pt_scene::{
-    AreaEmitterDesc, BsdfKind, Geometry, SceneDesc, SpectrumDesc, TextureDesc, TriangleMesh,
+    AreaEmitterDesc, BsdfKind, Geometry, SceneDesc, ShapeDesc, SpectrumDesc, TextureDesc,
+    TriangleMesh,
 };
 use pt_spectrum::cie::{integrate_visible, LAMBDA_MAX, LAMBDA_MIN};
 use pt_spectrum::{ColorMode, SampledWavelengths, Spectrum};
@@ -93,6 +94,44 @@ fn phosphor(kind: &BsdfKind) -> Option<(&SpectrumDesc, &SpectrumDesc, f32, f32)>
 /// The first pass renders `desc` in spectral mode with `seed`. Errors if the scene has no
 /// phosphorescent shape or `time_s` is negative.
 pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, BuildError> {
+    check_request(desc, time_s)?;
+    let lit = Scene::build_with_mode(
+        desc,
+        BvhKind::CwBvh,
+        LightSelection::Power,
+        Some(ColorMode::Spectral),
+    )?;
+    let settings = PathSettings {
+        max_depth: desc.integrator.max_depth,
+        rr_depth: desc.integrator.rr_depth,
+        hide_emitters: true,
+        ..PathSettings::default()
+    };
+    let first = FirstPass {
+        scene: &lit,
+        settings: &settings,
+        seed,
+    };
+    let mut out = desc.clone();
+    out.lights.clear();
+    out.shapes.clear();
+    for (si, shape) in desc.shapes.iter().enumerate() {
+        let mut dark = shape.clone();
+        dark.emitter = None;
+        let Some(params) = phosphor(&desc.bsdfs[shape.bsdf].kind) else {
+            out.shapes.push(dark);
+            continue;
+        };
+        let glow = Glow::new(shape, params, time_s)?;
+        refuse_non_emitters(shape)?;
+        glowing_shape(&first, &glow, si, dark, &mut out.shapes);
+    }
+    Ok(out)
+}
+
+/// Refuses a negative or non-finite `time_s` and a scene without phosphorescent shapes (the
+/// error names the scene file).
+fn check_request(desc: &SceneDesc, time_s: f32) -> Result<(), BuildError> {
     let err = |m: String| BuildError {
         loc: pt_scene::SourceLoc {
             file: desc.source.clone(),
@@ -117,28 +156,36 @@ pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, 
                 .into(),
         ));
     }
-    let lit = Scene::build_with_mode(
-        desc,
-        BvhKind::CwBvh,
-        LightSelection::Power,
-        Some(ColorMode::Spectral),
-    )?;
-    let settings = PathSettings {
-        max_depth: desc.integrator.max_depth,
-        rr_depth: desc.integrator.rr_depth,
-        hide_emitters: true,
-        ..PathSettings::default()
-    };
-    let mut out = desc.clone();
-    out.lights.clear();
-    out.shapes.clear();
-    for (si, shape) in desc.shapes.iter().enumerate() {
-        let mut dark = shape.clone();
-        dark.emitter = None;
-        let Some((absorption, emission, q, tau)) = phosphor(&desc.bsdfs[shape.bsdf].kind) else {
-            out.shapes.push(dark);
-            continue;
-        };
+    Ok(())
+}
+
+/// The first pass: the scene with its lights on (spectral mode), the path settings of its
+/// indirect light, and the seed of its random streams.
+struct FirstPass<'a> {
+    scene: &'a Scene,
+    settings: &'a PathSettings,
+    seed: u64,
+}
+
+/// A phosphorescent shape's afterglow: its absorption `a(l)`, its emission `e(l)`, and the
+/// factor `k = Q e^{-t/tau} / (pi area)` of `L(lo) = k Phi e(lo) / lo` (module doc).
+struct Glow {
+    a: Spectrum,
+    e: Spectrum,
+    k: f64,
+    /// The shape's location, for its emitters.
+    loc: pt_scene::SourceLoc,
+}
+
+impl Glow {
+    /// The afterglow of `shape` `time_s` seconds after the lights went out, from its phosphor
+    /// `(absorption, emission, yield, lifetime)`; an error if the emission spectrum has no
+    /// area over the visible range.
+    fn new(
+        shape: &ShapeDesc,
+        (absorption, emission, q, tau): (&SpectrumDesc, &SpectrumDesc, f32, f32),
+        time_s: f32,
+    ) -> Result<Glow, BuildError> {
         let a = spectrum_for_role(absorption, Role::Albedo);
         let e = spectrum_for_role(emission, Role::Albedo);
         let area = integrate_visible(|l| e.eval(l as f32) as f64);
@@ -150,136 +197,160 @@ pub fn afterglow(desc: &SceneDesc, time_s: f32, seed: u64) -> Result<SceneDesc, 
         }
         // L(lo) = k Phi e(lo) / lo with k = Q e^{-t/tau} / (pi area).
         let k = q as f64 * (-(time_s as f64) / tau as f64).exp() / (std::f64::consts::PI * area);
-        let emitter = |phi: f64| -> Option<AreaEmitterDesc> {
-            let scale = k * phi;
-            if !(scale > 0.0) {
-                return None;
-            }
-            let n = ((LAMBDA_MAX - LAMBDA_MIN) / TABLE_STEP) as usize;
-            let pairs: Vec<(f32, f32)> = (0..=n)
-                .map(|j| {
-                    let l = LAMBDA_MIN + j as f32 * TABLE_STEP;
-                    (l, (scale * e.eval(l) as f64 / l as f64) as f32)
-                })
-                .collect();
-            Some(AreaEmitterDesc {
-                loc: shape.loc.clone(),
-                radiance: TextureDesc::Constant(SpectrumDesc::Tabulated(Arc::new(pairs))),
-                primaries: None,
-            })
-        };
-        if matches!(shape.geometry, Geometry::Curves(_)) {
-            return Err(BuildError {
-                loc: shape.loc.clone(),
-                message: "a phosphorescent curve cannot glow: curves cannot be emitters".into(),
-            });
-        }
-        if matches!(shape.geometry, Geometry::SdfGrid(_)) {
-            // Its afterglow would make it an emitter, and an sdfgrid cannot emit (no point
-            // on it can be sampled, as in Mitsuba).
-            return Err(BuildError {
-                loc: shape.loc.clone(),
-                message: "a phosphorescent sdfgrid cannot glow: an sdfgrid cannot be an emitter"
-                    .into(),
-            });
-        }
-        let mut sampler_index = 0u64;
-        let mut next = || {
-            sampler_index += 1;
-            Sampler::new(seed, si as u64, sampler_index)
-        };
-        match &shape.geometry {
-            Geometry::Mesh(m) => {
-                for (t, idx) in m.indices.iter().enumerate() {
-                    let p = idx.map(|i| m.positions[i as usize]);
-                    let n = (p[1] - p[0]).cross(p[2] - p[0]);
-                    let Some(n) = n.try_normalize() else { continue };
-                    let mut s = next();
-                    let phi = absorbed(&lit, &a, &mut s, &settings, |u| {
-                        // Uniform point on the triangle (pbrt-v4 SampleUniformTriangle, square root form).
-                        let su = u.x.sqrt();
-                        (
-                            p[0] * (1.0 - su) + p[1] * (su * (1.0 - u.y)) + p[2] * (su * u.y),
-                            n,
-                        )
-                    });
-                    let mut tri = dark.clone();
-                    tri.geometry = Geometry::Mesh(TriangleMesh {
-                        positions: p.to_vec(),
-                        normals: m
-                            .normals
-                            .as_ref()
-                            .map(|ns| idx.map(|i| ns[i as usize]).to_vec()),
-                        uvs: m
-                            .uvs
-                            .as_ref()
-                            .map(|uv| idx.map(|i| uv[i as usize]).to_vec()),
-                        tangents: m
-                            .tangents
-                            .as_ref()
-                            .map(|ts| idx.map(|i| ts[i as usize]).to_vec()),
-                        indices: vec![[0, 1, 2]],
-                        // A face attribute of triangle t is the one attribute value of `tri`.
-                        attributes: m
-                            .attributes
-                            .iter()
-                            .map(|a| one_triangle(a, idx, t))
-                            .collect(),
-                    });
-                    tri.emitter = emitter(phi);
-                    tri.id = shape.id.as_ref().map(|id| format!("{id}#{t}"));
-                    out.shapes.push(tri);
-                }
-            }
-            &Geometry::Sphere {
-                center,
-                radius,
-                flip_normals,
-                ..
-            } => {
-                let mut s = next();
-                let phi = absorbed(&lit, &a, &mut s, &settings, |u| {
-                    let d = pt_math::warp::square_to_uniform_sphere(u);
-                    (center + d * radius, if flip_normals { -d } else { d })
-                });
-                dark.emitter = emitter(phi);
-                out.shapes.push(dark);
-            }
-            &Geometry::Cylinder {
-                p0,
-                frame,
-                radius,
-                length,
-                flip_normals,
-            } => {
-                let mut s = next();
-                let phi = absorbed(&lit, &a, &mut s, &settings, |u| {
-                    let (p, n, _) = pt_render::light::cylinder_point(
-                        p0,
-                        frame,
-                        radius,
-                        length,
-                        flip_normals,
-                        u,
-                    );
-                    (p, n)
-                });
-                dark.emitter = emitter(phi);
-                out.shapes.push(dark);
-            }
-            Geometry::Disk(d) => {
-                // One glow over the whole disk, as for spheres and cylinders.
-                let mut s = next();
-                let phi = absorbed(&lit, &a, &mut s, &settings, |u| {
-                    (d.point(square_to_disk_concentric(u)), d.normal)
-                });
-                dark.emitter = emitter(phi);
-                out.shapes.push(dark);
-            }
-            Geometry::SdfGrid(_) | Geometry::Curves(_) => unreachable!("refused above"),
-        }
+        Ok(Glow {
+            a,
+            e,
+            k,
+            loc: shape.loc.clone(),
+        })
     }
-    Ok(out)
+
+    /// The area emitter of a surface that absorbed `phi` (`e(l) / l` tabulated every
+    /// [`TABLE_STEP`] nm), or `None` when it does not glow.
+    fn emitter(&self, phi: f64) -> Option<AreaEmitterDesc> {
+        let scale = self.k * phi;
+        if !(scale > 0.0) {
+            return None;
+        }
+        let n = ((LAMBDA_MAX - LAMBDA_MIN) / TABLE_STEP) as usize;
+        let pairs: Vec<(f32, f32)> = (0..=n)
+            .map(|j| {
+                let l = LAMBDA_MIN + j as f32 * TABLE_STEP;
+                (l, (scale * self.e.eval(l) as f64 / l as f64) as f32)
+            })
+            .collect();
+        Some(AreaEmitterDesc {
+            loc: self.loc.clone(),
+            radiance: TextureDesc::Constant(SpectrumDesc::Tabulated(Arc::new(pairs))),
+            primaries: None,
+        })
+    }
+}
+
+/// Refuses a phosphorescent shape that cannot be an emitter (curves, sdfgrids).
+fn refuse_non_emitters(shape: &ShapeDesc) -> Result<(), BuildError> {
+    if matches!(shape.geometry, Geometry::Curves(_)) {
+        return Err(BuildError {
+            loc: shape.loc.clone(),
+            message: "a phosphorescent curve cannot glow: curves cannot be emitters".into(),
+        });
+    }
+    if matches!(shape.geometry, Geometry::SdfGrid(_)) {
+        // Its afterglow would make it an emitter, and an sdfgrid cannot emit (no point
+        // on it can be sampled, as in Mitsuba).
+        return Err(BuildError {
+            loc: shape.loc.clone(),
+            message: "a phosphorescent sdfgrid cannot glow: an sdfgrid cannot be an emitter".into(),
+        });
+    }
+    Ok(())
+}
+
+/// Appends to `shapes` the phosphorescent shape `si`, made `dark` (no emitter of its own), as
+/// the emitters of its afterglow: one per triangle of a mesh, one for an analytic shape. Each
+/// surface's absorbed `Phi` has its own random stream (`si`, then 1, 2, .. per surface).
+fn glowing_shape(
+    first: &FirstPass,
+    glow: &Glow,
+    si: usize,
+    mut dark: ShapeDesc,
+    shapes: &mut Vec<ShapeDesc>,
+) {
+    let mut sampler_index = 0u64;
+    let mut next = || {
+        sampler_index += 1;
+        Sampler::new(first.seed, si as u64, sampler_index)
+    };
+    let (lit, a, settings) = (first.scene, &glow.a, first.settings);
+    let phi = match &dark.geometry {
+        Geometry::Mesh(m) => {
+            // One emitter per triangle, each with the glow of its own Phi.
+            for (t, idx) in m.indices.iter().enumerate() {
+                let p = idx.map(|i| m.positions[i as usize]);
+                let n = (p[1] - p[0]).cross(p[2] - p[0]);
+                let Some(n) = n.try_normalize() else { continue };
+                let mut s = next();
+                let phi = absorbed(lit, a, &mut s, settings, |u| {
+                    // Uniform point on the triangle (pbrt-v4 SampleUniformTriangle, square root form).
+                    let su = u.x.sqrt();
+                    (
+                        p[0] * (1.0 - su) + p[1] * (su * (1.0 - u.y)) + p[2] * (su * u.y),
+                        n,
+                    )
+                });
+                let mut tri = one_triangle_shape(&dark, m, idx, t);
+                tri.emitter = glow.emitter(phi);
+                shapes.push(tri);
+            }
+            return;
+        }
+        &Geometry::Sphere {
+            center,
+            radius,
+            flip_normals,
+            ..
+        } => {
+            let mut s = next();
+            absorbed(lit, a, &mut s, settings, |u| {
+                let d = pt_math::warp::square_to_uniform_sphere(u);
+                (center + d * radius, if flip_normals { -d } else { d })
+            })
+        }
+        &Geometry::Cylinder {
+            p0,
+            frame,
+            radius,
+            length,
+            flip_normals,
+        } => {
+            let mut s = next();
+            absorbed(lit, a, &mut s, settings, |u| {
+                let (p, n, _) =
+                    pt_render::light::cylinder_point(p0, frame, radius, length, flip_normals, u);
+                (p, n)
+            })
+        }
+        Geometry::Disk(d) => {
+            // One glow over the whole disk, as for spheres and cylinders.
+            let mut s = next();
+            absorbed(lit, a, &mut s, settings, |u| {
+                (d.point(square_to_disk_concentric(u)), d.normal)
+            })
+        }
+        Geometry::SdfGrid(_) | Geometry::Curves(_) => unreachable!("refused above"),
+    };
+    dark.emitter = glow.emitter(phi);
+    shapes.push(dark);
+}
+
+/// Triangle `t` (vertices `idx`) of the mesh `m` of the dark shape `dark`, as a shape of its
+/// own: its vertex data, face attributes and an id of `id#t`.
+fn one_triangle_shape(dark: &ShapeDesc, m: &TriangleMesh, idx: &[u32; 3], t: usize) -> ShapeDesc {
+    let mut tri = dark.clone();
+    tri.geometry = Geometry::Mesh(TriangleMesh {
+        positions: idx.map(|i| m.positions[i as usize]).to_vec(),
+        normals: m
+            .normals
+            .as_ref()
+            .map(|ns| idx.map(|i| ns[i as usize]).to_vec()),
+        uvs: m
+            .uvs
+            .as_ref()
+            .map(|uv| idx.map(|i| uv[i as usize]).to_vec()),
+        tangents: m
+            .tangents
+            .as_ref()
+            .map(|ts| idx.map(|i| ts[i as usize]).to_vec()),
+        indices: vec![[0, 1, 2]],
+        // A face attribute of triangle t is the one attribute value of `tri`.
+        attributes: m
+            .attributes
+            .iter()
+            .map(|a| one_triangle(a, idx, t))
+            .collect(),
+    });
+    tri.id = dark.id.as_ref().map(|id| format!("{id}#{t}"));
+    tri
 }
 
 /// Estimate of `Phi = int a(l) E(l) l dl` (W m^-2 nm, before dividing by hc) averaged over a

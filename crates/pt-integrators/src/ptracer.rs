@@ -470,12 +470,7 @@ pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
     mut visit: impl FnMut(&LightVertex, &mut S),
     mut visit_medium: impl FnMut(&MediumVertex, &mut S),
 ) {
-    let Some((li, pmf, u_sel)) = scene.sample_light(sampler.next_1d()) else {
-        return;
-    };
-    let (u_pos, u_dir) = (sampler.next_2d(), sampler.next_2d());
-    let Some(emitted) = scene.lights[li].sample_emission(u_sel, u_pos, u_dir, lambda, scene.bounds)
-    else {
+    let Some((li, pmf, emitted)) = sample_emitted(scene, lambda, sampler) else {
         return;
     };
     let mut beta = emitted.weight * (1.0 / pmf);
@@ -580,40 +575,18 @@ pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
             },
             sampler,
         );
-        let u_lobe = sampler.next_1d();
-        let Some(bs) = bsdf.sample(wl, u_lobe, sampler.next_2d()) else {
+        let at = (&hit, &bsdf, &frame);
+        let Some(next) = leave_surface::<S, BIDIR>(at, wl, ng_light, &mut beta, &mut eta, sampler)
+        else {
             return;
         };
-        let dir = frame.to_world(bs.wi);
-        let ng_next = hit.ng.dot(dir);
-        if ng_next * bs.wi.z <= 0.0 {
-            return;
-        }
-        // Importance transport: refraction's 1 / eta^2 undone, and the adjoint's shading
-        // normal correction.
-        let correction = (wl.z * ng_next).abs() / (bs.wi.z * ng_light).abs();
-        beta *= bs.weight * (bs.eta * bs.eta * correction);
-        eta *= bs.eta;
-        arrival = Arrival::Scattered {
-            fwd: bs.pdf,
-            rev: if BIDIR && !bs.delta {
-                bsdf.pdf(bs.wi, wl)
-            } else {
-                bs.pdf
-            },
-            cos_out: ng_next.abs(),
-            delta: bs.delta,
-        };
-        if beta.is_black() || !beta.is_finite() {
-            return;
-        }
-        ray = Ray::new(offset_ray_origin(hit.p, hit.ng * ng_next.signum()), dir);
+        (ray, arrival) = (next.ray, next.arrival);
         if let Some((inside, outside)) = scene.medium_boundary(hit.shape) {
-            medium = if ng_next > 0.0 { outside } else { inside };
+            medium = if next.ng_next > 0.0 { outside } else { inside };
         }
         // With media, a pass straight through a surface (a null wall) is not a bounce, as in
         // the volumetric path tracer (Mitsuba's volpath).
-        if medium_walk && bs.is_pass_through(wl) {
+        if medium_walk && next.pass_through {
             continue;
         }
         depth += 1;
@@ -621,6 +594,80 @@ pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
             return;
         }
     }
+}
+
+/// A light chosen by the scene's light selection and a ray sampled from it
+/// ([`Light::sample_emission`]): the light's index, its selection probability and the ray;
+/// `None` when the scene has no light to choose or the light emits no ray.
+#[inline]
+fn sample_emitted<S: RandomSource>(
+    scene: &Scene,
+    lambda: &SampledWavelengths,
+    sampler: &mut S,
+) -> Option<(usize, f32, pt_render::light::EmittedRay)> {
+    let (li, pmf, u_sel) = scene.sample_light(sampler.next_1d())?;
+    let (u_pos, u_dir) = (sampler.next_2d(), sampler.next_2d());
+    let emitted = scene.lights[li].sample_emission(u_sel, u_pos, u_dir, lambda, scene.bounds)?;
+    Some((li, pmf, emitted))
+}
+
+/// How a light path left a surface vertex ([`leave_surface`]).
+struct Leaving {
+    /// The ray to the next vertex, its origin off the surface.
+    ray: Ray,
+    /// How the path arrives at the next vertex.
+    arrival: Arrival,
+    /// ng . direction taken (its sign says which side the ray leaves on).
+    ng_next: f32,
+    /// Whether the sample passed straight through the surface (a null event).
+    pass_through: bool,
+}
+
+/// The light path leaves the surface vertex `(hit, bsdf, frame)` by BSDF sampling from the
+/// light's side (`wl`: the local direction towards the previous vertex, `ng_light` its
+/// geometric cosine), with the importance transport weights folded into `beta` and the
+/// relative index into `eta`. `None` when the path ends there: no sample, a light leak, or a
+/// black or non-finite weight. `BIDIR`: the arrival carries the reverse density.
+#[inline]
+fn leave_surface<S: RandomSource, const BIDIR: bool>(
+    (hit, bsdf, frame): (&Interaction, &SurfaceBsdf, &Frame),
+    wl: Vec3,
+    ng_light: f32,
+    beta: &mut SampledSpectrum,
+    eta: &mut f32,
+    sampler: &mut S,
+) -> Option<Leaving> {
+    let u_lobe = sampler.next_1d();
+    let bs = bsdf.sample(wl, u_lobe, sampler.next_2d())?;
+    let dir = frame.to_world(bs.wi);
+    let ng_next = hit.ng.dot(dir);
+    if ng_next * bs.wi.z <= 0.0 {
+        return None;
+    }
+    // Importance transport: refraction's 1 / eta^2 undone, and the adjoint's shading
+    // normal correction.
+    let correction = (wl.z * ng_next).abs() / (bs.wi.z * ng_light).abs();
+    *beta *= bs.weight * (bs.eta * bs.eta * correction);
+    *eta *= bs.eta;
+    let arrival = Arrival::Scattered {
+        fwd: bs.pdf,
+        rev: if BIDIR && !bs.delta {
+            bsdf.pdf(bs.wi, wl)
+        } else {
+            bs.pdf
+        },
+        cos_out: ng_next.abs(),
+        delta: bs.delta,
+    };
+    if beta.is_black() || !beta.is_finite() {
+        return None;
+    }
+    Some(Leaving {
+        ray: Ray::new(offset_ray_origin(hit.p, hit.ng * ng_next.signum()), dir),
+        arrival,
+        ng_next,
+        pass_through: bs.is_pass_through(wl),
+    })
 }
 
 /// Russian roulette on a light path: keeps it with probability q = min(max(beta) `scale`, 0.95)

@@ -114,15 +114,9 @@ pub fn estimate<S: RandomSource>(
                 // Light sampling, weighted by the phase function.
                 let sample_lights = m.sample_emitters && s.strategy != Strategy::Bsdf;
                 if sample_lights {
-                    let (u_light, u_pos) = (sampler.next_1d(), sampler.next_2d());
-                    if let Some((ls, pmf)) = sample_light(scene, p, &lambda, u_light, u_pos) {
-                        let phase = m.phase.eval(wo, ls.wi);
-                        let w = nee_weight(s, &ls, pmf, phase);
-                        if w > 0.0 && phase > 0.0 {
-                            let tr = transmittance_to(scene, p, &ls, medium, &lambda, sampler);
-                            radiance +=
-                                throughput * ls.radiance * tr * (phase * w / (pmf * ls.pdf));
-                        }
+                    let at = (p, wo, medium);
+                    if let Some(c) = medium_nee(scene, s, m, at, &lambda, throughput, sampler) {
+                        radiance += c;
                     }
                 }
                 let ps = m.phase.sample(wo, sampler.next_2d());
@@ -145,14 +139,9 @@ pub fn estimate<S: RandomSource>(
             break;
         };
         let wo_world = -ray.dir;
-        if let Some((li, light)) = scene.shape_light(hit.shape) {
-            let le = light.emitted(hit.ns, wo_world, hit.uv, &lambda);
-            if !le.is_black() {
-                let w = emission_weight(s, depth, prev_delta, prev_pdf, || {
-                    scene.light_pmf_at(prev_p, li) * light.pdf(prev_p, hit.p, hit.ns)
-                });
-                radiance += throughput * le * w;
-            }
+        let prev = (prev_p, prev_pdf, prev_delta);
+        if let Some((le, w)) = emission_met(scene, s, &hit, wo_world, &lambda, depth, prev) {
+            radiance += throughput * le * w;
         }
         let frame = shading_frame(&hit);
         let wo = frame.to_local(wo_world);
@@ -172,38 +161,15 @@ pub fn estimate<S: RandomSource>(
             && depth.saturating_add(1) < max_depth
             && s.strategy != Strategy::Bsdf
         {
-            let (u_light, u_pos) = (sampler.next_1d(), sampler.next_2d());
-            let origin_side = |d: Vec3| offset_ray_origin(hit.p, hit.ng * hit.ng.dot(d).signum());
-            if let Some((ls, pmf)) = sample_light(scene, hit.p, &lambda, u_light, u_pos) {
-                let wi = frame.to_local(ls.wi);
-                let ng_wi = hit.ng.dot(ls.wi);
-                if ng_wi * wi.z > 0.0 {
-                    let f = bsdf.eval(wo, wi);
-                    if !f.is_black() {
-                        let w = nee_weight(s, &ls, pmf, bsdf.pdf(wo, wi));
-                        if w > 0.0 {
-                            // The shadow ray starts in the medium on the light's side.
-                            let start = match scene.medium_boundary(hit.shape) {
-                                Some((_, outside)) if ng_wi > 0.0 => outside,
-                                Some((inside, _)) => inside,
-                                None => medium,
-                            };
-                            let tr = transmittance_to(
-                                scene,
-                                origin_side(ls.wi),
-                                &ls,
-                                start,
-                                &lambda,
-                                sampler,
-                            );
-                            radiance += throughput
-                                * f
-                                * ls.radiance
-                                * tr
-                                * (wi.z.abs() * w / (pmf * ls.pdf));
-                        }
-                    }
-                }
+            let at = SurfaceVertex {
+                hit: &hit,
+                frame: &frame,
+                bsdf: &bsdf,
+                wo,
+                medium,
+            };
+            if let Some(c) = surface_nee(scene, s, &at, &lambda, throughput, sampler) {
+                radiance += c;
             }
         }
         // BSDF sampling.
@@ -230,6 +196,105 @@ pub fn estimate<S: RandomSource>(
     }
     path.radiance = radiance;
     path.covered = covered;
+}
+
+/// The radiance emitted by the surface met at `hit` towards `wo_world` (unit, world) and its
+/// MIS weight against light sampling from the last scattering event `prev` (its position, the
+/// density of the direction it chose, and whether light sampling could not have made that
+/// choice) at path depth `depth`; `None` off emitters and for black emission.
+#[inline]
+fn emission_met(
+    scene: &Scene,
+    s: &PathSettings,
+    hit: &pt_render::geometry::Interaction,
+    wo_world: Vec3,
+    lambda: &SampledWavelengths,
+    depth: u32,
+    (prev_p, prev_pdf, prev_delta): (Vec3, f32, bool),
+) -> Option<(SampledSpectrum, f32)> {
+    let (li, light) = scene.shape_light(hit.shape)?;
+    let le = light.emitted(hit.ns, wo_world, hit.uv, lambda);
+    if le.is_black() {
+        return None;
+    }
+    let w = emission_weight(s, depth, prev_delta, prev_pdf, || {
+        scene.light_pmf_at(prev_p, li) * light.pdf(prev_p, hit.p, hit.ns)
+    });
+    Some((le, w))
+}
+
+/// Light sampling at a scattering event in the medium `m` at `(p, wo, medium)` (position,
+/// unit direction back along the path, world; the medium's index), weighted by the phase
+/// function and by MIS against phase sampling: the radiance it adds, times `throughput`.
+/// Draws the light sample's numbers whether or not a light is found.
+#[inline]
+fn medium_nee<S: RandomSource>(
+    scene: &Scene,
+    s: &PathSettings,
+    m: &Medium,
+    (p, wo, medium): (Vec3, Vec3, Option<u32>),
+    lambda: &SampledWavelengths,
+    throughput: SampledSpectrum,
+    sampler: &mut S,
+) -> Option<SampledSpectrum> {
+    let (u_light, u_pos) = (sampler.next_1d(), sampler.next_2d());
+    let (ls, pmf) = sample_light(scene, p, lambda, u_light, u_pos)?;
+    let phase = m.phase.eval(wo, ls.wi);
+    let w = nee_weight(s, &ls, pmf, phase);
+    if !(w > 0.0 && phase > 0.0) {
+        return None;
+    }
+    let tr = transmittance_to(scene, p, &ls, medium, lambda, sampler);
+    Some(throughput * ls.radiance * tr * (phase * w / (pmf * ls.pdf)))
+}
+
+/// A surface vertex of a volumetric path as light sampling sees it: the hit, its shading
+/// frame and BSDF, `wo` (local frame) and the medium the path arrived in.
+struct SurfaceVertex<'a> {
+    hit: &'a pt_render::geometry::Interaction,
+    frame: &'a pt_math::Frame,
+    bsdf: &'a pt_bsdf::SurfaceBsdf,
+    wo: Vec3,
+    medium: Option<u32>,
+}
+
+/// Light sampling at a surface vertex `at`, its shadow ray through media and null surfaces
+/// ([`transmittance_to`]), weighted by MIS against BSDF sampling: the radiance it adds, times
+/// `throughput`. Draws the light sample's numbers whether or not a light is found.
+#[inline]
+fn surface_nee<S: RandomSource>(
+    scene: &Scene,
+    s: &PathSettings,
+    at: &SurfaceVertex,
+    lambda: &SampledWavelengths,
+    throughput: SampledSpectrum,
+    sampler: &mut S,
+) -> Option<SampledSpectrum> {
+    let (hit, bsdf, wo) = (at.hit, at.bsdf, at.wo);
+    let (u_light, u_pos) = (sampler.next_1d(), sampler.next_2d());
+    let origin_side = |d: Vec3| offset_ray_origin(hit.p, hit.ng * hit.ng.dot(d).signum());
+    let (ls, pmf) = sample_light(scene, hit.p, lambda, u_light, u_pos)?;
+    let wi = at.frame.to_local(ls.wi);
+    let ng_wi = hit.ng.dot(ls.wi);
+    if !(ng_wi * wi.z > 0.0) {
+        return None;
+    }
+    let f = bsdf.eval(wo, wi);
+    if f.is_black() {
+        return None;
+    }
+    let w = nee_weight(s, &ls, pmf, bsdf.pdf(wo, wi));
+    if !(w > 0.0) {
+        return None;
+    }
+    // The shadow ray starts in the medium on the light's side.
+    let start = match scene.medium_boundary(hit.shape) {
+        Some((_, outside)) if ng_wi > 0.0 => outside,
+        Some((inside, _)) => inside,
+        None => at.medium,
+    };
+    let tr = transmittance_to(scene, origin_side(ls.wi), &ls, start, lambda, sampler);
+    Some(throughput * f * ls.radiance * tr * (wi.z.abs() * w / (pmf * ls.pdf)))
 }
 
 /// What a segment through a medium did: the throughput factor, where the path scatters (the
