@@ -93,13 +93,43 @@ impl Numbers {
 /// Parses an IES file's text (as read from disk; Latin-1 bytes outside ASCII are fine in
 /// keyword lines) into its intensity table, `scale` not yet applied.
 pub fn parse_ies(text: &str) -> Result<IntensityTable, IesError> {
-    let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l));
-    let (first_no, first) = lines.next().ok_or_else(|| IesError {
-        line: 1,
-        message: "the file is empty".into(),
-    })?;
+    let (edition, tilt, mut nums) = split_file(text)?;
+    if tilt == "INCLUDE" {
+        nums.take("the lamp-to-luminaire geometry of the tilt table")?;
+        let n = nums.count("the number of tilt angles")?;
+        for _ in 0..2 * n {
+            nums.take("the end of the tilt table")?;
+        }
+    }
+    let (nv, nh, factor) = read_header(&mut nums, edition)?;
+    let vertical = increasing_angles(&mut nums, nv, "vertical")?;
+    let horizontal = increasing_angles(&mut nums, nh, "horizontal")?;
+    let (v0, v0_line) = vertical[0];
+    let (v1, v1_line) = vertical[nv - 1];
+    if v0 < 0.0 || v1 > 180.0 {
+        let line = if v0 < 0.0 { v0_line } else { v1_line };
+        return Err(IesError {
+            line,
+            message: format!(
+                "type C vertical angles lie in [0, 180] degrees, these run from {v0} to {v1}"
+            ),
+        });
+    }
+    let symmetry = Symmetry::of(&horizontal)?;
+    let candela = read_candela(&mut nums, nv, nh)?;
+    Ok(full_circle(
+        &vertical,
+        &horizontal,
+        symmetry,
+        &candela,
+        factor,
+    ))
+}
+
+/// The edition a file's first line names (none: 1986).
+fn edition(first: &str) -> Edition {
     let head = first.trim().to_ascii_uppercase();
-    let edition = if head.starts_with("IESNA:LM-63-2002") {
+    if head.starts_with("IESNA:LM-63-2002") {
         Edition::Lm63_2002
     } else if head.starts_with("IESNA:LM-63-1995") {
         Edition::Lm63_1995
@@ -109,7 +139,17 @@ pub fn parse_ies(text: &str) -> Result<IntensityTable, IesError> {
         Edition::Lm63_2019
     } else {
         Edition::Lm63_1986
-    };
+    }
+}
+
+/// A file's edition, its `TILT=` value (upper case) and the numbers after that line.
+fn split_file(text: &str) -> Result<(Edition, String, Numbers), IesError> {
+    let mut lines = text.lines().enumerate().map(|(i, l)| (i + 1, l));
+    let (first_no, first) = lines.next().ok_or_else(|| IesError {
+        line: 1,
+        message: "the file is empty".into(),
+    })?;
+    let edition = edition(first);
     // Keyword lines up to TILT= (the 1986 edition's first line is already a free-form one).
     let mut tilt = None;
     let header = std::iter::once((first_no, first)).filter(|_| edition == Edition::Lm63_1986);
@@ -146,18 +186,18 @@ pub fn parse_ies(text: &str) -> Result<IntensityTable, IesError> {
             values.push((v, no));
         }
     }
-    let mut nums = Numbers {
+    let nums = Numbers {
         values,
         next: 0,
         last_line,
     };
-    if tilt == "INCLUDE" {
-        nums.take("the lamp-to-luminaire geometry of the tilt table")?;
-        let n = nums.count("the number of tilt angles")?;
-        for _ in 0..2 * n {
-            nums.take("the end of the tilt table")?;
-        }
-    }
+    Ok((edition, tilt, nums))
+}
+
+/// The 13 numbers before the angles: the vertical and horizontal angle counts and the factor
+/// every candela value is multiplied by (module doc, "Conversion"); refuses photometric
+/// types other than C and negative factors.
+fn read_header(nums: &mut Numbers, edition: Edition) -> Result<(usize, usize, f64), IesError> {
     let _lamps = nums.take("the number of lamps")?;
     let _lumens = nums.take("the lumens per lamp")?;
     let (multiplier, m_line) = nums.take("the candela multiplier")?;
@@ -220,55 +260,35 @@ pub fn parse_ies(text: &str) -> Result<IntensityTable, IesError> {
         }
         Edition::Lm63_2002 | Edition::Lm63_2019 => 1.0,
     };
-    let factor = multiplier * ballast * lamp_factor;
+    Ok((nv, nh, multiplier * ballast * lamp_factor))
+}
 
-    let angles =
-        |nums: &mut Numbers, n: usize, what: &str| -> Result<Vec<(f64, usize)>, IesError> {
-            let mut a: Vec<(f64, usize)> = Vec::with_capacity(n);
-            for _ in 0..n {
-                let (v, line) = nums.take(&format!("the {n} {what} angles"))?;
-                if let Some(&(prev, _)) = a.last() {
-                    if !(v > prev) {
-                        return Err(IesError {
-                            line,
-                            message: format!("{what} angles must increase ({prev} then {v})"),
-                        });
-                    }
-                }
-                a.push((v, line));
+/// The next `n` numbers as strictly increasing `what` ("vertical", "horizontal") angles in
+/// degrees, each with its line.
+fn increasing_angles(
+    nums: &mut Numbers,
+    n: usize,
+    what: &str,
+) -> Result<Vec<(f64, usize)>, IesError> {
+    let mut a: Vec<(f64, usize)> = Vec::with_capacity(n);
+    for _ in 0..n {
+        let (v, line) = nums.take(&format!("the {n} {what} angles"))?;
+        if let Some(&(prev, _)) = a.last() {
+            if !(v > prev) {
+                return Err(IesError {
+                    line,
+                    message: format!("{what} angles must increase ({prev} then {v})"),
+                });
             }
-            Ok(a)
-        };
-    let vertical = angles(&mut nums, nv, "vertical")?;
-    let horizontal = angles(&mut nums, nh, "horizontal")?;
-    let (v0, v0_line) = vertical[0];
-    let (v1, v1_line) = vertical[nv - 1];
-    if v0 < 0.0 || v1 > 180.0 {
-        let line = if v0 < 0.0 { v0_line } else { v1_line };
-        return Err(IesError {
-            line,
-            message: format!(
-                "type C vertical angles lie in [0, 180] degrees, these run from {v0} to {v1}"
-            ),
-        });
-    }
-    let (h0, h0_line) = horizontal[0];
-    let (h1, _) = horizontal[nh - 1];
-    let symmetry = match (h0, h1) {
-        (a, b) if a == 0.0 && b == 0.0 => Symmetry::Axial,
-        (a, b) if a == 0.0 && b == 90.0 => Symmetry::Quadrant,
-        (a, b) if a == 0.0 && b == 180.0 => Symmetry::Bilateral0,
-        (a, b) if a == 90.0 && b == 270.0 => Symmetry::Bilateral90,
-        (a, b) if a == 0.0 && b == 360.0 => Symmetry::None,
-        _ => {
-            return Err(IesError {
-                line: h0_line,
-                message: format!(
-                    "type C horizontal angles must run 0 (one angle), 0-90, 0-180, 90-270 or 0-360 degrees, not {h0}-{h1}"
-                ),
-            })
         }
-    };
+        a.push((v, line));
+    }
+    Ok(a)
+}
+
+/// The `nv` x `nh` candela values (column by column: one per vertical angle for each
+/// horizontal angle), which must be the file's last numbers.
+fn read_candela(nums: &mut Numbers, nv: usize, nh: usize) -> Result<Vec<f64>, IesError> {
     let mut candela = Vec::with_capacity(nv * nh);
     for _ in 0..nv * nh {
         let (v, line) = nums.take(&format!("the {} candela values", nv * nh))?;
@@ -289,7 +309,19 @@ pub fn parse_ies(text: &str) -> Result<IntensityTable, IesError> {
             ),
         });
     }
+    Ok(candela)
+}
 
+/// The intensity table over the full circle of azimuths from the measured `vertical` and
+/// `horizontal` angles (degrees) and `candela` columns, each value times `factor`.
+fn full_circle(
+    vertical: &[(f64, usize)],
+    horizontal: &[(f64, usize)],
+    symmetry: Symmetry,
+    candela: &[f64],
+    factor: f64,
+) -> IntensityTable {
+    let nv = vertical.len();
     // The full circle of azimuths: every image of a measured angle under the symmetry, each
     // taking the measured column it is an image of (so linear interpolation between the new
     // nodes is linear interpolation between measured angles, mirrored).
@@ -317,12 +349,12 @@ pub fn parse_ies(text: &str) -> Result<IntensityTable, IesError> {
             values.push((candela[j * nv + i] * factor) as f32);
         }
     }
-    Ok(IntensityTable {
+    IntensityTable {
         theta,
         phi,
         values,
         axes: Mat3::IDENTITY,
-    })
+    }
 }
 
 /// The symmetries LM-63 type C files declare through their horizontal angles.
@@ -341,6 +373,28 @@ enum Symmetry {
 }
 
 impl Symmetry {
+    /// The symmetry the first and last of the (increasing) `horizontal` angles declare, or
+    /// the error naming the first angle's line.
+    fn of(horizontal: &[(f64, usize)]) -> Result<Symmetry, IesError> {
+        let (h0, h0_line) = horizontal[0];
+        let (h1, _) = horizontal[horizontal.len() - 1];
+        Ok(match (h0, h1) {
+            (a, b) if a == 0.0 && b == 0.0 => Symmetry::Axial,
+            (a, b) if a == 0.0 && b == 90.0 => Symmetry::Quadrant,
+            (a, b) if a == 0.0 && b == 180.0 => Symmetry::Bilateral0,
+            (a, b) if a == 90.0 && b == 270.0 => Symmetry::Bilateral90,
+            (a, b) if a == 0.0 && b == 360.0 => Symmetry::None,
+            _ => {
+                return Err(IesError {
+                    line: h0_line,
+                    message: format!(
+                        "type C horizontal angles must run 0 (one angle), 0-90, 0-180, 90-270 or 0-360 degrees, not {h0}-{h1}"
+                    ),
+                })
+            }
+        })
+    }
+
     /// The azimuths (degrees, any turn) that carry the same intensity as the measured `c`.
     fn images(self, c: f64) -> Vec<f64> {
         match self {

@@ -28,31 +28,82 @@ impl<'e> Builder<'e> {
     pub(super) fn light(&mut self, el: &'e Element) -> Result<LightDesc> {
         let v = ObjectView::parse(el)?;
         let to_world = v.transform("to_world")?;
-        let spectrum = |name: &str| -> Result<SpectrumDesc> {
-            let s = v.spectrum(name)?.unwrap_or(SpectrumDesc::Constant(1.0));
-            let vals = s.values();
-            if vals.iter().any(|&x| x < 0.0) {
-                return Err(v.prop_error(name, format!("{name} must not be negative")));
-            }
-            Ok(s)
-        };
-        // Direction of travel: `direction`, or the +z axis of `to_world`.
-        let direction = |v: &ObjectView<'e>, to_world: Option<Mat4>| -> Result<Vec3> {
-            let d = match (v.vec3("direction")?, to_world) {
-                (Some(_), Some(_)) => {
-                    return Err(
-                        v.prop_error("direction", "give either direction or to_world, not both")
-                    )
+        let texture = self.light_texture(&v)?;
+        let kind = match v.plugin.as_str() {
+            "point" => {
+                let position = match (v.vec3("position")?, to_world) {
+                    (Some(_), Some(_)) => {
+                        return Err(
+                            v.prop_error("position", "give either position or to_world, not both")
+                        )
+                    }
+                    (Some(p), None) => p,
+                    (None, Some(m)) => m.transform_point3(Vec3::ZERO),
+                    (None, None) => Vec3::ZERO,
+                };
+                let profile = self.ies_profile(&v, to_world)?;
+                LightKind::Point {
+                    position,
+                    intensity: light_spectrum(&v, "intensity")?,
+                    profile,
                 }
-                (Some(d), None) => d,
-                (None, Some(m)) => m.transform_vector3(Vec3::Z),
-                (None, None) => Vec3::Z,
-            };
-            d.try_normalize()
-                .ok_or_else(|| v.prop_error("direction", "direction must not be zero"))
+            }
+            "goniometric" => self.goniometric(&v, to_world)?,
+            "spot" => self.spot(&v, to_world, texture)?,
+            "projector" => projector(&v, to_world, texture)?,
+            "directional" => LightKind::Directional {
+                direction: light_direction(&v, to_world)?,
+                irradiance: light_spectrum(&v, "irradiance")?,
+            },
+            "sun" => {
+                let angular_diameter_deg = v.float("angular_diameter")?.unwrap_or(0.5338);
+                if !(angular_diameter_deg > 0.0 && angular_diameter_deg < 180.0) {
+                    return Err(v.prop_error(
+                        "angular_diameter",
+                        "angular_diameter must be in (0, 180) degrees",
+                    ));
+                }
+                LightKind::Sun {
+                    direction: light_direction(&v, to_world)?,
+                    irradiance: light_spectrum(&v, "irradiance")?,
+                    angular_diameter_deg,
+                }
+            }
+            "constant" => LightKind::Constant {
+                radiance: light_spectrum(&v, "radiance")?,
+            },
+            "sunsky" => LightKind::SunSky(Box::new(super::sunsky::sunsky(&v, to_world)?)),
+            "envmap" => {
+                let name = v
+                    .string("filename")?
+                    .ok_or_else(|| SceneError::at(&el.loc, "envmap needs a filename"))?;
+                let path = self.light_file(&v, "filename", "environment map ", &name)?;
+                let scale = v.float("scale")?.unwrap_or(1.0);
+                if scale < 0.0 {
+                    return Err(v.prop_error("scale", "scale must not be negative"));
+                }
+                LightKind::EnvMap {
+                    filename: path,
+                    to_world: to_world.unwrap_or(Mat4::IDENTITY),
+                    scale,
+                }
+            }
+            _ => return Err(plugin_error(el)),
         };
-        // Nested textures by name: a spot's `texture`, a projector's `irradiance` (plain
-        // textures in Mitsuba 3.9.1, not wrapped in D65).
+        v.finish()?;
+        Ok(LightDesc {
+            loc: el.loc.clone(),
+            kind,
+        })
+    }
+
+    /// A light's nested texture with the location it was written at: a spot's `texture`, a
+    /// projector's `irradiance` (plain textures in Mitsuba 3.9.1, not wrapped in D65); any
+    /// other child is an error, and so is a spatially varying `intensity`.
+    fn light_texture(
+        &mut self,
+        v: &ObjectView<'e>,
+    ) -> Result<Option<(TextureDesc, &'e SourceLoc)>> {
         let wanted = match v.plugin.as_str() {
             "spot" => Some("texture"),
             "projector" => Some("irradiance"),
@@ -93,153 +144,78 @@ impl<'e> Builder<'e> {
                     return Err(misplaced(
                         child,
                         t,
-                        &v,
+                        v,
                         &format!("one <texture name=\"{w}\">"),
                     ))
                 }
-                None => no_children(&v)?,
+                None => no_children(v)?,
             }
         }
-        let kind = match v.plugin.as_str() {
-            "point" => {
-                let position = match (v.vec3("position")?, to_world) {
-                    (Some(_), Some(_)) => {
-                        return Err(
-                            v.prop_error("position", "give either position or to_world, not both")
-                        )
-                    }
-                    (Some(p), None) => p,
-                    (None, Some(m)) => m.transform_point3(Vec3::ZERO),
-                    (None, None) => Vec3::ZERO,
-                };
-                let profile = self.ies_profile(&v, to_world)?;
-                LightKind::Point {
-                    position,
-                    intensity: spectrum("intensity")?,
-                    profile,
-                }
-            }
-            "goniometric" => {
-                let to_world = to_world.unwrap_or(Mat4::IDENTITY);
-                let name = v
-                    .string("filename")?
-                    .ok_or_else(|| SceneError::at(&el.loc, "goniometric needs a filename (an .ies file or an equirectangular EXR image)"))?;
-                let scale = self.profile_scale(&v)?;
-                let path = self.light_file(&v, "filename", "", &name)?;
-                let source = if is_ies(&name) {
-                    ProfileSource::Ies(self.read_ies(&v, "filename", &name, &path)?)
-                } else {
-                    ProfileSource::Image(path)
-                };
-                LightKind::Point {
-                    position: to_world.transform_point3(Vec3::ZERO),
-                    intensity: spectrum("intensity")?,
-                    profile: Some(Box::new(IntensityProfile {
-                        source,
-                        to_world: profile_rotation(&v, &to_world)?,
-                        scale,
-                    })),
-                }
-            }
-            "spot" => {
-                let cutoff_deg = v.float("cutoff_angle")?.unwrap_or(20.0);
-                if !(cutoff_deg > 0.0 && cutoff_deg <= 180.0) {
-                    return Err(
-                        v.prop_error("cutoff_angle", "cutoff_angle must be in (0, 180] degrees")
-                    );
-                }
-                let beam_width_deg = v.float("beam_width")?.unwrap_or(cutoff_deg * 0.75);
-                if !(beam_width_deg >= 0.0 && beam_width_deg <= cutoff_deg) {
-                    return Err(v.prop_error(
-                        "beam_width",
-                        "beam_width must be in [0, cutoff_angle] degrees",
-                    ));
-                }
-                let texture = match texture {
-                    Some((TextureDesc::Constant(_), loc)) => {
-                        return Err(SceneError::at(
-                            loc,
-                            "a spot's texture must vary over the image (Mitsuba refuses a constant one): give a constant as the intensity",
-                        ))
-                    }
-                    t => t.map(|(t, _)| t),
-                };
-                LightKind::Spot {
-                    to_world: to_world.unwrap_or(Mat4::IDENTITY),
-                    intensity: spectrum("intensity")?,
-                    cutoff_deg,
-                    beam_width_deg,
-                    texture,
-                    profile: self.ies_profile(&v, to_world)?,
-                }
-            }
-            "projector" => {
-                let irradiance = match texture {
-                    Some((t, _)) => {
-                        if v.has("irradiance") {
-                            return Err(v.prop_error(
-                                "irradiance",
-                                "give either an irradiance value or an irradiance texture",
-                            ));
-                        }
-                        t
-                    }
-                    None => TextureDesc::Constant(spectrum("irradiance")?),
-                };
-                let scale = v.float("scale")?.unwrap_or(1.0);
-                if !(scale >= 0.0 && scale.is_finite()) {
-                    return Err(v.prop_error("scale", "scale must be finite and not negative"));
-                }
-                LightKind::Projector {
-                    to_world: to_world.unwrap_or(Mat4::IDENTITY),
-                    irradiance,
-                    scale,
-                    projection: super::sensor::projection(&v)?,
-                }
-            }
-            "directional" => LightKind::Directional {
-                direction: direction(&v, to_world)?,
-                irradiance: spectrum("irradiance")?,
-            },
-            "sun" => {
-                let angular_diameter_deg = v.float("angular_diameter")?.unwrap_or(0.5338);
-                if !(angular_diameter_deg > 0.0 && angular_diameter_deg < 180.0) {
-                    return Err(v.prop_error(
-                        "angular_diameter",
-                        "angular_diameter must be in (0, 180) degrees",
-                    ));
-                }
-                LightKind::Sun {
-                    direction: direction(&v, to_world)?,
-                    irradiance: spectrum("irradiance")?,
-                    angular_diameter_deg,
-                }
-            }
-            "constant" => LightKind::Constant {
-                radiance: spectrum("radiance")?,
-            },
-            "sunsky" => LightKind::SunSky(Box::new(super::sunsky::sunsky(&v, to_world)?)),
-            "envmap" => {
-                let name = v
-                    .string("filename")?
-                    .ok_or_else(|| SceneError::at(&el.loc, "envmap needs a filename"))?;
-                let path = self.light_file(&v, "filename", "environment map ", &name)?;
-                let scale = v.float("scale")?.unwrap_or(1.0);
-                if scale < 0.0 {
-                    return Err(v.prop_error("scale", "scale must not be negative"));
-                }
-                LightKind::EnvMap {
-                    filename: path,
-                    to_world: to_world.unwrap_or(Mat4::IDENTITY),
-                    scale,
-                }
-            }
-            _ => return Err(plugin_error(el)),
+        Ok(texture)
+    }
+
+    /// A `goniometric` light: a point light whose intensity an IES file or an equirectangular
+    /// image of factors shapes.
+    fn goniometric(&self, v: &ObjectView<'e>, to_world: Option<Mat4>) -> Result<LightKind> {
+        let to_world = to_world.unwrap_or(Mat4::IDENTITY);
+        let name = v.string("filename")?.ok_or_else(|| {
+            SceneError::at(
+                &v.el.loc,
+                "goniometric needs a filename (an .ies file or an equirectangular EXR image)",
+            )
+        })?;
+        let scale = self.profile_scale(v)?;
+        let path = self.light_file(v, "filename", "", &name)?;
+        let source = if is_ies(&name) {
+            ProfileSource::Ies(self.read_ies(v, "filename", &name, &path)?)
+        } else {
+            ProfileSource::Image(path)
         };
-        v.finish()?;
-        Ok(LightDesc {
-            loc: el.loc.clone(),
-            kind,
+        Ok(LightKind::Point {
+            position: to_world.transform_point3(Vec3::ZERO),
+            intensity: light_spectrum(v, "intensity")?,
+            profile: Some(Box::new(IntensityProfile {
+                source,
+                to_world: profile_rotation(v, &to_world)?,
+                scale,
+            })),
+        })
+    }
+
+    /// A `spot` light with its optional `texture` (which must vary) and IES profile.
+    fn spot(
+        &self,
+        v: &ObjectView<'e>,
+        to_world: Option<Mat4>,
+        texture: Option<(TextureDesc, &SourceLoc)>,
+    ) -> Result<LightKind> {
+        let cutoff_deg = v.float("cutoff_angle")?.unwrap_or(20.0);
+        if !(cutoff_deg > 0.0 && cutoff_deg <= 180.0) {
+            return Err(v.prop_error("cutoff_angle", "cutoff_angle must be in (0, 180] degrees"));
+        }
+        let beam_width_deg = v.float("beam_width")?.unwrap_or(cutoff_deg * 0.75);
+        if !(beam_width_deg >= 0.0 && beam_width_deg <= cutoff_deg) {
+            return Err(v.prop_error(
+                "beam_width",
+                "beam_width must be in [0, cutoff_angle] degrees",
+            ));
+        }
+        let texture = match texture {
+            Some((TextureDesc::Constant(_), loc)) => {
+                return Err(SceneError::at(
+                    loc,
+                    "a spot's texture must vary over the image (Mitsuba refuses a constant one): give a constant as the intensity",
+                ))
+            }
+            t => t.map(|(t, _)| t),
+        };
+        Ok(LightKind::Spot {
+            to_world: to_world.unwrap_or(Mat4::IDENTITY),
+            intensity: light_spectrum(v, "intensity")?,
+            cutoff_deg,
+            beam_width_deg,
+            texture,
+            profile: self.ies_profile(v, to_world)?,
         })
     }
 
@@ -395,6 +371,62 @@ impl<'e> Builder<'e> {
             primaries,
         })
     }
+}
+
+/// A light's spectrum property `name` (default 1), which must not be negative.
+fn light_spectrum(v: &ObjectView<'_>, name: &str) -> Result<SpectrumDesc> {
+    let s = v.spectrum(name)?.unwrap_or(SpectrumDesc::Constant(1.0));
+    let vals = s.values();
+    if vals.iter().any(|&x| x < 0.0) {
+        return Err(v.prop_error(name, format!("{name} must not be negative")));
+    }
+    Ok(s)
+}
+
+/// A distant light's direction of travel: `direction`, or the +z axis of `to_world`
+/// (default +z), normalised.
+fn light_direction(v: &ObjectView<'_>, to_world: Option<Mat4>) -> Result<Vec3> {
+    let d = match (v.vec3("direction")?, to_world) {
+        (Some(_), Some(_)) => {
+            return Err(v.prop_error("direction", "give either direction or to_world, not both"))
+        }
+        (Some(d), None) => d,
+        (None, Some(m)) => m.transform_vector3(Vec3::Z),
+        (None, None) => Vec3::Z,
+    };
+    d.try_normalize()
+        .ok_or_else(|| v.prop_error("direction", "direction must not be zero"))
+}
+
+/// A `projector`: its irradiance a value or a nested texture (not both), `scale`, and a
+/// camera's projection.
+fn projector(
+    v: &ObjectView<'_>,
+    to_world: Option<Mat4>,
+    texture: Option<(TextureDesc, &SourceLoc)>,
+) -> Result<LightKind> {
+    let irradiance = match texture {
+        Some((t, _)) => {
+            if v.has("irradiance") {
+                return Err(v.prop_error(
+                    "irradiance",
+                    "give either an irradiance value or an irradiance texture",
+                ));
+            }
+            t
+        }
+        None => TextureDesc::Constant(light_spectrum(v, "irradiance")?),
+    };
+    let scale = v.float("scale")?.unwrap_or(1.0);
+    if !(scale >= 0.0 && scale.is_finite()) {
+        return Err(v.prop_error("scale", "scale must be finite and not negative"));
+    }
+    Ok(LightKind::Projector {
+        to_world: to_world.unwrap_or(Mat4::IDENTITY),
+        irradiance,
+        scale,
+        projection: super::sensor::projection(v)?,
+    })
 }
 
 /// Whether a profile's file name is an IES file (by its extension, as photometric files are

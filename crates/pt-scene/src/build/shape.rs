@@ -466,12 +466,60 @@ impl<'e> Builder<'e> {
             "heterogeneous" => true,
             _ => return Err(plugin_error(el)),
         };
-        let mut phase_fn = None;
-        let (mut sigma_volume, mut albedo_volume, mut emission_volume) = (None, None, None);
+        let nested = self.medium_children(&v, heterogeneous)?;
+        let (sigma_t, density) = match nested.sigma_t {
+            Some(_) if v.has("sigma_t") => return Err(given_twice(&v, "sigma_t")),
+            Some(Volume::Grid(g)) => (SpectrumDesc::Constant(1.0), Some(g)),
+            Some(Volume::Constant(c)) => (c, None),
+            None => (
+                v.spectrum("sigma_t")?
+                    .unwrap_or(SpectrumDesc::Constant(1.0)),
+                None,
+            ),
+        };
+        let scale = v.float("scale")?.unwrap_or(1.0);
+        if !(scale.is_finite() && scale >= 0.0) {
+            return Err(v.prop_error(
+                "scale",
+                format!("scale must be finite and >= 0, got {scale}"),
+            ));
+        }
+        if sigma_t
+            .values()
+            .iter()
+            .any(|x| !(x.is_finite() && *x >= 0.0))
+        {
+            return Err(v.prop_error("sigma_t", "sigma_t must be finite and >= 0"));
+        }
+        let albedo = medium_albedo(&v, nested.albedo)?;
+        let emission = medium_emission(&v, nested.emission, density.is_some())?;
+        let sample_emitters = v.boolean("sample_emitters")?.unwrap_or(true);
+        v.boolean("has_spectral_extinction")?;
+        v.finish()?;
+        Ok(MediumDesc {
+            loc: el.loc.clone(),
+            sigma_t: scaled_extinction(&v, sigma_t, scale)?,
+            albedo,
+            phase: nested.phase.unwrap_or(PhaseDesc::Isotropic),
+            sample_emitters,
+            density,
+            emission,
+        })
+    }
+
+    /// A medium's nested objects: at most one `<phase>` and one `<volume>` each for
+    /// `sigma_t`, `albedo` and `emission`; grids of extinction or emission only in a
+    /// `heterogeneous` medium.
+    fn medium_children(
+        &mut self,
+        v: &ObjectView<'_>,
+        heterogeneous: bool,
+    ) -> Result<MediumChildren> {
+        let mut nested = MediumChildren::default();
         for child in &v.children {
             let what = child.written();
             match what.tag.as_str() {
-                "phase" if phase_fn.is_none() => phase_fn = Some(phase(what)?),
+                "phase" if nested.phase.is_none() => nested.phase = Some(phase(what)?),
                 "phase" => {
                     return Err(SceneError::at(
                         &what.loc,
@@ -480,9 +528,9 @@ impl<'e> Builder<'e> {
                 }
                 "volume" => {
                     let (slot, role) = match what.attr("name") {
-                        Some("sigma_t") => (&mut sigma_volume, GridRole::Extinction),
-                        Some("albedo") => (&mut albedo_volume, GridRole::Albedo),
-                        Some("emission") => (&mut emission_volume, GridRole::Emission),
+                        Some("sigma_t") => (&mut nested.sigma_t, GridRole::Extinction),
+                        Some("albedo") => (&mut nested.albedo, GridRole::Albedo),
+                        Some("emission") => (&mut nested.emission, GridRole::Emission),
                         other => {
                             return Err(SceneError::at(
                                 &what.loc,
@@ -527,106 +575,7 @@ impl<'e> Builder<'e> {
                 }
             }
         }
-        let twice = |name: &str| {
-            v.prop_error(
-                name,
-                format!("{name} is given twice (a value and a <volume>)"),
-            )
-        };
-        let (sigma_t, density) = match sigma_volume {
-            Some(_) if v.has("sigma_t") => return Err(twice("sigma_t")),
-            Some(Volume::Grid(g)) => (SpectrumDesc::Constant(1.0), Some(g)),
-            Some(Volume::Constant(c)) => (c, None),
-            None => (
-                v.spectrum("sigma_t")?
-                    .unwrap_or(SpectrumDesc::Constant(1.0)),
-                None,
-            ),
-        };
-        let scale = v.float("scale")?.unwrap_or(1.0);
-        if !(scale.is_finite() && scale >= 0.0) {
-            return Err(v.prop_error(
-                "scale",
-                format!("scale must be finite and >= 0, got {scale}"),
-            ));
-        }
-        if sigma_t
-            .values()
-            .iter()
-            .any(|x| !(x.is_finite() && *x >= 0.0))
-        {
-            return Err(v.prop_error("sigma_t", "sigma_t must be finite and >= 0"));
-        }
-        // Mitsuba's default albedo.
-        let albedo = match albedo_volume {
-            Some(_) if v.has("albedo") => return Err(twice("albedo")),
-            Some(Volume::Constant(c)) => VolumeDesc::Constant(c),
-            Some(Volume::Grid(g)) => VolumeDesc::Grid(g),
-            None => VolumeDesc::Constant(
-                v.spectrum("albedo")?
-                    .unwrap_or(SpectrumDesc::Constant(0.75)),
-            ),
-        };
-        if let VolumeDesc::Constant(a) = &albedo {
-            if a.values()
-                .iter()
-                .any(|x| !(x.is_finite() && (0.0..=1.0).contains(x)))
-            {
-                return Err(v.prop_error("albedo", "albedo must lie in [0, 1]"));
-            }
-            if let s @ (SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. }) = a {
-                return Err(v.prop_error(
-                    "albedo",
-                    format!("albedo cannot be an emission spectrum ({})", s.form_name()),
-                ));
-            }
-        }
-        let emission = match emission_volume {
-            Some(_) if v.has("emission") => return Err(twice("emission")),
-            Some(Volume::Constant(c)) => Some(VolumeDesc::Constant(c)),
-            Some(Volume::Grid(g)) if density.is_some() => Some(VolumeDesc::Grid(g)),
-            Some(Volume::Grid(_)) => {
-                return Err(SceneError::at(
-                    &el.loc,
-                    "an emission grid needs an extinction grid (a <volume type=\"gridvolume\" name=\"sigma_t\">): emission is confined to its box",
-                ))
-            }
-            None => v.spectrum("emission")?.map(VolumeDesc::Constant),
-        };
-        if let Some(VolumeDesc::Constant(e)) = &emission {
-            if e.values().iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
-                return Err(v.prop_error("emission", "emission must be finite and >= 0"));
-            }
-        }
-        let sample_emitters = v.boolean("sample_emitters")?.unwrap_or(true);
-        v.boolean("has_spectral_extinction")?;
-        v.finish()?;
-        let sigma_t = match sigma_t {
-            SpectrumDesc::Constant(c) => SpectrumDesc::Constant(c * scale),
-            SpectrumDesc::Uniform(c) => SpectrumDesc::Uniform(c * scale),
-            SpectrumDesc::Rgb(c) => SpectrumDesc::Rgb(c.map(|x| x * scale)),
-            SpectrumDesc::Tabulated(p) => SpectrumDesc::Tabulated(std::sync::Arc::new(
-                p.iter().map(|&(w, x)| (w, x * scale)).collect(),
-            )),
-            SpectrumDesc::Measured(p) => SpectrumDesc::Tabulated(std::sync::Arc::new(
-                p.iter().map(|&(w, x)| (w, x * scale)).collect(),
-            )),
-            s @ (SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. }) => {
-                return Err(v.prop_error(
-                    "sigma_t",
-                    format!("sigma_t cannot be an emission spectrum ({})", s.form_name()),
-                ));
-            }
-        };
-        Ok(MediumDesc {
-            loc: el.loc.clone(),
-            sigma_t,
-            albedo,
-            phase: phase_fn.unwrap_or(PhaseDesc::Isotropic),
-            sample_emitters,
-            density,
-            emission,
-        })
+        Ok(nested)
     }
 
     /// A medium's `<volume>`: `constvolume` (`value`: float, rgb or spectrum; default 1) or
@@ -722,6 +671,107 @@ impl<'e> Builder<'e> {
 enum Volume {
     Constant(SpectrumDesc),
     Grid(std::sync::Arc<GridDesc>),
+}
+
+/// A medium's nested objects as read, before its properties.
+#[derive(Default)]
+struct MediumChildren {
+    phase: Option<PhaseDesc>,
+    sigma_t: Option<Volume>,
+    albedo: Option<Volume>,
+    emission: Option<Volume>,
+}
+
+/// The error of a medium parameter `name` given both as a value and as a `<volume>`.
+fn given_twice(v: &ObjectView<'_>, name: &str) -> SceneError {
+    v.prop_error(
+        name,
+        format!("{name} is given twice (a value and a <volume>)"),
+    )
+}
+
+/// A medium's albedo: its `<volume>` or `albedo` property (Mitsuba's default 0.75); a
+/// constant must lie in [0, 1] and not be an emission spectrum.
+fn medium_albedo(v: &ObjectView<'_>, nested: Option<Volume>) -> Result<VolumeDesc> {
+    // Mitsuba's default albedo.
+    let albedo = match nested {
+        Some(_) if v.has("albedo") => return Err(given_twice(v, "albedo")),
+        Some(Volume::Constant(c)) => VolumeDesc::Constant(c),
+        Some(Volume::Grid(g)) => VolumeDesc::Grid(g),
+        None => VolumeDesc::Constant(
+            v.spectrum("albedo")?
+                .unwrap_or(SpectrumDesc::Constant(0.75)),
+        ),
+    };
+    if let VolumeDesc::Constant(a) = &albedo {
+        if a.values()
+            .iter()
+            .any(|x| !(x.is_finite() && (0.0..=1.0).contains(x)))
+        {
+            return Err(v.prop_error("albedo", "albedo must lie in [0, 1]"));
+        }
+        if let s @ (SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. }) = a {
+            return Err(v.prop_error(
+                "albedo",
+                format!("albedo cannot be an emission spectrum ({})", s.form_name()),
+            ));
+        }
+    }
+    Ok(albedo)
+}
+
+/// A medium's emission (pt extension): its `<volume>` (a grid only beside an extinction
+/// grid, `has_density`) or `emission` property, none by default; a constant must be finite
+/// and >= 0.
+fn medium_emission(
+    v: &ObjectView<'_>,
+    nested: Option<Volume>,
+    has_density: bool,
+) -> Result<Option<VolumeDesc>> {
+    let emission = match nested {
+        Some(_) if v.has("emission") => return Err(given_twice(v, "emission")),
+        Some(Volume::Constant(c)) => Some(VolumeDesc::Constant(c)),
+        Some(Volume::Grid(g)) if has_density => Some(VolumeDesc::Grid(g)),
+        Some(Volume::Grid(_)) => {
+            return Err(SceneError::at(
+                &v.el.loc,
+                "an emission grid needs an extinction grid (a <volume type=\"gridvolume\" name=\"sigma_t\">): emission is confined to its box",
+            ))
+        }
+        None => v.spectrum("emission")?.map(VolumeDesc::Constant),
+    };
+    if let Some(VolumeDesc::Constant(e)) = &emission {
+        if e.values().iter().any(|x| !(x.is_finite() && *x >= 0.0)) {
+            return Err(v.prop_error("emission", "emission must be finite and >= 0"));
+        }
+    }
+    Ok(emission)
+}
+
+/// A medium's extinction `sigma_t` times its `scale` (measured spectra become tabulated ones);
+/// an emission spectrum is refused.
+fn scaled_extinction(
+    v: &ObjectView<'_>,
+    sigma_t: SpectrumDesc,
+    scale: f32,
+) -> Result<SpectrumDesc> {
+    Ok(match sigma_t {
+        SpectrumDesc::Constant(c) => SpectrumDesc::Constant(c * scale),
+        SpectrumDesc::Uniform(c) => SpectrumDesc::Uniform(c * scale),
+        SpectrumDesc::Rgb(c) => SpectrumDesc::Rgb(c.map(|x| x * scale)),
+        SpectrumDesc::Tabulated(p) => SpectrumDesc::Tabulated(std::sync::Arc::new(
+            p.iter().map(|&(w, x)| (w, x * scale)).collect(),
+        )),
+        SpectrumDesc::Measured(p) => SpectrumDesc::Tabulated(std::sync::Arc::new(
+            p.iter().map(|&(w, x)| (w, x * scale)).collect(),
+        )),
+        s @ (SpectrumDesc::Blackbody { .. } | SpectrumDesc::Illuminant { .. }) => {
+            return Err(v.prop_error(
+                "sigma_t",
+                format!("sigma_t cannot be an emission spectrum ({})", s.form_name()),
+            ));
+        }
+    })
 }
 
 /// Which medium parameter a `<volume>` gives.

@@ -360,10 +360,11 @@ fn tabphase_reads_its_table() {
     }
 }
 
-#[test]
-fn heterogeneous_medium_reads_its_grid_and_refuses_what_it_cannot_trace() {
+/// A folder `name` in the temporary directory with the grids the medium tests read: one and
+/// three channels of 0.5, a negative one, six channels, and an albedo of 1.5.
+fn medium_grids(name: &str) -> PathBuf {
     use crate::volgrid::{write_vol, VolumeGrid};
-    let dir = temp_dir("heterogeneous");
+    let dir = temp_dir(name);
     let grid = |channels: u32, value: f32| VolumeGrid {
         resolution: [2, 3, 2],
         channels,
@@ -379,13 +380,25 @@ fn heterogeneous_medium_reads_its_grid_and_refuses_what_it_cannot_trace() {
     ] {
         std::fs::write(dir.join(name), write_vol(&g)).unwrap();
     }
-    let medium = |inner: &str| {
-        scene(&format!(
-            "<shape type=\"cube\"><bsdf type=\"null\"/><medium type=\"heterogeneous\" name=\"interior\">{inner}</medium></shape>"
-        ))
-    };
-    let load_in = |xml: &str| load_str(xml, Path::new("test.xml"), &dir, &[]);
-    let s = load_in(&medium(
+    dir
+}
+
+/// Loads the scene `xml` with files relative to `dir`.
+fn load_in(dir: &Path, xml: &str) -> Result<SceneDesc, SceneError> {
+    load_str(xml, Path::new("test.xml"), dir, &[])
+}
+
+/// A scene of a cube holding a heterogeneous medium with the children `inner`.
+fn heterogeneous(inner: &str) -> String {
+    scene(&format!(
+        "<shape type=\"cube\"><bsdf type=\"null\"/><medium type=\"heterogeneous\" name=\"interior\">{inner}</medium></shape>"
+    ))
+}
+
+#[test]
+fn heterogeneous_medium_reads_its_grid() {
+    let dir = medium_grids("heterogeneous");
+    let s = load_in(&dir, &heterogeneous(
         r#"<volume type="gridvolume" name="sigma_t"><string name="filename" value="one.vol"/>
            <transform name="to_world"><scale value="2"/></transform></volume>
            <float name="scale" value="4"/>
@@ -404,7 +417,7 @@ fn heterogeneous_medium_reads_its_grid_and_refuses_what_it_cannot_trace() {
     assert_eq!(d.to_world, glam::Mat4::from_scale(Vec3::splat(2.0)));
     assert!(!d.nearest);
     // use_grid_bbox: the file's box, then to_world.
-    let s = load_in(&medium(
+    let s = load_in(&dir, &heterogeneous(
         r#"<volume type="gridvolume" name="sigma_t"><string name="filename" value="one.vol"/>
            <boolean name="use_grid_bbox" value="true"/><string name="filter_type" value="nearest"/></volume>"#,
     ))
@@ -421,9 +434,14 @@ fn heterogeneous_medium_reads_its_grid_and_refuses_what_it_cannot_trace() {
         d.to_world.transform_point3(Vec3::ONE),
         Vec3::new(2.0, 4.0, 7.0)
     );
+}
+
+#[test]
+fn heterogeneous_medium_reads_rgb_grids_and_emission() {
+    let dir = medium_grids("heterogeneous-rgb");
     // Three-channel (RGB) grids for extinction, albedo and emission, each with its own
     // transform; a constant emission.
-    let s = load_in(&medium(
+    let s = load_in(&dir, &heterogeneous(
         r#"<volume type="gridvolume" name="sigma_t"><string name="filename" value="rgb.vol"/></volume>
            <volume type="gridvolume" name="albedo"><string name="filename" value="rgb.vol"/>
                <transform name="to_world"><translate value="1, 0, 0"/></transform></volume>
@@ -441,7 +459,7 @@ fn heterogeneous_medium_reads_its_grid_and_refuses_what_it_cannot_trace() {
         glam::Mat4::from_translation(Vec3::new(1.0, 0.0, 0.0))
     );
     assert!(matches!(m.emission, Some(VolumeDesc::Grid(_))));
-    let s = load_in(&scene(
+    let s = load_in(&dir, &scene(
         r#"<shape type="sphere"><medium type="homogeneous" name="interior"><rgb name="emission" value="1, 2, 3"/>
            <volume type="gridvolume" name="albedo"><string name="filename" value="one.vol"/></volume></medium></shape>"#,
     ))
@@ -452,6 +470,11 @@ fn heterogeneous_medium_reads_its_grid_and_refuses_what_it_cannot_trace() {
         Some(VolumeDesc::Constant(SpectrumDesc::Rgb([1.0, 2.0, 3.0])))
     );
     assert!(matches!(m.albedo, VolumeDesc::Grid(_)));
+}
+
+#[test]
+fn heterogeneous_medium_refuses_what_it_cannot_trace() {
+    let dir = medium_grids("heterogeneous-refused");
     for (inner, want) in [
         (
             r#"<volume type="gridvolume" name="sigma_t"><string name="filename" value="six.vol"/></volume>"#,
@@ -494,12 +517,17 @@ fn heterogeneous_medium_reads_its_grid_and_refuses_what_it_cannot_trace() {
             "name=\"sigma_t\", name=\"albedo\" or name=\"emission\"",
         ),
     ] {
-        let e = load_in(&medium(inner)).unwrap_err();
+        let e = load_in(&dir, &heterogeneous(inner)).unwrap_err();
         assert!(e.message.contains(want), "{inner}: {e}");
     }
+}
+
+#[test]
+fn homogeneous_medium_refuses_extinction_and_emission_grids() {
+    let dir = medium_grids("homogeneous-grids");
     // A homogeneous medium reads constant volumes, and refuses extinction and emission grids.
     let homogeneous = |inner: &str| {
-        load_in(&scene(&format!(
+        load_in(&dir, &scene(&format!(
             "<shape type=\"sphere\"><medium type=\"homogeneous\" name=\"interior\">{inner}</medium></shape>"
         )))
     };
