@@ -245,6 +245,98 @@ impl Lcg {
     }
 }
 
+/// The largest ratio of the tube's radius to its radius of curvature along the segment
+/// (at 101 parameters): beyond 1/2 the circle sweep folds into itself inside a bend.
+fn max_fold(cp: &[Vec3A; 4], r: &[f32; 4]) -> f32 {
+    (0..=100)
+        .map(|i| {
+            let e = bspline_eval(cp, r, i as f32 / 100.0);
+            e.r * e.dc.cross(e.ddc).length() / e.dc.length().powi(3)
+        })
+        .fold(0.0f32, f32::max)
+}
+
+/// The tessellation of a B-spline tube: `n_u + 1` rings of the circle sweep of `n_around`
+/// points each, joined by triangles oriented outwards (ring `i` starts triangle
+/// `2 n_around i`).
+fn tessellate(cp: &[Vec3A; 4], r: &[f32; 4], n_u: usize, n_around: usize) -> Vec<[Vec3; 3]> {
+    let ring = |i: usize| {
+        let e = bspline_eval(cp, r, i as f32 / n_u as f32);
+        let axis = Vec3::from(e.dc).normalize();
+        let (rot, rad) = curve_frame(axis);
+        (0..n_around)
+            .map(|j| {
+                let phi = std::f32::consts::TAU * j as f32 / n_around as f32;
+                Vec3::from(e.c) + (rad * phi.cos() + rot * phi.sin()) * e.r
+            })
+            .collect::<Vec<_>>()
+    };
+    let rings: Vec<Vec<Vec3>> = (0..=n_u).map(ring).collect();
+    let mut tris = Vec::new();
+    for i in 0..n_u {
+        let mid = Vec3::from(bspline_eval(cp, r, (i as f32 + 0.5) / n_u as f32).c);
+        for j in 0..n_around {
+            let k = (j + 1) % n_around;
+            for t in [
+                [rings[i][j], rings[i + 1][j], rings[i + 1][k]],
+                [rings[i][j], rings[i + 1][k], rings[i][k]],
+            ] {
+                let n = (t[1] - t[0]).cross(t[2] - t[0]);
+                let out = n.dot((t[0] + t[1] + t[2]) / 3.0 - mid) > 0.0;
+                tris.push(if out { t } else { [t[0], t[2], t[1]] });
+            }
+        }
+    }
+    tris
+}
+
+/// The nearest front face of the tessellation `tris` (of `n_u` rings of `n_around` points)
+/// along the ray `o + t d`: its distance, normal and the parameter of its ring.
+fn tessellation_hit(
+    tris: &[[Vec3; 3]],
+    o: Vec3,
+    d: Vec3,
+    n_u: usize,
+    n_around: usize,
+) -> Option<(f32, Vec3, f32)> {
+    let mut tess: Option<(f32, Vec3, f32)> = None;
+    for (k, tri) in tris.iter().enumerate() {
+        let (e1, e2) = (tri[1] - tri[0], tri[2] - tri[0]);
+        let n = e1.cross(e2).normalize();
+        if n.dot(d) >= 0.0 {
+            continue;
+        }
+        let hit = crate::geometry::intersect_triangle(
+            o.into(),
+            d.into(),
+            tri[0].into(),
+            e1.into(),
+            e2.into(),
+            0.0,
+            tess.map_or(f32::INFINITY, |h| h.0),
+        );
+        if let Some((th, _, _)) = hit {
+            let ring_u = (k / (2 * n_around)) as f32 / n_u as f32;
+            tess = Some((th, n, ring_u));
+        }
+    }
+    tess
+}
+
+/// How far the point `x` lies off the tube: its distance from the curve point whose circle
+/// plane holds it (the foot, by Newton from the parameter `u`) minus the radius there; with
+/// that curve point.
+fn off_tube(cp: &[Vec3A; 4], r: &[f32; 4], x: Vec3A, mut u: f32) -> (f32, CurvePoint) {
+    for _ in 0..8 {
+        let e = bspline_eval(cp, r, u);
+        let g = (x - e.c).dot(e.dc);
+        let dg = (x - e.c).dot(e.ddc) - e.dc.length_squared();
+        u -= g / dg;
+    }
+    let e = bspline_eval(cp, r, u);
+    ((x - e.c).length() - e.r, e)
+}
+
 /// The B-spline intersector against a dense tessellation of the same tube (the circle of
 /// radius r(u) across c'(u) at 200 values of u, 96 points around; front faces only), over
 /// 30 segments from gently to strongly bent with radii varying up to threefold, and 400 rays
@@ -275,13 +367,7 @@ fn bspline_matches_dense_tessellation() {
         // Tubes thinner than half their radius of curvature: beyond, the circle sweep folds
         // into itself on the inside of a bend, where no two tube models agree (hair is far
         // thinner than its bends).
-        let fold = (0..=100)
-            .map(|i| {
-                let e = bspline_eval(&cp, &r, i as f32 / 100.0);
-                e.r * e.dc.cross(e.ddc).length() / e.dc.length().powi(3)
-            })
-            .fold(0.0f32, f32::max);
-        if fold > 0.5 {
+        if max_fold(&cp, &r) > 0.5 {
             skipped += 1;
             continue;
         }
@@ -292,34 +378,7 @@ fn bspline_matches_dense_tessellation() {
                 (pp.map(Vec3A::from), pr)
             })
             .collect();
-        // The tessellation: rings of the circle sweep, triangles oriented outwards.
-        let ring = |i: usize| {
-            let e = bspline_eval(&cp, &r, i as f32 / n_u as f32);
-            let axis = Vec3::from(e.dc).normalize();
-            let (rot, rad) = curve_frame(axis);
-            (0..n_around)
-                .map(|j| {
-                    let phi = std::f32::consts::TAU * j as f32 / n_around as f32;
-                    Vec3::from(e.c) + (rad * phi.cos() + rot * phi.sin()) * e.r
-                })
-                .collect::<Vec<_>>()
-        };
-        let rings: Vec<Vec<Vec3>> = (0..=n_u).map(ring).collect();
-        let mut tris = Vec::new();
-        for i in 0..n_u {
-            let mid = Vec3::from(bspline_eval(&cp, &r, (i as f32 + 0.5) / n_u as f32).c);
-            for j in 0..n_around {
-                let k = (j + 1) % n_around;
-                for t in [
-                    [rings[i][j], rings[i + 1][j], rings[i + 1][k]],
-                    [rings[i][j], rings[i + 1][k], rings[i][k]],
-                ] {
-                    let n = (t[1] - t[0]).cross(t[2] - t[0]);
-                    let out = n.dot((t[0] + t[1] + t[2]) / 3.0 - mid) > 0.0;
-                    tris.push(if out { t } else { [t[0], t[2], t[1]] });
-                }
-            }
-        }
+        let tris = tessellate(&cp, &r, n_u, n_around);
         for _ in 0..400 {
             let u = rng.next();
             let e = bspline_eval(&cp, &r, u);
@@ -340,28 +399,7 @@ fn bspline_matches_dense_tessellation() {
                     "case {case}: o {o} d {d}: whole {t}, pieces {t_pieces}"
                 ));
             }
-            // The tessellation's nearest front face.
-            let mut tess: Option<(f32, Vec3, f32)> = None;
-            for (k, tri) in tris.iter().enumerate() {
-                let (e1, e2) = (tri[1] - tri[0], tri[2] - tri[0]);
-                let n = e1.cross(e2).normalize();
-                if n.dot(d) >= 0.0 {
-                    continue;
-                }
-                let hit = crate::geometry::intersect_triangle(
-                    o.into(),
-                    d.into(),
-                    tri[0].into(),
-                    e1.into(),
-                    e2.into(),
-                    0.0,
-                    tess.map_or(f32::INFINITY, |h| h.0),
-                );
-                if let Some((th, _, _)) = hit {
-                    let ring_u = (k / (2 * n_around)) as f32 / n_u as f32;
-                    tess = Some((th, n, ring_u));
-                }
-            }
+            let tess = tessellation_hit(&tris, o, d, n_u, n_around);
             let ours = t.is_finite().then(|| {
                 let h = bspline_hit(&cp, &r, u_hit, o + d * t, (0.0, 1.0), 0, 1);
                 (t, h.n, u_hit)
@@ -377,19 +415,7 @@ fn bspline_matches_dense_tessellation() {
                 (None, None) => {}
                 (Some(a), Some(b)) => {
                     let cos = a.1.dot(d).abs();
-                    // On the tube: the point's distance from the curve point whose circle
-                    // plane holds it (the foot, by Newton from the returned parameter) is the
-                    // radius there.
-                    let x = Vec3A::from(o + d * a.0);
-                    let mut u = a.2;
-                    for _ in 0..8 {
-                        let e = bspline_eval(&cp, &r, u);
-                        let g = (x - e.c).dot(e.dc);
-                        let dg = (x - e.c).dot(e.ddc) - e.dc.length_squared();
-                        u -= g / dg;
-                    }
-                    let e = bspline_eval(&cp, &r, u);
-                    let off = (x - e.c).length() - e.r;
+                    let (off, e) = off_tube(&cp, &r, Vec3A::from(o + d * a.0), a.2);
                     assert!(
                         off.abs() <= 1e-4 * e.r,
                         "case {case}: {off} off the tube (r {})",

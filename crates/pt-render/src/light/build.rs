@@ -21,15 +21,6 @@ pub fn build_light(
         message: m,
     };
     let emission = |s| constant_spectrum(s, Role::Emission, mode);
-    // World-to-light linear map of a light's `to_world` (for texture lookups).
-    let to_local = |m: &Mat4| {
-        let inv = Mat3::from_mat4(*m).inverse();
-        if inv.is_finite() {
-            Ok(inv)
-        } else {
-            Err(err("to_world cannot be inverted (a zero scale?)".into()))
-        }
-    };
     Ok(match &l.kind {
         LightKind::Point {
             position,
@@ -47,72 +38,8 @@ pub fn build_light(
                 profile,
             }
         }
-        LightKind::Spot {
-            to_world,
-            intensity,
-            cutoff_deg,
-            beam_width_deg,
-            texture,
-            profile,
-        } => {
-            let axis = to_world
-                .transform_vector3(Vec3::Z)
-                .try_normalize()
-                .ok_or_else(|| err("spot to_world has no direction".into()))?;
-            let cutoff = cutoff_deg.to_radians();
-            let cone = SpotCone {
-                cos_cutoff: cutoff.cos(),
-                cutoff,
-                beam_width: beam_width_deg.to_radians(),
-            };
-            let intensity = emission(intensity);
-            let profile = match profile {
-                Some(p) => Some(Box::new(
-                    build_profile(p, &intensity, Some(&cone)).map_err(err)?,
-                )),
-                None => None,
-            };
-            Light::Spot {
-                position: to_world.transform_point3(Vec3::ZERO),
-                frame: Frame::from_normal(axis),
-                intensity,
-                cone,
-                profile,
-                texture: match texture {
-                    Some(t) => Some(Box::new(SpotTexture {
-                        texture: textures.build(t, Role::Albedo).map_err(err)?,
-                        to_local: to_local(to_world)?,
-                        inv_tan_cutoff: 1.0 / cutoff.tan(),
-                    })),
-                    None => None,
-                },
-            }
-        }
-        LightKind::Projector {
-            to_world,
-            irradiance,
-            scale,
-            projection,
-        } => {
-            // Mitsuba 3.9.1 reads the projector's image (and a spot's) as a plain texture: in
-            // spectral mode texels are upsampled as reflectances, without D65 (the spot's
-            // intensity carries D65).
-            let irradiance = textures.build(irradiance, Role::Albedo).map_err(err)?;
-            let (w, h) = irradiance.resolution();
-            let pt_scene::Projection::Perspective { fov_deg, fov_axis } = *projection else {
-                return Err(err("a projector's projection must be perspective".into()));
-            };
-            let tan_half = tan_half_x(fov_deg, fov_axis, w as f32, h as f32);
-            Light::Projector(Box::new(Projector {
-                position: to_world.transform_point3(Vec3::ZERO),
-                to_local: to_local(to_world)?,
-                axis: to_world.transform_vector3(Vec3::Z),
-                irradiance,
-                pi_scale: std::f32::consts::PI * scale,
-                cot_half_x: 1.0 / tan_half,
-                aspect: w as f32 / h as f32,
-            }))
-        }
+        LightKind::Spot { .. } => build_spot(&l.kind, mode, textures).map_err(err)?,
+        LightKind::Projector { .. } => build_projector(&l.kind, textures).map_err(err)?,
         LightKind::Directional {
             direction,
             irradiance,
@@ -140,34 +67,132 @@ pub fn build_light(
         LightKind::Constant { radiance } => Light::Constant {
             radiance: emission(radiance),
         },
-        LightKind::EnvMap {
-            filename,
-            to_world,
-            scale,
-        } => {
-            let (img, _) =
-                pt_image::read_exr(filename).map_err(|e| err(format!("environment map: {e}")))?;
-            if img
-                .data
-                .iter()
-                .any(|p| p.iter().any(|c| !c.is_finite() || *c < 0.0))
-            {
-                return Err(err(format!(
-                    "environment map '{}' has negative or non-finite pixels",
-                    filename.display()
-                )));
-            }
-            let texels = img.data.iter().map(|p| p.map(|c| c * scale)).collect();
-            let rot = Mat3::from_mat4(*to_world);
-            let mut e = EnvMap::new(img.width as usize, img.height as usize, texels, rot)
-                .ok_or_else(|| err("empty environment map".into()))?;
-            // Spectral mode: the upsampled texels times D65 of luminance 1 (Mitsuba 3's envmap).
-            if mode == ColorMode::Spectral {
-                e.upsample();
-            }
-            Light::EnvMap(e)
-        }
+        LightKind::EnvMap { .. } => build_envmap(&l.kind, mode).map_err(err)?,
     })
+}
+
+/// World-to-light linear map of a light's `to_world` (for texture lookups).
+fn world_to_local(m: &Mat4) -> Result<Mat3, String> {
+    let inv = Mat3::from_mat4(*m).inverse();
+    if inv.is_finite() {
+        Ok(inv)
+    } else {
+        Err("to_world cannot be inverted (a zero scale?)".into())
+    }
+}
+
+/// A `spot` light: its cone, optional IES profile and optional texture (built by `textures`).
+fn build_spot(
+    kind: &LightKind,
+    mode: ColorMode,
+    textures: &mut TextureBuilder,
+) -> Result<Light, String> {
+    let LightKind::Spot {
+        to_world,
+        intensity,
+        cutoff_deg,
+        beam_width_deg,
+        texture,
+        profile,
+    } = kind
+    else {
+        return Err("internal: not a spot light".into());
+    };
+    let axis = to_world
+        .transform_vector3(Vec3::Z)
+        .try_normalize()
+        .ok_or_else(|| "spot to_world has no direction".to_string())?;
+    let cutoff = cutoff_deg.to_radians();
+    let cone = SpotCone {
+        cos_cutoff: cutoff.cos(),
+        cutoff,
+        beam_width: beam_width_deg.to_radians(),
+    };
+    let intensity = constant_spectrum(intensity, Role::Emission, mode);
+    let profile = match profile {
+        Some(p) => Some(Box::new(build_profile(p, &intensity, Some(&cone))?)),
+        None => None,
+    };
+    Ok(Light::Spot {
+        position: to_world.transform_point3(Vec3::ZERO),
+        frame: Frame::from_normal(axis),
+        intensity,
+        cone,
+        profile,
+        texture: match texture {
+            Some(t) => Some(Box::new(SpotTexture {
+                texture: textures.build(t, Role::Albedo)?,
+                to_local: world_to_local(to_world)?,
+                inv_tan_cutoff: 1.0 / cutoff.tan(),
+            })),
+            None => None,
+        },
+    })
+}
+
+/// A `projector`: its irradiance texture (built by `textures`) through a perspective
+/// projection.
+fn build_projector(kind: &LightKind, textures: &mut TextureBuilder) -> Result<Light, String> {
+    let LightKind::Projector {
+        to_world,
+        irradiance,
+        scale,
+        projection,
+    } = kind
+    else {
+        return Err("internal: not a projector".into());
+    };
+    // Mitsuba 3.9.1 reads the projector's image (and a spot's) as a plain texture: in
+    // spectral mode texels are upsampled as reflectances, without D65 (the spot's
+    // intensity carries D65).
+    let irradiance = textures.build(irradiance, Role::Albedo)?;
+    let (w, h) = irradiance.resolution();
+    let pt_scene::Projection::Perspective { fov_deg, fov_axis } = *projection else {
+        return Err("a projector's projection must be perspective".into());
+    };
+    let tan_half = tan_half_x(fov_deg, fov_axis, w as f32, h as f32);
+    Ok(Light::Projector(Box::new(Projector {
+        position: to_world.transform_point3(Vec3::ZERO),
+        to_local: world_to_local(to_world)?,
+        axis: to_world.transform_vector3(Vec3::Z),
+        irradiance,
+        pi_scale: std::f32::consts::PI * scale,
+        cot_half_x: 1.0 / tan_half,
+        aspect: w as f32 / h as f32,
+    })))
+}
+
+/// An `envmap`: the EXR's texels times `scale` (non-negative and finite), upsampled in
+/// spectral mode.
+fn build_envmap(kind: &LightKind, mode: ColorMode) -> Result<Light, String> {
+    let LightKind::EnvMap {
+        filename,
+        to_world,
+        scale,
+    } = kind
+    else {
+        return Err("internal: not an environment map".into());
+    };
+    let (img, _) = pt_image::read_exr(filename).map_err(|e| format!("environment map: {e}"))?;
+    if img
+        .data
+        .iter()
+        .any(|p| p.iter().any(|c| !c.is_finite() || *c < 0.0))
+    {
+        return Err(format!(
+            "environment map '{}' has negative or non-finite pixels",
+            filename.display()
+        ));
+    }
+    let texels = img.data.iter().map(|p| p.map(|c| c * scale)).collect();
+    let rot = Mat3::from_mat4(*to_world);
+    let mut e = EnvMap::new(img.width as usize, img.height as usize, texels, rot)
+        .ok_or_else(|| "empty environment map".to_string())?;
+    // Spectral mode: the upsampled texels times D65 of luminance 1 (Mitsuba 3's envmap).
+    if mode == ColorMode::Spectral {
+        e.upsample();
+    }
+    Ok(Light::EnvMap(e))
 }
 
 /// A light's intensity profile: an IES table (its values per unit luminance of the light's

@@ -259,6 +259,7 @@ impl Builder<'_> {
         Ok(fix(m, self.textures.mode()))
     }
 
+    /// The model of a BSDF description with its textures as built, before [`fix`].
     fn model_textured(&mut self, d: &BsdfDesc) -> Result<Material, BuildError> {
         Ok(match &d.kind {
             BsdfKind::Diffuse { reflectance } => Material::Diffuse {
@@ -291,6 +292,81 @@ impl Builder<'_> {
                 reflectance: self.tex("reflectance", reflectance, Role::Albedo)?,
                 k: self.tex("k", k, Role::Scalar)?,
             },
+            BsdfKind::Dielectric { .. }
+            | BsdfKind::ThinDielectric { .. }
+            | BsdfKind::RoughDielectric { .. } => self.dielectric(&d.kind)?,
+            BsdfKind::Conductor { .. } | BsdfKind::RoughConductor { .. } => {
+                self.conductor(&d.kind)?
+            }
+            BsdfKind::Plastic { .. } => self.plastic(&d.kind)?,
+            BsdfKind::PPlastic {
+                diffuse_reflectance,
+                specular_reflectance,
+                int_ior,
+                ext_ior,
+                microfacet,
+            } => {
+                let (rho, ks, weight) =
+                    self.coating_textures(diffuse_reflectance, specular_reflectance)?;
+                Material::PPlastic {
+                    diffuse_reflectance: rho,
+                    specular_reflectance: ks,
+                    eta: int_ior / ext_ior,
+                    roughness: self.roughness(microfacet)?,
+                    specular_sampling_weight: weight,
+                }
+            }
+            BsdfKind::Polarizer {
+                element,
+                transmittance,
+            } => Material::Polarizer {
+                kept: element.unpolarized_fraction(),
+                transmittance: self.tex("transmittance", transmittance, Role::Albedo)?,
+            },
+            BsdfKind::Hair { .. } => self.hair(&d.kind)?,
+            BsdfKind::RoughPlastic { .. } => self.rough_plastic(&d.kind)?,
+            BsdfKind::ThinFilm {
+                thickness,
+                film_ior,
+                ext_ior,
+                base,
+            } => Material::ThinFilm(Box::new(self.film(thickness, *film_ior, *ext_ior, base)?)),
+            BsdfKind::RoughThinFilm {
+                thickness,
+                film_ior,
+                ext_ior,
+                base,
+                microfacet,
+            } => {
+                let film = self.film(thickness, *film_ior, *ext_ior, base)?;
+                Material::RoughThinFilm(Box::new((film, self.roughness(microfacet)?)))
+            }
+            BsdfKind::GltfPbr {
+                base_color,
+                metallic,
+                roughness,
+                ior,
+            } => Material::GltfPbr {
+                base_color: self.tex("base_color", base_color, Role::Albedo)?,
+                metallic: self.tex("metallic", metallic, Role::Scalar)?,
+                roughness: self.tex("roughness", roughness, Role::Scalar)?,
+                ior: *ior,
+            },
+            BsdfKind::Principled(_) | BsdfKind::PrincipledThin(_) => self.principled(&d.kind)?,
+            BsdfKind::TwoSided { .. }
+            | BsdfKind::Mask { .. }
+            | BsdfKind::NormalMap { .. }
+            | BsdfKind::BumpMap { .. }
+            | BsdfKind::Blend { .. } => {
+                return Err(self.err("internal: a wrapper where a model was expected"))
+            }
+        })
+    }
+
+    /// The dielectrics: `dielectric`, `thindielectric` and `roughdielectric`, each with its
+    /// relative index and specular factors.
+    fn dielectric(&mut self, kind: &BsdfKind) -> Result<Material, BuildError> {
+        Ok(match kind {
             BsdfKind::Dielectric {
                 int_ior,
                 ext_ior,
@@ -335,6 +411,13 @@ impl Builder<'_> {
                     specular_transmittance,
                 }
             }
+            _ => return Err(self.err("internal: not a dielectric BSDF")),
+        })
+    }
+
+    /// The conductors: `conductor` and `roughconductor`.
+    fn conductor(&mut self, kind: &BsdfKind) -> Result<Material, BuildError> {
+        Ok(match kind {
             BsdfKind::Conductor {
                 eta,
                 k,
@@ -363,31 +446,13 @@ impl Builder<'_> {
                 )?,
                 roughness: self.roughness(microfacet)?,
             },
-            BsdfKind::Plastic { .. } => self.plastic(&d.kind)?,
-            BsdfKind::PPlastic {
-                diffuse_reflectance,
-                specular_reflectance,
-                int_ior,
-                ext_ior,
-                microfacet,
-            } => {
-                let (rho, ks, weight) =
-                    self.coating_textures(diffuse_reflectance, specular_reflectance)?;
-                Material::PPlastic {
-                    diffuse_reflectance: rho,
-                    specular_reflectance: ks,
-                    eta: int_ior / ext_ior,
-                    roughness: self.roughness(microfacet)?,
-                    specular_sampling_weight: weight,
-                }
-            }
-            BsdfKind::Polarizer {
-                element,
-                transmittance,
-            } => Material::Polarizer {
-                kept: element.unpolarized_fraction(),
-                transmittance: self.tex("transmittance", transmittance, Role::Albedo)?,
-            },
+            _ => return Err(self.err("internal: not a conductor BSDF")),
+        })
+    }
+
+    /// `hair`: its absorption from pigments, `sigma_a` or a reflectance, and its roughnesses.
+    fn hair(&mut self, kind: &BsdfKind) -> Result<Material, BuildError> {
+        Ok(match kind {
             BsdfKind::Hair {
                 absorption,
                 eta,
@@ -423,34 +488,13 @@ impl Builder<'_> {
                     scale_tilt_deg: *scale_tilt_deg,
                 }
             }
-            BsdfKind::RoughPlastic { .. } => self.rough_plastic(&d.kind)?,
-            BsdfKind::ThinFilm {
-                thickness,
-                film_ior,
-                ext_ior,
-                base,
-            } => Material::ThinFilm(Box::new(self.film(thickness, *film_ior, *ext_ior, base)?)),
-            BsdfKind::RoughThinFilm {
-                thickness,
-                film_ior,
-                ext_ior,
-                base,
-                microfacet,
-            } => {
-                let film = self.film(thickness, *film_ior, *ext_ior, base)?;
-                Material::RoughThinFilm(Box::new((film, self.roughness(microfacet)?)))
-            }
-            BsdfKind::GltfPbr {
-                base_color,
-                metallic,
-                roughness,
-                ior,
-            } => Material::GltfPbr {
-                base_color: self.tex("base_color", base_color, Role::Albedo)?,
-                metallic: self.tex("metallic", metallic, Role::Scalar)?,
-                roughness: self.tex("roughness", roughness, Role::Scalar)?,
-                ior: *ior,
-            },
+            _ => return Err(self.err("internal: not a hair BSDF")),
+        })
+    }
+
+    /// The principled BSDFs (`principled`, `principledthin`): their scalar textures by name.
+    fn principled(&mut self, kind: &BsdfKind) -> Result<Material, BuildError> {
+        Ok(match kind {
             BsdfKind::Principled(p) => {
                 let mut scalars = Vec::with_capacity(p.scalars.len());
                 for (name, t) in pt_scene::PrincipledDesc::NAMES.iter().zip(&p.scalars) {
@@ -475,13 +519,7 @@ impl Builder<'_> {
                     rates: p.rates,
                 }))
             }
-            BsdfKind::TwoSided { .. }
-            | BsdfKind::Mask { .. }
-            | BsdfKind::NormalMap { .. }
-            | BsdfKind::BumpMap { .. }
-            | BsdfKind::Blend { .. } => {
-                return Err(self.err("internal: a wrapper where a model was expected"))
-            }
+            _ => return Err(self.err("internal: not a principled BSDF")),
         })
     }
 

@@ -55,75 +55,15 @@ impl Scene {
             .iter()
             .map(|b| build_material(b, &mut textures))
             .collect::<Result<_, _>>()?;
-        let mut prims = Vec::new();
-        let mut refs = Vec::new();
-        let mut shapes = Vec::new();
-        let mut lights = Vec::new();
-        let mut stats = SceneStats::default();
-        let mut media = Vec::new();
-        // The irradiancemeter's shape, sampled by area as an emitter's is.
-        let meter_shape = match desc.camera.projection {
-            Projection::Irradiancemeter { shape } => Some(shape),
-            _ => None,
-        };
-        let mut meter_surface = None;
-        for (si, shape) in desc.shapes.iter().enumerate() {
-            if shape.bsdf >= materials.len() {
-                return Err(BuildError {
-                    loc: shape.loc.clone(),
-                    message: format!("BSDF index {} out of range", shape.bsdf),
-                });
-            }
-            let mut data = ShapeData::new(shape.bsdf as u32, None);
-            let measured = meter_shape == Some(si);
-            let light_shape = geometry(
-                shape,
-                si as u32,
-                shape.emitter.is_some() || measured,
-                &mut prims,
-                &mut refs,
-                &mut stats,
-                &mut data,
-            )?;
-            if measured {
-                meter_surface = match &light_shape {
-                    Some((surface, area)) if *area > 0.0 => Some(surface.clone()),
-                    _ => {
-                        return Err(BuildError {
-                            loc: desc.camera.loc.clone(),
-                            message: "an irradiancemeter on a shape with zero area".into(),
-                        })
-                    }
-                };
-            }
-            if let Some(m) = &shape.interior {
-                data.interior = Some(add_medium(&mut media, m, mode)?);
-            }
-            if let Some(m) = &shape.exterior {
-                data.exterior = Some(add_medium(&mut media, m, mode)?);
-            }
-            if let Some(em) = &shape.emitter {
-                let radiance = emission_texture(em, &mut textures)?;
-                match light_shape {
-                    Some((geometry, area)) if area > 0.0 => {
-                        data.light = Some(lights.len() as u32);
-                        lights.push(Light::Area(AreaLight {
-                            radiance,
-                            shape: geometry,
-                            area,
-                        }));
-                    }
-                    _ => {
-                        return Err(BuildError {
-                            loc: em.loc.clone(),
-                            message: "area emitter on a shape with zero area".into(),
-                        })
-                    }
-                }
-            }
-            shapes.push(data);
-        }
-
+        let ShapesBuilt {
+            prims,
+            refs,
+            mut shapes,
+            mut lights,
+            mut stats,
+            mut media,
+            meter_surface,
+        } = build_shapes(desc, &materials, &mut textures, mode)?;
         let instancing = instancing(
             desc,
             &materials,
@@ -176,56 +116,7 @@ impl Scene {
             LightSelection::Tree => LightTree::build(&lights, &weights, bounds.1),
             LightSelection::Power | LightSelection::Uniform => None,
         };
-        let mut camera = Camera::for_film(&desc.camera, &desc.film);
-        if let Some(surface) = meter_surface {
-            camera.attach_surface(surface);
-        }
-        if desc.camera.projection == Projection::Batch {
-            let n = desc.batch.len().max(1) as u32;
-            // The loader checks the file's width; a width set afterwards (--width) here.
-            if desc.film.width % n != 0 {
-                return Err(BuildError {
-                    loc: desc.camera.loc.clone(),
-                    message: format!(
-                        "the film width ({}) must be divisible by the batch's number of sensors ({n}), as in Mitsuba",
-                        desc.film.width
-                    ),
-                });
-            }
-            let strip = desc.film.width / n;
-            let members = desc
-                .batch
-                .iter()
-                .map(|c| Camera::new(c, strip, desc.film.height))
-                .collect();
-            camera.set_batch(members, strip);
-        }
-        if let Projection::Distant { target } = desc.camera.projection {
-            if let Some(shape) = &desc.sensor_target {
-                // Sampled by area only: its primitives go nowhere.
-                let (mut prims, mut refs) = (Vec::new(), Vec::new());
-                let mut data = ShapeData::new(0, None);
-                let mut scratch_stats = SceneStats::default();
-                match geometry(
-                    shape,
-                    0,
-                    true,
-                    &mut prims,
-                    &mut refs,
-                    &mut scratch_stats,
-                    &mut data,
-                )? {
-                    Some((surface, area)) if area > 0.0 => camera.attach_surface(surface),
-                    _ => {
-                        return Err(BuildError {
-                            loc: shape.loc.clone(),
-                            message: "a distant sensor's target shape has zero area".into(),
-                        })
-                    }
-                }
-            }
-            camera.aim(target, bounds.0, bounds.1);
-        }
+        let camera = build_camera(desc, meter_surface, bounds)?;
         let camera_medium = match &desc.camera_medium {
             Some(m) => Some(add_medium(&mut media, m, mode)?),
             None => None,
@@ -248,6 +139,164 @@ impl Scene {
             stats,
         })
     }
+}
+
+/// What the scene's own shapes (not those of instanced groups) give the scene, in shape order.
+struct ShapesBuilt {
+    /// Their primitives for the BVH, and where each came from.
+    prims: Vec<Primitive>,
+    refs: Vec<PrimRef>,
+    /// Per shape its material, light and media.
+    shapes: Vec<ShapeData>,
+    /// Their area lights.
+    lights: Vec<Light>,
+    stats: SceneStats,
+    /// The media inside and outside them, each description once.
+    media: Vec<(pt_scene::MediumDesc, Medium)>,
+    /// The irradiancemeter's shape in its area-sampling form.
+    meter_surface: Option<LightShape>,
+}
+
+/// Builds the scene's own shapes: their primitives, media and area lights (an emitter or the
+/// irradiancemeter on a shape of zero area is an error).
+fn build_shapes(
+    desc: &SceneDesc,
+    materials: &[SurfaceMaterial],
+    textures: &mut TextureBuilder,
+    mode: ColorMode,
+) -> Result<ShapesBuilt, BuildError> {
+    let mut out = ShapesBuilt {
+        prims: Vec::new(),
+        refs: Vec::new(),
+        shapes: Vec::new(),
+        lights: Vec::new(),
+        stats: SceneStats::default(),
+        media: Vec::new(),
+        meter_surface: None,
+    };
+    // The irradiancemeter's shape, sampled by area as an emitter's is.
+    let meter_shape = match desc.camera.projection {
+        Projection::Irradiancemeter { shape } => Some(shape),
+        _ => None,
+    };
+    for (si, shape) in desc.shapes.iter().enumerate() {
+        if shape.bsdf >= materials.len() {
+            return Err(BuildError {
+                loc: shape.loc.clone(),
+                message: format!("BSDF index {} out of range", shape.bsdf),
+            });
+        }
+        let mut data = ShapeData::new(shape.bsdf as u32, None);
+        let measured = meter_shape == Some(si);
+        let light_shape = geometry(
+            shape,
+            si as u32,
+            shape.emitter.is_some() || measured,
+            &mut out.prims,
+            &mut out.refs,
+            &mut out.stats,
+            &mut data,
+        )?;
+        if measured {
+            out.meter_surface = match &light_shape {
+                Some((surface, area)) if *area > 0.0 => Some(surface.clone()),
+                _ => {
+                    return Err(BuildError {
+                        loc: desc.camera.loc.clone(),
+                        message: "an irradiancemeter on a shape with zero area".into(),
+                    })
+                }
+            };
+        }
+        if let Some(m) = &shape.interior {
+            data.interior = Some(add_medium(&mut out.media, m, mode)?);
+        }
+        if let Some(m) = &shape.exterior {
+            data.exterior = Some(add_medium(&mut out.media, m, mode)?);
+        }
+        if let Some(em) = &shape.emitter {
+            let radiance = emission_texture(em, textures)?;
+            match light_shape {
+                Some((geometry, area)) if area > 0.0 => {
+                    data.light = Some(out.lights.len() as u32);
+                    out.lights.push(Light::Area(AreaLight {
+                        radiance,
+                        shape: geometry,
+                        area,
+                    }));
+                }
+                _ => {
+                    return Err(BuildError {
+                        loc: em.loc.clone(),
+                        message: "area emitter on a shape with zero area".into(),
+                    })
+                }
+            }
+        }
+        out.shapes.push(data);
+    }
+    Ok(out)
+}
+
+/// The camera of the scene's sensor and film, with the surface it measures (an
+/// irradiancemeter's `meter_surface`, a distant sensor's target shape), a batch's sensors, and
+/// a distant sensor aimed at the scene's bounding sphere `bounds`.
+fn build_camera(
+    desc: &SceneDesc,
+    meter_surface: Option<LightShape>,
+    bounds: (pt_math::Vec3, f32),
+) -> Result<Camera, BuildError> {
+    let mut camera = Camera::for_film(&desc.camera, &desc.film);
+    if let Some(surface) = meter_surface {
+        camera.attach_surface(surface);
+    }
+    if desc.camera.projection == Projection::Batch {
+        let n = desc.batch.len().max(1) as u32;
+        // The loader checks the file's width; a width set afterwards (--width) here.
+        if desc.film.width % n != 0 {
+            return Err(BuildError {
+                loc: desc.camera.loc.clone(),
+                message: format!(
+                    "the film width ({}) must be divisible by the batch's number of sensors ({n}), as in Mitsuba",
+                    desc.film.width
+                ),
+            });
+        }
+        let strip = desc.film.width / n;
+        let members = desc
+            .batch
+            .iter()
+            .map(|c| Camera::new(c, strip, desc.film.height))
+            .collect();
+        camera.set_batch(members, strip);
+    }
+    if let Projection::Distant { target } = desc.camera.projection {
+        if let Some(shape) = &desc.sensor_target {
+            // Sampled by area only: its primitives go nowhere.
+            let (mut prims, mut refs) = (Vec::new(), Vec::new());
+            let mut data = ShapeData::new(0, None);
+            let mut scratch_stats = SceneStats::default();
+            match geometry(
+                shape,
+                0,
+                true,
+                &mut prims,
+                &mut refs,
+                &mut scratch_stats,
+                &mut data,
+            )? {
+                Some((surface, area)) if area > 0.0 => camera.attach_surface(surface),
+                _ => {
+                    return Err(BuildError {
+                        loc: shape.loc.clone(),
+                        message: "a distant sensor's target shape has zero area".into(),
+                    })
+                }
+            }
+        }
+        camera.aim(target, bounds.0, bounds.1);
+    }
+    Ok(camera)
 }
 
 /// Builds `m` in the colour mode `mode` and appends it to `media`; returns its index. The same
@@ -454,39 +503,7 @@ fn geometry(
     data: &mut ShapeData,
 ) -> Result<Option<(LightShape, f32)>, BuildError> {
     Ok(match &shape.geometry {
-        Geometry::Mesh(mesh) => {
-            let tris = add_mesh(mesh, si, sampled, prims, refs, stats, &shape.loc)?;
-            if let Some(ts) = &mesh.tangents {
-                if ts.len() != mesh.positions.len() {
-                    return Err(BuildError {
-                        loc: shape.loc.clone(),
-                        message: format!(
-                            "mesh has {} tangents for {} vertices",
-                            ts.len(),
-                            mesh.positions.len()
-                        ),
-                    });
-                }
-            }
-            // An emitter that is one parallelogram (a rectangle light) samples it as one.
-            let single = match (prims.last(), refs.last(), &tris) {
-                (Some(&prim), Some(r), Some((t, _))) if r.shape == si && t.len() == 2 => {
-                    parallelogram_light(mesh, prim, *r)
-                }
-                _ => None,
-            };
-            single.or_else(|| {
-                tris.map(|(tris, areas)| {
-                    (
-                        LightShape::Mesh {
-                            distr: Distribution1D::new(&areas).expect("non-empty"),
-                            tris,
-                        },
-                        areas.iter().sum::<f32>(),
-                    )
-                })
-            })
-        }
+        Geometry::Mesh(mesh) => mesh_geometry(shape, mesh, si, sampled, prims, refs, stats)?,
         Geometry::Disk(d) => {
             prims.push(primitive_of_geometry(
                 &shape.geometry,
@@ -574,34 +591,91 @@ fn geometry(
             None
         }
         Geometry::Curves(c) => {
-            // One primitive per segment, referenced by its index. The loader refuses
-            // emitters on curves.
-            for i in 0..c.segments.len() as u32 {
-                // B-spline segments in pieces short enough for tight boxes.
-                let pieces = match c.basis {
-                    pt_scene::CurveBasis::Linear => vec![None],
-                    pt_scene::CurveBasis::BSpline => {
-                        let cp = c.segment(i as usize);
-                        crate::curve::Piece::split(std::array::from_fn(|k| cp[k]))
-                            .map(|p| Some(p.code()))
-                            .collect()
-                    }
-                };
-                for part in pieces {
-                    let r = PrimRef {
-                        shape: si,
-                        local: i,
-                        part,
-                    };
-                    prims.push(primitive_of_geometry(&shape.geometry, r));
-                    refs.push(r);
-                }
-            }
-            stats.curve_segments += c.segments.len();
+            curve_primitives(c, si, prims, refs, stats, &shape.geometry);
             data.curve_segments = c.segments.len() as u32;
             None
         }
     })
+}
+
+/// A mesh's triangles (added to `prims` and `refs`) and, when it is `sampled` by area, its
+/// area-sampling form (one parallelogram for a rectangle light) and area.
+fn mesh_geometry(
+    shape: &ShapeDesc,
+    mesh: &pt_scene::TriangleMesh,
+    si: u32,
+    sampled: bool,
+    prims: &mut Vec<Primitive>,
+    refs: &mut Vec<PrimRef>,
+    stats: &mut SceneStats,
+) -> Result<Option<(LightShape, f32)>, BuildError> {
+    let tris = add_mesh(mesh, si, sampled, prims, refs, stats, &shape.loc)?;
+    if let Some(ts) = &mesh.tangents {
+        if ts.len() != mesh.positions.len() {
+            return Err(BuildError {
+                loc: shape.loc.clone(),
+                message: format!(
+                    "mesh has {} tangents for {} vertices",
+                    ts.len(),
+                    mesh.positions.len()
+                ),
+            });
+        }
+    }
+    // An emitter that is one parallelogram (a rectangle light) samples it as one.
+    let single = match (prims.last(), refs.last(), &tris) {
+        (Some(&prim), Some(r), Some((t, _))) if r.shape == si && t.len() == 2 => {
+            parallelogram_light(mesh, prim, *r)
+        }
+        _ => None,
+    };
+    Ok(single.or_else(|| {
+        tris.map(|(tris, areas)| {
+            (
+                LightShape::Mesh {
+                    distr: Distribution1D::new(&areas).expect("non-empty"),
+                    tris,
+                },
+                areas.iter().sum::<f32>(),
+            )
+        })
+    }))
+}
+
+/// The primitives of curves `c` (shape `si`, whose geometry `shape_geometry` they are made
+/// from): one per segment, B-spline segments in pieces; added to `prims` and `refs`.
+fn curve_primitives(
+    c: &pt_scene::Curves,
+    si: u32,
+    prims: &mut Vec<Primitive>,
+    refs: &mut Vec<PrimRef>,
+    stats: &mut SceneStats,
+    shape_geometry: &Geometry,
+) {
+    // One primitive per segment, referenced by its index. The loader refuses
+    // emitters on curves.
+    for i in 0..c.segments.len() as u32 {
+        // B-spline segments in pieces short enough for tight boxes.
+        let pieces = match c.basis {
+            pt_scene::CurveBasis::Linear => vec![None],
+            pt_scene::CurveBasis::BSpline => {
+                let cp = c.segment(i as usize);
+                crate::curve::Piece::split(std::array::from_fn(|k| cp[k]))
+                    .map(|p| Some(p.code()))
+                    .collect()
+            }
+        };
+        for part in pieces {
+            let r = PrimRef {
+                shape: si,
+                local: i,
+                part,
+            };
+            prims.push(primitive_of_geometry(shape_geometry, r));
+            refs.push(r);
+        }
+    }
+    stats.curve_segments += c.segments.len();
 }
 
 /// A mesh's shading data: normals, texture coordinates (only where something reads them),
