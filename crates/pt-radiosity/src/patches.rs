@@ -275,6 +275,43 @@ fn split(p: [Vec3; 3], k: u32, map: &dyn Fn(Vec3) -> Vec3, emit: &mut dyn FnMut(
     }
 }
 
+/// What every patch of one shape carries: the shape's index, its RGB reflectance, its
+/// emitted radiosity (front side only; W m^-2 per channel, see [`Patch::emission`]) and
+/// whether it has a back side.
+#[derive(Clone, Copy, Debug)]
+struct Surface {
+    shape: u32,
+    reflectance: [f32; 3],
+    emission: [f32; 3],
+    two_sided: bool,
+}
+
+/// A shape's emitted radiosity, pi times its area emitter's radiance (RGB), or zero without
+/// one; the radiance must be a finite, non-negative constant.
+fn emitted_radiosity(s: &ShapeDesc) -> Result<[f32; 3], RadiosityError> {
+    Ok(match &s.emitter {
+        Some(em) => {
+            let le = match em.radiance.as_constant() {
+                Some(s) => rgb(s, Role::Emission),
+                None => {
+                    return Err(RadiosityError::scene(
+                        &em.loc,
+                        "radiosity needs a constant radiance (textured emitters are not yet supported by radiosity)",
+                    ))
+                }
+            };
+            if !le.iter().all(|v| v.is_finite() && *v >= 0.0) {
+                return Err(RadiosityError::scene(
+                    &em.loc,
+                    "radiance must be finite and non-negative",
+                ));
+            }
+            le.map(|v| std::f32::consts::PI * v)
+        }
+        None => [0.0; 3],
+    })
+}
+
 impl PatchMesh {
     /// Cuts the scene into patches of at most `patch_size` (longest edge, scene units; `None`:
     /// [`DEFAULT_RELATIVE_PATCH_SIZE`] of the scene diagonal). Fails, naming the element, on
@@ -334,103 +371,13 @@ impl PatchMesh {
                 RadiosityError::scene(&s.loc, format!("BSDF index {} out of range", s.bsdf))
             })?;
             let (reflectance, two_sided) = material(bsdf, &mut mesh.warnings)?;
-            let emission = match &s.emitter {
-                Some(em) => {
-                    let le = match em.radiance.as_constant() {
-                        Some(s) => rgb(s, Role::Emission),
-                        None => {
-                            return Err(RadiosityError::scene(
-                                &em.loc,
-                                "radiosity needs a constant radiance (textured emitters are not yet supported by radiosity)",
-                            ))
-                        }
-                    };
-                    if !le.iter().all(|v| v.is_finite() && *v >= 0.0) {
-                        return Err(RadiosityError::scene(
-                            &em.loc,
-                            "radiance must be finite and non-negative",
-                        ));
-                    }
-                    le.map(|v| std::f32::consts::PI * v)
-                }
-                None => [0.0; 3],
+            let surface = Surface {
+                shape: si as u32,
+                reflectance,
+                emission: emitted_radiosity(s)?,
+                two_sided,
             };
-            let mut degenerate = 0usize;
-            let mut add = |t: [Vec3; 3], mesh: &mut PatchMesh| {
-                let cross = (t[1] - t[0]).cross(t[2] - t[0]);
-                let area = 0.5 * cross.length();
-                if !(area > 0.0 && area.is_finite()) {
-                    degenerate += 1;
-                    return;
-                }
-                let normal = cross.normalize();
-                let v = t.map(|p| welder.add(&mut mesh.vertices, p));
-                let centroid = (t[0] + t[1] + t[2]) / 3.0;
-                let tri = mesh.triangles.len() as u32;
-                let front = mesh.patches.len() as u32;
-                mesh.patches.push(Patch {
-                    corners: v,
-                    area,
-                    normal,
-                    centroid,
-                    reflectance,
-                    emission,
-                    shape: si as u32,
-                    triangle: tri,
-                });
-                let back = if two_sided {
-                    mesh.patches.push(Patch {
-                        corners: v,
-                        area,
-                        normal: -normal,
-                        centroid,
-                        reflectance,
-                        emission: [0.0; 3],
-                        shape: si as u32,
-                        triangle: tri,
-                    });
-                    front + 1
-                } else {
-                    NO_PATCH
-                };
-                mesh.triangles.push(Triangle {
-                    v,
-                    normal,
-                    front,
-                    back,
-                });
-            };
-            match &*meshed(&s.geometry) {
-                Geometry::Mesh(m) => {
-                    for idx in &m.indices {
-                        let p = idx.map(|i| m.positions[i as usize]);
-                        let k = subdivisions(&p, h);
-                        split(p, k, &|q| q, &mut |t| add(t, &mut mesh));
-                    }
-                }
-                &Geometry::Sphere {
-                    center,
-                    radius,
-                    flip_normals,
-                    ..
-                } => {
-                    let (v, faces) = icosahedron();
-                    let k = sphere_subdivisions(radius, h);
-                    for f in faces {
-                        let mut p = f.map(|i| v[i]);
-                        if flip_normals {
-                            p.swap(1, 2);
-                        }
-                        split(p, k, &|q| center + q.normalize() * radius, &mut |t| {
-                            add(t, &mut mesh)
-                        });
-                    }
-                }
-                Geometry::Disk(_) => unreachable!("meshed"),
-                Geometry::Cylinder { .. } | Geometry::SdfGrid(_) | Geometry::Curves(_) => {
-                    unreachable!("count_shape refuses cylinders, SDF grids and curves")
-                }
-            }
+            let degenerate = mesh.add_shape(&mut welder, &s.geometry, h, &surface);
             if degenerate > 0 {
                 mesh.warnings.push(format!(
                     "{}: {degenerate} zero-area triangles were left out",
@@ -439,6 +386,103 @@ impl PatchMesh {
             }
         }
         Ok(mesh)
+    }
+
+    /// Cuts `geometry` (a mesh or a sphere: [`Self::count_shape`] refused the others) into
+    /// patches of longest edge about `h` with the properties of `surface`, welding their
+    /// corners; returns how many zero-area triangles were left out.
+    fn add_shape(
+        &mut self,
+        welder: &mut Welder,
+        geometry: &Geometry,
+        h: f32,
+        surface: &Surface,
+    ) -> usize {
+        let mut degenerate = 0usize;
+        let mut add = |t: [Vec3; 3], mesh: &mut PatchMesh| {
+            if !mesh.add_triangle(welder, t, surface) {
+                degenerate += 1;
+            }
+        };
+        match &*meshed(geometry) {
+            Geometry::Mesh(m) => {
+                for idx in &m.indices {
+                    let p = idx.map(|i| m.positions[i as usize]);
+                    let k = subdivisions(&p, h);
+                    split(p, k, &|q| q, &mut |t| add(t, self));
+                }
+            }
+            &Geometry::Sphere {
+                center,
+                radius,
+                flip_normals,
+                ..
+            } => {
+                let (v, faces) = icosahedron();
+                let k = sphere_subdivisions(radius, h);
+                for f in faces {
+                    let mut p = f.map(|i| v[i]);
+                    if flip_normals {
+                        p.swap(1, 2);
+                    }
+                    split(p, k, &|q| center + q.normalize() * radius, &mut |t| {
+                        add(t, self)
+                    });
+                }
+            }
+            Geometry::Disk(_) => unreachable!("meshed"),
+            Geometry::Cylinder { .. } | Geometry::SdfGrid(_) | Geometry::Curves(_) => {
+                unreachable!("count_shape refuses cylinders, SDF grids and curves")
+            }
+        }
+        degenerate
+    }
+
+    /// Adds the triangle `t` as a patch of `surface` (and its back, for a two-sided one) with
+    /// welded corners; false, adding nothing, when its area is zero or not finite.
+    fn add_triangle(&mut self, welder: &mut Welder, t: [Vec3; 3], surface: &Surface) -> bool {
+        let cross = (t[1] - t[0]).cross(t[2] - t[0]);
+        let area = 0.5 * cross.length();
+        if !(area > 0.0 && area.is_finite()) {
+            return false;
+        }
+        let normal = cross.normalize();
+        let v = t.map(|p| welder.add(&mut self.vertices, p));
+        let centroid = (t[0] + t[1] + t[2]) / 3.0;
+        let tri = self.triangles.len() as u32;
+        let front = self.patches.len() as u32;
+        self.patches.push(Patch {
+            corners: v,
+            area,
+            normal,
+            centroid,
+            reflectance: surface.reflectance,
+            emission: surface.emission,
+            shape: surface.shape,
+            triangle: tri,
+        });
+        let back = if surface.two_sided {
+            self.patches.push(Patch {
+                corners: v,
+                area,
+                normal: -normal,
+                centroid,
+                reflectance: surface.reflectance,
+                emission: [0.0; 3],
+                shape: surface.shape,
+                triangle: tri,
+            });
+            front + 1
+        } else {
+            NO_PATCH
+        };
+        self.triangles.push(Triangle {
+            v,
+            normal,
+            front,
+            back,
+        });
+        true
     }
 
     /// Checks a shape's geometry and returns how many triangles it will make.
