@@ -2,11 +2,12 @@
 
 use super::{
     budget_words, check, load, mean_bias, rect, reference, region_error, render_steps,
-    render_within, three_strategies, with_strategy, AtlasSettings, Budget, Equal, Panel, Study,
-    SEED, STRATEGIES,
+    render_within, three_strategies, with_strategy, AtlasSettings, Budget, Equal, Panel, Reference,
+    Study, SEED, STRATEGIES,
 };
 use crate::{LabError, Result};
 use pt_integrators::{RenderSettings, Strategy};
+use pt_render::{RenderOutput, Scene};
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 
@@ -417,6 +418,113 @@ fn transport_regions(w: u32, h: u32) -> [Vec<usize>; 2] {
     [caustic, walls]
 }
 
+/// The Mitsuba `ptracer` reference of transport scene `name` (`NAME.exr` in `o.references` or,
+/// as the scene suite's references, in its parent folder); an error without one.
+fn transport_reference(
+    o: &AtlasSettings,
+    name: &str,
+    scene: &Scene,
+    base: &RenderSettings,
+) -> Result<Reference> {
+    let folder = if o.references.join(format!("{name}.exr")).is_file() {
+        o.references.clone()
+    } else {
+        o.references
+            .parent()
+            .map_or_else(|| o.references.clone(), Path::to_path_buf)
+    };
+    let reference = reference(&folder, name, scene, base, o.fallback_spp)?;
+    if !reference.source.starts_with("Mitsuba") {
+        return Err(LabError::Invalid(format!(
+            "transport: no Mitsuba ptracer reference {name}.exr in {} or its parent (a path-traced stand-in would lack the caustic)",
+            o.references.display()
+        )));
+    }
+    Ok(reference)
+}
+
+/// A transport scene rendered by each of [`TRANSPORT_METHODS`], in that order: the path
+/// tracer (MIS) at `o.spp`, the others at its time (or spp).
+fn transport_renders(
+    o: &AtlasSettings,
+    scene: &Scene,
+    base: &RenderSettings,
+) -> Result<[RenderOutput; 6]> {
+    let settings = RenderSettings {
+        seed: SEED,
+        ..base.clone()
+    };
+    pt_integrators::ptracer::check(&settings).map_err(LabError::Invalid)?;
+    let photons = pt_integrators::sppm::SppmSettings::default();
+    pt_integrators::sppm::check(&photons).map_err(LabError::Invalid)?;
+    let path = render_within(
+        scene,
+        &with_strategy(base, Strategy::Mis),
+        Budget::Spp(o.spp),
+    );
+    let budget = match o.equal {
+        Equal::Time => Budget::Time(path.time),
+        Equal::Spp => Budget::Spp(o.spp),
+    };
+    let never = AtomicBool::new(false);
+    let light = render_steps(
+        &settings,
+        budget,
+        pt_integrators::RenderState::for_light_paths(&settings),
+        |rs, state| {
+            pt_integrators::ptracer::render_light_passes(scene, rs, state, &never, None, &|_| {});
+        },
+    );
+    let sppm = render_steps(
+        &settings,
+        budget,
+        pt_integrators::sppm::new_state(&settings),
+        |rs, state| {
+            pt_integrators::sppm::render_sppm_passes(scene, rs, &photons, state, &never, &|_| {});
+        },
+    );
+    let bidirectional = |params: pt_integrators::vcm::VcmSettings| -> Result<_> {
+        pt_integrators::vcm::check(scene, &settings, &params).map_err(LabError::Invalid)?;
+        Ok(render_steps(
+            &settings,
+            budget,
+            pt_integrators::RenderState::for_light_paths(&settings),
+            |rs, state| {
+                pt_integrators::vcm::render_vcm_passes(
+                    scene,
+                    rs,
+                    &params,
+                    state,
+                    &never,
+                    None,
+                    &|_| {},
+                );
+            },
+        ))
+    };
+    let bdpt = bidirectional(pt_integrators::vcm::VcmSettings::bdpt())?;
+    let vcm = bidirectional(pt_integrators::vcm::VcmSettings::vcm())?;
+    let maps = pt_integrators::photonmap::PhotonMapSettings::default();
+    pt_integrators::photonmap::check(&maps).map_err(LabError::Invalid)?;
+    let jensen = render_steps(
+        &settings,
+        budget,
+        pt_integrators::sppm::new_state(&settings),
+        |rs, state| {
+            pt_integrators::photonmap::render_photon_passes(
+                scene,
+                rs,
+                &maps,
+                state,
+                &never,
+                None,
+                &|_| {},
+            );
+        },
+    );
+    Ok([path, light, sppm, jensen, bdpt, vcm])
+}
+
 /// The transport study (on the current rayon pool): each scene rendered by the path tracer
 /// (MIS) at `o.spp`, then by the light tracer and SPPM at its time (or spp). References:
 /// Mitsuba's `ptracer` images of the scenes (`NAME.exr` in `o.references` or, as the scene
@@ -430,110 +538,11 @@ pub fn transport(o: &AtlasSettings) -> Result<Study> {
     for (name, _, xml) in TRANSPORT {
         let (scene, base, _) = load(xml, name, o.shrink)?;
         size = (base.width, base.height);
-        let folder = if o.references.join(format!("{name}.exr")).is_file() {
-            o.references.clone()
-        } else {
-            o.references
-                .parent()
-                .map_or_else(|| o.references.clone(), Path::to_path_buf)
-        };
-        let reference = reference(&folder, name, &scene, &base, o.fallback_spp)?;
-        if !reference.source.starts_with("Mitsuba") {
-            return Err(LabError::Invalid(format!(
-                "transport: no Mitsuba ptracer reference {name}.exr in {} or its parent (a path-traced stand-in would lack the caustic)",
-                o.references.display()
-            )));
-        }
+        let reference = transport_reference(o, name, &scene, &base)?;
         sources.push(reference.source.clone());
         let regions = transport_regions(base.width, base.height);
-        let settings = RenderSettings {
-            seed: SEED,
-            ..base.clone()
-        };
-        pt_integrators::ptracer::check(&settings).map_err(LabError::Invalid)?;
-        let photons = pt_integrators::sppm::SppmSettings::default();
-        pt_integrators::sppm::check(&photons).map_err(LabError::Invalid)?;
-        let path = render_within(
-            &scene,
-            &with_strategy(&base, Strategy::Mis),
-            Budget::Spp(o.spp),
-        );
-        let budget = match o.equal {
-            Equal::Time => Budget::Time(path.time),
-            Equal::Spp => Budget::Spp(o.spp),
-        };
-        let never = AtomicBool::new(false);
-        let light = render_steps(
-            &settings,
-            budget,
-            pt_integrators::RenderState::for_light_paths(&settings),
-            |rs, state| {
-                pt_integrators::ptracer::render_light_passes(
-                    &scene,
-                    rs,
-                    state,
-                    &never,
-                    None,
-                    &|_| {},
-                );
-            },
-        );
-        let sppm = render_steps(
-            &settings,
-            budget,
-            pt_integrators::sppm::new_state(&settings),
-            |rs, state| {
-                pt_integrators::sppm::render_sppm_passes(
-                    &scene,
-                    rs,
-                    &photons,
-                    state,
-                    &never,
-                    &|_| {},
-                );
-            },
-        );
-        let bidirectional = |params: pt_integrators::vcm::VcmSettings| -> Result<_> {
-            pt_integrators::vcm::check(&scene, &settings, &params).map_err(LabError::Invalid)?;
-            Ok(render_steps(
-                &settings,
-                budget,
-                pt_integrators::RenderState::for_light_paths(&settings),
-                |rs, state| {
-                    pt_integrators::vcm::render_vcm_passes(
-                        &scene,
-                        rs,
-                        &params,
-                        state,
-                        &never,
-                        None,
-                        &|_| {},
-                    );
-                },
-            ))
-        };
-        let bdpt = bidirectional(pt_integrators::vcm::VcmSettings::bdpt())?;
-        let vcm = bidirectional(pt_integrators::vcm::VcmSettings::vcm())?;
-        let maps = pt_integrators::photonmap::PhotonMapSettings::default();
-        pt_integrators::photonmap::check(&maps).map_err(LabError::Invalid)?;
-        let jensen = render_steps(
-            &settings,
-            budget,
-            pt_integrators::sppm::new_state(&settings),
-            |rs, state| {
-                pt_integrators::photonmap::render_photon_passes(
-                    &scene,
-                    rs,
-                    &maps,
-                    state,
-                    &never,
-                    None,
-                    &|_| {},
-                );
-            },
-        );
-        let outs = [&path, &light, &sppm, &jensen, &bdpt, &vcm];
-        for (k, (panel, out)) in panels.iter_mut().zip(outs).enumerate() {
+        let outs = transport_renders(o, &scene, &base)?;
+        for (k, (panel, out)) in panels.iter_mut().zip(&outs).enumerate() {
             for (g, pixels) in regions.iter().enumerate() {
                 let (e, n) = region_error(&out.mean, &reference, pixels);
                 panel.cells[g].push(e);
