@@ -88,13 +88,7 @@ pub(crate) fn run(args: CompareArgs) -> Result<ExitCode> {
         ("--flip-image", &args.flip_image),
     ] {
         if let Some(out) = out {
-            if !matches!(
-                out.extension()
-                    .and_then(|e| e.to_str())
-                    .map(str::to_ascii_lowercase)
-                    .as_deref(),
-                Some("png" | "exr")
-            ) {
+            if !matches!(extension(out).as_deref(), Some("png" | "exr")) {
                 bail!("{flag} '{}' must end in .png or .exr", out.display());
             }
         }
@@ -123,6 +117,40 @@ pub(crate) fn run(args: CompareArgs) -> Result<ExitCode> {
             flip_exposure: args.flip_exposure,
         },
     )?;
+    print_report(&args, &c);
+    let flip = c.flip;
+    let agree = c.agree;
+    if let Some(out) = &args.error_image {
+        let err = pt_image::colormap::relative_error_image(&img, &reference)?;
+        let e = pt_image::colormap::false_colour(&err, img.width, img.height, 0.0, 0.2, false);
+        write_false_colour("--error-image", out, &e)?;
+        out!(
+            "relative error image (0 to 20%, viridis) -> {}",
+            out.display()
+        );
+    }
+    if let Some(out) = &args.flip_image {
+        let e = pt_image::colormap::false_colour(
+            &flip.error_map,
+            img.width,
+            img.height,
+            0.0,
+            1.0,
+            false,
+        );
+        write_false_colour("--flip-image", out, &e)?;
+        out!("FLIP error image (0 to 1, viridis) -> {}", out.display());
+    }
+    Ok(if agree {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(1)
+    })
+}
+
+/// Prints the comparison `c`: the metrics per channel, non-finite pixels, FLIP, fireflies and
+/// the z-tests (when there were variances).
+fn print_report(args: &CompareArgs, c: &pt_lab::compare::Comparison) {
     let m = &c.metrics;
     let ch = |v: [f64; 3]| format!("{:>12.6e} {:>12.6e} {:>12.6e}", v[0], v[1], v[2]);
     out!("{:<22} {:>12} {:>12} {:>12}", "metric", "R", "G", "B");
@@ -183,52 +211,24 @@ pub(crate) fn run(args: CompareArgs) -> Result<ExitCode> {
         }
         None => out!("no variance images: z-test skipped (give --variance and --image-variance, or put NAME_var.exr beside each)"),
     }
-    let flip = c.flip;
-    let agree = c.agree;
-    if let Some(out) = &args.error_image {
-        let err = pt_image::colormap::relative_error_image(&img, &reference)?;
-        let e = pt_image::colormap::false_colour(&err, img.width, img.height, 0.0, 0.2, false);
-        match out
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase)
-            .as_deref()
-        {
-            Some("png") => pt_image::write_png_preview(out, &e, 0.0)?,
-            Some("exr") => pt_image::write_exr(out, &e, &ExrMeta::default())?,
-            _ => bail!("--error-image '{}' must end in .png or .exr", out.display()),
-        }
-        out!(
-            "relative error image (0 to 20%, viridis) -> {}",
-            out.display()
-        );
+}
+
+/// The lower-case extension of the output path `out`.
+fn extension(out: &Path) -> Option<String> {
+    out.extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+}
+
+/// Writes the false-colour image `e` to `out` (given by `flag`) as PNG or EXR, by its
+/// extension.
+fn write_false_colour(flag: &str, out: &Path, e: &Image) -> Result<()> {
+    match extension(out).as_deref() {
+        Some("png") => pt_image::write_png_preview(out, e, 0.0)?,
+        Some("exr") => pt_image::write_exr(out, e, &ExrMeta::default())?,
+        _ => bail!("{flag} '{}' must end in .png or .exr", out.display()),
     }
-    if let Some(out) = &args.flip_image {
-        let e = pt_image::colormap::false_colour(
-            &flip.error_map,
-            img.width,
-            img.height,
-            0.0,
-            1.0,
-            false,
-        );
-        match out
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase)
-            .as_deref()
-        {
-            Some("png") => pt_image::write_png_preview(out, &e, 0.0)?,
-            Some("exr") => pt_image::write_exr(out, &e, &ExrMeta::default())?,
-            _ => bail!("--flip-image '{}' must end in .png or .exr", out.display()),
-        }
-        out!("FLIP error image (0 to 1, viridis) -> {}", out.display());
-    }
-    Ok(if agree {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::from(1)
-    })
+    Ok(())
 }
 
 /// The variance images of the image and the reference, when both exist (given, or beside

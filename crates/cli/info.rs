@@ -149,10 +149,29 @@ fn describe_light(k: &pt_scene::LightKind) -> String {
     }
 }
 
+/// `pt info`: loads and builds the scene, then prints what it holds, section by section.
 pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
     let (desc, gltf_summary) = load_scene_with_summary(args.scene.as_deref(), &args.scene_args)?;
     let scene = Scene::build(&desc, BvhKind::Auto, LightSelection::Power)?;
     out!("scene       {}", desc.source.display());
+    print_settings(&desc);
+    print_shapes(&desc, &scene);
+    print_materials_and_lights(&desc, &scene);
+    if !gltf_summary.is_empty() {
+        out!("glTF        (how the file maps onto the renderer; see pt-gltf's documentation)");
+        for line in &gltf_summary {
+            out!("  {line}");
+        }
+    }
+    match desc.spectral_reason() {
+        Some(why) => out!("mode        spectral, because {why}"),
+        None => out!("mode        rgb (every input is RGB and no material depends on wavelength: RGB is exact)"),
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// The film, sampler, integrator (and its AOVs), camera and the camera's medium.
+fn print_settings(desc: &pt_scene::SceneDesc) {
     out!(
         "film        {}x{}{}, filter {:?}, channels {}",
         desc.film.width,
@@ -218,6 +237,10 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
     if let Some(m) = &desc.camera_medium {
         out!("camera in   {}", medium_summary(m));
     }
+}
+
+/// The geometry's totals, then one line per shape and per shape group.
+fn print_shapes(desc: &pt_scene::SceneDesc, scene: &Scene) {
     out!(
         "geometry    {} shapes{}, {} triangles{}, {} spheres, {} cylinders{}{}",
         desc.shapes.len(),
@@ -256,35 +279,7 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
         }
     );
     for (k, s) in desc.shapes.iter().enumerate() {
-        let geo = match &s.geometry {
-            Geometry::Mesh(m) => format!("{} triangles", m.indices.len()),
-            Geometry::Sphere { radius, .. } => format!("sphere r={radius}"),
-            Geometry::Disk(d) => format!("disk, area {}", d.area()),
-            Geometry::Cylinder { radius, length, .. } => {
-                format!("cylinder r={radius} length={length}")
-            }
-            Geometry::Curves(c) => format!(
-                "{} curve, {} control points, {} segments",
-                match c.basis {
-                    pt_scene::CurveBasis::Linear => "linear",
-                    pt_scene::CurveBasis::BSpline => "B-spline",
-                },
-                c.points.len(),
-                c.segments.len()
-            ),
-            Geometry::SdfGrid(g) => format!(
-                "sdf grid {}x{}x{}, {} voxels on the surface, {} normals",
-                g.resolution[0],
-                g.resolution[1],
-                g.resolution[2],
-                g.occupied_voxels().count(),
-                if g.smooth_normals {
-                    "smooth"
-                } else {
-                    "analytic"
-                }
-            ),
-        };
+        let geo = describe_geometry(&s.geometry);
         let bsdf = &desc.bsdfs[s.bsdf];
         out!(
             "  shape {k:<3} {:<10} {:<16} bsdf {:<12} {}{}",
@@ -332,6 +327,10 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
             uses
         );
     }
+}
+
+/// One line per material, then the lights: their count and one line per light of its own.
+fn print_materials_and_lights(desc: &pt_scene::SceneDesc, scene: &Scene) {
     out!("materials   {}", desc.bsdfs.len());
     for b in &desc.bsdfs {
         out!(
@@ -353,17 +352,39 @@ pub(crate) fn run(args: InfoArgs) -> Result<ExitCode> {
     for l in &desc.lights {
         out!("  {}", describe_light(&l.kind));
     }
-    if !gltf_summary.is_empty() {
-        out!("glTF        (how the file maps onto the renderer; see pt-gltf's documentation)");
-        for line in &gltf_summary {
-            out!("  {line}");
+}
+
+/// A shape's geometry in a few words: its kind and size.
+fn describe_geometry(geometry: &Geometry) -> String {
+    match geometry {
+        Geometry::Mesh(m) => format!("{} triangles", m.indices.len()),
+        Geometry::Sphere { radius, .. } => format!("sphere r={radius}"),
+        Geometry::Disk(d) => format!("disk, area {}", d.area()),
+        Geometry::Cylinder { radius, length, .. } => {
+            format!("cylinder r={radius} length={length}")
         }
+        Geometry::Curves(c) => format!(
+            "{} curve, {} control points, {} segments",
+            match c.basis {
+                pt_scene::CurveBasis::Linear => "linear",
+                pt_scene::CurveBasis::BSpline => "B-spline",
+            },
+            c.points.len(),
+            c.segments.len()
+        ),
+        Geometry::SdfGrid(g) => format!(
+            "sdf grid {}x{}x{}, {} voxels on the surface, {} normals",
+            g.resolution[0],
+            g.resolution[1],
+            g.resolution[2],
+            g.occupied_voxels().count(),
+            if g.smooth_normals {
+                "smooth"
+            } else {
+                "analytic"
+            }
+        ),
     }
-    match desc.spectral_reason() {
-        Some(why) => out!("mode        spectral, because {why}"),
-        None => out!("mode        rgb (every input is RGB and no material depends on wavelength: RGB is exact)"),
-    }
-    Ok(ExitCode::SUCCESS)
 }
 
 /// One line's worth of a medium: its kind, coefficients and phase function.

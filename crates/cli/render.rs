@@ -388,28 +388,7 @@ pub(crate) fn execute(
         bail!("--spp must be at least 1");
     }
     integrator.check_scene(&desc)?;
-    let part = match (args.part, &merge) {
-        (Some(_), Some(_)) => bail!("a part file's arguments contain --part"),
-        (Some((k, n)), None) => {
-            if args.resume.is_some() || args.save_state.is_some() {
-                bail!("--part keeps its state in its part file: drop --resume and --save-state");
-            }
-            if args.variance || args.png.is_some() {
-                bail!("--part writes a part file, not an image: --variance and --png belong to `pt merge`");
-            }
-            if let Some(why) = integrator.unshared_because() {
-                bail!(
-                    "--part applies to every sampling method but sppm, radiosity and depth, not to {}: {why}",
-                    integrator.name(),
-                );
-            }
-            Some(Share {
-                index: k - 1,
-                count: n,
-            })
-        }
-        (None, _) => None,
-    };
+    let part = requested_share(&args, merge.is_some(), &integrator)?;
     // A merge takes no samples: the parts' checkpoint setting does not apply.
     let checkpoint = if merge.is_some() {
         None
@@ -419,27 +398,7 @@ pub(crate) fn execute(
     if checkpoint.is_some() && part.is_none() && args.save_state.is_none() {
         bail!("--checkpoint saves to the part file (--part) or to --save-state: give one of them");
     }
-    let job = Job {
-        spp: args.spp.unwrap_or(desc.sampler.sample_count),
-        seed: args.seed.unwrap_or(desc.sampler.seed),
-        bvh: match args.bvh {
-            BvhArg::Auto => BvhKind::Auto,
-            BvhArg::Cwbvh => BvhKind::CwBvh,
-            BvhArg::Bvh2 => BvhKind::Bvh2,
-            BvhArg::Flat => BvhKind::Flat,
-        },
-        selection: match args.light_selection {
-            SelectionArg::Tree => LightSelection::Tree,
-            SelectionArg::Power => LightSelection::Power,
-            SelectionArg::Uniform => LightSelection::Uniform,
-        },
-        mode: args.mode.map(|m| match m {
-            ModeArg::Rgb => pt_spectrum::ColorMode::Rgb,
-            ModeArg::Spectral => pt_spectrum::ColorMode::Spectral,
-        }),
-        share: part.unwrap_or(Share::WHOLE),
-        ..Job::new(&desc)
-    };
+    let job = job_of(&args, &desc, part);
     let output = match (&args.output, part) {
         (Some(o), _) => o.clone(),
         (None, Some(sh)) => default_part_output(args.scene.as_deref(), sh),
@@ -477,62 +436,9 @@ pub(crate) fn execute(
         args: shared_arguments(argv),
         state: state.to_bytes(key),
     };
-    let resume = if let Some(parts) = merge {
-        // Sums are exact: the order of the additions does not matter (share order is used).
-        let mut total: Option<RenderState> = None;
-        for (path, p) in &parts {
-            if p.key != key {
-                bail!(
-                    "{}: the scene file or the options changed since the part was rendered (the render's key differs)",
-                    path.display()
-                );
-            }
-            let s = read_state(&p.state, path)?;
-            match total.as_mut() {
-                None => total = Some(s),
-                Some(t) => t
-                    .merge(&s)
-                    .map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))?,
-            }
-        }
-        total
-    } else if let Some(path) = &args.resume {
-        let bytes = std::fs::read(path)
-            .with_context(|| format!("cannot read render state {}", path.display()))?;
-        Some(read_state(&bytes, path)?)
-    } else if let (Some(sh), true) = (part, output.exists()) {
-        let p = PartFile::read(&output)?;
-        if (p.key, p.index, p.count, p.spp, p.seed) != (key, sh.index, sh.count, job.spp, job.seed)
-        {
-            bail!(
-                "{} exists and holds part {} of another render (scene, options, seed or sample count differ): delete it or write this part elsewhere (-o)",
-                output.display(),
-                p.label()
-            );
-        }
-        if p.complete() {
-            if !args.quiet {
-                eprintln!(
-                    "part {} is already complete ({} spp) in {}",
-                    p.label(),
-                    p.done,
-                    output.display()
-                );
-            }
-            return Ok(ExitCode::SUCCESS);
-        }
-        if !args.quiet {
-            eprintln!(
-                "resuming part {} from {} of {} spp in {}",
-                p.label(),
-                p.done,
-                p.share_spp,
-                output.display()
-            );
-        }
-        Some(read_state(&p.state, &output)?)
-    } else {
-        None
+    let resume = match starting_state(&args, merge, part, &output, &job, key, &read_state)? {
+        Start::From(state) => state,
+        Start::Complete => return Ok(ExitCode::SUCCESS),
     };
     // Ctrl-C or SIGTERM: finish the current pass, then write what was accumulated (image and,
     // with --save-state, the sums; or the part file) and exit with code 130.
@@ -580,6 +486,160 @@ pub(crate) fn execute(
         ),
         _ => {}
     }
+    finish(&args, &desc, &job, part, &rendered, &output, settings.spp)
+}
+
+/// The share of the samples `--part K/N` asks for (`None`: all of them); refused with the
+/// options a part cannot have, when `merging` (a part file's own arguments), and for the
+/// methods whose samples cannot be split.
+fn requested_share(
+    args: &RenderArgs,
+    merging: bool,
+    integrator: &Integrator,
+) -> Result<Option<Share>> {
+    Ok(match (args.part, merging) {
+        (Some(_), true) => bail!("a part file's arguments contain --part"),
+        (Some((k, n)), false) => {
+            if args.resume.is_some() || args.save_state.is_some() {
+                bail!("--part keeps its state in its part file: drop --resume and --save-state");
+            }
+            if args.variance || args.png.is_some() {
+                bail!("--part writes a part file, not an image: --variance and --png belong to `pt merge`");
+            }
+            if let Some(why) = integrator.unshared_because() {
+                bail!(
+                    "--part applies to every sampling method but sppm, radiosity and depth, not to {}: {why}",
+                    integrator.name(),
+                );
+            }
+            Some(Share {
+                index: k - 1,
+                count: n,
+            })
+        }
+        (None, _) => None,
+    })
+}
+
+/// The render job of `desc` as the command line asks for it: samples, seed, acceleration
+/// structure, light selection, colour mode and share `part`.
+fn job_of<'a>(args: &RenderArgs, desc: &'a SceneDesc, part: Option<Share>) -> Job<'a> {
+    Job {
+        spp: args.spp.unwrap_or(desc.sampler.sample_count),
+        seed: args.seed.unwrap_or(desc.sampler.seed),
+        bvh: match args.bvh {
+            BvhArg::Auto => BvhKind::Auto,
+            BvhArg::Cwbvh => BvhKind::CwBvh,
+            BvhArg::Bvh2 => BvhKind::Bvh2,
+            BvhArg::Flat => BvhKind::Flat,
+        },
+        selection: match args.light_selection {
+            SelectionArg::Tree => LightSelection::Tree,
+            SelectionArg::Power => LightSelection::Power,
+            SelectionArg::Uniform => LightSelection::Uniform,
+        },
+        mode: args.mode.map(|m| match m {
+            ModeArg::Rgb => pt_spectrum::ColorMode::Rgb,
+            ModeArg::Spectral => pt_spectrum::ColorMode::Spectral,
+        }),
+        share: part.unwrap_or(Share::WHOLE),
+        ..Job::new(desc)
+    }
+}
+
+/// Where a render starts.
+// One value per render: its size is of no consequence.
+#[allow(clippy::large_enum_variant)]
+enum Start {
+    /// From scratch (`None`) or from a saved state.
+    From(Option<RenderState>),
+    /// Nowhere: its part file is complete.
+    Complete,
+}
+
+/// The state a render continues: the sum of the `merge` parts, the `--resume` state, or the
+/// unfinished part file at `output` of the same render (`key`, `part`, `job`); each read by
+/// `read_state`.
+fn starting_state(
+    args: &RenderArgs,
+    merge: Option<Vec<(PathBuf, PartFile)>>,
+    part: Option<Share>,
+    output: &Path,
+    job: &Job,
+    key: u64,
+    read_state: &dyn Fn(&[u8], &Path) -> Result<RenderState>,
+) -> Result<Start> {
+    let state = if let Some(parts) = merge {
+        // Sums are exact: the order of the additions does not matter (share order is used).
+        let mut total: Option<RenderState> = None;
+        for (path, p) in &parts {
+            if p.key != key {
+                bail!(
+                    "{}: the scene file or the options changed since the part was rendered (the render's key differs)",
+                    path.display()
+                );
+            }
+            let s = read_state(&p.state, path)?;
+            match total.as_mut() {
+                None => total = Some(s),
+                Some(t) => t
+                    .merge(&s)
+                    .map_err(|m| anyhow::anyhow!("{}: {m}", path.display()))?,
+            }
+        }
+        total
+    } else if let Some(path) = &args.resume {
+        let bytes = std::fs::read(path)
+            .with_context(|| format!("cannot read render state {}", path.display()))?;
+        Some(read_state(&bytes, path)?)
+    } else if let (Some(sh), true) = (part, output.exists()) {
+        let p = PartFile::read(output)?;
+        if (p.key, p.index, p.count, p.spp, p.seed) != (key, sh.index, sh.count, job.spp, job.seed)
+        {
+            bail!(
+                "{} exists and holds part {} of another render (scene, options, seed or sample count differ): delete it or write this part elsewhere (-o)",
+                output.display(),
+                p.label()
+            );
+        }
+        if p.complete() {
+            if !args.quiet {
+                eprintln!(
+                    "part {} is already complete ({} spp) in {}",
+                    p.label(),
+                    p.done,
+                    output.display()
+                );
+            }
+            return Ok(Start::Complete);
+        }
+        if !args.quiet {
+            eprintln!(
+                "resuming part {} from {} of {} spp in {}",
+                p.label(),
+                p.done,
+                p.share_spp,
+                output.display()
+            );
+        }
+        Some(read_state(&p.state, output)?)
+    } else {
+        None
+    };
+    Ok(Start::From(state))
+}
+
+/// After the render: the part file's line or the image files with theirs, the warnings, and
+/// the exit code (130 when interrupted, with what was written of the `spp` asked for).
+fn finish(
+    args: &RenderArgs,
+    desc: &SceneDesc,
+    job: &Job,
+    part: Option<Share>,
+    rendered: &Rendered,
+    output: &Path,
+    spp: u32,
+) -> Result<ExitCode> {
     if let Some(sh) = part {
         if !args.quiet {
             eprintln!(
@@ -591,7 +651,7 @@ pub(crate) fn execute(
             );
         }
     } else {
-        write_outputs(&args, &desc, &job, &rendered, &output)?;
+        write_outputs(args, desc, job, rendered, output)?;
         if !args.quiet {
             eprintln!("{} -> {}", rendered.summary, output.display());
         }
@@ -604,7 +664,7 @@ pub(crate) fn execute(
             "interrupted: wrote the {} of the {} of {} samples per pixel taken so far{}",
             if part.is_some() { "part file" } else { "image" },
             rendered.output.spp,
-            settings.spp,
+            spp,
             if part.is_some() {
                 " (run the same command again to resume it)"
             } else if args.save_state.is_some() {
