@@ -361,9 +361,10 @@ fn render_row_samples<S: RandomSource>(
         // Each sample's film offset and weight (1 but for filters with negative lobes).
         let mut offsets = [(Vec2::ZERO, 1.0f32); SAMPLE_CHUNK as usize];
         let mut taken = 0u32;
-        let start = || {
+        let start = |slot: &mut Option<PathStart<S>>| {
             if taken == SAMPLE_CHUNK || x >= xs.end {
-                return None;
+                *slot = None;
+                return;
             }
             let pixel = settings.pixel_key(x, y);
             let mut sampler = new_sampler(pixel, u64::from(settings.share.sample(k)));
@@ -392,12 +393,12 @@ fn render_row_samples<S: RandomSource>(
             if k == samples.end {
                 (x, k) = (x + 1, samples.start);
             }
-            Some(PathStart {
+            *slot = Some(PathStart {
                 path,
                 sampler,
                 lambda,
                 tag,
-            })
+            });
         };
         let finish = |done: &PathStart<S>| {
             let l = done.path.radiance;
