@@ -40,6 +40,7 @@ mod radiosity;
 mod resume;
 mod samplers;
 mod scene_docs;
+mod source_size;
 mod spectral_textures;
 mod sppm;
 mod surface_textures;
