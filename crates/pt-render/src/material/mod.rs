@@ -396,37 +396,9 @@ impl Material {
             Material::Minnaert { reflectance, k } => {
                 Bsdf::Minnaert(Minnaert::new(reflectance.eval(at, lambda), k.eval_1(at)))
             }
-            Material::Dielectric {
-                eta,
-                specular_reflectance,
-                specular_transmittance,
-            } => {
-                let mut d = Dielectric::new(*eta);
-                d.specular_reflectance = specular_reflectance.eval(at, lambda);
-                d.specular_transmittance = specular_transmittance.eval(at, lambda);
-                Bsdf::Dielectric(d)
-            }
-            Material::ThinDielectric {
-                eta,
-                specular_reflectance,
-                specular_transmittance,
-            } => {
-                let mut d = ThinDielectric::new(*eta);
-                d.specular_reflectance = specular_reflectance.eval(at, lambda);
-                d.specular_transmittance = specular_transmittance.eval(at, lambda);
-                Bsdf::ThinDielectric(d)
-            }
-            Material::RoughDielectric {
-                eta,
-                roughness,
-                specular_reflectance,
-                specular_transmittance,
-            } => {
-                let mut d = RoughDielectric::new(*eta, roughness.at(at));
-                d.specular_reflectance = specular_reflectance.eval(at, lambda);
-                d.specular_transmittance = specular_transmittance.eval(at, lambda);
-                Bsdf::RoughDielectric(d)
-            }
+            Material::Dielectric { .. }
+            | Material::ThinDielectric { .. }
+            | Material::RoughDielectric { .. } => self.dielectric_bsdf(at, lambda),
             Material::Conductor {
                 eta,
                 k,
@@ -467,35 +439,7 @@ impl Material {
                 kept: *kept,
                 transmittance: transmittance.eval(at, lambda),
             }),
-            Material::Hair {
-                absorption,
-                from_reflectance,
-                scale,
-                eta,
-                roughness,
-                scale_tilt_deg,
-            } => {
-                let a = absorption.eval(at, lambda);
-                let sigma_a = if *from_reflectance {
-                    Hair::sigma_a_from_reflectance(a, roughness[1])
-                } else {
-                    a * *scale
-                };
-                let luminance = match mode {
-                    ColorMode::Rgb => pt_math::Vec4::new(0.212_671, 0.715_160, 0.072_169, 0.0),
-                    ColorMode::Spectral => pt_math::Vec4::from_array(
-                        lambda.lambda().to_array().map(pt_spectrum::cie::cmf_y),
-                    ),
-                };
-                Bsdf::Hair(Hair::new(
-                    sigma_a,
-                    luminance,
-                    *eta,
-                    roughness[0],
-                    roughness[1],
-                    *scale_tilt_deg,
-                ))
-            }
+            Material::Hair { .. } => self.hair_bsdf(at, lambda, mode),
             Material::Plastic {
                 diffuse_reflectance,
                 specular_reflectance,
@@ -545,6 +489,84 @@ impl Material {
             )),
             Material::Fluorescent(f) => Bsdf::Lambert(Lambert::new(f.albedo(lambda))),
         }
+    }
+
+    /// [`Material::bsdf`] of the three dielectrics (smooth, thin, rough): the interface with
+    /// its specular factors evaluated at the point.
+    #[inline(always)]
+    fn dielectric_bsdf(&self, at: &TexturePoint, lambda: &SampledWavelengths) -> Bsdf {
+        match self {
+            Material::Dielectric {
+                eta,
+                specular_reflectance,
+                specular_transmittance,
+            } => {
+                let mut d = Dielectric::new(*eta);
+                d.specular_reflectance = specular_reflectance.eval(at, lambda);
+                d.specular_transmittance = specular_transmittance.eval(at, lambda);
+                Bsdf::Dielectric(d)
+            }
+            Material::ThinDielectric {
+                eta,
+                specular_reflectance,
+                specular_transmittance,
+            } => {
+                let mut d = ThinDielectric::new(*eta);
+                d.specular_reflectance = specular_reflectance.eval(at, lambda);
+                d.specular_transmittance = specular_transmittance.eval(at, lambda);
+                Bsdf::ThinDielectric(d)
+            }
+            Material::RoughDielectric {
+                eta,
+                roughness,
+                specular_reflectance,
+                specular_transmittance,
+            } => {
+                let mut d = RoughDielectric::new(*eta, roughness.at(at));
+                d.specular_reflectance = specular_reflectance.eval(at, lambda);
+                d.specular_transmittance = specular_transmittance.eval(at, lambda);
+                Bsdf::RoughDielectric(d)
+            }
+            _ => unreachable!("dielectric_bsdf is called for dielectrics"),
+        }
+    }
+
+    /// [`Material::bsdf`] of Mitsuba's `hair`: the absorption from the texture (or from the
+    /// fibres' colour, Chiang et al. 2016, eq. 9) and the luminance weights of the path's
+    /// channels (RGB's Y row, or the CIE y of each wavelength) for the lobe selection.
+    #[inline(always)]
+    fn hair_bsdf(&self, at: &TexturePoint, lambda: &SampledWavelengths, mode: ColorMode) -> Bsdf {
+        let Material::Hair {
+            absorption,
+            from_reflectance,
+            scale,
+            eta,
+            roughness,
+            scale_tilt_deg,
+        } = self
+        else {
+            unreachable!("hair_bsdf is called for hair")
+        };
+        let a = absorption.eval(at, lambda);
+        let sigma_a = if *from_reflectance {
+            Hair::sigma_a_from_reflectance(a, roughness[1])
+        } else {
+            a * *scale
+        };
+        let luminance = match mode {
+            ColorMode::Rgb => pt_math::Vec4::new(0.212_671, 0.715_160, 0.072_169, 0.0),
+            ColorMode::Spectral => {
+                pt_math::Vec4::from_array(lambda.lambda().to_array().map(pt_spectrum::cie::cmf_y))
+            }
+        };
+        Bsdf::Hair(Hair::new(
+            sigma_a,
+            luminance,
+            *eta,
+            roughness[0],
+            roughness[1],
+            *scale_tilt_deg,
+        ))
     }
 }
 
