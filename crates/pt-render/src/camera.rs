@@ -201,19 +201,26 @@ impl Camera {
     /// The primary ray for the image's pixel (x, y) at `offset` (pixels) from its centre: the
     /// film position is computed from the pixel's place in the whole film, in the same
     /// operations for any crop window, so that a cropped render traces the whole film's rays
-    /// bit for bit. `u_lens` as in [`Camera::generate_ray`].
-    #[inline]
-    /// Pixels outside the image (negative or beyond its size: the border a splatting film
-    /// samples with `sample_border`) continue the film's grid.
+    /// bit for bit. `u_lens` as in [`Camera::generate_ray`]. Pixels outside the image
+    /// (negative or beyond its size: the border a splatting film samples with
+    /// `sample_border`) continue the film's grid.
+    #[inline(always)]
     pub fn pixel_ray(&self, x: i32, y: i32, offset: Vec2, u_lens: Vec2) -> Ray {
-        if let Some((member, x)) = self.batch_member(x) {
-            return member.pixel_ray(x, y, offset, u_lens);
-        }
+        let (camera, x) = self.batch_member(x).unwrap_or((self, x));
+        camera.own_pixel_ray(x, y, offset, u_lens)
+    }
+
+    /// [`Camera::pixel_ray`] of this camera itself (a batch's member, or a camera that is no
+    /// batch). A batch's members are never batches themselves (the loader refuses them), so
+    /// the batch is resolved once, without recursion: a recursive function is not inlined
+    /// into the render loop, and this runs once per sample.
+    #[inline(always)]
+    fn own_pixel_ray(&self, x: i32, y: i32, offset: Vec2, u_lens: Vec2) -> Ray {
         let centre = Vec2::new(
             (i64::from(x) + i64::from(self.crop_offset[0])) as f32 + 0.5,
             (i64::from(y) + i64::from(self.crop_offset[1])) as f32 + 0.5,
         );
-        self.generate_ray(centre + offset, u_lens)
+        self.own_ray(centre + offset, u_lens)
     }
 
     /// Whether [`Camera::generate_ray`] uses its lens sample (a thin lens with an aperture):
@@ -240,21 +247,19 @@ impl Camera {
         offset: Vec2,
         mut next_2d: impl FnMut() -> Vec2,
     ) -> Ray {
-        match self.kind {
-            Kind::Batch => match self.batch_member(x) {
-                Some((member, x)) => member.sample_ray(x, y, offset, next_2d),
-                None => self.pixel_ray(x, y, offset, Vec2::splat(0.5)),
-            },
-            Kind::ThinLens { .. } => self.pixel_ray(x, y, offset, next_2d()),
+        // A batch's member samples its own rays (see `own_pixel_ray`).
+        let (camera, x) = self.batch_member(x).unwrap_or((self, x));
+        match camera.kind {
+            Kind::ThinLens { .. } => camera.own_pixel_ray(x, y, offset, next_2d()),
             Kind::Irradiancemeter => {
                 let u_point = next_2d();
-                self.surface_ray(u_point, next_2d())
+                camera.surface_ray(u_point, next_2d())
             }
-            Kind::Distant => match self.aim {
-                Some((Aim::Point(_), ..)) | None => self.distant_ray(Vec2::splat(0.5)),
-                Some(_) => self.distant_ray(next_2d()),
+            Kind::Distant => match camera.aim {
+                Some((Aim::Point(_), ..)) | None => camera.distant_ray(Vec2::splat(0.5)),
+                Some(_) => camera.distant_ray(next_2d()),
             },
-            _ => self.pixel_ray(x, y, offset, Vec2::splat(0.5)),
+            _ => camera.own_pixel_ray(x, y, offset, Vec2::splat(0.5)),
         }
     }
 
@@ -333,11 +338,18 @@ impl Camera {
     pub fn generate_ray(&self, film: Vec2, u_lens: Vec2) -> Ray {
         if let Some((member, x)) = self.batch_member(film.x.floor() as i32) {
             let local = Vec2::new(film.x - (film.x.floor() - x as f32), film.y);
-            return member.generate_ray(local, u_lens);
+            return member.own_ray(local, u_lens);
         }
-        let ndc = (film + self.film_offset) * self.inv_size; // [0,1]^2 on the film, y down
-                                                             // The film point in camera space: at z = 1 for the perspective cameras (the direction
-                                                             // of the pinhole ray), at z = 0 for the orthographic one (the ray's origin).
+        self.own_ray(film, u_lens)
+    }
+
+    /// [`Camera::generate_ray`] of this camera itself (see `own_pixel_ray`).
+    #[inline(always)]
+    fn own_ray(&self, film: Vec2, u_lens: Vec2) -> Ray {
+        // [0,1]^2 on the film, y down.
+        let ndc = (film + self.film_offset) * self.inv_size;
+        // The film point in camera space: at z = 1 for the perspective cameras (the direction
+        // of the pinhole ray), at z = 0 for the orthographic one (the ray's origin).
         let x = (1.0 - 2.0 * ndc.x) * self.tan_half.x;
         let y = (1.0 - 2.0 * ndc.y) * self.tan_half.y;
         match self.kind {
