@@ -49,6 +49,12 @@ pub struct PathSettings {
 }
 
 impl PathSettings {
+    /// `max_depth` as a count of segments: `u32::MAX` when unlimited (-1).
+    #[inline]
+    pub fn depth_limit(&self) -> u32 {
+        u32::try_from(self.max_depth).unwrap_or(u32::MAX)
+    }
+
     /// The settings a scene's `<integrator>` gives (for `radiosity` scenes, the path tracer's
     /// with its `max_depth`).
     pub fn from_desc(i: &pt_scene::IntegratorDesc) -> Self {
@@ -419,11 +425,7 @@ fn arrive(
     path: &mut PathState,
     hit: &Option<Interaction>,
 ) -> bool {
-    let max_depth = if s.max_depth < 0 {
-        u32::MAX
-    } else {
-        s.max_depth as u32
-    };
+    let max_depth = s.depth_limit();
     let PathState {
         ray,
         lambda,

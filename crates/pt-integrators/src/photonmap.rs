@@ -520,11 +520,7 @@ pub fn render_photon_passes(
     let (w, h) = (settings.width, settings.height);
     let pixels = u64::from(w) * u64::from(h);
     let s = &settings.path;
-    let max_depth = if s.max_depth < 0 {
-        u32::MAX
-    } else {
-        s.max_depth as u32
-    };
+    let max_depth = s.depth_limit();
     let photons = pm.global_photons + pm.caustic_photons;
     // Progress counts pixels: the photons of an iteration as one half of them.
     let photon_progress = |n: u64| progress(n * pixels / (2 * photons.max(1)));

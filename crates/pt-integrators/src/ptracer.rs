@@ -493,11 +493,7 @@ pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
     };
     let mut lambda = *lambda;
     let mut eta = 1.0f32;
-    let max_depth = if s.max_depth < 0 {
-        u32::MAX
-    } else {
-        s.max_depth as u32
-    };
+    let max_depth = s.depth_limit();
     let medium_walk = scene.has_media();
     let mut depth = 1u32;
     while depth < max_depth {

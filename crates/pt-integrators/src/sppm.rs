@@ -320,11 +320,7 @@ pub fn render_sppm_passes(
                 r,
             );
             let chunks = photons.div_ceil(CHUNK);
-            let max_depth = if s.max_depth < 0 {
-                u32::MAX
-            } else {
-                s.max_depth as u32
-            };
+            let max_depth = s.depth_limit();
             let deposits: Vec<Vec<(u32, SampledSpectrum)>> = (0..chunks)
                 .into_par_iter()
                 .map(|c| {

@@ -57,11 +57,7 @@ pub fn estimate<S: RandomSource>(
     path: &mut PathState,
     sampler: &mut S,
 ) {
-    let max_depth = if s.max_depth < 0 {
-        u32::MAX
-    } else {
-        s.max_depth as u32
-    };
+    let max_depth = s.depth_limit();
     // The channels free-flight sampling chooses among (RGB's fourth lane is unused).
     let channels = match scene.mode {
         ColorMode::Spectral => 4,

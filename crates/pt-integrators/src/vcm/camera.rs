@@ -2,7 +2,7 @@
 //! sampling (s = 1), connections to the paired light subpath (s, t >= 2) and merging.
 
 use super::mis::{connection_weight, emission_weight, light_sample_weight, merge_weight};
-use super::{max_depth, Iteration, LightVertex, Photon, SubpathMis};
+use super::{Iteration, LightVertex, Photon, SubpathMis};
 use crate::grid::PointGrid;
 use crate::ptracer::{shading_frame, to_rgb, Splat};
 use pt_bsdf::SurfaceBsdf;
@@ -44,7 +44,7 @@ fn camera_subpath(
     }
     let mut mis_state = SubpathMis::camera(1.0 / (it.scale * pdf_film));
     let mut prev = ray.origin;
-    let max_depth = max_depth(s);
+    let max_depth = s.depth_limit();
     let mut eta = 1.0f32;
     let mut depth = 1u32;
     loop {
@@ -222,7 +222,7 @@ fn merged(
     cam: &SubpathMis,
     depth: u32,
 ) -> SampledSpectrum {
-    let max_depth = max_depth(it.s);
+    let max_depth = it.s.depth_limit();
     let mut sum = SampledSpectrum::ZERO;
     grid.within(hit.p, |ph| {
         if ph.ng.dot(hit.ng) <= 0.0 || ph.depth.saturating_add(depth) > max_depth {

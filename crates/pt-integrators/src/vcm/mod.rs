@@ -168,15 +168,6 @@ struct Photon {
     /// Segments from the light.
     depth: u32,
 }
-/// The largest path depth of `s` (Mitsuba's max_depth; -1: none).
-fn max_depth(s: &PathSettings) -> u32 {
-    if s.max_depth < 0 {
-        u32::MAX
-    } else {
-        s.max_depth as u32
-    }
-}
-
 /// What an iteration shares: the scene, settings, the merging radius and factors, and for
 /// merging the light vertices of all light subpaths (in chunks) and their grid.
 struct Iteration<'a> {
