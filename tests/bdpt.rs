@@ -11,7 +11,7 @@
 //!   uninterrupted one, bit for bit.
 //!
 //! That each strategy's weight is the power heuristic over all strategies is checked in the
-//! integrator's unit tests (`crates/pt-integrators/src/vcm.rs`).
+//! integrator's unit tests (`crates/pt-integrators/src/vcm/`).
 
 use crate::common;
 
