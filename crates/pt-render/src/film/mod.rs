@@ -27,7 +27,9 @@ pub mod splat;
 const GAUSSIAN_TAIL: f32 = 3.354_626_3e-4;
 
 /// The 1D profile of a separable filter at offset `x` (pixels), as Mitsuba 3.9.1 evaluates it
-/// (`eval`; its Gaussian with the exact exp), even in x; 0 outside the radius.
+/// (`eval`; its Gaussian with the exact exp), even in x; 0 outside the radius. Always inlined
+/// (as [`splat::SplatTile::splat`], which calls it per pixel of a footprint).
+#[inline(always)]
 pub fn filter_profile(filter: &FilterDesc, x: f32) -> f32 {
     let x = x.abs();
     match *filter {
