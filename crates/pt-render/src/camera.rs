@@ -162,7 +162,7 @@ impl Camera {
 
     /// For a batch, the sensor whose strip holds the film column `x` (columns left and right of
     /// the film go to the first and last) and `x` within its strip.
-    #[inline]
+    #[inline(always)]
     fn batch_member(&self, x: i32) -> Option<(&Camera, i32)> {
         let (cameras, strip) = self.batch.as_ref()?;
         let k = x
@@ -238,8 +238,9 @@ impl Camera {
     /// centre ([`Camera::pixel_ray`]), drawing from `next_2d` the numbers the camera needs
     /// beyond the film position: a thin lens's aperture point, or an irradiancemeter's point
     /// and direction (which ignore the film position, as Mitsuba's do); nothing for the
-    /// others, whose images keep their random numbers.
-    #[inline]
+    /// others, whose images keep their random numbers. Always inlined: it runs once per
+    /// sample, in the render loop compiled for the processor's instruction sets.
+    #[inline(always)]
     pub fn sample_ray(
         &self,
         x: i32,

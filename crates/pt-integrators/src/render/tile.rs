@@ -3,7 +3,7 @@
 //! where the processor has it.
 
 use super::{clamp_sample, RenderSettings};
-use crate::path::{trace_paths, PathStart, PathState};
+use crate::path::{trace_paths, PathQueue, PathStart, PathState};
 use pt_math::Vec2;
 use pt_render::film::splat::{SplatFilm, SplatTile};
 use pt_render::film::{filter_radius, sample_pixel_offset, PixelStats};
@@ -351,80 +351,126 @@ fn render_row_samples<S: RandomSource>(
     if samples.is_empty() || xs.is_empty() {
         return;
     }
-    let spectral = scene.mode == ColorMode::Spectral;
-    let rgb_lambda = *rgb_lambda;
-    // The next sample to start, as (pixel x, sample index); `x == xs.end` when all are started.
-    let (mut x, mut k) = (xs.start, samples.start);
-    while x < xs.end {
-        let (chunk_x, chunk_k) = (x, k);
-        let mut results = [([0.0f32; 3], 0.0f32); SAMPLE_CHUNK as usize];
-        // Each sample's film offset and weight (1 but for filters with negative lobes).
-        let mut offsets = [(Vec2::ZERO, 1.0f32); SAMPLE_CHUNK as usize];
-        let mut taken = 0u32;
-        let start = |slot: &mut Option<PathStart<S>>| {
-            if taken == SAMPLE_CHUNK || x >= xs.end {
-                *slot = None;
-                return;
-            }
-            let pixel = settings.pixel_key(x, y);
-            let mut sampler = new_sampler(pixel, u64::from(settings.share.sample(k)));
-            let lambda = if spectral {
-                SampledWavelengths::sample_visible(sampler.next_1d())
-            } else {
-                rgb_lambda
-            };
-            let (offset, weight) = if splat {
-                (sampler.next_2d() - Vec2::splat(0.5), 1.0)
-            } else {
-                sample_pixel_offset(
-                    &settings.filter,
-                    &mut sampler,
-                    (x as u32, y as u32),
-                    (settings.width, settings.height),
-                    settings.sample_border,
-                )
-            };
-            let ray = scene.camera.sample_ray(x, y, offset, || sampler.next_2d());
-            let path = PathState::new(scene, ray, &lambda);
-            let tag = taken;
-            offsets[tag as usize] = (offset, weight);
-            taken += 1;
-            k += 1;
-            if k == samples.end {
-                (x, k) = (x + 1, samples.start);
-            }
-            *slot = Some(PathStart {
-                path,
-                sampler,
-                lambda,
-                tag,
-            });
-        };
-        let finish = |done: &PathStart<S>| {
-            let l = done.path.radiance;
-            let rgb = if spectral {
-                spectrum_to_srgb(l, &done.lambda)
-            } else {
-                l.rgb()
-            };
-            let rgb = match settings.clamp {
-                Some(c) => clamp_sample(rgb, c),
-                None => rgb,
-            };
-            let alpha = f32::from(u8::from(done.path.covered));
-            results[done.tag as usize] = (rgb, alpha);
-        };
-        trace_paths(scene, &settings.path, start, finish);
+    let mut chunk = RowChunk {
+        scene,
+        settings,
+        y,
+        xs: xs.clone(),
+        samples: samples.clone(),
+        rgb_lambda: *rgb_lambda,
+        splat,
+        new_sampler,
+        x: xs.start,
+        k: samples.start,
+        taken: 0,
+        results: [([0.0f32; 3], 0.0f32); SAMPLE_CHUNK as usize],
+        offsets: [(Vec2::ZERO, 1.0f32); SAMPLE_CHUNK as usize],
+    };
+    while chunk.x < xs.end {
+        let (chunk_x, chunk_k) = (chunk.x, chunk.k);
+        chunk.taken = 0;
+        trace_paths(scene, &settings.path, &mut chunk);
         // The chunk's results, in the order they were started: pixel by pixel, each in sample
         // order.
         let (mut px, mut pk) = (chunk_x, chunk_k);
-        for ((rgb, alpha), (offset, w)) in results[..taken as usize].iter().zip(&offsets) {
+        let taken = chunk.taken as usize;
+        for ((rgb, alpha), (offset, w)) in chunk.results[..taken].iter().zip(&chunk.offsets) {
             sink.put(px, pk, *rgb, *alpha, *offset, *w);
             pk += 1;
             if pk == samples.end {
                 (px, pk) = (px + 1, samples.start);
             }
         }
+    }
+}
+
+/// One chunk of [`render_row_samples`]: the camera paths of up to [`SAMPLE_CHUNK`] samples of
+/// a row's pixels, started for [`trace_paths`] and their results taken back.
+struct RowChunk<'a, F> {
+    scene: &'a Scene,
+    settings: &'a RenderSettings,
+    /// The row, its pixels and the samples of each pixel.
+    y: i32,
+    xs: std::ops::Range<i32>,
+    samples: std::ops::Range<u32>,
+    /// The wavelengths of an RGB render (a spectral one samples its own per path).
+    rgb_lambda: SampledWavelengths,
+    /// Whether the film splats (the sample's film offset is uniform over the pixel).
+    splat: bool,
+    /// A sample's random numbers from its pixel key and sample index.
+    new_sampler: F,
+    /// The next sample to start, as (pixel x, sample index); `x == xs.end` when all are
+    /// started.
+    x: i32,
+    k: u32,
+    /// Samples started in this chunk.
+    taken: u32,
+    /// Each started sample's colour and alpha, by the order it started in.
+    results: [([f32; 3], f32); SAMPLE_CHUNK as usize],
+    /// Each sample's film offset and weight (1 but for filters with negative lobes).
+    offsets: [(Vec2, f32); SAMPLE_CHUNK as usize],
+}
+
+impl<S: RandomSource, F: Fn(u64, u64) -> S> PathQueue<S> for RowChunk<'_, F> {
+    #[inline(always)]
+    fn start(&mut self, slot: &mut Option<PathStart<S>>) {
+        let (x, y, settings) = (self.x, self.y, self.settings);
+        if self.taken == SAMPLE_CHUNK || x >= self.xs.end {
+            *slot = None;
+            return;
+        }
+        let pixel = settings.pixel_key(x, y);
+        let mut sampler = (self.new_sampler)(pixel, u64::from(settings.share.sample(self.k)));
+        let lambda = if self.scene.mode == ColorMode::Spectral {
+            SampledWavelengths::sample_visible(sampler.next_1d())
+        } else {
+            self.rgb_lambda
+        };
+        let (offset, weight) = if self.splat {
+            (sampler.next_2d() - Vec2::splat(0.5), 1.0)
+        } else {
+            sample_pixel_offset(
+                &settings.filter,
+                &mut sampler,
+                (x as u32, y as u32),
+                (settings.width, settings.height),
+                settings.sample_border,
+            )
+        };
+        let ray = self
+            .scene
+            .camera
+            .sample_ray(x, y, offset, || sampler.next_2d());
+        let path = PathState::new(self.scene, ray, &lambda);
+        let tag = self.taken;
+        self.offsets[tag as usize] = (offset, weight);
+        self.taken += 1;
+        self.k += 1;
+        if self.k == self.samples.end {
+            (self.x, self.k) = (x + 1, self.samples.start);
+        }
+        *slot = Some(PathStart {
+            path,
+            sampler,
+            lambda,
+            tag,
+        });
+    }
+
+    #[inline(always)]
+    fn finish(&mut self, done: &PathStart<S>) {
+        let l = done.path.radiance;
+        let rgb = if self.scene.mode == ColorMode::Spectral {
+            spectrum_to_srgb(l, &done.lambda)
+        } else {
+            l.rgb()
+        };
+        let rgb = match self.settings.clamp {
+            Some(c) => clamp_sample(rgb, c),
+            None => rgb,
+        };
+        let alpha = f32::from(u8::from(done.path.covered));
+        self.results[done.tag as usize] = (rgb, alpha);
     }
 }
 
