@@ -278,17 +278,18 @@ impl Accel {
         // obvhs and `cw_closest` accept a candidate exactly when its distance is below the
         // current `tmax`, so the barycentrics of the last candidate below it are the hit's.
         let mut bary = (0.0, 0.0);
-        let mut f = |r: &BvhRay, id: usize| {
-            let (t, b1, b2) = prims[id].intersect_bary(r.origin, r.direction, r.tmin, r.tmax);
-            if t < r.tmax {
-                bary = (b1, b2);
-            }
-            t
-        };
         let found = match &self.tree {
-            Tree::Cw(b) if self.small_stack => cw_closest::<SMALL_STACK>(b, r, &mut hit, &mut f),
-            Tree::Cw(b) => cw_closest::<LARGE_STACK>(b, r, &mut hit, &mut f),
-            Tree::Two(b) => b.ray_traverse(r, &mut hit, &mut f),
+            Tree::Cw(b) if self.small_stack => {
+                cw_closest::<SMALL_STACK>(b, r, &mut hit, prims, &mut bary)
+            }
+            Tree::Cw(b) => cw_closest::<LARGE_STACK>(b, r, &mut hit, prims, &mut bary),
+            Tree::Two(b) => b.ray_traverse(r, &mut hit, |r: &BvhRay, id: usize| {
+                let (t, b1, b2) = prims[id].intersect_bary(r.origin, r.direction, r.tmin, r.tmax);
+                if t < r.tmax {
+                    bary = (b1, b2);
+                }
+                t
+            }),
             Tree::Flat { .. } => unreachable!("handled above"),
             Tree::Empty => false,
         };
