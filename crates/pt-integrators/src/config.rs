@@ -137,16 +137,7 @@ fn afterglow(
     time: f32,
     path: PathTracer,
 ) -> Result<Integrator, IntegratorError> {
-    if matches!(
-        kind,
-        IntegratorKind::Radiosity
-            | IntegratorKind::Depth
-            | IntegratorKind::PTracer { .. }
-            | IntegratorKind::Sppm { .. }
-            | IntegratorKind::Bdpt
-            | IntegratorKind::Vcm { .. }
-            | IntegratorKind::PhotonMapper { .. }
-    ) {
+    if !kind.is_camera_path_tracer() {
         return bad("--time (afterglow) is rendered by the path tracer".into());
     }
     if !(time >= 0.0 && time.is_finite()) {

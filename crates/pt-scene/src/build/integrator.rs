@@ -147,18 +147,7 @@ impl<'e> Builder<'e> {
 
     pub(super) fn moment(&mut self, v: &ObjectView<'e>) -> Result<IntegratorDesc> {
         let plain = |d: &IntegratorDesc| {
-            d.moment.is_none()
-                && d.aov.is_none()
-                && !matches!(
-                    d.kind,
-                    IntegratorKind::Radiosity
-                        | IntegratorKind::Depth
-                        | IntegratorKind::PTracer { .. }
-                        | IntegratorKind::Sppm { .. }
-                        | IntegratorKind::Bdpt
-                        | IntegratorKind::Vcm { .. }
-                        | IntegratorKind::PhotonMapper { .. }
-                )
+            d.moment.is_none() && d.aov.is_none() && d.kind.is_camera_path_tracer()
         };
         let (name, mut inner) = self
             .nested_integrator(v, "path, volpath or direct", plain)?
@@ -205,17 +194,7 @@ impl<'e> Builder<'e> {
             outputs.push((name.to_string(), kind));
         }
         let inner = self.nested_integrator(v, "path, volpath, direct or moment", |d| {
-            d.aov.is_none()
-                && !matches!(
-                    d.kind,
-                    IntegratorKind::Radiosity
-                        | IntegratorKind::Depth
-                        | IntegratorKind::PTracer { .. }
-                        | IntegratorKind::Sppm { .. }
-                        | IntegratorKind::Bdpt
-                        | IntegratorKind::Vcm { .. }
-                        | IntegratorKind::PhotonMapper { .. }
-                )
+            d.aov.is_none() && d.kind.is_camera_path_tracer()
         })?;
         let (image, base) = match inner {
             Some((name, desc)) => (Some(name), desc),

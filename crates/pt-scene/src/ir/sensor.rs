@@ -423,6 +423,23 @@ pub enum IntegratorKind {
     },
 }
 
+impl IntegratorKind {
+    /// Whether the method traces paths from the camera shading each hit (Mitsuba's `path`,
+    /// `volpath` and `direct`): the ones `moment` can wrap and the afterglow renders with.
+    pub fn is_camera_path_tracer(self) -> bool {
+        match self {
+            IntegratorKind::Path | IntegratorKind::VolPath | IntegratorKind::Direct { .. } => true,
+            IntegratorKind::Radiosity
+            | IntegratorKind::Depth
+            | IntegratorKind::PTracer { .. }
+            | IntegratorKind::Sppm { .. }
+            | IntegratorKind::PhotonMapper { .. }
+            | IntegratorKind::Bdpt
+            | IntegratorKind::Vcm { .. } => false,
+        }
+    }
+}
+
 /// Which radiosity solver to use (`solver`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum RadiositySolver {
