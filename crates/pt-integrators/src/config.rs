@@ -235,3 +235,47 @@ fn radiosity_params(scene: &RadiosityOptions, cli: &RadiosityOptions) -> Radiosi
         ..d
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The afterglow (`--time`) is rendered by the camera path tracers only: every other
+    /// method, asked for on the command line or by the scene, is refused with a message that
+    /// says so, and a path tracer is accepted.
+    #[test]
+    fn afterglow_needs_a_camera_path_tracer() {
+        let scene = |integrator: &str| {
+            pt_scene::load_str(
+                &format!(r#"<scene version="3.0.0">{integrator}<shape type="cube"/></scene>"#),
+                std::path::Path::new("afterglow.xml"),
+                std::path::Path::new("."),
+                &[],
+            )
+            .unwrap()
+            .integrator
+        };
+        let time = |kind: Option<IntegratorKind>| Overrides {
+            kind,
+            afterglow: Some(1.0),
+            ..Overrides::default()
+        };
+        let refused = |d: &IntegratorDesc, o: &Overrides| match Integrator::from_desc(d, o) {
+            Err(IntegratorError::Settings(m)) => m.contains("rendered by the path tracer"),
+            _ => false,
+        };
+        let path = scene(r#"<integrator type="path"/>"#);
+        assert!(matches!(
+            Integrator::from_desc(&path, &time(None)),
+            Ok(Integrator::Afterglow { .. })
+        ));
+        assert!(refused(&path, &time(Some(IntegratorKind::Bdpt))));
+        assert!(refused(
+            &path,
+            &time(Some(IntegratorKind::PTracer {
+                samples_per_pass: None
+            }))
+        ));
+        assert!(refused(&scene(r#"<integrator type="bdpt"/>"#), &time(None)));
+    }
+}

@@ -8,6 +8,8 @@
 //! | [`Integrator::Direct`] | `direct` | direct illumination at the camera ray's hit: any numbers of light and BSDF samples, weighted by Veach's count-weighted power heuristic ([`direct`]) |
 //! | [`Integrator::PTracer`] | `ptracer` | light tracing: paths from the lights, every vertex connected to the camera and splatted ([`ptracer`]) |
 //! | [`Integrator::Sppm`] | `sppm` (pt) | stochastic progressive photon mapping with Knaus & Zwicker's radius schedule ([`sppm`]) |
+//! | [`Integrator::PhotonMapper`] | `photonmapper` (pt) | photon mapping as Jensen 1996 describes it: global and caustic maps, k-nearest estimates, final gathering ([`photonmap`]) |
+//! | [`Integrator::Vcm`] | `bdpt`, `vcm` (pt) | bidirectional path tracing, and vertex connection and merging, under one power heuristic ([`vcm`]) |
 //! | [`Integrator::Radiosity`] | `radiosity` (pt) | finite-element radiosity (crate `pt-radiosity`) |
 //! | [`Integrator::Depth`] | `depth` | the distance to the first hit as the image ([`aov::render_depth`]) |
 //! | [`Integrator::Afterglow`] | (pt, `--time`) | phosphorescent afterglow: a first pass with the lights on, then the path tracer in the dark ([`afterglow`]) |

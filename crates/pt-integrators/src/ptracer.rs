@@ -92,7 +92,7 @@ pub(crate) struct Splat {
 
 /// The shading frame of a hit: the same as the path tracer's (oriented by dp/du when the
 /// surface has a parameterisation, for anisotropic models).
-#[inline]
+#[inline(always)]
 pub(crate) fn shading_frame(hit: &Interaction) -> Frame {
     if hit.dpdu == Vec3::ZERO {
         Frame::from_normal(hit.ns)
@@ -102,7 +102,7 @@ pub(crate) fn shading_frame(hit: &Interaction) -> Frame {
 }
 
 /// The colour of a contribution at the path's wavelengths: linear sRGB.
-#[inline]
+#[inline(always)]
 pub(crate) fn to_rgb(scene: &Scene, c: SampledSpectrum, lambda: &SampledWavelengths) -> [f32; 3] {
     match scene.mode {
         ColorMode::Spectral => spectrum_to_srgb(c, lambda),
@@ -114,6 +114,7 @@ pub(crate) fn to_rgb(scene: &Scene, c: SampledSpectrum, lambda: &SampledWaveleng
 /// `inv_scale` is P_image / P_film, the inverse of the scale every splat gets (see the module
 /// documentation), for contributions sampled uniformly over the image; `rgb_lambda` the
 /// (unused) wavelengths of RGB mode, made once.
+#[inline(always)]
 fn trace_light_path<S: RandomSource>(
     scene: &Scene,
     s: &PathSettings,
@@ -225,6 +226,7 @@ fn trace_light_path<S: RandomSource>(
         sampler,
         &lambda,
         AtFluorescence::Adjoint,
+        #[inline(always)]
         |v, sampler| {
             if let Some(seen) = seen_by_camera(scene, v, sampler) {
                 out.push(Splat {
@@ -234,6 +236,7 @@ fn trace_light_path<S: RandomSource>(
                 });
             }
         },
+        #[inline(always)]
         |v, sampler| {
             if let Some((film, c)) = medium_seen_by_camera(scene, v, sampler) {
                 in_media.push(Splat {
@@ -262,6 +265,7 @@ pub(crate) struct CameraSight {
 
 /// Connects a light path's vertex to the camera (`u_lens` picks a thin lens's point): `None`
 /// when the camera cannot see it, the BSDF sends nothing that way, or the segment is blocked.
+#[inline(always)]
 pub(crate) fn seen_by_camera<S: RandomSource>(
     scene: &Scene,
     v: &LightVertex,
@@ -304,6 +308,7 @@ pub(crate) fn seen_by_camera<S: RandomSource>(
 /// The transmittance from `origin` (in `medium`) to the camera point of `cc`: media and the
 /// straight-through transmission of the surfaces between (the volumetric path tracer's shadow
 /// rays, [`transmittance_to`]).
+#[inline(always)]
 fn camera_transmittance<S: RandomSource>(
     scene: &Scene,
     origin: Vec3,
@@ -326,6 +331,7 @@ fn camera_transmittance<S: RandomSource>(
 
 /// A medium vertex seen by the camera: its contribution `beta phase(w_cam, w_light) W T` and
 /// where it lands, or `None` when nothing arrives.
+#[inline(always)]
 fn medium_seen_by_camera<S: RandomSource>(
     scene: &Scene,
     v: &MediumVertex,
@@ -461,6 +467,7 @@ pub(crate) enum AtFluorescence {
 /// camera side weighs its own (where Mitsuba's `ptracer` compares the weight itself, in the
 /// light's power units, with 1: a bright light's paths then run until the 0.95 cap stops them,
 /// each vertex connecting to every camera vertex).
+#[inline(always)]
 pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
     scene: &Scene,
     s: &PathSettings,
@@ -595,7 +602,7 @@ pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
 /// A light chosen by the scene's light selection and a ray sampled from it
 /// ([`Light::sample_emission`]): the light's index, its selection probability and the ray;
 /// `None` when the scene has no light to choose or the light emits no ray.
-#[inline]
+#[inline(always)]
 fn sample_emitted<S: RandomSource>(
     scene: &Scene,
     lambda: &SampledWavelengths,
@@ -624,7 +631,7 @@ struct Leaving {
 /// geometric cosine), with the importance transport weights folded into `beta` and the
 /// relative index into `eta`. `None` when the path ends there: no sample, a light leak, or a
 /// black or non-finite weight. `BIDIR`: the arrival carries the reverse density.
-#[inline]
+#[inline(always)]
 fn leave_surface<S: RandomSource, const BIDIR: bool>(
     (hit, bsdf, frame): (&Interaction, &SurfaceBsdf, &Frame),
     wl: Vec3,
@@ -669,7 +676,7 @@ fn leave_surface<S: RandomSource, const BIDIR: bool>(
 /// Russian roulette on a light path: keeps it with probability q = min(max(beta) `scale`, 0.95)
 /// (`scale` holds eta^2 and, for the bidirectional walk, the emitted weight's normalisation),
 /// dividing `beta` by q; false when the path ends.
-#[inline]
+#[inline(always)]
 fn roulette<S: RandomSource>(beta: &mut SampledSpectrum, scale: f32, sampler: &mut S) -> bool {
     let q = (beta.max_value() * scale).min(0.95);
     if !(sampler.next_1d() < q) {
@@ -734,11 +741,16 @@ fn light_pass(
             let first = u64::from(b) * per_batch + c * CHUNK;
             let end = (u64::from(b) * per_batch + per_batch).min(first + CHUNK);
             let mut out = Vec::with_capacity(((end - first) * 4) as usize);
-            for path in first..end {
-                let mut sampler = Sampler::new(settings.seed, LIGHT_STREAM, path);
-                let inv_scale = (1.0 / scale) as f32;
-                trace_light_path(scene, s, &mut sampler, inv_scale, &rgb_lambda, &mut out);
-            }
+            pt_render::isa::best(
+                #[inline(always)]
+                || {
+                    for path in first..end {
+                        let mut sampler = Sampler::new(settings.seed, LIGHT_STREAM, path);
+                        let inv_scale = (1.0 / scale) as f32;
+                        trace_light_path(scene, s, &mut sampler, inv_scale, &rgb_lambda, &mut out);
+                    }
+                },
+            );
             progress(end - first);
             out
         })

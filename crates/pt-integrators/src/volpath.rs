@@ -51,6 +51,7 @@ const MAX_CROSSINGS: u32 = 256;
 /// Traces `path` (a camera path, not yet traced) through the scene's media and surfaces with
 /// Mitsuba's `volpath` rules (see the module documentation); leaves the estimate in
 /// `path.radiance` and whether the sample covers its pixel in `path.covered`.
+#[inline(always)]
 pub fn estimate<S: RandomSource>(
     scene: &Scene,
     s: &PathSettings,
@@ -198,7 +199,7 @@ pub fn estimate<S: RandomSource>(
 /// MIS weight against light sampling from the last scattering event `prev` (its position, the
 /// density of the direction it chose, and whether light sampling could not have made that
 /// choice) at path depth `depth`; `None` off emitters and for black emission.
-#[inline]
+#[inline(always)]
 fn emission_met(
     scene: &Scene,
     s: &PathSettings,
@@ -223,7 +224,7 @@ fn emission_met(
 /// unit direction back along the path, world; the medium's index), weighted by the phase
 /// function and by MIS against phase sampling: the radiance it adds, times `throughput`.
 /// Draws the light sample's numbers whether or not a light is found.
-#[inline]
+#[inline(always)]
 fn medium_nee<S: RandomSource>(
     scene: &Scene,
     s: &PathSettings,
@@ -257,7 +258,7 @@ struct SurfaceVertex<'a> {
 /// Light sampling at a surface vertex `at`, its shadow ray through media and null surfaces
 /// ([`transmittance_to`]), weighted by MIS against BSDF sampling: the radiance it adds, times
 /// `throughput`. Draws the light sample's numbers whether or not a light is found.
-#[inline]
+#[inline(always)]
 fn surface_nee<S: RandomSource>(
     scene: &Scene,
     s: &PathSettings,
@@ -307,7 +308,7 @@ pub(crate) struct Flight {
 }
 
 /// The mean of the first `channels` lanes.
-#[inline]
+#[inline(always)]
 fn mean(x: SampledSpectrum, channels: usize) -> f32 {
     x.0.to_array()[..channels].iter().sum::<f32>() / channels as f32
 }
@@ -315,7 +316,7 @@ fn mean(x: SampledSpectrum, channels: usize) -> f32 {
 /// `int_0^d exp(-sigma_t t) j dt = j (1 - exp(-sigma_t d)) / sigma_t` per lane: the emission of
 /// a homogeneous glowing medium along `d` (`j d` where `sigma_t` is 0; 0 where `j` is, even
 /// for an infinite `d`).
-#[inline]
+#[inline(always)]
 fn homogeneous_emission(j: SampledSpectrum, sigma_t: SampledSpectrum, d: f32) -> SampledSpectrum {
     let (j, s) = (j.0.to_array(), sigma_t.0.to_array());
     SampledSpectrum(pt_math::Vec4::from_array(std::array::from_fn(|k| {
@@ -342,6 +343,7 @@ fn homogeneous_emission(j: SampledSpectrum, sigma_t: SampledSpectrum, d: f32) ->
 /// gathered by the collision estimator: `j(x) / mu` at each tentative collision, with the
 /// weight so far (its expectation is `int T j dt`, as the collisions have density `mu
 /// T_mu(t)` and the weights turn `T_mu` into `T`).
+#[inline(always)]
 pub(crate) fn free_flight<S: RandomSource>(
     m: &Medium,
     ray: &Ray,
@@ -449,7 +451,7 @@ pub(crate) fn free_flight<S: RandomSource>(
 }
 
 /// The largest of the first `channels` lanes.
-#[inline]
+#[inline(always)]
 fn max_lane(x: SampledSpectrum, channels: usize) -> f32 {
     x.0.to_array()[..channels]
         .iter()
@@ -460,6 +462,7 @@ fn max_lane(x: SampledSpectrum, channels: usize) -> f32 {
 /// The transmittance of `m` along `ray` over `[0, t]`: exact for a homogeneous medium; by
 /// ratio tracking (Novák, Selle & Jarosz 2014) inside a heterogeneous medium's box, the
 /// product of `1 - sigma_t(x) / mu` over tentative collisions at rate `mu` (unbiased).
+#[inline(always)]
 fn medium_transmittance<S: RandomSource>(
     m: &Medium,
     ray: &Ray,
@@ -496,7 +499,7 @@ fn medium_transmittance<S: RandomSource>(
 
 /// A light sample for the point `p` (the scene's light selection, then the light's own
 /// sampling) and the selection probability, if it carries light.
-#[inline]
+#[inline(always)]
 fn sample_light(
     scene: &Scene,
     p: Vec3,
@@ -512,7 +515,7 @@ fn sample_light(
 /// The MIS weight of a light sample against the scattering's density `scatter_pdf` of the
 /// same direction (BSDF or phase function): the power heuristic, 1 for a delta light or with
 /// light sampling alone.
-#[inline]
+#[inline(always)]
 fn nee_weight(s: &PathSettings, ls: &LightSample, pmf: f32, scatter_pdf: f32) -> f32 {
     if ls.delta || s.strategy == Strategy::Light {
         1.0
@@ -525,6 +528,7 @@ fn nee_weight(s: &PathSettings, ls: &LightSample, pmf: f32, scatter_pdf: f32) ->
 /// off its surface, in `medium`): the product of the media's transmittances along the segment
 /// and of the straight-through transmission of each surface it crosses; 0 when an opaque
 /// surface blocks it.
+#[inline(always)]
 pub(crate) fn transmittance_to<S: RandomSource>(
     scene: &Scene,
     origin: Vec3,

@@ -443,7 +443,7 @@ impl Camera {
     /// `sample_direction` tests it) or projects outside the image. `u_lens` picks the thin
     /// lens's point (unused by the other cameras). The film position is the inverse of
     /// [`Camera::generate_ray`]: the camera ray through it passes through `p`.
-    #[inline]
+    #[inline(always)]
     pub fn connect(&self, p: Vec3, u_lens: Vec2) -> Option<CameraConnection> {
         if matches!(
             self.kind,

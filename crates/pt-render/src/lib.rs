@@ -15,7 +15,9 @@
 //! # Ok(()) }
 //! ```
 #![warn(missing_docs)]
-#![forbid(unsafe_code)]
+// `unsafe` only to call code compiled for the processor's wider instructions once they are
+// detected (`isa`).
+#![deny(unsafe_code)]
 
 pub mod accel;
 pub mod camera;
@@ -23,6 +25,7 @@ pub mod curve;
 pub mod film;
 pub mod fluorescence;
 pub mod geometry;
+pub mod isa;
 pub mod light;
 pub mod material;
 pub mod medium;
@@ -33,19 +36,6 @@ pub mod texture;
 
 pub use accel::BvhKind;
 pub use film::RenderOutput;
-pub use scene::{BuildError, LightSelection, Scene};
-
-/// Whether this processor has the x86-64-v3 features `render_tile_v3` is compiled for
-/// (detected once by std and cached): the render loop and the traversal benchmarks run code
-/// compiled for them when it has.
 #[cfg(target_arch = "x86_64")]
-#[inline]
-pub fn has_x86_64_v3() -> bool {
-    std::is_x86_feature_detected!("avx2")
-        && std::is_x86_feature_detected!("fma")
-        && std::is_x86_feature_detected!("bmi1")
-        && std::is_x86_feature_detected!("bmi2")
-        && std::is_x86_feature_detected!("lzcnt")
-        && std::is_x86_feature_detected!("popcnt")
-        && std::is_x86_feature_detected!("movbe")
-}
+pub use isa::has_x86_64_v3;
+pub use scene::{BuildError, LightSelection, Scene};

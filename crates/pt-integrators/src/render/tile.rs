@@ -122,33 +122,18 @@ enum Target<'a> {
     },
 }
 
-/// Renders one tile: takes its samples and adds them to `target`.
-///
-/// On x86-64 processors with AVX2, FMA and BMI (x86-64-v3: Intel since 2013, AMD since 2015)
-/// the same code runs compiled for those instructions, chosen at run time so that the binary
-/// still runs on any x86-64: [`render_tile_v3`]. The path integrator and the BSDF and light
-/// routines it calls are inlined into it (`#[inline(always)]`), since a function compiled
-/// separately keeps the baseline instructions. Images are bit-identical either way: Rust never
-/// fuses a multiply and an add on its own, and glam and libm pick their code paths the same way
-/// in both. Cornell box, 256x256, 64 spp, 2 threads: 1.71 -> 2.02 M samples/s (+18%, as much
-/// as building everything with `-C target-cpu=x86-64-v3`; AVX-512, `target-cpu=native` on this
-/// project's machine, gave only +6%).
+/// Renders one tile: takes its samples and adds them to `target`, compiled for the processor's
+/// wider instructions when it has them ([`pt_render::isa::best`]): the path integrator and the
+/// BSDF and light routines it calls are inlined into the loop (`#[inline(always)]`), since a
+/// function compiled separately keeps the baseline instructions. Cornell box, 256x256, 64 spp,
+/// 2 threads: 1.71 -> 2.02 M samples/s (+18%, as much as building everything with
+/// `-C target-cpu=x86-64-v3`; AVX-512, `target-cpu=native` on this project's machine, gave
+/// only +6%).
 fn render_tile(scene: &Scene, settings: &RenderSettings, target: Target, tile: &Tile) {
-    #[cfg(target_arch = "x86_64")]
-    if pt_render::has_x86_64_v3() {
-        // SAFETY: the processor supports every feature `render_tile_v3` is compiled for.
-        #[allow(unsafe_code)]
-        return unsafe { render_tile_v3(scene, settings, target, tile) };
-    }
-    render_tile_portable(scene, settings, target, tile)
-}
-
-/// [`render_tile_portable`] compiled for x86-64-v3 (AVX2, FMA, BMI1/2, LZCNT, POPCNT, MOVBE).
-/// Callers must check [`pt_render::has_x86_64_v3`] first (calling it is `unsafe` for that reason).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe")]
-fn render_tile_v3(scene: &Scene, settings: &RenderSettings, target: Target, tile: &Tile) {
-    render_tile_portable(scene, settings, target, tile)
+    pt_render::isa::best(
+        #[inline(always)]
+        || render_tile_portable(scene, settings, target, tile),
+    )
 }
 
 /// The body of [`render_tile`], inlined into each instruction-set variant.
@@ -479,13 +464,16 @@ mod tests {
     use super::*;
     use pt_render::{BvhKind, LightSelection};
 
-    /// The x86-64-v3 variant of the render loop must give exactly the portable variant's pixel
-    /// sums (the same arithmetic compiled with other instructions), on scenes that together use
-    /// every BSDF family, textures, spectral mode, fluorescence and media. A difference in any
-    /// bit of any sum fails it (what fused multiply-adds or a different libm path would cause).
+    /// The x86-64-v3 variants ([`pt_render::isa::best`]) must give exactly the portable
+    /// variants' results (the same arithmetic compiled with other instructions): the path
+    /// tracer's pixel sums on scenes that together use every BSDF family, textures, spectral
+    /// mode, fluorescence and media, and the images of the methods that trace from the lights
+    /// (light tracing, BDPT, VCM, which splat). A difference in any bit fails it (what fused
+    /// multiply-adds or a different libm path would cause). One test, because the switch to
+    /// the portable variants is process-wide.
     #[cfg(target_arch = "x86_64")]
     #[test]
-    fn v3_variant_matches_portable_bit_for_bit() {
+    fn v3_variants_match_portable_bit_for_bit() {
         if !pt_render::has_x86_64_v3() {
             eprintln!(
                 "skipped: this processor lacks x86-64-v3 (the portable variant is the only one)"
@@ -504,6 +492,7 @@ mod tests {
             "coloured-glass.xml",
             "normal-map.xml",
             "envmap-spectral.xml",
+            "fog-spot.xml",
         ];
         for name in scenes {
             let desc =
@@ -523,17 +512,51 @@ mod tests {
             };
             let mut portable = vec![PixelStats::default(); (settings.width * 16) as usize];
             let mut v3 = portable.clone();
-            render_tile_portable(&scene, &settings, Target::Pixels(&mut portable), &tile);
-            #[allow(unsafe_code)]
-            // SAFETY: checked above that the processor has the features.
-            unsafe {
-                render_tile_v3(&scene, &settings, Target::Pixels(&mut v3), &tile)
-            };
+            pt_render::isa::force_baseline(true);
+            render_tile(&scene, &settings, Target::Pixels(&mut portable), &tile);
+            pt_render::isa::force_baseline(false);
+            render_tile(&scene, &settings, Target::Pixels(&mut v3), &tile);
             // The exact sums hold every f32 sample above 2^-33 to its last bit.
             assert!(portable == v3, "{name}: the x86-64-v3 variant differs");
             assert!(
                 portable.iter().any(|p| p.sum.iter().any(|s| s.0 > 0)),
                 "{name}: the tile is black, the test checks nothing"
+            );
+        }
+        let methods = [
+            ("caustic-sphere-light.xml", "ptracer"),
+            ("caustic-point-light.xml", "bdpt"),
+            ("cornell-box.xml", "vcm"),
+        ];
+        for (name, method) in methods {
+            let mut desc =
+                pt_scene::load_file(&dir.join(name), &[]).unwrap_or_else(|e| panic!("{name}: {e}"));
+            (desc.film.width, desc.film.height) = (24, 24);
+            let overrides = crate::Overrides {
+                kind: Some(crate::method(method).expect("a method name")),
+                ..Default::default()
+            };
+            let integrator = crate::Integrator::from_desc(&desc.integrator, &overrides).unwrap();
+            let job = crate::Job {
+                spp: 2,
+                ..crate::Job::new(&desc)
+            };
+            let image = |baseline: bool| {
+                pt_render::isa::force_baseline(baseline);
+                let r = integrator.render(&job, crate::Run::default()).unwrap();
+                pt_render::isa::force_baseline(false);
+                r.output
+            };
+            let (portable, v3) = (image(true), image(false));
+            let bits = |v: &[[f32; 3]]| v.iter().flatten().map(|c| c.to_bits()).collect::<Vec<_>>();
+            assert!(
+                bits(&portable.mean) == bits(&v3.mean)
+                    && bits(&portable.variance) == bits(&v3.variance),
+                "{method} on {name}: the x86-64-v3 variant differs"
+            );
+            assert!(
+                portable.mean.iter().flatten().any(|&c| c > 0.0),
+                "{method} on {name}: the image is black, the test checks nothing"
             );
         }
     }

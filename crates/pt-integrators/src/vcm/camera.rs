@@ -16,6 +16,7 @@ use std::f32::consts::PI;
 /// Traces camera subpath `index` (pixel `index` of the image) and returns its film position
 /// and estimate: emission met (s = 0), light sampling (s = 1), connections to the vertices
 /// of its light subpath, `light_vertices`, and merging with every light subpath.
+#[inline(always)]
 fn camera_subpath(
     it: &Iteration,
     sampler: &mut Sampler,
@@ -142,7 +143,7 @@ fn camera_subpath(
 /// Adds to `radiance` the distant lights seen by a camera ray that left the scene in
 /// direction `dir` (s = 0), weighted; `depth` counts the ray's segments, `beta` is the camera
 /// subpath's weight.
-#[inline]
+#[inline(always)]
 fn add_escaped(
     it: &Iteration,
     dir: Vec3,
@@ -176,7 +177,7 @@ fn add_escaped(
 /// The emission of the surface a camera ray from `prev` met at `hit` (s = 0), weighted and
 /// times the camera subpath's weight `beta`; `None` off emitters, for black emission and for
 /// emitters hidden from the camera. `wo_world` is the unit direction back along the ray.
-#[inline]
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn emission_met(
     it: &Iteration,
@@ -210,7 +211,7 @@ fn emission_met(
 /// The light vertices of every subpath within the merging radius of camera vertex `hit`
 /// (depth `depth`), each times its BSDF value, weight and the shading-normal correction
 /// (cos_s / cos_g), summed: merging's estimate before the kernel's 1 / (pi r^2 N).
-#[inline]
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn merged(
     it: &Iteration,
@@ -253,7 +254,11 @@ pub(super) fn camera_sample(
     width: u32,
     own: &[LightVertex],
 ) -> Splat {
-    let (film, l) = camera_subpath(it, sampler, lambda, k as usize, width, own);
+    // The camera subpath and its strategies inlined into one function per instruction set.
+    let (film, l) = pt_render::isa::best(
+        #[inline(always)]
+        || camera_subpath(it, sampler, lambda, k as usize, width, own),
+    );
     Splat {
         film,
         rgb: to_rgb(it.scene, l, lambda),
@@ -263,6 +268,7 @@ pub(super) fn camera_sample(
 
 /// Light sampling at a camera vertex (s = 1), weighted.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 fn light_sample(
     it: &Iteration,
     hit: &Interaction,
@@ -329,6 +335,7 @@ fn light_sample(
 /// A camera vertex connected to a light vertex (s, t >= 2), weighted; the camera subpath's
 /// weight not included.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 fn connect(
     it: &Iteration,
     hit: &Interaction,

@@ -14,6 +14,7 @@ use pt_spectrum::SampledWavelengths;
 /// Traces light subpath `index`: its vertices (non-delta surfaces) appended to `out`, its
 /// camera splats (t = 1) to `splats`.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 pub(super) fn light_subpath(
     scene: &Scene,
     s: &PathSettings,
@@ -33,6 +34,7 @@ pub(super) fn light_subpath(
         sampler,
         lambda,
         AtFluorescence::Absorb,
+        #[inline(always)]
         |v, sampler| {
             let cos_in = v.ng_light.abs();
             match v.arrival {
@@ -101,6 +103,7 @@ pub(super) fn light_subpath(
             }
         },
         // Scenes with media are refused before this method runs.
+        #[inline(always)]
         |_, _| {},
     );
 }

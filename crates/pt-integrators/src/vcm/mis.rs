@@ -112,7 +112,7 @@ impl SubpathMis {
 /// Weight of a camera subpath meeting an emitter (s = 0): `direct` the area density (solid
 /// angle for distant lights) of light sampling choosing the point, `emit` the density of
 /// the light emitting towards the previous vertex, both with the selection probability.
-#[inline]
+#[inline(always)]
 pub(crate) fn emission_weight(cam: &SubpathMis, direct: f32, emit: f32, f: &Factors) -> f32 {
     1.0 / (1.0 + mis(direct) * cam.dvcm * f.conn + mis(emit) * cam.dvc)
 }
@@ -122,7 +122,7 @@ pub(crate) fn emission_weight(cam: &SubpathMis, direct: f32, emit: f32, f: &Fact
 /// angle, with selection), `emit` the light's emission density towards the vertex (with
 /// selection), `cos_vertex` and `cos_light` the geometric cosines at both ends, `bsdf_rev`
 /// the BSDF's density of the camera side's direction from the light's.
-#[inline]
+#[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn light_sample_weight(
     cam: &SubpathMis,
@@ -144,7 +144,7 @@ pub(crate) fn light_sample_weight(
 /// camera vertex's BSDF density of the light vertex (per unit area there), `light_area` the
 /// light vertex's of the camera vertex, `light_rev` / `cam_rev` each BSDF's reverse
 /// solid-angle density of its own subpath's previous direction.
-#[inline]
+#[inline(always)]
 pub(crate) fn connection_weight(
     light: &SubpathMis,
     cam: &SubpathMis,
@@ -162,7 +162,7 @@ pub(crate) fn connection_weight(
 /// Weight of a light vertex splatted to the camera (t = 1): `cam_area_over_n` the camera's
 /// density of the vertex for one pixel sample (per unit area there) over the number of light
 /// subpaths, `light_rev` the vertex's BSDF density of its previous direction from the camera's.
-#[inline]
+#[inline(always)]
 pub(crate) fn camera_weight(
     light: &SubpathMis,
     cam_area_over_n: f32,
@@ -174,7 +174,7 @@ pub(crate) fn camera_weight(
 
 /// Weight of merging a light vertex at a camera vertex: `cam_fwd` the camera vertex's BSDF
 /// density of the light vertex's arriving direction, `cam_rev` of the camera side's from it.
-#[inline]
+#[inline(always)]
 pub(crate) fn merge_weight(
     light: &SubpathMis,
     cam: &SubpathMis,

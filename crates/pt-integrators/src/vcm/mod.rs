@@ -273,16 +273,23 @@ pub fn render_vcm_passes(
                 let lambda = wavelengths(scene, vcm, settings.seed, iteration, k);
                 let index = u64::from(iteration) * paths + k;
                 let mut sampler = Sampler::new(settings.seed, LIGHT_STREAM, index);
-                light_subpath(
-                    scene,
-                    s,
-                    vcm,
-                    &f,
-                    scale as f32,
-                    &mut sampler,
-                    &lambda,
-                    vertices,
-                    splats,
+                // Dispatched per subpath: the hot routines are inlined into one function per
+                // instruction set (`pt_render::isa`).
+                pt_render::isa::best(
+                    #[inline(always)]
+                    || {
+                        light_subpath(
+                            scene,
+                            s,
+                            vcm,
+                            &f,
+                            scale as f32,
+                            &mut sampler,
+                            &lambda,
+                            vertices,
+                            splats,
+                        )
+                    },
                 );
                 lambda
             };

@@ -149,6 +149,7 @@ impl LightFilm {
             (w, h),
             radius,
             splats,
+            #[inline(always)]
             |band, rows, pos, value| {
                 splat_rows(
                     &filter,
@@ -173,6 +174,7 @@ impl LightFilm {
             (w, h),
             radius,
             samples,
+            #[inline(always)]
             |band, rows, pos, value| {
                 let Some(fp) = Footprint::new(&filter, radius, (w as i32, h as i32), pos) else {
                     return;
@@ -217,11 +219,16 @@ fn in_bands<T: Send>(
         .for_each(|(b, band)| {
             let y0 = b as i32 * rows;
             let y1 = (y0 + rows).min(h);
-            for &(pos, value) in splats {
-                if pos.y + reach >= y0 as f32 && pos.y - reach < y1 as f32 {
-                    add(band, y0..y1, pos, value);
-                }
-            }
+            crate::isa::best(
+                #[inline(always)]
+                || {
+                    for &(pos, value) in splats {
+                        if pos.y + reach >= y0 as f32 && pos.y - reach < y1 as f32 {
+                            add(band, y0..y1, pos, value);
+                        }
+                    }
+                },
+            )
         });
 }
 
@@ -235,7 +242,7 @@ struct Footprint {
 }
 
 impl Footprint {
-    #[inline]
+    #[inline(always)]
     fn new(filter: &FilterDesc, radius: f32, (w, h): (i32, i32), pos: Vec2) -> Option<Footprint> {
         let mut fp = Footprint {
             xs: 0..0,
@@ -276,7 +283,7 @@ impl Footprint {
 /// `size` image, added to `sums`, which holds exactly those rows. The weights are normalised
 /// over the whole clipped footprint, whatever part of it the band holds.
 #[allow(clippy::too_many_arguments)]
-#[inline]
+#[inline(always)]
 fn splat_rows(
     filter: &FilterDesc,
     radius: f32,

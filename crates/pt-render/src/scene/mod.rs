@@ -305,7 +305,7 @@ impl Scene {
     /// surface) to `target` (a point off any surface, or already offset): the far end stops a
     /// relative fraction short (`SHADOW_RAY_SHORTEN`). Light samples and connections to the
     /// camera use it.
-    #[inline]
+    #[inline(always)]
     pub fn segment_unoccluded(&self, origin: Vec3, target: Vec3) -> bool {
         let seg = target - origin;
         let dist = seg.length();

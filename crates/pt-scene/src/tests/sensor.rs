@@ -228,6 +228,18 @@ fn integrators() {
             "unused property 'max_depth'",
         ),
         ("", "moment", "needs one nested"),
+        // moment and aov wrap camera path tracers only: a light tracer's or BDPT's image is
+        // not a mean of per-pixel samples whose second moment could be taken.
+        (
+            "<integrator type=\"ptracer\"/>",
+            "moment",
+            "nested in moment must be path, volpath or direct",
+        ),
+        (
+            "<string name=\"aovs\" value=\"d:depth\"/><integrator type=\"bdpt\"/>",
+            "aov",
+            "nested in aov must be path, volpath, direct or moment",
+        ),
         ("<shape type=\"cube\"/>", "path", "cannot be nested"),
     ];
     for (inner, plugin, text) in cases {
