@@ -232,7 +232,7 @@ impl SplatTile {
     /// adds to the tile's. The distances are computed from the whole-pixel
     /// difference X - origin and `u`, so they are the same numbers whatever the image's place
     /// in the film (a crop window's pixels splat exactly as the whole film's). Always inlined:
-    /// the render loop is compiled for the processor's instruction sets (`render_tile_v3`), and
+    /// the render loop is compiled for the processor's instruction sets ([`crate::isa::best`]), and
     /// an outlined copy is compiled for the baseline, where `floor` and `ceil` are libm calls.
     #[inline(always)]
     pub fn splat(
