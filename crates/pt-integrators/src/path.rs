@@ -364,7 +364,7 @@ pub fn trace_paths<S: RandomSource>(
     if crate::volpath::applies(scene, s) {
         // Media: one path at a time through `volpath.rs`.
         while let Some(mut sl) = next(queue) {
-            crate::volpath::estimate(scene, s, &mut sl.path, &mut sl.sampler);
+            crate::volpath::estimate_best(scene, s, &mut sl.path, &mut sl.sampler);
             queue.finish(&sl);
         }
         return;

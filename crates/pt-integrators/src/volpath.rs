@@ -48,6 +48,22 @@ use pt_spectrum::{ColorMode, SampledSpectrum, SampledWavelengths};
 /// against rounding loops on coincident surfaces, far above what scenes stack).
 const MAX_CROSSINGS: u32 = 256;
 
+/// [`estimate`] compiled for the processor's wider instructions ([`pt_render::isa::best`]),
+/// called from the path tracer's loop but kept out of it: inlined there, once per instruction
+/// set, it made that already large function much slower to compile.
+#[inline(never)]
+pub(crate) fn estimate_best<S: RandomSource>(
+    scene: &Scene,
+    s: &PathSettings,
+    path: &mut PathState,
+    sampler: &mut S,
+) {
+    pt_render::isa::best(
+        #[inline(always)]
+        || estimate(scene, s, path, sampler),
+    )
+}
+
 /// Traces `path` (a camera path, not yet traced) through the scene's media and surfaces with
 /// Mitsuba's `volpath` rules (see the module documentation); leaves the estimate in
 /// `path.radiance` and whether the sample covers its pixel in `path.covered`.
