@@ -733,6 +733,7 @@ fn light_pass(
         .collect();
     let s = &settings.path;
     let rgb_lambda = SampledWavelengths::sample_visible(0.5);
+    let inv_scale = (1.0 / scale) as f32;
     let lists: Vec<Vec<Splat>> = items
         .par_iter()
         .map(|&(b, c)| {
@@ -746,7 +747,6 @@ fn light_pass(
                 || {
                     for path in first..end {
                         let mut sampler = Sampler::new(settings.seed, LIGHT_STREAM, path);
-                        let inv_scale = (1.0 / scale) as f32;
                         trace_light_path(scene, s, &mut sampler, inv_scale, &rgb_lambda, &mut out);
                     }
                 },
