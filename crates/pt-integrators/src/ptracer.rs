@@ -805,8 +805,13 @@ pub(crate) fn add_batches<L: AsRef<[Splat]>>(
         }
         // The batch joins the film's exact sums.
         light.commit();
-        for (stats, v) in state.pixels.iter_mut().zip(&batch) {
-            stats.add(v.map(|c| c as f32), 0.0);
+        {
+            use rayon::prelude::*;
+            state
+                .pixels
+                .par_iter_mut()
+                .zip(&batch)
+                .for_each(|(stats, v)| stats.add(v.map(|c| c as f32), 0.0));
         }
     }
 }

@@ -68,20 +68,28 @@ impl LightFilm {
 
     /// Adds the current batch's splats and camera samples to the exact sums and clears them.
     pub fn commit(&mut self) {
-        for (e, b) in self.sums.iter_mut().zip(&mut self.batch) {
-            for c in 0..3 {
-                e[c] = e[c].wrapping_add(to_fixed(b[c], LINEAR_BITS));
-            }
-            *b = [0.0; 3];
-        }
-        for (e, b) in self.camera.iter_mut().zip(&mut self.camera_batch) {
-            if *b != [0.0; 4] {
-                for c in 0..4 {
+        use rayon::prelude::*;
+        // Pixel by pixel, so on all threads (the same sums for any thread count).
+        self.sums
+            .par_iter_mut()
+            .zip(&mut self.batch)
+            .for_each(|(e, b)| {
+                for c in 0..3 {
                     e[c] = e[c].wrapping_add(to_fixed(b[c], LINEAR_BITS));
                 }
-                *b = [0.0; 4];
-            }
-        }
+                *b = [0.0; 3];
+            });
+        self.camera
+            .par_iter_mut()
+            .zip(&mut self.camera_batch)
+            .for_each(|(e, b)| {
+                if *b != [0.0; 4] {
+                    for c in 0..4 {
+                        e[c] = e[c].wrapping_add(to_fixed(b[c], LINEAR_BITS));
+                    }
+                    *b = [0.0; 4];
+                }
+            });
     }
 
     /// Adds another film's committed sums (a part of the same render with other batches):
