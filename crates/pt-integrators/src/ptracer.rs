@@ -57,6 +57,7 @@ use crate::volpath::{free_flight, transmittance_to};
 use pt_bsdf::{Bsdf, Lambert, SurfaceBsdf};
 use pt_math::{offset_ray_origin, Frame, Ray, Vec2, Vec3};
 use pt_render::film::light::LightFilm;
+pub(crate) use pt_render::film::light::Splat;
 use pt_render::geometry::Interaction;
 use pt_render::light::{Light, LightSample};
 use pt_render::medium::Phase;
@@ -76,19 +77,6 @@ const CHUNK: u64 = 1024;
 /// Most light paths in one pass (their splats are held until the pass ends: about 8 splats of
 /// 20 bytes per path, so 40 MB).
 const MAX_PASS_PATHS: u64 = 1 << 18;
-
-/// One contribution to the image: where it lands (pixels from the image's top-left corner)
-/// and its linear RGB value.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Splat {
-    /// Film position, pixels from the image's top-left corner.
-    pub film: Vec2,
-    /// Linear RGB: a light splat's before the pass's scale, a camera sample's radiance.
-    pub rgb: [f32; 3],
-    /// Whether it is a camera sample (the bidirectional methods': averaged with the filter's
-    /// weights, see [`LightFilm`]) rather than a light splat.
-    pub camera: bool,
-}
 
 /// The shading frame of a hit: the same as the path tracer's (oriented by dp/du when the
 /// surface has a parameterisation, for anisotropic models).
@@ -772,47 +760,8 @@ pub(crate) fn add_batches<L: AsRef<[Splat]>>(
         .light
         .as_mut()
         .expect("a light-path render keeps a light film");
-    let (w, h) = (light.width as usize, light.height as usize);
-    let mut batch = vec![[0.0f64; 3]; w * h];
-    let (mut finite, mut camera) = (Vec::new(), Vec::new());
     for per_batch_lists in lists.chunks(per_batch) {
-        batch.fill([0.0; 3]);
-        finite.clear();
-        camera.clear();
-        for sp in per_batch_lists.iter().flat_map(|l| l.as_ref()) {
-            let (x, y) = (sp.film.x as usize, sp.film.y as usize);
-            let pixel = (y.min(h - 1)) * w + x.min(w - 1);
-            if !sp.rgb.iter().all(|c| c.is_finite()) {
-                state.pixels[pixel].nonfinite += 1;
-                continue;
-            }
-            // A camera sample counts as itself in its pixel; a light splat scaled.
-            let k = if sp.camera {
-                camera.push((sp.film, sp.rgb));
-                1.0
-            } else {
-                finite.push((sp.film, sp.rgb));
-                scale
-            };
-            for c in 0..3 {
-                batch[pixel][c] += k * f64::from(sp.rgb[c]);
-            }
-        }
-        // The filtered splats in row bands on all threads (same sums as one by one).
-        light.splat_all(&finite, scale);
-        if !camera.is_empty() {
-            light.add_camera_samples(&camera);
-        }
-        // The batch joins the film's exact sums.
-        light.commit();
-        {
-            use rayon::prelude::*;
-            state
-                .pixels
-                .par_iter_mut()
-                .zip(&batch)
-                .for_each(|(stats, v)| stats.add(v.map(|c| c as f32), 0.0));
-        }
+        light.add_batch(per_batch_lists, scale, &mut state.pixels);
     }
 }
 

@@ -352,7 +352,8 @@ pub fn render_vcm_passes(
                         .map(|c| {
                             let mut out = Vec::with_capacity(CHUNK as usize);
                             for k in range(c) {
-                                let lambda = wavelengths(scene, vcm, &shared, settings.seed, iteration, k);
+                                let lambda =
+                                    wavelengths(scene, vcm, &shared, settings.seed, iteration, k);
                                 let index = u64::from(iteration) * paths + k;
                                 let mut sampler = Sampler::new(settings.seed, CAMERA_STREAM, index);
                                 let own = it.subpath(k);

@@ -30,8 +30,20 @@ use pt_scene::FilterDesc;
 /// refuses wider filters ([`LightFilm::supports`]).
 const MAX_FOOTPRINT: usize = 32;
 
+/// One contribution to the image: where it lands and its linear RGB value.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Splat {
+    /// Film position, pixels from the image's top-left corner.
+    pub film: Vec2,
+    /// Linear RGB: a light splat's before the batch's scale, a camera sample's radiance.
+    pub rgb: [f32; 3],
+    /// Whether it is a camera sample (the bidirectional methods': averaged with the filter's
+    /// weights, see the module documentation) rather than a light splat.
+    pub camera: bool,
+}
+
 /// The accumulated splats of a light-path render.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct LightFilm {
     /// Image width, pixels.
     pub width: u32,
@@ -49,6 +61,31 @@ pub struct LightFilm {
     batch: Vec<[f64; 3]>,
     /// The current batch's camera samples, not yet committed.
     camera_batch: Vec<[f64; 4]>,
+    /// Per pixel, the current batch's unfiltered value (zero between batches; not state).
+    unfiltered: Vec<[f64; 3]>,
+    /// Per band of rows, the current batch's samples that reach it (scratch kept for its
+    /// memory; not state).
+    bands: Vec<Vec<Splat>>,
+}
+
+/// Films are equal when their size, filter and committed sums are (the current batch and the
+/// scratch lists are not part of the film).
+impl PartialEq for LightFilm {
+    fn eq(&self, other: &Self) -> bool {
+        (
+            self.width,
+            self.height,
+            self.filter,
+            &self.sums,
+            &self.camera,
+        ) == (
+            other.width,
+            other.height,
+            other.filter,
+            &other.sums,
+            &other.camera,
+        )
+    }
 }
 
 impl LightFilm {
@@ -63,33 +100,19 @@ impl LightFilm {
             camera: vec![[0; 4]; width as usize * height as usize],
             batch: vec![[0.0; 3]; width as usize * height as usize],
             camera_batch: vec![[0.0; 4]; width as usize * height as usize],
+            unfiltered: vec![[0.0; 3]; width as usize * height as usize],
+            bands: Vec::new(),
         }
     }
 
     /// Adds the current batch's splats and camera samples to the exact sums and clears them.
     pub fn commit(&mut self) {
-        use rayon::prelude::*;
-        // Pixel by pixel, so on all threads (the same sums for any thread count).
-        self.sums
-            .par_iter_mut()
-            .zip(&mut self.batch)
-            .for_each(|(e, b)| {
-                for c in 0..3 {
-                    e[c] = e[c].wrapping_add(to_fixed(b[c], LINEAR_BITS));
-                }
-                *b = [0.0; 3];
-            });
-        self.camera
-            .par_iter_mut()
-            .zip(&mut self.camera_batch)
-            .for_each(|(e, b)| {
-                if *b != [0.0; 4] {
-                    for c in 0..4 {
-                        e[c] = e[c].wrapping_add(to_fixed(b[c], LINEAR_BITS));
-                    }
-                    *b = [0.0; 4];
-                }
-            });
+        commit_rows(
+            &mut self.sums,
+            &mut self.batch,
+            &mut self.camera,
+            &mut self.camera_batch,
+        );
     }
 
     /// Adds another film's committed sums (a part of the same render with other batches):
@@ -146,98 +169,167 @@ impl LightFilm {
         );
     }
 
-    /// Adds the splats `(pos, value)` in order, times `scale`, as [`LightFilm::splat`] one by
-    /// one would, bit for bit: the image is cut into bands of rows, each band (on its own
-    /// thread) adding in order the parts of the splats that reach it, so every pixel receives
-    /// the same additions in the same order.
-    pub fn splat_all(&mut self, splats: &[(Vec2, [f32; 3])], scale: f64) {
-        let (filter, radius, w, h) = (self.filter, self.radius, self.width, self.height);
-        in_bands(
-            &mut self.batch,
-            (w, h),
-            radius,
-            splats,
-            #[inline(always)]
-            |band, rows, pos, value| {
-                splat_rows(
-                    &filter,
-                    radius,
-                    (w as i32, h as i32),
-                    rows,
-                    band,
-                    pos,
-                    value,
-                    scale,
-                )
-            },
-        );
-    }
-
-    /// Adds camera samples `(pos, value)` in order (see the module documentation), in bands of
-    /// rows on all threads as [`LightFilm::splat_all`] does.
-    pub fn add_camera_samples(&mut self, samples: &[(Vec2, [f32; 3])]) {
-        let (filter, radius, w, h) = (self.filter, self.radius, self.width, self.height);
-        in_bands(
-            &mut self.camera_batch,
-            (w, h),
-            radius,
-            samples,
-            #[inline(always)]
-            |band, rows, pos, value| {
-                let Some(fp) = Footprint::new(&filter, radius, (w as i32, h as i32), pos) else {
-                    return;
-                };
-                for (j, y) in fp.ys.clone().enumerate() {
-                    if !rows.contains(&y) {
-                        continue;
+    /// Adds one batch (one light path per pixel, see the module documentation) and commits it:
+    /// the samples of `lists` in order, light splats times `scale` through the filter, camera
+    /// samples into the pixels' weighted averages; and into `pixels[i]` (row-major) the batch's
+    /// unfiltered value of pixel i (the light splats landing in it times `scale`, plus its
+    /// camera samples) as one sample of its statistics. Non-finite samples are counted in
+    /// their pixel's statistics and dropped. The same sums, bit for bit, as adding the samples
+    /// one by one ([`LightFilm::splat`]): the image is cut into bands of rows, each sample is
+    /// listed (in order) for the bands it reaches, and each band adds its list on its own
+    /// thread, so every pixel receives the same additions in the same order for any number of
+    /// threads.
+    pub fn add_batch<L: AsRef<[Splat]>>(
+        &mut self,
+        lists: &[L],
+        scale: f64,
+        pixels: &mut [super::PixelStats],
+    ) {
+        use rayon::prelude::*;
+        let (filter, radius) = (self.filter, self.radius);
+        let (w, h) = (self.width as i32, self.height as i32);
+        let threads = rayon::current_num_threads().max(1) as i32;
+        // Four bands per thread balance the threads' loads.
+        let rows = (h / (4 * threads)).max(1);
+        let n_bands = ((h + rows - 1) / rows) as usize;
+        self.bands.resize_with(n_bands, Vec::new);
+        self.bands.iter_mut().for_each(Vec::clear);
+        // A sample at y reaches the rows whose centre is within the radius, y - 1/2 +- radius
+        // (and its own pixel's row: the box of radius 1/2 keeps that one).
+        let reach = radius.max(0.5) + 0.5;
+        for sp in lists.iter().flat_map(|l| l.as_ref()) {
+            if !sp.rgb.iter().all(|c| c.is_finite()) {
+                pixels[own_pixel(sp.film, w, h)].nonfinite += 1;
+                continue;
+            }
+            let lo = ((sp.film.y - reach).floor() as i32).clamp(0, h - 1) / rows;
+            let hi = ((sp.film.y + reach).floor() as i32).clamp(0, h - 1) / rows;
+            for band in &mut self.bands[lo as usize..=hi as usize] {
+                band.push(*sp);
+            }
+        }
+        let band_len = (rows * w) as usize;
+        self.batch
+            .par_chunks_mut(band_len)
+            .zip(self.camera_batch.par_chunks_mut(band_len))
+            .zip(self.unfiltered.par_chunks_mut(band_len))
+            .zip(self.sums.par_chunks_mut(band_len))
+            .zip(self.camera.par_chunks_mut(band_len))
+            .zip(pixels.par_chunks_mut(band_len))
+            .zip(self.bands.par_iter())
+            .enumerate()
+            .for_each(
+                |(b, ((((((batch, camera_batch), unfiltered), sums), camera), stats), list))| {
+                    let y0 = b as i32 * rows;
+                    let band = y0..(y0 + rows).min(h);
+                    let first = (y0 * w) as usize;
+                    crate::isa::best(
+                        #[inline(always)]
+                        || {
+                            for sp in list {
+                                let k = if sp.camera {
+                                    add_camera_rows(
+                                        &filter,
+                                        radius,
+                                        (w, h),
+                                        &band,
+                                        camera_batch,
+                                        sp,
+                                    );
+                                    1.0
+                                } else {
+                                    splat_rows(
+                                        &filter,
+                                        radius,
+                                        (w, h),
+                                        band.clone(),
+                                        batch,
+                                        sp.film,
+                                        sp.rgb,
+                                        scale,
+                                    );
+                                    scale
+                                };
+                                let pixel = own_pixel(sp.film, w, h);
+                                if let Some(u) =
+                                    pixel.checked_sub(first).and_then(|i| unfiltered.get_mut(i))
+                                {
+                                    for c in 0..3 {
+                                        u[c] += k * f64::from(sp.rgb[c]);
+                                    }
+                                }
+                            }
+                        },
+                    );
+                    for (stat, u) in stats.iter_mut().zip(unfiltered.iter_mut()) {
+                        stat.add(u.map(|c| c as f32), 0.0);
+                        *u = [0.0; 3];
                     }
-                    let row = ((y - rows.start) * w as i32) as usize;
-                    for (k, x) in fp.xs.clone().enumerate() {
-                        let weight = f64::from(fp.wx[k] * fp.wy[j]);
-                        let s = &mut band[row + x as usize];
-                        for c in 0..3 {
-                            s[c] += weight * f64::from(value[c]);
-                        }
-                        s[3] += weight;
-                    }
-                }
-            },
-        );
+                    commit_rows(sums, batch, camera, camera_batch);
+                },
+            );
     }
 }
 
-/// Runs `add(band, rows, pos, value)` for every splat on the bands of rows of `pixels` it
-/// reaches, the bands on all threads, each adding its splats in order.
-fn in_bands<T: Send>(
-    pixels: &mut [T],
-    (w, h): (u32, u32),
-    radius: f32,
-    splats: &[(Vec2, [f32; 3])],
-    add: impl Fn(&mut [T], std::ops::Range<i32>, Vec2, [f32; 3]) + Sync,
+/// The pixel (row-major index) a sample at `pos` falls in, clamped to the image.
+#[inline(always)]
+fn own_pixel(pos: Vec2, w: i32, h: i32) -> usize {
+    let (x, y) = (pos.x as usize, pos.y as usize);
+    y.min(h as usize - 1) * w as usize + x.min(w as usize - 1)
+}
+
+/// Adds the batch's sums of some pixels, `batch` and `camera_batch`, to the exact sums of the
+/// same pixels, `sums` and `camera`, and clears them.
+fn commit_rows(
+    sums: &mut [[i128; 3]],
+    batch: &mut [[f64; 3]],
+    camera: &mut [[i128; 4]],
+    camera_batch: &mut [[f64; 4]],
 ) {
-    use rayon::prelude::*;
-    let (w, h) = (w as i32, h as i32);
-    let threads = rayon::current_num_threads().max(1) as i32;
-    let rows = (h / (4 * threads)).max(1);
-    // A splat at y reaches rows whose centre is within the radius: y - 1/2 +- radius.
-    let reach = radius + 0.5;
-    pixels
-        .par_chunks_mut((rows * w) as usize)
-        .enumerate()
-        .for_each(|(b, band)| {
-            let y0 = b as i32 * rows;
-            let y1 = (y0 + rows).min(h);
-            crate::isa::best(
-                #[inline(always)]
-                || {
-                    for &(pos, value) in splats {
-                        if pos.y + reach >= y0 as f32 && pos.y - reach < y1 as f32 {
-                            add(band, y0..y1, pos, value);
-                        }
-                    }
-                },
-            )
-        });
+    for (e, b) in sums.iter_mut().zip(batch) {
+        for c in 0..3 {
+            e[c] = e[c].wrapping_add(to_fixed(b[c], LINEAR_BITS));
+        }
+        *b = [0.0; 3];
+    }
+    for (e, b) in camera.iter_mut().zip(camera_batch) {
+        if *b != [0.0; 4] {
+            for c in 0..4 {
+                e[c] = e[c].wrapping_add(to_fixed(b[c], LINEAR_BITS));
+            }
+            *b = [0.0; 4];
+        }
+    }
+}
+
+/// The part of camera sample `sp` that falls in the rows `band`, added to `sums` (which holds
+/// exactly those rows): its value and its filter weight, for the weighted average.
+#[inline(always)]
+fn add_camera_rows(
+    filter: &FilterDesc,
+    radius: f32,
+    (w, h): (i32, i32),
+    band: &std::ops::Range<i32>,
+    sums: &mut [[f64; 4]],
+    sp: &Splat,
+) {
+    let Some(fp) = Footprint::new(filter, radius, (w, h), sp.film) else {
+        return;
+    };
+    for (j, y) in fp.ys.clone().enumerate() {
+        if !band.contains(&y) {
+            continue;
+        }
+        let row = ((y - band.start) * w) as usize;
+        for (k, x) in fp.xs.clone().enumerate() {
+            let weight = f64::from(fp.wx[k] * fp.wy[j]);
+            let s = &mut sums[row + x as usize];
+            for c in 0..3 {
+                s[c] += weight * f64::from(sp.rgb[c]);
+            }
+            s[3] += weight;
+        }
+    }
 }
 
 /// The pixels a sample at `pos` reaches (centres within the filter's radius, clipped to the
@@ -380,35 +472,47 @@ mod tests {
         assert!((total - 1.0).abs() < 1e-7);
     }
 
-    /// Adding splats in row bands on several threads gives the sequential sums bit for bit
+    /// Adding a batch in row bands on several threads gives the sequential sums bit for bit
     /// (every pixel receives the same additions in the same order), with splats straddling
-    /// bands and the image's edges.
+    /// bands and the image's edges: the light splats as [`LightFilm::splat`] one by one adds
+    /// them, camera samples and pixel statistics the same for one thread and for three.
     #[test]
-    fn banded_splats_equal_sequential_splats() {
+    fn banded_batches_equal_sequential_splats() {
         let f = FilterDesc::Gaussian { stddev: 0.5 };
-        let splats: Vec<(Vec2, [f32; 3])> = (0..500)
+        let (w, h) = (23, 41);
+        let splats: Vec<Splat> = (0..500)
             .map(|k| {
                 let t = k as f32;
-                (
-                    Vec2::new((t * 7.31) % 23.0, (t * 3.17) % 41.0),
-                    [1.0 + t * 0.01, 0.5, 0.25 * (t % 3.0)],
-                )
+                Splat {
+                    film: Vec2::new((t * 7.31) % 23.0, (t * 3.17) % 41.0),
+                    rgb: [1.0 + t * 0.01, 0.5, 0.25 * (t % 3.0)],
+                    camera: k % 5 == 0,
+                }
             })
             .collect();
-        let mut one = LightFilm::new(f, 23, 41);
-        for &(p, v) in &splats {
-            one.splat(p, v, 0.7);
+        let lights: Vec<Splat> = splats.iter().filter(|s| !s.camera).copied().collect();
+        let mut one = LightFilm::new(f, w, h);
+        for s in &lights {
+            one.splat(s.film, s.rgb, 0.7);
         }
-        let mut banded = LightFilm::new(f, 23, 41);
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(3)
-            .build()
-            .unwrap()
-            .install(|| banded.splat_all(&splats, 0.7));
-        assert!(one
-            .batch
-            .iter()
-            .zip(&banded.batch)
-            .all(|(a, b)| a.map(f64::to_bits) == b.map(f64::to_bits)));
+        one.commit();
+        let banded = |threads: usize, list: &[Splat]| {
+            let mut film = LightFilm::new(f, w, h);
+            let mut pixels = vec![super::super::PixelStats::default(); (w * h) as usize];
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap()
+                .install(|| film.add_batch(&[list], 0.7, &mut pixels));
+            (film, pixels)
+        };
+        assert_eq!(banded(3, &lights).0.sums, one.sums);
+        let (a, pa) = banded(1, &splats);
+        let (b, pb) = banded(3, &splats);
+        assert_eq!(a, b);
+        assert_eq!(pa, pb);
+        assert!(a.camera.iter().any(|c| c[3] != 0));
+        // Each pixel's statistics got one sample: the unfiltered sum of what landed in it.
+        assert!(pa.iter().all(|p| p.n == 1));
     }
 }
