@@ -270,35 +270,42 @@ fn trace_photons(
         .map(|c| {
             let mut out = Vec::new();
             let (first, end) = (c * CHUNK, ((c + 1) * CHUNK).min(count));
-            for k in first..end {
-                let mut sampler = Sampler::new(seed, PHOTON_STREAM, stream + k);
-                let mut specular = true;
-                walk_light_path::<_, false>(
-                    scene,
-                    s,
-                    &mut sampler,
-                    lambda,
-                    AtFluorescence::Absorb,
-                    |v, _| {
-                        if let Arrival::Scattered { delta, .. } = v.arrival {
-                            specular &= delta;
-                        }
-                        if v.bsdf.has_smooth_lobe() && keep(v.depth, specular) {
-                            out.push((
-                                v.hit.p,
-                                Photon {
-                                    ng: v.hit.ng,
-                                    w_light: v.w_light,
-                                    power: v.beta * scale,
-                                    depth: v.depth,
-                                },
-                            ));
-                        }
-                    },
-                    // Scenes with media are refused before this method runs.
-                    |_, _| {},
-                );
-            }
+            // Dispatched per chunk: the walk inlined into one function per instruction set
+            // (`pt_render::isa`).
+            pt_render::isa::best(
+                #[inline(always)]
+                || {
+                    for k in first..end {
+                        let mut sampler = Sampler::new(seed, PHOTON_STREAM, stream + k);
+                        let mut specular = true;
+                        walk_light_path::<_, false>(
+                            scene,
+                            s,
+                            &mut sampler,
+                            lambda,
+                            AtFluorescence::Absorb,
+                            |v, _| {
+                                if let Arrival::Scattered { delta, .. } = v.arrival {
+                                    specular &= delta;
+                                }
+                                if v.bsdf.has_smooth_lobe() && keep(v.depth, specular) {
+                                    out.push((
+                                        v.hit.p,
+                                        Photon {
+                                            ng: v.hit.ng,
+                                            w_light: v.w_light,
+                                            power: v.beta * scale,
+                                            depth: v.depth,
+                                        },
+                                    ));
+                                }
+                            },
+                            // Scenes with media are refused before this method runs.
+                            |_, _| {},
+                        );
+                    }
+                },
+            );
             progress(end - first);
             out
         })
@@ -308,6 +315,7 @@ fn trace_photons(
 
 /// Light sampling at a surface (direct light; no MIS: emission met after a non-specular
 /// bounce is never counted).
+#[inline(always)]
 fn direct_light(
     scene: &Scene,
     hit: &pt_render::geometry::Interaction,
@@ -345,6 +353,7 @@ const MAX_SPECULAR_CHAIN: u32 = 64;
 
 /// One camera sample of pixel (x, y): its radiance and filter weight.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 fn camera_sample(
     scene: &Scene,
     s: &PathSettings,
@@ -443,6 +452,7 @@ fn camera_sample(
 /// Final gathering from a surface: one BSDF-sampled ray, through specular surfaces, to a
 /// surface whose global-map estimate stands for the light it sends back.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 fn gather(
     scene: &Scene,
     maps: &Maps,
@@ -567,21 +577,27 @@ pub fn render_photon_passes(
                 .into_par_iter()
                 .map(|y| {
                     let mut heap = BinaryHeap::with_capacity(maps.lookup + 1);
-                    let row = (0..w)
-                        .map(|x| {
-                            camera_sample(
-                                scene,
-                                s,
-                                settings,
-                                pm,
-                                &maps,
-                                &lambda,
-                                (x, y),
-                                it,
-                                &mut heap,
-                            )
-                        })
-                        .collect();
+                    // Dispatched per row, as the photon pass.
+                    let row = pt_render::isa::best(
+                        #[inline(always)]
+                        || {
+                            (0..w)
+                                .map(|x| {
+                                    camera_sample(
+                                        scene,
+                                        s,
+                                        settings,
+                                        pm,
+                                        &maps,
+                                        &lambda,
+                                        (x, y),
+                                        it,
+                                        &mut heap,
+                                    )
+                                })
+                                .collect()
+                        },
+                    );
                     progress(u64::from(w) - u64::from(w) / 2);
                     row
                 })

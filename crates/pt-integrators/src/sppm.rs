@@ -123,6 +123,7 @@ pub fn radius_squared(r0: f32, alpha: f32, i: u32) -> f64 {
 /// Step 1 for one pixel: its direct light (emission and light sampling along the camera path)
 /// and its visible points, appended to `out`.
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 fn camera_path(
     scene: &Scene,
     s: &PathSettings,
@@ -297,9 +298,26 @@ pub fn render_sppm_passes(
                 .into_par_iter()
                 .map(|y| {
                     let mut points = Vec::new();
-                    let direct = (0..w)
-                        .map(|x| camera_path(scene, s, settings, &lambda, (x, y), it, &mut points))
-                        .collect();
+                    // Dispatched per row: the camera paths inlined into one function per
+                    // instruction set (`pt_render::isa`).
+                    let direct = pt_render::isa::best(
+                        #[inline(always)]
+                        || {
+                            (0..w)
+                                .map(|x| {
+                                    camera_path(
+                                        scene,
+                                        s,
+                                        settings,
+                                        &lambda,
+                                        (x, y),
+                                        it,
+                                        &mut points,
+                                    )
+                                })
+                                .collect()
+                        },
+                    );
                     progress(u64::from(w) / 2);
                     (direct, points)
                 })
@@ -327,36 +345,43 @@ pub fn render_sppm_passes(
                     let mut out = Vec::new();
                     let first = c * CHUNK;
                     let end = (first + CHUNK).min(photons);
-                    for k in first..end {
-                        let index = u64::from(it) * photons + k;
-                        let mut sampler = Sampler::new(settings.seed, PHOTON_STREAM, index);
-                        walk_light_path::<_, false>(
-                            scene,
-                            s,
-                            &mut sampler,
-                            &lambda,
-                            AtFluorescence::Absorb,
-                            |v, _| {
-                                if v.depth < 2 {
-                                    return;
-                                }
-                                grid.within(v.hit.p, |&i| {
-                                    let vp = &points[i as usize];
-                                    if vp.ng.dot(v.hit.ng) <= 0.0
-                                        || vp.segments.saturating_add(v.depth) > max_depth
-                                    {
-                                        return;
-                                    }
-                                    let f = vp.bsdf.eval(vp.wo, vp.frame.to_local(v.w_light));
-                                    if !f.is_black() {
-                                        out.push((i, f * v.beta));
-                                    }
-                                });
-                            },
-                            // Scenes with media are refused before this method runs.
-                            |_, _| {},
-                        );
-                    }
+                    // Dispatched per chunk, as the camera pass.
+                    pt_render::isa::best(
+                        #[inline(always)]
+                        || {
+                            for k in first..end {
+                                let index = u64::from(it) * photons + k;
+                                let mut sampler = Sampler::new(settings.seed, PHOTON_STREAM, index);
+                                walk_light_path::<_, false>(
+                                    scene,
+                                    s,
+                                    &mut sampler,
+                                    &lambda,
+                                    AtFluorescence::Absorb,
+                                    |v, _| {
+                                        if v.depth < 2 {
+                                            return;
+                                        }
+                                        grid.within(v.hit.p, |&i| {
+                                            let vp = &points[i as usize];
+                                            if vp.ng.dot(v.hit.ng) <= 0.0
+                                                || vp.segments.saturating_add(v.depth) > max_depth
+                                            {
+                                                return;
+                                            }
+                                            let f =
+                                                vp.bsdf.eval(vp.wo, vp.frame.to_local(v.w_light));
+                                            if !f.is_black() {
+                                                out.push((i, f * v.beta));
+                                            }
+                                        });
+                                    },
+                                    // Scenes with media are refused before this method runs.
+                                    |_, _| {},
+                                );
+                            }
+                        },
+                    );
                     progress(((end - first) * pixels / photons) / 2);
                     out
                 })

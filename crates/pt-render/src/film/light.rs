@@ -191,7 +191,7 @@ impl LightFilm {
         let threads = rayon::current_num_threads().max(1) as i32;
         // Four bands per thread balance the threads' loads.
         let rows = (h / (4 * threads)).max(1);
-        let n_bands = ((h + rows - 1) / rows) as usize;
+        let n_bands = (h as u32).div_ceil(rows as u32) as usize;
         self.bands.resize_with(n_bands, Vec::new);
         self.bands.iter_mut().for_each(Vec::clear);
         // A sample at y reaches the rows whose centre is within the radius, y - 1/2 +- radius
