@@ -11,7 +11,6 @@
 //! (through a mirror or a mask's hole too), and media are ignored.
 
 use crate::path::{emitted_radiance, escaped_radiance, PathSettings, PathState};
-use pt_bsdf::SurfaceBsdf;
 use pt_math::{offset_ray_origin, power_heuristic, Frame, Ray, Vec3};
 use pt_render::sampler::RandomSource;
 use pt_render::Scene;
@@ -58,14 +57,7 @@ pub(crate) fn estimate<S: RandomSource>(
             .unwrap_or(SampledSpectrum::ZERO);
     }
     let material = scene.material(hit.shape);
-    let built: SurfaceBsdf;
-    let bsdf = match &material.fixed {
-        Some(b) => b,
-        None => {
-            built = scene.bsdf(&hit, &path.lambda);
-            &built
-        }
-    };
+    let bsdf = scene.bsdf(&hit, &path.lambda);
     // Fluorescence moves some lanes to an excitation wavelength for everything lit below.
     if let Some(f) = material.fluorescent() {
         path.lambda = f.scatter(&path.lambda, sampler.next_1d());

@@ -547,7 +547,7 @@ pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
             if fluorescence == AtFluorescence::Absorb {
                 return;
             }
-            bsdf.bsdf = Bsdf::Lambert(Lambert::new(f.adjoint_albedo(&lambda)));
+            bsdf.to_mut().bsdf = Bsdf::Lambert(Lambert::new(f.adjoint_albedo(&lambda)));
             lambda = f.scatter_adjoint(&lambda, sampler.next_1d());
         }
         visit(
@@ -566,7 +566,7 @@ pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
             },
             sampler,
         );
-        let at = (&hit, &bsdf, &frame);
+        let at = (&hit, &*bsdf, &frame);
         let Some(next) = leave_surface::<S, BIDIR>(at, wl, ng_light, &mut beta, &mut eta, sampler)
         else {
             return;

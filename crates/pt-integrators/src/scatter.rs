@@ -360,7 +360,7 @@ fn draw<'a, S: RandomSource>(
         let (bsdf, lambert): (&SurfaceBsdf, _) = match &material.fixed {
             Some(b) => (d.fixed[k].insert(b), material.fixed_lambert),
             None => {
-                let b = built[k].insert(scene.bsdf(h, &path.lambda));
+                let b = built[k].insert(scene.bsdf(h, &path.lambda).into_owned());
                 (b, b.plain_lambert())
             }
         };

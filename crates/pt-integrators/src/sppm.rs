@@ -188,7 +188,7 @@ fn camera_path(
                 ng: hit.ng,
                 frame,
                 wo,
-                bsdf,
+                bsdf: *bsdf,
                 beta,
                 segments,
             });

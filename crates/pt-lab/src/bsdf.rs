@@ -495,7 +495,7 @@ impl BsdfModel {
         let at = pt_render::texture::TexturePoint::uv(pt_math::Vec2::ZERO);
         let hit = pt_render::geometry::Interaction::default();
         let wavelengths = pt_spectrum::SampledWavelengths::sample_visible(0.5).with_lambda(lambda);
-        self.material.bsdf(&hit, &at, &wavelengths)
+        self.material.bsdf(&hit, &at, &wavelengths).into_owned()
     }
 }
 

@@ -61,7 +61,10 @@ fn fixed(s: &SurfaceMaterial) -> Option<SurfaceBsdf> {
     // Constants read the same anywhere: any point and wavelengths give the BSDF.
     let at = crate::texture::TexturePoint::uv(pt_math::Vec2::ZERO);
     let hit = crate::geometry::Interaction::default();
-    Some(s.bsdf(&hit, &at, &SampledWavelengths::sample_visible(0.5)))
+    Some(
+        s.bsdf(&hit, &at, &SampledWavelengths::sample_visible(0.5))
+            .into_owned(),
+    )
 }
 
 /// The state of one material's build: the texture builder and where the BSDF was defined.

@@ -366,9 +366,14 @@ impl Scene {
         r.local + u32::from(r.part.is_some() && hit.b.x + hit.b.y > 1.0)
     }
 
-    /// The BSDF at a hit, at the path's wavelengths ([`SurfaceMaterial::bsdf`]).
+    /// The BSDF at a hit, at the path's wavelengths ([`SurfaceMaterial::bsdf`]: borrowed from
+    /// the material when it is the same all over the surface).
     #[inline(always)]
-    pub fn bsdf(&self, hit: &Interaction, lambda: &SampledWavelengths) -> SurfaceBsdf {
+    pub fn bsdf(
+        &self,
+        hit: &Interaction,
+        lambda: &SampledWavelengths,
+    ) -> std::borrow::Cow<'_, SurfaceBsdf> {
         self.material(hit.shape)
             .bsdf(hit, &self.texture_point(hit), lambda)
     }
