@@ -554,11 +554,11 @@ fn gltf_partial_factors_are_blends() {
             Vec3::new(0.2, 0.1, 0.9).normalize(),
             Vec3::new(-0.3, 0.2, 0.8).normalize(),
         );
-        let first = pt_bsdf::SurfaceBsdf { blend: None, ..b };
+        let first = pt_bsdf::SurfaceBsdf { blend: None, ..*b };
         let only_second = pt_bsdf::SurfaceBsdf {
             bsdf: second,
             blend: None,
-            ..b
+            ..*b
         };
         let want = first.eval(wo, wi).0 * (1.0 - w) + only_second.eval(wo, wi).0 * w;
         assert!(
