@@ -65,6 +65,7 @@ use pt_render::sampler::{RandomSource, Sampler};
 use pt_render::Scene;
 use pt_spectrum::{spectrum_to_srgb, ColorMode, SampledSpectrum, SampledWavelengths};
 use rayon::prelude::*;
+use std::borrow::Cow;
 use std::sync::atomic::AtomicBool;
 
 /// The key of the light paths' random streams (in the place of a pixel's: above every pixel
@@ -357,11 +358,12 @@ fn light_medium(scene: &Scene, ray: &Ray) -> Option<u32> {
 const MAX_MEDIUM_PROBES: u32 = 64;
 
 /// A surface a light path meets (see [`walk_light_path`]).
-pub(crate) struct LightVertex<'a> {
+pub(crate) struct LightVertex<'a, 's> {
     /// The hit, world space.
     pub hit: &'a Interaction,
-    /// Its BSDF at the path's wavelengths.
-    pub bsdf: &'a SurfaceBsdf,
+    /// Its BSDF at the path's wavelengths (borrowed from the scene's material when it is the
+    /// same all over the surface: the bidirectional methods keep that reference).
+    pub bsdf: &'a Cow<'s, SurfaceBsdf>,
     /// Its shading frame (the path tracer's).
     pub frame: Frame,
     /// Unit direction towards the previous vertex (the light's side), local frame.
@@ -456,13 +458,13 @@ pub(crate) enum AtFluorescence {
 /// light's power units, with 1: a bright light's paths then run until the 0.95 cap stops them,
 /// each vertex connecting to every camera vertex).
 #[inline(always)]
-pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
-    scene: &Scene,
+pub(crate) fn walk_light_path<'s, S: RandomSource, const BIDIR: bool>(
+    scene: &'s Scene,
     s: &PathSettings,
     sampler: &mut S,
     lambda: &SampledWavelengths,
     fluorescence: AtFluorescence,
-    mut visit: impl FnMut(&LightVertex, &mut S),
+    mut visit: impl FnMut(&LightVertex<'_, 's>, &mut S),
     mut visit_medium: impl FnMut(&MediumVertex, &mut S),
 ) {
     let Some((li, pmf, emitted)) = sample_emitted(scene, lambda, sampler) else {
@@ -470,6 +472,7 @@ pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
     };
     let mut beta = emitted.weight * (1.0 / pmf);
     let rr_norm = if BIDIR { 1.0 / beta.max_value() } else { 1.0 };
+    let rr_depth = s.rr_depth;
     let mut ray = emitted.ray;
     // The medium the ray starts in (only the light tracer walks scenes with media).
     let mut medium = if scene.has_media() {
@@ -523,7 +526,7 @@ pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
                 }
                 ray = Ray::new(p, ps.wi);
                 depth += 1;
-                if depth > s.rr_depth && !roulette(&mut beta, rr_norm * eta * eta, sampler) {
+                if depth > rr_depth && !roulette(&mut beta, rr_norm * eta * eta, sampler) {
                     return;
                 }
                 continue;
@@ -581,7 +584,7 @@ pub(crate) fn walk_light_path<S: RandomSource, const BIDIR: bool>(
             continue;
         }
         depth += 1;
-        if depth > s.rr_depth && !roulette(&mut beta, rr_norm * eta * eta, sampler) {
+        if depth > rr_depth && !roulette(&mut beta, rr_norm * eta * eta, sampler) {
             return;
         }
     }

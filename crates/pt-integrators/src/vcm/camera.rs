@@ -23,7 +23,7 @@ fn camera_subpath(
     lambda: &SampledWavelengths,
     index: usize,
     width: u32,
-    light_vertices: &[LightVertex],
+    (light_vertices, built): (&[LightVertex], &[SurfaceBsdf]),
 ) -> (Vec2, SampledSpectrum) {
     let (scene, s, f) = (it.scene, it.s, &it.f);
     let camera = &scene.camera;
@@ -96,7 +96,8 @@ fn camera_subpath(
                     if lv.depth.saturating_add(depth).saturating_add(1) > max_depth {
                         break;
                     }
-                    radiance += beta * connect(it, &hit, &frame, &bsdf, wo, &mis_state, lv);
+                    let lb = lv.bsdf(built);
+                    radiance += beta * connect(it, &hit, &frame, &bsdf, wo, &mis_state, lv, lb);
                 }
             }
             // Merging with the light vertices of every subpath nearby.
@@ -252,7 +253,7 @@ pub(super) fn camera_sample(
     lambda: &SampledWavelengths,
     k: u64,
     width: u32,
-    own: &[LightVertex],
+    own: (&[LightVertex], &[SurfaceBsdf]),
 ) -> Splat {
     // The camera subpath and its strategies inlined into one function per instruction set.
     let (film, l) = pt_render::isa::best(
@@ -344,6 +345,7 @@ fn connect(
     wo: Vec3,
     cam: &SubpathMis,
     lv: &LightVertex,
+    lb: &SurfaceBsdf,
 ) -> SampledSpectrum {
     let d = lv.p - hit.p;
     let dist2 = d.length_squared();
@@ -359,18 +361,18 @@ fn connect(
         return SampledSpectrum::ZERO;
     }
     let f_cam = bsdf.eval(wo, wi);
-    let f_light = lv.bsdf.eval(wl_cam, lv.wl);
+    let f_light = lb.eval(wl_cam, lv.wl);
     if f_cam.is_black() || f_light.is_black() {
         return SampledSpectrum::ZERO;
     }
     let cam_area = bsdf.pdf(wo, wi) * ng_l.abs() / dist2;
-    let light_area = lv.bsdf.pdf(lv.wl, wl_cam) * ng_c.abs() / dist2;
+    let light_area = lb.pdf(lv.wl, wl_cam) * ng_c.abs() / dist2;
     let weight = connection_weight(
         &lv.mis,
         cam,
         cam_area,
         light_area,
-        lv.bsdf.pdf(wl_cam, lv.wl),
+        lb.pdf(wl_cam, lv.wl),
         bsdf.pdf(wi, wo),
         &it.f,
     );

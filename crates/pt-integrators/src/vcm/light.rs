@@ -2,28 +2,31 @@
 //! merging with its partial sums, and splatting each vertex the camera sees (t = 1).
 
 use super::mis::{camera_weight, Factors, SubpathMis};
-use super::{LightVertex, VcmSettings};
+use super::{LightVertex, VcmSettings, VertexBsdf};
 use crate::path::PathSettings;
 use crate::ptracer::{seen_by_camera, to_rgb, walk_light_path, Arrival, AtFluorescence, Splat};
+use pt_bsdf::SurfaceBsdf;
 use pt_math::Vec3;
 use pt_render::light::Light;
 use pt_render::sampler::Sampler;
 use pt_render::Scene;
 use pt_spectrum::SampledWavelengths;
+use std::borrow::Cow;
 
 /// Traces light subpath `index`: its vertices (non-delta surfaces) appended to `out`, its
 /// camera splats (t = 1) to `splats`.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(super) fn light_subpath(
-    scene: &Scene,
+pub(super) fn light_subpath<'s>(
+    scene: &'s Scene,
     s: &PathSettings,
     vcm: &VcmSettings,
     f: &Factors,
     scale: f32,
     sampler: &mut Sampler,
     lambda: &SampledWavelengths,
-    out: &mut Vec<LightVertex>,
+    out: &mut Vec<LightVertex<'s>>,
+    built: &mut Vec<SurfaceBsdf>,
     splats: &mut Vec<Splat>,
 ) {
     let mut mis_state = SubpathMis::default();
@@ -79,7 +82,13 @@ pub(super) fn light_subpath(
                 wl: v.wl,
                 w_light: v.w_light,
                 ng_light: v.ng_light,
-                bsdf: *v.bsdf,
+                bsdf: match v.bsdf {
+                    Cow::Borrowed(b) => VertexBsdf::Shared(b),
+                    Cow::Owned(b) => {
+                        built.push(*b);
+                        VertexBsdf::Built(built.len() as u32 - 1)
+                    }
+                },
                 beta: v.beta,
                 mis: mis_state,
                 depth: v.depth,
