@@ -29,7 +29,9 @@
 //! delta lobes leave their factor out (their forward and reverse probabilities cancel). Light
 //! emission densities come from [`pt_render::light::Light::emission_pdf`], light sampling's
 //! from the light's own `sample`/`pdf` (a sphere light's cone sampling included), the
-//! camera's from [`pt_render::camera::Camera::direction_pdf`]. Russian roulette is left out
+//! camera's from [`pt_render::camera::Camera::direction_pdf`]. Russian roulette (camera
+//! subpaths after `rr_depth` segments as the path tracer, light subpaths from their first
+//! bounce, see [`crate::ptracer::walk_light_path`]) is left out
 //! of the weights (it thins every strategy's samples without changing which can make a
 //! path, so the weights still sum to one: the estimate stays unbiased).
 //!
