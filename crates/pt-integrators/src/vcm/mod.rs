@@ -168,6 +168,18 @@ struct LightVertex<'s> {
 }
 
 impl LightVertex<'_> {
+    /// What merging needs of the vertex, and where it is.
+    fn photon(&self) -> (Vec3, Photon) {
+        let ph = Photon {
+            ng: self.ng,
+            w_light: self.w_light,
+            beta: self.beta,
+            mis: self.mis,
+            depth: self.depth,
+        };
+        (self.p, ph)
+    }
+
     /// The vertex's BSDF, `built` being the list of BSDFs built for its subpaths' hits.
     #[inline(always)]
     fn bsdf<'x>(&'x self, built: &'x [SurfaceBsdf]) -> &'x SurfaceBsdf {
@@ -364,21 +376,8 @@ pub fn render_vcm_passes<'s>(
                     progress(range(c as u64).count() as u64 / 2);
                 });
                 // 2. The grid of all light vertices, then every camera subpath.
-                let photons = pool
-                    .iter()
-                    .flat_map(|c| &c.vertices)
-                    .map(|v| {
-                        let ph = Photon {
-                            ng: v.ng,
-                            w_light: v.w_light,
-                            beta: v.beta,
-                            mis: v.mis,
-                            depth: v.depth,
-                        };
-                        (v.p, ph)
-                    })
-                    .collect();
-                let grid = PointGrid::new(photons, radius);
+                let photons = pool.iter().flat_map(|c| &c.vertices);
+                let grid = PointGrid::new(photons.map(LightVertex::photon).collect(), radius);
                 let camera: Vec<Vec<Splat>> = {
                     let it = Iteration {
                         chunks: &pool,

@@ -316,20 +316,13 @@ fn add_camera_rows(
     let Some(fp) = Footprint::new(filter, radius, (w, h), sp.film) else {
         return;
     };
-    for (j, y) in fp.ys.clone().enumerate() {
-        if !band.contains(&y) {
-            continue;
+    fp.in_rows(band, w, |i, weight| {
+        let s = &mut sums[i];
+        for c in 0..3 {
+            s[c] += weight * f64::from(sp.rgb[c]);
         }
-        let row = ((y - band.start) * w) as usize;
-        for (k, x) in fp.xs.clone().enumerate() {
-            let weight = f64::from(fp.wx[k] * fp.wy[j]);
-            let s = &mut sums[row + x as usize];
-            for c in 0..3 {
-                s[c] += weight * f64::from(sp.rgb[c]);
-            }
-            s[3] += weight;
-        }
-    }
+        s[3] += weight;
+    });
 }
 
 /// The pixels a sample at `pos` reaches (centres within the filter's radius, clipped to the
@@ -342,6 +335,22 @@ struct Footprint {
 }
 
 impl Footprint {
+    /// Calls `add(i, weight)` for each pixel of the footprint in the rows `band` of an image
+    /// `w` pixels wide: `i` indexes the band's pixels (row-major), `weight` is the pixel's
+    /// filter weight, unnormalised.
+    #[inline(always)]
+    fn in_rows(&self, band: &std::ops::Range<i32>, w: i32, mut add: impl FnMut(usize, f64)) {
+        for (j, y) in self.ys.clone().enumerate() {
+            if !band.contains(&y) {
+                continue;
+            }
+            let row = ((y - band.start) * w) as usize;
+            for (k, x) in self.xs.clone().enumerate() {
+                add(row + x as usize, f64::from(self.wx[k] * self.wy[j]));
+            }
+        }
+    }
+
     #[inline(always)]
     fn new(filter: &FilterDesc, radius: f32, (w, h): (i32, i32), pos: Vec2) -> Option<Footprint> {
         let mut fp = Footprint {
@@ -404,19 +413,12 @@ fn splat_rows(
         return;
     }
     let v = value.map(|c| scale * f64::from(c) / f64::from(norm));
-    for (j, y) in fp.ys.clone().enumerate() {
-        if !band.contains(&y) {
-            continue;
+    fp.in_rows(&band, w, |i, weight| {
+        let s = &mut sums[i];
+        for c in 0..3 {
+            s[c] += weight * v[c];
         }
-        let row = ((y - band.start) * w) as usize;
-        for (k, x) in fp.xs.clone().enumerate() {
-            let weight = f64::from(fp.wx[k] * fp.wy[j]);
-            let s = &mut sums[row + x as usize];
-            for c in 0..3 {
-                s[c] += weight * v[c];
-            }
-        }
-    }
+    });
 }
 
 #[cfg(test)]
