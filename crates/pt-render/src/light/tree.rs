@@ -1,10 +1,14 @@
 //! Light selection from a shading point with a light tree (Conty Estevez and Kulla 2018,
 //! "Importance Sampling of Many Lights with Adaptive Tree Splitting"): the lights at a finite
-//! distance sit in a binary tree whose nodes bound their lights' positions (a box), emission
+//! distance sit in a tree whose nodes bound their lights' positions (a box), emission
 //! directions (a cone) and power; from a point, each step down the tree picks a child with
 //! probability proportional to its importance, power over squared distance times a bound on
 //! the cosine at the emitter. A light's pmf is the product of the choices on its path, which
 //! [`LightTree::pmf`] retraces from the bits stored per light.
+//!
+//! The tree is built binary (median splits) and collapsed into nodes of eight children, whose
+//! importances are computed together in SIMD lanes: a step chooses among eight, so 144 lights
+//! take three steps, where the binary tree took eight steps of two scalar evaluations each.
 //!
 //! The importance here leaves out the paper's receiver term (the cosine at the shading point's
 //! normal), so that a light's pmf is a function of the point alone: every MIS weight is then
@@ -67,7 +71,7 @@ impl Bounds {
     }
 }
 
-/// A node's bounds as traversal reads them (see [`Bounds`]).
+/// A node's bounds as a [`WideNode`]'s slot holds them (see [`Bounds`]).
 #[derive(Clone, Copy, Debug)]
 struct Packed {
     /// Centre of the box.
@@ -82,54 +86,6 @@ struct Packed {
     sin_o: f32,
     /// Power.
     phi: f32,
-}
-
-impl Packed {
-    /// The importance of these emitters for the point `p` as a fraction (numerator,
-    /// denominator), so that comparing two costs no division: phi cos(theta') / d^2, where d is
-    /// the distance to the box's centre (at least the radius r of the box's bounding sphere,
-    /// since the emitters may lie anywhere within it) and theta' = max(0, theta - theta_o -
-    /// theta_u), theta the angle between the axis and the direction to `p`, theta_u the half
-    /// angle the bounding sphere subtends at `p` (pi inside it). 0 when theta' >= theta_e = pi / 2:
-    /// no emitter in the node sends light towards `p`. Angle differences by the sine and
-    /// cosine subtraction formulas, without inverse trigonometry.
-    #[inline(always)]
-    fn importance(&self, p: Vec3) -> (f32, f32) {
-        let r2 = self.r2;
-        let to_p = p - self.center;
-        let d2 = to_p.length_squared();
-        let mut cos_t = 1.0f32;
-        if self.cos_o > -1.0 && d2 > r2 {
-            let w = to_p / d2.sqrt();
-            let (cos_w, sin_w) = cos_sin(self.axis.dot(w));
-            // theta_x = max(0, theta - theta_o).
-            let (cos_x, sin_x) = if cos_w >= self.cos_o {
-                (1.0, 0.0)
-            } else {
-                (
-                    cos_w * self.cos_o + sin_w * self.sin_o,
-                    sin_w * self.cos_o - cos_w * self.sin_o,
-                )
-            };
-            // theta' = max(0, theta_x - theta_u), sin(theta_u) = r / d.
-            let sin_u2 = r2 / d2;
-            let cos_u = (1.0 - sin_u2).max(0.0).sqrt();
-            if cos_x < cos_u {
-                cos_t = cos_x * cos_u + sin_x * sin_u2.sqrt();
-            }
-            if cos_t <= 0.0 {
-                return (0.0, 1.0);
-            }
-        }
-        (self.phi * cos_t, d2.max(r2).max(f32::MIN_POSITIVE))
-    }
-}
-
-/// cos and sin of the angle whose cosine is `c` (clamped to [-1, 1]).
-#[inline]
-fn cos_sin(c: f32) -> (f32, f32) {
-    let c = c.clamp(-1.0, 1.0);
-    (c, (1.0 - c * c).max(0.0).sqrt())
 }
 
 /// The smallest cone (of this construction) holding the cones `a` and `b`, each (unit axis,
@@ -247,17 +203,141 @@ fn light_bounds(light: &Light, scene_radius: f32) -> Option<Bounds> {
     })
 }
 
-/// A node: its bounds and either two children or one light.
+/// A node of the binary tree that [`LightTree::build`] splits first: its bounds and either
+/// two children or one light. Build-time only; traversal reads the [`WideNode`]s made from it.
 #[derive(Clone, Debug)]
-struct Node {
+struct BinaryNode {
     bounds: Packed,
     /// Children (node indices) of an inner node; `[light, u32::MAX]` for a leaf.
     children: [u32; 2],
 }
 
-impl Node {
-    fn leaf_light(&self) -> Option<usize> {
-        (self.children[1] == u32::MAX).then_some(self.children[0] as usize)
+impl BinaryNode {
+    fn leaf_light(&self) -> Option<u32> {
+        (self.children[1] == u32::MAX).then_some(self.children[0])
+    }
+}
+
+/// Children per [`WideNode`]: eight `f32` fill one AVX2 register, so one node's importances
+/// are evaluated in one pass of vector instructions.
+const WIDTH: usize = 8;
+
+/// Bits of a light's trail per level: the child's slot in `0..WIDTH`.
+const SLOT_BITS: u32 = 3;
+
+/// Tag of a [`WideNode`] child that is a light (its index in the low bits), not a node.
+const LIGHT: u32 = 1 << 31;
+
+/// A node of the tree that traversal reads: up to [`WIDTH`] children's bounds ([`Packed`]) in
+/// structure-of-arrays form, so that their importances are computed in SIMD lanes. The binary
+/// tree collapsed three levels at a time (as wide BVHs are made from binary ones), so a choice
+/// among 144 lights takes three steps instead of eight. Unused slots have no power and are
+/// never chosen.
+#[derive(Clone, Debug, Default)]
+#[repr(C, align(32))]
+struct WideNode {
+    /// Centre of each child's box, x, y, z per slot.
+    center: [[f32; WIDTH]; 3],
+    /// Squared radius of the box's bounding sphere.
+    r2: [f32; WIDTH],
+    /// Cone axis, x, y, z per slot.
+    axis: [[f32; WIDTH]; 3],
+    /// cos theta_o (-1: emitting everywhere).
+    cos_o: [f32; WIDTH],
+    /// sin theta_o.
+    sin_o: [f32; WIDTH],
+    /// Power (0 for an unused slot).
+    phi: [f32; WIDTH],
+    /// Child node index, or [`LIGHT`] | light index.
+    child: [u32; WIDTH],
+}
+
+impl WideNode {
+    /// The importance of each child's emitters for the point `p`: phi cos(theta') / d^2, where
+    /// d is the distance to the box's centre (at least the radius r of the box's bounding
+    /// sphere, since the emitters may lie anywhere within it) and theta' = max(0, theta -
+    /// theta_o - theta_u), theta the angle between the axis and the direction to `p`, theta_u
+    /// the half angle the bounding sphere subtends at `p` (pi inside it); 0 when theta' >=
+    /// theta_e = pi / 2: no emitter of the child sends light towards `p` (Conty Estevez and
+    /// Kulla 2018, eq. 3 without the receiver's cosine). Angle differences by the sine and
+    /// cosine subtraction formulas, without inverse trigonometry. One loop over the slots with
+    /// selects instead of branches, so that it compiles to vector instructions.
+    #[inline(always)]
+    fn importances(&self, p: Vec3) -> [f32; WIDTH] {
+        // `if a < b` forms compile to minps/maxps; the NaNs of a point at a box's centre
+        // (d = 0) only reach values that the selects below discard.
+        let min = |a: f32, b: f32| if a < b { a } else { b };
+        let max = |a: f32, b: f32| if a > b { a } else { b };
+        let mut out = [0.0; WIDTH];
+        for (i, o) in out.iter_mut().enumerate() {
+            let to_p = [
+                p.x - self.center[0][i],
+                p.y - self.center[1][i],
+                p.z - self.center[2][i],
+            ];
+            let d2 = (to_p[0] * to_p[0] + to_p[1] * to_p[1]) + to_p[2] * to_p[2];
+            let (r2, cos_o, sin_o) = (self.r2[i], self.cos_o[i], self.sin_o[i]);
+            let inv_d = 1.0 / d2.sqrt();
+            let axis_dot =
+                (self.axis[0][i] * to_p[0] + self.axis[1][i] * to_p[1]) + self.axis[2][i] * to_p[2];
+            let cos_w = min(max(axis_dot * inv_d, -1.0), 1.0);
+            let sin_w = max(1.0 - cos_w * cos_w, 0.0).sqrt();
+            // theta_x = max(0, theta - theta_o).
+            let inside = cos_w >= cos_o;
+            let cos_x = if inside {
+                1.0
+            } else {
+                cos_w * cos_o + sin_w * sin_o
+            };
+            let sin_x = if inside {
+                0.0
+            } else {
+                sin_w * cos_o - cos_w * sin_o
+            };
+            // theta' = max(0, theta_x - theta_u), sin(theta_u) = r / d.
+            let sin_u2 = r2 / d2;
+            let cos_u = max(1.0 - sin_u2, 0.0).sqrt();
+            let cos_t = if cos_x < cos_u {
+                cos_x * cos_u + sin_x * sin_u2.sqrt()
+            } else {
+                1.0
+            };
+            // Children emitting everywhere, and points inside a child's bounding sphere, see
+            // the whole cone.
+            let cos_t = if cos_o > -1.0 && d2 > r2 { cos_t } else { 1.0 };
+            let imp = self.phi[i] * cos_t / max(max(d2, r2), f32::MIN_POSITIVE);
+            *o = if cos_t > 0.0 { imp } else { 0.0 };
+        }
+        out
+    }
+
+    /// The slot that the uniform number `u` (in [0, 1)) chooses among `imp` in proportion to
+    /// them, with its probability and `u` rescaled to [0, 1) within the slot's share; `None`
+    /// when every importance is 0 (or their sum overflows). The chosen slot's importance is
+    /// positive: it is the first whose running sum exceeds `u` times the total.
+    #[inline(always)]
+    fn choose(imp: &[f32; WIDTH], u: f32) -> Option<(usize, f32, f32)> {
+        let mut running = [0.0f32; WIDTH];
+        let mut sum = 0.0f32;
+        for (r, &x) in running.iter_mut().zip(imp) {
+            sum += x;
+            *r = sum;
+        }
+        if !(sum > 0.0 && sum.is_finite()) {
+            return None;
+        }
+        let target = u * sum;
+        let mut slot = 0;
+        for &r in &running {
+            slot += usize::from(r <= target);
+        }
+        // Rounding can leave `target` at the total: then the last slot with importance.
+        if slot == WIDTH {
+            slot = imp.iter().rposition(|&x| x > 0.0)?;
+        }
+        let below = running[slot] - imp[slot];
+        let u = ((target - below) / imp[slot]).clamp(0.0, ONE_MINUS_EPSILON);
+        Some((slot, imp[slot] / sum, u))
     }
 }
 
@@ -265,11 +345,14 @@ impl Node {
 /// distant lights' fixed shares.
 #[derive(Clone, Debug)]
 pub struct LightTree {
-    /// Nodes, root first.
-    nodes: Vec<Node>,
-    /// Per light: its path from the root (bit k: the second child at depth k) and its depth,
-    /// or `None` for lights outside the tree.
-    trails: Vec<Option<(u64, u32)>>,
+    /// Wide nodes, root first (empty when the tree holds one light).
+    nodes: Vec<WideNode>,
+    /// The tree's light when it holds only one: chosen without a test, as power selection
+    /// chooses it.
+    only: Option<usize>,
+    /// Per light: its path from the root (the slot taken at depth k in bits
+    /// `SLOT_BITS * k..`) and its depth, or `None` for lights outside the tree.
+    trails: Vec<Option<(u128, u32)>>,
     /// Probability of choosing within the tree (the other lights' shares are fixed).
     tree_share: f32,
     /// Choice among all lights with the tree's lights at weight 0 (`None` when every light
@@ -307,67 +390,72 @@ impl LightTree {
             .enumerate()
             .filter_map(|(i, b)| b.map(|b| (i, b)))
             .collect();
+        let mut binary = Vec::with_capacity(2 * items.len());
+        split(&mut binary, &mut items);
         let mut tree = LightTree {
-            nodes: Vec::with_capacity(2 * items.len()),
+            nodes: Vec::with_capacity(binary.len() / (WIDTH - 1) + 1),
+            only: binary[0].leaf_light().map(|l| l as usize),
             trails: vec![None; lights.len()],
             tree_share: (tree_weight / total).min(1.0),
             others: Distribution1D::new(&other_weights),
         };
-        tree.split(&mut items, 0, 0);
+        if tree.only.is_none() {
+            tree.widen(&binary, 0, 0, 0);
+        }
         Some(tree)
     }
 
-    /// Builds the subtree of `items` at depth `depth` reached by the path `trail`; returns its
-    /// node index. Splits at the median along the widest axis of the centroids (depth stays
-    /// below log2(n) + 1, far under the 64 bits of a trail).
-    fn split(&mut self, items: &mut [(usize, Bounds)], depth: u32, trail: u64) -> u32 {
+    /// Adds the wide node made from the binary inner node `node` and, below it, those of its
+    /// descendants; returns its index. `trail` and `depth` are the wide node's path from the
+    /// root. The node's children are found by opening, while there are fewer than
+    /// [`WIDTH`], the inner node among them whose bounding sphere is largest (as wide BVHs are
+    /// collapsed from binary ones): for the median-split tree, three binary levels.
+    fn widen(&mut self, binary: &[BinaryNode], node: u32, depth: u32, trail: u128) -> u32 {
+        let mut kids: Vec<u32> = binary[node as usize].children.to_vec();
+        while kids.len() < WIDTH {
+            let open = kids
+                .iter()
+                .enumerate()
+                .filter(|(_, &k)| binary[k as usize].leaf_light().is_none())
+                .max_by(|a, b| {
+                    let r2 = |k: &u32| binary[*k as usize].bounds.r2;
+                    r2(a.1).total_cmp(&r2(b.1))
+                })
+                .map(|(j, _)| j);
+            let Some(j) = open else { break };
+            let [l, r] = binary[kids[j] as usize].children;
+            kids[j] = l;
+            kids.insert(j + 1, r);
+        }
         let at = self.nodes.len() as u32;
-        if let [(light, b)] = items {
-            self.nodes.push(Node {
-                bounds: b.packed(),
-                children: [*light as u32, u32::MAX],
-            });
-            self.trails[*light] = Some((trail, depth));
-            return at;
+        self.nodes.push(WideNode::default());
+        assert!(
+            (depth + 1) * SLOT_BITS <= u128::BITS,
+            "light tree deeper than its trails"
+        );
+        for (slot, &k) in kids.iter().enumerate() {
+            let kid = &binary[k as usize];
+            let b = &kid.bounds;
+            let trail = trail | (slot as u128) << (SLOT_BITS * depth);
+            let child = match kid.leaf_light() {
+                Some(light) => {
+                    self.trails[light as usize] = Some((trail, depth + 1));
+                    LIGHT | light
+                }
+                None => self.widen(binary, k, depth + 1, trail),
+            };
+            let w = &mut self.nodes[at as usize];
+            for a in 0..3 {
+                w.center[a][slot] = b.center[a];
+                w.axis[a][slot] = b.axis[a];
+            }
+            w.r2[slot] = b.r2;
+            w.cos_o[slot] = b.cos_o;
+            w.sin_o[slot] = b.sin_o;
+            w.phi[slot] = b.phi;
+            w.child[slot] = child;
         }
-        let all = items[1..]
-            .iter()
-            .fold(items[0].1, |acc, (_, b)| acc.union(b));
-        self.nodes.push(Node {
-            bounds: all.packed(),
-            children: [0, 0],
-        });
-        let (lo, hi) = items
-            .iter()
-            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (_, b)| {
-                (lo.min(b.centroid()), hi.max(b.centroid()))
-            });
-        let axis = (hi - lo).max_position();
-        items.sort_by(|a, b| a.1.centroid()[axis].total_cmp(&b.1.centroid()[axis]));
-        let mid = items.len() / 2;
-        let (left, right) = items.split_at_mut(mid);
-        let l = self.split(left, depth + 1, trail);
-        let r = self.split(right, depth + 1, trail | (1 << depth));
-        self.nodes[at as usize].children = [l, r];
         at
-    }
-
-    /// The probabilities of the two children of inner node `node` seen from `p` (0 and 0 when
-    /// neither can light it).
-    #[inline(always)]
-    fn child_probs(&self, node: &Node, p: Vec3) -> (f32, f32) {
-        // Two plain calls: `array::map` here was not inlined. a = na / da and b = nb / db,
-        // so a / (a + b) = na db / (na db + nb da): one division for both.
-        let (na, da) = self.nodes[node.children[0] as usize].bounds.importance(p);
-        let (nb, db) = self.nodes[node.children[1] as usize].bounds.importance(p);
-        let (a, b) = (na * db, nb * da);
-        let sum = a + b;
-        if sum > 0.0 && sum.is_finite() {
-            let inv = 1.0 / sum;
-            (a * inv, b * inv)
-        } else {
-            (0.0, 0.0)
-        }
     }
 
     /// Picks a light for the point `p` with the uniform number `u`: (light index, its
@@ -385,23 +473,19 @@ impl LightTree {
         }
         let mut u = (u / self.tree_share).min(ONE_MINUS_EPSILON);
         let mut pmf = self.tree_share;
+        if let Some(light) = self.only {
+            return Some((light, pmf, u));
+        }
         let mut node = &self.nodes[0];
         loop {
-            if let Some(light) = node.leaf_light() {
-                // Its importance was weighed at its parent (a tree of one light has no parent
-                // and chooses it without a test, as power selection does).
-                return Some((light, pmf, u));
-            }
-            let (pa, pb) = self.child_probs(node, p);
-            if pa + pb == 0.0 {
-                return None;
-            }
-            // Selects rather than branches: which child is taken is a coin flip per level.
-            let second = u >= pa;
-            let (prob, below) = if second { (pb, pa) } else { (pa, 0.0) };
-            u = ((u - below) / prob).min(ONE_MINUS_EPSILON);
+            let (slot, prob, rescaled) = WideNode::choose(&node.importances(p), u)?;
+            u = rescaled;
             pmf *= prob;
-            node = &self.nodes[node.children[usize::from(second)] as usize];
+            let child = node.child[slot];
+            if child & LIGHT != 0 {
+                return Some(((child & !LIGHT) as usize, pmf, u));
+            }
+            node = &self.nodes[child as usize];
         }
     }
 
@@ -409,6 +493,9 @@ impl LightTree {
     #[inline]
     pub fn pmf(&self, p: Vec3, i: usize) -> f32 {
         let Some(Some((trail, depth))) = self.trails.get(i) else {
+            if self.only == Some(i) {
+                return self.tree_share;
+            }
             return self
                 .others
                 .as_ref()
@@ -417,16 +504,54 @@ impl LightTree {
         let mut pmf = self.tree_share;
         let mut node = &self.nodes[0];
         for k in 0..*depth {
-            let (pa, pb) = self.child_probs(node, p);
-            let second = trail >> k & 1 == 1;
-            pmf *= if second { pb } else { pa };
-            if pmf == 0.0 {
+            let imp = node.importances(p);
+            // The same sum, in the same order, as `WideNode::choose`.
+            let sum = imp.iter().fold(0.0f32, |s, &x| s + x);
+            let slot = (trail >> (SLOT_BITS * k)) as usize & (WIDTH - 1);
+            if !(sum > 0.0 && sum.is_finite()) || imp[slot] == 0.0 {
                 return 0.0;
             }
-            node = &self.nodes[node.children[usize::from(second)] as usize];
+            pmf *= imp[slot] / sum;
+            let child = node.child[slot];
+            if child & LIGHT == 0 {
+                node = &self.nodes[child as usize];
+            }
         }
         pmf
     }
+}
+
+/// Builds the binary subtree of `items` into `nodes`; returns its node index. Splits at the
+/// median along the widest axis of the centroids.
+fn split(nodes: &mut Vec<BinaryNode>, items: &mut [(usize, Bounds)]) -> u32 {
+    let at = nodes.len() as u32;
+    if let [(light, b)] = items {
+        nodes.push(BinaryNode {
+            bounds: b.packed(),
+            children: [*light as u32, u32::MAX],
+        });
+        return at;
+    }
+    let all = items[1..]
+        .iter()
+        .fold(items[0].1, |acc, (_, b)| acc.union(b));
+    nodes.push(BinaryNode {
+        bounds: all.packed(),
+        children: [0, 0],
+    });
+    let (lo, hi) = items
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), (_, b)| {
+            (lo.min(b.centroid()), hi.max(b.centroid()))
+        });
+    let axis = (hi - lo).max_position();
+    items.sort_by(|a, b| a.1.centroid()[axis].total_cmp(&b.1.centroid()[axis]));
+    let mid = items.len() / 2;
+    let (left, right) = items.split_at_mut(mid);
+    let l = split(nodes, left);
+    let r = split(nodes, right);
+    nodes[at as usize].children = [l, r];
+    at
 }
 
 /// The largest float below 1 (rescaled uniform numbers stay in [0, 1)).
@@ -533,6 +658,42 @@ mod tests {
                     (c as f64 - mean).abs() <= 5.0 * sd + 1.0,
                     "light {i} at {p}: {c} vs {mean}"
                 );
+            }
+        }
+    }
+
+    /// A tree four wide levels deep (3,000 lights of random sizes and powers in a slab): from
+    /// points inside and outside it, the pmfs of all lights sum to 1 (to the rounding of 3,000
+    /// f32 terms) and every sampled choice reports the probability `pmf` gives its light, so
+    /// that the trails address the slots `sample` takes at every level.
+    #[test]
+    fn deep_trees_are_consistent() {
+        let mut rnd = lcg(23);
+        let lights: Vec<Light> = (0..3000)
+            .map(|_| {
+                let c = Vec3::new(rnd() * 40.0, rnd() * 4.0, rnd() * 40.0);
+                sphere(c, 0.02 + 0.2 * rnd(), 1.0 + 50.0 * rnd())
+            })
+            .collect();
+        let t = tree(&lights);
+        let deepest = t.trails.iter().flatten().map(|&(_, d)| d).max();
+        assert!(deepest >= Some(4), "{deepest:?}");
+        for p in [
+            Vec3::new(20.0, 2.0, 20.0),
+            Vec3::new(3.0, 0.5, 37.0),
+            Vec3::new(-30.0, 10.0, 60.0),
+        ] {
+            let pmfs: Vec<f32> = (0..lights.len()).map(|i| t.pmf(p, i)).collect();
+            let total: f64 = pmfs.iter().map(|&x| x as f64).sum();
+            assert!((total - 1.0).abs() < 1e-3, "{total}");
+            for _ in 0..2000 {
+                let (i, pmf, u) = t.sample(p, rnd()).expect("a light");
+                assert!(
+                    (pmf - pmfs[i]).abs() <= 1e-5 * pmfs[i],
+                    "{pmf} vs {}",
+                    pmfs[i]
+                );
+                assert!((0.0..1.0).contains(&u));
             }
         }
     }
