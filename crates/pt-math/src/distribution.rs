@@ -1,12 +1,22 @@
 //! Discrete distributions.
 
 /// A discrete distribution over `n` items proportional to non-negative weights, sampled by
-/// inverting its CDF (binary search). Used for light selection by power.
+/// inverting its CDF. Used for light selection by power, the triangles of a mesh light and the
+/// pixels of an environment map.
+///
+/// The inversion starts from a guide table (Chen and Asau 1974, "On generating random
+/// variates from an empirical distribution"): `n` equal intervals of `u`, each with the item
+/// its lower end falls in, from which a short scan finds `u`'s item. With as many intervals as
+/// items the expected scan is below two steps whatever the weights, where a binary search
+/// takes log2(n) dependent loads (an environment map's sampling was 12-14% of a render's time).
+/// The item found is the one the binary search finds, bit for bit.
 #[derive(Clone, Debug)]
 pub struct Distribution1D {
     /// Normalised CDF: cdf[i] = sum of pmf[0..i], cdf[n] = 1.
     cdf: Vec<f32>,
     pmf: Vec<f32>,
+    /// guide[k]: the item that u = k / n falls in.
+    guide: Vec<u32>,
 }
 
 impl Distribution1D {
@@ -45,7 +55,35 @@ impl Distribution1D {
         if let Some(last) = cdf.last_mut() {
             *last = 1.0;
         }
-        Some(Distribution1D { cdf, pmf })
+        // One merge of the interval ends k / n (increasing) with the CDF.
+        let mut guide = Vec::with_capacity(n);
+        let mut i = 0;
+        for k in 0..n {
+            let u = k as f32 / n as f32;
+            while i + 1 < n && cdf[i + 1] <= u {
+                i += 1;
+            }
+            guide.push(i as u32);
+        }
+        Some(Distribution1D { cdf, pmf, guide })
+    }
+
+    /// The item `u` (in [0, 1)) falls in: the first `i` with `cdf[i + 1] > u`, at most
+    /// `n - 1`. From the guide table's item for `u`'s interval, down while the item starts
+    /// above `u` (only where `u * n` rounded up to the next interval), then up while it ends
+    /// at or below `u`; the item found is the only one with `cdf[i] <= u < cdf[i + 1]`.
+    #[inline(always)]
+    fn find(&self, u: f32) -> usize {
+        let n = self.pmf.len();
+        let k = ((u * n as f32) as usize).min(n - 1);
+        let mut i = self.guide[k] as usize;
+        while i > 0 && self.cdf[i] > u {
+            i -= 1;
+        }
+        while i + 1 < n && self.cdf[i + 1] <= u {
+            i += 1;
+        }
+        i
     }
 
     /// Number of items.
@@ -83,7 +121,7 @@ impl Distribution1D {
                 },
             );
         }
-        let mut i = self.cdf[1..].partition_point(|&c| c <= u).min(n - 1);
+        let mut i = self.find(u);
         while self.pmf[i] == 0.0 && i > 0 {
             i -= 1; // u at the very top can land past zero-weight tail items.
         }
@@ -117,6 +155,55 @@ mod tests {
         assert_eq!(counts[1], 0);
         for (i, &c) in counts.iter().enumerate() {
             assert!((c as f32 - d.pmf(i) * n as f32).abs() <= 1.5, "{i}: {c}");
+        }
+    }
+
+    /// The guide table's search finds the item the binary search over the CDF finds, for
+    /// equal weights, weights with zeros, plateaus, one dominant item and a long tail, at random `u` and at
+    /// every CDF value and interval start and their float neighbours (where rounding of `u * n`
+    /// can pick the next interval).
+    #[test]
+    fn guided_search_equals_binary_search() {
+        let mut state = 0x2545_f491_4f6c_dd1d_u64;
+        let mut rnd = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let sets: Vec<Vec<f32>> = vec![
+            vec![1.0],
+            // Equal weights put CDF values exactly at interval starts.
+            vec![1.0; 11],
+            vec![2.0; 1000],
+            vec![0.0, 0.0, 5.0, 0.0],
+            vec![1e6, 1.0, 1.0, 0.0, 1.0],
+            (0..1000).map(|i| if i % 7 == 0 { 0.0 } else { rnd() }).collect(),
+            (0..4096)
+                .map(|i| if i == 1234 { 1e5 } else { rnd() * rnd() })
+                .collect(),
+            (0..300).map(|i| (i as f32 * 0.05).exp()).collect(),
+        ];
+        for w in &sets {
+            let d = Distribution1D::new(w).unwrap();
+            let n = d.len();
+            let binary = |u: f32| d.cdf[1..].partition_point(|&c| c <= u).min(n - 1);
+            let mut us: Vec<f32> = (0..20_000).map(|_| rnd()).collect();
+            for &c in &d.cdf {
+                for v in [c, c.next_down(), c.next_up()] {
+                    if (0.0..1.0).contains(&v) {
+                        us.push(v);
+                    }
+                }
+            }
+            for k in 0..n {
+                let start = k as f32 / n as f32;
+                us.extend([start, start.next_down().max(0.0)]);
+            }
+            us.push(1.0 - f32::EPSILON / 2.0);
+            for u in us {
+                assert_eq!(d.find(u), binary(u), "u = {u} over {n} items");
+            }
         }
     }
 
