@@ -267,7 +267,7 @@ impl Distribution2D {
     }
 
     /// Samples a point in [0,1)^2 from `u`; returns it with its pdf per unit area.
-    #[inline]
+    #[inline(always)]
     pub fn sample(&self, u: glam::Vec2) -> (glam::Vec2, f32) {
         let (row, p_row, v_in) = self.marginal.sample(u.y);
         let (col, p_col, u_in) = self.rows[row].sample(u.x);
@@ -282,7 +282,7 @@ impl Distribution2D {
     }
 
     /// Density per unit area of \[0,1\]^2 at `p`.
-    #[inline]
+    #[inline(always)]
     pub fn pdf(&self, p: glam::Vec2) -> f32 {
         let col = ((p.x * self.width as f32) as usize).min(self.width - 1);
         let row = ((p.y * self.height as f32) as usize).min(self.height - 1);

@@ -69,6 +69,7 @@ impl EnvMap {
         })
     }
 
+    #[inline(always)]
     pub(super) fn dir_to_uv(&self, world: Vec3) -> Vec2 {
         let d = self.to_local * world;
         let mut u = d.x.atan2(-d.z) * (0.5 / PI);
@@ -78,6 +79,7 @@ impl EnvMap {
         Vec2::new(u, d.y.clamp(-1.0, 1.0).acos() / PI)
     }
 
+    #[inline(always)]
     pub(super) fn uv_to_dir(&self, uv: Vec2) -> (Vec3, f32) {
         let (phi, theta) = (2.0 * PI * uv.x, PI * uv.y);
         let (st, ct) = theta.sin_cos();
@@ -95,7 +97,7 @@ impl EnvMap {
 
     /// The four texels (indices a, b, c, d: (x0, y0), (x0 + 1, y0), (x0, y0 + 1),
     /// (x0 + 1, y0 + 1)) and the bilinear weights (fx, fy) of a lookup at `uv`.
-    #[inline]
+    #[inline(always)]
     fn footprint(&self, uv: Vec2) -> ([usize; 4], f32, f32) {
         // Mitsuba 3's envmap: columns are pixel centres (u = (x + 0.5) / W, wrapping), rows span
         // the poles exactly (row 0 at v = 0, row H-1 at v = 1).
@@ -119,6 +121,7 @@ impl EnvMap {
     }
 
     /// Bilinearly interpolated radiance at `uv`.
+    #[inline(always)]
     fn lookup(&self, uv: Vec2) -> [f32; 3] {
         let ([ia, ib, ic, id], fx, fy) = self.footprint(uv);
         let (a, b, c, d) = (
@@ -134,7 +137,7 @@ impl EnvMap {
 
     /// Radiance at `uv`: RGB lanes, or in spectral mode the interpolated sigmoid values times
     /// the interpolated scales (Mitsuba 3), at the path's wavelengths.
-    #[inline]
+    #[inline(always)]
     fn radiance_uv(&self, uv: Vec2, lambda: &SampledWavelengths) -> SampledSpectrum {
         let Some((spec, d65)) = &self.spectral else {
             return SampledSpectrum::from_rgb(self.lookup(uv));
@@ -152,11 +155,13 @@ impl EnvMap {
 
     /// Radiance arriving from world direction `dir` (unit, pointing away from the scene), at the
     /// path's wavelengths `lambda` (spectral mode).
+    #[inline(always)]
     pub fn radiance(&self, dir: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
         self.radiance_uv(self.dir_to_uv(dir), lambda)
     }
 
     /// Solid-angle pdf of sampling `dir`.
+    #[inline(always)]
     pub fn pdf(&self, dir: Vec3) -> f32 {
         let uv = self.dir_to_uv(dir);
         let sin_t = (PI * uv.y).sin();
@@ -167,6 +172,7 @@ impl EnvMap {
     }
 
     /// Samples a direction: (dir, radiance at the path's wavelengths, solid-angle pdf).
+    #[inline(always)]
     pub fn sample(
         &self,
         u: Vec2,
