@@ -178,7 +178,9 @@ mod tests {
             vec![2.0; 1000],
             vec![0.0, 0.0, 5.0, 0.0],
             vec![1e6, 1.0, 1.0, 0.0, 1.0],
-            (0..1000).map(|i| if i % 7 == 0 { 0.0 } else { rnd() }).collect(),
+            (0..1000)
+                .map(|i| if i % 7 == 0 { 0.0 } else { rnd() })
+                .collect(),
             (0..4096)
                 .map(|i| if i == 1234 { 1e5 } else { rnd() * rnd() })
                 .collect(),
