@@ -760,7 +760,7 @@ fn light_pass(
 /// (one sample per pixel), each batch going to the filtered film and, without the filter,
 /// into the pixels' statistics (see the module documentation on variance). Splats are
 /// scaled by `scale`; non-finite ones are counted in the pixel they land in and dropped.
-pub(crate) fn add_batches<L: AsRef<[Splat]>>(
+pub(crate) fn add_batches<L: AsRef<[Splat]> + Sync>(
     state: &mut crate::RenderState,
     lists: &[L],
     per_batch: usize,

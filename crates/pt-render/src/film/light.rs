@@ -63,9 +63,9 @@ pub struct LightFilm {
     camera_batch: Vec<[f64; 4]>,
     /// Per pixel, the current batch's unfiltered value (zero between batches; not state).
     unfiltered: Vec<[f64; 3]>,
-    /// Per band of rows, the current batch's samples that reach it (scratch kept for its
-    /// memory; not state).
-    bands: Vec<Vec<Splat>>,
+    /// Per list of the current batch and per band of rows, the list's samples that reach the
+    /// band, and the pixels of its non-finite samples (scratch kept for its memory; not state).
+    listed: Vec<(Vec<Vec<Splat>>, Vec<usize>)>,
 }
 
 /// Films are equal when their size, filter and committed sums are (the current batch and the
@@ -101,7 +101,7 @@ impl LightFilm {
             batch: vec![[0.0; 3]; width as usize * height as usize],
             camera_batch: vec![[0.0; 4]; width as usize * height as usize],
             unfiltered: vec![[0.0; 3]; width as usize * height as usize],
-            bands: Vec::new(),
+            listed: Vec::new(),
         }
     }
 
@@ -175,11 +175,11 @@ impl LightFilm {
     /// unfiltered value of pixel i (the light splats landing in it times `scale`, plus its
     /// camera samples) as one sample of its statistics. Non-finite samples are counted in
     /// their pixel's statistics and dropped. The same sums, bit for bit, as adding the samples
-    /// one by one ([`LightFilm::splat`]): the image is cut into bands of rows, each sample is
-    /// listed (in order) for the bands it reaches, and each band adds its list on its own
-    /// thread, so every pixel receives the same additions in the same order for any number of
-    /// threads.
-    pub fn add_batch<L: AsRef<[Splat]>>(
+    /// one by one ([`LightFilm::splat`]): the image is cut into bands of rows, the samples of
+    /// each list are listed (in order, the lists in parallel) for the bands they reach, and
+    /// each band adds what the lists listed for it, list after list, on its own thread, so
+    /// every pixel receives the same additions in the same order for any number of threads.
+    pub fn add_batch<L: AsRef<[Splat]> + Sync>(
         &mut self,
         lists: &[L],
         scale: f64,
@@ -192,22 +192,36 @@ impl LightFilm {
         // Four bands per thread balance the threads' loads.
         let rows = (h / (4 * threads)).max(1);
         let n_bands = (h as u32).div_ceil(rows as u32) as usize;
-        self.bands.resize_with(n_bands, Vec::new);
-        self.bands.iter_mut().for_each(Vec::clear);
         // A sample at y reaches the rows whose centre is within the radius, y - 1/2 +- radius
         // (and its own pixel's row: the box of radius 1/2 keeps that one).
         let reach = radius.max(0.5) + 0.5;
-        for sp in lists.iter().flat_map(|l| l.as_ref()) {
-            if !sp.rgb.iter().all(|c| c.is_finite()) {
-                pixels[own_pixel(sp.film, w, h)].nonfinite += 1;
-                continue;
-            }
-            let lo = ((sp.film.y - reach).floor() as i32).clamp(0, h - 1) / rows;
-            let hi = ((sp.film.y + reach).floor() as i32).clamp(0, h - 1) / rows;
-            for band in &mut self.bands[lo as usize..=hi as usize] {
-                band.push(*sp);
+        // Listing on one thread left the other idle a quarter of a light-tracing render.
+        self.listed.resize_with(lists.len(), Default::default);
+        lists
+            .par_iter()
+            .zip(self.listed.par_iter_mut())
+            .for_each(|(list, (bands, nonfinite))| {
+                bands.resize_with(n_bands, Vec::new);
+                bands.iter_mut().for_each(Vec::clear);
+                nonfinite.clear();
+                for sp in list.as_ref() {
+                    if !sp.rgb.iter().all(|c| c.is_finite()) {
+                        nonfinite.push(own_pixel(sp.film, w, h));
+                        continue;
+                    }
+                    let lo = ((sp.film.y - reach).floor() as i32).clamp(0, h - 1) / rows;
+                    let hi = ((sp.film.y + reach).floor() as i32).clamp(0, h - 1) / rows;
+                    for band in &mut bands[lo as usize..=hi as usize] {
+                        band.push(*sp);
+                    }
+                }
+            });
+        for (_, nonfinite) in &self.listed[..lists.len()] {
+            for &i in nonfinite {
+                pixels[i].nonfinite += 1;
             }
         }
+        let listed = &self.listed[..lists.len()];
         let band_len = (rows * w) as usize;
         self.batch
             .par_chunks_mut(band_len)
@@ -216,17 +230,16 @@ impl LightFilm {
             .zip(self.sums.par_chunks_mut(band_len))
             .zip(self.camera.par_chunks_mut(band_len))
             .zip(pixels.par_chunks_mut(band_len))
-            .zip(self.bands.par_iter())
             .enumerate()
             .for_each(
-                |(b, ((((((batch, camera_batch), unfiltered), sums), camera), stats), list))| {
+                |(b, (((((batch, camera_batch), unfiltered), sums), camera), stats))| {
                     let y0 = b as i32 * rows;
                     let band = y0..(y0 + rows).min(h);
                     let first = (y0 * w) as usize;
                     crate::isa::best(
                         #[inline(always)]
                         || {
-                            for sp in list {
+                            for sp in listed.iter().flat_map(|(bands, _)| &bands[b]) {
                                 let k = if sp.camera {
                                     add_camera_rows(
                                         &filter,
@@ -474,7 +487,8 @@ mod tests {
         assert!((total - 1.0).abs() < 1e-7);
     }
 
-    /// Adding a batch in row bands on several threads gives the sequential sums bit for bit
+    /// Adding a batch in row bands on several threads, as one list or cut into several, gives
+    /// the sequential sums bit for bit
     /// (every pixel receives the same additions in the same order), with splats straddling
     /// bands and the image's edges: the light splats as [`LightFilm::splat`] one by one adds
     /// them, camera samples and pixel statistics the same for one thread and for three.
@@ -498,23 +512,38 @@ mod tests {
             one.splat(s.film, s.rgb, 0.7);
         }
         one.commit();
-        let banded = |threads: usize, list: &[Splat]| {
+        let banded = |threads: usize, lists: &[&[Splat]]| {
             let mut film = LightFilm::new(f, w, h);
             let mut pixels = vec![super::super::PixelStats::default(); (w * h) as usize];
             rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
                 .unwrap()
-                .install(|| film.add_batch(&[list], 0.7, &mut pixels));
+                .install(|| film.add_batch(lists, 0.7, &mut pixels));
             (film, pixels)
         };
-        assert_eq!(banded(3, &lights).0.sums, one.sums);
-        let (a, pa) = banded(1, &splats);
-        let (b, pb) = banded(3, &splats);
+        assert_eq!(banded(3, &[&lights]).0.sums, one.sums);
+        // The same samples cut into lists (listed in parallel): the same sums in list order.
+        let cut: Vec<&[Splat]> = lights.chunks(37).collect();
+        assert_eq!(banded(3, &cut).0.sums, one.sums);
+        let (a, pa) = banded(1, &[&splats]);
+        let (b, pb) = banded(3, &[&splats]);
+        let cut: Vec<&[Splat]> = splats.chunks(29).collect();
+        let (c, pc) = banded(2, &cut);
         assert_eq!(a, b);
         assert_eq!(pa, pb);
+        assert_eq!(a, c);
+        assert_eq!(pa, pc);
         assert!(a.camera.iter().any(|c| c[3] != 0));
         // Each pixel's statistics got one sample: the unfiltered sum of what landed in it.
         assert!(pa.iter().all(|p| p.n == 1));
+        // A non-finite sample is counted in its own pixel, from whichever list it is in.
+        let mut bad = splats.clone();
+        bad[123].rgb[1] = f32::NAN;
+        let cut: Vec<&[Splat]> = bad.chunks(29).collect();
+        let (_, pn) = banded(2, &cut);
+        let own = own_pixel(bad[123].film, w as i32, h as i32);
+        assert_eq!(pn[own].nonfinite, 1);
+        assert_eq!(pn.iter().map(|p| p.nonfinite).sum::<u32>(), 1);
     }
 }
