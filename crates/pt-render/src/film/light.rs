@@ -191,9 +191,8 @@ impl LightFilm {
         let threads = rayon::current_num_threads().max(1) as i32;
         // Two bands per thread: a splat weighs its whole footprint in every band it reaches,
         // so more bands cost more (four per thread: 3-8% slower on the caustic scenes, eight:
-        // 15-20%),
-        // and one per thread (3% faster there) leaves a thread idle when the light lands in one
-        // half of the image.
+        // 15-20%), and one per thread (3% faster there) leaves a thread idle when the light
+        // lands in one half of the image.
         let rows = (h / (2 * threads)).max(1);
         let n_bands = (h as u32).div_ceil(rows as u32) as usize;
         // A sample at y reaches the rows whose centre is within the radius, y - 1/2 +- radius
