@@ -164,13 +164,8 @@ mod tests {
     /// can pick the next interval).
     #[test]
     fn guided_search_equals_binary_search() {
-        let mut state = 0x2545_f491_4f6c_dd1d_u64;
-        let mut rnd = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut rng = pt_stats::rng::Pcg32::new(11, 3);
+        let mut rnd = move || rng.next_f32();
         let sets: Vec<Vec<f32>> = vec![
             vec![1.0],
             // Equal weights put CDF values exactly at interval starts.

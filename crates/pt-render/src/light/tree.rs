@@ -615,6 +615,19 @@ mod tests {
         v
     }
 
+    /// The light `t` chooses from `p` with `u`, after checking that the probability it reports
+    /// is `pmfs[i]` (what [`LightTree::pmf`] gives) and that its rescaled number is in [0, 1).
+    fn checked_sample(t: &LightTree, p: Vec3, u: f32, pmfs: &[f32]) -> usize {
+        let (i, pmf, u) = t.sample(p, u).expect("a light");
+        assert!(
+            (pmf - pmfs[i]).abs() <= 1e-5 * pmfs[i],
+            "{pmf} vs {}",
+            pmfs[i]
+        );
+        assert!((0.0..1.0).contains(&u));
+        i
+    }
+
     fn tree(lights: &[Light]) -> LightTree {
         let w = vec![1.0; lights.len()];
         LightTree::build(lights, &w, 50.0).expect("a tree")
@@ -642,14 +655,7 @@ mod tests {
             assert!((pmfs[lights.len() - 1] - 1.0 / 38.0).abs() < 1e-6);
             let mut counts = vec![0u32; lights.len()];
             for _ in 0..n {
-                let (i, pmf, u) = t.sample(p, rnd()).expect("a light");
-                assert!(
-                    (pmf - pmfs[i]).abs() <= 1e-5 * pmfs[i],
-                    "{pmf} vs {}",
-                    pmfs[i]
-                );
-                assert!((0.0..1.0).contains(&u));
-                counts[i] += 1;
+                counts[checked_sample(&t, p, rnd(), &pmfs)] += 1;
             }
             for (i, (&c, &q)) in counts.iter().zip(&pmfs).enumerate() {
                 let mean = q as f64 * n as f64;
@@ -687,13 +693,7 @@ mod tests {
             let total: f64 = pmfs.iter().map(|&x| x as f64).sum();
             assert!((total - 1.0).abs() < 1e-3, "{total}");
             for _ in 0..2000 {
-                let (i, pmf, u) = t.sample(p, rnd()).expect("a light");
-                assert!(
-                    (pmf - pmfs[i]).abs() <= 1e-5 * pmfs[i],
-                    "{pmf} vs {}",
-                    pmfs[i]
-                );
-                assert!((0.0..1.0).contains(&u));
+                checked_sample(&t, p, rnd(), &pmfs);
             }
         }
     }
