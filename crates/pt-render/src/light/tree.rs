@@ -311,18 +311,27 @@ impl WideNode {
         out
     }
 
-    /// The slot that the uniform number `u` (in [0, 1)) chooses among `imp` in proportion to
-    /// them, with its probability and `u` rescaled to [0, 1) within the slot's share; `None`
-    /// when every importance is 0 (or their sum overflows). The chosen slot's importance is
-    /// positive: it is the first whose running sum exceeds `u` times the total.
+    /// The running sums of `imp` (the last is the total), in the one order that both
+    /// [`WideNode::choose`] and [`LightTree::pmf`] use, so that they divide by the same bits.
     #[inline(always)]
-    fn choose(imp: &[f32; WIDTH], u: f32) -> Option<(usize, f32, f32)> {
+    fn running_sums(imp: &[f32; WIDTH]) -> [f32; WIDTH] {
         let mut running = [0.0f32; WIDTH];
         let mut sum = 0.0f32;
         for (r, &x) in running.iter_mut().zip(imp) {
             sum += x;
             *r = sum;
         }
+        running
+    }
+
+    /// The slot that the uniform number `u` (in [0, 1)) chooses among `imp` in proportion to
+    /// them, with its probability and `u` rescaled to [0, 1) within the slot's share; `None`
+    /// when every importance is 0 (or their sum overflows). The chosen slot's importance is
+    /// positive: it is the first whose running sum exceeds `u` times the total.
+    #[inline(always)]
+    fn choose(imp: &[f32; WIDTH], u: f32) -> Option<(usize, f32, f32)> {
+        let running = Self::running_sums(imp);
+        let sum = running[WIDTH - 1];
         if !(sum > 0.0 && sum.is_finite()) {
             return None;
         }
@@ -505,8 +514,7 @@ impl LightTree {
         let mut node = &self.nodes[0];
         for k in 0..*depth {
             let imp = node.importances(p);
-            // The same sum, in the same order, as `WideNode::choose`.
-            let sum = imp.iter().fold(0.0f32, |s, &x| s + x);
+            let sum = WideNode::running_sums(&imp)[WIDTH - 1];
             let slot = (trail >> (SLOT_BITS * k)) as usize & (WIDTH - 1);
             if !(sum > 0.0 && sum.is_finite()) || imp[slot] == 0.0 {
                 return 0.0;
