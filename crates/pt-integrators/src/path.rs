@@ -326,8 +326,9 @@ impl PathState {
     }
 }
 
-/// Most paths [`trace_paths`] keeps in flight at once.
-pub const MAX_PATHS: usize = 8;
+/// Most paths [`trace_paths`] keeps in flight at once: as many as the scene traces rays
+/// together.
+pub const MAX_PATHS: usize = pt_render::accel::BATCH;
 
 /// Where [`trace_paths`] takes its paths from and hands them back to. A trait rather than two
 /// closures: its methods are inlined into the path loop (`#[inline(always)]` on the
@@ -384,14 +385,29 @@ pub fn trace_paths<S: RandomSource>(
     let mut hits: [Option<Interaction>; MAX_PATHS] = [None; MAX_PATHS];
     // A visible environment light covers every pixel (Mitsuba's alpha).
     let environment_seen = !scene.infinite_lights.is_empty() && !s.hide_emitters;
+    // The rays of one pass (a lane per slot), traced together: the queries do not depend on
+    // each other, and the scene's traversal interleaves them (`Scene::intersect_batch`).
+    let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); MAX_PATHS];
     loop {
-        // The previous scattering's shadow rays; finished paths out and new ones in; the new
-        // segments' closest hits. The queries do not depend on each other.
-        let mut any = false;
-        for (slot, hit) in slots.iter_mut().zip(hits.iter_mut()) {
+        // The previous scattering's shadow rays.
+        let mut shadowed: pt_math::lanes::Mask = 0;
+        for (k, slot) in slots.iter().enumerate() {
+            if let Some((ray, _)) = slot.as_ref().and_then(|sl| sl.path.shadow.as_ref()) {
+                rays[k] = *ray;
+                shadowed |= 1 << k;
+            }
+        }
+        let blocked = if shadowed != 0 {
+            scene.occluded_batch(&rays, shadowed)
+        } else {
+            0
+        };
+        // Finished paths out and new ones in; the new segments' closest hits.
+        let mut tracing: pt_math::lanes::Mask = 0;
+        for (k, slot) in slots.iter_mut().enumerate() {
             if let Some(sl) = slot {
-                if let Some((ray, contribution)) = sl.path.shadow.take() {
-                    if !scene.occluded(&ray) {
+                if let Some((_, contribution)) = sl.path.shadow.take() {
+                    if blocked >> k & 1 == 0 {
                         sl.path.radiance += contribution;
                     }
                 }
@@ -407,13 +423,14 @@ pub fn trace_paths<S: RandomSource>(
                 }
             }
             if let Some(sl) = slot {
-                scene.intersect_into(&sl.path.ray, hit);
-                any = true;
+                rays[k] = sl.path.ray;
+                tracing |= 1 << k;
             }
         }
-        if !any {
+        if tracing == 0 {
             break;
         }
+        scene.intersect_batch(&rays, tracing, &mut hits);
         // Emission found by the new segments; the paths that go on scatter together.
         let mut todo: pt_math::lanes::Mask = 0;
         for (k, (slot, hit)) in slots.iter_mut().zip(&hits).enumerate() {

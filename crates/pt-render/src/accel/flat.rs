@@ -44,6 +44,58 @@ pub(super) struct Block {
     k1: [f32; LANES],
 }
 
+/// One triangle or parallelogram of a [`Block`] (world space), as its test reads it.
+#[derive(Clone, Copy)]
+struct Facet {
+    v0: [f32; 3],
+    e1: [f32; 3],
+    e2: [f32; 3],
+    /// `e1 x e2`.
+    n: [f32; 3],
+    /// See [`Block::k1`].
+    k1: f32,
+}
+
+impl Facet {
+    /// Möller-Trumbore test (Möller & Trumbore 1997, one combined bounds test as in
+    /// `geometry::moller_trumbore`) of the ray from `o` along `d`: `(hit, t, b1, b2)` for a hit
+    /// in `(tmin, tmax)`. The one implementation of both ways of filling SIMD lanes: eight
+    /// primitives against one ray ([`Block::lane`]) and one primitive against eight rays
+    /// ([`flat_closest_batch`]).
+    #[inline(always)]
+    fn test(&self, o: [f32; 3], d: [f32; 3], tmin: f32, tmax: f32) -> (bool, f32, f32, f32) {
+        let cross = |a: [f32; 3], b: [f32; 3]| {
+            [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ]
+        };
+        let dot = |a: [f32; 3], b: [f32; 3]| (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2];
+        // Möller-Trumbore's scalar triple products regrouped around the stored normal
+        // n = e1 x e2 and r = tvec x d (one cross product per lane instead of two):
+        // det = e1 . (d x e2) = -d . n, b1 det = tvec . (d x e2) = e2 . r,
+        // b2 det = d . (tvec x e1) = -e1 . r, t det = e2 . (tvec x e1) = tvec . n.
+        let tvec = [o[0] - self.v0[0], o[1] - self.v0[1], o[2] - self.v0[2]];
+        let r = cross(tvec, d);
+        let det = -dot(d, self.n);
+        let inv_det = 1.0 / det;
+        let b1 = dot(self.e2, r) * inv_det;
+        let b2 = -dot(self.e1, r) * inv_det;
+        let t = dot(tvec, self.n) * inv_det;
+        // The bounds in four comparisons: b1, b2 >= 0 as min(b1, b2) >= 0; the outer bound
+        // k1 b1 + b2 <= 1 (b1 + b2 for triangles, b2 for parallelograms) together with
+        // b1 <= 1 as one max (for triangles b1 <= b1 + b2 already). A zero determinant needs no
+        // test of its own: t is then infinite or NaN and fails `t > tmin & t < tmax` (a NaN in
+        // b1 or b2, which min and max might pass on, only arises there).
+        let min = |a: f32, b: f32| if a < b { a } else { b };
+        let max = |a: f32, b: f32| if a > b { a } else { b };
+        let hit =
+            (min(b1, b2) >= 0.0) & (max(b1, self.k1 * b1 + b2) <= 1.0) & (t > tmin) & (t < tmax);
+        (hit, t, b1, b2)
+    }
+}
+
 /// The nearest hit per lane so far, over the blocks a closest-hit search has tested.
 pub(super) struct LaneBest {
     /// Distance (the ray's `tmax` while nothing was hit in the lane).
@@ -79,49 +131,25 @@ impl Block {
         b
     }
 
-    /// Lane `i`'s Möller-Trumbore test (Möller & Trumbore 1997, one combined bounds test as in
-    /// `geometry::moller_trumbore`): `(hit, t, b1, b2)` for a hit in `(ray.tmin, tmax)`.
+    /// Lane `i`'s Möller-Trumbore test: `(hit, t, b1, b2)` for a hit in `(ray.tmin, tmax)`
+    /// ([`Facet::test`]).
     #[inline(always)]
     fn lane(&self, i: usize, ray: &Ray, tmax: f32) -> (bool, f32, f32, f32) {
         let (o, d) = (ray.origin, ray.dir);
-        let e1 = [self.e1[0][i], self.e1[1][i], self.e1[2][i]];
-        let e2 = [self.e2[0][i], self.e2[1][i], self.e2[2][i]];
-        let cross = |a: [f32; 3], b: [f32; 3]| {
-            [
-                a[1] * b[2] - a[2] * b[1],
-                a[2] * b[0] - a[0] * b[2],
-                a[0] * b[1] - a[1] * b[0],
-            ]
-        };
-        let dot = |a: [f32; 3], b: [f32; 3]| (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2];
-        // Möller-Trumbore's scalar triple products regrouped around the stored normal
-        // n = e1 x e2 and r = tvec x d (one cross product per lane instead of two):
-        // det = e1 . (d x e2) = -d . n, b1 det = tvec . (d x e2) = e2 . r,
-        // b2 det = d . (tvec x e1) = -e1 . r, t det = e2 . (tvec x e1) = tvec . n.
-        let n = [self.n[0][i], self.n[1][i], self.n[2][i]];
-        let tvec = [
-            o.x - self.v0[0][i],
-            o.y - self.v0[1][i],
-            o.z - self.v0[2][i],
-        ];
-        let r = cross(tvec, [d.x, d.y, d.z]);
-        let det = -dot([d.x, d.y, d.z], n);
-        let inv_det = 1.0 / det;
-        let b1 = dot(e2, r) * inv_det;
-        let b2 = -dot(e1, r) * inv_det;
-        let t = dot(tvec, n) * inv_det;
-        // The bounds in four comparisons: b1, b2 >= 0 as min(b1, b2) >= 0; the outer bound
-        // k1 b1 + b2 <= 1 (b1 + b2 for triangles, b2 for parallelograms) together with
-        // b1 <= 1 as one max (for triangles b1 <= b1 + b2 already). A zero determinant needs no
-        // test of its own: t is then infinite or NaN and fails `t > tmin & t < tmax` (a NaN in
-        // b1 or b2, which min and max might pass on, only arises there).
-        let min = |a: f32, b: f32| if a < b { a } else { b };
-        let max = |a: f32, b: f32| if a > b { a } else { b };
-        let hit = (min(b1, b2) >= 0.0)
-            & (max(b1, self.k1[i] * b1 + b2) <= 1.0)
-            & (t > ray.tmin)
-            & (t < tmax);
-        (hit, t, b1, b2)
+        self.facet(i)
+            .test([o.x, o.y, o.z], [d.x, d.y, d.z], ray.tmin, tmax)
+    }
+
+    /// Lane `i`'s primitive.
+    #[inline(always)]
+    fn facet(&self, i: usize) -> Facet {
+        Facet {
+            v0: [self.v0[0][i], self.v0[1][i], self.v0[2][i]],
+            e1: [self.e1[0][i], self.e1[1][i], self.e1[2][i]],
+            e2: [self.e2[0][i], self.e2[1][i], self.e2[2][i]],
+            n: [self.n[0][i], self.n[1][i], self.n[2][i]],
+            k1: self.k1[i],
+        }
     }
 
     /// Keeps in `best` each lane's hit that is nearer than the lane's best so far; `first_id`
@@ -225,4 +253,144 @@ pub(super) fn flat_any(blocks: &[Block], analytic: &[Primitive], ray: &Ray) -> b
         }
     }
     false
+}
+
+/// The rays of a batch by component (structure of arrays): lane `j` is `rays[j]`.
+struct RayLanes {
+    o: [[f32; BATCH]; 3],
+    d: [[f32; BATCH]; 3],
+    tmin: [f32; BATCH],
+    tmax: [f32; BATCH],
+}
+
+impl RayLanes {
+    #[inline(always)]
+    fn of(rays: &[Ray; BATCH]) -> Self {
+        let mut l = RayLanes {
+            o: [[0.0; BATCH]; 3],
+            d: [[0.0; BATCH]; 3],
+            tmin: [0.0; BATCH],
+            tmax: [0.0; BATCH],
+        };
+        for (j, r) in rays.iter().enumerate() {
+            for a in 0..3 {
+                l.o[a][j] = r.origin[a];
+                l.d[a][j] = r.dir[a];
+            }
+            l.tmin[j] = r.tmin;
+            l.tmax[j] = r.tmax;
+        }
+        l
+    }
+
+    /// Lane `j`'s origin and direction.
+    #[inline(always)]
+    fn ray(&self, j: usize) -> ([f32; 3], [f32; 3]) {
+        let (o, d) = (&self.o, &self.d);
+        ([o[0][j], o[1][j], o[2][j]], [d[0][j], d[1][j], d[2][j]])
+    }
+}
+
+/// [`flat_closest`] of the rays `rays[j]`, `j` in `active`, into `out[j]` (the other entries are
+/// left as they are), the same bits: each triangle and parallelogram is tested against the
+/// eight rays at once, in SIMD lanes, rather than each ray against eight primitives. A batch
+/// then tests each primitive once, where one ray at a time tests every block (the last one
+/// partly empty) and then reduces its lanes: a scene of one rectangle tests it once instead
+/// of eight times. The primitives are visited in the order of the single-ray search's
+/// tie-break (lane, then block) and a hit is kept only when strictly nearer, so ties go the
+/// same way.
+#[inline(always)]
+pub(super) fn flat_closest_batch(
+    blocks: &[Block],
+    analytic: &[Primitive],
+    analytic_from: usize,
+    rays: &[Ray; BATCH],
+    active: Mask,
+    out: &mut [Option<AccelHit>; BATCH],
+) {
+    let lanes = RayLanes::of(rays);
+    let mut best = LaneBest {
+        t: lanes.tmax,
+        b1: [0.0; BATCH],
+        b2: [0.0; BATCH],
+        id: [u32::MAX; BATCH],
+    };
+    for i in 0..LANES {
+        for (k, b) in blocks.iter().enumerate() {
+            let id = k * LANES + i;
+            if id >= analytic_from {
+                break;
+            }
+            let f = b.facet(i);
+            for j in 0..BATCH {
+                let (o, d) = lanes.ray(j);
+                let (hit, t, b1, b2) = f.test(o, d, lanes.tmin[j], best.t[j]);
+                best.t[j] = if hit { t } else { best.t[j] };
+                best.b1[j] = if hit { b1 } else { best.b1[j] };
+                best.b2[j] = if hit { b2 } else { best.b2[j] };
+                best.id[j] = if hit { id as u32 } else { best.id[j] };
+            }
+        }
+    }
+    for j in set_lanes(active) {
+        let ray = &rays[j];
+        let mut hit = AccelHit {
+            index: best.id[j] as usize,
+            t: best.t[j],
+            b1: best.b1[j],
+            b2: best.b2[j],
+        };
+        let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
+        for (m, s) in analytic.iter().enumerate() {
+            let (t, b1, b2) = s.intersect_bary(o, d, ray.tmin, hit.t);
+            if t < hit.t {
+                hit = AccelHit {
+                    index: analytic_from + m,
+                    t,
+                    b1,
+                    b2,
+                };
+            }
+        }
+        out[j] = (hit.t < ray.tmax).then_some(hit);
+    }
+}
+
+/// [`flat_any`] of the rays `rays[j]`, `j` in `active`: the mask of those blocked. Each
+/// triangle and parallelogram is tested against the eight rays at once (as in
+/// [`flat_closest_batch`]) until every active ray is blocked.
+#[inline(always)]
+pub(super) fn flat_any_batch(
+    blocks: &[Block],
+    analytic: &[Primitive],
+    analytic_from: usize,
+    rays: &[Ray; BATCH],
+    active: Mask,
+) -> Mask {
+    let lanes = RayLanes::of(rays);
+    let mut blocked: Mask = 0;
+    for id in 0..analytic_from {
+        let f = blocks[id / LANES].facet(id % LANES);
+        // Lane results into an array first, then one reduction (as `Block::any_hit`).
+        let mut hits = [0u32; BATCH];
+        for (j, h) in hits.iter_mut().enumerate() {
+            let (o, d) = lanes.ray(j);
+            *h = u32::from(f.test(o, d, lanes.tmin[j], lanes.tmax[j]).0) << j;
+        }
+        blocked |= hits.iter().fold(0, |a, &h| a | h) & active;
+        if blocked == active {
+            return blocked;
+        }
+    }
+    for j in set_lanes(active & !blocked) {
+        let ray = &rays[j];
+        let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
+        if analytic
+            .iter()
+            .any(|s| s.intersect(o, d, ray.tmin, ray.tmax) < ray.tmax)
+        {
+            blocked |= 1 << j;
+        }
+    }
+    blocked
 }

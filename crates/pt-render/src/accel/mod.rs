@@ -325,6 +325,68 @@ impl Accel {
     }
 }
 
+impl Accel {
+    /// [`Accel::intersect`] of the rays `rays[k]` for each lane `k` in `active`, into `out[k]`
+    /// (other entries are left as they are), the same bits as one by one: a CWBVH traverses
+    /// them interleaved ([`interleaved`]), the flat structure tests each primitive against all
+    /// of them at once ([`flat_closest_batch`]), a BVH2 takes them one by one.
+    #[inline(always)]
+    pub fn intersect_batch(
+        &self,
+        rays: &[Ray; BATCH],
+        active: Mask,
+        out: &mut [Option<AccelHit>; BATCH],
+    ) {
+        match &self.tree {
+            Tree::Cw(b) if self.small_stack => {
+                cw_closest_batch::<SMALL_STACK>(b, &self.prims, rays, active, out)
+            }
+            Tree::Cw(b) => cw_closest_batch::<LARGE_STACK>(b, &self.prims, rays, active, out),
+            Tree::Flat {
+                blocks,
+                analytic_from,
+            } => flat_closest_batch(
+                blocks,
+                &self.prims[*analytic_from..],
+                *analytic_from,
+                rays,
+                active,
+                out,
+            ),
+            _ => {
+                for k in set_lanes(active) {
+                    out[k] = self.intersect(&rays[k]);
+                }
+            }
+        }
+    }
+
+    /// [`Accel::occluded`] of the rays `rays[k]` for each lane `k` in `active`: the mask of
+    /// those blocked, found as [`Accel::intersect_batch`] finds closest hits.
+    #[inline(always)]
+    pub fn occluded_batch(&self, rays: &[Ray; BATCH], active: Mask) -> Mask {
+        match &self.tree {
+            Tree::Cw(b) if self.small_stack => {
+                cw_any_batch::<SMALL_STACK>(b, &self.prims, rays, active)
+            }
+            Tree::Cw(b) => cw_any_batch::<LARGE_STACK>(b, &self.prims, rays, active),
+            Tree::Flat {
+                blocks,
+                analytic_from,
+            } => flat_any_batch(
+                blocks,
+                &self.prims[*analytic_from..],
+                *analytic_from,
+                rays,
+                active,
+            ),
+            _ => set_lanes(active)
+                .filter(|&k| self.occluded(&rays[k]))
+                .fold(0, |m, k| m | 1 << k),
+        }
+    }
+}
+
 /// The closest hit [`Accel::intersect`] found.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct AccelHit {
@@ -358,6 +420,7 @@ fn bvh_ray(ray: &Ray) -> BvhRay {
 
 mod cwbvh;
 mod flat;
+pub mod interleaved;
 #[cfg(test)]
 mod tests;
 pub mod top;
@@ -365,3 +428,6 @@ pub mod top;
 use cwbvh::*;
 pub(crate) use cwbvh::{gathered, permute_in_place};
 use flat::*;
+pub use interleaved::BATCH;
+use interleaved::{cw_any_batch, cw_closest_batch};
+use pt_math::lanes::{set_lanes, Mask};

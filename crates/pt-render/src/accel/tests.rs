@@ -394,3 +394,72 @@ fn matches_brute_force() {
         }
     }
 }
+
+#[test]
+fn batches_match_single_rays() {
+    // The interleaved traversal of eight rays must give each ray the bits of its own
+    // traversal (closest hit: primitive, distance, edge coordinates; any hit), whichever lanes
+    // are active, on every tree kind, including grouped CWBVHs, both stack sizes, and trees
+    // too small for a tree (`Flat`) or empty.
+    let prims = grid(8);
+    let mut accels = vec![
+        Accel::build(prims.clone(), BvhKind::CwBvh),
+        Accel::build(prims.clone(), BvhKind::Bvh2),
+        Accel::build(prims[..20].to_vec(), BvhKind::Auto),
+        // Flat with a sphere (tested one by one after the blocks), and with one triangle.
+        Accel::build(prims[prims.len() - 21..].to_vec(), BvhKind::Auto),
+        Accel::build(prims[5..6].to_vec(), BvhKind::Auto),
+        Accel::build(Vec::new(), BvhKind::Auto),
+    ];
+    for chunk in [80, 16] {
+        accels.push(Accel::build_compact_chunked(
+            prims.clone(),
+            BvhKind::CwBvh,
+            |i| prims[i],
+            chunk,
+        ));
+    }
+    let mut large = Accel::build(prims.clone(), BvhKind::CwBvh);
+    large.small_stack = false;
+    accels.push(large);
+    let mut s = 777u64;
+    let mut rnd = || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((s >> 40) as f32) / (1u64 << 24) as f32
+    };
+    for accel in &accels {
+        for _ in 0..300 {
+            let rays: [Ray; BATCH] = std::array::from_fn(|_| {
+                let o = Vec3::new(rnd() * 10.0 - 1.0, rnd() * 10.0 - 1.0, rnd() * 8.0 - 2.0);
+                let d = Vec3::new(rnd() - 0.5, rnd() - 0.5, rnd() - 0.7).normalize();
+                let mut r = Ray::new(o, d);
+                // Some segments end early, as shadow rays do.
+                if rnd() < 0.3 {
+                    r.tmax = rnd() * 6.0;
+                }
+                r
+            });
+            let active = (rnd() * 256.0) as Mask;
+            let mut out = [Some(AccelHit {
+                index: 7,
+                t: -1.0,
+                b1: 0.0,
+                b2: 0.0,
+            }); BATCH];
+            let before = out;
+            accel.intersect_batch(&rays, active, &mut out);
+            let blocked = accel.occluded_batch(&rays, active);
+            for k in 0..BATCH {
+                if active >> k & 1 == 0 {
+                    assert_eq!(out[k], before[k], "inactive lanes are left alone");
+                    assert_eq!(blocked >> k & 1, 0);
+                    continue;
+                }
+                assert_eq!(out[k], accel.intersect(&rays[k]));
+                assert_eq!(blocked >> k & 1 == 1, accel.occluded(&rays[k]));
+            }
+        }
+    }
+}

@@ -5,7 +5,7 @@ mod build;
 mod interaction;
 mod mesh;
 
-use crate::accel::{Accel, AccelHit};
+use crate::accel::{Accel, AccelHit, BATCH};
 use crate::camera::Camera;
 use crate::geometry::{Interaction, Primitive};
 use crate::light::{AreaLight, Light};
@@ -14,6 +14,7 @@ use crate::medium::Medium;
 use crate::texture::{Attribute, TexturePoint};
 use mesh::PrimRef;
 use pt_bsdf::SurfaceBsdf;
+use pt_math::lanes::{set_lanes, Mask};
 use pt_math::{Distribution1D, Mat3, Ray, Vec2, Vec3};
 use pt_scene::SourceLoc;
 use pt_spectrum::{ColorMode, SampledWavelengths};
@@ -244,6 +245,47 @@ impl Scene {
                     inst.groups[i.group as usize].accel.occluded(&local)
                 })
             })
+    }
+
+    /// [`Scene::intersect_into`] of the rays `rays[k]` for each lane `k` in `active`, into
+    /// `out[k]` (other entries are left as they are): the rays traverse the BVH together,
+    /// interleaved ([`crate::accel::interleaved`]), so that their cache misses overlap. The
+    /// same results as one at a time.
+    #[inline(always)]
+    pub fn intersect_batch(
+        &self,
+        rays: &[Ray; BATCH],
+        active: Mask,
+        out: &mut [Option<Interaction>; BATCH],
+    ) {
+        if self.instancing.is_some() {
+            for k in set_lanes(active) {
+                self.intersect_into(&rays[k], &mut out[k]);
+            }
+            return;
+        }
+        let mut hits = [None; BATCH];
+        self.accel.intersect_batch(rays, active, &mut hits);
+        for k in set_lanes(active) {
+            match hits[k] {
+                Some(h) => {
+                    out[k] = Some(self.interaction(&self.accel, &self.prim_refs, &rays[k], h))
+                }
+                None => out[k] = None,
+            }
+        }
+    }
+
+    /// [`Scene::occluded`] of the rays `rays[k]` for each lane `k` in `active`: the mask of
+    /// those blocked, the rays traversing the BVH together as in [`Scene::intersect_batch`].
+    #[inline(always)]
+    pub fn occluded_batch(&self, rays: &[Ray; BATCH], active: Mask) -> Mask {
+        if self.instancing.is_some() {
+            return set_lanes(active)
+                .filter(|&k| self.occluded(&rays[k]))
+                .fold(0, |m, k| m | 1 << k);
+        }
+        self.accel.occluded_batch(rays, active)
     }
 
     /// The closest hit on an instance below `tmax`, in world space.
