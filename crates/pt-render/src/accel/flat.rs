@@ -382,14 +382,16 @@ pub(super) fn flat_any_batch(
             return blocked;
         }
     }
+    // Plain loops, as in `flat_any`: the adaptor `any` was left outlined (compiled for the
+    // baseline, 5.6% of `veach-mis`'s profile samples).
     for j in set_lanes(active & !blocked) {
         let ray = &rays[j];
         let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
-        if analytic
-            .iter()
-            .any(|s| s.intersect(o, d, ray.tmin, ray.tmax) < ray.tmax)
-        {
-            blocked |= 1 << j;
+        for s in analytic {
+            if s.intersect(o, d, ray.tmin, ray.tmax) < ray.tmax {
+                blocked |= 1 << j;
+                break;
+            }
         }
     }
     blocked

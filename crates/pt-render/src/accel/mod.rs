@@ -380,9 +380,13 @@ impl Accel {
                 rays,
                 active,
             ),
-            _ => set_lanes(active)
-                .filter(|&k| self.occluded(&rays[k]))
-                .fold(0, |m, k| m | 1 << k),
+            _ => {
+                let mut blocked = 0;
+                for k in set_lanes(active) {
+                    blocked |= Mask::from(self.occluded(&rays[k])) << k;
+                }
+                blocked
+            }
         }
     }
 }

@@ -281,9 +281,11 @@ impl Scene {
     #[inline(always)]
     pub fn occluded_batch(&self, rays: &[Ray; BATCH], active: Mask) -> Mask {
         if self.instancing.is_some() {
-            return set_lanes(active)
-                .filter(|&k| self.occluded(&rays[k]))
-                .fold(0, |m, k| m | 1 << k);
+            let mut blocked = 0;
+            for k in set_lanes(active) {
+                blocked |= Mask::from(self.occluded(&rays[k])) << k;
+            }
+            return blocked;
         }
         self.accel.occluded_batch(rays, active)
     }
