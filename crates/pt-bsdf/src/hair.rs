@@ -311,7 +311,29 @@ impl Hair {
     /// [`Hair::eval`] and [`Hair::pdf`] from one setup for `wo` and one pass over the lobes
     /// (each call alone does both): the same values.
     pub fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (SampledSpectrum, f32) {
-        let (value, pdf) = self.value_pdf(&self.setup(wo), wi);
+        self.eval_pdf_with(&self.setup(wo), wi)
+    }
+
+    /// [`Hair::eval_pdf`] of `wi` and [`Hair::sample`] from one setup for `wo` (the setup's
+    /// refraction angles, attenuations and lobe weights are a third of the model's cost, and
+    /// the path tracer asks for both at every hit): the same values as the two calls.
+    pub fn eval_pdf_and_sample(
+        &self,
+        wo: Vec3,
+        wi: Vec3,
+        u_lobe: f32,
+        u: Vec2,
+    ) -> ((SampledSpectrum, f32), Option<BsdfSample>) {
+        let st = self.setup(wo);
+        (
+            self.eval_pdf_with(&st, wi),
+            self.sample_with(&st, u_lobe, u),
+        )
+    }
+
+    /// [`Hair::eval_pdf`] given the setup for `wo`.
+    fn eval_pdf_with(&self, st: &Setup, wi: Vec3) -> (SampledSpectrum, f32) {
+        let (value, pdf) = self.value_pdf(st, wi);
         let cos = wi.z.abs();
         if !(cos > 0.0) {
             return (SampledSpectrum::ZERO, pdf);
@@ -322,7 +344,11 @@ impl Hair {
     /// Samples `wi`: `u_lobe` picks the segment count (and is reused for the azimuth), `u` the
     /// longitudinal angle and its azimuth about the tilted cone.
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
-        let st = self.setup(wo);
+        self.sample_with(&self.setup(wo), u_lobe, u)
+    }
+
+    /// [`Hair::sample`] given the setup for `wo`.
+    fn sample_with(&self, st: &Setup, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         // Pick p; rescale u_lobe within the chosen interval for the azimuth.
         let mut p = P_MAX;
         let mut rest = u_lobe;
@@ -361,7 +387,7 @@ impl Hair {
             sin_theta_i,
             cos_theta_i * phi_i.sin(),
         );
-        let (value, pdf) = self.value_pdf(&st, wi);
+        let (value, pdf) = self.value_pdf(st, wi);
         if !(pdf > 0.0) {
             return None;
         }

@@ -189,6 +189,23 @@ impl Bsdf {
         }
     }
 
+    /// [`Bsdf::eval_pdf`] of `wi` and [`Bsdf::sample`], both for `wo`, sharing what depends on
+    /// `wo` alone where the model computes much of that (the hair model's setup); the same
+    /// values as the two calls.
+    #[inline(always)]
+    pub fn eval_pdf_and_sample(
+        &self,
+        wo: Vec3,
+        wi: Vec3,
+        u_lobe: f32,
+        u: Vec2,
+    ) -> ((SampledSpectrum, f32), Option<BsdfSample>) {
+        match self {
+            Bsdf::Hair(m) => m.eval_pdf_and_sample(wo, wi, u_lobe, u),
+            _ => (self.eval_pdf(wo, wi), self.sample(wo, u_lobe, u)),
+        }
+    }
+
     /// Solid-angle pdf of sampling `wi` given `wo`, local frame.
     #[inline(always)]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
@@ -473,6 +490,36 @@ impl SurfaceBsdf {
         }
     }
 
+    /// [`SurfaceBsdf::eval_pdf`] of `wi` and [`SurfaceBsdf::sample`], both for `wo`: the same
+    /// values as the two calls. A plain surface (no blend, no normal map, opaque) asks its
+    /// model for both at once ([`Bsdf::eval_pdf_and_sample`]).
+    #[inline(always)]
+    pub fn eval_pdf_and_sample(
+        &self,
+        wo: Vec3,
+        wi: Vec3,
+        u_lobe: f32,
+        u: Vec2,
+    ) -> ((SampledSpectrum, f32), Option<BsdfSample>) {
+        if self.blend.is_some() || self.normal.is_some() || self.opacity != 1.0 {
+            return (self.eval_pdf(wo, wi), self.sample(wo, u_lobe, u));
+        }
+        // What `eval_pdf` and `sample` do for such a surface: sides mirrored, the opacity's
+        // factors of 1 and its lobe choice (u_lobe below 1 kept) left out.
+        let s = self.side(&self.bsdf, wo);
+        let (value_pdf, sample) = self.bsdf.eval_pdf_and_sample(
+            flip_z(wo, s),
+            flip_z(wi, s),
+            u_lobe.min(mask::ONE_MINUS_EPSILON),
+            u,
+        );
+        let sample = sample.map(|mut bs| {
+            bs.wi = flip_z(bs.wi, s);
+            bs
+        });
+        (value_pdf, sample)
+    }
+
     /// Solid-angle pdf of `wi`, local frame.
     #[inline(always)]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
@@ -574,6 +621,58 @@ pub(crate) fn check_eval_pdf(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `eval_pdf_and_sample` gives exactly what `eval_pdf` and `sample` give, for the hair
+    /// model (which shares its setup between them) and for others, on plain surfaces (one or
+    /// two sides) and on those that take the separate calls (half opaque, blended), over
+    /// random directions on both sides and lobe numbers up to 1.
+    #[test]
+    fn eval_pdf_and_sample_is_both_calls() {
+        let rgb = pt_math::Vec4::new(0.212_671, 0.715_160, 0.072_169, 0.0);
+        let sigma_a = SampledSpectrum::from_rgb(Hair::pigment_sigma_a_rgb(1.3, 0.2));
+        let hair = Bsdf::Hair(Hair::new(sigma_a, rgb, 1.55, 0.3, 0.3, 2.0));
+        let gold = Bsdf::RoughConductor(RoughConductor::new(
+            SampledSpectrum::from_rgb([0.2, 0.4, 1.4]),
+            SampledSpectrum::from_rgb([3.6, 2.4, 1.8]),
+            SampledSpectrum::splat(1.0),
+            Microfacet::new(Distribution::Ggx, 0.2, 0.2),
+        ));
+        let mut surfaces = vec![
+            SurfaceBsdf::new(hair, false),
+            SurfaceBsdf::new(hair, true),
+            SurfaceBsdf::new(gold, true),
+        ];
+        let mut masked = SurfaceBsdf::new(hair, false);
+        masked.opacity = 0.5;
+        surfaces.push(masked);
+        let mut blended = SurfaceBsdf::new(gold, true);
+        blended.blend = Some((0.3, hair));
+        surfaces.push(blended);
+        let mut s = 99u64;
+        let mut rnd = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 40) as f32 / (1u64 << 24) as f32
+        };
+        for b in &surfaces {
+            for _ in 0..3_000 {
+                let mut dir = || Vec3::new(rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0);
+                let (wo, wi) = (dir().normalize(), dir().normalize());
+                let u_lobe = if rnd() < 0.1 { 1.0 } else { rnd() };
+                let u = Vec2::new(rnd(), rnd());
+                let (value_pdf, sample) = b.eval_pdf_and_sample(wo, wi, u_lobe, u);
+                assert_eq!(
+                    format!("{value_pdf:?}"),
+                    format!("{:?}", b.eval_pdf(wo, wi))
+                );
+                assert_eq!(
+                    format!("{sample:?}"),
+                    format!("{:?}", b.sample(wo, u_lobe, u))
+                );
+            }
+        }
+    }
 
     #[test]
     fn one_sided_is_black_from_behind_two_sided_is_not() {

@@ -501,18 +501,23 @@ fn other_bsdfs(
             continue;
         };
         let wo = g.wo.get(k);
+        let (u_lobe, u) = (d.u_lobe[k], Vec2::new(d.ub[0][k], d.ub[1][k]));
         (out.f[k], out.bsdf_pdf[k]) = (SampledSpectrum::ZERO, 0.0);
+        let mut sample = None;
         if l.have[k] {
             let w = wi.get(k);
             // Only MIS needs the BSDF's pdf of the light's direction; with it, both from one
-            // call (the models share terms between the two).
+            // call (the models share terms between the two), and the sample from the same
+            // call (the hair model's setup for `wo` serves all three).
             if s.strategy != Strategy::Light && !l.delta[k] && !l.radiance[k].is_black() {
-                (out.f[k], out.bsdf_pdf[k]) = b.eval_pdf(wo, w);
+                let both = b.eval_pdf_and_sample(wo, w, u_lobe, u);
+                ((out.f[k], out.bsdf_pdf[k]), sample) = (both.0, Some(both.1));
             } else {
                 out.f[k] = b.eval(wo, w);
             }
         }
-        if let Some(bs) = b.sample(wo, d.u_lobe[k], Vec2::new(d.ub[0][k], d.ub[1][k])) {
+        let sample = sample.unwrap_or_else(|| b.sample(wo, u_lobe, u));
+        if let Some(bs) = sample {
             out.wi.set(k, bs.wi);
             (out.weight[k], out.pdf[k]) = (bs.weight, bs.pdf);
             (out.delta[k], out.eta[k]) = (bs.delta, bs.eta);
