@@ -386,29 +386,51 @@ pub fn intersect_sphere(
     tmin: f32,
     tmax: f32,
 ) -> f32 {
-    let f = o - center;
-    let b = -f.dot(d); // distance along d to the point closest to the centre
-    let perp = f + d * b; // offset of that point from the centre
-    let disc = radius * radius - perp.length_squared();
-    if !(disc >= 0.0) {
-        return f32::INFINITY;
-    }
+    sphere_hit(
+        o.to_array(),
+        d.to_array(),
+        center.to_array(),
+        radius,
+        tmin,
+        tmax,
+    )
+}
+
+/// [`intersect_sphere`] on plain numbers, written without a branch (a miss of the
+/// discriminant is selected away at the end), so that a loop over rays in SIMD lanes
+/// vectorises it (the flat structure's batches); the sums in the order of glam's dot products
+/// ((x + y) + z), so the single-ray calls through [`intersect_sphere`] give the same bits.
+#[inline(always)]
+pub fn sphere_hit(
+    o: [f32; 3],
+    d: [f32; 3],
+    center: [f32; 3],
+    radius: f32,
+    tmin: f32,
+    tmax: f32,
+) -> f32 {
+    let dot = |a: [f32; 3], b: [f32; 3]| (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2];
+    let f = [o[0] - center[0], o[1] - center[1], o[2] - center[2]];
+    let b = -dot(f, d); // distance along d to the point closest to the centre
+    let perp = [f[0] + d[0] * b, f[1] + d[1] * b, f[2] + d[2] * b]; // its offset from the centre
+    let disc = radius * radius - dot(perp, perp);
+    // NaN for a negative discriminant: the miss is selected at the end.
     let sq = disc.sqrt();
     // Stable pair of roots: q has the larger magnitude, the other root is c / q.
-    let c = f.length_squared() - radius * radius;
+    let c = dot(f, f) - radius * radius;
     let q = if b >= 0.0 { b + sq } else { b - sq };
-    let (mut t0, mut t1) = (c / q, q);
-    if t0 > t1 {
-        std::mem::swap(&mut t0, &mut t1);
-    }
-    if q == 0.0 {
-        t0 = 0.0;
-        t1 = 0.0;
-    }
-    if t0 > tmin && t0 < tmax {
+    let (r0, r1) = (c / q, q);
+    let (t0, t1) = if r0 > r1 { (r1, r0) } else { (r0, r1) };
+    let (t0, t1) = if q == 0.0 { (0.0, 0.0) } else { (t0, t1) };
+    let t = if t0 > tmin && t0 < tmax {
         t0
     } else if t1 > tmin && t1 < tmax {
         t1
+    } else {
+        f32::INFINITY
+    };
+    if disc >= 0.0 {
+        t
     } else {
         f32::INFINITY
     }

@@ -1,6 +1,7 @@
 //! Scenes without a tree: every primitive tested, eight at a time in SIMD lanes.
 
 use super::*;
+use crate::geometry::sphere_hit;
 
 /// Whether `kind` asks for the flat "tree" for `prims`: forced, or automatic for at most
 /// [`FLAT_MAX`] primitives of which at most [`FLAT_MAX_ANALYTIC`] are analytic.
@@ -332,27 +333,40 @@ pub(super) fn flat_closest_batch(
             }
         }
     }
+    // The analytic primitives in their order, each against every ray: spheres in SIMD lanes,
+    // the others one ray at a time (their hit coordinates with them).
+    for (m, s) in analytic.iter().enumerate() {
+        let id = (analytic_from + m) as u32;
+        if let Primitive::Sphere { center, radius, .. } = *s {
+            let c = center.to_array();
+            for j in 0..BATCH {
+                let (o, d) = lanes.ray(j);
+                let t = sphere_hit(o, d, c, radius, lanes.tmin[j], best.t[j]);
+                let hit = t < best.t[j];
+                best.t[j] = if hit { t } else { best.t[j] };
+                best.b1[j] = if hit { 0.0 } else { best.b1[j] };
+                best.b2[j] = if hit { 0.0 } else { best.b2[j] };
+                best.id[j] = if hit { id } else { best.id[j] };
+            }
+            continue;
+        }
+        for j in set_lanes(active) {
+            let ray = &rays[j];
+            let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
+            let (t, b1, b2) = s.intersect_bary(o, d, ray.tmin, best.t[j]);
+            if t < best.t[j] {
+                (best.t[j], best.b1[j], best.b2[j], best.id[j]) = (t, b1, b2, id);
+            }
+        }
+    }
     for j in set_lanes(active) {
-        let ray = &rays[j];
-        let mut hit = AccelHit {
+        let hit = AccelHit {
             index: best.id[j] as usize,
             t: best.t[j],
             b1: best.b1[j],
             b2: best.b2[j],
         };
-        let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
-        for (m, s) in analytic.iter().enumerate() {
-            let (t, b1, b2) = s.intersect_bary(o, d, ray.tmin, hit.t);
-            if t < hit.t {
-                hit = AccelHit {
-                    index: analytic_from + m,
-                    t,
-                    b1,
-                    b2,
-                };
-            }
-        }
-        out[j] = (hit.t < ray.tmax).then_some(hit);
+        out[j] = (hit.t < rays[j].tmax).then_some(hit);
     }
 }
 
@@ -382,16 +396,28 @@ pub(super) fn flat_any_batch(
             return blocked;
         }
     }
-    // Plain loops, as in `flat_any`: the adaptor `any` was left outlined (compiled for the
-    // baseline, 5.6% of `veach-mis`'s profile samples).
-    for j in set_lanes(active & !blocked) {
-        let ray = &rays[j];
-        let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
-        for s in analytic {
-            if s.intersect(o, d, ray.tmin, ray.tmax) < ray.tmax {
-                blocked |= 1 << j;
-                break;
+    // The analytic primitives: spheres against all rays in SIMD lanes, the others one ray at
+    // a time (plain loops, as in `flat_any`: the adaptor `any` was left outlined, compiled for
+    // the baseline, 5.6% of `veach-mis`'s profile samples).
+    for s in analytic {
+        if let Primitive::Sphere { center, radius, .. } = *s {
+            let c = center.to_array();
+            let mut hits = [0u32; BATCH];
+            for (j, h) in hits.iter_mut().enumerate() {
+                let (o, d) = lanes.ray(j);
+                let t = sphere_hit(o, d, c, radius, lanes.tmin[j], lanes.tmax[j]);
+                *h = u32::from(t < lanes.tmax[j]) << j;
             }
+            blocked |= hits.iter().fold(0, |a, &h| a | h) & active;
+        } else {
+            for j in set_lanes(active & !blocked) {
+                let ray = &rays[j];
+                let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
+                blocked |= Mask::from(s.intersect(o, d, ray.tmin, ray.tmax) < ray.tmax) << j;
+            }
+        }
+        if blocked == active {
+            break;
         }
     }
     blocked
