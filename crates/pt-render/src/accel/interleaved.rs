@@ -140,6 +140,28 @@ impl Lane {
     }
 }
 
+/// Sets `lanes` to the start of the traversals of the rays `rays[k]`, `k` in `active`, each
+/// with its first node chosen; returns the mask of those with work to do.
+#[inline(always)]
+fn start_batch<const N: usize>(
+    bvh: &CwBvh,
+    rays: &[Ray; BATCH],
+    active: Mask,
+    lanes: &mut [Lane; BATCH],
+    stacks: &mut Stacks<N>,
+) -> Mask {
+    let mut live: Mask = 0;
+    for k in set_lanes(active) {
+        if let Some(lane) = Lane::start(bvh, &rays[k]) {
+            lanes[k] = lane;
+            if lanes[k].choose_next(&mut stacks[k]) {
+                live |= 1 << k;
+            }
+        }
+    }
+    live
+}
+
 /// Closest hits of the rays `rays[k]` for `k` in `active`, as [`cw_closest`] gives them, into
 /// `out[k]` (the other entries are left as they are). Each turn a ray tests the primitives its
 /// last node test found, then the node it chose, then chooses the next.
@@ -153,15 +175,7 @@ pub(super) fn cw_closest_batch<const N: usize>(
 ) {
     let mut lanes = [Lane::IDLE; BATCH];
     let mut stacks: Stacks<N> = [[UVec2::ZERO; N]; BATCH];
-    let mut live: Mask = 0;
-    for k in set_lanes(active) {
-        if let Some(lane) = Lane::start(bvh, &rays[k]) {
-            lanes[k] = lane;
-            if lanes[k].choose_next(&mut stacks[k]) {
-                live |= 1 << k;
-            }
-        }
-    }
+    let mut live = start_batch(bvh, rays, active, &mut lanes, &mut stacks);
     while live != 0 {
         for k in set_lanes(live) {
             let l = &mut lanes[k];
@@ -203,15 +217,7 @@ pub(super) fn cw_any_batch<const N: usize>(
 ) -> Mask {
     let mut lanes = [Lane::IDLE; BATCH];
     let mut stacks: Stacks<N> = [[UVec2::ZERO; N]; BATCH];
-    let mut live: Mask = 0;
-    for k in set_lanes(active) {
-        if let Some(lane) = Lane::start(bvh, &rays[k]) {
-            lanes[k] = lane;
-            if lanes[k].choose_next(&mut stacks[k]) {
-                live |= 1 << k;
-            }
-        }
-    }
+    let mut live = start_batch(bvh, rays, active, &mut lanes, &mut stacks);
     let mut blocked: Mask = 0;
     while live != 0 {
         'lanes: for k in set_lanes(live) {

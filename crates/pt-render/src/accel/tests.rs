@@ -419,9 +419,6 @@ fn batches_match_single_rays() {
             chunk,
         ));
     }
-    let mut large = Accel::build(prims.clone(), BvhKind::CwBvh);
-    large.small_stack = false;
-    accels.push(large);
     let mut s = 777u64;
     let mut rnd = || {
         s = s
@@ -442,23 +439,44 @@ fn batches_match_single_rays() {
                 r
             });
             let active = (rnd() * 256.0) as Mask;
-            let mut out = [Some(AccelHit {
+            let out = [Some(AccelHit {
                 index: 7,
                 t: -1.0,
                 b1: 0.0,
                 b2: 0.0,
             }); BATCH];
             let before = out;
-            accel.intersect_batch(&rays, active, &mut out);
-            let blocked = accel.occluded_batch(&rays, active);
-            for k in 0..BATCH {
-                if active >> k & 1 == 0 {
-                    assert_eq!(out[k], before[k], "inactive lanes are left alone");
-                    assert_eq!(blocked >> k & 1, 0);
-                    continue;
+            // What the accel does for batches, and, on a CWBVH, the interleaved traversal
+            // with both stack sizes (the accel interleaves only large trees).
+            let mut results = vec![{
+                let mut o = out;
+                accel.intersect_batch(&rays, active, &mut o);
+                (o, accel.occluded_batch(&rays, active))
+            }];
+            if let Tree::Cw(b) = &accel.tree {
+                let mut o = out;
+                cw_closest_batch::<LARGE_STACK>(b, &accel.prims, &rays, active, &mut o);
+                results.push((
+                    o,
+                    cw_any_batch::<LARGE_STACK>(b, &accel.prims, &rays, active),
+                ));
+                if accel.small_stack {
+                    let mut o = out;
+                    cw_closest_batch::<SMALL_STACK>(b, &accel.prims, &rays, active, &mut o);
+                    let blocked = cw_any_batch::<SMALL_STACK>(b, &accel.prims, &rays, active);
+                    results.push((o, blocked));
                 }
-                assert_eq!(out[k], accel.intersect(&rays[k]));
-                assert_eq!(blocked >> k & 1 == 1, accel.occluded(&rays[k]));
+            }
+            for (out, blocked) in results {
+                for k in 0..BATCH {
+                    if active >> k & 1 == 0 {
+                        assert_eq!(out[k], before[k], "inactive lanes are left alone");
+                        assert_eq!(blocked >> k & 1, 0);
+                        continue;
+                    }
+                    assert_eq!(out[k], accel.intersect(&rays[k]));
+                    assert_eq!(blocked >> k & 1 == 1, accel.occluded(&rays[k]));
+                }
             }
         }
     }
