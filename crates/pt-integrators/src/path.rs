@@ -386,7 +386,8 @@ pub fn trace_paths<S: RandomSource>(
     // A visible environment light covers every pixel (Mitsuba's alpha).
     let environment_seen = !scene.infinite_lights.is_empty() && !s.hide_emitters;
     // The rays of one pass (a lane per slot), traced together: the queries do not depend on
-    // each other, and the scene's traversal interleaves them (`Scene::intersect_batch`).
+    // each other (`Scene::intersect_batch`: interleaved through a large tree, in SIMD lanes
+    // through a tiny scene's primitives).
     let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); MAX_PATHS];
     loop {
         // The previous scattering's shadow rays.

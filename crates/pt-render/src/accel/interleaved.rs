@@ -7,7 +7,7 @@
 //! chaining", VLDB) apply to hash joins, here over BVH traversals.
 //!
 //! Every ray visits the same nodes and tests the same primitives in the same order as
-//! [`cw_closest`] and [`cw_any`] (obvhs's `traverse!` loop), so the results are the same bits.
+//! `cw_closest` and `cw_any` (obvhs's `traverse!` loop), so the results are the same bits.
 
 use super::*;
 use pt_math::lanes::{set_lanes, Mask};

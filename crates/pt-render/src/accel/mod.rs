@@ -329,7 +329,7 @@ impl Accel {
     /// [`Accel::intersect`] of the rays `rays[k]` for each lane `k` in `active`, into `out[k]`
     /// (other entries are left as they are), the same bits as one by one: a CWBVH of at least
     /// [`INTERLEAVE_MIN`] primitives traverses them interleaved ([`interleaved`]), the flat
-    /// structure tests each primitive against all of them at once ([`flat_closest_batch`]),
+    /// structure tests each primitive against all of them at once (`flat::flat_closest_batch`),
     /// smaller CWBVHs and a BVH2 take them one by one.
     #[inline(always)]
     pub fn intersect_batch(

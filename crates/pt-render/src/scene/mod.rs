@@ -248,9 +248,10 @@ impl Scene {
     }
 
     /// [`Scene::intersect_into`] of the rays `rays[k]` for each lane `k` in `active`, into
-    /// `out[k]` (other entries are left as they are): the rays traverse the BVH together,
-    /// interleaved ([`crate::accel::interleaved`]), so that their cache misses overlap. The
-    /// same results as one at a time.
+    /// `out[k]` (other entries are left as they are), traced together as
+    /// [`Accel::intersect_batch`] does it (interleaved through a large tree, so that their cache
+    /// misses overlap; in SIMD lanes through a tiny scene's primitives). The same results as
+    /// one at a time; a scene with instances takes them one at a time.
     #[inline(always)]
     pub fn intersect_batch(
         &self,
@@ -277,7 +278,7 @@ impl Scene {
     }
 
     /// [`Scene::occluded`] of the rays `rays[k]` for each lane `k` in `active`: the mask of
-    /// those blocked, the rays traversing the BVH together as in [`Scene::intersect_batch`].
+    /// those blocked, the rays traced together as in [`Scene::intersect_batch`].
     #[inline(always)]
     pub fn occluded_batch(&self, rays: &[Ray; BATCH], active: Mask) -> Mask {
         if self.instancing.is_some() {
