@@ -505,14 +505,15 @@ impl SurfaceBsdf {
             return (self.eval_pdf(wo, wi), self.sample(wo, u_lobe, u));
         }
         // What `eval_pdf` and `sample` do for such a surface: sides mirrored, the opacity's
-        // factors of 1 and its lobe choice (u_lobe below 1 kept) left out.
+        // factors of 1 left out; its lobe choice picks the model (an opaque surface passes
+        // nothing straight through, but the separate calls would handle it).
+        let Ok(model_u) = mask::choose(self.opacity, wo, u_lobe) else {
+            return (self.eval_pdf(wo, wi), self.sample(wo, u_lobe, u));
+        };
         let s = self.side(&self.bsdf, wo);
-        let (value_pdf, sample) = self.bsdf.eval_pdf_and_sample(
-            flip_z(wo, s),
-            flip_z(wi, s),
-            u_lobe.min(mask::ONE_MINUS_EPSILON),
-            u,
-        );
+        let (value_pdf, sample) =
+            self.bsdf
+                .eval_pdf_and_sample(flip_z(wo, s), flip_z(wi, s), model_u, u);
         let sample = sample.map(|mut bs| {
             bs.wi = flip_z(bs.wi, s);
             bs

@@ -58,7 +58,7 @@ pub fn choose(opacity: f32, wo: Vec3, u_lobe: f32) -> Result<f32, BsdfSample> {
 }
 
 /// The largest f32 below 1, so a rescaled uniform number stays in [0, 1).
-pub(crate) const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
 #[cfg(test)]
 mod tests {

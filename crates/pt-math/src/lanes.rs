@@ -36,6 +36,17 @@ pub fn set_lanes(mut mask: Mask) -> impl Iterator<Item = usize> {
     })
 }
 
+/// The lanes `k` of `mask` for which `pred(k)` holds, as a mask (a plain loop, so that it is
+/// inlined into the caller's compiled variant).
+#[inline(always)]
+pub fn lanes_where(mask: Mask, mut pred: impl FnMut(usize) -> bool) -> Mask {
+    let mut out = 0;
+    for k in set_lanes(mask) {
+        out |= Mask::from(pred(k)) << k;
+    }
+    out
+}
+
 /// `N` 3-vectors, one per lane, stored by component (structure of arrays).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct V3<const N: usize> {

@@ -108,6 +108,18 @@ pub(super) struct LaneBest {
     id: [u32; LANES],
 }
 
+impl LaneBest {
+    /// Keeps in lane `i` the hit `(t, b1, b2)` of primitive `id` when `hit` (a select per
+    /// field, no branch, so that loops over lanes vectorise).
+    #[inline(always)]
+    fn keep(&mut self, i: usize, hit: bool, (t, b1, b2): (f32, f32, f32), id: u32) {
+        self.t[i] = if hit { t } else { self.t[i] };
+        self.b1[i] = if hit { b1 } else { self.b1[i] };
+        self.b2[i] = if hit { b2 } else { self.b2[i] };
+        self.id[i] = if hit { id } else { self.id[i] };
+    }
+}
+
 impl Block {
     /// The block of `prims` (at most [`LANES`], no analytic primitives).
     pub(super) fn new(prims: &[Primitive]) -> Block {
@@ -160,10 +172,7 @@ impl Block {
     fn closest(&self, ray: &Ray, first_id: u32, best: &mut LaneBest) {
         for i in 0..LANES {
             let (hit, t, b1, b2) = self.lane(i, ray, best.t[i]);
-            best.t[i] = if hit { t } else { best.t[i] };
-            best.b1[i] = if hit { b1 } else { best.b1[i] };
-            best.b2[i] = if hit { b2 } else { best.b2[i] };
-            best.id[i] = if hit { first_id + i as u32 } else { best.id[i] };
+            best.keep(i, hit, (t, b1, b2), first_id + i as u32);
         }
     }
 
@@ -326,10 +335,7 @@ pub(super) fn flat_closest_batch(
             for j in 0..BATCH {
                 let (o, d) = lanes.ray(j);
                 let (hit, t, b1, b2) = f.test(o, d, lanes.tmin[j], best.t[j]);
-                best.t[j] = if hit { t } else { best.t[j] };
-                best.b1[j] = if hit { b1 } else { best.b1[j] };
-                best.b2[j] = if hit { b2 } else { best.b2[j] };
-                best.id[j] = if hit { id as u32 } else { best.id[j] };
+                best.keep(j, hit, (t, b1, b2), id as u32);
             }
         }
     }
@@ -342,11 +348,7 @@ pub(super) fn flat_closest_batch(
             for j in 0..BATCH {
                 let (o, d) = lanes.ray(j);
                 let t = sphere_hit(o, d, c, radius, lanes.tmin[j], best.t[j]);
-                let hit = t < best.t[j];
-                best.t[j] = if hit { t } else { best.t[j] };
-                best.b1[j] = if hit { 0.0 } else { best.b1[j] };
-                best.b2[j] = if hit { 0.0 } else { best.b2[j] };
-                best.id[j] = if hit { id } else { best.id[j] };
+                best.keep(j, t < best.t[j], (t, 0.0, 0.0), id);
             }
             continue;
         }
@@ -354,9 +356,7 @@ pub(super) fn flat_closest_batch(
             let ray = &rays[j];
             let (o, d) = (Vec3A::from(ray.origin), Vec3A::from(ray.dir));
             let (t, b1, b2) = s.intersect_bary(o, d, ray.tmin, best.t[j]);
-            if t < best.t[j] {
-                (best.t[j], best.b1[j], best.b2[j], best.id[j]) = (t, b1, b2, id);
-            }
+            best.keep(j, t < best.t[j], (t, b1, b2), id);
         }
     }
     for j in set_lanes(active) {

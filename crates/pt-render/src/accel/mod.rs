@@ -379,13 +379,7 @@ impl Accel {
                 rays,
                 active,
             ),
-            _ => {
-                let mut blocked = 0;
-                for k in set_lanes(active) {
-                    blocked |= Mask::from(self.occluded(&rays[k])) << k;
-                }
-                blocked
-            }
+            _ => lanes_where(active, |k| self.occluded(&rays[k])),
         }
     }
 }
@@ -441,4 +435,4 @@ pub(crate) use cwbvh::{gathered, permute_in_place};
 use flat::*;
 pub use interleaved::BATCH;
 use interleaved::{cw_any_batch, cw_closest_batch};
-use pt_math::lanes::{set_lanes, Mask};
+use pt_math::lanes::{lanes_where, set_lanes, Mask};

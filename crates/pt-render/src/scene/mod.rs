@@ -14,7 +14,7 @@ use crate::medium::Medium;
 use crate::texture::{Attribute, TexturePoint};
 use mesh::PrimRef;
 use pt_bsdf::SurfaceBsdf;
-use pt_math::lanes::{set_lanes, Mask};
+use pt_math::lanes::{lanes_where, set_lanes, Mask};
 use pt_math::{Distribution1D, Mat3, Ray, Vec2, Vec3};
 use pt_scene::SourceLoc;
 use pt_spectrum::{ColorMode, SampledWavelengths};
@@ -282,11 +282,7 @@ impl Scene {
     #[inline(always)]
     pub fn occluded_batch(&self, rays: &[Ray; BATCH], active: Mask) -> Mask {
         if self.instancing.is_some() {
-            let mut blocked = 0;
-            for k in set_lanes(active) {
-                blocked |= Mask::from(self.occluded(&rays[k])) << k;
-            }
-            return blocked;
+            return lanes_where(active, |k| self.occluded(&rays[k]));
         }
         self.accel.occluded_batch(rays, active)
     }
