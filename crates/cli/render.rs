@@ -107,7 +107,8 @@ pub(crate) struct RenderArgs {
     light_selection: SelectionArg,
     /// Acceleration structure: `auto` tests scenes of at most 32 primitives without a tree
     /// (SIMD, faster at that size) and builds a CWBVH for larger ones; `cwbvh` and `bvh2` are
-    /// obvhs's layouts; `flat` tests every primitive for every ray (small scenes only).
+    /// obvhs's layouts (the CWBVH's tree traversed with uncompressed boxes); `flat` tests every
+    /// primitive for every ray (small scenes only).
     #[arg(long, value_enum, default_value_t = BvhArg::Auto)]
     bvh: BvhArg,
     /// Colour transport [default: spectral when the scene has wavelength-dependent inputs

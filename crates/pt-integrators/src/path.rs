@@ -386,8 +386,8 @@ pub fn trace_paths<S: RandomSource>(
     // A visible environment light covers every pixel (Mitsuba's alpha).
     let environment_seen = !scene.infinite_lights.is_empty() && !s.hide_emitters;
     // The rays of one pass (a lane per slot), traced together: the queries do not depend on
-    // each other (`Scene::intersect_batch`: interleaved through a large tree, in SIMD lanes
-    // through a tiny scene's primitives).
+    // each other (`Scene::intersect_batch`: in SIMD lanes through a tiny scene's primitives,
+    // one after the other on one traversal stack through a tree).
     let mut rays = [Ray::new(Vec3::ZERO, Vec3::Z); MAX_PATHS];
     loop {
         // The previous scattering's shadow rays.

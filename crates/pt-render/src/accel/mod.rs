@@ -1,7 +1,8 @@
 //! The acceleration structure: one obvhs BVH over all primitives, kept unaware of materials.
 //!
-//! Both obvhs layouts are available: the compressed 8-wide CWBVH (Ylitie et al. 2017) and the
-//! binary BVH2 built by PLOC. CWBVH is the default; `benches/traversal.rs` compares them. Scenes
+//! Both obvhs layouts are available: the compressed 8-wide CWBVH (Ylitie et al. 2017), whose
+//! tree is traversed with its child boxes uncompressed ([`wide`]), and the binary BVH2 built by
+//! PLOC. CWBVH is the default; `benches/traversal.rs` compares them. Scenes
 //! of at most [`FLAT_MAX`] primitives (a Cornell box has 18) get no tree by default: every
 //! triangle and parallelogram is tested, eight at a time in SIMD lanes ([`BvhKind::Flat`]),
 //! which is faster than any traversal at that size.
@@ -15,12 +16,9 @@ use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::cwbvh::bvh2_to_cwbvh::bvh2_to_cwbvh;
 use obvhs::cwbvh::node::CwBvhNode;
 use obvhs::cwbvh::CwBvh;
-use obvhs::faststack::StackStack;
 use obvhs::ploc::PlocBuilder;
 use obvhs::ray::{Ray as BvhRay, RayHit};
 use obvhs::{Boundable, BvhBuildParams};
-// The `traverse!` macro of obvhs names `UVec2` unqualified.
-use glam::UVec2;
 use pt_math::{Ray, Vec3A};
 use rayon::prelude::*;
 use std::time::Duration;
@@ -48,7 +46,8 @@ pub enum BvhKind {
 pub const FLAT_MAX: usize = 32;
 
 enum Tree {
-    Cw(CwBvh),
+    /// A CWBVH's tree with uncompressed child boxes ([`wide`]).
+    Wide(WideBvh),
     Two(Bvh2),
     /// No tree: `prims[..blocks.len() * LANES]` (at most) are the triangles and parallelograms,
     /// also held in `blocks`; the analytic primitives follow them and are tested one by one.
@@ -72,8 +71,6 @@ const MAX_CHUNKS: usize = 8;
 /// A BVH over primitives stored in traversal order.
 pub struct Accel {
     tree: Tree,
-    /// Whether every CWBVH here is shallow enough for [`SMALL_STACK`] (chosen at build time).
-    small_stack: bool,
     /// Primitives reordered so that the BVH's primitive id indexes this directly.
     pub prims: Vec<Primitive>,
     /// For each entry of `prims`, its index in the order given to [`Accel::build`].
@@ -91,7 +88,6 @@ impl Accel {
         if prims.is_empty() {
             Ok(Accel {
                 tree: Tree::Empty,
-                small_stack: true,
                 prims,
                 original_index: Vec::new(),
                 unit_normals: Vec::new(),
@@ -118,18 +114,17 @@ impl Accel {
             BvhKind::CwBvh | BvhKind::Auto | BvhKind::Flat => {
                 let bvh = build_cwbvh(&prims, params, &mut t);
                 let order = bvh.primitive_indices.clone();
-                (Tree::Cw(bvh), order)
+                (Built::Cw(bvh), order)
             }
             BvhKind::Bvh2 => {
                 let bvh = build_bvh2(&prims, params, &mut t);
                 let order = bvh.primitive_indices.clone();
-                (Tree::Two(bvh), order)
+                (Built::Two(bvh), order)
             }
         };
         permute_in_place(&mut prims, &order);
         Accel {
-            small_stack: fits_small_stack(&tree),
-            tree,
+            tree: tree.finish(&prims),
             prims,
             original_index: order,
             unit_normals: Vec::new(),
@@ -174,7 +169,7 @@ impl Accel {
             BvhKind::CwBvh | BvhKind::Auto | BvhKind::Flat if boxes.len() <= chunk_prims => {
                 let bvh = build_cw_low_memory(boxes, &params);
                 let order = bvh.primitive_indices.clone();
-                (Tree::Cw(bvh), order)
+                (Built::Cw(bvh), order)
             }
             BvhKind::CwBvh | BvhKind::Auto | BvhKind::Flat => {
                 let parts = boxes
@@ -202,13 +197,13 @@ impl Accel {
                 }
                 drop(boxes);
                 let bvh = merge_groups(groups, order.clone());
-                (Tree::Cw(bvh), order)
+                (Built::Cw(bvh), order)
             }
             BvhKind::Bvh2 => {
                 let bvh = build_bvh2(&boxes, params, &mut Duration::default());
                 drop(boxes);
                 let order = bvh.primitive_indices.clone();
-                (Tree::Two(bvh), order)
+                (Built::Two(bvh), order)
             }
         };
         let mut prims = Vec::with_capacity(order.len());
@@ -217,8 +212,7 @@ impl Accel {
             .map(|&i| remake(i as usize))
             .collect_into_vec(&mut prims);
         Accel {
-            small_stack: fits_small_stack(&tree),
-            tree,
+            tree: tree.finish(&prims),
             prims,
             original_index: order,
             unit_normals: Vec::new(),
@@ -254,7 +248,6 @@ impl Accel {
                 blocks,
                 analytic_from,
             },
-            small_stack: false,
             prims,
             original_index: order,
             unit_normals,
@@ -273,32 +266,32 @@ impl Accel {
             return flat_closest(blocks, &self.prims[*analytic_from..], *analytic_from, ray);
         }
         let r = bvh_ray(ray);
-        let mut hit = RayHit::none();
         let prims = &self.prims;
-        // obvhs and `cw_closest` accept a candidate exactly when its distance is below the
-        // current `tmax`, so the barycentrics of the last candidate below it are the hit's.
-        let mut bary = (0.0, 0.0);
-        let found = match &self.tree {
-            Tree::Cw(b) if self.small_stack => {
-                cw_closest::<SMALL_STACK>(b, r, &mut hit, prims, &mut bary)
+        match &self.tree {
+            Tree::Wide(w) => w.closest(&r, prims),
+            Tree::Two(b) => {
+                let mut hit = RayHit::none();
+                // obvhs accepts a candidate exactly when its distance is below the current
+                // `tmax`, so the barycentrics of the last candidate below it are the hit's.
+                let mut bary = (0.0, 0.0);
+                let found = b.ray_traverse(r, &mut hit, |r: &BvhRay, id: usize| {
+                    let (t, b1, b2) =
+                        prims[id].intersect_bary(r.origin, r.direction, r.tmin, r.tmax);
+                    if t < r.tmax {
+                        bary = (b1, b2);
+                    }
+                    t
+                });
+                found.then_some(AccelHit {
+                    index: hit.primitive_id as usize,
+                    t: hit.t,
+                    b1: bary.0,
+                    b2: bary.1,
+                })
             }
-            Tree::Cw(b) => cw_closest::<LARGE_STACK>(b, r, &mut hit, prims, &mut bary),
-            Tree::Two(b) => b.ray_traverse(r, &mut hit, |r: &BvhRay, id: usize| {
-                let (t, b1, b2) = prims[id].intersect_bary(r.origin, r.direction, r.tmin, r.tmax);
-                if t < r.tmax {
-                    bary = (b1, b2);
-                }
-                t
-            }),
             Tree::Flat { .. } => unreachable!("handled above"),
-            Tree::Empty => false,
-        };
-        found.then_some(AccelHit {
-            index: hit.primitive_id as usize,
-            t: hit.t,
-            b1: bary.0,
-            b2: bary.1,
-        })
+            Tree::Empty => None,
+        }
     }
 
     /// Whether anything blocks the ray within `(tmin, tmax)` (any-hit traversal, stops at the
@@ -316,8 +309,7 @@ impl Accel {
         let prims = &self.prims;
         let f = |r: &BvhRay, id: usize| prims[id].intersect(r.origin, r.direction, r.tmin, r.tmax);
         match &self.tree {
-            Tree::Cw(b) if self.small_stack => cw_any::<SMALL_STACK>(b, r, prims),
-            Tree::Cw(b) => cw_any::<LARGE_STACK>(b, r, prims),
+            Tree::Wide(w) => w.any(&r, prims),
             Tree::Two(b) => !b.ray_traverse_miss(r, f),
             Tree::Flat { .. } => unreachable!("handled above"),
             Tree::Empty => false,
@@ -327,10 +319,9 @@ impl Accel {
 
 impl Accel {
     /// [`Accel::intersect`] of the rays `rays[k]` for each lane `k` in `active`, into `out[k]`
-    /// (other entries are left as they are), the same bits as one by one: a CWBVH of at least
-    /// [`INTERLEAVE_MIN`] primitives traverses them interleaved ([`interleaved`]), the flat
-    /// structure tests each primitive against all of them at once (`flat::flat_closest_batch`),
-    /// smaller CWBVHs and a BVH2 take them one by one.
+    /// (other entries are left as they are), the same bits as one by one: the flat structure
+    /// tests each primitive against all of them at once (`flat::flat_closest_batch`), a tree
+    /// takes them one after the other (a CWBVH's on one traversal stack).
     #[inline(always)]
     pub fn intersect_batch(
         &self,
@@ -339,9 +330,7 @@ impl Accel {
         out: &mut [Option<AccelHit>; BATCH],
     ) {
         match &self.tree {
-            Tree::Cw(b) if self.prims.len() >= INTERLEAVE_MIN => {
-                cw_closest_batch::<LARGE_STACK>(b, &self.prims, rays, active, out)
-            }
+            Tree::Wide(w) => w.closest_batch(&self.prims, rays, active, out),
             Tree::Flat {
                 blocks,
                 analytic_from,
@@ -366,9 +355,7 @@ impl Accel {
     #[inline(always)]
     pub fn occluded_batch(&self, rays: &[Ray; BATCH], active: Mask) -> Mask {
         match &self.tree {
-            Tree::Cw(b) if self.prims.len() >= INTERLEAVE_MIN => {
-                cw_any_batch::<LARGE_STACK>(b, &self.prims, rays, active)
-            }
+            Tree::Wide(w) => w.any_batch(&self.prims, rays, active),
             Tree::Flat {
                 blocks,
                 analytic_from,
@@ -384,13 +371,9 @@ impl Accel {
     }
 }
 
-/// Fewest primitives for which a CWBVH traverses a batch of rays interleaved
-/// ([`Accel::intersect_batch`]). The interleaving overlaps the cache misses of different rays
-/// and costs bookkeeping on every node (each ray's state is stored and reloaded between its
-/// turns); a small tree stays in the caches, where only the cost remains. Measured (A/B, whole
-/// renders): the 2,000-triangle `staircase` 6% slower interleaved; `mesh-100k` 1.4% and
-/// `mesh-1m` 3% faster.
-pub const INTERLEAVE_MIN: usize = 1 << 16;
+/// Most rays a batch query ([`Accel::intersect_batch`], [`Accel::occluded_batch`]) takes: the
+/// path tracer's paths in flight.
+pub const BATCH: usize = 8;
 
 /// The closest hit [`Accel::intersect`] found.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -423,16 +406,32 @@ fn bvh_ray(ray: &Ray) -> BvhRay {
     }
 }
 
+/// A tree as built, before traversal's layout is made from it (which needs the primitives in
+/// the tree's order).
+enum Built {
+    Cw(CwBvh),
+    Two(Bvh2),
+}
+
+impl Built {
+    /// The tree traversal uses; `prims` in the tree's primitive order.
+    fn finish(self, prims: &[Primitive]) -> Tree {
+        match self {
+            Built::Cw(b) => Tree::Wide(WideBvh::from_cwbvh(&b, prims)),
+            Built::Two(b) => Tree::Two(b),
+        }
+    }
+}
+
 mod cwbvh;
 mod flat;
-pub mod interleaved;
 #[cfg(test)]
 mod tests;
 pub mod top;
+mod wide;
 
 use cwbvh::*;
 pub(crate) use cwbvh::{gathered, permute_in_place};
 use flat::*;
-pub use interleaved::BATCH;
-use interleaved::{cw_any_batch, cw_closest_batch};
 use pt_math::lanes::{lanes_where, set_lanes, Mask};
+use wide::*;

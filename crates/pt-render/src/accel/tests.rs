@@ -49,7 +49,7 @@ fn compact_build_gives_the_same_accel() {
         let b = Accel::build_compact(prims.clone(), kind, |i| prims[i]);
         assert_eq!(a.original_index, b.original_index, "{kind:?}");
         match (&a.tree, &b.tree) {
-            (Tree::Cw(x), Tree::Cw(y)) => assert!(x == y),
+            (Tree::Wide(x), Tree::Wide(y)) => assert!(x == y),
             (Tree::Two(x), Tree::Two(y)) => {
                 assert_eq!(format!("{:?}", x.nodes), format!("{:?}", y.nodes))
             }
@@ -128,37 +128,63 @@ fn finds_hits_closer_than_obvhs_epsilon() {
     }
 }
 
+/// 3,000 triangles along the x axis, each 1% farther out and 1% larger than the one before:
+/// the builder's tree over them is deep (25 levels) where a uniform grid of the same count
+/// has 5.
+fn geometric_line() -> Vec<Primitive> {
+    (0..3000)
+        .map(|k| {
+            let x = 1.01f32.powi(k);
+            Primitive::Triangle {
+                v0: Vec3A::new(x, 0.0, 0.0),
+                e1: Vec3A::new(0.01 * x, 0.0, 0.0),
+                e2: Vec3A::new(0.0, 0.01 * x, 0.0),
+            }
+        })
+        .collect()
+}
+
 #[test]
 fn stack_size_follows_the_tree_depth() {
-    // obvhs's validation counts depth from 0 at the root; `cw_depth` counts levels.
-    for (n, small) in [(2, true), (8, true), (300, false)] {
-        let prims = grid(n);
+    // The traversal stack holds at most seven entries per level (a node's hit children but
+    // the one visited next); obvhs's validation counts depth from 0 at the root.
+    for (prims, small) in [(grid(2), true), (grid(8), true), (geometric_line(), false)] {
+        let n = prims.len();
         let accel = Accel::build(prims.clone(), BvhKind::CwBvh);
-        let Tree::Cw(b) = &accel.tree else {
-            panic!("not a single CWBVH")
+        let Tree::Wide(w) = &accel.tree else {
+            panic!("not a CWBVH's tree")
         };
-        let levels = cw_depth(b, 0);
-        assert_eq!(
-            levels,
-            b.validate(&accel.prims, true).max_depth + 1,
-            "grid {n}"
+        // The CWBVH it was made from, built again (the build is deterministic).
+        let cw = build_cwbvh(
+            &prims,
+            BvhBuildParams::medium_build(),
+            &mut Duration::default(),
         );
-        // 180,001 primitives need more levels than the small stack holds.
-        assert_eq!(accel.small_stack, small, "grid {n}: {levels} levels");
-        // Closest hits through the large stack agree with a brute-force search.
+        let levels = cw.validate(&accel.prims, true).max_depth as usize + 1;
+        assert_eq!(w.stack_need(), 1 + 7 * levels, "{n} primitives");
+        assert_eq!(w.stack_need() <= wide::SMALL, small, "{n}: {levels} levels");
+        // Closest hits through the deep tree agree with a brute-force search: rays from above
+        // each 15th triangle's centre, slanted so that they pass over its neighbours.
         if !small {
-            for k in 0..200 {
-                let o = Vec3::new(k as f32 * 1.37 % 300.0, k as f32 * 2.71 % 300.0, 6.0);
-                let ray = Ray::new(o, Vec3::new(0.3, -0.2, -1.0).normalize());
+            for (k, p) in prims.iter().enumerate().step_by(15) {
+                let Primitive::Triangle { v0, e1, e2 } = *p else {
+                    unreachable!()
+                };
+                let c = Vec3::from(v0 + (e1 + e2) / 3.0);
+                let d = Vec3::new(-0.3, -0.2, -1.0).normalize();
+                let o = c - d * (10.0 * e1.length());
+                let ray = Ray::new(o, d);
                 let brute = prims
                     .iter()
-                    .map(|p| p.intersect(o.into(), ray.dir.into(), 0.0, f32::INFINITY))
+                    .map(|p| p.intersect(o.into(), d.into(), 0.0, f32::INFINITY))
                     .fold(f32::INFINITY, f32::min);
+                assert!(brute.is_finite(), "ray {k} misses");
                 assert_eq!(
                     accel.intersect(&ray).map_or(f32::INFINITY, |h| h.t),
                     brute,
                     "ray {k}"
                 );
+                assert!(accel.occluded(&ray), "ray {k}");
             }
         }
     }
@@ -303,7 +329,7 @@ fn flat_blocks_match_the_scalar_tests() {
     ));
     assert!(matches!(
         Accel::build(prims[..FLAT_MAX + 1].to_vec(), BvhKind::Auto).tree,
-        Tree::Cw(_)
+        Tree::Wide(_)
     ));
     assert!(matches!(
         Accel::build_compact(prims[..FLAT_MAX].to_vec(), BvhKind::Auto, |i| prims[i]).tree,
@@ -329,11 +355,11 @@ fn matches_brute_force() {
         } else {
             let accel = Accel::build_compact_chunked(prims.clone(), kind, |i| prims[i], chunk);
             // One tree whose root joins the groups.
-            let Tree::Cw(b) = &accel.tree else {
-                panic!("{chunk}: not a CWBVH")
+            let Tree::Wide(w) = &accel.tree else {
+                panic!("{chunk}: not a CWBVH's tree")
             };
             assert_eq!(
-                b.nodes[0].imask.count_ones() as usize,
+                w.root_internal_children(),
                 prims
                     .len()
                     .div_ceil(chunk)
@@ -397,10 +423,10 @@ fn matches_brute_force() {
 
 #[test]
 fn batches_match_single_rays() {
-    // The interleaved traversal of eight rays must give each ray the bits of its own
-    // traversal (closest hit: primitive, distance, edge coordinates; any hit), whichever lanes
-    // are active, on every tree kind, including grouped CWBVHs, both stack sizes, and trees
-    // too small for a tree (`Flat`) or empty.
+    // A batch of eight rays must give each ray the bits of its own traversal (closest hit:
+    // primitive, distance, edge coordinates; any hit), whichever lanes are active, on every
+    // tree kind, including grouped CWBVHs (whose rays share one stack, so each must start
+    // from an empty one), and scenes too small for a tree (`Flat`) or empty.
     let prims = grid(8);
     let mut accels = vec![
         Accel::build(prims.clone(), BvhKind::CwBvh),
@@ -446,27 +472,9 @@ fn batches_match_single_rays() {
                 b2: 0.0,
             }); BATCH];
             let before = out;
-            // What the accel does for batches, and, on a CWBVH, the interleaved traversal
-            // with both stack sizes (the accel interleaves only large trees).
-            let mut results = vec![{
-                let mut o = out;
-                accel.intersect_batch(&rays, active, &mut o);
-                (o, accel.occluded_batch(&rays, active))
-            }];
-            if let Tree::Cw(b) = &accel.tree {
-                let mut o = out;
-                cw_closest_batch::<LARGE_STACK>(b, &accel.prims, &rays, active, &mut o);
-                results.push((
-                    o,
-                    cw_any_batch::<LARGE_STACK>(b, &accel.prims, &rays, active),
-                ));
-                if accel.small_stack {
-                    let mut o = out;
-                    cw_closest_batch::<SMALL_STACK>(b, &accel.prims, &rays, active, &mut o);
-                    let blocked = cw_any_batch::<SMALL_STACK>(b, &accel.prims, &rays, active);
-                    results.push((o, blocked));
-                }
-            }
+            let mut o = out;
+            accel.intersect_batch(&rays, active, &mut o);
+            let results = [(o, accel.occluded_batch(&rays, active))];
             for (out, blocked) in results {
                 for k in 0..BATCH {
                     if active >> k & 1 == 0 {

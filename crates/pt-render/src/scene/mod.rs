@@ -249,9 +249,8 @@ impl Scene {
 
     /// [`Scene::intersect_into`] of the rays `rays[k]` for each lane `k` in `active`, into
     /// `out[k]` (other entries are left as they are), traced together as
-    /// [`Accel::intersect_batch`] does it (interleaved through a large tree, so that their cache
-    /// misses overlap; in SIMD lanes through a tiny scene's primitives). The same results as
-    /// one at a time; a scene with instances takes them one at a time.
+    /// [`Accel::intersect_batch`] does it (in SIMD lanes through a tiny scene's primitives). The
+    /// same results as one at a time; a scene with instances takes them one at a time.
     #[inline(always)]
     pub fn intersect_batch(
         &self,

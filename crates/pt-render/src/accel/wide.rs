@@ -1,0 +1,417 @@
+//! An 8-wide BVH with uncompressed child boxes, converted from obvhs's CWBVH (same tree, same
+//! primitive order), and its traversal: nearest child first, popped entries beyond the closest
+//! hit skipped.
+//!
+//! Why a second layout of the same tree: the CWBVH's node (80 bytes; Ylitie et al. 2017) stores
+//! its child boxes as bytes on a per-node grid and finds a child's node index by counting the
+//! internal children before it. On a processor that traverses one ray at a time, each step of a
+//! traversal waits for the previous one (the node test decides which node is loaded next), so
+//! the length of that chain is the cost: decoding the planes (widen, convert, scale) and the
+//! bit arithmetic that turns a hit mask into a node index are on it. Here a child's box is six
+//! floats and its node index a stored word, as in Embree's BVH8 (Wald et al. 2014, "Embree: a
+//! kernel framework for efficient CPU ray tracing"): a node test is one multiply-subtract per
+//! plane, and the boxes are the exact bounds of what lies below (the CWBVH's are rounded outwards
+//! to its grid), so fewer of them are entered.
+
+use super::*;
+use glam::Vec4;
+
+/// A child reference with this bit set is a leaf: bits 28-30 hold its primitive count (1-3),
+/// the low 28 bits its first primitive.
+const LEAF: u32 = 1 << 31;
+/// Bit position of a leaf's primitive count in its reference.
+const COUNT_SHIFT: u32 = 28;
+/// The first primitive's bits of a leaf reference.
+const FIRST_MASK: u32 = (1 << COUNT_SHIFT) - 1;
+
+/// One node: up to eight children, each with its box (structure of arrays, so that the eight
+/// are tested in SIMD lanes) and its reference. 224 bytes. An empty slot has the inverted box
+/// (lower bounds `f32::MAX`, upper `-f32::MAX`), which no ray enters: its entry distance is
+/// infinite on every axis (the ray's inverse direction is finite and nonzero, `bvh_ray`).
+#[derive(Clone, Copy, PartialEq)]
+#[repr(C, align(32))]
+pub(super) struct WideNode {
+    /// The children's boxes, plane by plane (lower x, upper x, lower y, upper y, lower z,
+    /// upper z), slot by slot; world units.
+    planes: [[f32; 8]; 6],
+    /// Per slot: an internal child's node index, or a leaf reference (`LEAF`, count, first
+    /// primitive); 0 for an empty slot.
+    child: [u32; 8],
+}
+
+impl WideNode {
+    /// A node without children.
+    const EMPTY: Self = WideNode {
+        planes: [
+            [f32::MAX; 8],
+            [-f32::MAX; 8],
+            [f32::MAX; 8],
+            [-f32::MAX; 8],
+            [f32::MAX; 8],
+            [-f32::MAX; 8],
+        ],
+        child: [0; 8],
+    };
+
+    /// Sets slot `s`'s box.
+    fn set_box(&mut self, s: usize, b: &Aabb) {
+        for axis in 0..3 {
+            self.planes[2 * axis][s] = b.min[axis];
+            self.planes[2 * axis + 1][s] = b.max[axis];
+        }
+    }
+
+    /// The union of the children's boxes.
+    fn bounds(&self) -> Aabb {
+        let p = &self.planes;
+        let lo = |k: usize| p[k].iter().copied().fold(f32::MAX, f32::min);
+        let hi = |k: usize| p[k].iter().copied().fold(-f32::MAX, f32::max);
+        Aabb::new(
+            Vec3A::new(lo(0), lo(2), lo(4)),
+            Vec3A::new(hi(1), hi(3), hi(5)),
+        )
+    }
+}
+
+/// The tree: `nodes[0]` is the root; leaf references index the [`Accel`]'s primitives.
+#[derive(PartialEq)]
+pub(super) struct WideBvh {
+    nodes: Vec<WideNode>,
+    /// Most stack entries a traversal can hold: the root's, then at most seven more per level
+    /// (a node's hit children but the one visited next).
+    stack_need: usize,
+}
+
+impl WideBvh {
+    /// The tree of `cw` with exact child boxes, computed from `prims` (in the tree's primitive
+    /// order, as [`Accel::prims`]): a leaf's box bounds its primitives, an internal child's
+    /// bounds its children's boxes. obvhs stores a node's internal children after the node
+    /// (`bvh2_to_cwbvh`, and [`merge_groups`] likewise), so one pass from the last node to the
+    /// first finds every child's box already made.
+    pub(super) fn from_cwbvh(cw: &CwBvh, prims: &[Primitive]) -> Self {
+        assert!(
+            prims.len() <= FIRST_MASK as usize + 1,
+            "more primitives than a leaf reference holds"
+        );
+        // Leaf boxes (the primitives' bounds, most of the work) in parallel.
+        let mut nodes: Vec<WideNode> = cw
+            .nodes
+            .par_iter()
+            .map(|n| {
+                let mut out = WideNode::EMPTY;
+                for s in (0..8).filter(|&s| !n.is_child_empty(s)) {
+                    if n.is_leaf(s) {
+                        let (first, count) = n.child_primitives(s);
+                        out.child[s] = LEAF | count << COUNT_SHIFT | first;
+                        let b = prims[first as usize..(first + count) as usize]
+                            .iter()
+                            .fold(Aabb::INVALID, |b, p| b.union(&p.aabb()));
+                        out.set_box(s, &b);
+                    } else {
+                        out.child[s] = n.child_node_index(s);
+                    }
+                }
+                out
+            })
+            .collect();
+        // Internal children's boxes and the levels below each node, children first.
+        let mut levels = vec![1u32; nodes.len()];
+        for i in (0..nodes.len()).rev() {
+            for s in 0..8 {
+                let c = nodes[i].child[s];
+                if c & LEAF == 0 && !cw.nodes[i].is_child_empty(s) {
+                    debug_assert!(c as usize > i, "a child stored before its parent");
+                    let b = nodes[c as usize].bounds();
+                    nodes[i].set_box(s, &b);
+                    levels[i] = levels[i].max(levels[c as usize] + 1);
+                }
+            }
+        }
+        let stack_need = 1 + 7 * levels.first().copied().unwrap_or(0) as usize;
+        WideBvh { nodes, stack_need }
+    }
+}
+
+/// A ray prepared for node tests: `t = plane * inv - origin_inv` per axis, and which of a
+/// child's two planes the ray enters through.
+struct WideRay {
+    inv: Vec3A,
+    origin_inv: Vec3A,
+    /// Per axis: the plane the ray enters a box through ([`WideNode::planes`]'s index: the
+    /// upper one for a negative direction); it leaves through the other (index ^ 1).
+    near: [usize; 3],
+    tmin: f32,
+}
+
+impl WideRay {
+    #[inline(always)]
+    fn new(r: &BvhRay) -> Self {
+        WideRay {
+            inv: r.inv_direction,
+            origin_inv: r.origin * r.inv_direction,
+            near: [
+                usize::from(r.direction.x < 0.0),
+                2 + usize::from(r.direction.y < 0.0),
+                4 + usize::from(r.direction.z < 0.0),
+            ],
+            tmin: r.tmin,
+        }
+    }
+}
+
+/// The slots of `node` whose boxes the ray enters within `(tmin, tmax)`, as a bit mask, and the
+/// entry distances.
+#[inline(always)]
+fn test_node(node: &WideNode, ray: &WideRay, tmax: f32) -> (u32, [f32; 8]) {
+    let p = &node.planes;
+    let [a, b, c] = ray.near;
+    // Two halves of four slots in SSE vectors (glam's `Vec4`): written over arrays of eight,
+    // the compiler's vectoriser split the far planes into scalar pieces.
+    let half = |h: usize| {
+        let plane = |k: usize| Vec4::from_slice(&p[k][4 * h..4 * h + 4]);
+        let t = |k: usize, inv: f32, oi: f32| plane(k) * inv - Vec4::splat(oi);
+        let (i, o) = (ray.inv, ray.origin_inv);
+        let near = t(a, i.x, o.x)
+            .max(t(b, i.y, o.y))
+            .max(t(c, i.z, o.z).max(Vec4::splat(ray.tmin)));
+        let far = t(a ^ 1, i.x, o.x)
+            .min(t(b ^ 1, i.y, o.y))
+            .min(t(c ^ 1, i.z, o.z).min(Vec4::splat(tmax)));
+        (near.cmple(far).bitmask(), near)
+    };
+    let (m0, n0) = half(0);
+    let (m1, n1) = half(1);
+    let mut near = [0.0f32; 8];
+    near[..4].copy_from_slice(&n0.to_array());
+    near[4..].copy_from_slice(&n1.to_array());
+    (m0 | m1 << 4, near)
+}
+
+/// A stack entry: a child reference and the distance at which the ray enters its box.
+#[derive(Clone, Copy, Default)]
+pub(super) struct Entry {
+    child: u32,
+    near: f32,
+}
+
+/// Pushes the hit children of `node` so that the nearest is on top.
+#[inline(always)]
+fn push_sorted(
+    node: &WideNode,
+    mut mask: u32,
+    near: &[f32; 8],
+    stack: &mut [Entry],
+    top: &mut usize,
+) {
+    let base = *top;
+    while mask != 0 {
+        let s = mask.trailing_zeros() as usize;
+        mask &= mask - 1;
+        let e = entry(node, s, near);
+        // Insertion: entries above `base` are kept in decreasing distance.
+        let mut j = *top;
+        while j > base && stack[j - 1].near < e.near {
+            stack[j] = stack[j - 1];
+            j -= 1;
+        }
+        stack[j] = e;
+        *top += 1;
+    }
+}
+
+/// The entry for slot `s` of `node`.
+#[inline(always)]
+fn entry(node: &WideNode, s: usize, near: &[f32; 8]) -> Entry {
+    Entry {
+        child: node.child[s],
+        near: near[s],
+    }
+}
+
+/// The next entry to visit after the node `node` was tested (`mask`, `near`): its only hit child
+/// directly, the nearest of several (the others pushed, nearest on top), or else the top of the
+/// stack that the ray can still reach (entered before `tmax`); `None` when none is left.
+#[inline(always)]
+fn next_entry(
+    node: &WideNode,
+    mask: u32,
+    near: &[f32; 8],
+    stack: &mut [Entry],
+    top: &mut usize,
+    tmax: f32,
+) -> Option<Entry> {
+    if mask != 0 && mask & (mask - 1) == 0 {
+        return Some(entry(node, mask.trailing_zeros() as usize, near));
+    }
+    if mask != 0 {
+        push_sorted(node, mask, near, stack, top);
+    }
+    pop(stack, top, tmax)
+}
+
+/// The top of the stack that the ray can still reach (entered before `tmax`).
+#[inline(always)]
+fn pop(stack: &[Entry], top: &mut usize, tmax: f32) -> Option<Entry> {
+    while *top > 0 {
+        *top -= 1;
+        let e = stack[*top];
+        if e.near <= tmax {
+            return Some(e);
+        }
+    }
+    None
+}
+
+/// A leaf entry's primitives: their range in the tree's primitive order.
+#[inline(always)]
+fn leaf_range(e: Entry) -> std::ops::Range<usize> {
+    let first = (e.child & FIRST_MASK) as usize;
+    first..first + (e.child >> COUNT_SHIFT & 7) as usize
+}
+
+/// Closest hit of `ray` among `prims` through `bvh`: `(primitive, t, b1, b2)`.
+#[inline(always)]
+fn wide_closest(
+    bvh: &WideBvh,
+    ray: &BvhRay,
+    prims: &[Primitive],
+    stack: &mut [Entry],
+) -> Option<AccelHit> {
+    if bvh.nodes.is_empty() {
+        return None;
+    }
+    let wr = WideRay::new(ray);
+    let mut tmax = ray.tmax;
+    let mut best: Option<AccelHit> = None;
+    let mut top = 0;
+    let mut current = Some(Entry {
+        child: 0,
+        near: ray.tmin,
+    });
+    while let Some(e) = current {
+        if e.child & LEAF != 0 {
+            let range = leaf_range(e);
+            let first = range.start;
+            for (k, p) in prims[range].iter().enumerate() {
+                let (t, b1, b2) = p.intersect_bary(ray.origin, ray.direction, ray.tmin, tmax);
+                if t < tmax {
+                    tmax = t;
+                    best = Some(AccelHit {
+                        index: first + k,
+                        t,
+                        b1,
+                        b2,
+                    });
+                }
+            }
+            current = pop(stack, &mut top, tmax);
+        } else {
+            let node = &bvh.nodes[e.child as usize];
+            let (mask, near) = test_node(node, &wr, tmax);
+            current = next_entry(node, mask, &near, stack, &mut top, tmax);
+        }
+    }
+    best
+}
+
+/// Whether anything blocks `ray` within `(tmin, tmax)` among `prims` through `bvh`.
+#[inline(always)]
+fn wide_any(bvh: &WideBvh, ray: &BvhRay, prims: &[Primitive], stack: &mut [Entry]) -> bool {
+    if bvh.nodes.is_empty() {
+        return false;
+    }
+    let wr = WideRay::new(ray);
+    let mut top = 0;
+    let mut current = Some(Entry::default());
+    while let Some(e) = current {
+        if e.child & LEAF != 0 {
+            for p in &prims[leaf_range(e)] {
+                if p.intersect(ray.origin, ray.direction, ray.tmin, ray.tmax) < ray.tmax {
+                    return true;
+                }
+            }
+            current = pop(stack, &mut top, ray.tmax);
+        } else {
+            let node = &bvh.nodes[e.child as usize];
+            let (mask, near) = test_node(node, &wr, ray.tmax);
+            current = next_entry(node, mask, &near, stack, &mut top, ray.tmax);
+        }
+    }
+    false
+}
+
+/// Stack sizes: a tree of up to nine levels takes the small one, of up to 36 the large one
+/// (obvhs's CWBVHs have fewer than 32, its own traversal needs that; [`merge_groups`] adds
+/// one), both on the thread's stack and zeroed for each batch of rays, so their size is a cost;
+/// a deeper tree gets one from the heap.
+pub(super) const SMALL: usize = 1 + 7 * 9;
+/// See [`SMALL`].
+const LARGE: usize = 1 + 7 * 36;
+
+impl WideBvh {
+    /// Most stack entries a traversal of this tree can hold.
+    #[cfg(test)]
+    pub(super) fn stack_need(&self) -> usize {
+        self.stack_need
+    }
+
+    /// The root's internal children.
+    #[cfg(test)]
+    pub(super) fn root_internal_children(&self) -> usize {
+        self.nodes.first().map_or(0, |n| {
+            (0..8)
+                .filter(|&s| n.child[s] & LEAF == 0 && n.planes[0][s] <= n.planes[1][s])
+                .count()
+        })
+    }
+
+    /// Runs `f` with a stack deep enough for this tree.
+    #[inline(always)]
+    fn with_stack<R>(&self, f: impl FnOnce(&mut [Entry]) -> R) -> R {
+        if self.stack_need <= SMALL {
+            f(&mut [Entry::default(); SMALL])
+        } else if self.stack_need <= LARGE {
+            f(&mut [Entry::default(); LARGE])
+        } else {
+            f(&mut vec![Entry::default(); self.stack_need])
+        }
+    }
+
+    /// Closest hits of `rays[k]`, `k` in `active`, into `out[k]` (the other entries are left as
+    /// they are), one ray after the other on one stack.
+    #[inline(always)]
+    pub(super) fn closest_batch(
+        &self,
+        prims: &[Primitive],
+        rays: &[Ray; BATCH],
+        active: Mask,
+        out: &mut [Option<AccelHit>; BATCH],
+    ) {
+        self.with_stack(|stack| {
+            for k in set_lanes(active) {
+                out[k] = wide_closest(self, &bvh_ray(&rays[k]), prims, stack);
+            }
+        })
+    }
+
+    /// The mask of the rays `rays[k]`, `k` in `active`, that are blocked, as
+    /// [`WideBvh::closest_batch`].
+    #[inline(always)]
+    pub(super) fn any_batch(&self, prims: &[Primitive], rays: &[Ray; BATCH], active: Mask) -> Mask {
+        self.with_stack(|stack| {
+            lanes_where(active, |k| wide_any(self, &bvh_ray(&rays[k]), prims, stack))
+        })
+    }
+
+    /// Closest hit of one ray.
+    #[inline(always)]
+    pub(super) fn closest(&self, ray: &BvhRay, prims: &[Primitive]) -> Option<AccelHit> {
+        self.with_stack(|stack| wide_closest(self, ray, prims, stack))
+    }
+
+    /// Whether anything blocks one ray.
+    #[inline(always)]
+    pub(super) fn any(&self, ray: &BvhRay, prims: &[Primitive]) -> bool {
+        self.with_stack(|stack| wide_any(self, ray, prims, stack))
+    }
+}
