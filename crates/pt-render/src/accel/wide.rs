@@ -340,6 +340,26 @@ fn wide_any(bvh: &WideBvh, ray: &BvhRay, prims: &[Primitive], stack: &mut [Entry
     false
 }
 
+/// Binds `$stack` to a zeroed traversal stack deep enough for the tree `$bvh`, on the thread's
+/// stack (or the heap for a tree deeper than [`LARGE`] allows). A macro, not a function taking
+/// a closure: the compiler left such closures, which hold the whole traversal, out of line, so
+/// they ran compiled for baseline x86-64 instead of inside the render loop's x86-64-v3 code.
+macro_rules! stack {
+    ($bvh:expr, $stack:ident) => {
+        let (mut small, mut large, mut heap);
+        let $stack: &mut [Entry] = if $bvh.stack_need <= SMALL {
+            small = [Entry::default(); SMALL];
+            &mut small
+        } else if $bvh.stack_need <= LARGE {
+            large = [Entry::default(); LARGE];
+            &mut large
+        } else {
+            heap = vec![Entry::default(); $bvh.stack_need];
+            &mut heap
+        };
+    };
+}
+
 /// Stack sizes: a tree of up to nine levels takes the small one, of up to 36 the large one
 /// (obvhs's CWBVHs have fewer than 32, its own traversal needs that; [`merge_groups`] adds
 /// one), both on the thread's stack and zeroed for each batch of rays, so their size is a cost;
@@ -365,18 +385,6 @@ impl WideBvh {
         })
     }
 
-    /// Runs `f` with a stack deep enough for this tree.
-    #[inline(always)]
-    fn with_stack<R>(&self, f: impl FnOnce(&mut [Entry]) -> R) -> R {
-        if self.stack_need <= SMALL {
-            f(&mut [Entry::default(); SMALL])
-        } else if self.stack_need <= LARGE {
-            f(&mut [Entry::default(); LARGE])
-        } else {
-            f(&mut vec![Entry::default(); self.stack_need])
-        }
-    }
-
     /// Closest hits of `rays[k]`, `k` in `active`, into `out[k]` (the other entries are left as
     /// they are), one ray after the other on one stack.
     #[inline(always)]
@@ -387,31 +395,37 @@ impl WideBvh {
         active: Mask,
         out: &mut [Option<AccelHit>; BATCH],
     ) {
-        self.with_stack(|stack| {
-            for k in set_lanes(active) {
-                out[k] = wide_closest(self, &bvh_ray(&rays[k]), prims, stack);
-            }
-        })
+        stack!(self, stack);
+        for k in set_lanes(active) {
+            out[k] = wide_closest(self, &bvh_ray(&rays[k]), prims, stack);
+        }
     }
 
     /// The mask of the rays `rays[k]`, `k` in `active`, that are blocked, as
     /// [`WideBvh::closest_batch`].
     #[inline(always)]
     pub(super) fn any_batch(&self, prims: &[Primitive], rays: &[Ray; BATCH], active: Mask) -> Mask {
-        self.with_stack(|stack| {
-            lanes_where(active, |k| wide_any(self, &bvh_ray(&rays[k]), prims, stack))
-        })
+        stack!(self, stack);
+        let mut blocked: Mask = 0;
+        for k in set_lanes(active) {
+            if wide_any(self, &bvh_ray(&rays[k]), prims, stack) {
+                blocked |= 1 << k;
+            }
+        }
+        blocked
     }
 
     /// Closest hit of one ray.
     #[inline(always)]
     pub(super) fn closest(&self, ray: &BvhRay, prims: &[Primitive]) -> Option<AccelHit> {
-        self.with_stack(|stack| wide_closest(self, ray, prims, stack))
+        stack!(self, stack);
+        wide_closest(self, ray, prims, stack)
     }
 
     /// Whether anything blocks one ray.
     #[inline(always)]
     pub(super) fn any(&self, ray: &BvhRay, prims: &[Primitive]) -> bool {
-        self.with_stack(|stack| wide_any(self, ray, prims, stack))
+        stack!(self, stack);
+        wide_any(self, ray, prims, stack)
     }
 }
