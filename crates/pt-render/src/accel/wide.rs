@@ -26,8 +26,9 @@ const FIRST_MASK: u32 = (1 << COUNT_SHIFT) - 1;
 
 /// One node: up to eight children, each with its box (structure of arrays, so that the eight
 /// are tested in SIMD lanes) and its reference. 224 bytes. An empty slot has the inverted box
-/// (lower bounds `f32::MAX`, upper `-f32::MAX`), which no ray enters: its entry distance is
-/// infinite on every axis (the ray's inverse direction is finite and nonzero, `bvh_ray`).
+/// (lower bounds `f32::MAX`, upper `-f32::MAX`), which no ray enters: on every axis its entry
+/// distance exceeds its exit distance by `2 f32::MAX |1 / d|` (the inverse direction is finite
+/// and nonzero, `bvh_ray`), or the two are NaN, which fails the test as well.
 #[derive(Clone, Copy, PartialEq)]
 #[repr(C, align(32))]
 pub(super) struct WideNode {
