@@ -190,7 +190,7 @@ fn test_node(node: &WideNode, ray: &WideRay, tmax: f32) -> (u32, [f32; 8]) {
 
 /// A stack entry: a child reference and the distance at which the ray enters its box.
 #[derive(Clone, Copy, Default)]
-pub(super) struct Entry {
+struct Entry {
     child: u32,
     near: f32,
 }
@@ -263,6 +263,15 @@ fn pop(stack: &[Entry], top: &mut usize, tmax: f32) -> Option<Entry> {
     None
 }
 
+/// The entry a traversal of `ray` starts from: the root node, entered at `tmin`.
+#[inline(always)]
+fn root(ray: &BvhRay) -> Entry {
+    Entry {
+        child: 0,
+        near: ray.tmin,
+    }
+}
+
 /// A leaf entry's primitives: their range in the tree's primitive order.
 #[inline(always)]
 fn leaf_range(e: Entry) -> std::ops::Range<usize> {
@@ -285,10 +294,7 @@ fn wide_closest(
     let mut tmax = ray.tmax;
     let mut best: Option<AccelHit> = None;
     let mut top = 0;
-    let mut current = Some(Entry {
-        child: 0,
-        near: ray.tmin,
-    });
+    let mut current = Some(root(ray));
     while let Some(e) = current {
         if e.child & LEAF != 0 {
             let range = leaf_range(e);
@@ -323,7 +329,7 @@ fn wide_any(bvh: &WideBvh, ray: &BvhRay, prims: &[Primitive], stack: &mut [Entry
     }
     let wr = WideRay::new(ray);
     let mut top = 0;
-    let mut current = Some(Entry::default());
+    let mut current = Some(root(ray));
     while let Some(e) = current {
         if e.child & LEAF != 0 {
             for p in &prims[leaf_range(e)] {
@@ -407,6 +413,7 @@ impl WideBvh {
     #[inline(always)]
     pub(super) fn any_batch(&self, prims: &[Primitive], rays: &[Ray; BATCH], active: Mask) -> Mask {
         stack!(self, stack);
+        // A loop, not `lanes_where`: its closure would hold the whole traversal (see `stack!`).
         let mut blocked: Mask = 0;
         for k in set_lanes(active) {
             if wide_any(self, &bvh_ray(&rays[k]), prims, stack) {
