@@ -10,6 +10,7 @@
 pub use glam::{self, Mat3, Mat4, Vec2, Vec3, Vec3A, Vec4};
 
 mod distribution;
+pub mod fastmath;
 mod frame;
 pub mod lanes;
 mod offset;

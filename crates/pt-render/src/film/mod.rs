@@ -11,7 +11,8 @@
 //! carries the weight f(x) / (p(x) integral f), negative where the filter is (pbrt-v4's
 //! `FilterSampler`, per axis since these filters are separable as in Mitsuba).
 
-use pt_math::Vec2;
+use pt_math::lanes::lanes;
+use pt_math::{fastmath, Vec2};
 use pt_scene::{FilterDesc, PixelFormat};
 use pt_spectrum::srgb_to_xyz;
 use std::sync::Arc;
@@ -27,20 +28,30 @@ pub mod splat;
 const GAUSSIAN_TAIL: f32 = 3.354_626_3e-4;
 
 /// The 1D profile of a separable filter at offset `x` (pixels), as Mitsuba 3.9.1 evaluates it
-/// (`eval`; its Gaussian with the exact exp), even in x; 0 outside the radius. Always inlined
-/// (as [`splat::SplatTile::splat`], which calls it per pixel of a footprint).
+/// (`eval`; its Gaussian's exponential to within an ulp, [`pt_math::fastmath::exp`]), even in
+/// x; 0 outside the radius. One lane of [`filter_profiles`].
 #[inline(always)]
 pub fn filter_profile(filter: &FilterDesc, x: f32) -> f32 {
-    let x = x.abs();
+    filter_profiles(filter, &[x])[0]
+}
+
+/// [`filter_profile`] at `L` offsets at once: the filter is matched once and each model's
+/// formula runs over the lanes, which the compiler vectorises (a footprint's weights in one
+/// SIMD pass). Always inlined (as [`splat::SplatTile::splat`], which calls it per sample).
+#[inline(always)]
+pub fn filter_profiles<const L: usize>(filter: &FilterDesc, x: &[f32; L]) -> [f32; L] {
+    let x: [f32; L] = lanes(|k| x[k].abs());
     match *filter {
-        FilterDesc::Box { radius } => f32::from(u8::from(x <= radius)),
-        FilterDesc::Tent { radius } => (1.0 - x / radius).max(0.0),
+        FilterDesc::Box { radius } => lanes(|k| f32::from(u8::from(x[k] <= radius))),
+        FilterDesc::Tent { radius } => lanes(|k| (1.0 - x[k] / radius).max(0.0)),
         // Cut at radius 4 stddev and lowered by its value there, exp(-4^2 / 2) = exp(-8).
         FilterDesc::Gaussian { stddev } => {
-            ((-(x * x) / (2.0 * stddev * stddev)).exp() - GAUSSIAN_TAIL).max(0.0)
+            let two_var = 2.0 * stddev * stddev;
+            lanes(|k| (fastmath::exp(-(x[k] * x[k]) / two_var) - GAUSSIAN_TAIL).max(0.0))
         }
         // Mitchell & Netravali 1988, eq. 8, on radius 2.
-        FilterDesc::Mitchell { b, c } => {
+        FilterDesc::Mitchell { b, c } => lanes(|k| {
+            let x = x[k];
             let (x2, x3) = (x * x, x * x * x);
             let v = if x < 1.0 {
                 (12.0 - 9.0 * b - 6.0 * c) * x3
@@ -55,8 +66,9 @@ pub fn filter_profile(filter: &FilterDesc, x: f32) -> f32 {
                 0.0
             };
             v / 6.0
-        }
-        FilterDesc::Lanczos { lobes } => {
+        }),
+        FilterDesc::Lanczos { lobes } => lanes(|k| {
+            let x = x[k];
             if x >= lobes {
                 return 0.0;
             }
@@ -69,7 +81,7 @@ pub fn filter_profile(filter: &FilterDesc, x: f32) -> f32 {
                 }
             };
             sinc(x) * sinc(x / lobes)
-        }
+        }),
     }
 }
 
@@ -414,6 +426,7 @@ mod tests {
     #[test]
     fn gaussian_tail_is_its_value_at_the_radius() {
         assert_eq!(GAUSSIAN_TAIL, (-8f32).exp());
+        assert_eq!(GAUSSIAN_TAIL, fastmath::exp(-8.0));
         for stddev in [0.5f32, 0.3, 1.0] {
             let f = FilterDesc::Gaussian { stddev };
             assert_eq!(filter_profile(&f, 4.0 * stddev), 0.0);
