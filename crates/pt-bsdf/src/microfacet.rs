@@ -31,7 +31,7 @@
 //! All functions take directions in the local frame with `wo.z >= 0` (callers flip).
 
 use crate::fresnel::fresnel_dielectric;
-use pt_math::{Vec2, Vec3};
+use pt_math::{fastmath, Vec2, Vec3};
 use std::f32::consts::PI;
 
 /// Which normal distribution.
@@ -69,40 +69,16 @@ pub struct Microfacet {
     pub alpha_v: f32,
 }
 
-/// erf in f64 (libm, correctly rounded to within an ulp or two), as f32.
-fn erf(x: f32) -> f32 {
-    libm::erf(f64::from(x)) as f32
-}
-
-/// Inverse error function on (-1, 1), f64: [`erf_inv_giles`] as the start, then Newton steps
-/// on libm's erf (`d erf/dx = 2/sqrt(pi) e^{-x^2}`) to full double precision. +-inf at +-1.
-pub fn erf_inv(y: f64) -> f64 {
-    let mut x = erf_inv_giles(y);
-    if !x.is_finite() {
-        return x;
-    }
-    // Giles' start is good to about 1e-7 relative; Newton doubles the digits per step.
-    for _ in 0..2 {
-        let e = libm::erf(x) - y;
-        let d = 2.0 / std::f64::consts::PI.sqrt() * (-x * x).exp();
-        if d == 0.0 {
-            break;
-        }
-        x -= e / d;
-    }
-    x
-}
-
-/// Inverse error function on (-1, 1) to about 1e-7 relative (+-inf at +-1): Giles 2010
-/// ("Approximating the erfinv function", GPU Computing Gems Jade), the single-precision branch
-/// evaluated in f64, one logarithm and a polynomial. Enough where the result becomes an f32
-/// (Beckmann's visible slopes; Mitsuba uses the same approximation in f32).
-pub fn erf_inv_giles(y: f64) -> f64 {
+/// Inverse error function on (-1, 1) to about 1e-7 relative, f32's precision (+-inf at +-1):
+/// Giles 2010 ("Approximating the erfinv function", GPU Computing Gems Jade), his
+/// single-precision approximation, one logarithm and a polynomial (Mitsuba samples Beckmann
+/// slopes with the same approximation).
+pub fn erf_inv_giles(y: f32) -> f32 {
     if y <= -1.0 {
-        return f64::NEG_INFINITY;
+        return f32::NEG_INFINITY;
     }
     if y >= 1.0 {
-        return f64::INFINITY;
+        return f32::INFINITY;
     }
     let w = -((1.0 - y) * (1.0 + y)).ln();
     if w < 5.0 {
@@ -140,48 +116,51 @@ pub fn erf_inv_giles(y: f64) -> f64 {
     }
 }
 
+/// 1 / sqrt(pi), in the Gaussian slope densities of Beckmann's visible normals.
+const INV_SQRT_PI: f32 = 0.564_189_6;
+
 /// Visible slopes of the Beckmann distribution of roughness 1 seen from incidence `cos_theta`
 /// (in the xz-plane): `(slope_x, slope_y)` from two uniform numbers (see the module doc). Away
 /// from normal incidence the two are separable: slope_x depends on `u1` and the angle alone
-/// ([`beckmann_slope_x`]), slope_y on `u2` alone ([`beckmann_slope_y`]).
-fn beckmann_visible_slopes_11(cos_theta: f64, u1: f64, u2: f64) -> (f64, f64) {
+/// ([`beckmann_slope_x`]), slope_y on `u2` alone ([`beckmann_slope_y`]). In f32, as the
+/// normals they become: the inversions below are accurate to a few 1e-7 in probability.
+fn beckmann_visible_slopes_11(cos_theta: f32, u1: f32, u2: f32) -> (f32, f32) {
     let slope_y = beckmann_slope_y(u2);
     if beckmann_normal_incidence(cos_theta) {
         // Normal incidence: every facet is visible, the slopes are the plain Gaussian.
-        let u1 = u1.clamp(1e-9, 1.0 - 1e-9);
+        let u1 = u1.clamp(1e-7, 1.0 - 1e-7);
         let r = (-(1.0 - u1).ln()).sqrt();
-        let phi = 2.0 * std::f64::consts::PI * u2;
-        return (r * phi.cos(), r * phi.sin());
+        let (sin_phi, cos_phi) = (2.0 * PI * u2).sin_cos();
+        return (r * cos_phi, r * sin_phi);
     }
     (beckmann_slope_x(cos_theta, u1), slope_y)
 }
 
 /// Whether [`beckmann_visible_slopes_11`] takes its normal-incidence branch (not separable).
 #[inline]
-fn beckmann_normal_incidence(cos_theta: f64) -> bool {
+fn beckmann_normal_incidence(cos_theta: f32) -> bool {
     cos_theta > 0.9999
 }
 
-/// The visible slope across the viewing plane: the standard Gaussian's, Giles' inverse error
-/// function to 1e-7 (the slopes become f32 normals: the full-precision inverse's Newton steps
-/// on erf made Beckmann sampling, and the coating tables of a Beckmann `roughplastic`, several
-/// times slower).
+/// The visible slope across the viewing plane: the standard Gaussian's, by Giles' inverse
+/// error function.
 #[inline]
-fn beckmann_slope_y(u2: f64) -> f64 {
-    erf_inv_giles((2.0 * u2 - 1.0).clamp(-1.0 + 1e-12, 1.0 - 1e-12))
+fn beckmann_slope_y(u2: f32) -> f32 {
+    erf_inv_giles((2.0 * u2 - 1.0).clamp(-1.0 + 1e-7, 1.0 - 1e-7))
 }
 
 /// The visible slope in the viewing plane for incidence `cos_theta` (below normal incidence):
-/// the inverse of its CDF at `u1` by Newton's method in a bracket.
-fn beckmann_slope_x(cos_theta: f64, u1: f64) -> f64 {
-    let u1 = u1.clamp(1e-9, 1.0 - 1e-9);
+/// the inverse of its CDF at `u1` by Newton's method in a bracket, in the erf domain b =
+/// erf(slope_x) (Heitz & d'Eon 2014, sec. 4 and appendix; the CDF is
+/// norm (1 + b + tan(theta) e^{-slope_x^2} / sqrt(pi))).
+fn beckmann_slope_x(cos_theta: f32, u1: f32) -> f32 {
+    let u1 = u1.clamp(1e-7, 1.0 - 1e-7);
     let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
     let tan_theta = sin_theta / cos_theta;
     let cot_theta = cos_theta / sin_theta;
-    let inv_sqrt_pi = 1.0 / std::f64::consts::PI.sqrt();
-    // Bracket of b = erf(slope_x): facets with slope_x >= cot(theta) face away from the viewer.
-    let (mut lo, mut hi) = (-1.0f64, libm::erf(cot_theta));
-    let norm = 1.0 / (1.0 + hi + inv_sqrt_pi * tan_theta * (-cot_theta * cot_theta).exp());
+    // Bracket of b: facets with slope_x >= cot(theta) face away from the viewer.
+    let (mut lo, mut hi) = (-1.0f32, libm::erff(cot_theta));
+    let norm = 1.0 / (1.0 + hi + INV_SQRT_PI * tan_theta * fastmath::exp(-cot_theta * cot_theta));
     // Start from Jakob 2014's fit of the inverse, b0 = c - (1 + c)(1 - u1)^p(theta), which
     // leaves a few Newton steps.
     let theta = cos_theta.acos();
@@ -193,9 +172,10 @@ fn beckmann_slope_x(cos_theta: f64, u1: f64) -> f64 {
             b = 0.5 * (lo + hi);
         }
         x = erf_inv_giles(b);
-        let value = norm * (1.0 + b + inv_sqrt_pi * tan_theta * (-x * x).exp()) - u1;
-        // 1e-9 in probability is far below the f32 output's resolution.
-        if value.abs() < 1e-9 || hi - lo < 1e-14 {
+        let value = norm * (1.0 + b + INV_SQRT_PI * tan_theta * fastmath::exp(-x * x)) - u1;
+        // 2e-7 in probability: a few roundings of the CDF's f32 terms, below which its sign
+        // is noise; a bracket of 1e-6 in b leaves slopes good to f32's own precision.
+        if value.abs() < 2e-7 || hi - lo < 1e-6 {
             break;
         }
         if value > 0.0 {
@@ -240,7 +220,9 @@ impl Microfacet {
                 let k = x * x + y * y + z2;
                 1.0 / (PI * ax * ay * k * k)
             }
-            Distribution::Beckmann => (-(x * x + y * y) / z2).exp() / (PI * ax * ay * z2 * z2),
+            Distribution::Beckmann => {
+                fastmath::exp(-(x * x + y * y) / z2) / (PI * ax * ay * z2 * z2)
+            }
         };
         if v.is_finite() {
             v
@@ -266,7 +248,9 @@ impl Microfacet {
                 if a >= 4.0 {
                     return 0.0; // Lambda(4) = 1.4e-9; the difference below cancels in f32
                 }
-                (0.5 * (erf(a) - 1.0) + (-a * a).exp() / (2.0 * a * PI.sqrt())).max(0.0)
+                // Walter et al. 2007 eq. 27's Lambda, (e^{-a^2} / (a sqrt(pi)) - erfc(a)) / 2,
+                // with erfc itself: 1 - erf(a) lost its digits in f32 for a > 2.
+                (0.5 * (fastmath::exp(-a * a) * INV_SQRT_PI / a - libm::erfcf(a))).max(0.0)
             }
         }
     }
@@ -380,21 +364,16 @@ impl Microfacet {
     /// viewer `ws`: rotated to the viewer's azimuth, unstretched; the normal is
     /// (-slope_x, -slope_y, 1), +z where that is not finite.
     #[inline]
-    fn beckmann_normal(&self, ws: Vec3, sx: f64, sy: f64) -> Vec3 {
+    fn beckmann_normal(&self, ws: Vec3, sx: f32, sy: f32) -> Vec3 {
         let (ax, ay) = (self.alpha_u, self.alpha_v);
-        let r = f64::from(ws.x.hypot(ws.y));
+        let r = ws.x.hypot(ws.y);
         let (cos_phi, sin_phi) = if r > 0.0 {
-            (f64::from(ws.x) / r, f64::from(ws.y) / r)
+            (ws.x / r, ws.y / r)
         } else {
             (1.0, 0.0)
         };
         let (rx, ry) = (cos_phi * sx - sin_phi * sy, sin_phi * sx + cos_phi * sy);
-        let m = Vec3::new(
-            (-rx * f64::from(ax)) as f32,
-            (-ry * f64::from(ay)) as f32,
-            1.0,
-        )
-        .normalize();
+        let m = Vec3::new(-rx * ax, -ry * ay, 1.0).normalize();
         if m.is_finite() {
             m
         } else {
@@ -418,17 +397,17 @@ impl Microfacet {
             return per_pair();
         }
         let ws = self.beckmann_stretched(wo);
-        let cos_theta = f64::from(ws.z.clamp(0.0, 1.0));
+        let cos_theta = ws.z.clamp(0.0, 1.0);
         if beckmann_normal_incidence(cos_theta) {
             return per_pair();
         }
-        let sx: Vec<f64> = us
+        let sx: Vec<f32> = us
             .iter()
-            .map(|&u| beckmann_slope_x(cos_theta, f64::from(u)))
+            .map(|&u| beckmann_slope_x(cos_theta, u))
             .collect();
         vs.iter()
             .flat_map(|&v| {
-                let sy = beckmann_slope_y(f64::from(v));
+                let sy = beckmann_slope_y(v);
                 sx.iter().map(move |&sx| self.beckmann_normal(ws, sx, sy))
             })
             .collect()
@@ -461,9 +440,8 @@ impl Microfacet {
                 // Heitz & d'Eon 2014: stretch to roughness 1, sample visible slopes, rotate to
                 // the viewer's azimuth, unstretch.
                 let ws = self.beckmann_stretched(wo);
-                let cos_theta = f64::from(ws.z.clamp(0.0, 1.0));
-                let (sx, sy) =
-                    beckmann_visible_slopes_11(cos_theta, f64::from(u.x), f64::from(u.y));
+                let cos_theta = ws.z.clamp(0.0, 1.0);
+                let (sx, sy) = beckmann_visible_slopes_11(cos_theta, u.x, u.y);
                 self.beckmann_normal(ws, sx, sy)
             }
         }
@@ -562,24 +540,26 @@ mod tests {
         }
     }
 
+    /// Giles' f32 inverse against the exact inverse (Newton's method on libm's f64 erf, checked
+    /// to invert it to 1e-14): within 1e-6 relative over (-1, 1), a few f32 roundings (Giles'
+    /// design accuracy is about 1e-7; a wrong coefficient is off by far more).
     #[test]
     fn erf_inv_inverts_erf() {
-        for &x in &[-4.0f64, -2.5, -1.0, -0.3, 0.0, 1e-4, 0.7, 1.9, 3.5] {
-            let y = libm::erf(x);
-            assert!(
-                (erf_inv(y) - x).abs() < 1e-9 * x.abs().max(1.0),
-                "{x}: {}",
-                erf_inv(y)
-            );
-        }
-        assert!(erf_inv(1.0).is_infinite() && erf_inv(-1.0).is_infinite());
-        // Giles' approximation alone: within 1e-6 relative over the range Beckmann sampling
-        // uses (its design accuracy is a few 1e-7 in f32).
+        let exact = |y: f64| {
+            let mut x = f64::from(erf_inv_giles(y as f32));
+            for _ in 0..3 {
+                let slope = 2.0 / std::f64::consts::PI.sqrt() * (-x * x).exp();
+                x -= (libm::erf(x) - y) / slope;
+            }
+            assert!((libm::erf(x) - y).abs() < 1e-14, "{y}");
+            x
+        };
         for k in 1..2000 {
-            let y = -1.0 + 2.0 * k as f64 / 2000.0;
-            let (a, b) = (erf_inv_giles(y), erf_inv(y));
+            let y = -1.0 + 2.0 * k as f32 / 2000.0;
+            let (a, b) = (f64::from(erf_inv_giles(y)), exact(f64::from(y)));
             assert!((a - b).abs() <= 1e-6 * b.abs().max(1e-3), "{y}: {a} vs {b}");
         }
+        assert!(erf_inv_giles(1.0).is_infinite() && erf_inv_giles(-1.0).is_infinite());
     }
 
     #[test]
