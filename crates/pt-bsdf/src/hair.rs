@@ -55,7 +55,7 @@
 
 use crate::fresnel::fresnel_dielectric;
 use crate::BsdfSample;
-use pt_math::{Vec2, Vec3, Vec4};
+use pt_math::{fastmath, Vec2, Vec3, Vec4};
 use pt_spectrum::SampledSpectrum;
 use std::f32::consts::{PI, TAU};
 
@@ -227,7 +227,7 @@ impl Hair {
         let transmittance = SampledSpectrum(
             self.sigma_a
                 .0
-                .map(|s| (-s * 2.0 * cos_gamma_t / cos_theta_t).exp()),
+                .map(|s| fastmath::exp(-s * 2.0 * cos_gamma_t / cos_theta_t)),
         );
         let cos_gamma_o = (1.0 - h * h).max(0.0).sqrt();
         let f = fresnel_dielectric(cos_theta_o * cos_gamma_o, self.eta);
@@ -368,7 +368,7 @@ impl Hair {
         // Longitudinal (d'Eon et al. 2011): cos of the angle to the reflected cone's axis.
         let v = self.v[p];
         let u0 = u.x.max(1e-5);
-        let cos_t = 1.0 + v * (u0 + (1.0 - u0) * (-2.0 / v).exp()).ln();
+        let cos_t = 1.0 + v * (u0 + (1.0 - u0) * fastmath::exp(-2.0 / v)).ln();
         let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
         let cos_phi = (TAU * u.y).cos();
         let sin_theta_i = (-cos_t * sin_op + sin_t * cos_phi * cos_op).clamp(-1.0, 1.0);
@@ -409,9 +409,11 @@ fn longitudinal(v: f32, sin_o: f32, cos_o: f32, sin_i: f32, cos_i: f32) -> f32 {
     let a = cos_o * cos_i / v;
     let b = sin_o * sin_i / v;
     if v <= 0.1 {
-        (log_i0(a) - b - 1.0 / v + std::f32::consts::LN_2 + (1.0 / (2.0 * v)).ln()).exp()
+        fastmath::exp(log_i0(a) - b - 1.0 / v + std::f32::consts::LN_2 + (1.0 / (2.0 * v)).ln())
     } else {
-        (-b).exp() * i0(a) / (2.0 * v * (1.0 / v).sinh())
+        // 2 v sinh(1 / v) = v (e^{1/v} - e^{-1/v}); 1 / v < 10 here, so neither overflows.
+        let x = 1.0 / v;
+        fastmath::exp(-b) * i0(a) / (v * (fastmath::exp(x) - fastmath::exp(-x)))
     }
 }
 
@@ -448,14 +450,14 @@ fn log_i0(x: f32) -> f32 {
 /// The logistic density of scale `s` at `x`.
 #[inline]
 fn logistic(x: f32, s: f32) -> f32 {
-    let e = (-x.abs() / s).exp();
+    let e = fastmath::exp(-x.abs() / s);
     e / (s * (1.0 + e) * (1.0 + e))
 }
 
 /// The logistic cumulative distribution of scale `s` at `x`.
 #[inline]
 fn logistic_cdf(x: f32, s: f32) -> f32 {
-    1.0 / (1.0 + (-x / s).exp())
+    1.0 / (1.0 + fastmath::exp(-x / s))
 }
 
 /// The logistic of scale `s` restricted to [-pi, pi] and renormalised.

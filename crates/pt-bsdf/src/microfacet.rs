@@ -401,10 +401,7 @@ impl Microfacet {
         if beckmann_normal_incidence(cos_theta) {
             return per_pair();
         }
-        let sx: Vec<f32> = us
-            .iter()
-            .map(|&u| beckmann_slope_x(cos_theta, u))
-            .collect();
+        let sx: Vec<f32> = us.iter().map(|&u| beckmann_slope_x(cos_theta, u)).collect();
         vs.iter()
             .flat_map(|&v| {
                 let sy = beckmann_slope_y(v);
