@@ -34,6 +34,7 @@
 
 use crate::tables::{self, tables, Tables};
 use glam::Vec3;
+use pt_math::fastmath;
 use std::f64::consts::PI;
 
 /// Mitsuba's `MI_CIE_Y_NORMALIZATION`: 1 / (integral of CIE y-bar over 360-830 nm at 1 nm),
@@ -480,9 +481,12 @@ fn eval_sky(a: &SkyAngles, p: &[f32; tables::SKY_PARAMS], mean: f32) -> f32 {
     // chi = (1 + cos^2 gamma) / (1 + H^2 - 2 H cos gamma)^(3/2); x^(3/2) as x sqrt(x).
     let base = 1.0 + h * h - 2.0 * h * a.cos_gamma;
     let chi = a.one_plus_cos2 / (base * base.sqrt());
-    let c1 = 1.0 + p[0] * (p[1] * a.inv_cos_theta).exp();
-    let c2 =
-        p[2] + p[3] * (p[4] * a.gamma).exp() + p[5] * a.cos2 + p[6] * chi + p[7] * a.sqrt_cos_theta;
+    let c1 = 1.0 + p[0] * fastmath::exp(p[1] * a.inv_cos_theta);
+    let c2 = p[2]
+        + p[3] * fastmath::exp(p[4] * a.gamma)
+        + p[5] * a.cos2
+        + p[6] * chi
+        + p[7] * a.sqrt_cos_theta;
     c1 * c2 * mean
 }
 
