@@ -7,7 +7,7 @@ use pt_math::warp::{
     square_to_disk_concentric, square_to_uniform_sphere, square_to_uniform_triangle,
     uniform_cone_pdf,
 };
-use pt_math::{Distribution1D, Frame, Mat3, Vec2, Vec3};
+use pt_math::{fastmath, Distribution1D, Frame, Mat3, Vec2, Vec3};
 use pt_spectrum::{SampledSpectrum, SampledWavelengths};
 use std::f32::consts::PI;
 
@@ -391,11 +391,11 @@ impl SphereCone {
 #[inline]
 pub fn sphere_uv(frame: Mat3, d: Vec3) -> Vec2 {
     let local = frame.transpose() * d;
-    let mut u = local.y.atan2(local.x) * (0.5 / PI);
+    let mut u = fastmath::atan2(local.y, local.x) * (0.5 / PI);
     if u < 0.0 {
         u += 1.0;
     }
-    Vec2::new(u, local.z.clamp(-1.0, 1.0).acos() / PI)
+    Vec2::new(u, fastmath::acos(local.z) / PI)
 }
 
 /// Mitsuba's disk texture coordinates at the object-space point `local` = (x, y) of the disk
@@ -412,7 +412,7 @@ pub fn disk_uv(a: Vec3, b: Vec3, local: Vec2) -> (Vec2, [Vec3; 2]) {
     } else {
         (1.0, 0.0)
     };
-    let mut v = local.y.atan2(local.x) * (0.5 / PI);
+    let mut v = fastmath::atan2(local.y, local.x) * (0.5 / PI);
     if v < 0.0 {
         v += 1.0;
     }

@@ -1,7 +1,7 @@
 //! Environment maps (Mitsuba `envmap`).
 
 use crate::texture::spectral::{upsample_texels, TexelSpectrum, Upsampling};
-use pt_math::{Distribution2D, Mat3, Vec2, Vec3};
+use pt_math::{fastmath, Distribution2D, Mat3, Vec2, Vec3};
 use pt_spectrum::{NamedIlluminant, SampledSpectrum, SampledWavelengths, Spectrum};
 use std::f32::consts::PI;
 
@@ -72,11 +72,11 @@ impl EnvMap {
     #[inline(always)]
     pub(super) fn dir_to_uv(&self, world: Vec3) -> Vec2 {
         let d = self.to_local * world;
-        let mut u = d.x.atan2(-d.z) * (0.5 / PI);
+        let mut u = fastmath::atan2(d.x, -d.z) * (0.5 / PI);
         if u < 0.0 {
             u += 1.0;
         }
-        Vec2::new(u, d.y.clamp(-1.0, 1.0).acos() / PI)
+        Vec2::new(u, fastmath::acos(d.y) / PI)
     }
 
     #[inline(always)]

@@ -14,7 +14,7 @@
 //! MIS with BSDF sampling weighs against.
 
 use pt_math::warp::{square_to_uniform_cone, uniform_cone_pdf};
-use pt_math::{Distribution2D, Frame, Mat3, Vec2, Vec3};
+use pt_math::{fastmath, Distribution2D, Frame, Mat3, Vec2, Vec3};
 use pt_sky::SkyModel;
 use pt_spectrum::{SampledSpectrum, SampledWavelengths};
 use std::f32::consts::PI;
@@ -181,7 +181,7 @@ impl SunSky {
     /// The sky table's solid-angle density at local direction `d` (upper hemisphere).
     #[inline]
     fn sky_pdf(&self, d: Vec3) -> f32 {
-        let mut u = d.y.atan2(d.x) * (0.5 / PI);
+        let mut u = fastmath::atan2(d.y, d.x) * (0.5 / PI);
         if u < 0.0 {
             u += 1.0;
         }

@@ -247,7 +247,7 @@ fn cylinder_point(
     let on = dir * radius;
     let p = p0 + frame * Vec3::new(on.x, on.y, local.z);
     let outward = frame * Vec3::new(dir.x, dir.y, 0.0);
-    let mut phi = dir.y.atan2(dir.x);
+    let mut phi = pt_math::fastmath::atan2(dir.y, dir.x);
     if phi < 0.0 {
         phi += std::f32::consts::TAU;
     }
