@@ -71,7 +71,8 @@ pub struct Microfacet {
 
 /// Inverse error function on (-1, 1) to about 1e-7 relative, f32's precision (+-inf at +-1):
 /// Giles 2010 ("Approximating the erfinv function", GPU Computing Gems Jade), his
-/// single-precision approximation, one logarithm and a polynomial (Mitsuba samples Beckmann
+/// single-precision approximation, one logarithm and a polynomial (his coefficients, written
+/// as the f32 values they round to; Mitsuba samples Beckmann
 /// slopes with the same approximation).
 pub fn erf_inv_giles(y: f32) -> f32 {
     if y <= -1.0 {
@@ -83,32 +84,32 @@ pub fn erf_inv_giles(y: f32) -> f32 {
     let w = -((1.0 - y) * (1.0 + y)).ln();
     if w < 5.0 {
         let w = w - 2.5;
-        let mut p = 2.810_226_36e-08;
+        let mut p = 2.8102264e-08;
         for c in [
-            3.432_739_39e-07,
+            3.4327394e-07,
             -3.523_387_7e-06,
-            -4.391_506_54e-06,
+            -4.3915065e-06,
             0.000_218_580_87,
-            -0.001_253_725_03,
-            -0.004_177_681_64,
-            0.246_640_727,
-            1.501_409_41,
+            -0.001253725,
+            -0.0041776816,
+            0.24664073,
+            1.5014094,
         ] {
             p = c + p * w;
         }
         p * y
     } else {
         let w = w.sqrt() - 3.0;
-        let mut p = -0.000_200_214_257;
+        let mut p = -0.00020021426;
         for c in [
-            0.000_100_950_558,
-            0.001_349_343_22,
-            -0.003_673_428_44,
-            0.005_739_507_73,
+            0.00010095056,
+            0.0013493432,
+            -0.0036734284,
+            0.0057395077,
             -0.007_622_461_3,
-            0.009_438_870_47,
-            1.001_674_06,
-            2.832_976_82,
+            0.0094388705,
+            1.001674,
+            2.8329768,
         ] {
             p = c + p * w;
         }
