@@ -72,8 +72,8 @@ pub struct Microfacet {
 /// Inverse error function on (-1, 1) to about 1e-7 relative, f32's precision (+-inf at +-1):
 /// Giles 2010 ("Approximating the erfinv function", GPU Computing Gems Jade), his
 /// single-precision approximation, one logarithm and a polynomial (his coefficients, written
-/// as the f32 values they round to; Mitsuba samples Beckmann
-/// slopes with the same approximation).
+/// as the f32 values they round to; Mitsuba samples Beckmann slopes with the same
+/// approximation).
 pub fn erf_inv_giles(y: f32) -> f32 {
     if y <= -1.0 {
         return f32::NEG_INFINITY;

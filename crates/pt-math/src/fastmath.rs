@@ -9,7 +9,7 @@
 /// place is 1. Subtracting it again gives that integer as an f32, exactly.
 const ROUNDER: f32 = 12_582_912.0;
 
-/// ln 2 split in two: `LN2_HI` has only 16 significant bits, so `k * LN2_HI` is exact for the
+/// ln 2 split in two: `LN2_HI` has at most 16 significant bits, so `k * LN2_HI` is exact for the
 /// integers |k| < 2^8 that [`exp`] uses; `LN2_LO` is the rest (ln 2 - LN2_HI, to f32).
 const LN2_HI: f32 = 0.69314575;
 const LN2_LO: f32 = 1.428_606_8e-6;
