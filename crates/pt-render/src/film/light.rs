@@ -22,13 +22,9 @@
 //! quotient ([`LightFilm::camera`]). The image is the light splats' sum plus that average.
 
 use super::exact::{to_fixed, LINEAR_BITS};
-use super::{filter_profile, filter_radius};
+use super::{filter_radius, footprint_weights, MAX_FOOTPRINT};
 use pt_math::Vec2;
 use pt_scene::FilterDesc;
-
-/// Most pixels per axis a splat reaches (a filter radius up to 15.5 pixels); the light tracer
-/// refuses wider filters ([`LightFilm::supports`]).
-const MAX_FOOTPRINT: usize = 32;
 
 /// One contribution to the image: where it lands and its linear RGB value.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -394,12 +390,8 @@ impl Footprint {
         if fp.xs.is_empty() || fp.ys.is_empty() {
             return None;
         }
-        for (k, x) in fp.xs.clone().enumerate() {
-            fp.wx[k] = filter_profile(filter, x as f32 + 0.5 - pos.x);
-        }
-        for (k, y) in fp.ys.clone().enumerate() {
-            fp.wy[k] = filter_profile(filter, y as f32 + 0.5 - pos.y);
-        }
+        footprint_weights(filter, fp.xs.start, fp.xs.len(), pos.x, &mut fp.wx);
+        footprint_weights(filter, fp.ys.start, fp.ys.len(), pos.y, &mut fp.wy);
         Some(fp)
     }
 }

@@ -85,6 +85,38 @@ pub fn filter_profiles<const L: usize>(filter: &FilterDesc, x: &[f32; L]) -> [f3
     }
 }
 
+/// Most pixels per axis whose filter weights a splat computes at once (a filter radius up to
+/// 15.5 pixels): the splatting film computes wider footprints pixel by pixel, the light
+/// tracer's film refuses them. A multiple of [`WEIGHT_LANES`].
+pub(crate) const MAX_FOOTPRINT: usize = 32;
+
+/// Weights computed at once (SIMD lanes): the footprint of every filter Mitsuba users pick by
+/// default or name (box, tent, Gaussian, Mitchell, Catmull-Rom: at most 5 pixels; Lanczos
+/// with 3 lobes: 7) in one pass.
+const WEIGHT_LANES: usize = 8;
+
+/// The filter's weights f(X + 1/2 - frac) along one axis for the `len` pixels X = `first`,
+/// `first + 1`, ... (at most [`MAX_FOOTPRINT`]), into `out`, [`WEIGHT_LANES`] at a time (one
+/// SIMD pass for the usual filters). `first` and `frac` are in whichever coordinates the
+/// caller keeps its sample position: whole pixels relative to the sample's origin pixel and
+/// the offset in it (the splatting film), or image pixels and the position (the light
+/// tracer's film). Entries from `len` up to the next multiple of [`WEIGHT_LANES`] get the
+/// weights of the pixels beyond; callers read the first `len`. A function, not a closure:
+/// closures were compiled outside the render loop's instruction sets.
+#[inline(always)]
+pub(crate) fn footprint_weights(
+    filter: &FilterDesc,
+    first: i32,
+    len: usize,
+    frac: f32,
+    out: &mut [f32; MAX_FOOTPRINT],
+) {
+    for c in (0..len).step_by(WEIGHT_LANES) {
+        let d: [f32; WEIGHT_LANES] = lanes(|k| (first + (c + k) as i32) as f32 + 0.5 - frac);
+        out[c..c + WEIGHT_LANES].copy_from_slice(&filter_profiles(filter, &d));
+    }
+}
+
 /// Radius of a filter's support, pixels.
 pub fn filter_radius(filter: &FilterDesc) -> f32 {
     match *filter {

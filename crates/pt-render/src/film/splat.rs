@@ -20,23 +20,13 @@
 //! whole film's render does: the same pixels, bit for bit.
 
 use super::exact::{to_fixed, LINEAR_BITS, SQUARE_BITS};
-use super::{filter_profile, filter_profiles, filter_radius};
-use pt_math::lanes::lanes;
+use super::{filter_profile, filter_radius, footprint_weights, MAX_FOOTPRINT};
 use pt_math::Vec2;
 use pt_scene::FilterDesc;
 
 /// Edge length of a tile of origin pixels. Tiles are aligned to multiples of it in the whole
 /// film's coordinates (see the module documentation).
 pub const SPLAT_TILE: i32 = 16;
-
-/// Most pixels per axis whose weights are computed once per sample (a filter of radius up to
-/// 15.5 pixels); wider filters compute them per pixel. A multiple of [`WEIGHT_LANES`].
-const MAX_FOOTPRINT: usize = 32;
-
-/// Weights computed at once (SIMD lanes): the footprint of every filter Mitsuba users pick by
-/// default or name (box, tent, Gaussian, Mitchell, Catmull-Rom: at most 5 pixels; Lanczos
-/// with 3 lobes: 7) in one pass.
-const WEIGHT_LANES: usize = 8;
 
 /// The tile grid of a splatting film: which origin pixels each tile holds and which image
 /// pixels its accumulator covers. Coordinates are the image's pixels (negative or beyond the
@@ -265,8 +255,8 @@ impl SplatTile {
         let (mut wx, mut wy) = ([0.0f32; MAX_FOOTPRINT], [0.0f32; MAX_FOOTPRINT]);
         let cached = xs.len() <= MAX_FOOTPRINT && ys.len() <= MAX_FOOTPRINT;
         if cached {
-            profiles(filter, &xs, origin[0], u.x, &mut wx);
-            profiles(filter, &ys, origin[1], u.y, &mut wy);
+            footprint_weights(filter, xs.start - origin[0], xs.len(), u.x, &mut wx);
+            footprint_weights(filter, ys.start - origin[1], ys.len(), u.y, &mut wy);
         }
         for (j, y) in ys.enumerate() {
             let wy = if cached {
@@ -293,24 +283,6 @@ impl SplatTile {
                 s[self.stride - 1] += w;
             }
         }
-    }
-}
-
-/// The filter's weights f(X + 1/2 - (o + u)) for the pixels X of `r` (at most
-/// [`MAX_FOOTPRINT`]) along one axis, from origin pixel `o` and offset `u` in it, into `out`,
-/// [`WEIGHT_LANES`] pixels at a time (one SIMD pass for the usual filters). A function, not a
-/// closure: closures were compiled outside the render loop's instruction sets.
-#[inline(always)]
-fn profiles(
-    filter: &FilterDesc,
-    r: &std::ops::Range<i32>,
-    o: i32,
-    u: f32,
-    out: &mut [f32; MAX_FOOTPRINT],
-) {
-    for c in (0..r.len()).step_by(WEIGHT_LANES) {
-        let d: [f32; WEIGHT_LANES] = lanes(|k| (r.start - o + (c + k) as i32) as f32 + 0.5 - u);
-        out[c..c + WEIGHT_LANES].copy_from_slice(&filter_profiles(filter, &d));
     }
 }
 
