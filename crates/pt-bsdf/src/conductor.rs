@@ -39,12 +39,14 @@
 //! ```
 
 use crate::fresnel::fresnel_conductor4;
-use crate::microfacet::Microfacet;
+use crate::microfacet::{d_of, g1_of, Distribution, Microfacet};
 use crate::BsdfSample;
+use pt_math::lanes::{lanes, V3};
 use pt_math::{Vec2, Vec3};
 use pt_spectrum::SampledSpectrum;
 
 /// Per-lane conductor Fresnel at `cos_i`.
+#[inline(always)]
 fn fresnel_lanes(cos_i: f32, eta: SampledSpectrum, k: SampledSpectrum) -> SampledSpectrum {
     SampledSpectrum(fresnel_conductor4(cos_i, eta.0, k.0))
 }
@@ -164,40 +166,44 @@ impl RoughConductor {
     /// [`RoughConductor::eval`] and [`RoughConductor::pdf`] together, the same numbers (the
     /// same operations in the same order), with the half vector, D(h) and G1(wo) computed
     /// once: for a Beckmann surface each is an exponential or an error function, and light
-    /// sampling with MIS needs both values of every light direction.
+    /// sampling with MIS needs both values of every light direction. (One lane of
+    /// [`RoughConductor::eval_pdf_lanes`].)
+    #[inline(always)]
     pub fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (SampledSpectrum, f32) {
-        if wo.z <= 0.0 || wi.z <= 0.0 {
-            return (SampledSpectrum::ZERO, 0.0);
-        }
-        let h = (wo + wi).normalize_or_zero();
-        if h.z <= 0.0 {
-            return (SampledSpectrum::ZERO, 0.0);
-        }
-        let d = self.mf.d(h);
-        if d == 0.0 {
-            return (SampledSpectrum::ZERO, 0.0);
-        }
-        let woh = wo.dot(h);
-        let g1_o = self.mf.g1(wo);
-        // As Microfacet::reflection_pdf through pdf_m.
-        let pdf = if woh <= 0.0 {
-            0.0
-        } else {
-            let p = g1_o * woh.max(0.0) * d / wo.z / (4.0 * woh);
-            if p.is_finite() {
-                p
-            } else {
-                0.0
-            }
+        let (ax, ay) = (self.mf.alpha_u, self.mf.alpha_v);
+        let t = match self.mf.dist {
+            Distribution::Ggx => terms::<false>(ax, ay, wo, wi),
+            Distribution::Beckmann => terms::<true>(ax, ay, wo, wi),
         };
-        // As eval, with G2 = G1(wo) G1(wi).
-        let f = fresnel_lanes(woh, self.eta, self.k) * self.specular_reflectance;
-        let v = d * (g1_o * self.mf.g1(wi)) / (4.0 * wi.z * wo.z);
-        let f = if v.is_finite() {
-            f * v
-        } else {
-            SampledSpectrum::ZERO
-        };
+        (t.value(self.eta, self.k, self.specular_reflectance), t.pdf)
+    }
+
+    /// [`RoughConductor::eval_pdf`] for `N` lanes whose distribution is GGX (`BECKMANN`
+    /// false) or Beckmann, each with its own parameters `m`, directions in each lane's local
+    /// frame: the microfacet terms for all lanes at once in SIMD registers (the path tracer's
+    /// eight paths), then the Fresnel factors lane by lane (each a four-wide spectrum).
+    #[inline(always)]
+    pub fn eval_pdf_lanes<const N: usize, const BECKMANN: bool>(
+        m: &ConductorLanes<N>,
+        wo: &V3<N>,
+        wi: &V3<N>,
+    ) -> ([SampledSpectrum; N], [f32; N]) {
+        // Each field in its own array: the compiler vectorises a loop whose lanes store to
+        // consecutive addresses, not one that fills an array of structures.
+        let (mut lit, mut v, mut woh, mut pdf) = ([false; N], [0.0; N], [0.0; N], [0.0; N]);
+        for k in 0..N {
+            let t = terms::<BECKMANN>(m.alpha_u[k], m.alpha_v[k], wo.get(k), wi.get(k));
+            (lit[k], v[k], woh[k], pdf[k]) = (t.lit, t.v, t.woh, t.pdf);
+        }
+        let f = lanes(|k| {
+            let t = Terms {
+                lit: lit[k],
+                v: v[k],
+                woh: woh[k],
+                pdf: pdf[k],
+            };
+            t.value(m.eta[k], m.k[k], m.specular_reflectance[k])
+        });
         (f, pdf)
     }
 
@@ -219,6 +225,104 @@ impl RoughConductor {
             delta: false,
             eta: 1.0,
         })
+    }
+}
+
+/// The wavelength-independent part of [`RoughConductor::eval_pdf`] for one pair (`wo`, `wi`)
+/// in the local frame: the value is `F(wo.h) k_s v` where `lit`, else black.
+#[derive(Clone, Copy)]
+struct Terms {
+    /// Whether the value is not black: both directions above, a facing half vector, D(h) > 0
+    /// and a finite `v`.
+    lit: bool,
+    /// `D(h) G1(wo) G1(wi) / (4 cos_i cos_o)`.
+    v: f32,
+    /// wo.h, the Fresnel term's cosine.
+    woh: f32,
+    /// The solid-angle pdf, `pdf_m(h) / (4 wo.h)` (0 where not finite).
+    pdf: f32,
+}
+
+impl Terms {
+    /// The value: `F(wo.h) k_s v`, black unless `lit`.
+    #[inline(always)]
+    fn value(
+        &self,
+        eta: SampledSpectrum,
+        k: SampledSpectrum,
+        specular_reflectance: SampledSpectrum,
+    ) -> SampledSpectrum {
+        if self.lit {
+            fresnel_lanes(self.woh, eta, k) * specular_reflectance * self.v
+        } else {
+            SampledSpectrum::ZERO
+        }
+    }
+}
+
+/// [`Terms`] of the GGX (`BECKMANN` false) or Beckmann distribution of roughness (`ax`, `ay`):
+/// the operations of [`RoughConductor::eval`] and [`RoughConductor::pdf`] in their order, with
+/// selects where those return early (so that a loop of it over lanes vectorises).
+#[inline(always)]
+fn terms<const BECKMANN: bool>(ax: f32, ay: f32, wo: Vec3, wi: Vec3) -> Terms {
+    let h = (wo + wi).normalize_or_zero();
+    let d = d_of::<BECKMANN>(ax, ay, h);
+    let above = !(wo.z <= 0.0) & !(wi.z <= 0.0) & !(h.z <= 0.0) & (d != 0.0);
+    let woh = wo.dot(h);
+    let g1_o = g1_of::<BECKMANN>(ax, ay, wo);
+    // As Microfacet::reflection_pdf through pdf_m.
+    let p = g1_o * woh.max(0.0) * d / wo.z / (4.0 * woh);
+    let pdf = if above & !(woh <= 0.0) & p.is_finite() {
+        p
+    } else {
+        0.0
+    };
+    // As eval, with G2 = G1(wo) G1(wi).
+    let v = d * (g1_o * g1_of::<BECKMANN>(ax, ay, wi)) / (4.0 * wi.z * wo.z);
+    Terms {
+        lit: above & v.is_finite(),
+        v,
+        woh,
+        pdf,
+    }
+}
+
+/// The parameters of `N` rough conductors, one per lane (structure of arrays of
+/// [`RoughConductor`] without its distribution, which is the kernel's), for
+/// [`RoughConductor::eval_pdf_lanes`].
+#[derive(Clone, Copy, Debug)]
+pub struct ConductorLanes<const N: usize> {
+    /// Roughness along the local x axis.
+    pub alpha_u: [f32; N],
+    /// Roughness along the local y axis.
+    pub alpha_v: [f32; N],
+    /// Real parts of the indices.
+    pub eta: [SampledSpectrum; N],
+    /// Imaginary parts.
+    pub k: [SampledSpectrum; N],
+    /// Multipliers of the reflectance.
+    pub specular_reflectance: [SampledSpectrum; N],
+}
+
+impl<const N: usize> Default for ConductorLanes<N> {
+    fn default() -> Self {
+        ConductorLanes {
+            alpha_u: [1.0; N],
+            alpha_v: [1.0; N],
+            eta: [SampledSpectrum::ZERO; N],
+            k: [SampledSpectrum::ZERO; N],
+            specular_reflectance: [SampledSpectrum::ZERO; N],
+        }
+    }
+}
+
+impl<const N: usize> ConductorLanes<N> {
+    /// Puts `c`'s parameters into lane `k`.
+    #[inline(always)]
+    pub fn set(&mut self, k: usize, c: &RoughConductor) {
+        (self.alpha_u[k], self.alpha_v[k]) = (c.mf.alpha_u, c.mf.alpha_v);
+        (self.eta[k], self.k[k]) = (c.eta, c.k);
+        self.specular_reflectance[k] = c.specular_reflectance;
     }
 }
 

@@ -47,7 +47,7 @@ pub mod rough_thin_film;
 pub mod thin_dielectric;
 pub mod thin_film;
 
-pub use conductor::{Conductor, RoughConductor};
+pub use conductor::{Conductor, ConductorLanes, RoughConductor};
 pub use dielectric::Dielectric;
 pub use gltf_pbr::GltfPbr;
 pub use hair::Hair;
@@ -361,18 +361,23 @@ impl SurfaceBsdf {
         mirror_side(self.two_sided, bsdf.is_transmissive(), wo.z)
     }
 
-    /// The albedo of a plain Lambertian surface (no normal map, no blend, fully opaque) and
-    /// whether it is two-sided, which the path tracer shades for all its paths at once with
-    /// [`Lambert`]'s lane kernels (the same arithmetic as [`SurfaceBsdf::eval`], `pdf` and
-    /// `sample` of such a surface); `None` for every other surface.
+    /// The model of a plain surface (no normal map, no blend, fully opaque) and whether it is
+    /// two-sided: what the path tracer may shade with a model's lane kernels (the same
+    /// arithmetic as [`SurfaceBsdf::eval`], `pdf` and `sample` of such a surface, whose
+    /// opacity factors are 1); `None` for every other surface.
+    #[inline(always)]
+    pub fn plain_model(&self) -> Option<(&Bsdf, bool)> {
+        (self.normal.is_none() && self.blend.is_none() && self.opacity == 1.0)
+            .then_some((&self.bsdf, self.two_sided))
+    }
+
+    /// The albedo of a plain Lambertian surface ([`SurfaceBsdf::plain_model`]) and whether it
+    /// is two-sided, which the path tracer shades for all its paths at once with
+    /// [`Lambert`]'s lane kernels; `None` for every other surface.
     #[inline(always)]
     pub fn plain_lambert(&self) -> Option<(SampledSpectrum, bool)> {
-        match self.bsdf {
-            Bsdf::Lambert(l)
-                if self.normal.is_none() && self.blend.is_none() && self.opacity == 1.0 =>
-            {
-                Some((l.reflectance, self.two_sided))
-            }
+        match self.plain_model() {
+            Some((Bsdf::Lambert(l), two_sided)) => Some((l.reflectance, two_sided)),
             _ => None,
         }
     }

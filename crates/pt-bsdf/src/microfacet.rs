@@ -31,6 +31,7 @@
 //! All functions take directions in the local frame with `wo.z >= 0` (callers flip).
 
 use crate::fresnel::fresnel_dielectric;
+use pt_math::lanes::V3;
 use pt_math::{fastmath, Vec2, Vec3};
 use std::f32::consts::PI;
 
@@ -192,6 +193,124 @@ fn beckmann_slope_x(cos_theta: f32, u1: f32) -> f32 {
     x
 }
 
+/// [`Microfacet::d`] of the GGX (`BECKMANN` false) or the Beckmann distribution of roughness
+/// (`ax`, `ay`). Written with selects rather than early returns, and inlined, so that a loop
+/// of it over lanes (the path tracer's rough conductors) vectorises; one lane is the
+/// single-value function.
+#[inline(always)]
+pub fn d_of<const BECKMANN: bool>(ax: f32, ay: f32, m: Vec3) -> f32 {
+    let (x, y) = (m.x / ax, m.y / ay);
+    let z2 = m.z * m.z;
+    let v = if BECKMANN {
+        fastmath::exp(-(x * x + y * y) / z2) / (PI * ax * ay * z2 * z2)
+    } else {
+        let k = x * x + y * y + z2;
+        1.0 / (PI * ax * ay * k * k)
+    };
+    if (m.z > 0.0) & v.is_finite() {
+        v
+    } else {
+        0.0
+    }
+}
+
+/// [`Microfacet::lambda`] of the GGX (`BECKMANN` false) or the Beckmann distribution of
+/// roughness (`ax`, `ay`), with selects as [`d_of`].
+#[inline(always)]
+pub fn lambda_of<const BECKMANN: bool>(ax: f32, ay: f32, w: Vec3) -> f32 {
+    let z2 = w.z * w.z;
+    let t2 = w.x * w.x * ax * ax + w.y * w.y * ay * ay;
+    let v = if BECKMANN {
+        let a = (z2 / t2).sqrt();
+        // Walter et al. 2007 eq. 27's Lambda, (e^{-a^2} / (a sqrt(pi)) - erfc(a)) / 2, with
+        // erfc itself: 1 - erf(a) lost its digits in f32 for a > 2. Lambda is small where the
+        // two terms nearly cancel (1.4e-9 at a = 4): their relative errors of a few 1e-6 move
+        // G1 by less than 1e-7. From a = 4 on it is taken as 0 (Lambda(4) = 1.4e-9; the
+        // difference cancels in f32).
+        let l = (0.5 * (fastmath::exp(-a * a) * INV_SQRT_PI / a - fastmath::erfc(a))).max(0.0);
+        if a >= 4.0 {
+            0.0
+        } else {
+            l
+        }
+    } else {
+        0.5 * (-1.0 + (1.0 + t2 / z2).sqrt())
+    };
+    if t2 <= 0.0 {
+        0.0
+    } else if z2 == 0.0 {
+        f32::INFINITY
+    } else {
+        v
+    }
+}
+
+/// Smith G1(w) = 1/(1 + Lambda(w)) of [`lambda_of`]'s distribution.
+#[inline(always)]
+pub fn g1_of<const BECKMANN: bool>(ax: f32, ay: f32, w: Vec3) -> f32 {
+    1.0 / (1.0 + lambda_of::<BECKMANN>(ax, ay, w))
+}
+
+/// The GGX visible normal for the viewer `wo` (`wo.z > 0`) and roughness (`ax`, `ay`) from the
+/// uniform number `u1` and the angle `2 pi u2`, given by its sine and cosine (Heitz 2018,
+/// Listing 1: stretch, sample the projected hemisphere, unstretch). Selects rather than
+/// branches, so that a loop of it over lanes vectorises (the sine and cosine, library calls,
+/// are the caller's).
+#[inline(always)]
+fn ggx_visible_normal(ax: f32, ay: f32, wo: Vec3, u1: f32, sin_phi: f32, cos_phi: f32) -> Vec3 {
+    let vh = Vec3::new(ax * wo.x, ay * wo.y, wo.z).normalize();
+    let len2 = vh.x * vh.x + vh.y * vh.y;
+    let t1 = if len2 > 0.0 {
+        Vec3::new(-vh.y, vh.x, 0.0) / len2.sqrt()
+    } else {
+        Vec3::X
+    };
+    let t2v = vh.cross(t1);
+    let r = u1.sqrt();
+    let p1 = r * cos_phi;
+    let p2 = r * sin_phi;
+    let s = 0.5 * (1.0 + vh.z);
+    let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * p2;
+    let nh = t1 * p1 + t2v * p2 + vh * (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
+    Vec3::new(ax * nh.x, ay * nh.y, nh.z.max(1e-6)).normalize()
+}
+
+/// `wo` reflected about the normal `m`, and whether the reflection exists: `wo` faces `m`
+/// and the result lies above the surface ([`Microfacet::sample_reflection`]).
+#[inline(always)]
+fn reflect_about(wo: Vec3, m: Vec3) -> (Vec3, bool) {
+    let wom = wo.dot(m);
+    let wi = (2.0 * wom * m - wo).normalize();
+    (wi, !(wom <= 0.0) & (wi.z > 0.0))
+}
+
+/// [`Microfacet::sample_reflection`] of the GGX distribution for `N` lanes, each with its
+/// roughness (`ax`, `ay`), viewer `wo` (local frame, `wo.z > 0` where the result is used) and
+/// uniform numbers (`u1`, `u2`): the reflected directions and which lanes have one. The
+/// same operations as one lane's; all but the sines and cosines in SIMD registers.
+#[inline(always)]
+pub fn sample_reflection_ggx_lanes<const N: usize>(
+    ax: &[f32; N],
+    ay: &[f32; N],
+    wo: &V3<N>,
+    u1: &[f32; N],
+    u2: &[f32; N],
+) -> (V3<N>, [bool; N]) {
+    let (mut sin_phi, mut cos_phi) = ([0.0; N], [0.0; N]);
+    for k in 0..N {
+        (sin_phi[k], cos_phi[k]) = (2.0 * PI * u2[k]).sin_cos();
+    }
+    let mut wi = V3::default();
+    let mut ok = [false; N];
+    for k in 0..N {
+        let m = ggx_visible_normal(ax[k], ay[k], wo.get(k), u1[k], sin_phi[k], cos_phi[k]);
+        let (w, exists) = reflect_about(wo.get(k), m);
+        wi.set(k, w);
+        ok[k] = exists;
+    }
+    (wi, ok)
+}
+
 impl Microfacet {
     /// A distribution; alphas are clamped to [1e-3, 10] (non-finite taken as 1e-3).
     pub fn new(dist: Distribution, alpha_u: f32, alpha_v: f32) -> Self {
@@ -210,52 +329,20 @@ impl Microfacet {
     }
 
     /// D(m) per unit solid angle of m (projected area normalised: int D(m) m.z dm = 1).
+    #[inline(always)]
     pub fn d(&self, m: Vec3) -> f32 {
-        if m.z <= 0.0 {
-            return 0.0;
-        }
-        let (ax, ay) = (self.alpha_u, self.alpha_v);
-        let (x, y) = (m.x / ax, m.y / ay);
-        let z2 = m.z * m.z;
-        let v = match self.dist {
-            Distribution::Ggx => {
-                let k = x * x + y * y + z2;
-                1.0 / (PI * ax * ay * k * k)
-            }
-            Distribution::Beckmann => {
-                fastmath::exp(-(x * x + y * y) / z2) / (PI * ax * ay * z2 * z2)
-            }
-        };
-        if v.is_finite() {
-            v
-        } else {
-            0.0
+        match self.dist {
+            Distribution::Ggx => d_of::<false>(self.alpha_u, self.alpha_v, m),
+            Distribution::Beckmann => d_of::<true>(self.alpha_u, self.alpha_v, m),
         }
     }
 
     /// Smith Lambda(w) for the side `w` is on (uses |w.z|).
+    #[inline(always)]
     pub fn lambda(&self, w: Vec3) -> f32 {
-        let z2 = w.z * w.z;
-        let t2 = w.x * w.x * self.alpha_u * self.alpha_u + w.y * w.y * self.alpha_v * self.alpha_v;
-        if t2 <= 0.0 {
-            return 0.0;
-        }
-        if z2 == 0.0 {
-            return f32::INFINITY;
-        }
         match self.dist {
-            Distribution::Ggx => 0.5 * (-1.0 + (1.0 + t2 / z2).sqrt()),
-            Distribution::Beckmann => {
-                let a = (z2 / t2).sqrt();
-                if a >= 4.0 {
-                    return 0.0; // Lambda(4) = 1.4e-9; the difference below cancels in f32
-                }
-                // Walter et al. 2007 eq. 27's Lambda, (e^{-a^2} / (a sqrt(pi)) - erfc(a)) / 2,
-                // with erfc itself: 1 - erf(a) lost its digits in f32 for a > 2. Lambda is
-                // small where the two terms nearly cancel (1.4e-9 at a = 4): their relative
-                // errors of a few 1e-6 move G1 by less than 1e-7.
-                (0.5 * (fastmath::exp(-a * a) * INV_SQRT_PI / a - fastmath::erfc(a))).max(0.0)
-            }
+            Distribution::Ggx => lambda_of::<false>(self.alpha_u, self.alpha_v, w),
+            Distribution::Beckmann => lambda_of::<true>(self.alpha_u, self.alpha_v, w),
         }
     }
 
@@ -349,13 +436,8 @@ impl Microfacet {
     /// Draws a normal for `wo` (`wo.z > 0`) and reflects `wo` about it: the direction whose
     /// density is [`Microfacet::reflection_pdf`], or `None` when it falls below the surface.
     pub fn sample_reflection(&self, wo: Vec3, u: Vec2) -> Option<Vec3> {
-        let m = self.sample_m(wo, u);
-        let wom = wo.dot(m);
-        if wom <= 0.0 {
-            return None;
-        }
-        let wi = (2.0 * wom * m - wo).normalize();
-        (wi.z > 0.0).then_some(wi)
+        let (wi, ok) = reflect_about(wo, self.sample_m(wo, u));
+        ok.then_some(wi)
     }
 
     /// The viewer direction stretched to roughness 1 (Beckmann sampling).
@@ -419,23 +501,8 @@ impl Microfacet {
         let (ax, ay) = (self.alpha_u, self.alpha_v);
         match self.dist {
             Distribution::Ggx => {
-                // Heitz 2018, Listing 1: stretch, sample the projected hemisphere, unstretch.
-                let vh = Vec3::new(ax * wo.x, ay * wo.y, wo.z).normalize();
-                let len2 = vh.x * vh.x + vh.y * vh.y;
-                let t1 = if len2 > 0.0 {
-                    Vec3::new(-vh.y, vh.x, 0.0) / len2.sqrt()
-                } else {
-                    Vec3::X
-                };
-                let t2v = vh.cross(t1);
-                let r = u.x.sqrt();
-                let phi = 2.0 * PI * u.y;
-                let p1 = r * phi.cos();
-                let mut p2 = r * phi.sin();
-                let s = 0.5 * (1.0 + vh.z);
-                p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * p2;
-                let nh = t1 * p1 + t2v * p2 + vh * (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt();
-                Vec3::new(ax * nh.x, ay * nh.y, nh.z.max(1e-6)).normalize()
+                let (sin_phi, cos_phi) = (2.0 * PI * u.y).sin_cos();
+                ggx_visible_normal(ax, ay, wo, u.x, sin_phi, cos_phi)
             }
             Distribution::Beckmann => {
                 // Heitz & d'Eon 2014: stretch to roughness 1, sample visible slopes, rotate to

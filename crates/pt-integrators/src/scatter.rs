@@ -17,7 +17,8 @@
 //! for all lanes; a lane whose result is not used costs nothing extra in a SIMD register.
 
 use crate::path::{PathSettings, PathStart, PathState, Strategy, MAX_PATHS};
-use pt_bsdf::{mirror_side, Lambert, SurfaceBsdf};
+use pt_bsdf::microfacet::{sample_reflection_ggx_lanes, Microfacet};
+use pt_bsdf::{mirror_side, Bsdf, ConductorLanes, Distribution, Lambert, RoughConductor, SurfaceBsdf};
 use pt_math::lanes::{lanes, offset_ray_origins, set_lanes, Frames, Mask, V3};
 use pt_math::{offset_coordinate, power_heuristic, Frame, Ray, Vec2, Vec3};
 use pt_render::geometry::Interaction;
@@ -100,7 +101,13 @@ struct Draws<'a> {
     /// two-sidedness.
     lambert: Mask,
     albedo: [SampledSpectrum; N],
+    /// Whether a lane's plain surface (Lambertian or rough conductor) is two-sided.
     two_sided: [bool; N],
+    /// The lanes whose BSDF is a plain rough conductor (run in lanes), those of them with a
+    /// Beckmann distribution (the others are GGX), and their parameters.
+    conductor: Mask,
+    beckmann: Mask,
+    cond: ConductorLanes<N>,
     /// Uniform numbers of the BSDF sample: lobe choice, direction (its two coordinates as
     /// two lane arrays, the form the lane kernels read).
     u_lobe: [f32; N],
@@ -136,6 +143,9 @@ impl Draws<'_> {
             lambert: 0,
             albedo: [SampledSpectrum::ZERO; N],
             two_sided: [false; N],
+            conductor: 0,
+            beckmann: 0,
+            cond: ConductorLanes::default(),
             u_lobe: [0.5; N],
             ub: [[0.5; N]; 2],
             par: 0,
@@ -293,7 +303,11 @@ pub(crate) fn scatter<S: RandomSource>(
     if d.lambert != 0 {
         lambert_lanes(&g, &d, &wi, &mut sc);
     }
-    other_bsdfs(s, &g, &d, &built, &l, &wi, todo & !d.lambert, &mut sc);
+    if d.conductor != 0 {
+        conductor_lanes(&g, &d, &l, &wi, &mut sc);
+    }
+    let in_lanes = d.lambert | d.conductor;
+    other_bsdfs(s, &g, &d, &built, &l, &wi, todo & !in_lanes, &mut sc);
     // The shadow rays leave on the side of the hit the light is on; the next segments on the
     // side each sampled direction leaves to.
     let shadow = ShadowRays::new(s, &g, &l, &sc, &wi);
@@ -367,6 +381,11 @@ fn draw<'a, S: RandomSource>(
         if let Some((r, two_sided)) = lambert {
             (d.albedo[k], d.two_sided[k]) = (r, two_sided);
             d.lambert |= 1 << k;
+        } else if let Some((Bsdf::RoughConductor(c), two_sided)) = bsdf.plain_model() {
+            d.cond.set(k, c);
+            d.two_sided[k] = two_sided;
+            d.conductor |= 1 << k;
+            d.beckmann |= Mask::from(c.mf.dist == Distribution::Beckmann) << k;
         }
         // Fluorescence: the BSDF holds each lane's total albedo at its emitted wavelength; now
         // some lanes move to an excitation wavelength, used by NEE and the rest of the path.
@@ -480,6 +499,88 @@ fn lambert_lanes(g: &Geometry, d: &Draws, wi: &V3<N>, out: &mut Scattering) {
     };
     (out.weight, out.pdf) = (d.albedo, s_pdf);
     out.sampled = mask_of(&s_ok) & d.lambert;
+}
+
+/// The plain rough conductors (the lanes of `d.conductor`), with `SurfaceBsdf`'s two-sided
+/// mirroring, into `out`: the value and pdf towards the light samples and of the BSDF samples
+/// from [`RoughConductor::eval_pdf_lanes`], for all lanes of each distribution at once; the
+/// GGX normals drawn in lanes too, Beckmann's lane by lane (its visible slopes are an
+/// iteration). The
+/// same operations as `RoughConductor::sample` and `eval_pdf` of each lane.
+#[inline(always)]
+fn conductor_lanes(g: &Geometry, d: &Draws, l: &LightLanes, wi: &V3<N>, out: &mut Scattering) {
+    let mirror: [f32; N] = lanes(|k| mirror_side(d.two_sided[k], false, g.wo.z[k]));
+    let wo = V3 {
+        z: lanes(|k| g.wo.z[k] * mirror[k]),
+        ..g.wo
+    };
+    let to_light = V3 {
+        z: lanes(|k| wi.z[k] * mirror[k]),
+        ..*wi
+    };
+    // The GGX normals in lanes, Beckmann's lane by lane; none where `wo` is below (the models'
+    // `sample` returns none there).
+    let ggx = d.conductor & !d.beckmann;
+    let (mut sampled, mut drawn) = if ggx != 0 {
+        let (ax, ay) = (&d.cond.alpha_u, &d.cond.alpha_v);
+        sample_reflection_ggx_lanes(ax, ay, &wo, &d.ub[0], &d.ub[1])
+    } else {
+        (V3::splat(Vec3::Z), [false; N])
+    };
+    drawn = lanes(|k| drawn[k] & (wo.z[k] > 0.0));
+    for k in set_lanes(d.beckmann) {
+        let mf = Microfacet {
+            dist: Distribution::Beckmann,
+            alpha_u: d.cond.alpha_u[k],
+            alpha_v: d.cond.alpha_v[k],
+        };
+        let u = Vec2::new(d.ub[0][k], d.ub[1][k]);
+        let w = (wo.z[k] > 0.0).then(|| mf.sample_reflection(wo.get(k), u));
+        drawn[k] = false;
+        if let Some(Some(w)) = w {
+            sampled.set(k, w);
+            drawn[k] = true;
+        }
+    }
+    if ggx != 0 {
+        let light = RoughConductor::eval_pdf_lanes::<N, false>(&d.cond, &wo, &to_light);
+        let bsdf = RoughConductor::eval_pdf_lanes::<N, false>(&d.cond, &wo, &sampled);
+        conductor_results(ggx, &mirror, l, &sampled, &drawn, light, bsdf, out);
+    }
+    if d.beckmann != 0 {
+        let light = RoughConductor::eval_pdf_lanes::<N, true>(&d.cond, &wo, &to_light);
+        let bsdf = RoughConductor::eval_pdf_lanes::<N, true>(&d.cond, &wo, &sampled);
+        conductor_results(d.beckmann, &mirror, l, &sampled, &drawn, light, bsdf, out);
+    }
+}
+
+/// [`conductor_lanes`]'s results for the lanes of `mask`: the values towards the light samples
+/// and the BSDF samples (`sampled` where `drawn`, local frames before the mirroring) with their
+/// weights f cos / pdf.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn conductor_results(
+    mask: Mask,
+    mirror: &[f32; N],
+    l: &LightLanes,
+    sampled: &V3<N>,
+    drawn: &[bool; N],
+    (f, pdf): ([SampledSpectrum; N], [f32; N]),
+    (fs, ps): ([SampledSpectrum; N], [f32; N]),
+    out: &mut Scattering,
+) {
+    for k in set_lanes(mask) {
+        if l.have[k] {
+            (out.f[k], out.bsdf_pdf[k]) = (f[k], pdf[k]);
+        }
+        if drawn[k] & (ps[k] > 0.0) {
+            let w = sampled.get(k);
+            out.wi.set(k, Vec3::new(w.x, w.y, w.z * mirror[k]));
+            (out.weight[k], out.pdf[k]) = (fs[k] * (w.z / ps[k]), ps[k]);
+            (out.delta[k], out.eta[k]) = (false, 1.0);
+            out.sampled |= 1 << k;
+        }
+    }
 }
 
 /// The BSDFs without a lane kernel (the lanes of `todo`), one path at a time: the value
