@@ -38,11 +38,11 @@
 //! </bsdf>
 //! ```
 
-use crate::fresnel::fresnel_conductor4;
+use crate::fresnel::{fresnel_conductor4, fresnel_conductor_lanes};
 use crate::microfacet::{d_of, g1_of, Distribution, Microfacet};
 use crate::BsdfSample;
 use pt_math::lanes::{lanes, V3};
-use pt_math::{Vec2, Vec3};
+use pt_math::{Vec2, Vec3, Vec4};
 use pt_spectrum::SampledSpectrum;
 
 /// Per-lane conductor Fresnel at `cos_i`.
@@ -180,8 +180,8 @@ impl RoughConductor {
 
     /// [`RoughConductor::eval_pdf`] for `N` lanes whose distribution is GGX (`BECKMANN`
     /// false) or Beckmann, each with its own parameters `m`, directions in each lane's local
-    /// frame: the microfacet terms for all lanes at once in SIMD registers (the path tracer's
-    /// eight paths), then the Fresnel factors lane by lane (each a four-wide spectrum).
+    /// frame: the microfacet terms and the Fresnel factors for all lanes at once in SIMD
+    /// registers (the path tracer's eight paths).
     #[inline(always)]
     pub fn eval_pdf_lanes<const N: usize, const BECKMANN: bool>(
         m: &ConductorLanes<N>,
@@ -195,14 +195,21 @@ impl RoughConductor {
             let t = terms::<BECKMANN>(m.alpha_u[k], m.alpha_v[k], wo.get(k), wi.get(k));
             (lit[k], v[k], woh[k], pdf[k]) = (t.lit, t.v, t.woh, t.pdf);
         }
+        // The Fresnel factors channel by channel, each for all lanes at once.
+        let channel = |a: &[SampledSpectrum; N], c: usize| lanes(|k| a[k].0[c]);
+        // (A plain loop: `std::array::from_fn` was left as a call, compiled outside the render
+        // loop's instruction set.)
+        let mut fresnel = [[0.0; N]; 4];
+        for (c, fc) in fresnel.iter_mut().enumerate() {
+            *fc = fresnel_conductor_lanes(&woh, &channel(&m.eta, c), &channel(&m.k, c));
+        }
         let f = lanes(|k| {
-            let t = Terms {
-                lit: lit[k],
-                v: v[k],
-                woh: woh[k],
-                pdf: pdf[k],
-            };
-            t.value(m.eta[k], m.k[k], m.specular_reflectance[k])
+            if lit[k] {
+                let f = Vec4::new(fresnel[0][k], fresnel[1][k], fresnel[2][k], fresnel[3][k]);
+                SampledSpectrum(f) * m.specular_reflectance[k] * v[k]
+            } else {
+                SampledSpectrum::ZERO
+            }
         });
         (f, pdf)
     }

@@ -147,31 +147,50 @@ pub fn fresnel_conductor(cos_i: f32, eta: f32, k: f32) -> f32 {
 /// is taken from the product `(a^2 + b^2 + t0)(a^2 + b^2 - t0) = 4 eta^2 k^2` instead, which
 /// keeps the result within a few f32 roundings of the complex form evaluated in f64 (a test
 /// checks it over metals, dielectrics and limits).
+#[inline(always)]
 pub fn fresnel_conductor4(cos_i: f32, eta: Vec4, k: Vec4) -> Vec4 {
-    let c = cos_i.clamp(0.0, 1.0);
-    let (cos2, sin2) = (c * c, 1.0 - c * c);
-    let (eta2, k2) = (eta * eta, k * k);
-    let t0 = eta2 - k2 - Vec4::splat(sin2);
-    let a2pb2 = (t0 * t0 + 4.0 * eta2 * k2).sqrt();
-    let a2 = Vec4::select(
-        t0.cmplt(Vec4::ZERO),
-        2.0 * eta2 * k2 / (a2pb2 - t0),
-        0.5 * (a2pb2 + t0),
-    );
-    let a = a2.max(Vec4::ZERO).sqrt();
-    let t1 = a2pb2 + Vec4::splat(cos2);
-    let t2 = 2.0 * c * a;
-    let rs = (t1 - t2) / (t1 + t2);
-    let t3 = a2pb2 * cos2 + Vec4::splat(sin2 * sin2);
-    let t4 = t2 * sin2;
-    let rp = rs * (t3 - t4) / (t3 + t4);
-    let r = 0.5 * (rs + rp);
-    // eta = k = 0 at normal incidence is 0/0: a conductor without a medium reflects fully.
-    Vec4::select(
-        r.is_finite_mask(),
-        r.clamp(Vec4::ZERO, Vec4::ONE),
-        Vec4::ONE,
-    )
+    Vec4::from_array(fresnel_conductor_lanes(
+        &[cos_i; 4],
+        &eta.to_array(),
+        &k.to_array(),
+    ))
+}
+
+/// [`fresnel_conductor`] for `N` lanes, each with its own cosine and index (the path tracer's
+/// rough conductors run it for eight paths per channel): one loop over the lanes, which the
+/// compiler vectorises; the only implementation of the conductor's Fresnel term.
+#[inline(always)]
+pub fn fresnel_conductor_lanes<const N: usize>(
+    cos_i: &[f32; N],
+    eta: &[f32; N],
+    k: &[f32; N],
+) -> [f32; N] {
+    pt_math::lanes::lanes(|j| {
+        let c = cos_i[j].clamp(0.0, 1.0);
+        let (cos2, sin2) = (c * c, 1.0 - c * c);
+        let (eta2, k2) = (eta[j] * eta[j], k[j] * k[j]);
+        let t0 = eta2 - k2 - sin2;
+        let a2pb2 = (t0 * t0 + 4.0 * eta2 * k2).sqrt();
+        let a2 = if t0 < 0.0 {
+            2.0 * eta2 * k2 / (a2pb2 - t0)
+        } else {
+            0.5 * (a2pb2 + t0)
+        };
+        let a = a2.max(0.0).sqrt();
+        let t1 = a2pb2 + cos2;
+        let t2 = 2.0 * c * a;
+        let rs = (t1 - t2) / (t1 + t2);
+        let t3 = a2pb2 * cos2 + sin2 * sin2;
+        let t4 = t2 * sin2;
+        let rp = rs * (t3 - t4) / (t3 + t4);
+        let r = 0.5 * (rs + rp);
+        // eta = k = 0 at normal incidence is 0/0: a conductor without a medium reflects fully.
+        if r.is_finite() {
+            r.clamp(0.0, 1.0)
+        } else {
+            1.0
+        }
+    })
 }
 
 #[cfg(test)]

@@ -22,7 +22,9 @@ use pt_bsdf::{mirror_side, Bsdf, ConductorLanes, Distribution, Lambert, RoughCon
 use pt_math::lanes::{lanes, offset_ray_origins, set_lanes, Frames, Mask, V3};
 use pt_math::{offset_coordinate, power_heuristic, Frame, Ray, Vec2, Vec3};
 use pt_render::geometry::Interaction;
-use pt_render::light::{parallelogram_points, to_solid_angle, Light, LightSample, LightShape};
+use pt_render::light::{
+    parallelogram_points, sphere_cone_lanes, to_solid_angle, Light, LightSample, LightShape,
+};
 use pt_render::sampler::RandomSource;
 use pt_render::scene::SHADOW_RAY_SHORTEN;
 use pt_render::Scene;
@@ -115,16 +117,25 @@ struct Draws<'a> {
     /// The lanes that drew a parallelogram light (sampled in lanes); its index, corner,
     /// edges, area and uniform numbers.
     par: Mask,
-    par_light: [usize; N],
+    light_index: [usize; N],
     v0: V3<N>,
     e1: V3<N>,
     e2: V3<N>,
     area: [f32; N],
     lu: [[f32; N]; 2],
-    /// The radiance of a parallelogram light that is the same all over it, and the lanes
-    /// whose light has a texture instead (evaluated once the point is known).
-    par_radiance: [SampledSpectrum; N],
+    /// The radiance of a parallelogram or sphere light that is the same all over it, and the
+    /// parallelogram lanes whose light has a texture instead (evaluated once the point is
+    /// known).
+    light_radiance: [SampledSpectrum; N],
     par_textured: Mask,
+    /// The lanes that drew a sphere light without a texture (sampled by solid angle in lanes
+    /// where the hit is outside the sphere), its centre, radius and orientation, and the
+    /// light selection's reused uniform number (area sampling from inside the sphere needs it).
+    sphere: Mask,
+    center: V3<N>,
+    radius: [f32; N],
+    flip: [bool; N],
+    u_sel: [f32; N],
     /// Light selection probabilities.
     pmf: [f32; N],
 }
@@ -149,14 +160,19 @@ impl Draws<'_> {
             u_lobe: [0.5; N],
             ub: [[0.5; N]; 2],
             par: 0,
-            par_light: [0; N],
+            light_index: [0; N],
             v0: V3::default(),
             e1: V3::default(),
             e2: V3::default(),
             area: [1.0; N],
             lu: [[0.5; N]; 2],
-            par_radiance: [SampledSpectrum::ZERO; N],
+            light_radiance: [SampledSpectrum::ZERO; N],
             par_textured: 0,
+            sphere: 0,
+            center: V3::default(),
+            radius: [1.0; N],
+            flip: [false; N],
+            u_sel: [0.5; N],
             pmf: [1.0; N],
         }
     }
@@ -298,6 +314,9 @@ pub(crate) fn scatter<S: RandomSource>(
     if d.par != 0 {
         sample_parallelograms(scene, slots, &d, &mut l);
     }
+    if d.sphere != 0 {
+        sample_spheres(scene, slots, &d, &mut l);
+    }
     let wi = g.frames.to_local(&l.wi);
     let mut sc = Scattering::empty();
     if d.lambert != 0 {
@@ -411,13 +430,33 @@ fn draw<'a, S: RandomSource>(
                             d.e1.set(k, *e1);
                             d.e2.set(k, *e2);
                             l.n.set(k, *n);
-                            (d.area[k], d.par_light[k]) = (a.area, li);
+                            (d.area[k], d.light_index[k]) = (a.area, li);
                             (d.lu[0][k], d.lu[1][k]) = (u.x, u.y);
                             d.par |= 1 << k;
                             match a.constant_radiance(&path.lambda) {
-                                Some(r) => d.par_radiance[k] = r,
+                                Some(r) => d.light_radiance[k] = r,
                                 None => d.par_textured |= 1 << k,
                             }
+                        }
+                        Light::Area(a)
+                            if matches!(a.shape, LightShape::Sphere { .. })
+                                && a.constant_radiance(&path.lambda).is_some() =>
+                        {
+                            let LightShape::Sphere {
+                                center,
+                                radius,
+                                flip,
+                                ..
+                            } = &a.shape
+                            else {
+                                unreachable!()
+                            };
+                            d.center.set(k, *center);
+                            (d.radius[k], d.flip[k]) = (*radius, *flip);
+                            d.light_radiance[k] = a.constant_radiance(&path.lambda).unwrap();
+                            (d.lu[0][k], d.lu[1][k], d.u_sel[k]) = (u.x, u.y, u_sel);
+                            d.light_index[k] = li;
+                            d.sphere |= 1 << k;
                         }
                         light => {
                             if let Some(s) = light.sample(h.p, u_sel, u, &path.lambda) {
@@ -461,7 +500,7 @@ fn sample_parallelograms<S: RandomSource>(
         l.pdf[k] = if t { d.pmf[k] * sa.pdf[k] } else { l.pdf[k] };
         // The back side emits nothing.
         l.radiance[k] = if t & sa.front[k] {
-            d.par_radiance[k]
+            d.light_radiance[k]
         } else {
             l.radiance[k]
         };
@@ -470,7 +509,7 @@ fn sample_parallelograms<S: RandomSource>(
         if !(taken[k] && sa.front[k]) {
             continue;
         }
-        let Light::Area(a) = &scene.lights[d.par_light[k]] else {
+        let Light::Area(a) = &scene.lights[d.light_index[k]] else {
             unreachable!("drawn as an area light")
         };
         let LightShape::Parallelogram { uv, .. } = &a.shape else {
@@ -479,6 +518,51 @@ fn sample_parallelograms<S: RandomSource>(
         let u = Vec2::new(d.lu[0][k], d.lu[1][k]);
         let lambda = &slots[k].as_ref().expect("a scattering path").path.lambda;
         l.radiance[k] = a.radiance_at_uv(uv[0] + uv[1] * u.x + uv[2] * u.y, lambda);
+    }
+}
+
+/// The sphere lights drawn in `d`, sampled by solid angle for all lanes at once
+/// ([`sphere_cone_lanes`]), into `l`; a lane whose hit is inside its sphere samples it by area
+/// (`Light::sample`), as a path alone does.
+#[inline(always)]
+fn sample_spheres<S: RandomSource>(
+    scene: &Scene,
+    slots: &[Option<PathStart<S>>; N],
+    d: &Draws,
+    l: &mut LightLanes,
+) {
+    let c = sphere_cone_lanes(&d.center, &d.radius, &d.p, &d.lu[0], &d.lu[1], d.sphere);
+    for k in set_lanes(d.sphere) {
+        if !c.outside[k] {
+            let lambda = &slots[k].as_ref().expect("a scattering path").path.lambda;
+            let u = Vec2::new(d.lu[0][k], d.lu[1][k]);
+            let light = &scene.lights[d.light_index[k]];
+            if let Some(s) = light.sample(d.p.get(k), d.u_sel[k], u, lambda) {
+                l.set(k, &s, d.pmf[k]);
+            }
+            continue;
+        }
+        if !c.ok[k] {
+            continue;
+        }
+        let (wi, n_out) = (c.wi.get(k), c.n_out.get(k));
+        let n = if d.flip[k] { -n_out } else { n_out };
+        // The back side emits nothing.
+        let radiance = if n.dot(-wi) > 0.0 {
+            d.light_radiance[k]
+        } else {
+            SampledSpectrum::ZERO
+        };
+        let sample = LightSample {
+            p: c.p.get(k),
+            n,
+            wi,
+            dist: c.dist[k],
+            radiance,
+            pdf: c.pdf[k],
+            delta: false,
+        };
+        l.set(k, &sample, d.pmf[k]);
     }
 }
 

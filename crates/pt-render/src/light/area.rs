@@ -2,7 +2,7 @@
 
 use super::LightSample;
 use crate::texture::{Texture, TexturePoint};
-use pt_math::lanes::V3;
+use pt_math::lanes::{set_lanes, Mask, V3};
 use pt_math::warp::{
     square_to_disk_concentric, square_to_uniform_sphere, square_to_uniform_triangle,
     uniform_cone_pdf,
@@ -189,12 +189,36 @@ impl AreaLight {
             frame,
         } = &self.shape
         {
-            if let Some(cone) = SphereCone::new(*center, *radius, x) {
+            let c = sphere_cone_lanes(
+                &V3::<1>::splat(*center),
+                &[*radius],
+                &V3::splat(x),
+                &[u.x],
+                &[u.y],
+                1,
+            );
+            if c.outside[0] {
+                if !c.ok[0] {
+                    return None;
+                }
+                let (p, n_out, wi) = (c.p.get(0), c.n_out.get(0), c.wi.get(0));
+                let n = if *flip { -n_out } else { n_out };
                 // The texture coordinates (an atan2 and an acos) only for a textured light.
-                return cone.sample(u, *flip, x, |p| {
+                let radiance = if n.dot(-wi) > 0.0 {
                     self.radiance.constant_at(lambda).unwrap_or_else(|| {
                         self.radiance_at(sphere_uv(*frame, (p - *center) / *radius), lambda)
                     })
+                } else {
+                    SampledSpectrum::ZERO
+                };
+                return Some(LightSample {
+                    p,
+                    n,
+                    wi,
+                    dist: c.dist[0],
+                    radiance,
+                    pdf: c.pdf[0],
+                    delta: false,
                 });
             }
         }
@@ -243,7 +267,8 @@ impl AreaLight {
     #[inline]
     pub fn pdf(&self, x: Vec3, p: Vec3, n: Vec3) -> f32 {
         if let LightShape::Sphere { center, radius, .. } = &self.shape {
-            if let Some(cone) = SphereCone::new(*center, *radius, x) {
+            let cone = sphere_cone(*center, *radius, x);
+            if cone.outside {
                 return uniform_cone_pdf(cone.one_minus_cos_max);
             }
         }
@@ -298,92 +323,112 @@ pub fn cylinder_point(
     )
 }
 
-/// Solid-angle sampling of a sphere seen from an outside point `x` (pbrt-v4 section 6.2.4,
-/// "Sampling Spheres"): directions uniform in the cone the sphere subtends, pdf
+/// The cone a sphere (`center`, `radius`) subtends from the point `x`, for solid-angle sampling
+/// (pbrt-v4 section 6.2.4, "Sampling Spheres"): directions uniform in the cone, pdf
 /// 1 / (2 pi (1 - cos theta_max)), mapped to the visible point through the angle alpha at the
 /// centre, `cos alpha = sin^2 theta / sin theta_max + cos theta sqrt(1 - sin^2 theta /
 /// sin^2 theta_max)`, which needs no ray-sphere intersection and so never misses at the rim.
 /// Much lower variance than area sampling for small or distant spheres, whose far half area
 /// sampling wastes.
 struct SphereCone {
-    center: Vec3,
-    radius: f32,
-    /// Frame whose normal points from the centre towards `x`.
-    frame: Frame,
+    /// Whether `x` is outside the sphere; inside (or on it: NEE from a point of the emitter)
+    /// area sampling is used instead, and the other fields are meaningless.
+    outside: bool,
+    /// Unit axis from the centre towards `x`.
+    axis: Vec3,
+    /// sin^2 theta_max.
     sin2_max: f32,
+    /// 1 - cos theta_max.
     one_minus_cos_max: f32,
 }
 
-impl SphereCone {
-    /// `None` when `x` is inside (or on) the sphere: then area sampling is used.
-    fn new(center: Vec3, radius: f32, x: Vec3) -> Option<Self> {
-        let d = x - center;
-        let d2 = d.length_squared();
-        let r2 = radius * radius;
-        // Margin: on the surface itself (NEE from a point of the emitter) keep area sampling.
-        if !(d2 > r2 * 1.0001) {
-            return None;
-        }
-        let sin2_max = r2 / d2;
+/// The [`SphereCone`] of the sphere (`center`, `radius`) from `x`. Selects, not early returns:
+/// inlined into [`sphere_cone_lanes`]' loop, which vectorises.
+#[inline(always)]
+fn sphere_cone(center: Vec3, radius: f32, x: Vec3) -> SphereCone {
+    let d = x - center;
+    let d2 = d.length_squared();
+    let r2 = radius * radius;
+    let sin2_max = r2 / d2;
+    SphereCone {
+        // A margin: on the surface itself keep area sampling.
+        outside: d2 > r2 * 1.0001,
+        axis: d / d2.sqrt(),
+        sin2_max,
         // 1 - sqrt(1 - s) computed as s / (1 + sqrt(1 - s)): no cancellation for small s.
-        let one_minus_cos_max = sin2_max / (1.0 + (1.0 - sin2_max).sqrt());
-        Some(SphereCone {
-            center,
-            radius,
-            frame: Frame::from_normal(d / d2.sqrt()),
-            sin2_max,
-            one_minus_cos_max,
-        })
+        one_minus_cos_max: sin2_max / (1.0 + (1.0 - sin2_max).sqrt()),
     }
+}
 
-    /// A point of the visible cap for the uniform numbers `u`, its emitted radiance given by
-    /// `radiance(point)` on the front side.
-    fn sample(
-        &self,
-        u: Vec2,
-        flip: bool,
-        x: Vec3,
-        radiance: impl FnOnce(Vec3) -> SampledSpectrum,
-    ) -> Option<LightSample> {
-        let omc = u.x * self.one_minus_cos_max; // 1 - cos(theta), uniform in cos(theta)
+/// Solid-angle samples of sphere lights, one per lane ([`sphere_cone_lanes`]).
+pub struct ConeSamples<const N: usize> {
+    /// Whether the reference point is outside the sphere (else the lane has no sample here:
+    /// such points sample the sphere by area).
+    pub outside: [bool; N],
+    /// Whether the lane has a sample (outside, and the point is not the reference point).
+    pub ok: [bool; N],
+    /// Points on the spheres, world space.
+    pub p: V3<N>,
+    /// The spheres' outward normals there.
+    pub n_out: V3<N>,
+    /// Unit directions from the reference points towards `p`.
+    pub wi: V3<N>,
+    /// Distances to `p`.
+    pub dist: [f32; N],
+    /// Solid-angle pdfs.
+    pub pdf: [f32; N],
+}
+
+/// Points on the visible caps of `N` spheres (`center`, `radius`) seen from the points `x`, for
+/// the uniform numbers (`u0`, `u1`), uniform in the cones they subtend (see [`SphereCone`]):
+/// for all lanes at once, the sines and cosines (library calls) of the lanes in `mask` only.
+/// [`AreaLight::sample`] of a sphere is its one lane.
+#[inline(always)]
+pub fn sphere_cone_lanes<const N: usize>(
+    center: &V3<N>,
+    radius: &[f32; N],
+    x: &V3<N>,
+    u0: &[f32; N],
+    u1: &[f32; N],
+    mask: Mask,
+) -> ConeSamples<N> {
+    let (mut sin_phi, mut cos_phi) = ([0.0; N], [1.0; N]);
+    for k in set_lanes(mask) {
+        (sin_phi[k], cos_phi[k]) = (2.0 * PI * u1[k]).sin_cos();
+    }
+    let mut out = ConeSamples {
+        outside: [false; N],
+        ok: [false; N],
+        p: V3::default(),
+        n_out: V3::default(),
+        wi: V3::default(),
+        dist: [0.0; N],
+        pdf: [0.0; N],
+    };
+    for k in 0..N {
+        let (c, r, x) = (center.get(k), radius[k], x.get(k));
+        let cone = sphere_cone(c, r, x);
+        let omc = u0[k] * cone.one_minus_cos_max; // 1 - cos(theta), uniform in cos(theta)
         let cos_t = 1.0 - omc;
         let sin2_t = omc * (2.0 - omc);
-        let cos_alpha =
-            sin2_t / self.sin2_max.sqrt() + cos_t * (1.0 - sin2_t / self.sin2_max).max(0.0).sqrt();
+        let cos_alpha = sin2_t / cone.sin2_max.sqrt()
+            + cos_t * (1.0 - sin2_t / cone.sin2_max).max(0.0).sqrt();
         let sin_alpha = (1.0 - cos_alpha * cos_alpha).max(0.0).sqrt();
-        let phi = 2.0 * PI * u.y;
         // The point's outward normal, measured from the axis towards x.
-        let n_out = self
-            .frame
-            .to_world(Vec3::new(
-                sin_alpha * phi.cos(),
-                sin_alpha * phi.sin(),
-                cos_alpha,
-            ))
-            .normalize();
-        let p = self.center + n_out * self.radius;
+        let local = Vec3::new(sin_alpha * cos_phi[k], sin_alpha * sin_phi[k], cos_alpha);
+        let n_out = Frame::from_normal(cone.axis).to_world(local).normalize();
+        let p = c + n_out * r;
         let to = p - x;
         let dist = to.length();
-        if !(dist > 0.0) {
-            return None;
-        }
-        let wi = to / dist;
-        let n = if flip { -n_out } else { n_out };
-        let radiance = if n.dot(-wi) > 0.0 {
-            radiance(p)
-        } else {
-            SampledSpectrum::ZERO
-        };
-        Some(LightSample {
-            p,
-            n,
-            wi,
-            dist,
-            radiance,
-            pdf: uniform_cone_pdf(self.one_minus_cos_max),
-            delta: false,
-        })
+        out.outside[k] = cone.outside;
+        out.ok[k] = cone.outside & (dist > 0.0);
+        out.p.set(k, p);
+        out.n_out.set(k, n_out);
+        out.wi.set(k, to / dist);
+        out.dist[k] = dist;
+        out.pdf[k] = uniform_cone_pdf(cone.one_minus_cos_max);
     }
+    out
 }
 
 /// Mitsuba's sphere texture coordinates of a unit vector `d` from the centre (world space):

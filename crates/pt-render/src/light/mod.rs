@@ -24,8 +24,8 @@ mod tests;
 mod tree;
 
 pub use area::{
-    cylinder_point, disk_uv, parallelogram_points, sphere_uv, to_solid_angle, AreaLight,
-    LightShape, LightTriangle, SolidAngle,
+    cylinder_point, disk_uv, parallelogram_points, sphere_cone_lanes, sphere_uv, to_solid_angle,
+    AreaLight, ConeSamples, LightShape, LightTriangle, SolidAngle,
 };
 pub use build::build_light;
 pub use emit::{EmittedRay, LightPoint};
