@@ -39,9 +39,9 @@
 //! ```
 
 use crate::fresnel::{fresnel_conductor4, fresnel_conductor_lanes};
-use crate::microfacet::{d_of, g1_of, Distribution, Microfacet};
-use crate::BsdfSample;
-use pt_math::lanes::{lanes, V3};
+use crate::microfacet::{d_of, g1_of, sample_reflections, Distribution, Microfacet};
+use crate::{BsdfSample, SampleLanes};
+use pt_math::lanes::{lanes, Mask, V3};
 use pt_math::{Vec2, Vec3, Vec4};
 use pt_spectrum::SampledSpectrum;
 
@@ -170,21 +170,21 @@ impl RoughConductor {
     /// [`RoughConductor::eval_pdf_lanes`].)
     #[inline(always)]
     pub fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (SampledSpectrum, f32) {
-        let (ax, ay) = (self.mf.alpha_u, self.mf.alpha_v);
-        let t = match self.mf.dist {
-            Distribution::Ggx => terms::<false>(ax, ay, wo, wi),
-            Distribution::Beckmann => terms::<true>(ax, ay, wo, wi),
+        let (wo, wi) = (V3::<1>::splat(wo), V3::splat(wi));
+        let (f, pdf) = match self.mf.dist {
+            Distribution::Ggx => Self::eval_pdf_lanes::<1, false>(&[*self], &wo, &wi),
+            Distribution::Beckmann => Self::eval_pdf_lanes::<1, true>(&[*self], &wo, &wi),
         };
-        (t.value(self.eta, self.k, self.specular_reflectance), t.pdf)
+        (f[0], pdf[0])
     }
 
-    /// [`RoughConductor::eval_pdf`] for `N` lanes whose distribution is GGX (`BECKMANN`
-    /// false) or Beckmann, each with its own parameters `m`, directions in each lane's local
-    /// frame: the microfacet terms and the Fresnel factors for all lanes at once in SIMD
-    /// registers (the path tracer's eight paths).
+    /// [`RoughConductor::eval_pdf`] for `N` lanes of rough conductors `m` whose distribution
+    /// is GGX (`BECKMANN` false) or Beckmann, directions in each lane's local frame: the
+    /// microfacet terms and the Fresnel factors for all lanes at once in SIMD registers (the
+    /// path tracer's eight paths).
     #[inline(always)]
     pub fn eval_pdf_lanes<const N: usize, const BECKMANN: bool>(
-        m: &ConductorLanes<N>,
+        m: &[RoughConductor; N],
         wo: &V3<N>,
         wi: &V3<N>,
     ) -> ([SampledSpectrum; N], [f32; N]) {
@@ -192,21 +192,22 @@ impl RoughConductor {
         // consecutive addresses, not one that fills an array of structures.
         let (mut lit, mut v, mut woh, mut pdf) = ([false; N], [0.0; N], [0.0; N], [0.0; N]);
         for k in 0..N {
-            let t = terms::<BECKMANN>(m.alpha_u[k], m.alpha_v[k], wo.get(k), wi.get(k));
+            let (ax, ay) = (m[k].mf.alpha_u, m[k].mf.alpha_v);
+            let t = terms::<BECKMANN>(ax, ay, wo.get(k), wi.get(k));
             (lit[k], v[k], woh[k], pdf[k]) = (t.lit, t.v, t.woh, t.pdf);
         }
-        // The Fresnel factors channel by channel, each for all lanes at once.
-        let channel = |a: &[SampledSpectrum; N], c: usize| lanes(|k| a[k].0[c]);
-        // (A plain loop: `std::array::from_fn` was left as a call, compiled outside the render
-        // loop's instruction set.)
+        // The Fresnel factors channel by channel, each for all lanes at once. (A plain loop:
+        // `std::array::from_fn` was left as a call, compiled outside the render loop's
+        // instruction set.)
         let mut fresnel = [[0.0; N]; 4];
         for (c, fc) in fresnel.iter_mut().enumerate() {
-            *fc = fresnel_conductor_lanes(&woh, &channel(&m.eta, c), &channel(&m.k, c));
+            let (eta, k) = (lanes(|j| m[j].eta.0[c]), lanes(|j| m[j].k.0[c]));
+            *fc = fresnel_conductor_lanes(&woh, &eta, &k);
         }
         let f = lanes(|k| {
             if lit[k] {
                 let f = Vec4::new(fresnel[0][k], fresnel[1][k], fresnel[2][k], fresnel[3][k]);
-                SampledSpectrum(f) * m.specular_reflectance[k] * v[k]
+                SampledSpectrum(f) * m[k].specular_reflectance * v[k]
             } else {
                 SampledSpectrum::ZERO
             }
@@ -214,29 +215,59 @@ impl RoughConductor {
         (f, pdf)
     }
 
-    /// Samples a microfacet normal and reflects `wo` about it.
+    /// Samples a microfacet normal and reflects `wo` about it. (One lane of
+    /// [`RoughConductor::sample_lanes`].)
+    #[inline(always)]
     pub fn sample(&self, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
-        if wo.z <= 0.0 {
-            return None;
-        }
-        let wi = self.mf.sample_reflection(wo, u)?;
-        let (f, pdf) = self.eval_pdf(wo, wi);
-        if !(pdf > 0.0) {
-            return None;
-        }
-        let weight = f * (wi.z / pdf);
-        Some(BsdfSample {
-            wi,
-            weight,
-            pdf,
-            delta: false,
-            eta: 1.0,
-        })
+        let wo = V3::<1>::splat(wo);
+        let (u0, u1) = ([u.x], [u.y]);
+        let s = match self.mf.dist {
+            Distribution::Ggx => Self::sample_lanes::<1, false>(&[*self], &wo, &u0, &u1, 1),
+            Distribution::Beckmann => Self::sample_lanes::<1, true>(&[*self], &wo, &u0, &u1, 1),
+        };
+        s.ok[0].then(|| s.get(0))
     }
+
+    /// [`RoughConductor::sample`] for the lanes of `mask` among `N` lanes of rough conductors
+    /// `m` whose distribution is GGX (`BECKMANN` false) or Beckmann: the reflections about
+    /// normals drawn with (`u0`, `u1`) ([`sample_reflections`]), valued by
+    /// [`RoughConductor::eval_pdf_lanes`].
+    #[inline(always)]
+    pub fn sample_lanes<const N: usize, const BECKMANN: bool>(
+        m: &[RoughConductor; N],
+        wo: &V3<N>,
+        u0: &[f32; N],
+        u1: &[f32; N],
+        mask: Mask,
+    ) -> SampleLanes<N> {
+        let (ax, ay) = (lanes(|k| m[k].mf.alpha_u), lanes(|k| m[k].mf.alpha_v));
+        let (wi, drawn) = sample_reflections::<N, BECKMANN>(&ax, &ay, wo, u0, u1, mask);
+        let (f, pdf) = Self::eval_pdf_lanes::<N, BECKMANN>(m, wo, &wi);
+        SampleLanes {
+            weight: lanes(|k| f[k] * (wi.z[k] / pdf[k])),
+            wi,
+            pdf,
+            ok: lanes(|k| drawn[k] & (pdf[k] > 0.0)),
+        }
+    }
+
+    /// A stand-in for the lanes without a rough conductor in the lane kernels (its values
+    /// there are not used).
+    pub const UNUSED: RoughConductor = RoughConductor {
+        eta: SampledSpectrum::ZERO,
+        k: SampledSpectrum::ZERO,
+        specular_reflectance: SampledSpectrum::ZERO,
+        mf: Microfacet {
+            dist: Distribution::Ggx,
+            alpha_u: 1.0,
+            alpha_v: 1.0,
+        },
+    };
 }
 
 /// The wavelength-independent part of [`RoughConductor::eval_pdf`] for one pair (`wo`, `wi`)
-/// in the local frame: the value is `F(wo.h) k_s v` where `lit`, else black.
+/// in the local frame: the value is `F(wo.h) k_s v` where `lit`, else black
+/// ([`RoughConductor::eval_pdf_lanes`]).
 #[derive(Clone, Copy)]
 struct Terms {
     /// Whether the value is not black: both directions above, a facing half vector, D(h) > 0
@@ -248,23 +279,6 @@ struct Terms {
     woh: f32,
     /// The solid-angle pdf, `pdf_m(h) / (4 wo.h)` (0 where not finite).
     pdf: f32,
-}
-
-impl Terms {
-    /// The value: `F(wo.h) k_s v`, black unless `lit`.
-    #[inline(always)]
-    fn value(
-        &self,
-        eta: SampledSpectrum,
-        k: SampledSpectrum,
-        specular_reflectance: SampledSpectrum,
-    ) -> SampledSpectrum {
-        if self.lit {
-            fresnel_lanes(self.woh, eta, k) * specular_reflectance * self.v
-        } else {
-            SampledSpectrum::ZERO
-        }
-    }
 }
 
 /// [`Terms`] of the GGX (`BECKMANN` false) or Beckmann distribution of roughness (`ax`, `ay`):
@@ -291,45 +305,6 @@ fn terms<const BECKMANN: bool>(ax: f32, ay: f32, wo: Vec3, wi: Vec3) -> Terms {
         v,
         woh,
         pdf,
-    }
-}
-
-/// The parameters of `N` rough conductors, one per lane (structure of arrays of
-/// [`RoughConductor`] without its distribution, which is the kernel's), for
-/// [`RoughConductor::eval_pdf_lanes`].
-#[derive(Clone, Copy, Debug)]
-pub struct ConductorLanes<const N: usize> {
-    /// Roughness along the local x axis.
-    pub alpha_u: [f32; N],
-    /// Roughness along the local y axis.
-    pub alpha_v: [f32; N],
-    /// Real parts of the indices.
-    pub eta: [SampledSpectrum; N],
-    /// Imaginary parts.
-    pub k: [SampledSpectrum; N],
-    /// Multipliers of the reflectance.
-    pub specular_reflectance: [SampledSpectrum; N],
-}
-
-impl<const N: usize> Default for ConductorLanes<N> {
-    fn default() -> Self {
-        ConductorLanes {
-            alpha_u: [1.0; N],
-            alpha_v: [1.0; N],
-            eta: [SampledSpectrum::ZERO; N],
-            k: [SampledSpectrum::ZERO; N],
-            specular_reflectance: [SampledSpectrum::ZERO; N],
-        }
-    }
-}
-
-impl<const N: usize> ConductorLanes<N> {
-    /// Puts `c`'s parameters into lane `k`.
-    #[inline(always)]
-    pub fn set(&mut self, k: usize, c: &RoughConductor) {
-        (self.alpha_u[k], self.alpha_v[k]) = (c.mf.alpha_u, c.mf.alpha_v);
-        (self.eta[k], self.k[k]) = (c.eta, c.k);
-        self.specular_reflectance[k] = c.specular_reflectance;
     }
 }
 

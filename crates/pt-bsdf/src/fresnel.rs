@@ -9,25 +9,34 @@ use pt_math::Vec4;
 /// pbrt-v4 eq. 9.6 and `FrDielectric`). `cos_i` is the cosine between the direction and the
 /// normal, signed: negative means the direction is on the inside. `eta` is the relative index
 /// inside / outside. Returns 1 under total internal reflection.
+///
+/// Selects rather than branches, so that a loop of it over lanes vectorises (the path tracer's
+/// rough plastics).
+#[inline(always)]
 pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
-    let (cos_i, eta) = if cos_i < 0.0 {
+    let inside = cos_i < 0.0;
+    let (cos_i, eta) = if inside {
         (-cos_i, 1.0 / eta)
     } else {
         (cos_i, eta)
     };
     let cos_i = cos_i.min(1.0);
     let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
-    if sin2_t >= 1.0 {
-        return 1.0;
-    }
     let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
     let r_parl = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
     let r_perp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
     let r = 0.5 * (r_parl * r_parl + r_perp * r_perp);
-    if r.is_finite() {
+    // Not finite: eta * cos_i + cos_t = 0 only at cos_i = 0 (grazing), total reflection.
+    let r = if r.is_finite() {
         r.clamp(0.0, 1.0)
     } else {
-        1.0 // eta * cos_i + cos_t = 0 only at cos_i = 0 (grazing): total reflection
+        1.0
+    };
+    // Total internal reflection.
+    if sin2_t >= 1.0 {
+        1.0
+    } else {
+        r
     }
 }
 

@@ -47,7 +47,7 @@ pub mod rough_thin_film;
 pub mod thin_dielectric;
 pub mod thin_film;
 
-pub use conductor::{Conductor, ConductorLanes, RoughConductor};
+pub use conductor::{Conductor, RoughConductor};
 pub use dielectric::Dielectric;
 pub use gltf_pbr::GltfPbr;
 pub use hair::Hair;
@@ -60,6 +60,7 @@ pub use polarizer::Polarizer;
 pub use pplastic::PPlastic;
 pub use principled::Principled;
 pub use principled_thin::PrincipledThin;
+use pt_math::lanes::V3;
 use pt_math::{Vec2, Vec3, Vec4};
 use pt_spectrum::SampledSpectrum;
 pub use rough_dielectric::RoughDielectric;
@@ -91,6 +92,34 @@ pub struct BsdfSample {
     /// that applies Russian roulette on throughput may multiply by `eta^2` for the decision only
     /// (pbrt-v4 `etaScale`).
     pub eta: f32,
+}
+
+/// BSDF samples of `N` lanes (structure of arrays of [`BsdfSample`]) from the models whose
+/// lane kernels the path tracer runs: non-delta reflections (`delta` false, `eta` 1).
+#[derive(Clone, Copy, Debug)]
+pub struct SampleLanes<const N: usize> {
+    /// Sampled directions, local shading frames.
+    pub wi: V3<N>,
+    /// Throughput multipliers f |cos theta_i| / pdf.
+    pub weight: [SampledSpectrum; N],
+    /// Solid-angle pdfs.
+    pub pdf: [f32; N],
+    /// Whether the lane has a sample (the others' values are meaningless).
+    pub ok: [bool; N],
+}
+
+impl<const N: usize> SampleLanes<N> {
+    /// Lane `k`'s sample (meaningful where `ok[k]`).
+    #[inline(always)]
+    pub fn get(&self, k: usize) -> BsdfSample {
+        BsdfSample {
+            wi: self.wi.get(k),
+            weight: self.weight[k],
+            pdf: self.pdf[k],
+            delta: false,
+            eta: 1.0,
+        }
+    }
 }
 
 impl BsdfSample {

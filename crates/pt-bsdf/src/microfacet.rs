@@ -31,7 +31,7 @@
 //! All functions take directions in the local frame with `wo.z >= 0` (callers flip).
 
 use crate::fresnel::fresnel_dielectric;
-use pt_math::lanes::V3;
+use pt_math::lanes::{lanes, mask_of, set_lanes, Mask, V3};
 use pt_math::{fastmath, Vec2, Vec3};
 use std::f32::consts::PI;
 
@@ -251,6 +251,30 @@ pub fn g1_of<const BECKMANN: bool>(ax: f32, ay: f32, w: Vec3) -> f32 {
     1.0 / (1.0 + lambda_of::<BECKMANN>(ax, ay, w))
 }
 
+/// [`Microfacet::dielectric_reflection_pdf`] of the GGX (`BECKMANN` false) or Beckmann
+/// distribution of roughness (`ax`, `ay`), with selects as [`d_of`].
+#[inline(always)]
+pub fn dielectric_reflection_pdf_of<const BECKMANN: bool>(
+    ax: f32,
+    ay: f32,
+    wo: Vec3,
+    wi: Vec3,
+    eta: f32,
+) -> (f32, f32) {
+    let h = (wo + wi).normalize_or_zero();
+    let woh = wo.dot(h);
+    let ok = !(wo.z <= 0.0) & !(wi.z <= 0.0) & !(h.z <= 0.0) & !(woh <= 0.0);
+    let (d, g1_o) = (d_of::<BECKMANN>(ax, ay, h), g1_of::<BECKMANN>(ax, ay, wo));
+    let g2 = g1_o * g1_of::<BECKMANN>(ax, ay, wi);
+    let v = fresnel_dielectric(woh, eta) * d * g2 / (4.0 * wo.z * wi.z);
+    // As pdf_m(wo, h) / (4 wo.h).
+    let p = g1_o * woh.max(0.0) * d / wo.z / (4.0 * woh);
+    (
+        if ok & v.is_finite() { v } else { 0.0 },
+        if ok & p.is_finite() { p } else { 0.0 },
+    )
+}
+
 /// The GGX visible normal for the viewer `wo` (`wo.z > 0`) and roughness (`ax`, `ay`) from the
 /// uniform number `u1` and the angle `2 pi u2`, given by its sine and cosine (Heitz 2018,
 /// Listing 1: stretch, sample the projected hemisphere, unstretch). Selects rather than
@@ -284,29 +308,48 @@ fn reflect_about(wo: Vec3, m: Vec3) -> (Vec3, bool) {
     (wi, !(wom <= 0.0) & (wi.z > 0.0))
 }
 
-/// [`Microfacet::sample_reflection`] of the GGX distribution for `N` lanes, each with its
-/// roughness (`ax`, `ay`), viewer `wo` (local frame, `wo.z > 0` where the result is used) and
-/// uniform numbers (`u1`, `u2`): the reflected directions and which lanes have one. The
-/// same operations as one lane's; all but the sines and cosines in SIMD registers.
+/// [`Microfacet::sample_reflection`] for `N` lanes of the GGX (`BECKMANN` false) or Beckmann
+/// distribution, each with its roughness (`ax`, `ay`), viewer `wo` (local frame) and uniform
+/// numbers (`u0`, `u1`): the reflected directions and which lanes have one, computed for the
+/// lanes of `mask` where `wo` is above the surface. GGX lanes all at once in SIMD registers
+/// (but the sines and cosines, library calls), Beckmann lanes one by one (their visible
+/// slopes are an iteration). The same operations as one lane's.
 #[inline(always)]
-pub fn sample_reflection_ggx_lanes<const N: usize>(
+pub fn sample_reflections<const N: usize, const BECKMANN: bool>(
     ax: &[f32; N],
     ay: &[f32; N],
     wo: &V3<N>,
+    u0: &[f32; N],
     u1: &[f32; N],
-    u2: &[f32; N],
+    mask: Mask,
 ) -> (V3<N>, [bool; N]) {
-    let (mut sin_phi, mut cos_phi) = ([0.0; N], [0.0; N]);
-    for k in 0..N {
-        (sin_phi[k], cos_phi[k]) = (2.0 * PI * u2[k]).sin_cos();
-    }
-    let mut wi = V3::default();
+    let above: [bool; N] = lanes(|k| wo.z[k] > 0.0);
+    let mask = mask & mask_of(&above);
+    let mut wi = V3::splat(Vec3::Z);
     let mut ok = [false; N];
+    if BECKMANN {
+        for k in set_lanes(mask) {
+            let mf = Microfacet {
+                dist: Distribution::Beckmann,
+                alpha_u: ax[k],
+                alpha_v: ay[k],
+            };
+            let m = mf.sample_m(wo.get(k), Vec2::new(u0[k], u1[k]));
+            let (w, exists) = reflect_about(wo.get(k), m);
+            wi.set(k, w);
+            ok[k] = exists;
+        }
+        return (wi, ok);
+    }
+    let (mut sin_phi, mut cos_phi) = ([0.0; N], [1.0; N]);
+    for k in set_lanes(mask) {
+        (sin_phi[k], cos_phi[k]) = (2.0 * PI * u1[k]).sin_cos();
+    }
     for k in 0..N {
-        let m = ggx_visible_normal(ax[k], ay[k], wo.get(k), u1[k], sin_phi[k], cos_phi[k]);
+        let m = ggx_visible_normal(ax[k], ay[k], wo.get(k), u0[k], sin_phi[k], cos_phi[k]);
         let (w, exists) = reflect_about(wo.get(k), m);
         wi.set(k, w);
-        ok[k] = exists;
+        ok[k] = exists & (mask & (1 << k) != 0);
     }
     (wi, ok)
 }
@@ -413,24 +456,14 @@ impl Microfacet {
 
     /// [`Microfacet::dielectric_reflection`] and [`Microfacet::reflection_pdf`] of the same
     /// pair, the same values (the same operations in the same order) with the half vector,
-    /// D(h) and G1(wo) computed once.
+    /// D(h) and G1(wo) computed once. (One lane of [`dielectric_reflection_pdf_of`].)
+    #[inline(always)]
     pub fn dielectric_reflection_pdf(&self, wo: Vec3, wi: Vec3, eta: f32) -> (f32, f32) {
-        if wo.z <= 0.0 || wi.z <= 0.0 {
-            return (0.0, 0.0);
+        let (ax, ay) = (self.alpha_u, self.alpha_v);
+        match self.dist {
+            Distribution::Ggx => dielectric_reflection_pdf_of::<false>(ax, ay, wo, wi, eta),
+            Distribution::Beckmann => dielectric_reflection_pdf_of::<true>(ax, ay, wo, wi, eta),
         }
-        let h = (wo + wi).normalize_or_zero();
-        let woh = wo.dot(h);
-        if h.z <= 0.0 || woh <= 0.0 {
-            return (0.0, 0.0);
-        }
-        let (d, g1_o) = (self.d(h), self.g1(wo));
-        let v = fresnel_dielectric(woh, eta) * d * (g1_o * self.g1(wi)) / (4.0 * wo.z * wi.z);
-        // As pdf_m(wo, h) / (4 wo.h).
-        let p = g1_o * woh.max(0.0) * d / wo.z / (4.0 * woh);
-        (
-            if v.is_finite() { v } else { 0.0 },
-            if p.is_finite() { p } else { 0.0 },
-        )
     }
 
     /// Draws a normal for `wo` (`wo.z > 0`) and reflects `wo` about it: the direction whose

@@ -17,9 +17,8 @@
 //! for all lanes; a lane whose result is not used costs nothing extra in a SIMD register.
 
 use crate::path::{PathSettings, PathStart, PathState, Strategy, MAX_PATHS};
-use pt_bsdf::microfacet::{sample_reflection_ggx_lanes, Microfacet};
-use pt_bsdf::{mirror_side, Bsdf, ConductorLanes, Distribution, Lambert, RoughConductor, SurfaceBsdf};
-use pt_math::lanes::{lanes, offset_ray_origins, set_lanes, Frames, Mask, V3};
+use pt_bsdf::{mirror_side, Bsdf, Distribution, Lambert, RoughConductor, SampleLanes, SurfaceBsdf};
+use pt_math::lanes::{lanes, mask_of, offset_ray_origins, set_lanes, Frames, Mask, V3};
 use pt_math::{offset_coordinate, power_heuristic, Frame, Ray, Vec2, Vec3};
 use pt_render::geometry::Interaction;
 use pt_render::light::{
@@ -105,11 +104,10 @@ struct Draws<'a> {
     albedo: [SampledSpectrum; N],
     /// Whether a lane's plain surface (Lambertian or rough conductor) is two-sided.
     two_sided: [bool; N],
-    /// The lanes whose BSDF is a plain rough conductor (run in lanes), those of them with a
-    /// Beckmann distribution (the others are GGX), and their parameters.
+    /// The lanes whose BSDF is a plain rough conductor (run in lanes), and those of them with
+    /// a Beckmann distribution (the others are GGX).
     conductor: Mask,
     beckmann: Mask,
-    cond: ConductorLanes<N>,
     /// Uniform numbers of the BSDF sample: lobe choice, direction (its two coordinates as
     /// two lane arrays, the form the lane kernels read).
     u_lobe: [f32; N],
@@ -156,7 +154,6 @@ impl Draws<'_> {
             two_sided: [false; N],
             conductor: 0,
             beckmann: 0,
-            cond: ConductorLanes::default(),
             u_lobe: [0.5; N],
             ub: [[0.5; N]; 2],
             par: 0,
@@ -198,7 +195,8 @@ impl Geometry {
     fn new(d: &Draws) -> Self {
         // Without dp/du in any lane (meshes without uvs), the frames from the normals alone:
         // the same frames, without the projection of the tangents.
-        let tangent = lanes(|k| (d.dpdu.x[k] != 0.0) | (d.dpdu.y[k] != 0.0) | (d.dpdu.z[k] != 0.0));
+        let tangent: [bool; N] =
+            lanes(|k| (d.dpdu.x[k] != 0.0) | (d.dpdu.y[k] != 0.0) | (d.dpdu.z[k] != 0.0));
         if mask_of(&tangent) == 0 {
             Geometry::with_frames(d, |k| Frame::from_normal(d.ns.get(k)))
         } else {
@@ -287,12 +285,6 @@ impl Scattering {
     }
 }
 
-/// The lanes where `c` holds.
-#[inline(always)]
-fn mask_of(c: &[bool; N]) -> Mask {
-    (0..N).fold(0, |m, k| m | (Mask::from(c[k]) << k))
-}
-
 /// The scattering of the paths in `slots` that scatter at their hits (the lanes of `todo`),
 /// all at once.
 #[inline(always)]
@@ -323,7 +315,7 @@ pub(crate) fn scatter<S: RandomSource>(
         lambert_lanes(&g, &d, &wi, &mut sc);
     }
     if d.conductor != 0 {
-        conductor_lanes(&g, &d, &l, &wi, &mut sc);
+        conductor_lanes(&g, &d, &built, &l, &wi, &mut sc);
     }
     let in_lanes = d.lambert | d.conductor;
     other_bsdfs(s, &g, &d, &built, &l, &wi, todo & !in_lanes, &mut sc);
@@ -401,7 +393,6 @@ fn draw<'a, S: RandomSource>(
             (d.albedo[k], d.two_sided[k]) = (r, two_sided);
             d.lambert |= 1 << k;
         } else if let Some((Bsdf::RoughConductor(c), two_sided)) = bsdf.plain_model() {
-            d.cond.set(k, c);
             d.two_sided[k] = two_sided;
             d.conductor |= 1 << k;
             d.beckmann |= Mask::from(c.mf.dist == Distribution::Beckmann) << k;
@@ -586,13 +577,28 @@ fn lambert_lanes(g: &Geometry, d: &Draws, wi: &V3<N>, out: &mut Scattering) {
 }
 
 /// The plain rough conductors (the lanes of `d.conductor`), with `SurfaceBsdf`'s two-sided
-/// mirroring, into `out`: the value and pdf towards the light samples and of the BSDF samples
-/// from [`RoughConductor::eval_pdf_lanes`], for all lanes of each distribution at once; the
-/// GGX normals drawn in lanes too, Beckmann's lane by lane (its visible slopes are an
-/// iteration). The
-/// same operations as `RoughConductor::sample` and `eval_pdf` of each lane.
+/// mirroring, into `out`: the values and pdfs towards the light samples and the BSDF samples,
+/// from the model's lane kernels, for all lanes of each distribution at once. (The rough
+/// plastic run the same way was no faster: its Beckmann sampling and coating tables are lane
+/// by lane, and `mesh-100k` took 1.01-1.02 times as long.)
 #[inline(always)]
-fn conductor_lanes(g: &Geometry, d: &Draws, l: &LightLanes, wi: &V3<N>, out: &mut Scattering) {
+fn conductor_lanes(
+    g: &Geometry,
+    d: &Draws,
+    built: &[Option<SurfaceBsdf>; N],
+    l: &LightLanes,
+    wi: &V3<N>,
+    out: &mut Scattering,
+) {
+    // The lanes' models side by side (copies: read through references, one per lane, the
+    // kernels took 1.035 times as long on `veach-mis`), stand-ins elsewhere.
+    let mut m = [RoughConductor::UNUSED; N];
+    for k in set_lanes(d.conductor) {
+        match d.fixed[k].or(built[k].as_ref()).map(|b| &b.bsdf) {
+            Some(Bsdf::RoughConductor(c)) => m[k] = *c,
+            _ => unreachable!("drawn as a rough conductor"),
+        }
+    }
     let mirror: [f32; N] = lanes(|k| mirror_side(d.two_sided[k], false, g.wo.z[k]));
     let wo = V3 {
         z: lanes(|k| g.wo.z[k] * mirror[k]),
@@ -602,65 +608,40 @@ fn conductor_lanes(g: &Geometry, d: &Draws, l: &LightLanes, wi: &V3<N>, out: &mu
         z: lanes(|k| wi.z[k] * mirror[k]),
         ..*wi
     };
-    // The GGX normals in lanes, Beckmann's lane by lane; none where `wo` is below (the models'
-    // `sample` returns none there).
+    let (u0, u1) = (&d.ub[0], &d.ub[1]);
     let ggx = d.conductor & !d.beckmann;
-    let (mut sampled, mut drawn) = if ggx != 0 {
-        let (ax, ay) = (&d.cond.alpha_u, &d.cond.alpha_v);
-        sample_reflection_ggx_lanes(ax, ay, &wo, &d.ub[0], &d.ub[1])
-    } else {
-        (V3::splat(Vec3::Z), [false; N])
-    };
-    drawn = lanes(|k| drawn[k] & (wo.z[k] > 0.0));
-    for k in set_lanes(d.beckmann) {
-        let mf = Microfacet {
-            dist: Distribution::Beckmann,
-            alpha_u: d.cond.alpha_u[k],
-            alpha_v: d.cond.alpha_v[k],
-        };
-        let u = Vec2::new(d.ub[0][k], d.ub[1][k]);
-        let w = (wo.z[k] > 0.0).then(|| mf.sample_reflection(wo.get(k), u));
-        drawn[k] = false;
-        if let Some(Some(w)) = w {
-            sampled.set(k, w);
-            drawn[k] = true;
-        }
-    }
     if ggx != 0 {
-        let light = RoughConductor::eval_pdf_lanes::<N, false>(&d.cond, &wo, &to_light);
-        let bsdf = RoughConductor::eval_pdf_lanes::<N, false>(&d.cond, &wo, &sampled);
-        conductor_results(ggx, &mirror, l, &sampled, &drawn, light, bsdf, out);
+        let light = RoughConductor::eval_pdf_lanes::<N, false>(&m, &wo, &to_light);
+        let sample = RoughConductor::sample_lanes::<N, false>(&m, &wo, u0, u1, ggx);
+        lane_results(ggx, &mirror, l, light, &sample, out);
     }
     if d.beckmann != 0 {
-        let light = RoughConductor::eval_pdf_lanes::<N, true>(&d.cond, &wo, &to_light);
-        let bsdf = RoughConductor::eval_pdf_lanes::<N, true>(&d.cond, &wo, &sampled);
-        conductor_results(d.beckmann, &mirror, l, &sampled, &drawn, light, bsdf, out);
+        let light = RoughConductor::eval_pdf_lanes::<N, true>(&m, &wo, &to_light);
+        let sample = RoughConductor::sample_lanes::<N, true>(&m, &wo, u0, u1, d.beckmann);
+        lane_results(d.beckmann, &mirror, l, light, &sample, out);
     }
 }
 
-/// [`conductor_lanes`]'s results for the lanes of `mask`: the values towards the light samples
-/// and the BSDF samples (`sampled` where `drawn`, local frames before the mirroring) with their
-/// weights f cos / pdf.
+/// [`conductor_lanes`]' results for the lanes of `mask`: the values and pdfs towards the
+/// light samples (`f`, `pdf`), and the BSDF samples, mirrored back to the side each path
+/// sees.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn conductor_results(
+fn lane_results(
     mask: Mask,
     mirror: &[f32; N],
     l: &LightLanes,
-    sampled: &V3<N>,
-    drawn: &[bool; N],
     (f, pdf): ([SampledSpectrum; N], [f32; N]),
-    (fs, ps): ([SampledSpectrum; N], [f32; N]),
+    sample: &SampleLanes<N>,
     out: &mut Scattering,
 ) {
     for k in set_lanes(mask) {
         if l.have[k] {
             (out.f[k], out.bsdf_pdf[k]) = (f[k], pdf[k]);
         }
-        if drawn[k] & (ps[k] > 0.0) {
-            let w = sampled.get(k);
+        if sample.ok[k] {
+            let w = sample.wi.get(k);
             out.wi.set(k, Vec3::new(w.x, w.y, w.z * mirror[k]));
-            (out.weight[k], out.pdf[k]) = (fs[k] * (w.z / ps[k]), ps[k]);
+            (out.weight[k], out.pdf[k]) = (sample.weight[k], sample.pdf[k]);
             (out.delta[k], out.eta[k]) = (false, 1.0);
             out.sampled |= 1 << k;
         }

@@ -36,6 +36,12 @@ pub fn set_lanes(mut mask: Mask) -> impl Iterator<Item = usize> {
     })
 }
 
+/// The lanes where `c` holds, as a mask.
+#[inline(always)]
+pub fn mask_of<const N: usize>(c: &[bool; N]) -> Mask {
+    (0..N).fold(0, |m, k| m | (Mask::from(c[k]) << k))
+}
+
 /// The lanes `k` of `mask` for which `pred(k)` holds, as a mask (a plain loop, so that it is
 /// inlined into the caller's compiled variant).
 #[inline(always)]

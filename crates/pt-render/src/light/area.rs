@@ -411,8 +411,8 @@ pub fn sphere_cone_lanes<const N: usize>(
         let omc = u0[k] * cone.one_minus_cos_max; // 1 - cos(theta), uniform in cos(theta)
         let cos_t = 1.0 - omc;
         let sin2_t = omc * (2.0 - omc);
-        let cos_alpha = sin2_t / cone.sin2_max.sqrt()
-            + cos_t * (1.0 - sin2_t / cone.sin2_max).max(0.0).sqrt();
+        let cos_alpha =
+            sin2_t / cone.sin2_max.sqrt() + cos_t * (1.0 - sin2_t / cone.sin2_max).max(0.0).sqrt();
         let sin_alpha = (1.0 - cos_alpha * cos_alpha).max(0.0).sqrt();
         // The point's outward normal, measured from the axis towards x.
         let local = Vec3::new(sin_alpha * cos_phi[k], sin_alpha * sin_phi[k], cos_alpha);
