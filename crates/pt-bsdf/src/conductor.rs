@@ -312,6 +312,87 @@ fn terms<const BECKMANN: bool>(ax: f32, ay: f32, wo: Vec3, wi: Vec3) -> Terms {
 mod tests {
     use super::*;
 
+    /// The lane kernels give every lane what that lane's model gives alone, bit for bit: eight
+    /// conductors of different roughness, index and tint, each distribution, directions above,
+    /// below and grazing (the path tracer runs them for eight paths at once; a lane mixed up
+    /// with another, or a channel with another, fails).
+    #[test]
+    fn eight_lanes_match_one_lane_bit_for_bit() {
+        let bits = |s: SampledSpectrum| s.0.to_array().map(f32::to_bits);
+        for dist in [Distribution::Ggx, Distribution::Beckmann] {
+            let m: [RoughConductor; 8] = std::array::from_fn(|k| {
+                let x = k as f32;
+                RoughConductor::new(
+                    SampledSpectrum(Vec4::new(0.2 + 0.1 * x, 0.5, 1.1, 0.05 * x)),
+                    SampledSpectrum(Vec4::new(3.4, 2.0 + 0.2 * x, 0.0, 4.0)),
+                    SampledSpectrum(Vec4::new(1.0, 0.9, 0.8 - 0.05 * x, 1.0)),
+                    Microfacet::new(dist, 0.02 + 0.1 * x, 0.3 - 0.03 * x),
+                )
+            });
+            let dir = |x: f32, y: f32, z: f32| Vec3::new(x, y, z).normalize();
+            let wo = V3::<8>::from_fn(|k| {
+                [
+                    dir(0.3, 0.1, 0.9),
+                    dir(-0.5, 0.2, 0.4),
+                    dir(0.0, 0.0, 1.0),
+                    dir(0.9, -0.1, 1e-4),
+                    dir(0.2, 0.2, -0.5),
+                    dir(-0.1, 0.7, 0.3),
+                    dir(0.6, 0.6, 0.2),
+                    dir(0.01, -0.02, 0.99),
+                ][k]
+            });
+            let wi = V3::<8>::from_fn(|k| {
+                [
+                    dir(-0.3, -0.1, 0.9),
+                    dir(0.4, -0.3, 0.5),
+                    dir(0.1, 0.0, 0.99),
+                    dir(-0.9, 0.1, 0.05),
+                    dir(0.2, -0.2, 0.6),
+                    dir(0.0, -0.7, -0.3),
+                    dir(-0.5, -0.6, 0.3),
+                    dir(0.0, 0.02, 0.99),
+                ][k]
+            });
+            let u0 = [0.1, 0.5, 0.9, 0.3, 0.7, 0.2, 0.99, 0.0];
+            let u1 = [0.8, 0.25, 0.6, 0.1, 0.4, 0.95, 0.5, 0.33];
+            let (f, pdf) = match dist {
+                Distribution::Ggx => RoughConductor::eval_pdf_lanes::<8, false>(&m, &wo, &wi),
+                Distribution::Beckmann => RoughConductor::eval_pdf_lanes::<8, true>(&m, &wo, &wi),
+            };
+            let s = match dist {
+                Distribution::Ggx => {
+                    RoughConductor::sample_lanes::<8, false>(&m, &wo, &u0, &u1, 0xff)
+                }
+                Distribution::Beckmann => {
+                    RoughConductor::sample_lanes::<8, true>(&m, &wo, &u0, &u1, 0xff)
+                }
+            };
+            for k in 0..8 {
+                let (f1, pdf1) = m[k].eval_pdf(wo.get(k), wi.get(k));
+                assert_eq!(bits(f[k]), bits(f1), "{dist:?} lane {k}");
+                assert_eq!(pdf[k].to_bits(), pdf1.to_bits(), "{dist:?} lane {k}");
+                let s1 = m[k].sample(wo.get(k), Vec2::new(u0[k], u1[k]));
+                assert_eq!(s.ok[k], s1.is_some(), "{dist:?} lane {k}");
+                if let Some(s1) = s1 {
+                    let s8 = s.get(k);
+                    assert_eq!(
+                        s8.wi.to_array().map(f32::to_bits),
+                        s1.wi.to_array().map(f32::to_bits)
+                    );
+                    assert_eq!(bits(s8.weight), bits(s1.weight), "{dist:?} lane {k}");
+                    assert_eq!(s8.pdf.to_bits(), s1.pdf.to_bits(), "{dist:?} lane {k}");
+                }
+                assert!(
+                    f1.0.is_finite() && (k != 4 || f1.is_black()),
+                    "{dist:?} lane {k}"
+                );
+            }
+            // Lanes with a sample exist (the test is not vacuous).
+            assert!(s.ok.iter().filter(|&&o| o).count() >= 5, "{dist:?}");
+        }
+    }
+
     /// `eval_pdf` gives exactly `eval` and `pdf` (it repeats their operations in their order),
     /// for both distributions, anisotropic.
     #[test]

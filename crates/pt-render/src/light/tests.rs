@@ -555,3 +555,57 @@ fn profiled_lights_emit_their_power_with_consistent_densities() {
         );
     }
 }
+
+/// Sphere lights sampled in lanes give every lane what one lane gives alone, bit for bit
+/// (spheres of different sizes and places, seen from outside, from inside, and from a point
+/// of the surface, which samples by area instead), and the samples lie on the spheres.
+#[test]
+fn sphere_cones_in_lanes_match_one_lane_bit_for_bit() {
+    use pt_math::lanes::V3;
+    let centers = V3::<8>::from_fn(|k| Vec3::new(k as f32 - 3.0, 4.0, 8.0 - k as f32));
+    let radius: [f32; 8] = std::array::from_fn(|k| 0.03 + 0.4 * k as f32);
+    let x = V3::<8>::from_fn(|k| match k {
+        // Inside the sphere, and on its surface.
+        2 => centers.get(2),
+        5 => centers.get(5) + Vec3::new(0.0, radius[5], 0.0),
+        _ => Vec3::new(0.1 * k as f32, -1.0, 0.5),
+    });
+    let u0 = [0.1, 0.5, 0.9, 0.3, 0.7, 0.2, 0.99, 0.0];
+    let u1 = [0.8, 0.25, 0.6, 0.1, 0.4, 0.95, 0.5, 0.33];
+    let c8 = sphere_cone_lanes(&centers, &radius, &x, &u0, &u1, 0xff);
+    let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+    for k in 0..8 {
+        let c1 = sphere_cone_lanes(
+            &V3::<1>::splat(centers.get(k)),
+            &[radius[k]],
+            &V3::splat(x.get(k)),
+            &[u0[k]],
+            &[u1[k]],
+            1,
+        );
+        assert_eq!(
+            (c8.outside[k], c8.ok[k]),
+            (c1.outside[0], c1.ok[0]),
+            "lane {k}"
+        );
+        assert_eq!(c8.outside[k], k != 2 && k != 5, "lane {k}");
+        if !c1.ok[0] {
+            continue;
+        }
+        assert_eq!(bits(c8.p.get(k)), bits(c1.p.get(0)), "lane {k}");
+        assert_eq!(bits(c8.n_out.get(k)), bits(c1.n_out.get(0)), "lane {k}");
+        assert_eq!(bits(c8.wi.get(k)), bits(c1.wi.get(0)), "lane {k}");
+        assert_eq!(c8.dist[k].to_bits(), c1.dist[0].to_bits(), "lane {k}");
+        assert_eq!(c8.pdf[k].to_bits(), c1.pdf[0].to_bits(), "lane {k}");
+        // On the sphere, on the side facing x.
+        let r = (c8.p.get(k) - centers.get(k)).length();
+        assert!(
+            (r - radius[k]).abs() < 1e-4 * (1.0 + radius[k]),
+            "lane {k}: {r}"
+        );
+        assert!(
+            c8.n_out.get(k).dot(x.get(k) - c8.p.get(k)) > 0.0,
+            "lane {k}"
+        );
+    }
+}
