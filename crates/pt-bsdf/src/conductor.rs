@@ -4,11 +4,15 @@
 //! - Smooth: `f = F(cos_o) delta(wi - reflect(wo)) / cos_i`, one delta lobe; the sample weight is
 //!   `specular_reflectance * F(cos_o)` with F from [`fresnel_conductor`] (pbrt-v4 eq. 9.6 with
 //!   complex eta; sign convention `eta + i k`, `k >= 0`).
-//! - Rough: Cook-Torrance with the Smith height-correlated G2 (Walter et al. 2007, eq. 20;
-//!   Heitz 2014 eq. 99): `f = F(wo.h) D(h) G2(wo, wi) / (4 cos_i cos_o)`, `h = normalize(wo + wi)`.
-//!   Sampling: `h` from the visible normals (GGX; Heitz 2018) or `D(m) m.z` (Beckmann), see
-//!   [`crate::microfacet`]; `wi = 2 (wo.h) h - wo`; pdf `pdf_m(h) / (4 wo.h)` (Jacobian of the
-//!   reflection, Walter et al. 2007 eq. 14). With GGX the weight is `F G2 / G1(wo)`.
+//! - Rough: Cook-Torrance (Walter et al. 2007, eq. 20) with the separable Smith
+//!   `G2 = G1(wo) G1(wi)` as Mitsuba 3 (see [`crate::microfacet`] for why not the
+//!   height-correlated form): `f = F(wo.h) D(h) G2(wo, wi) / (4 cos_i cos_o)`,
+//!   `h = normalize(wo + wi)`. Sampling: `h` from the visible normals of either distribution
+//!   (GGX: Heitz 2018; Beckmann: Heitz & d'Eon 2014), see [`crate::microfacet`];
+//!   `wi = 2 (wo.h) h - wo`; pdf `pdf_m(h) / (4 wo.h)` (Jacobian of the reflection, Walter et
+//!   al. 2007 eq. 14), so the weight is `F G1(wi)`. The path tracer runs the model's lane
+//!   kernels ([`RoughConductor::eval_pdf_lanes`], [`RoughConductor::sample_lanes`]) for eight
+//!   paths at once; `eval_pdf` and `sample` are their one lane.
 //!
 //! Both are one-sided (black when `wo` or `wi` is below), as Mitsuba's `conductor`. Wrap them
 //! in a two-sided [`crate::SurfaceBsdf`] for sheets.
