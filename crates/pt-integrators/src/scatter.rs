@@ -7,9 +7,10 @@
 //! rays, MIS weights) runs for all paths at once in SIMD lanes; each path's BSDF and light are
 //! evaluated per lane, except the models written as lane kernels, which run for all paths
 //! that have them at once: Lambert's BSDF, the rough conductor, parallelogram area lights and
-//! sphere lights (the commonest of real scenes). Those kernels are the models' only implementation (their single-value functions
-//! are the kernels with one lane), so lanes and single paths cannot drift apart. Each path
-//! draws its random numbers in the same order as it would alone.
+//! sphere lights (the commonest of real scenes). Those kernels are the models' only
+//! implementation (their single-value functions are the kernels with one lane), so lanes and
+//! single paths cannot drift apart. Each path draws its random numbers in the same order as
+//! it would alone.
 //!
 //! Three passes over the lanes do what cannot run in SIMD: the draws (gathering each hit,
 //! resolving its BSDF, drawing its random numbers and its light), the models without a lane
