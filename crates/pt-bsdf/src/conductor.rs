@@ -50,7 +50,6 @@ use pt_math::{Vec2, Vec3, Vec4};
 use pt_spectrum::SampledSpectrum;
 
 /// Per-lane conductor Fresnel at `cos_i`.
-#[inline(always)]
 fn fresnel_lanes(cos_i: f32, eta: SampledSpectrum, k: SampledSpectrum) -> SampledSpectrum {
     SampledSpectrum(fresnel_conductor4(cos_i, eta.0, k.0))
 }
@@ -172,7 +171,6 @@ impl RoughConductor {
     /// once: for a Beckmann surface each is an exponential or an error function, and light
     /// sampling with MIS needs both values of every light direction. (One lane of
     /// [`RoughConductor::eval_pdf_lanes`].)
-    #[inline(always)]
     pub fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (SampledSpectrum, f32) {
         let (wo, wi) = (V3::<1>::splat(wo), V3::splat(wi));
         let (f, pdf) = match self.mf.dist {
@@ -221,7 +219,6 @@ impl RoughConductor {
 
     /// Samples a microfacet normal and reflects `wo` about it. (One lane of
     /// [`RoughConductor::sample_lanes`].)
-    #[inline(always)]
     pub fn sample(&self, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
         let wo = V3::<1>::splat(wo);
         let (u0, u1) = ([u.x], [u.y]);

@@ -12,7 +12,6 @@ use pt_math::Vec4;
 ///
 /// Selects rather than branches, so that a loop of it over lanes vectorises (the path tracer's
 /// rough plastics).
-#[inline(always)]
 pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
     let inside = cos_i < 0.0;
     let (cos_i, eta) = if inside {
@@ -156,7 +155,6 @@ pub fn fresnel_conductor(cos_i: f32, eta: f32, k: f32) -> f32 {
 /// is taken from the product `(a^2 + b^2 + t0)(a^2 + b^2 - t0) = 4 eta^2 k^2` instead, which
 /// keeps the result within a few f32 roundings of the complex form evaluated in f64 (a test
 /// checks it over metals, dielectrics and limits).
-#[inline(always)]
 pub fn fresnel_conductor4(cos_i: f32, eta: Vec4, k: Vec4) -> Vec4 {
     Vec4::from_array(fresnel_conductor_lanes(
         &[cos_i; 4],

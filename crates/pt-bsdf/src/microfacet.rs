@@ -372,7 +372,6 @@ impl Microfacet {
     }
 
     /// D(m) per unit solid angle of m (projected area normalised: int D(m) m.z dm = 1).
-    #[inline(always)]
     pub fn d(&self, m: Vec3) -> f32 {
         match self.dist {
             Distribution::Ggx => d_of::<false>(self.alpha_u, self.alpha_v, m),
@@ -381,7 +380,6 @@ impl Microfacet {
     }
 
     /// Smith Lambda(w) for the side `w` is on (uses |w.z|).
-    #[inline(always)]
     pub fn lambda(&self, w: Vec3) -> f32 {
         match self.dist {
             Distribution::Ggx => lambda_of::<false>(self.alpha_u, self.alpha_v, w),
@@ -457,7 +455,6 @@ impl Microfacet {
     /// [`Microfacet::dielectric_reflection`] and [`Microfacet::reflection_pdf`] of the same
     /// pair, the same values (the same operations in the same order) with the half vector,
     /// D(h) and G1(wo) computed once. (One lane of [`dielectric_reflection_pdf_of`].)
-    #[inline(always)]
     pub fn dielectric_reflection_pdf(&self, wo: Vec3, wi: Vec3, eta: f32) -> (f32, f32) {
         let (ax, ay) = (self.alpha_u, self.alpha_v);
         match self.dist {

@@ -189,14 +189,7 @@ impl AreaLight {
             frame,
         } = &self.shape
         {
-            let c = sphere_cone_lanes(
-                &V3::<1>::splat(*center),
-                &[*radius],
-                &V3::splat(x),
-                &[u.x],
-                &[u.y],
-                1,
-            );
+            let c = sample_sphere_cone(*center, *radius, x, u);
             if c.outside[0] {
                 if !c.ok[0] {
                     return None;
@@ -340,6 +333,19 @@ struct SphereCone {
     sin2_max: f32,
     /// 1 - cos theta_max.
     one_minus_cos_max: f32,
+}
+
+/// [`sphere_cone_lanes`]' one lane, out of line: [`AreaLight::sample`] is inlined wherever a
+/// light is sampled, and the kernel need not be copied into each of those places.
+fn sample_sphere_cone(center: Vec3, radius: f32, x: Vec3, u: Vec2) -> ConeSamples<1> {
+    sphere_cone_lanes(
+        &V3::splat(center),
+        &[radius],
+        &V3::splat(x),
+        &[u.x],
+        &[u.y],
+        1,
+    )
 }
 
 /// The [`SphereCone`] of the sphere (`center`, `radius`) from `x`. Selects, not early returns:
