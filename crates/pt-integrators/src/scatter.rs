@@ -413,47 +413,47 @@ fn draw<'a, S: RandomSource>(
                 Some((li, pmf, u_sel)) => {
                     let u = sampler.next_2d();
                     d.pmf[k] = pmf;
-                    match &scene.lights[li] {
-                        Light::Area(a) if matches!(a.shape, LightShape::Parallelogram { .. }) => {
-                            let LightShape::Parallelogram { v0, e1, e2, n, .. } = &a.shape else {
-                                unreachable!()
-                            };
-                            d.v0.set(k, *v0);
-                            d.e1.set(k, *e1);
-                            d.e2.set(k, *e2);
-                            l.n.set(k, *n);
-                            (d.area[k], d.light_index[k]) = (a.area, li);
-                            (d.lu[0][k], d.lu[1][k]) = (u.x, u.y);
-                            d.par |= 1 << k;
-                            match a.constant_radiance(&path.lambda) {
-                                Some(r) => d.light_radiance[k] = r,
-                                None => d.par_textured |= 1 << k,
+                    let light = &scene.lights[li];
+                    // Parallelograms, and spheres of constant radiance, are sampled for all lanes
+                    // at once after this loop; every other light here, lane by lane.
+                    'lane: {
+                        if let Light::Area(a) = light {
+                            match &a.shape {
+                                LightShape::Parallelogram { v0, e1, e2, n, .. } => {
+                                    d.v0.set(k, *v0);
+                                    d.e1.set(k, *e1);
+                                    d.e2.set(k, *e2);
+                                    l.n.set(k, *n);
+                                    (d.area[k], d.light_index[k]) = (a.area, li);
+                                    (d.lu[0][k], d.lu[1][k]) = (u.x, u.y);
+                                    d.par |= 1 << k;
+                                    match a.constant_radiance(&path.lambda) {
+                                        Some(r) => d.light_radiance[k] = r,
+                                        None => d.par_textured |= 1 << k,
+                                    }
+                                    break 'lane;
+                                }
+                                LightShape::Sphere {
+                                    center,
+                                    radius,
+                                    flip,
+                                    ..
+                                } => {
+                                    if let Some(r) = a.constant_radiance(&path.lambda) {
+                                        d.center.set(k, *center);
+                                        (d.radius[k], d.flip[k]) = (*radius, *flip);
+                                        d.light_radiance[k] = r;
+                                        (d.lu[0][k], d.lu[1][k], d.u_sel[k]) = (u.x, u.y, u_sel);
+                                        d.light_index[k] = li;
+                                        d.sphere |= 1 << k;
+                                        break 'lane;
+                                    }
+                                }
+                                _ => {}
                             }
                         }
-                        Light::Area(a)
-                            if matches!(a.shape, LightShape::Sphere { .. })
-                                && a.constant_radiance(&path.lambda).is_some() =>
-                        {
-                            let LightShape::Sphere {
-                                center,
-                                radius,
-                                flip,
-                                ..
-                            } = &a.shape
-                            else {
-                                unreachable!()
-                            };
-                            d.center.set(k, *center);
-                            (d.radius[k], d.flip[k]) = (*radius, *flip);
-                            d.light_radiance[k] = a.constant_radiance(&path.lambda).unwrap();
-                            (d.lu[0][k], d.lu[1][k], d.u_sel[k]) = (u.x, u.y, u_sel);
-                            d.light_index[k] = li;
-                            d.sphere |= 1 << k;
-                        }
-                        light => {
-                            if let Some(s) = light.sample(h.p, u_sel, u, &path.lambda) {
-                                l.set(k, &s, pmf);
-                            }
+                        if let Some(s) = light.sample(h.p, u_sel, u, &path.lambda) {
+                            l.set(k, &s, pmf);
                         }
                     }
                 }
@@ -523,7 +523,7 @@ fn sample_spheres<S: RandomSource>(
     d: &Draws,
     l: &mut LightLanes,
 ) {
-    let c = sphere_cone_lanes(&d.center, &d.radius, &d.p, &d.lu[0], &d.lu[1], d.sphere);
+    let c = sphere_cone_lanes(&d.center, &d.radius, &d.p, &d.lu[0], &d.lu[1]);
     for k in set_lanes(d.sphere) {
         if !c.outside[k] {
             let lambda = &slots[k].as_ref().expect("a scattering path").path.lambda;
