@@ -270,7 +270,7 @@ fn glowing_shape(
                 let n = (p[1] - p[0]).cross(p[2] - p[0]);
                 let Some(n) = n.try_normalize() else { continue };
                 let mut s = next();
-                let phi = absorbed(lit, a, &mut s, settings, |u| {
+                let phi = absorbed(lit, a, &mut s, settings, &|u| {
                     // Uniform point on the triangle (pbrt-v4 SampleUniformTriangle, square root form).
                     let su = u.x.sqrt();
                     (
@@ -291,7 +291,7 @@ fn glowing_shape(
             ..
         } => {
             let mut s = next();
-            absorbed(lit, a, &mut s, settings, |u| {
+            absorbed(lit, a, &mut s, settings, &|u| {
                 let d = pt_math::warp::square_to_uniform_sphere(u);
                 (center + d * radius, if flip_normals { -d } else { d })
             })
@@ -304,7 +304,7 @@ fn glowing_shape(
             flip_normals,
         } => {
             let mut s = next();
-            absorbed(lit, a, &mut s, settings, |u| {
+            absorbed(lit, a, &mut s, settings, &|u| {
                 let (p, n, _) =
                     pt_render::light::cylinder_point(p0, frame, radius, length, flip_normals, u);
                 (p, n)
@@ -313,7 +313,7 @@ fn glowing_shape(
         Geometry::Disk(d) => {
             // One glow over the whole disk, as for spheres and cylinders.
             let mut s = next();
-            absorbed(lit, a, &mut s, settings, |u| {
+            absorbed(lit, a, &mut s, settings, &|u| {
                 (d.point(square_to_disk_concentric(u)), d.normal)
             })
         }
@@ -354,13 +354,14 @@ fn one_triangle_shape(dark: &ShapeDesc, m: &TriangleMesh, idx: &[u32; 3], t: usi
 }
 
 /// Estimate of `Phi = int a(l) E(l) l dl` (W m^-2 nm, before dividing by hc) averaged over a
-/// surface, whose points and front normals `point(u)` draws uniformly by area.
+/// surface, whose points and front normals `point(u)` draws uniformly by area (a `dyn`
+/// closure: one copy of the path tracer inlined here serves every kind of surface).
 fn absorbed(
     scene: &Scene,
     a: &Spectrum,
     sampler: &mut Sampler,
     settings: &PathSettings,
-    point: impl Fn(Vec2) -> (Vec3, Vec3),
+    point: &dyn Fn(Vec2) -> (Vec3, Vec3),
 ) -> f64 {
     let n_samples = AFTERGLOW_SAMPLES;
     let mut sum = 0.0f64;

@@ -136,59 +136,85 @@ fn render_tile(scene: &Scene, settings: &RenderSettings, target: Target, tile: &
     )
 }
 
-/// The body of [`render_tile`], inlined into each instruction-set variant.
+/// The body of [`render_tile`], inlined into each instruction-set variant. The rows are traced
+/// at one place for both films ([`trace_row`] holds the whole path loop, inlined: a second call
+/// site would be a second copy of it to compile).
 #[inline(always)]
 fn render_tile_portable(scene: &Scene, settings: &RenderSettings, target: Target, tile: &Tile) {
-    match target {
-        Target::Pixels(band) => {
-            for y in tile.y0..tile.y1 {
-                let row = &mut band[((y - tile.y0) as u32 * settings.width) as usize..]
-                    [..settings.width as usize];
-                trace_row(scene, settings, y, tile, false, &mut PixelRow(row));
+    let splat = matches!(target, Target::Splat { .. });
+    let tw = (tile.x1 - tile.x0) as usize;
+    let ns = tile.samples.len();
+    // Splatting: per origin pixel (row-major) its samples in order: position in the pixel
+    // ([0, 1)^2), linear RGB and alpha.
+    let mut taken = if splat {
+        vec![(Vec2::ZERO, [0.0f32; 3], 0.0f32); tw * (tile.y1 - tile.y0) as usize * ns]
+    } else {
+        Vec::new()
+    };
+    let (mut band, mut stats, acc) = match target {
+        Target::Pixels(band) => (Some(band), None, None),
+        Target::Splat { stats, acc } => (None, Some(stats), Some(acc)),
+    };
+    for y in tile.y0..tile.y1 {
+        let mut sink = match (&mut band, &mut stats) {
+            (Some(band), _) => {
+                let width = settings.width as usize;
+                SampleSink::Pixels(&mut band[(y - tile.y0) as usize * width..][..width])
             }
-        }
-        Target::Splat { stats, acc } => render_splat_tile(scene, settings, tile, stats, acc),
+            (None, stats) => SampleSink::Splat(splat_row(settings, tile, y, stats, &mut taken)),
+        };
+        trace_row(scene, settings, y, tile, splat, &mut sink);
+    }
+    if let Some(acc) = acc {
+        splat_taken(settings, tile, &taken, acc);
     }
 }
 
-/// A splatting tile: traces the samples of every origin pixel of `tile` (adding them to the
-/// variance statistics of the origins inside the image), then splats them into `acc` sample
-/// index first, origin pixel (row-major) second, so that the order in which each pixel's sums
-/// grow does not depend on how samples were split into passes.
-#[inline(always)]
-fn render_splat_tile(
-    scene: &Scene,
+/// Where [`trace_row`] puts row `y`'s samples of a splatting tile: into `taken` (see
+/// [`render_tile_portable`]) and the variance statistics of the row's origins inside the image
+/// (`stats`: the tile's, row-major over them; none for a border row).
+fn splat_row<'a>(
     settings: &RenderSettings,
     tile: &Tile,
-    stats: &mut [PixelStats],
+    y: i32,
+    stats: &'a mut Option<&mut [PixelStats]>,
+    taken: &'a mut [(Vec2, [f32; 3], f32)],
+) -> SplatRow<'a> {
+    let (w, h) = (settings.width as i32, settings.height as i32);
+    let (ix0, ix1) = (tile.x0.max(0), tile.x1.min(w));
+    let iy0 = tile.y0.max(0);
+    let row = match stats {
+        Some(stats) if (0..h).contains(&y) && ix0 < ix1 => {
+            let start = ((y - iy0) * (ix1 - ix0)) as usize;
+            Some(&mut stats[start..start + (ix1 - ix0) as usize])
+        }
+        _ => None,
+    };
+    let tw = (tile.x1 - tile.x0) as usize;
+    SplatRow {
+        taken,
+        first: (y - tile.y0) as usize * tw,
+        x0: tile.x0,
+        samples: tile.samples.start,
+        per_origin: tile.samples.len(),
+        stats: row,
+        inside: ix0..ix1,
+    }
+}
+
+/// Splats a tile's samples `taken` (see [`render_tile_portable`]) into `acc` sample index
+/// first, origin pixel (row-major) second, so that the order in which each pixel's sums grow
+/// does not depend on how samples were split into passes. Inlined into the render loop's
+/// instruction-set variants, as the filter weights' SIMD pass gains from them.
+#[inline(always)]
+fn splat_taken(
+    settings: &RenderSettings,
+    tile: &Tile,
+    taken: &[(Vec2, [f32; 3], f32)],
     acc: &mut SplatTile,
 ) {
-    let (w, h) = (settings.width as i32, settings.height as i32);
     let tw = (tile.x1 - tile.x0) as usize;
     let ns = tile.samples.len();
-    let s0 = tile.samples.start;
-    // Per origin pixel (row-major) its samples in order: position in the pixel ([0, 1)^2),
-    // linear RGB and alpha.
-    let mut taken = vec![(Vec2::ZERO, [0.0f32; 3], 0.0f32); tw * (tile.y1 - tile.y0) as usize * ns];
-    for y in tile.y0..tile.y1 {
-        // The row's statistics (the tile's origins inside the image, from column ix0).
-        let (ix0, ix1) = (tile.x0.max(0), tile.x1.min(w));
-        let iy0 = tile.y0.max(0);
-        let row = ((0..h).contains(&y) && ix0 < ix1).then(|| {
-            let start = ((y - iy0) * (ix1 - ix0)) as usize;
-            &mut stats[start..start + (ix1 - ix0) as usize]
-        });
-        let mut sink = SplatRow {
-            taken: &mut taken,
-            first: (y - tile.y0) as usize * tw,
-            x0: tile.x0,
-            samples: s0,
-            per_origin: ns,
-            stats: row,
-            inside: ix0..ix1,
-        };
-        trace_row(scene, settings, y, tile, true, &mut sink);
-    }
     let radius = filter_radius(&settings.filter.desc);
     let channels = settings.splat_channels();
     for k in 0..ns {
@@ -220,22 +246,27 @@ fn render_splat_tile(
     }
 }
 
-/// Receives the samples of [`trace_row`]. A trait rather than a closure so that `put` is
-/// inlined into the render loop and compiled for its instruction sets ([`render_tile`]): an
-/// outlined closure is compiled for the baseline, where the film's exact sums cost more.
-trait SampleSink {
-    /// Sample `k` of pixel `x`: linear RGB radiance, alpha (0 or 1), film offset from the
-    /// pixel's centre, film weight.
-    fn put(&mut self, x: i32, k: u32, rgb: [f32; 3], alpha: f32, offset: Vec2, weight: f32);
+/// Receives the samples of [`trace_row`]. One concrete type for both films, so that the path
+/// loop is compiled once per kind of random numbers and instruction set, not once more per
+/// film (the loop is the bulk of the crate's code and of its build time); `put` is inlined
+/// into the render loop and compiled for its instruction sets ([`render_tile`]), where an
+/// outlined closure would be compiled for the baseline and the film's exact sums cost more.
+enum SampleSink<'a> {
+    /// Filter importance sampling: each sample into its own pixel of the row.
+    Pixels(&'a mut [PixelStats]),
+    /// Splatting.
+    Splat(SplatRow<'a>),
 }
 
-/// Filter importance sampling: each sample into its own pixel of the row.
-struct PixelRow<'a>(&'a mut [PixelStats]);
-
-impl SampleSink for PixelRow<'_> {
+impl SampleSink<'_> {
+    /// Sample `k` of pixel `x`: linear RGB radiance, alpha (0 or 1), film offset from the
+    /// pixel's centre, film weight.
     #[inline(always)]
-    fn put(&mut self, x: i32, _: u32, rgb: [f32; 3], alpha: f32, _: Vec2, w: f32) {
-        self.0[x as usize].add(rgb.map(|c| c * w), alpha * w);
+    fn put(&mut self, x: i32, k: u32, rgb: [f32; 3], alpha: f32, offset: Vec2, w: f32) {
+        match self {
+            SampleSink::Pixels(row) => row[x as usize].add(rgb.map(|c| c * w), alpha * w),
+            SampleSink::Splat(row) => row.put(x, k, rgb, alpha, offset),
+        }
     }
 }
 
@@ -258,9 +289,10 @@ struct SplatRow<'a> {
     inside: std::ops::Range<i32>,
 }
 
-impl SampleSink for SplatRow<'_> {
+impl SplatRow<'_> {
+    /// Sample `k` of pixel `x` (as [`SampleSink::put`]; the film weighs splatted samples).
     #[inline(always)]
-    fn put(&mut self, x: i32, k: u32, rgb: [f32; 3], alpha: f32, offset: Vec2, _: f32) {
+    fn put(&mut self, x: i32, k: u32, rgb: [f32; 3], alpha: f32, offset: Vec2) {
         let q = self.first + (x - self.x0) as usize;
         // Exact: the offset is u - 1/2 for u a multiple of 2^-24 in [0, 1).
         self.taken[q * self.per_origin + (k - self.samples) as usize] =
@@ -284,7 +316,7 @@ fn trace_row(
     y: i32,
     tile: &Tile,
     splat: bool,
-    sink: &mut impl SampleSink,
+    sink: &mut SampleSink,
 ) {
     // RGB mode draws no wavelength sample (its lanes are R, G, B), so its random sequence is the
     // same as before the spectral mode existed; these wavelengths are only carried along.
@@ -330,7 +362,7 @@ fn render_row_samples<S: RandomSource>(
         &SampledWavelengths,
         bool,
     ),
-    sink: &mut impl SampleSink,
+    sink: &mut SampleSink,
     new_sampler: impl Fn(u64, u64) -> S,
 ) {
     if samples.is_empty() || xs.is_empty() {
