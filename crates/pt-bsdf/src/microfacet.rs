@@ -132,7 +132,7 @@ fn beckmann_visible_slopes_11(cos_theta: f32, u1: f32, u2: f32) -> (f32, f32) {
         // Normal incidence: every facet is visible, the slopes are the plain Gaussian.
         let u1 = u1.clamp(1e-7, 1.0 - 1e-7);
         let r = (-(1.0 - u1).ln()).sqrt();
-        let (sin_phi, cos_phi) = (2.0 * PI * u2).sin_cos();
+        let (sin_phi, cos_phi) = pt_math::fastmath::sin_cos_turns(u2);
         return (r * cos_phi, r * sin_phi);
     }
     (beckmann_slope_x(cos_theta, u1), slope_y)
@@ -311,9 +311,8 @@ fn reflect_about(wo: Vec3, m: Vec3) -> (Vec3, bool) {
 /// [`Microfacet::sample_reflection`] for `N` lanes of the GGX (`BECKMANN` false) or Beckmann
 /// distribution, each with its roughness (`ax`, `ay`), viewer `wo` (local frame) and uniform
 /// numbers (`u0`, `u1`): the reflected directions and which lanes have one, computed for the
-/// lanes of `mask` where `wo` is above the surface. GGX lanes all at once in SIMD registers
-/// (but the sines and cosines, library calls), Beckmann lanes one by one (their visible
-/// slopes are an iteration). The same operations as one lane's.
+/// lanes of `mask` where `wo` is above the surface. GGX lanes all at once in SIMD registers,
+/// Beckmann lanes one by one (their visible slopes are an iteration). The same operations as one lane's.
 #[inline(always)]
 pub fn sample_reflections<const N: usize, const BECKMANN: bool>(
     ax: &[f32; N],
@@ -342,8 +341,8 @@ pub fn sample_reflections<const N: usize, const BECKMANN: bool>(
         return (wi, ok);
     }
     let (mut sin_phi, mut cos_phi) = ([0.0; N], [1.0; N]);
-    for k in set_lanes(mask) {
-        (sin_phi[k], cos_phi[k]) = (2.0 * PI * u1[k]).sin_cos();
+    for k in 0..N {
+        (sin_phi[k], cos_phi[k]) = pt_math::fastmath::sin_cos_turns(u1[k]);
     }
     for k in 0..N {
         let m = ggx_visible_normal(ax[k], ay[k], wo.get(k), u0[k], sin_phi[k], cos_phi[k]);
@@ -531,7 +530,7 @@ impl Microfacet {
         let (ax, ay) = (self.alpha_u, self.alpha_v);
         match self.dist {
             Distribution::Ggx => {
-                let (sin_phi, cos_phi) = (2.0 * PI * u.y).sin_cos();
+                let (sin_phi, cos_phi) = pt_math::fastmath::sin_cos_turns(u.y);
                 ggx_visible_normal(ax, ay, wo, u.x, sin_phi, cos_phi)
             }
             Distribution::Beckmann => {

@@ -100,8 +100,8 @@ pub fn cosine_hemisphere_pdf(v: Vec3) -> f32 {
 pub fn square_to_uniform_sphere(u: Vec2) -> Vec3 {
     let z = 1.0 - 2.0 * u.x;
     let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = 2.0 * PI * u.y;
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    let (sin_phi, cos_phi) = crate::fastmath::sin_cos_turns(u.y);
+    Vec3::new(r * cos_phi, r * sin_phi, z)
 }
 
 /// Solid-angle pdf of [`square_to_uniform_sphere`].
@@ -123,8 +123,8 @@ pub fn square_to_uniform_cone(u: Vec2, one_minus_cos_max: f32) -> Vec3 {
     let omc = u.x * one_minus_cos_max; // 1 - cos(theta), exactly uniform in cos(theta)
     let cos_t = 1.0 - omc;
     let sin_t = (omc * (2.0 - omc)).max(0.0).sqrt();
-    let phi = 2.0 * PI * u.y;
-    Vec3::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t)
+    let (sin_phi, cos_phi) = crate::fastmath::sin_cos_turns(u.y);
+    Vec3::new(sin_t * cos_phi, sin_t * sin_phi, cos_t)
 }
 
 /// Solid-angle pdf of [`square_to_uniform_cone`] (inside the cone).

@@ -2,7 +2,7 @@
 
 use super::LightSample;
 use crate::texture::{Texture, TexturePoint};
-use pt_math::lanes::{set_lanes, Mask, V3};
+use pt_math::lanes::V3;
 use pt_math::warp::{
     square_to_disk_concentric, square_to_uniform_sphere, square_to_uniform_triangle,
     uniform_cone_pdf,
@@ -307,7 +307,7 @@ pub fn cylinder_point(
     flip: bool,
     u: Vec2,
 ) -> (Vec3, Vec3, Vec2) {
-    let (sin, cos) = (std::f32::consts::TAU * u.y).sin_cos();
+    let (sin, cos) = pt_math::fastmath::sin_cos_turns(u.y);
     let outward = frame * Vec3::new(cos, sin, 0.0);
     (
         p0 + outward * radius + frame.z_axis * (u.x * length),
@@ -338,14 +338,7 @@ struct SphereCone {
 /// [`sphere_cone_lanes`]' one lane, out of line: [`AreaLight::sample`] is inlined wherever a
 /// light is sampled, and the kernel need not be copied into each of those places.
 fn sample_sphere_cone(center: Vec3, radius: f32, x: Vec3, u: Vec2) -> ConeSamples<1> {
-    sphere_cone_lanes(
-        &V3::splat(center),
-        &[radius],
-        &V3::splat(x),
-        &[u.x],
-        &[u.y],
-        1,
-    )
+    sphere_cone_lanes(&V3::splat(center), &[radius], &V3::splat(x), &[u.x], &[u.y])
 }
 
 /// The [`SphereCone`] of the sphere (`center`, `radius`) from `x`. Selects, not early returns:
@@ -386,9 +379,8 @@ pub struct ConeSamples<const N: usize> {
 }
 
 /// Points on the visible caps of `N` spheres (`center`, `radius`) seen from the points `x`, for
-/// the uniform numbers (`u0`, `u1`), uniform in the cones they subtend (see [`SphereCone`]):
-/// for all lanes at once, the sines and cosines (library calls) of the lanes in `mask` only.
-/// [`AreaLight::sample`] of a sphere is its one lane.
+/// the uniform numbers (`u0`, `u1`), uniform in the cones they subtend (see [`SphereCone`]),
+/// for all lanes at once; [`AreaLight::sample`] of a sphere is its one lane.
 #[inline(always)]
 pub fn sphere_cone_lanes<const N: usize>(
     center: &V3<N>,
@@ -396,11 +388,10 @@ pub fn sphere_cone_lanes<const N: usize>(
     x: &V3<N>,
     u0: &[f32; N],
     u1: &[f32; N],
-    mask: Mask,
 ) -> ConeSamples<N> {
     let (mut sin_phi, mut cos_phi) = ([0.0; N], [1.0; N]);
-    for k in set_lanes(mask) {
-        (sin_phi[k], cos_phi[k]) = (2.0 * PI * u1[k]).sin_cos();
+    for k in 0..N {
+        (sin_phi[k], cos_phi[k]) = pt_math::fastmath::sin_cos_turns(u1[k]);
     }
     let mut out = ConeSamples {
         outside: [false; N],

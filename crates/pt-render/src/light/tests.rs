@@ -572,7 +572,7 @@ fn sphere_cones_in_lanes_match_one_lane_bit_for_bit() {
     });
     let u0 = [0.1, 0.5, 0.9, 0.3, 0.7, 0.2, 0.99, 0.0];
     let u1 = [0.8, 0.25, 0.6, 0.1, 0.4, 0.95, 0.5, 0.33];
-    let c8 = sphere_cone_lanes(&centers, &radius, &x, &u0, &u1, 0xff);
+    let c8 = sphere_cone_lanes(&centers, &radius, &x, &u0, &u1);
     let bits = |v: Vec3| v.to_array().map(f32::to_bits);
     for k in 0..8 {
         let c1 = sphere_cone_lanes(
@@ -581,7 +581,6 @@ fn sphere_cones_in_lanes_match_one_lane_bit_for_bit() {
             &V3::splat(x.get(k)),
             &[u0[k]],
             &[u1[k]],
-            1,
         );
         assert_eq!(
             (c8.outside[k], c8.ok[k]),
