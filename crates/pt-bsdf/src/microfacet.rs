@@ -312,7 +312,8 @@ fn reflect_about(wo: Vec3, m: Vec3) -> (Vec3, bool) {
 /// distribution, each with its roughness (`ax`, `ay`), viewer `wo` (local frame) and uniform
 /// numbers (`u0`, `u1`): the reflected directions and which lanes have one, computed for the
 /// lanes of `mask` where `wo` is above the surface. GGX lanes all at once in SIMD registers,
-/// Beckmann lanes one by one (their visible slopes are an iteration). The same operations as one lane's.
+/// Beckmann lanes one by one (their visible slopes are an iteration). The same operations as
+/// one lane's.
 #[inline(always)]
 pub fn sample_reflections<const N: usize, const BECKMANN: bool>(
     ax: &[f32; N],

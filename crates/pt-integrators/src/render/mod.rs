@@ -181,7 +181,7 @@ pub fn render(
 /// honoured within about a second. (Each pass ends at a barrier where one core may idle for a
 /// tile: doubling from 1 spp, with more passes, cost 3% of the Cornell box's speed at 64 spp.)
 /// Splatting renders hold a pass's samples per tile until they are splatted (see
-/// `tile::render_splat_tile`), so their passes stop growing at [`MAX_SPLAT_PASS`] samples
+/// `tile::render_tile_portable`), so their passes stop growing at [`MAX_SPLAT_PASS`] samples
 /// per pixel.
 /// Returns whether all samples were taken.
 pub fn render_passes(
