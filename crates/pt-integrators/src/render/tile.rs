@@ -163,7 +163,7 @@ fn render_tile_portable(scene: &Scene, settings: &RenderSettings, target: Target
             }
             (None, stats) => SampleSink::Splat(splat_row(settings, tile, y, stats, &mut taken)),
         };
-        trace_row(scene, settings, y, tile, splat, &mut sink);
+        trace_row(scene, settings, y, tile, &mut sink);
     }
     if let Some(acc) = acc {
         splat_taken(settings, tile, &taken, acc);
@@ -306,18 +306,12 @@ impl SplatRow<'_> {
 }
 
 /// Traces samples `tile.samples` of pixels `tile.x0..tile.x1` of row `y` and hands each
-/// result to `sink`, pixel by pixel, each pixel's in sample order.
-/// `splat`: the sample's position is uniform in its pixel (weight 1; the film weighs it),
-/// else it is drawn from the filter ([`sample_pixel_offset`]).
+/// result to `sink`, pixel by pixel, each pixel's in sample order. For a splatting film the
+/// sample's position is uniform in its pixel (weight 1; the film weighs it), else it is drawn
+/// from the filter ([`sample_pixel_offset`]).
 #[inline(always)]
-fn trace_row(
-    scene: &Scene,
-    settings: &RenderSettings,
-    y: i32,
-    tile: &Tile,
-    splat: bool,
-    sink: &mut SampleSink,
-) {
+fn trace_row(scene: &Scene, settings: &RenderSettings, y: i32, tile: &Tile, sink: &mut SampleSink) {
+    let splat = matches!(sink, SampleSink::Splat(_));
     // RGB mode draws no wavelength sample (its lanes are R, G, B), so its random sequence is the
     // same as before the spectral mode existed; these wavelengths are only carried along.
     let rgb_lambda = SampledWavelengths::sample_visible(0.5);
