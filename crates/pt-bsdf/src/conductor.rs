@@ -139,26 +139,10 @@ impl RoughConductor {
         }
     }
 
-    /// f(wo, wi) without the cosine.
+    /// f(wo, wi) without the cosine (the value of [`RoughConductor::eval_pdf`], the model's
+    /// one implementation).
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
-        if wo.z <= 0.0 || wi.z <= 0.0 {
-            return SampledSpectrum::ZERO;
-        }
-        let h = (wo + wi).normalize_or_zero();
-        if h.z <= 0.0 {
-            return SampledSpectrum::ZERO;
-        }
-        let d = self.mf.d(h);
-        if d == 0.0 {
-            return SampledSpectrum::ZERO;
-        }
-        let f = fresnel_lanes(wo.dot(h), self.eta, self.k) * self.specular_reflectance;
-        let v = d * self.mf.g2(wo, wi) / (4.0 * wi.z * wo.z);
-        if v.is_finite() {
-            f * v
-        } else {
-            SampledSpectrum::ZERO
-        }
+        self.eval_pdf(wo, wi).0
     }
 
     /// Solid-angle pdf: `pdf_m(h) / (4 wo.h)` ([`Microfacet::reflection_pdf`]).
@@ -394,8 +378,11 @@ mod tests {
         }
     }
 
-    /// `eval_pdf` gives exactly `eval` and `pdf` (it repeats their operations in their order),
-    /// for both distributions, anisotropic.
+    /// `eval_pdf`'s pdf is exactly `pdf` ([`Microfacet::reflection_pdf`], written separately,
+    /// whose operations the kernel repeats in their order), for both distributions,
+    /// anisotropic. (`eval` is `eval_pdf`'s value, so that half holds by construction; the
+    /// value itself is checked by the chi-square and Fresnel-limit tests in `tests/specular.rs`
+    /// and by the reference images.)
     #[test]
     fn eval_pdf_is_eval_and_pdf() {
         use crate::microfacet::Distribution;

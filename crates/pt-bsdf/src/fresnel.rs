@@ -10,8 +10,8 @@ use pt_math::Vec4;
 /// normal, signed: negative means the direction is on the inside. `eta` is the relative index
 /// inside / outside. Returns 1 under total internal reflection.
 ///
-/// Selects rather than branches, so that a loop of it over lanes vectorises (the path tracer's
-/// rough plastics).
+/// Selects rather than branches, as its callers written for lanes
+/// (`microfacet::dielectric_reflection_pdf_of`) need to vectorise.
 pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
     let inside = cos_i < 0.0;
     let (cos_i, eta) = if inside {

@@ -254,7 +254,7 @@ pub fn g1_of<const BECKMANN: bool>(ax: f32, ay: f32, w: Vec3) -> f32 {
 /// [`Microfacet::dielectric_reflection_pdf`] of the GGX (`BECKMANN` false) or Beckmann
 /// distribution of roughness (`ax`, `ay`), with selects as [`d_of`].
 #[inline(always)]
-pub fn dielectric_reflection_pdf_of<const BECKMANN: bool>(
+fn dielectric_reflection_pdf_of<const BECKMANN: bool>(
     ax: f32,
     ay: f32,
     wo: Vec3,
