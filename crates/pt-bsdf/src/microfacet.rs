@@ -132,7 +132,7 @@ fn beckmann_visible_slopes_11(cos_theta: f32, u1: f32, u2: f32) -> (f32, f32) {
         // Normal incidence: every facet is visible, the slopes are the plain Gaussian.
         let u1 = u1.clamp(1e-7, 1.0 - 1e-7);
         let r = (-(1.0 - u1).ln()).sqrt();
-        let (sin_phi, cos_phi) = pt_math::fastmath::sin_cos_turns(u2);
+        let (sin_phi, cos_phi) = fastmath::sin_cos_turns(u2);
         return (r * cos_phi, r * sin_phi);
     }
     (beckmann_slope_x(cos_theta, u1), slope_y)
