@@ -327,7 +327,7 @@ impl SkyModel {
             return [0.0; 3];
         };
         let s = self.sky_scale * CIE_Y_NORMALIZATION;
-        let a = SkyAngles::new(ct, g);
+        let a = SkyAngles::new(ct, g, self.sun_dir.dot(d));
         std::array::from_fn(|c| s * eval_sky(&a, &sky.params[c], sky.radiance[c]))
     }
 
@@ -374,7 +374,7 @@ impl SkyModel {
             return [0.0; 4];
         };
         let sky = &data.0;
-        let a = SkyAngles::new(ct, g);
+        let a = SkyAngles::new(ct, g, self.sun_dir.dot(d));
         let mut cache = [f32::NAN; tables::WAVELENGTHS];
         let mut value = |c: usize| {
             if cache[c].is_nan() {
@@ -458,9 +458,11 @@ struct SkyAngles {
 }
 
 impl SkyAngles {
+    /// The terms for zenith angle cos `cos_theta` and sun angle `gamma`, whose cosine
+    /// `cos_gamma` (the dot product of the unit directions) the caller has at hand.
     #[inline]
-    fn new(cos_theta: f32, gamma: f32) -> Self {
-        let cos_gamma = gamma.cos();
+    fn new(cos_theta: f32, gamma: f32, cos_gamma: f32) -> Self {
+        let cos_gamma = cos_gamma.clamp(-1.0, 1.0);
         let cos2 = cos_gamma * cos_gamma;
         SkyAngles {
             gamma,
