@@ -461,10 +461,9 @@ impl Longitudinal {
 /// approximations of Abramowitz and Stegun (1964) 9.8.1 (x <= 3.75: a polynomial in
 /// (x / 3.75)^2, error below 1.6e-7) and 9.8.2 (above: `e^x / sqrt(x)` times a polynomial in
 /// 3.75 / x, relative error below 5e-7), their coefficients written as the f32 values they
-/// round to. Fixed length and no
-/// division per term: the power series summed until its terms stopped counting cost a
-/// division per term and most of a hair scene's longitudinal term. (Mitsuba and pbrt-v4 sum
-/// ten terms of the series, which is 0.6% low at x = 12, and take an asymptotic form above.)
+/// round to. A fixed length and no division per term, where the power series, summed until
+/// its terms stopped counting, took a division per term. (Mitsuba and pbrt-v4 sum ten terms
+/// of the series, which is 0.6% low at x = 12, and take an asymptotic form above.)
 #[inline]
 fn i0(x: f32) -> f32 {
     if x <= 3.75 {
