@@ -388,7 +388,11 @@ impl Hair {
             TAU * rest
         };
         let phi_i = st.phi_o + dphi;
-        let (sin_phi_i, cos_phi_i) = fastmath::sin_cos_turns(phi_i * (1.0 / TAU));
+        // In radians, not `fastmath::sin_cos_turns(phi_i / TAU)`: that gives sin exactly 0 where
+        // phi_i / TAU rounds to a multiple of 1/2, a direction with wi.z = 0 exactly, which
+        // `eval` counts as zero (the stability sweep's weight check found one at grazing
+        // incidence with roughness 0).
+        let (sin_phi_i, cos_phi_i) = phi_i.sin_cos();
         let wi = Vec3::new(
             cos_theta_i * cos_phi_i,
             sin_theta_i,
