@@ -458,8 +458,9 @@ struct SkyAngles {
 }
 
 impl SkyAngles {
-    /// The terms for zenith angle cos `cos_theta` and sun angle `gamma`, whose cosine
-    /// `cos_gamma` (the dot product of the unit directions) the caller has at hand.
+    /// The terms for a direction at zenith-angle cosine `cos_theta` and angle `gamma` from the
+    /// sun; `cos_gamma` is gamma's cosine, which callers have as the dot product of the unit
+    /// directions (no cosine of the angle computed again).
     #[inline]
     fn new(cos_theta: f32, gamma: f32, cos_gamma: f32) -> Self {
         let cos_gamma = cos_gamma.clamp(-1.0, 1.0);
