@@ -21,6 +21,7 @@
 
 use super::exact::{to_fixed, LINEAR_BITS, SQUARE_BITS};
 use super::{filter_profile, filter_radius, footprint_weights, MAX_FOOTPRINT};
+use pt_math::lanes::lanes;
 use pt_math::Vec2;
 use pt_scene::FilterDesc;
 
@@ -142,6 +143,7 @@ impl SplatLayout {
         let x1 = (xs.end + m).min(self.width as i32);
         let y1 = (ys.end + m).min(self.height as i32);
         let (w, h) = ((x1 - x0).max(0), (y1 - y0).max(0));
+        let pitch = w as usize + ROW_LANES - 1;
         SplatTile {
             x0,
             y0,
@@ -150,10 +152,27 @@ impl SplatLayout {
             stride: channels + 1,
             squares_from,
             sums: vec![0; (w * h) as usize * (channels + 1)],
-            scratch: vec![0.0; (w * h) as usize * (channels + 1)],
+            pitch,
+            scratch: vec![0.0; h as usize * pitch * (channels + 1)],
         }
     }
 }
+
+/// Fractional bits of the exact sum at position `c` of a pixel's `stride` sums whose values
+/// from `squares_from` on (up to the weight, the last) are squares: see
+/// [`SplatTile::frac_bits`].
+#[inline(always)]
+fn grid_bits(squares_from: usize, stride: usize, c: usize) -> u32 {
+    if (squares_from..stride - 1).contains(&c) {
+        SQUARE_BITS
+    } else {
+        LINEAR_BITS
+    }
+}
+
+/// Pixels of a footprint's row that a splat adds at once (a 4-wide f64 vector): the footprints
+/// of the usual filters (box, tent, Gaussian, Mitchell: up to 5 pixels) take one or two steps.
+const ROW_LANES: usize = 4;
 
 /// The accumulator of one tile: per covered image pixel the weighted sums of each of a
 /// sample's values (filter weight times value: linear RGB radiance and alpha for the image,
@@ -176,8 +195,13 @@ pub struct SplatTile {
     /// Row-major exact sums ([`super::exact`]), `stride` per pixel: weight times each value,
     /// and the weight; in units of 2^-[`SplatTile::frac_bits`] of the value's position.
     pub sums: Vec<i128>,
+    /// Length of a row of `scratch`: the width and room for a last step of [`ROW_LANES`]
+    /// that starts at the last pixel.
+    pitch: usize,
     /// The splats of the current sample index, not yet in `sums` (zero between
-    /// [`SplatTile::commit`]s; not part of the film's state).
+    /// [`SplatTile::commit`]s; not part of the film's state): one plane per sum (`stride`
+    /// planes of `h` rows of `pitch`), so that a footprint's row of one value is contiguous and
+    /// is added in vector steps.
     scratch: Vec<f64>,
 }
 
@@ -187,11 +211,7 @@ impl SplatTile {
     /// on [`LINEAR_BITS`].
     #[inline]
     pub fn frac_bits(&self, c: usize) -> u32 {
-        if (self.squares_from..self.stride - 1).contains(&c) {
-            SQUARE_BITS
-        } else {
-            LINEAR_BITS
-        }
+        grid_bits(self.squares_from, self.stride, c)
     }
 
     /// Adds the splats made since the last commit (one sample index's, see the module
@@ -199,23 +219,21 @@ impl SplatTile {
     /// for its instruction sets: the conversions' variable shifts are single instructions there).
     #[inline(always)]
     pub fn commit(&mut self) {
-        let (stride, squares) = (self.stride, self.squares_from..self.stride - 1);
-        // Pixel by pixel, so that a value's position in its pixel is the inner index (a
-        // remainder per value, a division, cost more than the conversion it chose for).
-        for (sums, scratch) in self
-            .sums
-            .chunks_exact_mut(stride)
-            .zip(self.scratch.chunks_exact_mut(stride))
-        {
-            for (c, (sum, s)) in sums.iter_mut().zip(scratch.iter_mut()).enumerate() {
-                if *s != 0.0 {
-                    let bits = if squares.contains(&c) {
-                        SQUARE_BITS
-                    } else {
-                        LINEAR_BITS
-                    };
-                    *sum = sum.wrapping_add(to_fixed(*s, bits));
-                    *s = 0.0;
+        let (stride, w, pitch) = (self.stride, self.w as usize, self.pitch);
+        let plane = self.h as usize * pitch;
+        if plane == 0 {
+            return;
+        }
+        for (c, scratch) in self.scratch.chunks_exact_mut(plane).enumerate() {
+            let bits = grid_bits(self.squares_from, stride, c);
+            // Row by row: the padding beyond `w` only ever receives zeros (see `splat`).
+            for (r, row) in scratch.chunks_exact_mut(pitch).enumerate() {
+                let sums = self.sums[r * w * stride..][..w * stride].chunks_exact_mut(stride);
+                for (sum, s) in sums.zip(&mut row[..w]) {
+                    if *s != 0.0 {
+                        sum[c] = sum[c].wrapping_add(to_fixed(*s, bits));
+                        *s = 0.0;
+                    }
                 }
             }
         }
@@ -258,6 +276,7 @@ impl SplatTile {
             footprint_weights(filter, xs.start - origin[0], xs.len(), u.x, &mut wx);
             footprint_weights(filter, ys.start - origin[1], ys.len(), u.y, &mut wy);
         }
+        let plane = self.h as usize * self.pitch;
         for (j, y) in ys.enumerate() {
             let wy = if cached {
                 wy[j]
@@ -267,20 +286,50 @@ impl SplatTile {
             if wy == 0.0 {
                 continue;
             }
-            let row = ((y - self.y0) * self.w + xs.start - self.x0) as usize * self.stride;
-            for (k, x) in xs.clone().enumerate() {
-                let w = wy
-                    * if cached {
-                        wx[k]
-                    } else {
-                        weight(x - origin[0], u.x)
-                    };
-                let w = f64::from(w);
-                let s = &mut self.scratch[row + k * self.stride..][..self.stride];
-                for (sum, v) in s.iter_mut().zip(values) {
-                    *sum += w * f64::from(*v);
+            let row = (y - self.y0) as usize * self.pitch + (xs.start - self.x0) as usize;
+            let len = xs.len();
+            if !cached {
+                // Footprints wider than MAX_FOOTPRINT (huge filters), pixel by pixel.
+                for (k, x) in xs.clone().enumerate() {
+                    let w = f64::from(wy * weight(x - origin[0], u.x));
+                    for (c, v) in values
+                        .iter()
+                        .map(|&v| f64::from(v))
+                        .chain([1.0])
+                        .enumerate()
+                    {
+                        self.scratch[c * plane + row + k] += w * v;
+                    }
                 }
-                s[self.stride - 1] += w;
+                continue;
+            }
+            // ROW_LANES pixels at a time, each value's plane in one vector step; lanes beyond
+            // the footprint weigh 0 (and add zeros: the values are finite, `fits`).
+            for c0 in (0..len).step_by(ROW_LANES) {
+                let w: [f64; ROW_LANES] = lanes(|k| {
+                    let x = c0 + k;
+                    let w = f64::from(wy * wx[x % MAX_FOOTPRINT]);
+                    if x < len {
+                        w
+                    } else {
+                        0.0
+                    }
+                });
+                let mut add = |at: usize, v: f64| {
+                    let s: &mut [f64; ROW_LANES] = (&mut self.scratch[at..at + ROW_LANES])
+                        .try_into()
+                        .expect("a step of ROW_LANES");
+                    for (s, w) in s.iter_mut().zip(w) {
+                        *s += w * v;
+                    }
+                };
+                let mut at = row + c0;
+                for &v in values {
+                    add(at, f64::from(v));
+                    at += plane;
+                }
+                // The weight (times 1: the same bits as the weight itself).
+                add(at, 1.0);
             }
         }
     }
