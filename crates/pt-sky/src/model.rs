@@ -35,6 +35,7 @@
 use crate::tables::{self, tables, Tables};
 use glam::Vec3;
 use pt_math::fastmath;
+use pt_math::lanes::lanes;
 use std::f64::consts::PI;
 
 /// Mitsuba's `MI_CIE_Y_NORMALIZATION`: 1 / (integral of CIE y-bar over 360-830 nm at 1 nm),
@@ -79,12 +80,21 @@ pub struct SkyParams {
     pub sky_scale: f32,
 }
 
-/// Per-channel sky coefficients A..I (file order) and mean radiance.
+/// Per-channel sky coefficients A..I (file order) and mean radiance, coefficient by
+/// coefficient (structure of arrays) in `L` lanes, so that one lookup evaluates every channel
+/// in SIMD lanes ([`eval_sky`]); lanes beyond the channels hold zeros (radiance 0).
 #[derive(Clone, Debug)]
-struct SkyChannels<const C: usize> {
-    params: [[f32; tables::SKY_PARAMS]; C],
-    radiance: [f32; C],
+struct SkyChannels<const L: usize> {
+    /// `params[p][c]`: coefficient p (file order) of channel c.
+    params: [[f32; L]; tables::SKY_PARAMS],
+    /// Mean radiance of channel c.
+    radiance: [f32; L],
 }
+
+/// Lanes of the RGB sky's channels (3, padded to a 4-wide vector).
+const RGB_LANES: usize = 4;
+/// Lanes of the spectral sky's channels (11, padded to three 4-wide vectors).
+const SPECTRAL_LANES: usize = 12;
 
 #[derive(Clone, Debug)]
 enum Sun<const C: usize> {
@@ -103,13 +113,8 @@ enum Sun<const C: usize> {
 /// times the size).
 #[derive(Clone, Debug)]
 enum Channels {
-    Rgb(SkyChannels<3>, Sun<3>),
-    Spectral(
-        Box<(
-            SkyChannels<{ tables::WAVELENGTHS }>,
-            Sun<{ tables::WAVELENGTHS }>,
-        )>,
-    ),
+    Rgb(SkyChannels<RGB_LANES>, Sun<3>),
+    Spectral(Box<(SkyChannels<SPECTRAL_LANES>, Sun<{ tables::WAVELENGTHS }>)>),
 }
 
 /// The sun and sky model for one set of parameters, in RGB or spectral mode.
@@ -133,14 +138,15 @@ fn level(x: f64, levels: usize) -> (usize, f64) {
     (i, x - i as f64)
 }
 
-/// Sky coefficients of `C` channels: turbidity, then albedo, then Bezier over the elevation.
-fn sky_channels<const C: usize>(
+/// Sky coefficients of `C` channels in `L` >= `C` lanes: turbidity, then albedo, then Bezier
+/// over the elevation.
+fn sky_channels<const C: usize, const L: usize>(
     params: &[f32],
     radiance: &[f32],
     turbidity: f32,
     albedo: [f32; C],
     eta: f64,
-) -> SkyChannels<C> {
+) -> SkyChannels<L> {
     use tables::{ALBEDO_LEVELS, SKY_CONTROL_POINTS as K, SKY_PARAMS as P};
     let (t, ft) = level(turbidity as f64 - 1.0, tables::TURBIDITY_LEVELS);
     // Bernstein weights of the quintic at x = (2 eta / pi)^(1/3), x < 1 as Mitsuba keeps it.
@@ -166,9 +172,12 @@ fn sky_channels<const C: usize>(
         }
         sum as f32
     };
+    let lane = |c: usize, f: &dyn Fn(usize) -> f32| if c < C { f(c) } else { 0.0 };
     SkyChannels {
-        params: std::array::from_fn(|c| std::array::from_fn(|p| interp(params, P, c, p))),
-        radiance: std::array::from_fn(|c| interp(radiance, 1, c, 0)),
+        params: std::array::from_fn(|p| {
+            std::array::from_fn(|c| lane(c, &|c| interp(params, P, c, p)))
+        }),
+        radiance: std::array::from_fn(|c| lane(c, &|c| interp(radiance, 1, c, 0))),
     }
 }
 
@@ -327,8 +336,8 @@ impl SkyModel {
             return [0.0; 3];
         };
         let s = self.sky_scale * CIE_Y_NORMALIZATION;
-        let a = SkyAngles::new(ct, g, self.sun_dir.dot(d));
-        std::array::from_fn(|c| s * eval_sky(&a, &sky.params[c], sky.radiance[c]))
+        let v = eval_sky(&SkyAngles::new(ct, g, self.sun_dir.dot(d)), sky);
+        std::array::from_fn(|c| s * v[c])
     }
 
     /// The sun's RGB radiance in direction `d` (unit, local): 0 outside its disc.
@@ -374,15 +383,10 @@ impl SkyModel {
             return [0.0; 4];
         };
         let sky = &data.0;
-        let a = SkyAngles::new(ct, g, self.sun_dir.dot(d));
-        let mut cache = [f32::NAN; tables::WAVELENGTHS];
-        let mut value = |c: usize| {
-            if cache[c].is_nan() {
-                cache[c] = eval_sky(&a, &sky.params[c], sky.radiance[c]);
-            }
-            cache[c]
-        };
-        lambda.map(|l| lerp_channels(l, &mut value) * self.sky_scale)
+        // All 11 channels at once (three vector steps), rather than the up to eight that four
+        // wavelengths fall between, one by one.
+        let v = eval_sky(&SkyAngles::new(ct, g, self.sun_dir.dot(d)), sky);
+        lambda.map(|l| lerp_channels(l, &mut |c| v[c]) * self.sky_scale)
     }
 
     /// The sun's spectral radiance at four wavelengths `lambda` (nm): 0 outside its disc.
@@ -476,21 +480,25 @@ impl SkyAngles {
     }
 }
 
-/// The sky's radiance of one channel (Hosek and Wilkie 2012, eq. 9; coefficients in the
-/// file's order A B C D E F G I H), for the direction terms `a`.
-#[inline]
-fn eval_sky(a: &SkyAngles, p: &[f32; tables::SKY_PARAMS], mean: f32) -> f32 {
-    let h = p[8];
-    // chi = (1 + cos^2 gamma) / (1 + H^2 - 2 H cos gamma)^(3/2); x^(3/2) as x sqrt(x).
-    let base = 1.0 + h * h - 2.0 * h * a.cos_gamma;
-    let chi = a.one_plus_cos2 / (base * base.sqrt());
-    let c1 = 1.0 + p[0] * fastmath::exp(p[1] * a.inv_cos_theta);
-    let c2 = p[2]
-        + p[3] * fastmath::exp(p[4] * a.gamma)
-        + p[5] * a.cos2
-        + p[6] * chi
-        + p[7] * a.sqrt_cos_theta;
-    c1 * c2 * mean
+/// The sky's radiance of every channel of `sky` (Hosek and Wilkie 2012, eq. 9; coefficients in
+/// the file's order A B C D E F G I H), for the direction terms `a`: one formula over the lanes,
+/// which the compiler vectorises (the exponentials included, [`fastmath::exp`]).
+#[inline(always)]
+fn eval_sky<const L: usize>(a: &SkyAngles, sky: &SkyChannels<L>) -> [f32; L] {
+    let p = &sky.params;
+    lanes(|c| {
+        let h = p[8][c];
+        // chi = (1 + cos^2 gamma) / (1 + H^2 - 2 H cos gamma)^(3/2); x^(3/2) as x sqrt(x).
+        let base = 1.0 + h * h - 2.0 * h * a.cos_gamma;
+        let chi = a.one_plus_cos2 / (base * base.sqrt());
+        let c1 = 1.0 + p[0][c] * fastmath::exp(p[1][c] * a.inv_cos_theta);
+        let c2 = p[2][c]
+            + p[3][c] * fastmath::exp(p[4][c] * a.gamma)
+            + p[5][c] * a.cos2
+            + p[6][c] * chi
+            + p[7][c] * a.sqrt_cos_theta;
+        c1 * c2 * sky.radiance[c]
+    })
 }
 
 /// Segment of the solar radiance function for a direction with cos(zenith angle) `cos_theta`,
