@@ -235,6 +235,8 @@ pub fn render_passes_saving(
     } else {
         u32::MAX
     };
+    // Each tile's (or band's) time in the last pass, which orders the next.
+    let mut costs = Vec::new();
     in_passes(
         state,
         settings.spp,
@@ -243,8 +245,23 @@ pub fn render_passes_saving(
         4,
         most,
         |state, samples| match &mut state.splat {
-            Some(film) => splat_pass(scene, settings, &mut state.pixels, film, samples, progress),
-            None => importance_pass(scene, settings, &mut state.pixels, samples, progress),
+            Some(film) => splat_pass(
+                scene,
+                settings,
+                &mut state.pixels,
+                film,
+                samples,
+                &mut costs,
+                progress,
+            ),
+            None => importance_pass(
+                scene,
+                settings,
+                &mut state.pixels,
+                samples,
+                &mut costs,
+                progress,
+            ),
         },
     )
 }

@@ -10,18 +10,22 @@ use pt_render::film::{filter_radius, sample_pixel_offset, PixelStats};
 use pt_render::sampler::{RandomSource, Sampler, StructuredSampler};
 use pt_render::Scene;
 use pt_spectrum::{spectrum_to_srgb, srgb_to_xyz, ColorMode, SampledWavelengths};
-use rayon::prelude::*;
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::sync::Mutex;
+use std::time::Instant;
 
 /// Tile width and largest band height in pixels (see [`super::render_passes`]): small enough to
 /// balance many threads, large enough that scheduling overhead is negligible.
 const TILE: u32 = 16;
 
-/// One pass of filter importance sampling: samples `samples` of every pixel.
+/// One pass of filter importance sampling: samples `samples` of every pixel. `costs` carries
+/// the bands' times from pass to pass ([`costliest_first`]).
 pub(super) fn importance_pass(
     scene: &Scene,
     settings: &RenderSettings,
     pixels: &mut [PixelStats],
     samples: std::ops::Range<u32>,
+    costs: &mut Vec<f32>,
     progress: &(dyn Fn(u64) + Sync),
 ) {
     let (w, h) = (settings.width, settings.height);
@@ -32,35 +36,35 @@ pub(super) fn importance_pass(
     // second image of sums: 2048x2048 peaked at 467 MB.
     let threads = rayon::current_num_threads().max(1) as u32;
     let rows = (h / (32 * threads)).clamp(1, TILE);
-    pixels
-        .par_chunks_mut((w * rows) as usize)
-        .enumerate()
-        .for_each(|(b, band)| {
-            let y0 = b as u32 * rows;
-            let y1 = (y0 + rows).min(h);
-            for x0 in (0..w).step_by(TILE as usize) {
-                let tile = Tile {
-                    x0: x0 as i32,
-                    y0: y0 as i32,
-                    x1: (x0 + TILE).min(w) as i32,
-                    y1: y1 as i32,
-                    samples: samples.clone(),
-                };
-                render_tile(scene, settings, Target::Pixels(band), &tile);
-                progress(tile.image_pixels(w, h) * u64::from(samples.len() as u32));
-            }
-        });
+    let bands = pixels.chunks_mut((w * rows) as usize).enumerate().collect();
+    costliest_first(bands, costs, |(b, band)| {
+        let y0 = b as u32 * rows;
+        let y1 = (y0 + rows).min(h);
+        for x0 in (0..w).step_by(TILE as usize) {
+            let tile = Tile {
+                x0: x0 as i32,
+                y0: y0 as i32,
+                x1: (x0 + TILE).min(w) as i32,
+                y1: y1 as i32,
+                samples: samples.clone(),
+            };
+            render_tile(scene, settings, Target::Pixels(band), &tile);
+            progress(tile.image_pixels(w, h) * u64::from(samples.len() as u32));
+        }
+    });
 }
 
 /// One pass of the splatting film: samples `samples` of every origin pixel (the image's and,
-/// with `sample_border`, its border's), rayon over the film's tiles (each owns its
-/// accumulator and the contiguous slice of tile-major statistics of its origins).
+/// with `sample_border`, its border's), over the film's tiles (each owns its accumulator and
+/// the contiguous slice of tile-major statistics of its origins). `costs` carries the tiles'
+/// times from pass to pass ([`costliest_first`]).
 pub(super) fn splat_pass(
     scene: &Scene,
     settings: &RenderSettings,
     pixels: &mut [PixelStats],
     film: &mut SplatFilm,
     samples: std::ops::Range<u32>,
+    costs: &mut Vec<f32>,
     progress: &(dyn Fn(u64) + Sync),
 ) {
     let layout = &film.layout;
@@ -75,7 +79,7 @@ pub(super) fn splat_pass(
         rest = r;
         jobs.push((i, j, stats, acc));
     }
-    jobs.into_par_iter().for_each(|(i, j, stats, acc)| {
+    costliest_first(jobs, costs, |(i, j, stats, acc)| {
         let (xs, ys) = layout.origins(i, j);
         let tile = Tile {
             x0: xs.start,
@@ -88,6 +92,38 @@ pub(super) fn splat_pass(
         render_tile(scene, settings, Target::Splat { stats, acc }, &tile);
         progress(n * u64::from(samples.len() as u32));
     });
+}
+
+/// Runs the jobs of a pass on every thread of rayon's pool, each thread taking the next job
+/// when it finishes one, the costliest first by `costs` (each job's seconds in the previous
+/// pass, by its index; in the given order when the previous pass had other jobs, as the first
+/// has none), and records this pass's times in `costs`. Longest processing time first (Graham
+/// 1969): a pass ends at a barrier, and the jobs still running when the queue runs dry are its
+/// cheapest, so a thread idles there for a short job rather than for a costly one (tiles cost
+/// very unequally where geometry or emitters cover part of the image). The image does not
+/// depend on the order: every job owns its pixels' sums, which are exact.
+fn costliest_first<J: Send>(jobs: Vec<J>, costs: &mut Vec<f32>, work: impl Fn(J) + Sync) {
+    let n = jobs.len();
+    let mut order: Vec<(usize, J)> = jobs.into_iter().enumerate().collect();
+    if costs.len() == n {
+        order.sort_by(|a, b| costs[b.0].total_cmp(&costs[a.0]));
+    }
+    let queue = Mutex::new(order.into_iter());
+    let times: Vec<AtomicU32> = (0..n).map(|_| AtomicU32::new(0)).collect();
+    rayon::broadcast(|_| loop {
+        // A job's own panic would poison the lock; the queue itself stays consistent.
+        let next = queue.lock().unwrap_or_else(|e| e.into_inner()).next();
+        let Some((k, job)) = next else {
+            break;
+        };
+        let start = Instant::now();
+        work(job);
+        times[k].store(start.elapsed().as_secs_f32().to_bits(), Ordering::Relaxed);
+    });
+    *costs = times
+        .into_iter()
+        .map(|t| f32::from_bits(t.into_inner()))
+        .collect();
 }
 
 /// Pixels `x0..x1` by `y0..y1` of the image (origin pixels beyond the image's edge for a
