@@ -622,4 +622,37 @@ mod tests {
             );
         }
     }
+
+    /// The pass scheduler runs every job exactly once, records one time per job, and with the
+    /// previous pass's times takes the costliest first: on one thread the jobs then run in
+    /// decreasing order of their recorded costs.
+    #[test]
+    fn costliest_first_runs_each_job_once_costliest_first() {
+        let mut counts = vec![0u32; 40];
+        let mut costs = Vec::new();
+        let jobs: Vec<(usize, &mut u32)> = counts.iter_mut().enumerate().collect();
+        costliest_first(jobs, &mut costs, |(_, c)| *c += 1);
+        assert!(counts.iter().all(|&c| c == 1), "{counts:?}");
+        assert_eq!(costs.len(), 40);
+        assert!(costs.iter().all(|t| t.is_finite() && *t >= 0.0));
+        // Made-up costs: job k cost (k * 7) % 40. On a pool of one thread the order is theirs.
+        let mut costs: Vec<f32> = (0..40).map(|k| ((k * 7) % 40) as f32).collect();
+        let before = costs.clone();
+        let order = Mutex::new(Vec::new());
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        pool.install(|| {
+            costliest_first((0..40).collect(), &mut costs, |k: usize| {
+                order.lock().unwrap().push(k)
+            })
+        });
+        let order = order.into_inner().unwrap();
+        assert_eq!(order.len(), 40);
+        assert!(
+            order.windows(2).all(|w| before[w[0]] >= before[w[1]]),
+            "{order:?}"
+        );
+    }
 }
