@@ -172,12 +172,18 @@ fn sky_channels<const C: usize, const L: usize>(
         }
         sum as f32
     };
-    let lane = |c: usize, f: &dyn Fn(usize) -> f32| if c < C { f(c) } else { 0.0 };
+    // Lanes from C on (padding) hold zeros.
     SkyChannels {
         params: std::array::from_fn(|p| {
-            std::array::from_fn(|c| lane(c, &|c| interp(params, P, c, p)))
+            std::array::from_fn(|c| if c < C { interp(params, P, c, p) } else { 0.0 })
         }),
-        radiance: std::array::from_fn(|c| lane(c, &|c| interp(radiance, 1, c, 0))),
+        radiance: std::array::from_fn(|c| {
+            if c < C {
+                interp(radiance, 1, c, 0)
+            } else {
+                0.0
+            }
+        }),
     }
 }
 
