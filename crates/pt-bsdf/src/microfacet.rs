@@ -31,7 +31,7 @@
 //! All functions take directions in the local frame with `wo.z >= 0` (callers flip).
 
 use crate::fresnel::fresnel_dielectric;
-use pt_math::lanes::{lanes, mask_of, set_lanes, Mask, V3};
+use pt_math::lanes::{lanes, mask_of, Mask, V3};
 use pt_math::{fastmath, Vec2, Vec3};
 use std::f32::consts::PI;
 
@@ -76,121 +76,214 @@ pub struct Microfacet {
 /// as the f32 values they round to; Mitsuba samples Beckmann slopes with the same
 /// approximation).
 pub fn erf_inv_giles(y: f32) -> f32 {
-    if y <= -1.0 {
-        return f32::NEG_INFINITY;
-    }
-    if y >= 1.0 {
-        return f32::INFINITY;
-    }
-    let w = -((1.0 - y) * (1.0 + y)).ln();
-    if w < 5.0 {
-        let w = w - 2.5;
-        let mut p = 2.8102264e-08;
-        for c in [
-            3.4327394e-07,
-            -3.523_387_7e-06,
-            -4.3915065e-06,
-            0.000_218_580_87,
-            -0.001253725,
-            -0.0041776816,
-            0.24664073,
+    erf_inv_lanes(&[y])[0]
+}
+
+/// [`erf_inv_giles`] for `N` lanes at once: Giles' central form for every lane (one logarithm
+/// without a library call, and a polynomial), his tail form only when some lane needs it
+/// (|y| above about 0.9966), so that the lanes run in SIMD registers and the rare form costs
+/// nothing where no lane takes it.
+#[inline(always)]
+fn erf_inv_lanes<const N: usize>(y: &[f32; N]) -> [f32; N] {
+    let w: [f32; N] = lanes(|k| -fastmath::ln((1.0 - y[k]) * (1.0 + y[k])));
+    let mut out: [f32; N] = lanes(|k| {
+        // Giles' central polynomial in w - 2.5 by Estrin's scheme (a chain of four steps
+        // where Horner's has eight: the single-lane callers wait for it).
+        let [c0, c1, c2, c3, c4, c5, c6, c7, c8] = [
             1.5014094,
-        ] {
-            p = c + p * w;
+            0.24664073,
+            -0.0041776816,
+            -0.001253725,
+            0.000_218_580_87,
+            -4.3915065e-06,
+            -3.523_387_7e-06,
+            3.4327394e-07,
+            2.8102264e-08,
+        ];
+        let t = w[k] - 2.5;
+        let (t2, t4) = (t * t, t * t * t * t);
+        let low = (c0 + c1 * t) + t2 * (c2 + c3 * t);
+        let high = (c4 + c5 * t) + t2 * (c6 + c7 * t);
+        (low + t4 * (high + t4 * c8)) * y[k]
+    });
+    let tail: [bool; N] = lanes(|k| !(w[k] < 5.0));
+    if mask_of(&tail) != 0 {
+        for k in 0..N {
+            let w = w[k];
+            let wt = w.sqrt() - 3.0;
+            let mut q = -0.00020021426;
+            for c in [
+                0.00010095056,
+                0.0013493432,
+                -0.0036734284,
+                0.0057395077,
+                -0.007_622_461_3,
+                0.0094388705,
+                1.001674,
+                2.8329768,
+            ] {
+                q = c + q * wt;
+            }
+            out[k] = if tail[k] { q * y[k] } else { out[k] };
         }
-        p * y
-    } else {
-        let w = w.sqrt() - 3.0;
-        let mut p = -0.00020021426;
-        for c in [
-            0.00010095056,
-            0.0013493432,
-            -0.0036734284,
-            0.0057395077,
-            -0.007_622_461_3,
-            0.0094388705,
-            1.001674,
-            2.8329768,
-        ] {
-            p = c + p * w;
-        }
-        p * y
     }
+    lanes(|k| {
+        if y[k] <= -1.0 {
+            f32::NEG_INFINITY
+        } else if y[k] >= 1.0 {
+            f32::INFINITY
+        } else {
+            out[k]
+        }
+    })
 }
 
 /// 1 / sqrt(pi), in the Gaussian slope densities of Beckmann's visible normals.
 const INV_SQRT_PI: f32 = 0.564_189_6;
 
-/// Visible slopes of the Beckmann distribution of roughness 1 seen from incidence `cos_theta`
-/// (in the xz-plane): `(slope_x, slope_y)` from two uniform numbers (see the module doc). Away
-/// from normal incidence the two are separable: slope_x depends on `u1` and the angle alone
-/// ([`beckmann_slope_x`]), slope_y on `u2` alone ([`beckmann_slope_y`]). In f32, as the
-/// normals they become: the inversions below are accurate to a few 1e-7 in probability.
-fn beckmann_visible_slopes_11(cos_theta: f32, u1: f32, u2: f32) -> (f32, f32) {
-    let slope_y = beckmann_slope_y(u2);
-    if beckmann_normal_incidence(cos_theta) {
-        // Normal incidence: every facet is visible, the slopes are the plain Gaussian.
-        let u1 = u1.clamp(1e-7, 1.0 - 1e-7);
-        let r = (-(1.0 - u1).ln()).sqrt();
-        let (sin_phi, cos_phi) = fastmath::sin_cos_turns(u2);
-        return (r * cos_phi, r * sin_phi);
+/// Beckmann visible normals for `N` lanes, each with its roughness (`ax`, `ay`), viewer `wo`
+/// (local frame, `wo.z > 0`) and uniform numbers (`u0`, `u1`): Heitz & d'Eon 2014's slope
+/// method (stretch to roughness 1, sample the visible slopes, rotate to the viewer's azimuth,
+/// unstretch), all lanes at once in SIMD registers; one lane is [`Microfacet::sample_m`]'s
+/// Beckmann normal. Away from normal incidence the two slopes are separable: slope_x depends
+/// on `u0` and the angle alone ([`beckmann_slopes_x`]), slope_y on `u1` alone
+/// ([`beckmann_slope_y`]); at normal incidence every facet is visible and the slopes are the
+/// plain Gaussian's. In f32, as the normals they become: the inversions are accurate to a
+/// few 1e-7 in probability.
+#[inline(always)]
+fn beckmann_visible_normals<const N: usize>(
+    ax: &[f32; N],
+    ay: &[f32; N],
+    wo: &V3<N>,
+    u0: &[f32; N],
+    u1: &[f32; N],
+) -> V3<N> {
+    let ws: V3<N> = V3::from_fn(|k| beckmann_stretched(ax[k], ay[k], wo.get(k)));
+    let cos_theta: [f32; N] = lanes(|k| ws.z[k].clamp(0.0, 1.0));
+    let mut sx = beckmann_slopes_x(&cos_theta, u0);
+    let mut sy = erf_inv_lanes::<N>(&lanes(|k| slope_y_argument(u1[k])));
+    let normal: [bool; N] = lanes(|k| beckmann_normal_incidence(cos_theta[k]));
+    if mask_of(&normal) != 0 {
+        for k in 0..N {
+            // Normal incidence: the Gaussian's slopes in polar form.
+            let u = u0[k].clamp(1e-7, 1.0 - 1e-7);
+            let r = (-fastmath::ln(1.0 - u)).sqrt();
+            let (sin_phi, cos_phi) = fastmath::sin_cos_turns(u1[k]);
+            if normal[k] {
+                (sx[k], sy[k]) = (r * cos_phi, r * sin_phi);
+            }
+        }
     }
-    (beckmann_slope_x(cos_theta, u1), slope_y)
+    V3::from_fn(|k| beckmann_normal(ax[k], ay[k], ws.get(k), sx[k], sy[k]))
 }
 
-/// Whether [`beckmann_visible_slopes_11`] takes its normal-incidence branch (not separable).
-#[inline]
+/// Whether [`beckmann_visible_normals`] takes its normal-incidence form (not separable).
+#[inline(always)]
 fn beckmann_normal_incidence(cos_theta: f32) -> bool {
     cos_theta > 0.9999
 }
 
 /// The visible slope across the viewing plane: the standard Gaussian's, by Giles' inverse
 /// error function.
-#[inline]
+#[inline(always)]
 fn beckmann_slope_y(u2: f32) -> f32 {
-    erf_inv_giles((2.0 * u2 - 1.0).clamp(-1.0 + 1e-7, 1.0 - 1e-7))
+    erf_inv_giles(slope_y_argument(u2))
 }
 
-/// The visible slope in the viewing plane for incidence `cos_theta` (below normal incidence):
-/// the inverse of its CDF at `u1` by Newton's method in a bracket, in the erf domain b =
-/// erf(slope_x) (Heitz & d'Eon 2014, sec. 4 and appendix; the CDF is
-/// norm (1 + b + tan(theta) e^{-slope_x^2} / sqrt(pi))).
-fn beckmann_slope_x(cos_theta: f32, u1: f32) -> f32 {
-    let u1 = u1.clamp(1e-7, 1.0 - 1e-7);
-    let sin_theta = (1.0 - cos_theta * cos_theta).max(0.0).sqrt();
-    let tan_theta = sin_theta / cos_theta;
-    let cot_theta = cos_theta / sin_theta;
-    // Bracket of b: facets with slope_x >= cot(theta) face away from the viewer.
-    // (cot_theta > 0: cos_theta is in (0, 0.9999] here.)
-    let (mut lo, mut hi) = (-1.0f32, 1.0 - fastmath::erfc(cot_theta));
-    let norm = 1.0 / (1.0 + hi + INV_SQRT_PI * tan_theta * fastmath::exp(-cot_theta * cot_theta));
-    // Start from Jakob 2014's fit of the inverse, b0 = c - (1 + c)(1 - u1)^p(theta), which
-    // leaves a few Newton steps.
-    let theta = cos_theta.acos();
-    let fit = 1.0 + theta * (-0.876 + theta * (0.4265 - 0.0594 * theta));
-    let mut b = hi - (1.0 + hi) * (1.0 - u1).powf(fit);
-    let mut x = 0.0;
+/// The error function's value whose inverse is [`beckmann_slope_y`] of `u2`.
+#[inline(always)]
+fn slope_y_argument(u2: f32) -> f32 {
+    (2.0 * u2 - 1.0).clamp(-1.0 + 1e-7, 1.0 - 1e-7)
+}
+
+/// The viewer direction stretched to roughness 1 (Beckmann sampling).
+#[inline(always)]
+fn beckmann_stretched(ax: f32, ay: f32, wo: Vec3) -> Vec3 {
+    Vec3::new(ax * wo.x, ay * wo.y, wo.z).normalize()
+}
+
+/// The microfacet normal of the roughness-1 slopes (`sx`, `sy`) drawn for the stretched
+/// viewer `ws`: rotated to the viewer's azimuth, unstretched by (`ax`, `ay`); the normal is
+/// (-slope_x, -slope_y, 1), +z where that is not finite.
+#[inline(always)]
+fn beckmann_normal(ax: f32, ay: f32, ws: Vec3, sx: f32, sy: f32) -> Vec3 {
+    // |ws| = 1, so the plain form cannot overflow (`hypot` is a library call).
+    let r = (ws.x * ws.x + ws.y * ws.y).sqrt();
+    let (cos_phi, sin_phi) = if r > 0.0 {
+        (ws.x / r, ws.y / r)
+    } else {
+        (1.0, 0.0)
+    };
+    let (rx, ry) = (cos_phi * sx - sin_phi * sy, sin_phi * sx + cos_phi * sy);
+    let m = Vec3::new(-rx * ax, -ry * ay, 1.0).normalize();
+    if m.is_finite() {
+        m
+    } else {
+        Vec3::Z
+    }
+}
+
+/// The visible slope in the viewing plane for incidence `cos_theta` (below normal incidence),
+/// lane by lane: the inverse of its CDF at `u1` by Newton's method in a bracket, in the erf
+/// domain b = erf(slope_x) (Heitz & d'Eon 2014, sec. 4 and appendix; the CDF is
+/// norm (1 + b + tan(theta) e^{-slope_x^2} / sqrt(pi))). The lanes iterate together until
+/// each has converged; a converged lane keeps its value, so every lane gets what it would
+/// alone.
+#[inline(always)]
+fn beckmann_slopes_x<const N: usize>(cos_theta: &[f32; N], u1: &[f32; N]) -> [f32; N] {
+    let (mut u, mut tan, mut lo, mut hi) = ([0.0; N], [0.0; N], [0.0; N], [0.0; N]);
+    let (mut norm, mut b) = ([0.0; N], [0.0; N]);
+    for k in 0..N {
+        let c = cos_theta[k];
+        u[k] = u1[k].clamp(1e-7, 1.0 - 1e-7);
+        let sin_theta = (1.0 - c * c).max(0.0).sqrt();
+        tan[k] = sin_theta / c;
+        let cot = c / sin_theta;
+        // Bracket of b: facets with slope_x >= cot(theta) face away from the viewer.
+        (lo[k], hi[k]) = (-1.0, 1.0 - fastmath::erfc(cot));
+        norm[k] = 1.0 / (1.0 + hi[k] + INV_SQRT_PI * tan[k] * fastmath::exp(-cot * cot));
+        // Start from Jakob 2014's fit of the inverse, b0 = c - (1 + c)(1 - u1)^p(theta),
+        // which leaves a few Newton steps.
+        let theta = fastmath::acos(c);
+        let fit = 1.0 + theta * (-0.876 + theta * (0.4265 - 0.0594 * theta));
+        b[k] = hi[k] - (1.0 + hi[k]) * fastmath::exp(fit * fastmath::ln(1.0 - u[k]));
+    }
+    let (mut x, mut live) = ([0.0; N], [true; N]);
     for _ in 0..32 {
-        if !(b > lo && b < hi) {
-            b = 0.5 * (lo + hi);
+        let bs: [f32; N] = lanes(|k| {
+            if b[k] > lo[k] && b[k] < hi[k] {
+                b[k]
+            } else {
+                0.5 * (lo[k] + hi[k])
+            }
+        });
+        let xs = erf_inv_lanes(&bs);
+        for k in 0..N {
+            let (bk, xk) = (bs[k], xs[k]);
+            let value =
+                norm[k] * (1.0 + bk + INV_SQRT_PI * tan[k] * fastmath::exp(-xk * xk)) - u[k];
+            // 2e-7 in probability: a few roundings of the CDF's f32 terms, below which its
+            // sign is noise; a bracket of 1e-6 in b leaves slopes good to f32's own precision.
+            let done = value.abs() < 2e-7 || hi[k] - lo[k] < 1e-6;
+            x[k] = if live[k] { xk } else { x[k] };
+            let step = live[k] & !done;
+            // Newton where it stays inside the bracket, bisection otherwise (the check above).
+            let derivative = norm[k] * (1.0 - xk * tan[k]);
+            hi[k] = if step & (value > 0.0) { bk } else { hi[k] };
+            lo[k] = if step & !(value > 0.0) { bk } else { lo[k] };
+            b[k] = if step { bk - value / derivative } else { b[k] };
+            live[k] = step;
         }
-        x = erf_inv_giles(b);
-        let value = norm * (1.0 + b + INV_SQRT_PI * tan_theta * fastmath::exp(-x * x)) - u1;
-        // 2e-7 in probability: a few roundings of the CDF's f32 terms, below which its sign
-        // is noise; a bracket of 1e-6 in b leaves slopes good to f32's own precision.
-        if value.abs() < 2e-7 || hi - lo < 1e-6 {
+        if mask_of(&live) == 0 {
             break;
         }
-        if value > 0.0 {
-            hi = b;
-        } else {
-            lo = b;
-        }
-        let derivative = norm * (1.0 - x * tan_theta);
-        // Newton where it stays inside the bracket, bisection otherwise (the check at the top).
-        b -= value / derivative;
     }
     x
+}
+
+/// One lane of [`beckmann_slopes_x`].
+fn beckmann_slope_x(cos_theta: f32, u1: f32) -> f32 {
+    beckmann_slopes_x(&[cos_theta], &[u1])[0]
 }
 
 /// [`Microfacet::d`] of the GGX (`BECKMANN` false) or the Beckmann distribution of roughness
@@ -311,9 +404,9 @@ fn reflect_about(wo: Vec3, m: Vec3) -> (Vec3, bool) {
 /// [`Microfacet::sample_reflection`] for `N` lanes of the GGX (`BECKMANN` false) or Beckmann
 /// distribution, each with its roughness (`ax`, `ay`), viewer `wo` (local frame) and uniform
 /// numbers (`u0`, `u1`): the reflected directions and which lanes have one, computed for the
-/// lanes of `mask` where `wo` is above the surface. GGX lanes all at once in SIMD registers,
-/// Beckmann lanes one by one (their visible slopes are an iteration). The same operations as
-/// one lane's.
+/// lanes of `mask` where `wo` is above the surface, all lanes at once in SIMD registers (the
+/// Beckmann lanes iterate for their visible slopes together, [`beckmann_slopes_x`]). The same
+/// operations as one lane's.
 #[inline(always)]
 pub fn sample_reflections<const N: usize, const BECKMANN: bool>(
     ax: &[f32; N],
@@ -328,16 +421,11 @@ pub fn sample_reflections<const N: usize, const BECKMANN: bool>(
     let mut wi = V3::splat(Vec3::Z);
     let mut ok = [false; N];
     if BECKMANN {
-        for k in set_lanes(mask) {
-            let mf = Microfacet {
-                dist: Distribution::Beckmann,
-                alpha_u: ax[k],
-                alpha_v: ay[k],
-            };
-            let m = mf.sample_m(wo.get(k), Vec2::new(u0[k], u1[k]));
-            let (w, exists) = reflect_about(wo.get(k), m);
+        let m = beckmann_visible_normals(ax, ay, wo, u0, u1);
+        for k in 0..N {
+            let (w, exists) = reflect_about(wo.get(k), m.get(k));
             wi.set(k, w);
-            ok[k] = exists;
+            ok[k] = exists & (mask & (1 << k) != 0);
         }
         return (wi, ok);
     }
@@ -470,33 +558,6 @@ impl Microfacet {
         ok.then_some(wi)
     }
 
-    /// The viewer direction stretched to roughness 1 (Beckmann sampling).
-    #[inline]
-    fn beckmann_stretched(&self, wo: Vec3) -> Vec3 {
-        Vec3::new(self.alpha_u * wo.x, self.alpha_v * wo.y, wo.z).normalize()
-    }
-
-    /// The microfacet normal of the roughness-1 slopes (`sx`, `sy`) drawn for the stretched
-    /// viewer `ws`: rotated to the viewer's azimuth, unstretched; the normal is
-    /// (-slope_x, -slope_y, 1), +z where that is not finite.
-    #[inline]
-    fn beckmann_normal(&self, ws: Vec3, sx: f32, sy: f32) -> Vec3 {
-        let (ax, ay) = (self.alpha_u, self.alpha_v);
-        let r = ws.x.hypot(ws.y);
-        let (cos_phi, sin_phi) = if r > 0.0 {
-            (ws.x / r, ws.y / r)
-        } else {
-            (1.0, 0.0)
-        };
-        let (rx, ry) = (cos_phi * sx - sin_phi * sy, sin_phi * sx + cos_phi * sy);
-        let m = Vec3::new(-rx * ax, -ry * ay, 1.0).normalize();
-        if m.is_finite() {
-            m
-        } else {
-            Vec3::Z
-        }
-    }
-
     /// [`Microfacet::sample_m`] for every pair of a grid of uniform numbers: the normal for
     /// (`us[i]`, `vs[j]`) at `[j * us.len() + i]`, the same normals. A Beckmann distribution
     /// away from normal incidence draws its two slopes from one number each, so each is solved
@@ -512,7 +573,8 @@ impl Microfacet {
         if self.dist != Distribution::Beckmann {
             return per_pair();
         }
-        let ws = self.beckmann_stretched(wo);
+        let (ax, ay) = (self.alpha_u, self.alpha_v);
+        let ws = beckmann_stretched(ax, ay, wo);
         let cos_theta = ws.z.clamp(0.0, 1.0);
         if beckmann_normal_incidence(cos_theta) {
             return per_pair();
@@ -521,7 +583,8 @@ impl Microfacet {
         vs.iter()
             .flat_map(|&v| {
                 let sy = beckmann_slope_y(v);
-                sx.iter().map(move |&sx| self.beckmann_normal(ws, sx, sy))
+                sx.iter()
+                    .map(move |&sx| beckmann_normal(ax, ay, ws, sx, sy))
             })
             .collect()
     }
@@ -535,12 +598,8 @@ impl Microfacet {
                 ggx_visible_normal(ax, ay, wo, u.x, sin_phi, cos_phi)
             }
             Distribution::Beckmann => {
-                // Heitz & d'Eon 2014: stretch to roughness 1, sample visible slopes, rotate to
-                // the viewer's azimuth, unstretch.
-                let ws = self.beckmann_stretched(wo);
-                let cos_theta = ws.z.clamp(0.0, 1.0);
-                let (sx, sy) = beckmann_visible_slopes_11(cos_theta, u.x, u.y);
-                self.beckmann_normal(ws, sx, sy)
+                let m = beckmann_visible_normals(&[ax], &[ay], &V3::splat(wo), &[u.x], &[u.y]);
+                m.get(0)
             }
         }
     }

@@ -26,6 +26,10 @@
 //!   N = 8 .. 128, built as a CWBVH and without a tree (`BvhKind::Flat`): where the crossing
 //!   lies decides `accel::FLAT_MAX`.
 //!
+//! - `PT_BENCH_SCENE=FILE.xml`: a scene file instead (its camera's rays at 256 x 256 and
+//!   incoherent rays in its bounds), for a side-by-side with Mitsuba's Embree
+//!   (`references/time_mitsuba_rays.py`, the same ray sets' kinds).
+//!
 //! Both queries use the same rays with `tmax = inf` (occlusion thus measures how fast any-hit
 //! traversal finds a first blocker). The traversal runs on the calling thread; the builds use the
 //! current rayon pool (obvhs `parallel` feature), measured once with one thread and once with all.
@@ -335,7 +339,31 @@ fn small_case(n: usize) -> Case {
     }
 }
 
+/// The scene file `path` as the renderer builds it, with its own camera for the coherent rays.
+fn scene_case(path: &Path) -> Case {
+    let desc = pt_scene::load_file(path, &[])
+        .unwrap_or_else(|e| panic!("cannot load {}: {e}", path.display()));
+    let scene = Scene::build(&desc, BvhKind::CwBvh, LightSelection::Power)
+        .unwrap_or_else(|e| panic!("cannot build {}: {e:?}", path.display()));
+    let prims = scene.primitives().to_vec();
+    let camera = Camera::new(&desc.camera, RES, RES);
+    Case {
+        scene: path
+            .file_stem()
+            .map_or("scene".into(), |s| s.to_string_lossy().into()),
+        coherent: camera_rays(&camera),
+        incoherent: random_rays(&prims, 13),
+        prims,
+    }
+}
+
 fn traversal(c: &mut Criterion) {
+    // `PT_BENCH_SCENE=FILE.xml`: that scene (its primitives, CWBVH only) instead of the two
+    // built-in cases, e.g. to set against `references/time_mitsuba_rays.py` on the same file.
+    if let Some(path) = std::env::var_os("PT_BENCH_SCENE") {
+        bench_kinds(c, &scene_case(Path::new(&path)), &KINDS[..1]);
+        return;
+    }
     bench_traversal(c, &cornell_case());
     bench_traversal(c, &mesh_case());
 }
