@@ -195,7 +195,8 @@ struct Entry {
     near: f32,
 }
 
-/// Pushes the hit children of `node` so that the nearest is on top.
+/// Pushes the hit children of `node` so that the nearest is on top; `Err(Overflow)` (and
+/// nothing pushed) when the stack has no room for them.
 #[inline(always)]
 fn push_sorted(
     node: &WideNode,
@@ -203,7 +204,10 @@ fn push_sorted(
     near: &[f32; 8],
     stack: &mut [Entry],
     top: &mut usize,
-) {
+) -> Result<(), Overflow> {
+    if *top + mask.count_ones() as usize > stack.len() {
+        return Err(Overflow);
+    }
     let base = *top;
     while mask != 0 {
         let s = mask.trailing_zeros() as usize;
@@ -218,7 +222,11 @@ fn push_sorted(
         stack[j] = e;
         *top += 1;
     }
+    Ok(())
 }
+
+/// A traversal's stack was too small for the tree (see [`stack!`]).
+struct Overflow;
 
 /// The entry for slot `s` of `node`.
 #[inline(always)]
@@ -240,14 +248,14 @@ fn next_entry(
     stack: &mut [Entry],
     top: &mut usize,
     tmax: f32,
-) -> Option<Entry> {
+) -> Result<Option<Entry>, Overflow> {
     if mask != 0 && mask & (mask - 1) == 0 {
-        return Some(entry(node, mask.trailing_zeros() as usize, near));
+        return Ok(Some(entry(node, mask.trailing_zeros() as usize, near)));
     }
     if mask != 0 {
-        push_sorted(node, mask, near, stack, top);
+        push_sorted(node, mask, near, stack, top)?;
     }
-    pop(stack, top, tmax)
+    Ok(pop(stack, top, tmax))
 }
 
 /// The top of the stack that the ray can still reach (entered before `tmax`).
@@ -279,16 +287,17 @@ fn leaf_range(e: Entry) -> std::ops::Range<usize> {
     first..first + (e.child >> COUNT_SHIFT & 7) as usize
 }
 
-/// Closest hit of `ray` among `prims` through `bvh`: `(primitive, t, b1, b2)`.
+/// Closest hit of `ray` among `prims` through `bvh`: `(primitive, t, b1, b2)`, or
+/// `Err(Overflow)` if `stack` was too small for this ray (see [`stack!`]).
 #[inline(always)]
 fn wide_closest(
     bvh: &WideBvh,
     ray: &BvhRay,
     prims: &[Primitive],
     stack: &mut [Entry],
-) -> Option<AccelHit> {
+) -> Result<Option<AccelHit>, Overflow> {
     if bvh.nodes.is_empty() {
-        return None;
+        return Ok(None);
     }
     let wr = WideRay::new(ray);
     let mut tmax = ray.tmax;
@@ -315,17 +324,23 @@ fn wide_closest(
         } else {
             let node = &bvh.nodes[e.child as usize];
             let (mask, near) = test_node(node, &wr, tmax);
-            current = next_entry(node, mask, &near, stack, &mut top, tmax);
+            current = next_entry(node, mask, &near, stack, &mut top, tmax)?;
         }
     }
-    best
+    Ok(best)
 }
 
-/// Whether anything blocks `ray` within `(tmin, tmax)` among `prims` through `bvh`.
+/// Whether anything blocks `ray` within `(tmin, tmax)` among `prims` through `bvh`, or
+/// `Err(Overflow)` as [`wide_closest`].
 #[inline(always)]
-fn wide_any(bvh: &WideBvh, ray: &BvhRay, prims: &[Primitive], stack: &mut [Entry]) -> bool {
+fn wide_any(
+    bvh: &WideBvh,
+    ray: &BvhRay,
+    prims: &[Primitive],
+    stack: &mut [Entry],
+) -> Result<bool, Overflow> {
     if bvh.nodes.is_empty() {
-        return false;
+        return Ok(false);
     }
     let wr = WideRay::new(ray);
     let mut top = 0;
@@ -334,52 +349,98 @@ fn wide_any(bvh: &WideBvh, ray: &BvhRay, prims: &[Primitive], stack: &mut [Entry
         if e.child & LEAF != 0 {
             for p in &prims[leaf_range(e)] {
                 if p.intersect(ray.origin, ray.direction, ray.tmin, ray.tmax) < ray.tmax {
-                    return true;
+                    return Ok(true);
                 }
             }
             current = pop(stack, &mut top, ray.tmax);
         } else {
             let node = &bvh.nodes[e.child as usize];
             let (mask, near) = test_node(node, &wr, ray.tmax);
-            current = next_entry(node, mask, &near, stack, &mut top, ray.tmax);
+            current = next_entry(node, mask, &near, stack, &mut top, ray.tmax)?;
         }
     }
-    false
+    Ok(false)
 }
 
-/// Binds `$stack` to a zeroed traversal stack deep enough for the tree `$bvh`, on the thread's
-/// stack (or the heap for a tree deeper than [`LARGE`] allows). A macro, not a function taking
-/// a closure: the compiler left such closures, which hold the whole traversal, out of line, so
-/// they ran compiled for baseline x86-64 instead of inside the render loop's x86-64-v3 code.
+/// [`wide_closest`] on `stack`, or on a stack as deep as the tree needs if this ray overflows
+/// it ([`wide_closest_deep`]): the same hit either way.
+#[inline(always)]
+fn closest_or_deep(
+    bvh: &WideBvh,
+    ray: &BvhRay,
+    prims: &[Primitive],
+    stack: &mut [Entry],
+) -> Option<AccelHit> {
+    wide_closest(bvh, ray, prims, stack).unwrap_or_else(|_| wide_closest_deep(bvh, ray, prims))
+}
+
+/// [`wide_any`] on `stack`, as [`closest_or_deep`].
+#[inline(always)]
+fn any_or_deep(bvh: &WideBvh, ray: &BvhRay, prims: &[Primitive], stack: &mut [Entry]) -> bool {
+    wide_any(bvh, ray, prims, stack).unwrap_or_else(|_| wide_any_deep(bvh, ray, prims))
+}
+
+/// [`wide_closest`] on a stack from the heap deep enough for any ray in `bvh`: the retry of a
+/// ray that overflowed the render loop's stack (rare: a deep tree and a ray that enters many
+/// of its boxes). Out of line, so the render loop holds one copy of the traversal.
+#[cold]
+#[inline(never)]
+fn wide_closest_deep(bvh: &WideBvh, ray: &BvhRay, prims: &[Primitive]) -> Option<AccelHit> {
+    let mut stack = vec![Entry::default(); bvh.stack_need];
+    wide_closest(bvh, ray, prims, &mut stack).unwrap_or_else(|_| unreachable!("stack_need"))
+}
+
+/// [`wide_any`] on a stack from the heap, as [`wide_closest_deep`].
+#[cold]
+#[inline(never)]
+fn wide_any_deep(bvh: &WideBvh, ray: &BvhRay, prims: &[Primitive]) -> bool {
+    let mut stack = vec![Entry::default(); bvh.stack_need];
+    wide_any(bvh, ray, prims, &mut stack).unwrap_or_else(|_| unreachable!("stack_need"))
+}
+
+/// Binds `$stack` to a zeroed traversal stack of [`STACK`] entries on the thread's stack: deep
+/// enough for every ray in a tree of up to nine levels, and for all but rare rays in deeper
+/// ones, which [`wide_closest`] and [`wide_any`] report (`Overflow`, checked before each push)
+/// and which are traced again on a stack as deep as the tree needs ([`wide_closest_deep`]).
+/// The stack is zeroed once per batch of rays (safe Rust initialises it), so its size is a
+/// cost: a stack for the deepest case (2 KB for a tree of 36 levels) cost 15-20% of the rays
+/// per second of single-ray queries on a tree of ten levels (`traversal` bench, `mesh-100k`).
+/// A macro, not a function taking a closure: the compiler left such closures, which hold the
+/// whole traversal, out of line, so they ran compiled for baseline x86-64 instead of inside
+/// the render loop's x86-64-v3 code.
 macro_rules! stack {
-    ($bvh:expr, $stack:ident) => {
-        let (mut small, mut large, mut heap);
-        let $stack: &mut [Entry] = if $bvh.stack_need <= SMALL {
-            small = [Entry::default(); SMALL];
-            &mut small
-        } else if $bvh.stack_need <= LARGE {
-            large = [Entry::default(); LARGE];
-            &mut large
-        } else {
-            heap = vec![Entry::default(); $bvh.stack_need];
-            &mut heap
-        };
+    ($stack:ident) => {
+        let mut array = [Entry::default(); STACK];
+        let $stack: &mut [Entry] = &mut array;
     };
 }
 
-/// Stack sizes: a tree of up to nine levels takes the small one, of up to 36 the large one
-/// (obvhs's CWBVHs have fewer than 32, its own traversal needs that; [`merge_groups`] adds
-/// one), both on the thread's stack and zeroed for each batch of rays, so their size is a cost;
-/// a deeper tree gets one from the heap.
-pub(super) const SMALL: usize = 1 + 7 * 9;
-/// See [`SMALL`].
-const LARGE: usize = 1 + 7 * 36;
+/// Entries of the traversal stack (see [`stack!`]): the bound for trees of up to nine levels
+/// (the root's entry, then at most seven more per level).
+pub(super) const STACK: usize = 1 + 7 * 9;
 
 impl WideBvh {
     /// Most stack entries a traversal of this tree can hold.
     #[cfg(test)]
     pub(super) fn stack_need(&self) -> usize {
         self.stack_need
+    }
+
+    /// The closest hit and occlusion of `ray` as the render loop finds them, but on a stack of
+    /// `entries` entries, and whether the closest-hit traversal overflowed it (and so took the
+    /// retry on a deep stack).
+    #[cfg(test)]
+    pub(super) fn on_stack_of(
+        &self,
+        ray: &Ray,
+        prims: &[Primitive],
+        entries: usize,
+    ) -> (Option<AccelHit>, bool, bool) {
+        let mut stack = vec![Entry::default(); entries];
+        let r = bvh_ray(ray);
+        let overflowed = wide_closest(self, &r, prims, &mut stack).is_err();
+        let hit = closest_or_deep(self, &r, prims, &mut stack);
+        (hit, any_or_deep(self, &r, prims, &mut stack), overflowed)
     }
 
     /// The root's internal children.
@@ -402,9 +463,9 @@ impl WideBvh {
         active: Mask,
         out: &mut [Option<AccelHit>; BATCH],
     ) {
-        stack!(self, stack);
+        stack!(stack);
         for k in set_lanes(active) {
-            out[k] = wide_closest(self, &bvh_ray(&rays[k]), prims, stack);
+            out[k] = closest_or_deep(self, &bvh_ray(&rays[k]), prims, stack);
         }
     }
 
@@ -412,11 +473,11 @@ impl WideBvh {
     /// [`WideBvh::closest_batch`].
     #[inline(always)]
     pub(super) fn any_batch(&self, prims: &[Primitive], rays: &[Ray; BATCH], active: Mask) -> Mask {
-        stack!(self, stack);
+        stack!(stack);
         // A loop, not `lanes_where`: its closure would hold the whole traversal (see `stack!`).
         let mut blocked: Mask = 0;
         for k in set_lanes(active) {
-            if wide_any(self, &bvh_ray(&rays[k]), prims, stack) {
+            if any_or_deep(self, &bvh_ray(&rays[k]), prims, stack) {
                 blocked |= 1 << k;
             }
         }
@@ -426,14 +487,14 @@ impl WideBvh {
     /// Closest hit of one ray.
     #[inline(always)]
     pub(super) fn closest(&self, ray: &BvhRay, prims: &[Primitive]) -> Option<AccelHit> {
-        stack!(self, stack);
-        wide_closest(self, ray, prims, stack)
+        stack!(stack);
+        closest_or_deep(self, ray, prims, stack)
     }
 
     /// Whether anything blocks one ray.
     #[inline(always)]
     pub(super) fn any(&self, ray: &BvhRay, prims: &[Primitive]) -> bool {
-        stack!(self, stack);
-        wide_any(self, ray, prims, stack)
+        stack!(stack);
+        any_or_deep(self, ray, prims, stack)
     }
 }
