@@ -224,7 +224,7 @@ fn beckmann_normal(ax: f32, ay: f32, ws: Vec3, sx: f32, sy: f32) -> Vec3 {
 }
 
 /// The visible slope in the viewing plane for incidence `cos_theta` (below normal incidence),
-/// lane by lane: the inverse of its CDF at `u1` by Newton's method in a bracket, in the erf
+/// for each lane: the inverse of its CDF at `u1` by Newton's method in a bracket, in the erf
 /// domain b = erf(slope_x) (Heitz & d'Eon 2014, sec. 4 and appendix; the CDF is
 /// norm (1 + b + tan(theta) e^{-slope_x^2} / sqrt(pi))). The lanes iterate together until
 /// each has converged; a converged lane keeps its value, so every lane gets what it would

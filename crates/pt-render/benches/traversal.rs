@@ -173,23 +173,27 @@ struct Case {
 
 fn cornell_case() -> Case {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/cornell-box.xml");
-    let desc = pt_scene::load_file(
-        &path,
-        &[
-            ("width".into(), RES.to_string()),
-            ("height".into(), RES.to_string()),
-        ],
-    )
-    .unwrap_or_else(|e| panic!("cannot load {}: {e}", path.display()));
+    let size = [
+        ("width".into(), RES.to_string()),
+        ("height".into(), RES.to_string()),
+    ];
     // The primitives as the renderer builds them: the box's 36 triangles are 18 parallelograms.
+    scene_case(&path, &size, "cornell", 7)
+}
+
+/// The scene file `path` (with the `defines`) as the renderer builds it, its camera's rays as
+/// the coherent set and incoherent rays drawn from `seed`.
+fn scene_case(path: &Path, defines: &[(String, String)], name: &str, seed: u64) -> Case {
+    let desc = pt_scene::load_file(path, defines)
+        .unwrap_or_else(|e| panic!("cannot load {}: {e}", path.display()));
     let scene = Scene::build(&desc, BvhKind::CwBvh, LightSelection::Power)
         .unwrap_or_else(|e| panic!("cannot build {}: {e:?}", path.display()));
     let prims = scene.primitives().to_vec();
     let camera = Camera::new(&desc.camera, RES, RES);
     Case {
-        scene: "cornell".into(),
+        scene: name.into(),
         coherent: camera_rays(&camera),
-        incoherent: random_rays(&prims, 7),
+        incoherent: random_rays(&prims, seed),
         prims,
     }
 }
@@ -339,29 +343,15 @@ fn small_case(n: usize) -> Case {
     }
 }
 
-/// The scene file `path` as the renderer builds it, with its own camera for the coherent rays.
-fn scene_case(path: &Path) -> Case {
-    let desc = pt_scene::load_file(path, &[])
-        .unwrap_or_else(|e| panic!("cannot load {}: {e}", path.display()));
-    let scene = Scene::build(&desc, BvhKind::CwBvh, LightSelection::Power)
-        .unwrap_or_else(|e| panic!("cannot build {}: {e:?}", path.display()));
-    let prims = scene.primitives().to_vec();
-    let camera = Camera::new(&desc.camera, RES, RES);
-    Case {
-        scene: path
-            .file_stem()
-            .map_or("scene".into(), |s| s.to_string_lossy().into()),
-        coherent: camera_rays(&camera),
-        incoherent: random_rays(&prims, 13),
-        prims,
-    }
-}
-
 fn traversal(c: &mut Criterion) {
     // `PT_BENCH_SCENE=FILE.xml`: that scene (its primitives, CWBVH only) instead of the two
     // built-in cases, e.g. to set against `references/time_mitsuba_rays.py` on the same file.
     if let Some(path) = std::env::var_os("PT_BENCH_SCENE") {
-        bench_kinds(c, &scene_case(Path::new(&path)), &KINDS[..1]);
+        let path = Path::new(&path);
+        let name = path
+            .file_stem()
+            .map_or("scene".into(), |s| s.to_string_lossy());
+        bench_kinds(c, &scene_case(path, &[], &name, 13), &KINDS[..1]);
         return;
     }
     bench_traversal(c, &cornell_case());

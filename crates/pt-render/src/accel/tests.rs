@@ -190,18 +190,23 @@ fn stack_size_follows_the_tree_depth() {
     }
 }
 
+/// Uniform numbers in [0, 1) from a 64-bit LCG seeded with `seed` (its top 24 bits): the
+/// tests' fixed random geometry.
+fn uniform_numbers(mut s: u64) -> impl FnMut() -> f32 {
+    move || {
+        s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        ((s >> 40) as f32) / (1u64 << 24) as f32
+    }
+}
+
 #[test]
 fn rays_that_overflow_the_stack_are_traced_again() {
     // 2,000 random triangles in a cube and rays across it: a ray enters several children of
     // many nodes, so on a stack of three entries most overflow, and the retry on a stack as
     // deep as the tree needs must give the brute-force search's closest hit and occlusion.
-    let mut s = 7u64;
-    let mut rnd = || {
-        s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((s >> 40) as f32) / (1u64 << 24) as f32
-    };
+    let mut rnd = uniform_numbers(7);
     let prims: Vec<Primitive> = (0..2000)
         .map(|_| Primitive::Triangle {
             v0: Vec3A::new(rnd(), rnd(), rnd()) * 10.0,
@@ -238,13 +243,7 @@ fn flat_blocks_match_the_scalar_tests() {
     // spheres and two cylinders, tested without a tree: each ray's hit must be the scalar tests' nearest (to
     // rounding), and a shadow ray must be blocked exactly when something lies within its
     // interval. A wrong sign or bound in the lanes misses or invents hits here.
-    let mut s = 99u64;
-    let mut rnd = || {
-        s = s
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((s >> 40) as f32) / (1u64 << 24) as f32
-    };
+    let mut rnd = uniform_numbers(99);
     let mut prims = Vec::new();
     for k in 0..45 {
         let v0 = Vec3A::new(rnd() * 8.0 - 4.0, rnd() * 8.0 - 4.0, rnd() * 8.0 - 4.0);
