@@ -144,8 +144,9 @@ const INV_SQRT_PI: f32 = 0.564_189_6;
 /// Beckmann visible normals for `N` lanes, each with its roughness (`ax`, `ay`), viewer `wo`
 /// (local frame, `wo.z > 0`) and uniform numbers (`u0`, `u1`): Heitz & d'Eon 2014's slope
 /// method (stretch to roughness 1, sample the visible slopes, rotate to the viewer's azimuth,
-/// unstretch), all lanes at once in SIMD registers; one lane is [`Microfacet::sample_m`]'s
-/// Beckmann normal. Away from normal incidence the two slopes are separable: slope_x depends
+/// unstretch), all lanes at once in SIMD registers, the x-slopes solved for the lanes of
+/// `active` (the others get some normal); one lane is [`Microfacet::sample_m`]'s Beckmann
+/// normal. Away from normal incidence the two slopes are separable: slope_x depends
 /// on `u0` and the angle alone ([`beckmann_slopes_x`]), slope_y on `u1` alone
 /// ([`beckmann_slope_y`]); at normal incidence every facet is visible and the slopes are the
 /// plain Gaussian's. In f32, as the normals they become: the inversions are accurate to a
@@ -157,10 +158,11 @@ fn beckmann_visible_normals<const N: usize>(
     wo: &V3<N>,
     u0: &[f32; N],
     u1: &[f32; N],
+    active: Mask,
 ) -> V3<N> {
     let ws: V3<N> = V3::from_fn(|k| beckmann_stretched(ax[k], ay[k], wo.get(k)));
     let cos_theta: [f32; N] = lanes(|k| ws.z[k].clamp(0.0, 1.0));
-    let mut sx = beckmann_slopes_x(&cos_theta, u0);
+    let mut sx = beckmann_slopes_x(&cos_theta, u0, active);
     let mut sy = erf_inv_lanes::<N>(&lanes(|k| slope_y_argument(u1[k])));
     let normal: [bool; N] = lanes(|k| beckmann_normal_incidence(cos_theta[k]));
     if mask_of(&normal) != 0 {
@@ -226,11 +228,16 @@ fn beckmann_normal(ax: f32, ay: f32, ws: Vec3, sx: f32, sy: f32) -> Vec3 {
 /// The visible slope in the viewing plane for incidence `cos_theta` (below normal incidence),
 /// for each lane: the inverse of its CDF at `u1` by Newton's method in a bracket, in the erf
 /// domain b = erf(slope_x) (Heitz & d'Eon 2014, sec. 4 and appendix; the CDF is
-/// norm (1 + b + tan(theta) e^{-slope_x^2} / sqrt(pi))). The lanes iterate together until
-/// each has converged; a converged lane keeps its value, so every lane gets what it would
-/// alone.
+/// norm (1 + b + tan(theta) e^{-slope_x^2} / sqrt(pi))). The lanes of `active` iterate
+/// together until each has converged; a converged lane keeps its value, so every lane gets
+/// what it would alone. The other lanes (their values unused: 0) do not iterate: a lane of
+/// no use, with a NaN viewer say, would bisect for twenty steps and hold the others up.
 #[inline(always)]
-fn beckmann_slopes_x<const N: usize>(cos_theta: &[f32; N], u1: &[f32; N]) -> [f32; N] {
+fn beckmann_slopes_x<const N: usize>(
+    cos_theta: &[f32; N],
+    u1: &[f32; N],
+    active: Mask,
+) -> [f32; N] {
     let (mut u, mut tan, mut lo, mut hi) = ([0.0; N], [0.0; N], [0.0; N], [0.0; N]);
     let (mut norm, mut b) = ([0.0; N], [0.0; N]);
     for k in 0..N {
@@ -248,7 +255,8 @@ fn beckmann_slopes_x<const N: usize>(cos_theta: &[f32; N], u1: &[f32; N]) -> [f3
         let fit = 1.0 + theta * (-0.876 + theta * (0.4265 - 0.0594 * theta));
         b[k] = hi[k] - (1.0 + hi[k]) * fastmath::exp(fit * fastmath::ln(1.0 - u[k]));
     }
-    let (mut x, mut live) = ([0.0; N], [true; N]);
+    let mut x = [0.0; N];
+    let mut live: [bool; N] = lanes(|k| active & (1 << k) != 0);
     for _ in 0..32 {
         let bs: [f32; N] = lanes(|k| {
             if b[k] > lo[k] && b[k] < hi[k] {
@@ -283,7 +291,7 @@ fn beckmann_slopes_x<const N: usize>(cos_theta: &[f32; N], u1: &[f32; N]) -> [f3
 
 /// One lane of [`beckmann_slopes_x`].
 fn beckmann_slope_x(cos_theta: f32, u1: f32) -> f32 {
-    beckmann_slopes_x(&[cos_theta], &[u1])[0]
+    beckmann_slopes_x(&[cos_theta], &[u1], 1)[0]
 }
 
 /// [`Microfacet::d`] of the GGX (`BECKMANN` false) or the Beckmann distribution of roughness
@@ -421,7 +429,7 @@ pub fn sample_reflections<const N: usize, const BECKMANN: bool>(
     let mut wi = V3::splat(Vec3::Z);
     let mut ok = [false; N];
     if BECKMANN {
-        let m = beckmann_visible_normals(ax, ay, wo, u0, u1);
+        let m = beckmann_visible_normals(ax, ay, wo, u0, u1, mask);
         for k in 0..N {
             let (w, exists) = reflect_about(wo.get(k), m.get(k));
             wi.set(k, w);
@@ -598,7 +606,8 @@ impl Microfacet {
                 ggx_visible_normal(ax, ay, wo, u.x, sin_phi, cos_phi)
             }
             Distribution::Beckmann => {
-                let m = beckmann_visible_normals(&[ax], &[ay], &V3::splat(wo), &[u.x], &[u.y]);
+                let wo = V3::splat(wo);
+                let m = beckmann_visible_normals(&[ax], &[ay], &wo, &[u.x], &[u.y], 1);
                 m.get(0)
             }
         }
