@@ -476,7 +476,6 @@ impl Microfacet {
     }
 
     /// Smith Lambda(w) for the side `w` is on (uses |w.z|).
-    #[inline(always)]
     pub fn lambda(&self, w: Vec3) -> f32 {
         match self.dist {
             Distribution::Ggx => lambda_of::<false>(self.alpha_u, self.alpha_v, w),
@@ -485,7 +484,6 @@ impl Microfacet {
     }
 
     /// Smith G1(w) = 1/(1 + Lambda(w)).
-    #[inline(always)]
     pub fn g1(&self, w: Vec3) -> f32 {
         1.0 / (1.0 + self.lambda(w))
     }
@@ -600,7 +598,6 @@ impl Microfacet {
     }
 
     /// Samples a microfacet normal (upper hemisphere) for the viewer direction `wo` (`wo.z > 0`).
-    #[inline(always)]
     pub fn sample_m(&self, wo: Vec3, u: Vec2) -> Vec3 {
         let (ax, ay) = (self.alpha_u, self.alpha_v);
         match self.dist {
