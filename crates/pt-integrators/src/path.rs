@@ -482,23 +482,11 @@ fn arrive(
     let prev = *prev_p;
     let Some(hit) = hit else {
         // The ray left the scene: environment and sun.
-        *radiance += escaped_radiance(
-            scene,
-            ray.dir,
-            lambda,
-            *throughput,
-            #[inline(always)]
-            |i| {
-                emission_weight(
-                    s,
-                    depth_now,
-                    prev_delta_now,
-                    prev_pdf_now,
-                    #[inline(always)]
-                    || scene.light_pmf_at(prev, i) * scene.lights[i].escaped_pdf(ray.dir),
-                )
-            },
-        );
+        *radiance += escaped_radiance(scene, ray.dir, lambda, *throughput, |i| {
+            emission_weight(s, depth_now, prev_delta_now, prev_pdf_now, || {
+                scene.light_pmf_at(prev, i) * scene.lights[i].escaped_pdf(ray.dir)
+            })
+        });
         *alive = false;
         return false;
     };
@@ -605,7 +593,7 @@ impl HitLightPdf<'_> {
 /// delta bounce: 1 (light sampling cannot produce it). Otherwise the power heuristic against
 /// light sampling under MIS, 1 with BSDF sampling alone, and 0 with light sampling alone (NEE
 /// already counted it).
-#[inline(always)]
+#[inline]
 pub(crate) fn emission_weight(
     s: &PathSettings,
     depth: u32,

@@ -52,7 +52,6 @@ pub struct Tabulated {
 
 impl Tabulated {
     /// Value at `lambda` nm.
-    #[inline(always)]
     pub fn eval(&self, lambda: f32) -> f32 {
         let (l, v) = (&self.lambda, &self.value);
         let n = l.len();
@@ -379,7 +378,6 @@ impl Spectrum {
     }
 
     /// Value at one wavelength, nm.
-    #[inline(always)]
     pub fn eval(&self, lambda: f32) -> f32 {
         match self {
             Spectrum::Constant(v) => *v,
@@ -401,7 +399,7 @@ impl Spectrum {
     }
 
     /// Values at the four sampled wavelengths (spectral mode).
-    #[inline(always)]
+    #[inline]
     pub fn sample(&self, lambda: &SampledWavelengths) -> SampledSpectrum {
         let l = lambda.lambda();
         SampledSpectrum(match self {

@@ -147,7 +147,7 @@ impl SunSky {
     }
 
     /// Radiance arriving from world direction `dir` (unit, pointing away from the scene).
-    #[inline(always)]
+    #[inline]
     pub fn radiance(&self, dir: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
         let d = self.to_local * dir;
         if self.model.is_spectral() {
@@ -163,7 +163,7 @@ impl SunSky {
     }
 
     /// Solid-angle pdf with which [`SunSky::sample`] draws world direction `dir`.
-    #[inline(always)]
+    #[inline]
     pub fn pdf(&self, dir: Vec3) -> f32 {
         let d = self.to_local * dir;
         if !(d.z >= 0.0) {
@@ -179,7 +179,7 @@ impl SunSky {
     }
 
     /// The sky table's solid-angle density at local direction `d` (upper hemisphere).
-    #[inline(always)]
+    #[inline]
     fn sky_pdf(&self, d: Vec3) -> f32 {
         let mut u = fastmath::atan2(d.y, d.x) * (0.5 / PI);
         if u < 0.0 {
@@ -189,7 +189,6 @@ impl SunSky {
     }
 
     /// Samples a direction towards the sky or the sun: (world direction, radiance, pdf).
-    #[inline(always)]
     pub fn sample(
         &self,
         u: Vec2,

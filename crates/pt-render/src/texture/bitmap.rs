@@ -212,7 +212,7 @@ pub struct Bitmap {
 
 impl Bitmap {
     /// Linear RGB at the surface's texture coordinates `uv`.
-    #[inline(always)]
+    #[inline]
     pub fn eval(&self, uv: Vec2) -> [f32; 3] {
         let f = self.lookup.footprint(uv);
         let t = f.texels.map(|i| self.texels[i]);
