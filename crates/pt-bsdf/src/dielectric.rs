@@ -88,6 +88,7 @@ impl Dielectric {
     }
 
     /// Chooses reflection with probability R (from `u_lobe`), else refraction.
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn sample(&self, wo: Vec3, u_lobe: f32, _u: Vec2) -> Option<BsdfSample> {
         if wo.z == 0.0 || !wo.is_finite() {
             return None;

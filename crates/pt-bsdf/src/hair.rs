@@ -202,6 +202,7 @@ impl Hair {
         (s, c.abs())
     }
 
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn setup(&self, wo: Vec3) -> Setup {
         let sin_theta_o = wo.y.clamp(-1.0, 1.0);
         let cos_theta_o = (1.0 - sin_theta_o * sin_theta_o).max(0.0).sqrt();
@@ -258,6 +259,7 @@ impl Hair {
     }
 
     /// The value `f |wi.z|` (as Mitsuba's eval) and the pdf of `wi`.
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn value_pdf(&self, st: &Setup, wi: Vec3) -> (SampledSpectrum, f32) {
         let sin_theta_i = wi.y.clamp(-1.0, 1.0);
         let cos_theta_i = (1.0 - sin_theta_i * sin_theta_i).max(0.0).sqrt();
@@ -325,6 +327,7 @@ impl Hair {
     /// [`Hair::eval_pdf`] of `wi` and [`Hair::sample`] from one setup for `wo` (the setup's
     /// refraction angles, attenuations and lobe weights are a third of the model's cost, and
     /// the path tracer asks for both at every hit): the same values as the two calls.
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn eval_pdf_and_sample(
         &self,
         wo: Vec3,
@@ -340,6 +343,7 @@ impl Hair {
     }
 
     /// [`Hair::eval_pdf`] given the setup for `wo`.
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn eval_pdf_with(&self, st: &Setup, wi: Vec3) -> (SampledSpectrum, f32) {
         let (value, pdf) = self.value_pdf(st, wi);
         let cos = wi.z.abs();
@@ -356,6 +360,7 @@ impl Hair {
     }
 
     /// [`Hair::sample`] given the setup for `wo`.
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn sample_with(&self, st: &Setup, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         // Pick p; rescale u_lobe within the chosen interval for the azimuth.
         let mut p = P_MAX;
@@ -449,7 +454,8 @@ impl Longitudinal {
 
     /// M between directions of longitudinal angles `theta_o` and `theta_i` (their sines and
     /// cosines).
-    #[inline]
+    #[cfg_attr(debug_assertions, inline)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn eval(&self, sin_o: f32, cos_o: f32, sin_i: f32, cos_i: f32) -> f32 {
         let a = cos_o * cos_i * self.inv_v;
         let b = sin_o * sin_i * self.inv_v;

@@ -476,6 +476,7 @@ impl Microfacet {
     }
 
     /// Smith Lambda(w) for the side `w` is on (uses |w.z|).
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn lambda(&self, w: Vec3) -> f32 {
         match self.dist {
             Distribution::Ggx => lambda_of::<false>(self.alpha_u, self.alpha_v, w),
@@ -484,6 +485,7 @@ impl Microfacet {
     }
 
     /// Smith G1(w) = 1/(1 + Lambda(w)).
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn g1(&self, w: Vec3) -> f32 {
         1.0 / (1.0 + self.lambda(w))
     }
@@ -598,6 +600,7 @@ impl Microfacet {
     }
 
     /// Samples a microfacet normal (upper hemisphere) for the viewer direction `wo` (`wo.z > 0`).
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn sample_m(&self, wo: Vec3, u: Vec2) -> Vec3 {
         let (ax, ay) = (self.alpha_u, self.alpha_v);
         match self.dist {

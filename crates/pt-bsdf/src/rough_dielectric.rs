@@ -105,6 +105,7 @@ impl RoughDielectric {
     }
 
     /// f(wo, wi) without the cosine (radiance transport).
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> SampledSpectrum {
         let Some(Half { h, etap, reflect }) = self.half(wo, wi) else {
             return SampledSpectrum::ZERO;
@@ -136,6 +137,7 @@ impl RoughDielectric {
     }
 
     /// Solid-angle pdf of `wi`.
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         let Some(Half { h, etap, reflect }) = self.half(wo, wi) else {
             return 0.0;
@@ -145,6 +147,7 @@ impl RoughDielectric {
     }
 
     /// Samples a micro-normal, then reflection (probability F) or refraction.
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         if wo.z == 0.0 || !wo.is_finite() {
             return None;

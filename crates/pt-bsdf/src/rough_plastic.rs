@@ -303,6 +303,7 @@ impl RoughPlastic {
     /// [`RoughPlastic::eval`] and [`RoughPlastic::pdf`] together: the same values, with the
     /// coating's half vector, D and G1(wo) computed once
     /// ([`Microfacet::dielectric_reflection_pdf`]).
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (SampledSpectrum, f32) {
         if wo.z <= 0.0 || wi.z <= 0.0 {
             return (SampledSpectrum::ZERO, 0.0);
@@ -348,6 +349,7 @@ impl RoughPlastic {
     }
 
     /// Chooses a lobe with `u_lobe`, samples it with `u`.
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2) -> Option<BsdfSample> {
         if wo.z <= 0.0 {
             return None;

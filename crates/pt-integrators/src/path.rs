@@ -482,11 +482,23 @@ fn arrive(
     let prev = *prev_p;
     let Some(hit) = hit else {
         // The ray left the scene: environment and sun.
-        *radiance += escaped_radiance(scene, ray.dir, lambda, *throughput, |i| {
-            emission_weight(s, depth_now, prev_delta_now, prev_pdf_now, || {
-                scene.light_pmf_at(prev, i) * scene.lights[i].escaped_pdf(ray.dir)
-            })
-        });
+        *radiance += escaped_radiance(
+            scene,
+            ray.dir,
+            lambda,
+            *throughput,
+            #[cfg_attr(not(debug_assertions), inline(always))]
+            |i| {
+                emission_weight(
+                    s,
+                    depth_now,
+                    prev_delta_now,
+                    prev_pdf_now,
+                    #[cfg_attr(not(debug_assertions), inline(always))]
+                    || scene.light_pmf_at(prev, i) * scene.lights[i].escaped_pdf(ray.dir),
+                )
+            },
+        );
         *alive = false;
         return false;
     };
@@ -593,7 +605,8 @@ impl HitLightPdf<'_> {
 /// delta bounce: 1 (light sampling cannot produce it). Otherwise the power heuristic against
 /// light sampling under MIS, 1 with BSDF sampling alone, and 0 with light sampling alone (NEE
 /// already counted it).
-#[inline]
+#[cfg_attr(debug_assertions, inline)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub(crate) fn emission_weight(
     s: &PathSettings,
     depth: u32,

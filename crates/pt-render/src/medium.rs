@@ -202,7 +202,8 @@ impl Phase {
 
     /// The phase function's value for light scattered between `wo` and `wi` (see the module
     /// doc), per steradian; also the density of [`Phase::sample`] choosing `wi`.
-    #[inline]
+    #[cfg_attr(debug_assertions, inline)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> f32 {
         // mu: the cosine between the propagation direction (-wo) and wi.
         let mu = -wo.dot(wi);
@@ -220,7 +221,8 @@ impl Phase {
 
     /// Draws `wi` given `wo` from the uniform numbers `u`: exactly by the inverse of the
     /// cumulative distribution of the scattering angle's cosine (uniform azimuth).
-    #[inline]
+    #[cfg_attr(debug_assertions, inline)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn sample(&self, wo: Vec3, u: Vec2) -> PhaseSample {
         let forward = -wo;
         let mu = match *self {

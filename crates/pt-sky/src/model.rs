@@ -336,7 +336,8 @@ impl SkyModel {
     }
 
     /// The sky's RGB radiance in direction `d` (unit, local), sun excluded.
-    #[inline]
+    #[cfg_attr(debug_assertions, inline)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn sky_rgb(&self, d: Vec3) -> [f32; 3] {
         let (Channels::Rgb(sky, _), Some((ct, g))) = (&self.channels, self.angles(d)) else {
             return [0.0; 3];
@@ -383,7 +384,8 @@ impl SkyModel {
     }
 
     /// The sky's spectral radiance at four wavelengths `lambda` (nm), sun excluded.
-    #[inline]
+    #[cfg_attr(debug_assertions, inline)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn sky_spectral(&self, d: Vec3, lambda: [f32; 4]) -> [f32; 4] {
         let (Channels::Spectral(data), Some((ct, g))) = (&self.channels, self.angles(d)) else {
             return [0.0; 4];
@@ -396,7 +398,8 @@ impl SkyModel {
     }
 
     /// The sun's spectral radiance at four wavelengths `lambda` (nm): 0 outside its disc.
-    #[inline]
+    #[cfg_attr(debug_assertions, inline)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn sun_spectral(&self, d: Vec3, lambda: [f32; 4]) -> [f32; 4] {
         // The disc test first: it is cheaper than the angles, and most directions miss.
         if !self.in_sun(d) {
@@ -492,19 +495,22 @@ impl SkyAngles {
 #[inline(always)]
 fn eval_sky<const L: usize>(a: &SkyAngles, sky: &SkyChannels<L>) -> [f32; L] {
     let p = &sky.params;
-    lanes(|c| {
-        let h = p[8][c];
-        // chi = (1 + cos^2 gamma) / (1 + H^2 - 2 H cos gamma)^(3/2); x^(3/2) as x sqrt(x).
-        let base = 1.0 + h * h - 2.0 * h * a.cos_gamma;
-        let chi = a.one_plus_cos2 / (base * base.sqrt());
-        let c1 = 1.0 + p[0][c] * fastmath::exp(p[1][c] * a.inv_cos_theta);
-        let c2 = p[2][c]
-            + p[3][c] * fastmath::exp(p[4][c] * a.gamma)
-            + p[5][c] * a.cos2
-            + p[6][c] * chi
-            + p[7][c] * a.sqrt_cos_theta;
-        c1 * c2 * sky.radiance[c]
-    })
+    lanes(
+        #[cfg_attr(not(debug_assertions), inline(always))]
+        |c| {
+            let h = p[8][c];
+            // chi = (1 + cos^2 gamma) / (1 + H^2 - 2 H cos gamma)^(3/2); x^(3/2) as x sqrt(x).
+            let base = 1.0 + h * h - 2.0 * h * a.cos_gamma;
+            let chi = a.one_plus_cos2 / (base * base.sqrt());
+            let c1 = 1.0 + p[0][c] * fastmath::exp(p[1][c] * a.inv_cos_theta);
+            let c2 = p[2][c]
+                + p[3][c] * fastmath::exp(p[4][c] * a.gamma)
+                + p[5][c] * a.cos2
+                + p[6][c] * chi
+                + p[7][c] * a.sqrt_cos_theta;
+            c1 * c2 * sky.radiance[c]
+        },
+    )
 }
 
 /// Segment of the solar radiance function for a direction with cos(zenith angle) `cos_theta`,

@@ -126,7 +126,8 @@ pub fn integrate_visible(f: impl Fn(f64) -> f64) -> f64 {
 }
 
 /// [`cmf`] for four wavelengths at once: returns (x-bar, y-bar, z-bar), each per lane.
-#[inline]
+#[cfg_attr(debug_assertions, inline)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn cmf4(lambda: Vec4) -> [Vec4; 3] {
     let a = lambda.to_array().map(cmf);
     [

@@ -42,7 +42,8 @@ pub fn srgb_to_xyz(rgb: [f32; 3]) -> [f32; 3] {
 /// One-sample Monte Carlo estimate of the XYZ of the spectral radiance `l` (per nm) sampled at
 /// `lambda`, normalised so that a constant spectrum of 1 has Y = 1. This is what the film
 /// accumulates per camera sample in spectral mode (then averages over samples).
-#[inline]
+#[cfg_attr(debug_assertions, inline)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn spectrum_to_xyz(l: SampledSpectrum, lambda: &SampledWavelengths) -> [f32; 3] {
     let pdf = lambda.pdf();
     // Lanes with pdf 0 are terminated: weight 0 (not NaN).

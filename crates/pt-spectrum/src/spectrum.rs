@@ -52,6 +52,7 @@ pub struct Tabulated {
 
 impl Tabulated {
     /// Value at `lambda` nm.
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn eval(&self, lambda: f32) -> f32 {
         let (l, v) = (&self.lambda, &self.value);
         let n = l.len();
@@ -378,6 +379,7 @@ impl Spectrum {
     }
 
     /// Value at one wavelength, nm.
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn eval(&self, lambda: f32) -> f32 {
         match self {
             Spectrum::Constant(v) => *v,
@@ -399,7 +401,8 @@ impl Spectrum {
     }
 
     /// Values at the four sampled wavelengths (spectral mode).
-    #[inline]
+    #[cfg_attr(debug_assertions, inline)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn sample(&self, lambda: &SampledWavelengths) -> SampledSpectrum {
         let l = lambda.lambda();
         SampledSpectrum(match self {

@@ -44,7 +44,8 @@ pub fn visible_wavelength_pdf(lambda: f32) -> f32 {
 
 /// Map a uniform sample `u` in [0, 1) to a wavelength in 360-830 nm with density
 /// [`visible_wavelength_pdf`] (analytic inverse CDF).
-#[inline]
+#[cfg_attr(debug_assertions, inline)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn sample_visible_wavelength(u: f32) -> f32 {
     sample_visible_with_pdf(u).0
 }
@@ -52,7 +53,8 @@ pub fn sample_visible_wavelength(u: f32) -> f32 {
 /// [`sample_visible_wavelength`] and its density [`visible_wavelength_pdf`] there, the density
 /// from the same `y = tanh(B (l - 538))` the inverse CDF inverts: `A / cosh^2 = A (1 - y^2)`,
 /// no exponential needed.
-#[inline]
+#[cfg_attr(debug_assertions, inline)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 fn sample_visible_with_pdf(u: f32) -> (f32, f32) {
     // atanh y = ln((1 + y) / (1 - y)) / 2: one logarithm (|y| <= 0.971 here, so 1 - y has
     // no cancellation to speak of).
@@ -75,6 +77,7 @@ impl SampledWavelengths {
 
     /// Hero wavelength from `u` with the visible density, the other lanes from `u + i/4`
     /// (mod 1) (pbrt-v4 `SampledWavelengths::SampleVisible`).
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn sample_visible(u: f32) -> Self {
         let mut lambda = [0.0; 4];
         let mut pdf = [0.0; 4];

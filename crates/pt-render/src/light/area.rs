@@ -430,7 +430,8 @@ pub fn sphere_cone_lanes<const N: usize>(
 
 /// Mitsuba's sphere texture coordinates of a unit vector `d` from the centre (world space):
 /// in the sphere's object frame, u = azimuth about z / 2 pi in [0, 1), v = polar angle from +z / pi.
-#[inline]
+#[cfg_attr(debug_assertions, inline)]
+#[cfg_attr(not(debug_assertions), inline(always))]
 pub fn sphere_uv(frame: Mat3, d: Vec3) -> Vec2 {
     let local = frame.transpose() * d;
     let mut u = fastmath::atan2(local.y, local.x) * (0.5 / PI);

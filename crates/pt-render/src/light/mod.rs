@@ -342,6 +342,7 @@ impl Light {
 
     /// Radiance seen along a ray that left the scene in direction `dir` (infinite lights only),
     /// at the path's wavelengths `lambda` (spectral environment maps).
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn escaped_radiance(&self, dir: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
         match self {
             Light::Sun {
@@ -366,6 +367,7 @@ impl Light {
     }
 
     /// Solid-angle pdf that `sample` produces direction `dir` (infinite lights only).
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn escaped_pdf(&self, dir: Vec3) -> f32 {
         match self {
             // Inside the sun's cone: |dir - n|^2 / 2 = 1 - cos.

@@ -147,7 +147,8 @@ impl SunSky {
     }
 
     /// Radiance arriving from world direction `dir` (unit, pointing away from the scene).
-    #[inline]
+    #[cfg_attr(debug_assertions, inline)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn radiance(&self, dir: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
         let d = self.to_local * dir;
         if self.model.is_spectral() {
@@ -163,7 +164,8 @@ impl SunSky {
     }
 
     /// Solid-angle pdf with which [`SunSky::sample`] draws world direction `dir`.
-    #[inline]
+    #[cfg_attr(debug_assertions, inline)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn pdf(&self, dir: Vec3) -> f32 {
         let d = self.to_local * dir;
         if !(d.z >= 0.0) {
@@ -179,7 +181,8 @@ impl SunSky {
     }
 
     /// The sky table's solid-angle density at local direction `d` (upper hemisphere).
-    #[inline]
+    #[cfg_attr(debug_assertions, inline)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn sky_pdf(&self, d: Vec3) -> f32 {
         let mut u = fastmath::atan2(d.y, d.x) * (0.5 / PI);
         if u < 0.0 {
@@ -189,6 +192,7 @@ impl SunSky {
     }
 
     /// Samples a direction towards the sky or the sun: (world direction, radiance, pdf).
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn sample(
         &self,
         u: Vec2,

@@ -125,7 +125,8 @@ impl Grid {
     }
 
     /// The cells a lookup at the world point `p` reads.
-    #[inline]
+    #[cfg_attr(debug_assertions, inline)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn footprint(&self, p: Vec3) -> Footprint {
         let g = self.world_to_grid.transform_point3(p);
         let [nx, ny, nz] = self.resolution;
@@ -163,7 +164,8 @@ impl Grid {
     }
 
     /// The cells blended at the world point `p` and their weights.
-    #[inline]
+    #[cfg_attr(debug_assertions, inline)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn stencil(&self, p: Vec3) -> Stencil {
         match self.footprint(p) {
             Footprint::Cell(i) => Stencil {
@@ -193,7 +195,8 @@ impl Grid {
 
     /// A one-channel lookup as nested lerps (the hot path of delta and ratio tracking through
     /// density grids: the stencil's blend without its weight arrays).
-    #[inline]
+    #[cfg_attr(debug_assertions, inline)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     fn lookup_scalar(&self, c: &[f32], p: Vec3) -> f32 {
         match self.footprint(p) {
             Footprint::Cell(i) => c[i],
@@ -209,7 +212,8 @@ impl Grid {
 
     /// The value at the world point `p` at the path's wavelengths (RGB mode: per channel,
     /// fourth lane 0; a one-channel grid: the same value in every lane).
-    #[inline]
+    #[cfg_attr(debug_assertions, inline)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn at(&self, p: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
         let v = match &self.cells {
             Cells::Scalar(c) => return SampledSpectrum::splat(self.lookup_scalar(c, p)),
@@ -274,7 +278,8 @@ pub enum VolumeSpectrum {
 
 impl VolumeSpectrum {
     /// The value at the world point `p` at the path's wavelengths.
-    #[inline]
+    #[cfg_attr(debug_assertions, inline)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn at(&self, p: Vec3, lambda: &SampledWavelengths) -> SampledSpectrum {
         match self {
             VolumeSpectrum::Constant(c) => c.at(lambda),

@@ -212,7 +212,8 @@ pub struct Bitmap {
 
 impl Bitmap {
     /// Linear RGB at the surface's texture coordinates `uv`.
-    #[inline]
+    #[cfg_attr(debug_assertions, inline)]
+    #[cfg_attr(not(debug_assertions), inline(always))]
     pub fn eval(&self, uv: Vec2) -> [f32; 3] {
         let f = self.lookup.footprint(uv);
         let t = f.texels.map(|i| self.texels[i]);
