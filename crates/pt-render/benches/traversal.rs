@@ -38,7 +38,7 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use pt_math::{Mat4, Ray, Vec2, Vec3, Vec3A};
-use pt_render::accel::{Accel, BvhKind};
+use pt_render::accel::{Accel, BvhKind, BATCH};
 use pt_render::camera::Camera;
 use pt_render::geometry::Primitive;
 use pt_render::{LightSelection, Scene};
@@ -239,6 +239,33 @@ fn occluded_count(accel: &Accel, rays: &[Ray]) -> usize {
     rays.iter().filter(|r| accel.occluded(black_box(r))).count()
 }
 
+/// [`closest_sum`] through the batch query the path tracer makes ([`Accel::intersect_batch`]):
+/// the rays in groups of [`BATCH`], every lane active.
+#[inline(always)]
+fn closest_sum_batch(accel: &Accel, rays: &[Ray]) -> f32 {
+    let mut sum = 0.0f32;
+    let mut out = [None; BATCH];
+    for group in rays.chunks_exact(BATCH) {
+        let group: &[Ray; BATCH] = group.try_into().expect("BATCH rays");
+        accel.intersect_batch(black_box(group), (1 << BATCH) - 1, &mut out);
+        sum += out.iter().flatten().map(|h| h.t).sum::<f32>();
+    }
+    sum
+}
+
+/// [`occluded_count`] through [`Accel::occluded_batch`], as [`closest_sum_batch`].
+#[inline(always)]
+fn occluded_count_batch(accel: &Accel, rays: &[Ray]) -> usize {
+    rays.chunks_exact(BATCH)
+        .map(|group| {
+            let group: &[Ray; BATCH] = group.try_into().expect("BATCH rays");
+            accel
+                .occluded_batch(black_box(group), (1 << BATCH) - 1)
+                .count_ones() as usize
+        })
+        .sum()
+}
+
 /// The queries compiled for x86-64-v3 when the processor has it, as the renderer's tile loop is
 /// (`render::render_tile`): the traversal and the SIMD primitive blocks are inlined into it.
 fn closest_sum_dispatch(accel: &Accel, rays: &[Ray]) -> f32 {
@@ -266,6 +293,34 @@ fn occluded_count_dispatch(accel: &Accel, rays: &[Ray]) -> usize {
         return unsafe { v3(accel, rays) };
     }
     occluded_count(accel, rays)
+}
+
+/// [`closest_sum_batch`], dispatched as [`closest_sum_dispatch`].
+fn closest_sum_batch_dispatch(accel: &Accel, rays: &[Ray]) -> f32 {
+    #[cfg(target_arch = "x86_64")]
+    if has_v3() {
+        #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe")]
+        fn v3(accel: &Accel, rays: &[Ray]) -> f32 {
+            closest_sum_batch(accel, rays)
+        }
+        // SAFETY: `has_v3` checked every feature `v3` is compiled for.
+        return unsafe { v3(accel, rays) };
+    }
+    closest_sum_batch(accel, rays)
+}
+
+/// [`occluded_count_batch`], dispatched as [`closest_sum_dispatch`].
+fn occluded_count_batch_dispatch(accel: &Accel, rays: &[Ray]) -> usize {
+    #[cfg(target_arch = "x86_64")]
+    if has_v3() {
+        #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe")]
+        fn v3(accel: &Accel, rays: &[Ray]) -> usize {
+            occluded_count_batch(accel, rays)
+        }
+        // SAFETY: `has_v3` checked every feature `v3` is compiled for.
+        return unsafe { v3(accel, rays) };
+    }
+    occluded_count_batch(accel, rays)
 }
 
 /// Whether the processor has the x86-64-v3 features (false when `PT_BENCH_BASELINE` is set).
@@ -309,6 +364,12 @@ fn bench_kinds(c: &mut Criterion, case: &Case, kinds: &[(BvhKind, &str)]) {
             });
             g.bench_function(BenchmarkId::new("occluded", kname), |b| {
                 b.iter(|| occluded_count_dispatch(&accel, rays))
+            });
+            g.bench_function(BenchmarkId::new("closest-batch", kname), |b| {
+                b.iter(|| closest_sum_batch_dispatch(&accel, rays))
+            });
+            g.bench_function(BenchmarkId::new("occluded-batch", kname), |b| {
+                b.iter(|| occluded_count_batch_dispatch(&accel, rays))
             });
             g.finish();
         }

@@ -287,121 +287,175 @@ fn leaf_range(e: Entry) -> std::ops::Range<usize> {
     first..first + (e.child >> COUNT_SHIFT & 7) as usize
 }
 
-/// Closest hit of `ray` among `prims` through `bvh`: `(primitive, t, b1, b2)`, or
-/// `Err(Overflow)` if `stack` was too small for this ray (see [`stack!`]).
-#[inline(always)]
-fn wide_closest(
-    bvh: &WideBvh,
-    ray: &BvhRay,
-    prims: &[Primitive],
-    stack: &mut [Entry],
-) -> Result<Option<AccelHit>, Overflow> {
-    if bvh.nodes.is_empty() {
-        return Ok(None);
+/// What a traversal does at its leaves: [`Nearest`] keeps the closest hit and shortens the ray
+/// to it, [`Blocked`] stops at the first blocker.
+trait LeafQuery: Copy {
+    /// The query for a ray that ends at `tmax`.
+    fn new(tmax: f32) -> Self;
+    /// Tests the leaf's primitives `prims[range]`; true when the traversal is done.
+    fn leaf(&mut self, ray: &BvhRay, prims: &[Primitive], range: std::ops::Range<usize>) -> bool;
+    /// Where the ray ends now: boxes entered beyond it are skipped.
+    fn tmax(&self) -> f32;
+}
+
+/// The closest hit so far, and the ray shortened to it.
+#[derive(Clone, Copy)]
+struct Nearest {
+    tmax: f32,
+    best: Option<AccelHit>,
+}
+
+impl LeafQuery for Nearest {
+    #[inline(always)]
+    fn new(tmax: f32) -> Self {
+        Nearest { tmax, best: None }
     }
-    let wr = WideRay::new(ray);
-    let mut tmax = ray.tmax;
-    let mut best: Option<AccelHit> = None;
-    let mut top = 0;
-    let mut current = Some(root(ray));
-    while let Some(e) = current {
-        if e.child & LEAF != 0 {
-            let range = leaf_range(e);
-            let first = range.start;
-            for (k, p) in prims[range].iter().enumerate() {
-                let (t, b1, b2) = p.intersect_bary(ray.origin, ray.direction, ray.tmin, tmax);
-                if t < tmax {
-                    tmax = t;
-                    best = Some(AccelHit {
-                        index: first + k,
-                        t,
-                        b1,
-                        b2,
-                    });
-                }
+
+    #[inline(always)]
+    fn leaf(&mut self, ray: &BvhRay, prims: &[Primitive], range: std::ops::Range<usize>) -> bool {
+        let first = range.start;
+        for (k, p) in prims[range].iter().enumerate() {
+            let (t, b1, b2) = p.intersect_bary(ray.origin, ray.direction, ray.tmin, self.tmax);
+            if t < self.tmax {
+                self.tmax = t;
+                self.best = Some(AccelHit {
+                    index: first + k,
+                    t,
+                    b1,
+                    b2,
+                });
             }
-            current = pop(stack, &mut top, tmax);
-        } else {
-            let node = &bvh.nodes[e.child as usize];
-            let (mask, near) = test_node(node, &wr, tmax);
-            current = next_entry(node, mask, &near, stack, &mut top, tmax)?;
+        }
+        false
+    }
+
+    #[inline(always)]
+    fn tmax(&self) -> f32 {
+        self.tmax
+    }
+}
+
+/// Whether a blocker was found; the ray keeps its length.
+#[derive(Clone, Copy)]
+struct Blocked {
+    tmax: f32,
+    blocked: bool,
+}
+
+impl LeafQuery for Blocked {
+    #[inline(always)]
+    fn new(tmax: f32) -> Self {
+        Blocked {
+            tmax,
+            blocked: false,
         }
     }
-    Ok(best)
+
+    #[inline(always)]
+    fn leaf(&mut self, ray: &BvhRay, prims: &[Primitive], range: std::ops::Range<usize>) -> bool {
+        self.blocked = prims[range]
+            .iter()
+            .any(|p| p.intersect(ray.origin, ray.direction, ray.tmin, self.tmax) < self.tmax);
+        self.blocked
+    }
+
+    #[inline(always)]
+    fn tmax(&self) -> f32 {
+        self.tmax
+    }
 }
 
-/// Whether anything blocks `ray` within `(tmin, tmax)` among `prims` through `bvh`, or
-/// `Err(Overflow)` as [`wide_closest`].
-#[inline(always)]
-fn wide_any(
-    bvh: &WideBvh,
-    ray: &BvhRay,
-    prims: &[Primitive],
-    stack: &mut [Entry],
-) -> Result<bool, Overflow> {
-    if bvh.nodes.is_empty() {
-        return Ok(false);
-    }
-    let wr = WideRay::new(ray);
-    let mut top = 0;
-    let mut current = Some(root(ray));
-    while let Some(e) = current {
-        if e.child & LEAF != 0 {
-            for p in &prims[leaf_range(e)] {
-                if p.intersect(ray.origin, ray.direction, ray.tmin, ray.tmax) < ray.tmax {
-                    return Ok(true);
-                }
-            }
-            current = pop(stack, &mut top, ray.tmax);
-        } else {
-            let node = &bvh.nodes[e.child as usize];
-            let (mask, near) = test_node(node, &wr, ray.tmax);
-            current = next_entry(node, mask, &near, stack, &mut top, ray.tmax)?;
+/// One ray's traversal in progress: the entry to visit next (`None` once done) and the top of
+/// its stack (held by the caller).
+struct Walk<Q> {
+    ray: BvhRay,
+    wide: WideRay,
+    query: Q,
+    current: Option<Entry>,
+    top: usize,
+}
+
+impl<Q: LeafQuery> Walk<Q> {
+    /// The traversal of `ray` before its first step.
+    #[inline(always)]
+    fn new(bvh: &WideBvh, ray: BvhRay) -> Self {
+        Walk {
+            wide: WideRay::new(&ray),
+            query: Q::new(ray.tmax),
+            current: (!bvh.nodes.is_empty()).then(|| root(&ray)),
+            top: 0,
+            ray,
         }
     }
-    Ok(false)
+
+    /// Visits the current entry (a leaf's primitives, or a node's children) and moves on to the
+    /// next; `Err(Overflow)` if `stack` has no room for a node's hit children (see [`stack!`]).
+    #[inline(always)]
+    fn step(
+        &mut self,
+        bvh: &WideBvh,
+        prims: &[Primitive],
+        stack: &mut [Entry],
+    ) -> Result<(), Overflow> {
+        let Some(e) = self.current else {
+            return Ok(());
+        };
+        if e.child & LEAF != 0 {
+            let done = self.query.leaf(&self.ray, prims, leaf_range(e));
+            self.current = if done {
+                None
+            } else {
+                pop(stack, &mut self.top, self.query.tmax())
+            };
+        } else {
+            let node = &bvh.nodes[e.child as usize];
+            let tmax = self.query.tmax();
+            let (mask, near) = test_node(node, &self.wide, tmax);
+            self.current = next_entry(node, mask, &near, stack, &mut self.top, tmax)?;
+        }
+        Ok(())
+    }
+
+    /// Steps until the traversal is done: the query's answer.
+    #[inline(always)]
+    fn run(
+        mut self,
+        bvh: &WideBvh,
+        prims: &[Primitive],
+        stack: &mut [Entry],
+    ) -> Result<Q, Overflow> {
+        while self.current.is_some() {
+            self.step(bvh, prims, stack)?;
+        }
+        Ok(self.query)
+    }
 }
 
-/// [`wide_closest`] on `stack`, or on a stack as deep as the tree needs if this ray overflows
-/// it ([`wide_closest_deep`]): the same hit either way.
+/// The query's answer for `ray` on `stack`, or on a stack as deep as the tree needs if this ray
+/// overflows it ([`walk_deep`]): the same answer either way.
 #[inline(always)]
-fn closest_or_deep(
-    bvh: &WideBvh,
-    ray: &BvhRay,
-    prims: &[Primitive],
-    stack: &mut [Entry],
-) -> Option<AccelHit> {
-    wide_closest(bvh, ray, prims, stack).unwrap_or_else(|_| wide_closest_deep(bvh, ray, prims))
+fn walk<Q: LeafQuery>(bvh: &WideBvh, ray: BvhRay, prims: &[Primitive], stack: &mut [Entry]) -> Q {
+    Walk::new(bvh, ray)
+        .run(bvh, prims, stack)
+        .unwrap_or_else(|_| walk_deep(bvh, ray, prims))
 }
 
-/// [`wide_any`] on `stack`, as [`closest_or_deep`].
-#[inline(always)]
-fn any_or_deep(bvh: &WideBvh, ray: &BvhRay, prims: &[Primitive], stack: &mut [Entry]) -> bool {
-    wide_any(bvh, ray, prims, stack).unwrap_or_else(|_| wide_any_deep(bvh, ray, prims))
-}
-
-/// [`wide_closest`] on a stack from the heap deep enough for any ray in `bvh`: the retry of a
-/// ray that overflowed the render loop's stack (rare: a deep tree and a ray that enters many
-/// of its boxes). Out of line, so the render loop holds one copy of the traversal.
+/// [`walk`] on a stack from the heap deep enough for any ray in `bvh`: the retry of a ray that
+/// overflowed the render loop's stack (rare: a deep tree and a ray that enters many of its
+/// boxes). Out of line, so the render loop holds one copy of the traversal.
 #[cold]
 #[inline(never)]
-fn wide_closest_deep(bvh: &WideBvh, ray: &BvhRay, prims: &[Primitive]) -> Option<AccelHit> {
+fn walk_deep<Q: LeafQuery>(bvh: &WideBvh, ray: BvhRay, prims: &[Primitive]) -> Q {
     let mut stack = vec![Entry::default(); bvh.stack_need];
-    wide_closest(bvh, ray, prims, &mut stack).unwrap_or_else(|_| unreachable!("stack_need"))
-}
-
-/// [`wide_any`] on a stack from the heap, as [`wide_closest_deep`].
-#[cold]
-#[inline(never)]
-fn wide_any_deep(bvh: &WideBvh, ray: &BvhRay, prims: &[Primitive]) -> bool {
-    let mut stack = vec![Entry::default(); bvh.stack_need];
-    wide_any(bvh, ray, prims, &mut stack).unwrap_or_else(|_| unreachable!("stack_need"))
+    Walk::new(bvh, ray)
+        .run(bvh, prims, &mut stack)
+        .unwrap_or_else(|_| unreachable!("stack_need"))
 }
 
 /// Binds `$stack` to a zeroed traversal stack of [`STACK`] entries on the thread's stack: deep
 /// enough for every ray in a tree of up to nine levels, and for all but rare rays in deeper
-/// ones, which [`wide_closest`] and [`wide_any`] report (`Overflow`, checked before each push)
-/// and which are traced again on a stack as deep as the tree needs ([`wide_closest_deep`]).
+/// ones, which [`Walk::step`] reports (`Overflow`, checked before each push) and which are
+/// traced again on a stack as deep as the tree needs ([`walk_deep`]).
 /// The stack is zeroed once per batch of rays (safe Rust initialises it), so its size is a
 /// cost: a stack for the deepest case (2 KB for a tree of 36 levels) cost 15-20% of the rays
 /// per second of single-ray queries on a tree of ten levels (`traversal` bench, `mesh-100k`).
@@ -438,9 +492,12 @@ impl WideBvh {
     ) -> (Option<AccelHit>, bool, bool) {
         let mut stack = vec![Entry::default(); entries];
         let r = bvh_ray(ray);
-        let overflowed = wide_closest(self, &r, prims, &mut stack).is_err();
-        let hit = closest_or_deep(self, &r, prims, &mut stack);
-        (hit, any_or_deep(self, &r, prims, &mut stack), overflowed)
+        let overflowed = Walk::<Nearest>::new(self, r)
+            .run(self, prims, &mut stack)
+            .is_err();
+        let hit = walk::<Nearest>(self, r, prims, &mut stack).best;
+        let blocked = walk::<Blocked>(self, r, prims, &mut stack).blocked;
+        (hit, blocked, overflowed)
     }
 
     /// The root's internal children.
@@ -454,7 +511,10 @@ impl WideBvh {
     }
 
     /// Closest hits of `rays[k]`, `k` in `active`, into `out[k]` (the other entries are left as
-    /// they are), one ray after the other on one stack.
+    /// they are), one ray after the other on one stack. (Two rays traversed in turns, a step of
+    /// one then a step of the other on two stacks, so that the processor would overlap their
+    /// independent chains of cache misses, made `mesh-100k` 11% slower: the turns' bookkeeping
+    /// and mispredicted branches cost more than the overlap gained.)
     #[inline(always)]
     pub(super) fn closest_batch(
         &self,
@@ -465,7 +525,7 @@ impl WideBvh {
     ) {
         stack!(stack);
         for k in set_lanes(active) {
-            out[k] = closest_or_deep(self, &bvh_ray(&rays[k]), prims, stack);
+            out[k] = walk::<Nearest>(self, bvh_ray(&rays[k]), prims, stack).best;
         }
     }
 
@@ -477,7 +537,7 @@ impl WideBvh {
         // A loop, not `lanes_where`: its closure would hold the whole traversal (see `stack!`).
         let mut blocked: Mask = 0;
         for k in set_lanes(active) {
-            if any_or_deep(self, &bvh_ray(&rays[k]), prims, stack) {
+            if walk::<Blocked>(self, bvh_ray(&rays[k]), prims, stack).blocked {
                 blocked |= 1 << k;
             }
         }
@@ -488,13 +548,13 @@ impl WideBvh {
     #[inline(always)]
     pub(super) fn closest(&self, ray: &BvhRay, prims: &[Primitive]) -> Option<AccelHit> {
         stack!(stack);
-        closest_or_deep(self, ray, prims, stack)
+        walk::<Nearest>(self, *ray, prims, stack).best
     }
 
     /// Whether anything blocks one ray.
     #[inline(always)]
     pub(super) fn any(&self, ray: &BvhRay, prims: &[Primitive]) -> bool {
         stack!(stack);
-        any_or_deep(self, ray, prims, stack)
+        walk::<Blocked>(self, *ray, prims, stack).blocked
     }
 }
