@@ -523,7 +523,8 @@ fn requested_share(
 }
 
 /// The render job of `desc` as the command line asks for it: samples, seed, acceleration
-/// structure, light selection, colour mode and share `part`.
+/// structure, light selection, colour mode and share `part`; the per-pixel variance only when
+/// it is written (`--variance`) or saved with the sums (a part file, a saved or resumed state).
 fn job_of<'a>(args: &RenderArgs, desc: &'a SceneDesc, part: Option<Share>) -> Job<'a> {
     Job {
         spp: args.spp.unwrap_or(desc.sampler.sample_count),
@@ -544,6 +545,11 @@ fn job_of<'a>(args: &RenderArgs, desc: &'a SceneDesc, part: Option<Share>) -> Jo
             ModeArg::Spectral => pt_spectrum::ColorMode::Spectral,
         }),
         share: part.unwrap_or(Share::WHOLE),
+        variance: args.variance
+            || part.is_some()
+            || args.save_state.is_some()
+            || args.resume.is_some()
+            || args.checkpoint.is_some(),
         ..Job::new(desc)
     }
 }

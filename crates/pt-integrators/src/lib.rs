@@ -221,6 +221,10 @@ pub struct Job<'a> {
     /// Which of the `spp` samples per pixel to take (all, or one share of a render split over
     /// machines: camera-path methods only).
     pub share: Share,
+    /// Whether the output's per-pixel variance is wanted: without it, a splatting film skips
+    /// the sums it needs ([`RenderSettings::variance`]). A render that saves its state (to
+    /// resume or merge it) must keep them.
+    pub variance: bool,
 }
 
 impl<'a> Job<'a> {
@@ -234,6 +238,7 @@ impl<'a> Job<'a> {
             selection: LightSelection::default(),
             mode: None,
             share: Share::WHOLE,
+            variance: true,
         }
     }
 }

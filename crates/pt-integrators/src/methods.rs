@@ -164,6 +164,7 @@ fn render_path(
         path: p.settings,
         clamp: p.clamp,
         share: job.share,
+        variance: job.variance,
         ..RenderSettings::from_desc(desc)
     };
     let mut state = match run.resume {
@@ -353,6 +354,7 @@ fn prepare(
         seed: job.seed,
         path: *path,
         share: job.share,
+        variance: job.variance,
         ..RenderSettings::from_desc(desc)
     };
     check(&scene, &settings).map_err(IntegratorError::Settings)?;

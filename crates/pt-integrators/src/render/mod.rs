@@ -55,6 +55,13 @@ pub struct RenderSettings {
     /// Which of the render's sample indices this process takes (all, or one share of a render
     /// split over machines); `spp` counts the share's samples.
     pub share: Share,
+    /// Keep each pixel's sums of its own samples and their squares under splatting, the
+    /// variance of [`RenderOutput::variance`] (and what a saved state or a part file holds).
+    /// Without them that variance is zero and each sample costs seven exact additions less
+    /// (`PixelStats::add`); the samples are still counted (`RenderOutput::nonfinite_samples`).
+    /// The image is the same either way. Importance sampling keeps the sums regardless (they
+    /// are its image).
+    pub variance: bool,
 }
 
 /// Which of a render's sample indices one process takes: the `index`-th (from 0) of `count`
@@ -151,6 +158,7 @@ impl RenderSettings {
             path: PathSettings::from_desc(&desc.integrator),
             clamp: None,
             share: Share::WHOLE,
+            variance: true,
         }
     }
 }

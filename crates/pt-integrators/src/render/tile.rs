@@ -235,6 +235,7 @@ fn splat_row<'a>(
         per_origin: tile.samples.len(),
         stats: row,
         inside: ix0..ix1,
+        variance: settings.variance,
     }
 }
 
@@ -323,6 +324,9 @@ struct SplatRow<'a> {
     stats: Option<&'a mut [PixelStats]>,
     /// The columns inside the image.
     inside: std::ops::Range<i32>,
+    /// Whether `stats` keep the sums for the variance or only count the samples
+    /// ([`RenderSettings::variance`]).
+    variance: bool,
 }
 
 impl SplatRow<'_> {
@@ -335,7 +339,12 @@ impl SplatRow<'_> {
             (offset + Vec2::splat(0.5), rgb, alpha);
         if let Some(r) = self.stats.as_deref_mut() {
             if self.inside.contains(&x) {
-                r[(x - self.inside.start) as usize].add(rgb, alpha);
+                let stats = &mut r[(x - self.inside.start) as usize];
+                if self.variance {
+                    stats.add(rgb, alpha);
+                } else {
+                    stats.count(&rgb);
+                }
             }
         }
     }
@@ -621,6 +630,41 @@ mod tests {
                 "{method} on {name}: the image is black, the test checks nothing"
             );
         }
+    }
+
+    /// A splatting render without the variance (`RenderSettings::variance` off, as `pt render`
+    /// runs without `--variance`) is the same image, bit for bit, with the same sample counts;
+    /// only its variance is zero. On the tent-filtered film scene, whose splats cross tiles.
+    #[test]
+    fn splat_image_does_not_depend_on_the_variance() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
+        let desc = pt_scene::load_file(&dir.join("film-tent.xml"), &[]).expect("film-tent.xml");
+        let scene = Scene::build(&desc, BvhKind::Auto, LightSelection::default()).unwrap();
+        let with = RenderSettings {
+            spp: 5,
+            ..RenderSettings::from_desc(&desc)
+        };
+        assert!(
+            with.splats() && with.variance,
+            "the test needs a splatting film"
+        );
+        let without = RenderSettings {
+            variance: false,
+            ..with.clone()
+        };
+        let (a, b) = (
+            crate::render::render(&scene, &with, &|_| {}),
+            crate::render::render(&scene, &without, &|_| {}),
+        );
+        let bits = |v: &[[f32; 3]]| v.iter().flatten().map(|c| c.to_bits()).collect::<Vec<_>>();
+        assert!(bits(&a.mean) == bits(&b.mean), "the image changed");
+        assert_eq!(a.alpha, b.alpha);
+        assert_eq!(a.nonfinite_samples, b.nonfinite_samples);
+        assert!(
+            a.variance.iter().flatten().any(|&v| v > 0.0),
+            "no variance to leave out"
+        );
+        assert!(b.variance.iter().flatten().all(|&v| v == 0.0));
     }
 
     /// The pass scheduler runs every job exactly once, records one time per job, and with the

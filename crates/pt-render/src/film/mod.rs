@@ -403,6 +403,18 @@ impl PixelStats {
         self.alpha.add(f64::from(alpha));
     }
 
+    /// Counts one sample without adding it to the sums: in `nonfinite` if the film cannot add
+    /// it (as [`PixelStats::add`]), else in `n`. For renders that need no variance (a splatting
+    /// film's image is its own sums).
+    #[inline(always)]
+    pub fn count(&mut self, v: &[f32; 3]) {
+        if exact::fits(v) {
+            self.n += 1;
+        } else {
+            self.nonfinite += 1;
+        }
+    }
+
     /// Adds another pixel's statistics (a part of the same render with other samples): exact,
     /// so the result does not depend on how the samples were split.
     pub fn merge(&mut self, other: &PixelStats) {
