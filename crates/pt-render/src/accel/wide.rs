@@ -353,10 +353,15 @@ impl LeafQuery for Blocked {
 
     #[inline(always)]
     fn leaf(&mut self, ray: &BvhRay, prims: &[Primitive], range: std::ops::Range<usize>) -> bool {
-        self.blocked = prims[range]
-            .iter()
-            .any(|p| p.intersect(ray.origin, ray.direction, ray.tmin, self.tmax) < self.tmax);
-        self.blocked
+        // A loop, not `Iterator::any`: the compiler left that call out of line, compiled for
+        // the baseline instructions (see `stack!`).
+        for p in &prims[range] {
+            if p.intersect(ray.origin, ray.direction, ray.tmin, self.tmax) < self.tmax {
+                self.blocked = true;
+                return true;
+            }
+        }
+        false
     }
 
     #[inline(always)]
