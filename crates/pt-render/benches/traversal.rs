@@ -266,61 +266,40 @@ fn occluded_count_batch(accel: &Accel, rays: &[Ray]) -> usize {
         .sum()
 }
 
-/// The queries compiled for x86-64-v3 when the processor has it, as the renderer's tile loop is
-/// (`render::render_tile`): the traversal and the SIMD primitive blocks are inlined into it.
-fn closest_sum_dispatch(accel: &Accel, rays: &[Ray]) -> f32 {
+/// `work` compiled for x86-64-v3 when the processor has it, as the renderer's tile loop is
+/// (`render::render_tile`): the traversal and the SIMD primitive blocks are inlined into it
+/// (callers pass a closure marked `#[inline(always)]`).
+fn dispatch<R>(work: impl FnOnce() -> R) -> R {
     #[cfg(target_arch = "x86_64")]
     if has_v3() {
         #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe")]
-        fn v3(accel: &Accel, rays: &[Ray]) -> f32 {
-            closest_sum(accel, rays)
+        fn v3<R>(work: impl FnOnce() -> R) -> R {
+            work()
         }
         // SAFETY: `has_v3` checked every feature `v3` is compiled for.
-        return unsafe { v3(accel, rays) };
+        return unsafe { v3(work) };
     }
-    closest_sum(accel, rays)
+    work()
 }
 
-/// [`occluded_count`], dispatched as [`closest_sum_dispatch`].
-fn occluded_count_dispatch(accel: &Accel, rays: &[Ray]) -> usize {
-    #[cfg(target_arch = "x86_64")]
-    if has_v3() {
-        #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe")]
-        fn v3(accel: &Accel, rays: &[Ray]) -> usize {
-            occluded_count(accel, rays)
-        }
-        // SAFETY: `has_v3` checked every feature `v3` is compiled for.
-        return unsafe { v3(accel, rays) };
-    }
-    occluded_count(accel, rays)
-}
-
-/// [`closest_sum_batch`], dispatched as [`closest_sum_dispatch`].
-fn closest_sum_batch_dispatch(accel: &Accel, rays: &[Ray]) -> f32 {
-    #[cfg(target_arch = "x86_64")]
-    if has_v3() {
-        #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe")]
-        fn v3(accel: &Accel, rays: &[Ray]) -> f32 {
-            closest_sum_batch(accel, rays)
-        }
-        // SAFETY: `has_v3` checked every feature `v3` is compiled for.
-        return unsafe { v3(accel, rays) };
-    }
-    closest_sum_batch(accel, rays)
-}
-
-/// [`occluded_count_batch`], dispatched as [`closest_sum_dispatch`].
-fn occluded_count_batch_dispatch(accel: &Accel, rays: &[Ray]) -> usize {
-    #[cfg(target_arch = "x86_64")]
-    if has_v3() {
-        #[target_feature(enable = "avx2,fma,bmi1,bmi2,lzcnt,popcnt,movbe")]
-        fn v3(accel: &Accel, rays: &[Ray]) -> usize {
-            occluded_count_batch(accel, rays)
-        }
-        // SAFETY: `has_v3` checked every feature `v3` is compiled for.
-        return unsafe { v3(accel, rays) };
-    }
-    occluded_count_batch(accel, rays)
+/// Times `query` as `id` in `group`, compiled as [`dispatch`] compiles it (callers pass a
+/// closure marked `#[inline(always)]`, so that its body is inlined into the x86-64-v3 variant).
+fn bench_query<R>(
+    group: &mut criterion::BenchmarkGroup<'_, criterion::measurement::WallTime>,
+    id: BenchmarkId,
+    query: impl Fn() -> R + Copy,
+) {
+    // A closure around `query`, not `query` itself: passed as it is, it ran through an
+    // outlined `FnOnce::call_once`, compiled for the baseline.
+    #[allow(clippy::redundant_closure)]
+    group.bench_function(id, |b| {
+        b.iter(|| {
+            dispatch(
+                #[inline(always)]
+                || query(),
+            )
+        })
+    });
 }
 
 /// Whether the processor has the x86-64-v3 features (false when `PT_BENCH_BASELINE` is set).
@@ -359,18 +338,30 @@ fn bench_kinds(c: &mut Criterion, case: &Case, kinds: &[(BvhKind, &str)]) {
             );
             let mut g = c.benchmark_group(format!("{}/{rname}", case.scene));
             g.throughput(Throughput::Elements(rays.len() as u64));
-            g.bench_function(BenchmarkId::new("closest", kname), |b| {
-                b.iter(|| closest_sum_dispatch(&accel, rays))
-            });
-            g.bench_function(BenchmarkId::new("occluded", kname), |b| {
-                b.iter(|| occluded_count_dispatch(&accel, rays))
-            });
-            g.bench_function(BenchmarkId::new("closest-batch", kname), |b| {
-                b.iter(|| closest_sum_batch_dispatch(&accel, rays))
-            });
-            g.bench_function(BenchmarkId::new("occluded-batch", kname), |b| {
-                b.iter(|| occluded_count_batch_dispatch(&accel, rays))
-            });
+            bench_query(
+                &mut g,
+                BenchmarkId::new("closest", kname),
+                #[inline(always)]
+                || closest_sum(&accel, rays),
+            );
+            bench_query(
+                &mut g,
+                BenchmarkId::new("occluded", kname),
+                #[inline(always)]
+                || occluded_count(&accel, rays),
+            );
+            bench_query(
+                &mut g,
+                BenchmarkId::new("closest-batch", kname),
+                #[inline(always)]
+                || closest_sum_batch(&accel, rays),
+            );
+            bench_query(
+                &mut g,
+                BenchmarkId::new("occluded-batch", kname),
+                #[inline(always)]
+                || occluded_count_batch(&accel, rays),
+            );
             g.finish();
         }
     }
