@@ -289,7 +289,7 @@ fn leaf_range(e: Entry) -> std::ops::Range<usize> {
 
 /// What a traversal does at its leaves: [`Nearest`] keeps the closest hit and shortens the ray
 /// to it, [`Blocked`] stops at the first blocker.
-trait LeafQuery: Copy {
+trait LeafQuery {
     /// The query for a ray that ends at `tmax`.
     fn new(tmax: f32) -> Self;
     /// Tests the leaf's primitives `prims[range]`; true when the traversal is done.
@@ -299,7 +299,6 @@ trait LeafQuery: Copy {
 }
 
 /// The closest hit so far, and the ray shortened to it.
-#[derive(Clone, Copy)]
 struct Nearest {
     tmax: f32,
     best: Option<AccelHit>,
@@ -336,7 +335,6 @@ impl LeafQuery for Nearest {
 }
 
 /// Whether a blocker was found; the ray keeps its length.
-#[derive(Clone, Copy)]
 struct Blocked {
     tmax: f32,
     blocked: bool,
@@ -370,79 +368,41 @@ impl LeafQuery for Blocked {
     }
 }
 
-/// One ray's traversal in progress: the entry to visit next (`None` once done) and the top of
-/// its stack (held by the caller).
-struct Walk<Q> {
-    ray: BvhRay,
-    wide: WideRay,
-    query: Q,
-    current: Option<Entry>,
-    top: usize,
-}
-
-impl<Q: LeafQuery> Walk<Q> {
-    /// The traversal of `ray` before its first step.
-    #[inline(always)]
-    fn new(bvh: &WideBvh, ray: BvhRay) -> Self {
-        Walk {
-            wide: WideRay::new(&ray),
-            query: Q::new(ray.tmax),
-            current: (!bvh.nodes.is_empty()).then(|| root(&ray)),
-            top: 0,
-            ray,
-        }
-    }
-
-    /// Visits the current entry (a leaf's primitives, or a node's children) and moves on to the
-    /// next; `Err(Overflow)` if `stack` has no room for a node's hit children (see [`stack!`]).
-    #[inline(always)]
-    fn step(
-        &mut self,
-        bvh: &WideBvh,
-        prims: &[Primitive],
-        stack: &mut [Entry],
-    ) -> Result<(), Overflow> {
-        let Some(e) = self.current else {
-            return Ok(());
-        };
+/// The query's answer for `ray` through `bvh`, nearest child first, or `Err(Overflow)` if
+/// `stack` has no room for a node's hit children (see [`stack!`]).
+#[inline(always)]
+fn traverse<Q: LeafQuery>(
+    bvh: &WideBvh,
+    ray: &BvhRay,
+    prims: &[Primitive],
+    stack: &mut [Entry],
+) -> Result<Q, Overflow> {
+    let wide = WideRay::new(ray);
+    let mut query = Q::new(ray.tmax);
+    let mut top = 0;
+    let mut current = (!bvh.nodes.is_empty()).then(|| root(ray));
+    while let Some(e) = current {
         if e.child & LEAF != 0 {
-            let done = self.query.leaf(&self.ray, prims, leaf_range(e));
-            self.current = if done {
+            current = if query.leaf(ray, prims, leaf_range(e)) {
                 None
             } else {
-                pop(stack, &mut self.top, self.query.tmax())
+                pop(stack, &mut top, query.tmax())
             };
         } else {
             let node = &bvh.nodes[e.child as usize];
-            let tmax = self.query.tmax();
-            let (mask, near) = test_node(node, &self.wide, tmax);
-            self.current = next_entry(node, mask, &near, stack, &mut self.top, tmax)?;
+            let tmax = query.tmax();
+            let (mask, near) = test_node(node, &wide, tmax);
+            current = next_entry(node, mask, &near, stack, &mut top, tmax)?;
         }
-        Ok(())
     }
-
-    /// Steps until the traversal is done: the query's answer.
-    #[inline(always)]
-    fn run(
-        mut self,
-        bvh: &WideBvh,
-        prims: &[Primitive],
-        stack: &mut [Entry],
-    ) -> Result<Q, Overflow> {
-        while self.current.is_some() {
-            self.step(bvh, prims, stack)?;
-        }
-        Ok(self.query)
-    }
+    Ok(query)
 }
 
 /// The query's answer for `ray` on `stack`, or on a stack as deep as the tree needs if this ray
 /// overflows it ([`walk_deep`]): the same answer either way.
 #[inline(always)]
 fn walk<Q: LeafQuery>(bvh: &WideBvh, ray: BvhRay, prims: &[Primitive], stack: &mut [Entry]) -> Q {
-    Walk::new(bvh, ray)
-        .run(bvh, prims, stack)
-        .unwrap_or_else(|_| walk_deep(bvh, ray, prims))
+    traverse(bvh, &ray, prims, stack).unwrap_or_else(|_| walk_deep(bvh, ray, prims))
 }
 
 /// [`walk`] on a stack from the heap deep enough for any ray in `bvh`: the retry of a ray that
@@ -452,14 +412,12 @@ fn walk<Q: LeafQuery>(bvh: &WideBvh, ray: BvhRay, prims: &[Primitive], stack: &m
 #[inline(never)]
 fn walk_deep<Q: LeafQuery>(bvh: &WideBvh, ray: BvhRay, prims: &[Primitive]) -> Q {
     let mut stack = vec![Entry::default(); bvh.stack_need];
-    Walk::new(bvh, ray)
-        .run(bvh, prims, &mut stack)
-        .unwrap_or_else(|_| unreachable!("stack_need"))
+    traverse(bvh, &ray, prims, &mut stack).unwrap_or_else(|_| unreachable!("stack_need"))
 }
 
 /// Binds `$stack` to a zeroed traversal stack of [`STACK`] entries on the thread's stack: deep
 /// enough for every ray in a tree of up to nine levels, and for all but rare rays in deeper
-/// ones, which [`Walk::step`] reports (`Overflow`, checked before each push) and which are
+/// ones, which [`traverse`] reports (`Overflow`, checked before each push) and which are
 /// traced again on a stack as deep as the tree needs ([`walk_deep`]).
 /// The stack is zeroed once per batch of rays (safe Rust initialises it), so its size is a
 /// cost: a stack for the deepest case (2 KB for a tree of 36 levels) cost 15-20% of the rays
@@ -497,9 +455,7 @@ impl WideBvh {
     ) -> (Option<AccelHit>, bool, bool) {
         let mut stack = vec![Entry::default(); entries];
         let r = bvh_ray(ray);
-        let overflowed = Walk::<Nearest>::new(self, r)
-            .run(self, prims, &mut stack)
-            .is_err();
+        let overflowed = traverse::<Nearest>(self, &r, prims, &mut stack).is_err();
         let hit = walk::<Nearest>(self, r, prims, &mut stack).best;
         let blocked = walk::<Blocked>(self, r, prims, &mut stack).blocked;
         (hit, blocked, overflowed)
