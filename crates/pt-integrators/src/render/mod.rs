@@ -55,12 +55,13 @@ pub struct RenderSettings {
     /// Which of the render's sample indices this process takes (all, or one share of a render
     /// split over machines); `spp` counts the share's samples.
     pub share: Share,
-    /// Keep each pixel's sums of its own samples and their squares under splatting, the
-    /// variance of [`RenderOutput::variance`] (and what a saved state or a part file holds).
-    /// Without them that variance is zero and each sample costs seven exact additions less
-    /// (`PixelStats::add`); the samples are still counted (`RenderOutput::nonfinite_samples`).
-    /// The image is the same either way. Importance sampling keeps the sums regardless (they
-    /// are its image).
+    /// Keep the sums of each pixel's own samples' squares (and, under splatting, of the
+    /// samples themselves), the variance of [`RenderOutput::variance`] (and what a saved state
+    /// or a part file holds). Without them that variance is zero and each sample costs seven
+    /// exact additions less under splatting (`PixelStats::add`, where `PixelStats::count`
+    /// only counts it), three less under importance sampling (`PixelStats::add_mean`, which
+    /// keeps the sums of values: they are its image); the samples are still counted
+    /// (`RenderOutput::nonfinite_samples`). The image is the same either way.
     pub variance: bool,
 }
 

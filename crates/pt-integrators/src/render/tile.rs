@@ -195,7 +195,8 @@ fn render_tile_portable(scene: &Scene, settings: &RenderSettings, target: Target
         let mut sink = match (&mut band, &mut stats) {
             (Some(band), _) => {
                 let width = settings.width as usize;
-                SampleSink::Pixels(&mut band[(y - tile.y0) as usize * width..][..width])
+                let row = &mut band[(y - tile.y0) as usize * width..][..width];
+                SampleSink::Pixels(row, settings.variance)
             }
             (None, stats) => SampleSink::Splat(splat_row(settings, tile, y, stats, &mut taken)),
         };
@@ -289,8 +290,9 @@ fn splat_taken(
 /// into the render loop and compiled for its instruction sets ([`render_tile`]), where an
 /// outlined closure would be compiled for the baseline and the film's exact sums cost more.
 enum SampleSink<'a> {
-    /// Filter importance sampling: each sample into its own pixel of the row.
-    Pixels(&'a mut [PixelStats]),
+    /// Filter importance sampling: each sample into its own pixel of the row, with the sums
+    /// of its squares when true ([`RenderSettings::variance`]).
+    Pixels(&'a mut [PixelStats], bool),
     /// Splatting.
     Splat(SplatRow<'a>),
 }
@@ -301,7 +303,14 @@ impl SampleSink<'_> {
     #[inline(always)]
     fn put(&mut self, x: i32, k: u32, rgb: [f32; 3], alpha: f32, offset: Vec2, w: f32) {
         match self {
-            SampleSink::Pixels(row) => row[x as usize].add(rgb.map(|c| c * w), alpha * w),
+            SampleSink::Pixels(row, variance) => {
+                let (v, a) = (rgb.map(|c| c * w), alpha * w);
+                if *variance {
+                    row[x as usize].add(v, a);
+                } else {
+                    row[x as usize].add_mean(v, a);
+                }
+            }
             SampleSink::Splat(row) => row.put(x, k, rgb, alpha, offset),
         }
     }
@@ -632,39 +641,43 @@ mod tests {
         }
     }
 
-    /// A splatting render without the variance (`RenderSettings::variance` off, as `pt render`
-    /// runs without `--variance`) is the same image, bit for bit, with the same sample counts;
-    /// only its variance is zero. On the tent-filtered film scene, whose splats cross tiles.
+    /// A render without the variance (`RenderSettings::variance` off, as `pt render` runs
+    /// without `--variance`) is the same image, bit for bit, with the same alpha and sample
+    /// counts; only its variance is zero. Under both films: splatting on the tent-filtered film
+    /// scene, whose splats cross tiles, and importance sampling on the box-filtered Cornell box.
     #[test]
-    fn splat_image_does_not_depend_on_the_variance() {
+    fn image_does_not_depend_on_the_variance() {
         let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes");
-        let desc = pt_scene::load_file(&dir.join("film-tent.xml"), &[]).expect("film-tent.xml");
-        let scene = Scene::build(&desc, BvhKind::Auto, LightSelection::default()).unwrap();
-        let with = RenderSettings {
-            spp: 5,
-            ..RenderSettings::from_desc(&desc)
-        };
-        assert!(
-            with.splats() && with.variance,
-            "the test needs a splatting film"
-        );
-        let without = RenderSettings {
-            variance: false,
-            ..with.clone()
-        };
-        let (a, b) = (
-            crate::render::render(&scene, &with, &|_| {}),
-            crate::render::render(&scene, &without, &|_| {}),
-        );
-        let bits = |v: &[[f32; 3]]| v.iter().flatten().map(|c| c.to_bits()).collect::<Vec<_>>();
-        assert!(bits(&a.mean) == bits(&b.mean), "the image changed");
-        assert_eq!(a.alpha, b.alpha);
-        assert_eq!(a.nonfinite_samples, b.nonfinite_samples);
-        assert!(
-            a.variance.iter().flatten().any(|&v| v > 0.0),
-            "no variance to leave out"
-        );
-        assert!(b.variance.iter().flatten().all(|&v| v == 0.0));
+        for (name, splats) in [("film-tent.xml", true), ("cornell-box.xml", false)] {
+            let mut desc = pt_scene::load_file(&dir.join(name), &[]).expect(name);
+            (desc.film.width, desc.film.height) = (48, 36);
+            let scene = Scene::build(&desc, BvhKind::Auto, LightSelection::default()).unwrap();
+            let with = RenderSettings {
+                spp: 5,
+                ..RenderSettings::from_desc(&desc)
+            };
+            assert!(
+                with.splats() == splats && with.variance,
+                "{name}: the test needs this film"
+            );
+            let without = RenderSettings {
+                variance: false,
+                ..with.clone()
+            };
+            let (a, b) = (
+                crate::render::render(&scene, &with, &|_| {}),
+                crate::render::render(&scene, &without, &|_| {}),
+            );
+            let bits = |v: &[[f32; 3]]| v.iter().flatten().map(|c| c.to_bits()).collect::<Vec<_>>();
+            assert!(bits(&a.mean) == bits(&b.mean), "{name}: the image changed");
+            assert_eq!(a.alpha, b.alpha, "{name}");
+            assert_eq!(a.nonfinite_samples, b.nonfinite_samples, "{name}");
+            assert!(
+                a.variance.iter().flatten().any(|&v| v > 0.0),
+                "{name}: no variance to leave out"
+            );
+            assert!(b.variance.iter().flatten().all(|&v| v == 0.0), "{name}");
+        }
     }
 
     /// The pass scheduler runs every job exactly once, records one time per job, and with the
