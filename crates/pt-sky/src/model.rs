@@ -394,7 +394,7 @@ impl SkyModel {
         // All 11 channels at once (three vector steps), rather than the up to eight that four
         // wavelengths fall between, one by one.
         let v = eval_sky(&SkyAngles::new(ct, g, self.sun_dir.dot(d)), sky);
-        lambda.map(|l| lerp_channels(l, &mut |c| v[c]) * self.sky_scale)
+        lanes(|k| lerp_channels(lambda[k], &mut |c| v[c]) * self.sky_scale)
     }
 
     /// The sun's spectral radiance at four wavelengths `lambda` (nm): 0 outside its disc.
@@ -410,7 +410,7 @@ impl SkyModel {
         };
         let sun = &data.1;
         match sun {
-            Sun::Disc(v) => lambda.map(|l| lerp_channels(l, &mut |c| v[c])),
+            Sun::Disc(v) => lanes(|k| lerp_channels(lambda[k], &mut |c| v[c])),
             Sun::Limb { poly, limb, factor } => {
                 use tables::SUN_CONTROL_POINTS as K;
                 let (pos, x) = sun_segment(ct);
@@ -426,7 +426,8 @@ impl SkyModel {
                     sum as f32
                 };
                 let ld = limb.as_deref().expect("spectral limb darkening");
-                lambda.map(|l| {
+                lanes(|k| {
+                    let l = lambda[k];
                     // Mitsuba interpolates the radiance and the limb-darkening coefficients
                     // across the channels separately, then multiplies.
                     let r = lerp_channels(l, &mut |c| radiance(c));

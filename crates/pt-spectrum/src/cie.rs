@@ -129,7 +129,7 @@ pub fn integrate_visible(f: impl Fn(f64) -> f64) -> f64 {
 #[cfg_attr(debug_assertions, inline)]
 #[cfg_attr(not(debug_assertions), inline(always))]
 pub fn cmf4(lambda: Vec4) -> [Vec4; 3] {
-    let a = lambda.to_array().map(cmf);
+    let a: [[f32; 3]; 4] = pt_math::lanes::lanes(|k| cmf(lambda[k]));
     [
         Vec4::new(a[0][0], a[1][0], a[2][0], a[3][0]),
         Vec4::new(a[0][1], a[1][1], a[2][1], a[3][1]),
